@@ -1,0 +1,104 @@
+"""Names, units and groups of the channels a run carries, shared by both engines.
+
+A channel is one uniformly sampled scalar signal. Groups are what a scene can ask for
+(``sensors.channels`` in the configuration) and what the MCAP file stores per topic.
+
+Conventions (bench frame of :mod:`twin.config`):
+
+* ``AC1``..``AC6``: proper acceleration (gravity included, as a MEMS sensor reads it)
+  along each sensor's sensitive axis [m/s²].
+* ``encoder_angle``: crank angle in the encoder's convention, zero with the crank along
+  −y, unwrapped (continuous over turns) [rad]. Quantization to counts is the sensor
+  chain's job, not the engine's.
+* ``crank_angle`` / ``crank_speed``: bench angle θ from +x, unwrapped [rad], and dθ/dt [rad/s].
+* ``slider_position``: x of the slider reference point Cs on the guide [m].
+* ``ecc_J_x``, ``ecc_J_y``: eccentricity of joint J = pin centre − bushing centre, in the
+  rod frame (x from B towards C) [m]; ``pen_J``: penetration max(0, |e| − c) [m];
+  ``fn_J``: normal contact force magnitude [N]; ``ft_J``: friction force on the pin
+  along the in-plane tangent ẑ × n (n = e/|e|) [N].
+* ``theta_ref`` / ``omega_ref``: the drive's reference bench angle [rad] and rate [rad/s];
+  ``crank_torque``: torque applied by the PID to the crank about +z [N m].
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from twin.config import ACCELEROMETERS, CHANNEL_GROUPS, BenchConfig
+
+
+@dataclass(frozen=True)
+class ChannelSpec:
+    """Static description of one channel: name, unit, group, storage dtype."""
+
+    name: str
+    unit: str
+    group: str
+    dtype: str
+    description: str
+
+
+def _joint_specs(joint: str) -> list[ChannelSpec]:
+    g = f"joint_{joint}"
+    return [
+        ChannelSpec(f"ecc_{joint}_x", "m", g, "float64", f"eccentricity at {joint}, rod x"),
+        ChannelSpec(f"ecc_{joint}_y", "m", g, "float64", f"eccentricity at {joint}, rod y"),
+        ChannelSpec(f"pen_{joint}", "m", g, "float64", f"penetration at {joint}"),
+        ChannelSpec(f"fn_{joint}", "N", g, "float32", f"normal contact force at {joint}"),
+        ChannelSpec(f"ft_{joint}", "N", g, "float32", f"friction force on the pin at {joint}"),
+    ]
+
+
+_STATIC: dict[str, list[ChannelSpec]] = {
+    "accel": [ChannelSpec(a, "m/s^2", "accel", "float32", f"{a} proper acceleration") for a in ACCELEROMETERS],
+    "encoder": [ChannelSpec("encoder_angle", "rad", "encoder", "float64", "crank encoder angle, zero at -y")],
+    "crank": [
+        ChannelSpec("crank_angle", "rad", "crank", "float64", "crank bench angle from +x"),
+        ChannelSpec("crank_speed", "rad/s", "crank", "float64", "crank angular velocity"),
+    ],
+    "slider": [ChannelSpec("slider_position", "m", "slider", "float64", "slider position along the guide")],
+    "drive": [
+        ChannelSpec("theta_ref", "rad", "drive", "float64", "reference crank bench angle"),
+        ChannelSpec("omega_ref", "rad/s", "drive", "float64", "reference crank rate"),
+        ChannelSpec("crank_torque", "N m", "drive", "float32", "PID torque on the crank"),
+    ],
+}
+
+
+def channel_specs(cfg: BenchConfig) -> list[ChannelSpec]:
+    """Channels a run of ``cfg`` produces, in canonical order (groups as in CHANNEL_GROUPS)."""
+    out: list[ChannelSpec] = []
+    for group in CHANNEL_GROUPS:
+        if group not in cfg.sensors.channels:
+            continue
+        if group == "joints":
+            for j in cfg.joints.clearance_joints:
+                out.extend(_joint_specs(j))
+        else:
+            out.extend(_STATIC[group])
+    return out
+
+
+def spec_by_name(name: str) -> ChannelSpec | None:
+    """Spec of a known channel name, or None for channels added by other tools."""
+    for specs in _STATIC.values():
+        for s in specs:
+            if s.name == name:
+                return s
+    for j in ("B", "C"):
+        for s in _joint_specs(j):
+            if s.name == name:
+                return s
+    return None
+
+
+def encoder_from_bench(theta: np.ndarray, direction: int = 1) -> np.ndarray:
+    """Encoder angle (zero along −y, counting with the drive direction) from bench angle θ [rad]."""
+    return direction * (np.asarray(theta) + np.pi / 2.0)
+
+
+def bench_from_encoder(phi: np.ndarray, direction: int = 1) -> np.ndarray:
+    """Bench angle θ from the encoder angle [rad]; inverse of :func:`encoder_from_bench`."""
+    return np.asarray(phi) * direction - np.pi / 2.0

@@ -1,0 +1,734 @@
+"""Bench configuration: one frozen dataclass per component, loadable from TOML.
+
+Every number of the physical bench lives here with its source (``S003`` is the bench
+paper, ``../shared/seeds/003_...``; tables refer to it). Values the papers leave open are
+marked PLACEHOLDER in the docstrings: they are configuration, documented, never hidden
+in code.
+
+Bench frame (used by both engines): origin at the crank pivot A, ``x`` along the slider
+guide towards the slider, ``y`` perpendicular in the plane of the mechanism (up in the
+paper's tests), ``z = x × y`` along the crank axis. The bench angle ``θ`` of the crank is
+measured from ``+x`` counter-clockwise about ``+z``; the encoder angle is ``θ + π/2`` so
+that it reads zero with the crank along ``−y`` (S003 §2.3.3).
+
+Validation happens in ``__post_init__``; errors are :class:`~twin.errors.ConfigError`
+naming the dotted TOML path of the field and what is allowed.
+"""
+
+from __future__ import annotations
+
+import collections.abc
+import dataclasses
+import hashlib
+import math
+import tomllib
+import types
+import typing
+from dataclasses import dataclass, field, fields
+from pathlib import Path
+from typing import Any, Mapping
+
+import tomli_w
+
+from twin.errors import ConfigError
+
+#: Diametral clearances of the bushing catalogue [mm] (S003 §2.2.1).
+CATALOGUE_DIAMETRAL_MM: tuple[float, ...] = (0.02, 0.05, 0.07, 0.10, 0.50, 1.00)
+#: Bench axes that can be vertical (S003 §2.2.3).
+ORIENTATIONS: tuple[str, ...] = ("x", "y", "z")
+#: Clearance joints of the bench.
+JOINTS: tuple[str, ...] = ("B", "C")
+#: Engines that speak this configuration.
+ENGINES: tuple[str, ...] = ("mujoco", "reference")
+#: Drive programs.
+PROGRAMS: tuple[str, ...] = ("constant", "protocol", "trace")
+#: Output channel groups a run can carry (see :mod:`twin.channels`).
+CHANNEL_GROUPS: tuple[str, ...] = ("accel", "encoder", "crank", "slider", "joints", "drive")
+#: Accelerometers of the bench (S003 Table 3).
+ACCELEROMETERS: tuple[str, ...] = ("AC1", "AC2", "AC3", "AC4", "AC5", "AC6")
+
+
+def _check(cond: bool, name: str, message: str) -> None:
+    if not cond:
+        raise ConfigError(name, message)
+
+
+def _positive(value: float, name: str, unit: str) -> None:
+    _check(isinstance(value, (int, float)) and math.isfinite(value) and value > 0,
+           name, f"must be a finite number > 0 [{unit}], got {value!r}")
+
+
+def _finite(value: float, name: str, unit: str) -> None:
+    _check(isinstance(value, (int, float)) and math.isfinite(value),
+           name, f"must be a finite number [{unit}], got {value!r}")
+
+
+def _choice(value: str, name: str, allowed: tuple[str, ...]) -> None:
+    _check(value in allowed, name, f"must be one of {', '.join(allowed)}; got {value!r}")
+
+
+# --------------------------------------------------------------------------- bodies
+@dataclass(frozen=True)
+class BodyParams:
+    """Rigid body of the mechanism (S003 Table 1).
+
+    Attributes:
+        mass_kg: mass [kg].
+        length_m: distance between the body's two joints (slider: its length) [m].
+        x_g_m: centre of mass along the body's longitudinal axis from its origin (A, B, C) [m].
+        inertia_kgm2: moment of inertia about the centre of mass, about the crank axis [kg m²]
+            (Table 1 prints "kg/m²", a typo).
+    """
+
+    mass_kg: float
+    length_m: float
+    x_g_m: float
+    inertia_kgm2: float
+
+    def __post_init__(self) -> None:
+        _positive(self.mass_kg, "mass_kg", "kg")
+        _positive(self.length_m, "length_m", "m")
+        _finite(self.x_g_m, "x_g_m", "m")
+        _positive(self.inertia_kgm2, "inertia_kgm2", "kg m^2")
+
+
+@dataclass(frozen=True)
+class Bodies:
+    """The three moving bodies (S003 Table 1; crank includes shaft and pulley)."""
+
+    crank: BodyParams = BodyParams(5.72, 0.12, 0.0115, 0.0293)
+    rod: BodyParams = BodyParams(3.55, 0.60, 0.3000, 0.1970)
+    slider: BodyParams = BodyParams(1.97, 0.05, 0.0040, 0.0025)
+
+
+# ------------------------------------------------------------------------ materials
+@dataclass(frozen=True)
+class Material:
+    """Isotropic elastic material.
+
+    Attributes:
+        youngs_modulus_pa: Young's modulus E [Pa].
+        poisson: Poisson's ratio ν [-].
+        density_kgm3: mass density [kg/m³] (visual sizes only; body masses come from Table 1).
+    """
+
+    youngs_modulus_pa: float
+    poisson: float
+    density_kgm3: float
+
+    def __post_init__(self) -> None:
+        _positive(self.youngs_modulus_pa, "youngs_modulus_pa", "Pa")
+        _check(isinstance(self.poisson, (int, float)) and -1.0 < self.poisson < 0.5,
+               "poisson", f"must lie in (-1, 0.5), got {self.poisson!r}")
+        _positive(self.density_kgm3, "density_kgm3", "kg/m^3")
+
+    @property
+    def compliance_h(self) -> float:
+        """h = (1 − ν²)/E of the Lankarani–Nikravesh stiffness (S003 Eq. 18) [1/Pa]."""
+        return (1.0 - self.poisson**2) / self.youngs_modulus_pa
+
+
+@dataclass(frozen=True)
+class Materials:
+    """Pin and bushing materials (S003 Table 2): F125 steel pins, RG10 bronze bushings."""
+
+    pin: Material = Material(210e9, 0.30, 7850.0)
+    bushing: Material = Material(90e9, 0.34, 8700.0)
+
+
+# --------------------------------------------------------------------------- joints
+@dataclass(frozen=True)
+class Joints:
+    """Revolute joints B (crank–rod) and C (rod–slider).
+
+    Attributes:
+        clearance_b_mm: diametral clearance at B [mm]; 0 = deep-groove ball bearing (ideal
+            joint, S003 §2.2.1 case A), otherwise a catalogue value.
+        clearance_c_mm: diametral clearance at C [mm], same rules.
+        allow_noncatalogue: accept clearances outside the catalogue (0.02–1.00 mm values).
+        pin_diameter_m: journal (pin) diameter [m]. PLACEHOLDER: not given by S003;
+            20 mm is the documented default (BENCH.md), consistent with its K ≈ 1.3e11.
+        bushing_length_m: axial length of the bushing [m]. PLACEHOLDER: not given; 20 mm.
+        initial_eccentricity: ``"loaded"`` starts each journal touching the bushing on the side
+            its static load pushes it to (no artificial drop at t = 0); ``"centred"`` starts
+            it at the bushing centre.
+    """
+
+    clearance_b_mm: float = 0.0
+    clearance_c_mm: float = 0.0
+    allow_noncatalogue: bool = False
+    pin_diameter_m: float = 0.020
+    bushing_length_m: float = 0.020
+    initial_eccentricity: str = "loaded"
+
+    def __post_init__(self) -> None:
+        for name in ("clearance_b_mm", "clearance_c_mm"):
+            value = getattr(self, name)
+            _check(isinstance(value, (int, float)) and math.isfinite(value) and value >= 0,
+                   name, f"must be 0 (ball bearing) or a diametral clearance > 0 [mm], got {value!r}")
+            if value != 0 and not self.allow_noncatalogue:
+                ok = any(abs(value - c) < 1e-9 for c in CATALOGUE_DIAMETRAL_MM)
+                _check(ok, name, "must be 0 (ball bearing) or a catalogue diametral clearance "
+                       f"{', '.join(f'{c:g}' for c in CATALOGUE_DIAMETRAL_MM)} mm; got {value!r} "
+                       "(set joints.allow_noncatalogue = true for other values)")
+            if value != 0:
+                _check(value < 5.0, name, f"must be < 5 mm even off-catalogue, got {value!r}")
+        _positive(self.pin_diameter_m, "pin_diameter_m", "m")
+        _positive(self.bushing_length_m, "bushing_length_m", "m")
+        _choice(self.initial_eccentricity, "initial_eccentricity", ("loaded", "centred"))
+
+    def diametral_mm(self, joint: str) -> float:
+        """Diametral clearance of ``joint`` ("B" or "C") [mm]."""
+        _choice(joint, "joint", JOINTS)
+        return self.clearance_b_mm if joint == "B" else self.clearance_c_mm
+
+    def radial_m(self, joint: str) -> float:
+        """Radial clearance c = (bushing radius − pin radius) of ``joint`` [m]."""
+        return self.diametral_mm(joint) * 1e-3 / 2.0
+
+    @property
+    def pin_radius_m(self) -> float:
+        """Pin radius R_j [m]."""
+        return self.pin_diameter_m / 2.0
+
+    def bushing_radius_m(self, joint: str) -> float:
+        """Bushing bore radius R_i = R_j + c [m]."""
+        return self.pin_radius_m + self.radial_m(joint)
+
+    @property
+    def clearance_joints(self) -> tuple[str, ...]:
+        """Joints fitted with a bushing, in order ("B", "C")."""
+        return tuple(j for j in JOINTS if self.diametral_mm(j) > 0)
+
+
+# ------------------------------------------------------------------------ mechanism
+@dataclass(frozen=True)
+class Mechanism:
+    """Frame, orientation and slider guide.
+
+    Attributes:
+        orientation: bench axis that points up ("x", "y" or "z"); gravity acts along its
+            negative direction. S003 tested only "y" (§2.2.3, §4.3).
+        gravity_mps2: magnitude of gravity [m/s²] (S003 §4.1).
+        d_off_m: offset of C' above the slider guide centre line [m] (S003 Fig. 7).
+            PLACEHOLDER: not given; 0 m. The guide line through A is also an assumption.
+        guide_friction_n: slider guide friction force whenever the slider moves [N] (S003 §3).
+        crank_direction: +1 if a positive motor speed turns the crank counter-clockwise about
+            +z (bench angle increasing), −1 otherwise. PLACEHOLDER: not given; +1.
+    """
+
+    orientation: str = "y"
+    gravity_mps2: float = 9.81
+    d_off_m: float = 0.0
+    guide_friction_n: float = 2.5
+    crank_direction: int = 1
+
+    def __post_init__(self) -> None:
+        _choice(self.orientation, "orientation", ORIENTATIONS)
+        _check(isinstance(self.gravity_mps2, (int, float)) and 0 <= self.gravity_mps2 < 100,
+               "gravity_mps2", f"must lie in [0, 100) m/s^2, got {self.gravity_mps2!r}")
+        _finite(self.d_off_m, "d_off_m", "m")
+        _check(abs(self.d_off_m) < 0.1, "d_off_m", f"must lie in (-0.1, 0.1) m, got {self.d_off_m!r}")
+        _check(isinstance(self.guide_friction_n, (int, float)) and 0 <= self.guide_friction_n < 1e3,
+               "guide_friction_n", f"must lie in [0, 1000) N, got {self.guide_friction_n!r}")
+        _check(self.crank_direction in (1, -1), "crank_direction",
+               f"must be 1 or -1, got {self.crank_direction!r}")
+
+    @property
+    def gravity_vector(self) -> tuple[float, float, float]:
+        """Gravity in the bench frame [m/s²]: −g along the vertical axis."""
+        g = [0.0, 0.0, 0.0]
+        g["xyz".index(self.orientation)] = -float(self.gravity_mps2)
+        return (g[0], g[1], g[2])
+
+
+# -------------------------------------------------------------------------- contact
+@dataclass(frozen=True)
+class Contact:
+    """Clearance-joint contact and friction of the reference model (S003 §3, Eq. 17–20).
+
+    Attributes:
+        law: normal force law of the reference engine ("lankarani-nikravesh",
+            "hunt-crossley", "flores" or "linear").
+        restitution: coefficient of restitution e [-] (S003: 0.4, tuned against the bench).
+        exponent: force exponent n [-] (S003: 1.5).
+        stiffness: contact stiffness K [N/m^n]; 0 = computed from the pin/bushing geometry
+            and materials with Eq. 18.
+        mu0: dynamic friction coefficient μ0 [-] (S003: 0.05).
+        v0_mps: friction regularization velocity below which μ = 0 [m/s] (S003: 5e-4).
+        v1_mps: velocity above which μ = μ0 [m/s] (S003: 1e-3).
+    """
+
+    law: str = "lankarani-nikravesh"
+    restitution: float = 0.4
+    exponent: float = 1.5
+    stiffness: float = 0.0
+    mu0: float = 0.05
+    v0_mps: float = 5e-4
+    v1_mps: float = 1e-3
+
+    LAWS: typing.ClassVar[tuple[str, ...]] = ("lankarani-nikravesh", "hunt-crossley", "flores", "linear")
+
+    def __post_init__(self) -> None:
+        _choice(self.law, "law", self.LAWS)
+        _check(isinstance(self.restitution, (int, float)) and 0 < self.restitution <= 1,
+               "restitution", f"must lie in (0, 1], got {self.restitution!r}")
+        _check(isinstance(self.exponent, (int, float)) and 1 <= self.exponent <= 3,
+               "exponent", f"must lie in [1, 3], got {self.exponent!r}")
+        _check(isinstance(self.stiffness, (int, float)) and math.isfinite(self.stiffness)
+               and self.stiffness >= 0, "stiffness", f"must be >= 0 (0 = from Eq. 18), got {self.stiffness!r}")
+        _check(isinstance(self.mu0, (int, float)) and 0 <= self.mu0 <= 1,
+               "mu0", f"must lie in [0, 1], got {self.mu0!r}")
+        _positive(self.v0_mps, "v0_mps", "m/s")
+        _positive(self.v1_mps, "v1_mps", "m/s")
+        _check(self.v1_mps > self.v0_mps, "v1_mps", f"must exceed v0_mps ({self.v0_mps}), got {self.v1_mps!r}")
+
+
+def ln_stiffness(joints: Joints, materials: Materials, joint: str) -> float:
+    """Lankarani–Nikravesh stiffness K of a clearance joint (S003 Eq. 18) [N/m^1.5].
+
+    K = 4 / (3 (h_i + h_j)) · sqrt(R_i R_j / (R_i − R_j)), bushing radius R_i > pin radius R_j.
+    """
+    c = joints.radial_m(joint)
+    if c <= 0:
+        raise ConfigError(f"joints.clearance_{joint.lower()}_mm", "is 0: no contact at an ideal joint")
+    ri, rj = joints.bushing_radius_m(joint), joints.pin_radius_m
+    h = materials.pin.compliance_h + materials.bushing.compliance_h
+    return 4.0 / (3.0 * h) * math.sqrt(ri * rj / (ri - rj))
+
+
+# --------------------------------------------------------------------------- mujoco
+@dataclass(frozen=True)
+class MujocoSettings:
+    """Solver and contact settings of the MuJoCo twin.
+
+    Attributes:
+        integrator: MuJoCo integrator ("Euler", "implicitfast", "implicit", "RK4").
+        solver: constraint solver ("Newton", "CG", "PGS").
+        iterations: maximum solver iterations.
+        tolerance: solver tolerance (0 disables the early exit).
+        contact_solref: pin/bushing ``solref`` (2 numbers); empty = use the calibration
+            table ``twin/data/contact_calibration.json`` (see ``twin calibrate contact``).
+        contact_solimp: pin/bushing ``solimp`` (5 numbers); empty = calibration table.
+        equality_solref: ``solref`` of the loop-closure ``connect`` at an ideal joint C.
+        equality_solimp: ``solimp`` of that connect.
+        guide_solreffriction: ``solreffriction`` of the guide's dry friction (frictionloss).
+    """
+
+    integrator: str = "Euler"
+    solver: str = "Newton"
+    iterations: int = 20
+    tolerance: float = 1e-10
+    contact_solref: tuple[float, ...] = ()
+    contact_solimp: tuple[float, ...] = ()
+    equality_solref: tuple[float, ...] = (2e-5, 1.0)
+    equality_solimp: tuple[float, ...] = (0.99, 0.9999, 1e-6, 0.5, 2.0)
+    guide_solreffriction: tuple[float, ...] = (2e-5, 1.0)
+
+    def __post_init__(self) -> None:
+        _choice(self.integrator, "integrator", ("Euler", "implicitfast", "implicit", "RK4"))
+        _choice(self.solver, "solver", ("Newton", "CG", "PGS"))
+        _check(isinstance(self.iterations, int) and 1 <= self.iterations <= 1000,
+               "iterations", f"must be an integer in [1, 1000], got {self.iterations!r}")
+        _check(isinstance(self.tolerance, (int, float)) and 0 <= self.tolerance < 1,
+               "tolerance", f"must lie in [0, 1), got {self.tolerance!r}")
+        for name, n in (("contact_solref", 2), ("contact_solimp", 5)):
+            v = getattr(self, name)
+            _check(len(v) in (0, n), name, f"must hold {n} numbers or be empty (calibration), got {list(v)!r}")
+        for name, n in (("equality_solref", 2), ("equality_solimp", 5), ("guide_solreffriction", 2)):
+            v = getattr(self, name)
+            _check(len(v) == n, name, f"must hold {n} numbers, got {list(v)!r}")
+
+
+# ---------------------------------------------------------------------------- drive
+@dataclass(frozen=True)
+class Drive:
+    """Crank motion program tracked by the PID (S003 §2.2.2, §4.2–4.3).
+
+    Attributes:
+        program: "constant" (spin up from rest to ``motor_rpm`` and hold), "protocol"
+            (the 38 s three-speed test of §4.3) or "trace" (crank angle from a file).
+        motor_rpm: motor speed of the constant program [rpm] (S003: 250, 500, 750).
+        belt_ratio: motor:crank speed ratio of the V-belt [-] (S003 §2.2.2: 3.97).
+        ramp_s: duration of each speed change (smooth cosine ramp of the speed) [s].
+            PLACEHOLDER: the motor controller's acceleration is not given; 0.5 s.
+        protocol_rpm: the three motor speeds of the protocol [rpm].
+        protocol_hold_s: time at each protocol speed [s] (10 s).
+        protocol_stop_s: stops before, between and after the speeds [s] (2 s).
+        initial_encoder_angle_rad: crank encoder angle at t = 0 [rad] (0 = crank along −y).
+            PLACEHOLDER: S003 did not control the start position; 0.
+        trace_file: encoder trace for the "trace" program (``.npz`` with ``t`` [s] and
+            ``angle`` [rad], or ``.csv`` with those columns), encoder angle convention.
+    """
+
+    program: str = "constant"
+    motor_rpm: float = 750.0
+    belt_ratio: float = 3.97
+    ramp_s: float = 0.5
+    protocol_rpm: tuple[float, ...] = (250.0, 500.0, 750.0)
+    protocol_hold_s: float = 10.0
+    protocol_stop_s: float = 2.0
+    initial_encoder_angle_rad: float = 0.0
+    trace_file: str = ""
+
+    def __post_init__(self) -> None:
+        _choice(self.program, "program", PROGRAMS)
+        _check(isinstance(self.motor_rpm, (int, float)) and math.isfinite(self.motor_rpm)
+               and abs(self.motor_rpm) <= 1000, "motor_rpm",
+               f"must lie in [-1000, 1000] rpm (±10 V command range), got {self.motor_rpm!r}")
+        _positive(self.belt_ratio, "belt_ratio", "-")
+        _check(isinstance(self.ramp_s, (int, float)) and 0 <= self.ramp_s <= 10,
+               "ramp_s", f"must lie in [0, 10] s, got {self.ramp_s!r}")
+        _check(len(self.protocol_rpm) >= 1 and all(abs(r) <= 1000 for r in self.protocol_rpm),
+               "protocol_rpm", f"must hold 1+ speeds within ±1000 rpm, got {list(self.protocol_rpm)!r}")
+        _check(self.protocol_hold_s > self.ramp_s, "protocol_hold_s",
+               f"must exceed ramp_s ({self.ramp_s} s), got {self.protocol_hold_s!r}")
+        _check(self.protocol_stop_s > self.ramp_s or self.protocol_stop_s >= 0, "protocol_stop_s",
+               f"must be >= 0 s, got {self.protocol_stop_s!r}")
+        _finite(self.initial_encoder_angle_rad, "initial_encoder_angle_rad", "rad")
+        if self.program == "trace":
+            _check(bool(self.trace_file), "trace_file", "must name a trace file when program = \"trace\"")
+
+    @property
+    def crank_rad_s(self) -> float:
+        """Crank speed of the constant program [rad/s] (motor rpm / belt ratio)."""
+        return self.motor_rpm / self.belt_ratio * 2.0 * math.pi / 60.0
+
+    @property
+    def protocol_duration_s(self) -> float:
+        """Length of the protocol: stops and holds (38 s for the paper's protocol) [s]."""
+        n = len(self.protocol_rpm)
+        return (n + 1) * self.protocol_stop_s + n * self.protocol_hold_s
+
+
+@dataclass(frozen=True)
+class PID:
+    """Crank PID tracking the reference angle and rate (native MuJoCo ``<pid>`` law).
+
+    torque = kp (θ_ref − θ) + kv (ω_ref − ω) + ki ∫(θ_ref − θ) dt, integral clamped to ±imax.
+    Gains from ``analysis/tune_pid.py`` (pole placement on the crank's largest effective
+    inertia over a turn; see its docstring), rounded.
+
+    Attributes:
+        kp: proportional gain [N m/rad].
+        kv: rate gain [N m s/rad].
+        ki: integral gain [N m/(rad s)].
+        imax: anti-windup clamp of the integral state [rad s]; 0 = unclamped.
+    """
+
+    kp: float = 6.0e4
+    kv: float = 1.5e2
+    ki: float = 6.0e5
+    imax: float = 0.05
+
+    def __post_init__(self) -> None:
+        _positive(self.kp, "kp", "N m/rad")
+        for name in ("kv", "ki", "imax"):
+            v = getattr(self, name)
+            _check(isinstance(v, (int, float)) and math.isfinite(v) and v >= 0,
+                   name, f"must be a finite number >= 0, got {v!r}")
+
+
+# -------------------------------------------------------------------------- sensors
+@dataclass(frozen=True)
+class AccelMount:
+    """Mounting of a uniaxial accelerometer on a body (S003 Table 3, Fig. 6/9).
+
+    Attributes:
+        body: "rod" or "slider".
+        position_m: position in the body frame (x along the body from its origin B or C',
+            y perpendicular in the plane) [m]. PLACEHOLDER: "near the named joint".
+        axis: sensitive axis in the body frame: "+x", "-x", "+y" or "-y". PLACEHOLDER signs:
+            longitudinal sensors point from B to C, perpendicular and vertical ones point up
+            when the rod is horizontal (calibration pose), AC6 points along +x.
+    """
+
+    body: str
+    position_m: tuple[float, float]
+    axis: str
+
+    def __post_init__(self) -> None:
+        _choice(self.body, "body", ("rod", "slider"))
+        _check(len(self.position_m) == 2 and all(math.isfinite(v) and abs(v) < 1 for v in self.position_m),
+               "position_m", f"must be [x, y] within ±1 m, got {list(self.position_m)!r}")
+        _choice(self.axis, "axis", ("+x", "-x", "+y", "-y"))
+
+
+def _default_mounts() -> dict[str, AccelMount]:
+    return {
+        "AC1": AccelMount("rod", (0.05, 0.0), "+x"),
+        "AC2": AccelMount("rod", (0.05, 0.0), "+y"),
+        "AC3": AccelMount("rod", (0.55, 0.0), "+y"),
+        "AC4": AccelMount("rod", (0.55, 0.0), "+x"),
+        "AC5": AccelMount("slider", (0.0, 0.0), "+y"),
+        "AC6": AccelMount("slider", (0.0, 0.0), "+x"),
+    }
+
+
+@dataclass(frozen=True)
+class Sensors:
+    """Virtual sensors and the channel groups a run computes and keeps.
+
+    Attributes:
+        accelerometers: mounting of AC1–AC6 (keys must be AC1..AC6).
+        channels: channel groups to compute (subset of accel, encoder, crank, slider,
+            joints, drive); a scene computes only the sensors these need.
+        output_rate_hz: sample rate of the run's channels [Hz] (the bench logs at 100 kHz).
+    """
+
+    accelerometers: Mapping[str, AccelMount] = field(default_factory=_default_mounts)
+    channels: tuple[str, ...] = CHANNEL_GROUPS
+    output_rate_hz: float = 100_000.0
+
+    def __post_init__(self) -> None:
+        _check(sorted(self.accelerometers) == list(ACCELEROMETERS), "accelerometers",
+               f"must define exactly {', '.join(ACCELEROMETERS)}, got {', '.join(sorted(self.accelerometers))}")
+        for g in self.channels:
+            _choice(g, "channels", CHANNEL_GROUPS)
+        _check(len(set(self.channels)) == len(self.channels), "channels", "must not repeat a group")
+        _positive(self.output_rate_hz, "output_rate_hz", "Hz")
+        # hashability of the frozen config: store the mapping as a read-only proxy
+        object.__setattr__(self, "accelerometers", types.MappingProxyType(dict(self.accelerometers)))
+
+    def __hash__(self) -> int:  # MappingProxyType is not hashable
+        return hash((tuple(sorted(self.accelerometers.items())), self.channels, self.output_rate_hz))
+
+
+# ----------------------------------------------------------------------- simulation
+@dataclass(frozen=True)
+class Simulation:
+    """Run settings shared by both engines.
+
+    Attributes:
+        engine: "mujoco" (the twin) or "reference" (R-matrix, Lankarani–Nikravesh).
+        duration_s: simulated time [s]; 0 = the drive program's natural length
+            (38 s for the protocol, the trace's length for a trace).
+        timestep_s: integration step [s] (S003 §4.3: 1e-5 s, matches the 100 kHz logging).
+        chunk_s: simulated time per chunk streamed to the sinks [s].
+    """
+
+    engine: str = "mujoco"
+    duration_s: float = 2.0
+    timestep_s: float = 1e-5
+    chunk_s: float = 0.5
+
+    def __post_init__(self) -> None:
+        _choice(self.engine, "engine", ENGINES)
+        _check(isinstance(self.duration_s, (int, float)) and 0 <= self.duration_s <= 3600,
+               "duration_s", f"must lie in [0, 3600] s (0 = program length), got {self.duration_s!r}")
+        _check(isinstance(self.timestep_s, (int, float)) and 1e-7 <= self.timestep_s <= 1e-3,
+               "timestep_s", f"must lie in [1e-7, 1e-3] s, got {self.timestep_s!r}")
+        _positive(self.chunk_s, "chunk_s", "s")
+
+
+# --------------------------------------------------------------------------- config
+@dataclass(frozen=True)
+class BenchConfig:
+    """Everything that defines one run of the bench, for either engine."""
+
+    name: str = "test6"
+    bodies: Bodies = Bodies()
+    materials: Materials = Materials()
+    joints: Joints = Joints(clearance_c_mm=0.1)
+    mechanism: Mechanism = Mechanism()
+    contact: Contact = Contact()
+    mujoco: MujocoSettings = MujocoSettings()
+    drive: Drive = Drive()
+    pid: PID = PID()
+    sensors: Sensors = field(default_factory=Sensors)
+    simulation: Simulation = Simulation()
+
+    def __post_init__(self) -> None:
+        _check(isinstance(self.name, str) and 0 < len(self.name) <= 80, "name",
+               f"must be a non-empty string of at most 80 characters, got {self.name!r}")
+
+    # -- derived
+    @property
+    def duration_s(self) -> float:
+        """Simulated time of the run [s] (resolves ``simulation.duration_s = 0``)."""
+        if self.simulation.duration_s > 0:
+            return float(self.simulation.duration_s)
+        if self.drive.program == "protocol":
+            return self.drive.protocol_duration_s
+        if self.drive.program == "trace":
+            from twin.drive import load_trace  # local import: drive imports config
+
+            t, _ = load_trace(self.drive.trace_file)
+            return float(t[-1] - t[0])
+        raise ConfigError("simulation.duration_s", "must be > 0 for the constant program")
+
+    # -- serialization
+    def to_dict(self) -> dict[str, Any]:
+        """Plain nested dict (tuples as lists), the TOML layout."""
+        return _to_plain(self)
+
+    def to_toml(self) -> str:
+        """Canonical TOML text of this configuration."""
+        return tomli_w.dumps(self.to_dict())
+
+    def digest(self) -> str:
+        """Short SHA-256 of the canonical TOML: a deterministic id of this configuration."""
+        return hashlib.sha256(self.to_toml().encode()).hexdigest()[:16]
+
+    def replace(self, **overrides: Any) -> "BenchConfig":
+        """Copy with dotted-path overrides, e.g. ``replace(**{"drive.motor_rpm": 500})``."""
+        return with_overrides(self, overrides)
+
+
+def _to_plain(obj: Any) -> Any:
+    if dataclasses.is_dataclass(obj):
+        return {f.name: _to_plain(getattr(obj, f.name)) for f in fields(obj)}
+    if isinstance(obj, Mapping):
+        return {k: _to_plain(v) for k, v in obj.items()}
+    if isinstance(obj, (tuple, list)):
+        return [_to_plain(v) for v in obj]
+    return obj
+
+
+# ----------------------------------------------------------------- dict -> dataclass
+def _hints(cls: type) -> dict[str, Any]:
+    return typing.get_type_hints(cls)
+
+
+def _convert(value: Any, tp: Any, path: str) -> Any:
+    origin = typing.get_origin(tp)
+    if dataclasses.is_dataclass(tp):
+        if not isinstance(value, Mapping):
+            raise ConfigError(path, f"must be a table of {tp.__name__} fields, got {value!r}")
+        return from_dict(tp, value, path)
+    if origin in (collections.abc.Mapping, dict):
+        _, vt = typing.get_args(tp)
+        if not isinstance(value, Mapping):
+            raise ConfigError(path, f"must be a table, got {value!r}")
+        return {str(k): _convert(v, vt, f"{path}.{k}") for k, v in value.items()}
+    if origin is tuple:
+        args = typing.get_args(tp)
+        if not isinstance(value, (list, tuple)):
+            raise ConfigError(path, f"must be an array, got {value!r}")
+        et = args[0]
+        return tuple(_convert(v, et, f"{path}[{i}]") for i, v in enumerate(value))
+    if tp is float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ConfigError(path, f"must be a number, got {value!r}")
+        return float(value)
+    if tp is int:
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise ConfigError(path, f"must be an integer, got {value!r}")
+        return value
+    if tp is bool:
+        if not isinstance(value, bool):
+            raise ConfigError(path, f"must be true or false, got {value!r}")
+        return value
+    if tp is str:
+        if not isinstance(value, str):
+            raise ConfigError(path, f"must be a string, got {value!r}")
+        return value
+    raise ConfigError(path, f"unsupported type {tp!r}")  # pragma: no cover - programming error
+
+
+def from_dict(cls: type, data: Mapping[str, Any], path: str = "") -> Any:
+    """Build dataclass ``cls`` from a (partial) nested dict; missing fields keep defaults.
+
+    Unknown keys, wrong types and invalid values raise :class:`ConfigError` naming the
+    dotted path.
+    """
+    hints = _hints(cls)
+    names = [f.name for f in fields(cls)]
+    prefix = f"{path}." if path else ""
+    for key in data:
+        if key not in names:
+            raise ConfigError(f"{prefix}{key}", f"unknown field; allowed: {', '.join(names)}")
+    kwargs = {}
+    base = cls() if all(f.default is not dataclasses.MISSING or f.default_factory is not dataclasses.MISSING
+                        for f in fields(cls)) else None
+    for f in fields(cls):
+        if f.name in data:
+            sub = data[f.name]
+            if base is not None and isinstance(sub, Mapping):
+                # a partial table overrides the default sub-config field by field
+                sub = _deep_merge(_to_plain(getattr(base, f.name)), sub)
+            kwargs[f.name] = _convert(sub, hints[f.name], f"{prefix}{f.name}")
+    try:
+        return cls(**kwargs)
+    except ConfigError as err:  # raised by cls.__post_init__ with a local field name
+        raise ConfigError(f"{prefix}{err.field}", err.message) from None
+    except TypeError as err:
+        raise ConfigError(path or cls.__name__, f"missing fields: {err}") from None
+
+
+def load_config(path: str | Path) -> BenchConfig:
+    """Read a TOML configuration file (partial files override the defaults)."""
+    p = Path(path)
+    try:
+        text = p.read_text()
+    except OSError as err:
+        raise ConfigError("--config", f"cannot read {p}: {err.strerror}") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise ConfigError("--config", f"{p} is not valid TOML: {err}") from None
+    base: dict[str, Any] = {}
+    if "test" in data:  # a config may start from a Table 4 preset: test = 6
+        test = data.pop("test")
+        base = preset(test).to_dict()
+    return from_dict(BenchConfig, _deep_merge(base, data))
+
+
+def _deep_merge(a: Mapping[str, Any], b: Mapping[str, Any]) -> dict[str, Any]:
+    out = dict(a)
+    for k, v in b.items():
+        out[k] = _deep_merge(out[k], v) if isinstance(v, Mapping) and isinstance(out.get(k), Mapping) else v
+    return out
+
+
+def config_from_toml(text: str) -> BenchConfig:
+    """Parse a configuration from TOML text (e.g. the copy stored in a run file)."""
+    try:
+        return from_dict(BenchConfig, tomllib.loads(text))
+    except tomllib.TOMLDecodeError as err:
+        raise ConfigError("config", f"stored configuration is not valid TOML: {err}") from None
+
+
+def with_overrides(cfg: BenchConfig, overrides: Mapping[str, Any]) -> BenchConfig:
+    """Apply dotted-path overrides (``{"joints.clearance_b_mm": 0.1}``) and re-validate."""
+    data = cfg.to_dict()
+    for dotted, value in overrides.items():
+        keys = dotted.split(".")
+        node = data
+        for k in keys[:-1]:
+            if not isinstance(node.get(k), dict):
+                raise ConfigError(dotted, f"unknown section {k!r}; allowed: {', '.join(node)}")
+            node = node[k]
+        if keys[-1] not in node:
+            raise ConfigError(dotted, f"unknown field; allowed: {', '.join(node)}")
+        node[keys[-1]] = list(value) if isinstance(value, tuple) else value
+    return from_dict(BenchConfig, data)
+
+
+# -------------------------------------------------------------------------- presets
+#: S003 Table 4: test id -> (diametral clearance B [mm], C [mm], motor speed [rpm]).
+TABLE4: dict[int, tuple[float, float, float]] = {
+    1: (0.0, 0.0, 250.0), 2: (0.0, 0.0, 500.0), 3: (0.0, 0.0, 750.0),
+    4: (0.0, 0.1, 250.0), 5: (0.0, 0.1, 500.0), 6: (0.0, 0.1, 750.0),
+    7: (0.1, 0.0, 250.0), 8: (0.1, 0.0, 500.0), 9: (0.1, 0.0, 750.0),
+    10: (0.1, 0.1, 250.0), 11: (0.1, 0.1, 500.0), 12: (0.1, 0.1, 750.0),
+}
+
+
+def preset(test_id: int) -> BenchConfig:
+    """Configuration of S003 Table 4 test ``test_id`` (1–12): clearances and a constant
+    motor speed, y vertical. The 38 s protocol with the same clearances is
+    ``preset(i).replace(**{"drive.program": "protocol"})``."""
+    if isinstance(test_id, bool) or not isinstance(test_id, int) or test_id not in TABLE4:
+        raise ConfigError("--test", f"must be a Table 4 test id 1..12, got {test_id!r}")
+    b, c, rpm = TABLE4[test_id]
+    base = BenchConfig()
+    return dataclasses.replace(
+        base,
+        name=f"test{test_id}",
+        joints=dataclasses.replace(base.joints, clearance_b_mm=b, clearance_c_mm=c),
+        drive=dataclasses.replace(base.drive, program="constant", motor_rpm=rpm),
+    )
+
+
+DEFAULT_CONFIG = BenchConfig()

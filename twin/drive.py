@@ -1,0 +1,144 @@
+"""Drive programs: the crank angle and rate references the PID tracks.
+
+In simulation the motor and the V-belt are not modelled (S003 §4.3): a PID on the crank
+tracks a reference crank angle. Three programs produce that reference:
+
+* ``constant``: from rest, the motor command steps to ``motor_rpm`` at t = 0;
+* ``protocol``: the 38 s test of S003 §4.3 (stop, speed 1, stop, speed 2, stop, speed 3, stop);
+* ``trace``: a recorded crank encoder angle (replay of a bench recording).
+
+For the synthetic programs the motor command is a step and the crank speed follows it
+with a smooth cosine ramp of ``drive.ramp_s`` (PLACEHOLDER for the motor controller's
+acceleration), so reference angle, rate and acceleration are continuous. All angles
+returned here are bench angles θ (see :mod:`twin.config`).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from twin.channels import bench_from_encoder
+from twin.config import BenchConfig
+from twin.errors import ConfigError, RecordingError
+
+RPM_TO_RAD_S = 2.0 * math.pi / 60.0
+
+
+def command_events(cfg: BenchConfig) -> list[tuple[float, float]]:
+    """(time [s], motor command [rpm]) steps of a synthetic program, starting at rest."""
+    d = cfg.drive
+    if d.program == "constant":
+        return [(0.0, d.motor_rpm)]
+    if d.program == "protocol":
+        ev, t = [], d.protocol_stop_s
+        for rpm in d.protocol_rpm:
+            ev.append((t, rpm))
+            ev.append((t + d.protocol_hold_s, 0.0))
+            t += d.protocol_hold_s + d.protocol_stop_s
+        return ev
+    raise ConfigError("drive.program", f"{d.program!r} has no command steps")
+
+
+def load_trace(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
+    """Read an encoder trace: (t [s], encoder angle [rad]) from ``.npz`` or ``.csv``.
+
+    ``.npz`` must hold arrays ``t`` and ``angle``; ``.csv`` a header with columns ``t`` and
+    ``angle``. Time must be finite and strictly increasing.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise ConfigError("drive.trace_file", f"no such file: {p}")
+    try:
+        if p.suffix == ".npz":
+            with np.load(p) as z:
+                t, a = np.asarray(z["t"], float), np.asarray(z["angle"], float)
+        elif p.suffix == ".csv":
+            data = np.genfromtxt(p, delimiter=",", names=True)
+            t, a = np.asarray(data["t"], float), np.asarray(data["angle"], float)
+        else:
+            raise ConfigError("drive.trace_file", f"must be a .npz or .csv file, got {p.name}")
+    except (KeyError, ValueError) as err:
+        raise RecordingError(f"{p}: needs columns 't' and 'angle' ({err})") from None
+    if t.ndim != 1 or t.shape != a.shape or t.size < 2:
+        raise RecordingError(f"{p}: 't' and 'angle' must be 1-D arrays of equal length >= 2")
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(a))):
+        raise RecordingError(f"{p}: trace holds NaN or infinite samples")
+    if np.any(np.diff(t) <= 0):
+        raise RecordingError(f"{p}: time must be strictly increasing")
+    return t, a
+
+
+def _ramp(tau: np.ndarray, T: float) -> tuple[np.ndarray, np.ndarray]:
+    """Cosine ramp s(τ) from 0 to 1 over T and its integral ∫0^τ s; τ clipped to [0, ∞)."""
+    tau = np.maximum(tau, 0.0)
+    if T <= 0:
+        return (tau > 0).astype(float), tau
+    tc = np.minimum(tau, T)
+    s = 0.5 * (1.0 - np.cos(np.pi * tc / T))
+    integral = 0.5 * (tc - T / np.pi * np.sin(np.pi * tc / T)) + (tau - tc)
+    return s, integral
+
+
+class DriveReference:
+    """Reference bench angle θ_ref(t) [rad] and rate ω_ref(t) [rad/s] of a configuration."""
+
+    def __init__(self, cfg: BenchConfig):
+        self.cfg = cfg
+        d = cfg.drive
+        self.direction = cfg.mechanism.crank_direction
+        self.theta0 = float(bench_from_encoder(d.initial_encoder_angle_rad, self.direction))
+        self._trace = None
+        if d.program == "trace":
+            self._trace = self._prepare_trace(*load_trace(d.trace_file))
+        else:
+            self.events = command_events(cfg)
+
+    # -- synthetic programs
+    def _speed_terms(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        d = self.cfg.drive
+        omega = np.zeros_like(t)
+        angle = np.zeros_like(t)
+        prev = 0.0
+        for t_ev, rpm in self.events:
+            target = rpm / d.belt_ratio * RPM_TO_RAD_S
+            s, integ = _ramp(t - t_ev, d.ramp_s)
+            omega += (target - prev) * s
+            angle += (target - prev) * integ
+            prev = target
+        return omega, angle
+
+    # -- trace program
+    def _prepare_trace(self, t: np.ndarray, phi: np.ndarray):
+        from scipy.interpolate import make_interp_spline  # scipy import only when needed
+
+        theta = bench_from_encoder(phi, self.direction)
+        # smoothing spline through the (quantized) encoder angle: C2 reference whose
+        # derivative is the rate; zero-phase, no lag
+        spline = make_interp_spline(t - t[0], theta, k=3)
+        self.theta0 = float(theta[0])
+        self.trace_duration_s = float(t[-1] - t[0])
+        return spline, spline.derivative()
+
+    def __call__(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        t = np.asarray(t, dtype=np.float64)
+        if self._trace is not None:
+            spline, dspline = self._trace
+            tc = np.clip(t, 0.0, self.trace_duration_s)
+            return spline(tc), dspline(tc)
+        omega, angle = self._speed_terms(t)
+        return self.theta0 + self.direction * angle, self.direction * omega
+
+    def command_rpm(self, t: np.ndarray) -> np.ndarray:
+        """Motor speed command [rpm] (the DAQ's analog output, ±10 V ↔ ±1000 rpm)."""
+        t = np.asarray(t, dtype=np.float64)
+        if self._trace is not None:
+            _, dspline = self._trace
+            w = dspline(np.clip(t, 0.0, self.trace_duration_s))
+            return self.direction * w / RPM_TO_RAD_S * self.cfg.drive.belt_ratio
+        out = np.zeros_like(t)
+        for t_ev, rpm in self.events:
+            out = np.where(t >= t_ev, rpm, out)
+        return out

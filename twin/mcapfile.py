@@ -1,0 +1,311 @@
+"""Runs as MCAP files: batched array messages per channel group, zstd chunks.
+
+Layout (documented for other tools in ``recordings/FORMAT.md``):
+
+* one topic per channel group, ``/twin/<group>`` (``/twin/accel``, ``/twin/joint_C``...),
+  message encoding ``cdr``, schema encoding ``ros2msg``, schema ``twin_msgs/msg/<Group>Block``;
+* each message is a block of up to ``block`` consecutive samples (1000 = 10 ms at 100 kHz):
+  ``builtin_interfaces/Time stamp`` (time of the block's first sample), ``uint64 first_index``,
+  ``float64 rate_hz``, then one ``float32[]``/``float64[]`` array per channel;
+* ``log_time = publish_time = stamp`` in nanoseconds of simulation time (epoch: the run's
+  start, t = 0), never the wall clock, so files are reproducible;
+* channel metadata ``names``/``units``/``dtypes`` (comma separated) give the exact channel
+  names and units (ros2msg field names are lower-cased);
+* metadata records ``twin.config`` (``toml``: the full configuration), ``twin.run``
+  (``format``, ``t0``, ``rate_hz``, ``n``, ``meta`` as JSON) and optionally ``twin.summary``.
+
+Writes go to a temporary file that is renamed into place on success, so an existing file is
+never left half-written.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import struct
+from pathlib import Path
+from typing import Any, Iterable
+
+import numpy as np
+from mcap.exceptions import McapError
+from mcap.reader import make_reader
+from mcap.writer import CompressionType, Writer
+
+from twin import __version__
+from twin.config import BenchConfig, config_from_toml
+from twin.errors import RecordingError, TwinError
+from twin.run import Channel, Run
+
+FORMAT = "twin-run/1"
+TOPIC_PREFIX = "/twin/"
+DEFAULT_BLOCK = 1000
+_CDR_LE = b"\x00\x01\x00\x00"
+_DTYPES = {"float32": ("float32", 4), "float64": ("float64", 8)}
+
+_TIME_DEF = """================================================================================
+MSG: builtin_interfaces/Time
+int32 sec
+uint32 nanosec
+"""
+
+
+def field_name(channel: str) -> str:
+    """ros2msg field name of a channel (lower case, [a-z0-9_])."""
+    f = re.sub(r"[^a-z0-9_]", "_", channel.lower())
+    return f if f[:1].isalpha() else f"c_{f}"
+
+
+def schema_name(group: str) -> str:
+    """ros2msg type name of a group's block message."""
+    return "twin_msgs/msg/" + "".join(p.capitalize() for p in re.split(r"[_\W]+", group) if p) + "Block"
+
+
+def schema_text(group: str, channels: list[Channel]) -> str:
+    lines = [f"# Block of uniformly sampled channels of group '{group}' (twin run file, {FORMAT})",
+             "builtin_interfaces/Time stamp  # simulation time of the first sample",
+             "uint64 first_index             # index of the first sample in the run",
+             "float64 rate_hz                # sample rate [Hz]"]
+    for c in channels:
+        lines.append(f"{c.data.dtype.name}[] {field_name(c.name)}  # {c.name} [{c.unit}]")
+    return "\n".join(lines) + "\n" + _TIME_DEF
+
+
+def _ns(t: float) -> int:
+    return int(round(t * 1e9))
+
+
+def encode_block(stamp_ns: int, first_index: int, rate_hz: float, arrays: list[np.ndarray]) -> bytes:
+    """CDR (little endian) encoding of one block message."""
+    sec, nsec = divmod(stamp_ns, 1_000_000_000)
+    parts = [_CDR_LE, struct.pack("<iIQd", sec, nsec, first_index, rate_hz)]
+    pos = 24  # offset after the encapsulation header
+    for a in arrays:
+        pad = (-pos) % 4
+        parts.append(b"\x00" * pad + struct.pack("<I", a.size))
+        pos += pad + 4
+        pad = (-pos) % a.itemsize
+        parts.append(b"\x00" * pad)
+        pos += pad
+        raw = a.astype(a.dtype.newbyteorder("<"), copy=False).tobytes()
+        parts.append(raw)
+        pos += len(raw)
+    return b"".join(parts)
+
+
+def decode_block(data: bytes, dtypes: list[str]) -> tuple[int, int, float, list[np.ndarray]]:
+    """Inverse of :func:`encode_block`: (stamp_ns, first_index, rate_hz, arrays)."""
+    if data[:4] != _CDR_LE or len(data) < 28:
+        raise RecordingError("block message is not little-endian CDR")
+    sec, nsec, first, rate = struct.unpack_from("<iIQd", data, 4)
+    pos, out = 24, []
+    for dt in dtypes:
+        size = _DTYPES[dt][1]
+        pos += (-pos) % 4
+        (n,) = struct.unpack_from("<I", data, 4 + pos)
+        pos += 4
+        pos += (-pos) % size
+        end = pos + n * size
+        if 4 + end > len(data):
+            raise RecordingError("block message is truncated")
+        out.append(np.frombuffer(data, dtype=np.dtype(dt).newbyteorder("<"), count=n, offset=4 + pos).astype(dt))
+        pos = end
+    return sec * 1_000_000_000 + nsec, first, rate, out
+
+
+class RunWriter:
+    """Streams a run, chunk by chunk, into an MCAP file (temporary file + rename).
+
+    Use as a context manager; :meth:`close` finalizes, leaving the exception path to
+    delete the temporary file.
+    """
+
+    def __init__(self, path: str | Path, config: BenchConfig | None, block: int = DEFAULT_BLOCK):
+        self.path = Path(path)
+        if self.path.suffix != ".mcap":
+            raise TwinError(f"--out: run files must end in .mcap, got {self.path.name}")
+        if not self.path.parent.exists():
+            raise TwinError(f"--out: directory {self.path.parent} does not exist")
+        self.tmp = self.path.with_name(f".{self.path.name}.{os.getpid()}.tmp")
+        self.config = config
+        self.block = int(block)
+        self._fh = open(self.tmp, "wb")
+        self._w = Writer(self._fh, compression=CompressionType.ZSTD, chunk_size=4 * 1024 * 1024)
+        self._w.start(profile="", library=f"twin {__version__}")
+        self._groups: dict[str, tuple[int, list[str]]] = {}
+        self._pending: Run | None = None
+        self._written = 0
+        self.t0: float | None = None
+        self.rate_hz: float | None = None
+        self._channels: list[str] | None = None
+        self._done = False
+
+    def _register(self, run: Run) -> None:
+        self.t0, self.rate_hz = run.t0, run.rate_hz
+        self._channels = list(run.channels)
+        for group, names in run.groups.items():
+            chans = [run.channels[n] for n in names]
+            sid = self._w.register_schema(schema_name(group), "ros2msg", schema_text(group, chans).encode())
+            cid = self._w.register_channel(
+                TOPIC_PREFIX + group, "cdr", sid,
+                metadata={"names": ",".join(names), "units": ",".join(c.unit for c in chans),
+                          "dtypes": ",".join(c.data.dtype.name for c in chans)})
+            self._groups[group] = (cid, names)
+
+    def write(self, chunk: Run) -> None:
+        """Append the samples of ``chunk`` (the next consecutive piece of the run)."""
+        if self._channels is None:
+            self._register(chunk)
+        elif list(chunk.channels) != self._channels or chunk.rate_hz != self.rate_hz:
+            raise RecordingError("chunk does not match the channels or rate of the run being written")
+        for c in chunk.channels.values():
+            if c.data.dtype.name not in _DTYPES:
+                raise RecordingError(f"channel {c.name}: dtype {c.data.dtype} not storable (float32/float64)")
+        run = chunk if self._pending is None else Run.concat([self._pending, chunk])
+        full = (run.n // self.block) * self.block
+        self._emit(run.slice(0, full))
+        self._pending = run.slice(full, run.n)
+
+    def _emit(self, run: Run) -> None:
+        for i in range(0, run.n, self.block):
+            idx = self._written + i
+            stamp = _ns(self.t0 + idx / self.rate_hz)
+            for group, (cid, names) in self._groups.items():
+                arrays = [np.ascontiguousarray(run.channels[n].data[i:i + self.block]) for n in names]
+                self._w.add_message(cid, log_time=stamp, publish_time=stamp, sequence=idx // self.block,
+                                    data=encode_block(stamp, idx, self.rate_hz, arrays))
+        self._written += run.n
+
+    def close(self, meta: dict[str, Any] | None = None, summary: dict[str, Any] | None = None) -> Path:
+        """Flush, write the metadata records, finish and rename into place."""
+        if self._pending is not None and self._pending.n:
+            self._emit(self._pending)
+            self._pending = None
+        if self.config is not None:
+            self._w.add_metadata("twin.config", {"toml": self.config.to_toml()})
+        self._w.add_metadata("twin.run", {
+            "format": FORMAT, "t0": repr(float(self.t0 or 0.0)), "rate_hz": repr(float(self.rate_hz or 0.0)),
+            "n": str(self._written), "channels": ",".join(self._channels or []),
+            "meta": json.dumps(meta or {}, sort_keys=True, default=_json_default)})
+        if summary is not None:
+            self._w.add_metadata("twin.summary", {"json": json.dumps(summary, sort_keys=True, default=_json_default)})
+        self._w.finish()
+        self._fh.close()
+        os.replace(self.tmp, self.path)
+        self._done = True
+        return self.path
+
+    def abort(self) -> None:
+        """Drop the temporary file (on error); an existing file at ``path`` is untouched."""
+        if not self._done:
+            try:
+                self._fh.close()
+            finally:
+                self.tmp.unlink(missing_ok=True)
+            self._done = True
+
+    def __enter__(self) -> "RunWriter":
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        if exc_type is not None:
+            self.abort()
+        elif not self._done:
+            self.abort()
+
+
+def _json_default(o: Any) -> Any:
+    if isinstance(o, (np.floating, np.integer)):
+        return o.item()
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, Path):
+        return str(o)
+    raise TypeError(f"not JSON serializable: {type(o).__name__}")
+
+
+def write_run(path: str | Path, run: Run, summary: dict[str, Any] | None = None,
+              block: int = DEFAULT_BLOCK) -> Path:
+    """Write a whole run to ``path`` (temporary file + rename)."""
+    with RunWriter(path, run.config, block=block) as w:
+        w.write(run)
+        return w.close(run.meta, summary)
+
+
+def read_metadata(path: str | Path) -> dict[str, dict[str, str]]:
+    """All metadata records of an MCAP file by name."""
+    p = _check_path(path)
+    try:
+        with open(p, "rb") as fh:
+            return {m.name: dict(m.metadata) for m in make_reader(fh).iter_metadata()}
+    except (McapError, EOFError, struct.error, ValueError, KeyError) as err:
+        raise RecordingError(f"{p}: not a readable MCAP file ({type(err).__name__}: {err})") from None
+
+
+def _check_path(path: str | Path) -> Path:
+    p = Path(path)
+    if not p.is_file():
+        raise RecordingError(f"{p}: no such file")
+    return p
+
+
+def read_run(path: str | Path, groups: Iterable[str] | None = None) -> Run:
+    """Read a run file back (all groups, or only ``groups``); bit-identical to what was written."""
+    p = _check_path(path)
+    try:
+        with open(p, "rb") as fh:
+            reader = make_reader(fh, validate_crcs=True)
+            meta_records = {m.name: dict(m.metadata) for m in reader.iter_metadata()}
+            if "twin.run" not in meta_records:
+                raise RecordingError(f"{p}: no 'twin.run' metadata record: not a twin run file "
+                                     "(bench recordings are imported with 'twin import')")
+            info = meta_records["twin.run"]
+            if info.get("format") != FORMAT:
+                raise RecordingError(f"{p}: unsupported run format {info.get('format')!r}, expected {FORMAT}")
+            n = int(info["n"])
+            rate = float(info["rate_hz"])
+            wanted = None if groups is None else {TOPIC_PREFIX + g for g in groups}
+            summary = reader.get_summary()
+            topics = {c.topic: c for c in summary.channels.values()} if summary else {}
+            if wanted is not None:
+                missing = wanted - set(topics)
+                if missing:
+                    raise RecordingError(f"{p}: no groups {sorted(m[len(TOPIC_PREFIX):] for m in missing)}")
+            blocks: dict[str, list[list[np.ndarray]]] = {}
+            expected_first: dict[str, int] = {}
+            chan_meta: dict[str, dict[str, str]] = {}
+            for _schema, channel, message in reader.iter_messages(topics=wanted, log_time_order=False):
+                topic = channel.topic
+                if not topic.startswith(TOPIC_PREFIX):
+                    continue
+                md = chan_meta.setdefault(topic, dict(channel.metadata))
+                dtypes = md["dtypes"].split(",")
+                _, first, _, arrays = decode_block(message.data, dtypes)
+                if first != expected_first.get(topic, 0):
+                    raise RecordingError(f"{p}: topic {topic} has a gap or is out of order at sample {first}")
+                expected_first[topic] = first + len(arrays[0])
+                blocks.setdefault(topic, []).append(arrays)
+    except TwinError:
+        raise
+    except (McapError, EOFError, struct.error, ValueError, KeyError, OSError) as err:
+        raise RecordingError(f"{p}: corrupt or truncated MCAP file ({type(err).__name__}: {err})") from None
+    order = info.get("channels", "").split(",") if info.get("channels") else None
+    chans: dict[str, Channel] = {}
+    for topic, md in chan_meta.items():
+        names, units = md["names"].split(","), md["units"].split(",")
+        if expected_first[topic] != n:
+            raise RecordingError(f"{p}: topic {topic} holds {expected_first[topic]} samples, expected {n} (truncated?)")
+        for k, (name, unit) in enumerate(zip(names, units)):
+            data = np.concatenate([b[k] for b in blocks[topic]])
+            chans[name] = Channel(name, unit, topic[len(TOPIC_PREFIX):], data)
+    if order:
+        chans = {k: chans[k] for k in order if k in chans}
+    config = config_from_toml(meta_records["twin.config"]["toml"]) if "twin.config" in meta_records else None
+    meta = json.loads(info.get("meta", "{}"))
+    return Run(float(info["t0"]), rate, chans, config, meta)
+
+
+def read_summary(path: str | Path) -> dict[str, Any] | None:
+    """The summary stored in a run file, if any."""
+    md = read_metadata(path)
+    return json.loads(md["twin.summary"]["json"]) if "twin.summary" in md else None

@@ -1,0 +1,311 @@
+"""Configuration -> compiled MuJoCo model, through ``mujoco.MjSpec`` edits of ``mjcf/bench.xml``.
+
+What the builder does to the base model:
+
+* options: timestep, integrator, solver, gravity from the orientation; contact detection is
+  switched off entirely when no joint has a clearance;
+* bodies: masses, centres of mass and inertias (Table 1), lengths, d_off, pin and bushing
+  radii, accelerometer mounting sites;
+* an ideal joint B is a hinge in the kinematic tree (exact); an ideal joint C is the
+  loop-closure ``connect`` of the base model (stiff soft constraint);
+* a clearance joint replaces that by two slide joints (B: rod eye relative to the crank pin)
+  or drops the connect (C), and adds an explicit ``<pair>`` pin/bushing whose contact is
+  computed by the native bore collider (exact circle) and governed by solref/solimp/friction;
+* sensors: only those the configuration's channel groups need;
+* the crank PID gains.
+
+Contact parameters of a clearance joint, in order of precedence:
+``mujoco.contact_solref``/``contact_solimp`` of the configuration (raw MuJoCo values); the
+calibration table ``twin/data/contact_calibration.json`` (written by ``twin calibrate
+contact``); the documented first guess :func:`first_guess_contact`.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from functools import lru_cache
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from twin import names as N
+from twin.config import BenchConfig, ln_stiffness
+from twin.errors import ModelError
+from twin.mujoco_engine.collider import ensure_installed
+
+CALIBRATION_FILE = Path(__file__).resolve().parent.parent / "data" / "contact_calibration.json"
+
+#: flat, tiny impedance: the contact force is then exactly k δ + c δ̇ with a direct solref
+#: (−k Â, −c Â), Â the row's inverse-inertia estimate (ENGINEERING_NOTES, re-measured in tests)
+FLAT_SOLIMP = (1e-4, 1e-4, 1e-3, 0.5, 2.0)
+#: impact speed at which the first guess matches the reference law [m/s]. PLACEHOLDER until
+#: the calibration (impact speeds on the bench span ~1 mm/s to 0.5 m/s).
+FIRST_GUESS_SPEED = 0.1
+#: torsional and rolling friction are irrelevant for a planar pin in a bore (condim 3)
+_CONDIM = 3
+
+_SENSORS_BY_GROUP = {
+    "accel": list(N.ACCEL_SENSORS),
+    "encoder": [N.SENSOR_CRANK_ANGLE],
+    "crank": [N.SENSOR_CRANK_ANGLE, N.SENSOR_CRANK_SPEED],
+    "slider": [N.SENSOR_SLIDER_POSITION],
+    "drive": [N.SENSOR_CRANK_TORQUE],
+}
+
+_AXIS_QUAT = {  # site orientation whose x axis is the sensitive axis (rotation about z)
+    "+x": (1.0, 0.0, 0.0, 0.0),
+    "+y": (math.sqrt(0.5), 0.0, 0.0, math.sqrt(0.5)),
+    "-x": (0.0, 0.0, 0.0, 1.0),
+    "-y": (math.sqrt(0.5), 0.0, 0.0, -math.sqrt(0.5)),
+}
+
+
+@dataclass(frozen=True)
+class ContactSetting:
+    """MuJoCo parameters of one pin/bushing pair and where they came from.
+
+    Attributes:
+        solref: the pair's solref (2 numbers; negative = direct stiffness/damping).
+        solimp: the pair's solimp (5 numbers).
+        friction: sliding friction coefficient μ [-].
+        source: "config", "calibration" or "first-guess".
+        stiffness_n_per_m: physical linear stiffness k, if defined that way [N/m].
+        damping_ns_per_m: physical linear damping c [N s/m].
+    """
+
+    solref: tuple[float, float]
+    solimp: tuple[float, ...]
+    friction: float
+    source: str
+    stiffness_n_per_m: float | None = None
+    damping_ns_per_m: float | None = None
+
+
+@dataclass
+class BuildInfo:
+    """What the builder decided, for run metadata and tests."""
+
+    contacts: dict[str, ContactSetting] = field(default_factory=dict)
+    sensors: list[str] = field(default_factory=list)
+    a_hat: dict[str, float] = field(default_factory=dict)
+
+
+# ------------------------------------------------------------------ contact parameters
+@lru_cache(maxsize=64)
+def _first_guess_kc(K: float, n: float, e: float, m_eff: float) -> tuple[float, float]:
+    from twin.impact import linear_equivalent
+
+    return linear_equivalent(K, n, e, m_eff, FIRST_GUESS_SPEED, law="lankarani-nikravesh")
+
+
+def first_guess_contact(cfg: BenchConfig, joint: str, m_eff: float) -> tuple[float, float]:
+    """First guess (k [N/m], c [N s/m]) of a linear contact for ``joint``.
+
+    Method: the reference's Lankarani–Nikravesh law (K from S003 Eq. 18, n, e of the
+    configuration) is replaced by the unilateral linear spring-damper that has the same
+    contact duration and the same restitution for an impact of the effective mass ``m_eff``
+    at :data:`FIRST_GUESS_SPEED`. The calibration (``twin calibrate contact``) supersedes it.
+    """
+    K = cfg.contact.stiffness or ln_stiffness(cfg.joints, cfg.materials, joint)
+    return _first_guess_kc(float(K), float(cfg.contact.exponent), float(cfg.contact.restitution), float(m_eff))
+
+
+def load_calibration(path: Path = CALIBRATION_FILE) -> dict:
+    """The calibration table (empty if none has been committed yet)."""
+    if not path.is_file():
+        return {}
+    return json.loads(path.read_text())
+
+
+def _calibration_entry(table: dict, cfg: BenchConfig, joint: str) -> dict | None:
+    key = f"{joint}:{cfg.joints.diametral_mm(joint):g}"
+    entry = table.get("entries", {}).get(key)
+    if entry is None:
+        return None
+    # a calibration holds for the reference parameters it was fitted to
+    ref = table.get("reference", {})
+    same = all(math.isclose(ref.get(k, float("nan")), v, rel_tol=1e-9) for k, v in (
+        ("restitution", cfg.contact.restitution), ("exponent", cfg.contact.exponent),
+        ("pin_diameter_m", cfg.joints.pin_diameter_m), ("mu0", cfg.contact.mu0)))
+    return entry if same and cfg.contact.stiffness == 0 else None
+
+
+def contact_setting(cfg: BenchConfig, joint: str, a_hat: float) -> ContactSetting:
+    """Resolve the pair parameters of a clearance joint (see module docstring)."""
+    mu = cfg.contact.mu0
+    ms = cfg.mujoco
+    if ms.contact_solref and ms.contact_solimp:
+        return ContactSetting(tuple(ms.contact_solref), tuple(ms.contact_solimp), mu, "config")
+    entry = _calibration_entry(load_calibration(), cfg, joint)
+    if entry is not None:
+        k, c = entry["stiffness_n_per_m"], entry["damping_ns_per_m"]
+        solimp = tuple(entry.get("solimp", FLAT_SOLIMP))
+        return ContactSetting((-k * a_hat, -c * a_hat), solimp, entry.get("friction", mu), "calibration", k, c)
+    k, c = first_guess_contact(cfg, joint, 1.0 / a_hat)
+    return ContactSetting((-k * a_hat, -c * a_hat), FLAT_SOLIMP, mu, "first-guess", k, c)
+
+
+# --------------------------------------------------------------------------- builder
+def _set_inertial(body: mujoco.MjsBody, mass: float, ipos, izz: float) -> None:
+    body.explicitinertial = True
+    body.mass = mass
+    body.ipos = list(ipos)
+    body.iquat = [1.0, 0.0, 0.0, 0.0]
+    # planar mechanism: only I_zz acts; the off-plane values keep the tensor valid
+    body.inertia = [izz / 2, izz / 2, izz]
+
+
+def build_spec(cfg: BenchConfig) -> mujoco.MjSpec:
+    """Edited (uncompiled) spec of the configuration; contact pairs without final solref."""
+    try:
+        spec = mujoco.MjSpec.from_file(str(N.BASE_XML))
+    except Exception as err:  # mujoco raises ValueError with the parser message
+        raise ModelError(f"cannot load base model {N.BASE_XML}: {err}") from None
+    spec.modelname = f"slider_crank_bench_{cfg.name}"
+    b, j, mech = cfg.bodies, cfg.joints, cfg.mechanism
+    r, l = b.crank.length_m, b.rod.length_m
+    rj, half_len = j.pin_radius_m, j.bushing_length_m / 2
+
+    # options
+    opt = spec.option
+    opt.timestep = cfg.simulation.timestep_s
+    opt.integrator = getattr(mujoco.mjtIntegrator, f"mjINT_{cfg.mujoco.integrator.upper()}")
+    opt.solver = getattr(mujoco.mjtSolver, f"mjSOL_{cfg.mujoco.solver.upper()}")
+    opt.iterations = cfg.mujoco.iterations
+    opt.tolerance = cfg.mujoco.tolerance
+    opt.gravity = list(mech.gravity_vector)
+    if not j.clearance_joints:
+        opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT
+
+    # crank
+    crank = spec.body(N.CRANK)
+    _set_inertial(crank, b.crank.mass_kg, (b.crank.x_g_m, 0, 0), b.crank.inertia_kgm2)
+    arm = spec.geom(N.CRANK_ARM)
+    arm.size = [r / 2 + 0.015, arm.size[1], arm.size[2]]
+    arm.pos = [r / 2 - 0.01, 0, 0]
+    z = spec.geom(N.pin("B")).pos[2]
+    for obj in (spec.geom(N.pin("B")), spec.site(N.pin("B"))):
+        obj.pos = [r, 0, z]
+
+    # rod (frame at the bushing centre B', x towards C)
+    rod = spec.body(N.ROD)
+    rod.pos = [r, 0, z]
+    _set_inertial(rod, b.rod.mass_kg, (b.rod.x_g_m, 0, 0), b.rod.inertia_kgm2)
+    beam = spec.geom(N.ROD_BEAM)
+    beam.size = [l / 2 - 0.03, beam.size[1], beam.size[2]]
+    beam.pos = [l / 2, 0, 0]
+    for name in (N.bushing("C"), N.bushing_ring("C")):
+        spec.geom(name).pos = [l, 0, 0]
+    spec.site(N.bushing("C")).pos = [l, 0, 0]
+
+    # slider (frame at Cs on the guide line; C' is d_off above it)
+    slider = spec.body(N.SLIDER)
+    _set_inertial(slider, b.slider.mass_kg, (b.slider.x_g_m, mech.d_off_m, 0), b.slider.inertia_kgm2)
+    spec.joint(N.SLIDER_SLIDE).frictionloss = mech.guide_friction_n
+    spec.joint(N.SLIDER_SLIDE).solref_friction = list(cfg.mujoco.guide_solreffriction)
+    for obj in (spec.geom(N.pin("C")), spec.site(N.pin("C"))):
+        obj.pos = [0, mech.d_off_m, 0]
+
+    # pins, bushings and their visual rings
+    for jt in ("B", "C"):
+        spec.geom(N.pin(jt)).size = [rj, half_len, 0]
+        spec.geom(N.bushing(jt)).size = [j.bushing_radius_m(jt), half_len, 0]
+        spec.geom(N.bushing_ring(jt)).size = [j.bushing_radius_m(jt) + 0.006, half_len * 1.05, 0]
+
+    # accelerometer sites
+    for name, mount in cfg.sensors.accelerometers.items():
+        site = spec.site(name)
+        x, y = mount.position_m
+        site.pos = [x, y, 0] if mount.body == "rod" else [x, y + mech.d_off_m, 0]
+        site.quat = list(_AXIS_QUAT[mount.axis])
+        if site.parent.name != mount.body:  # mounts may move between bodies only by config
+            site_body = spec.body(mount.body)
+            new = site_body.add_site(name=f"{name}_tmp", pos=site.pos, quat=site.quat, size=site.size,
+                                     type=site.type, rgba=site.rgba, group=site.group)
+            spec.delete(site)
+            new.name = name
+
+    # clearance joint B: rod eye free in the plane relative to the crank pin
+    if j.diametral_mm("B") > 0:
+        spec.delete(spec.joint(N.ROD_HINGE))
+        rod.add_joint(name=N.ECC_B_X, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1, 0, 0])
+        rod.add_joint(name=N.ECC_B_Y, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 1, 0])
+        rod.add_joint(name=N.ROD_HINGE, type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1])
+    # clearance joint C: no loop-closure constraint, the contact holds the rod on the pin
+    eq = spec.equality(N.JOINT_C_CONNECT)
+    if j.diametral_mm("C") > 0:
+        spec.delete(eq)
+    else:
+        eq.solref = list(cfg.mujoco.equality_solref)
+        eq.solimp = list(cfg.mujoco.equality_solimp)
+    for jt in j.clearance_joints:
+        spec.add_pair(name=N.pair(jt), geomname1=N.pin(jt), geomname2=N.bushing(jt), condim=_CONDIM)
+
+    # sensors: keep only what the channel groups need
+    keep: set[str] = set()
+    for g in cfg.sensors.channels:
+        keep.update(_SENSORS_BY_GROUP.get(g, []))
+        if g == "joints":
+            for jt in j.clearance_joints:
+                keep.update((N.sensor_ecc(jt), N.sensor_contact(jt)))
+    for s in list(spec.sensors):
+        if s.name not in keep:
+            spec.delete(s)
+
+    # crank PID (native <pid>: gainprm = ki, biasprm = [0, -kp, -kv], dynprm = imax)
+    act = spec.actuator(N.CRANK_PID)
+    act.gainprm[0] = cfg.pid.ki
+    act.biasprm[1], act.biasprm[2] = -cfg.pid.kp, -cfg.pid.kv
+    act.dynprm[0] = cfg.pid.imax
+    return spec
+
+
+def build(cfg: BenchConfig) -> tuple[mujoco.MjSpec, mujoco.MjModel, BuildInfo]:
+    """Spec, compiled model and build info of a configuration (collider installed)."""
+    ensure_installed()
+    spec = build_spec(cfg)
+    try:
+        model = spec.compile()
+    except Exception as err:
+        raise ModelError(f"MuJoCo could not compile the model of {cfg.name}: {err}") from None
+    info = BuildInfo(sensors=[s.name for s in spec.sensors])
+    if cfg.joints.clearance_joints:
+        for jt in cfg.joints.clearance_joints:
+            g1 = model.geom(N.pin(jt)).id
+            g2 = model.geom(N.bushing(jt)).id
+            a_hat = float(model.body_invweight0[model.geom_bodyid[g1], 0] +
+                          model.body_invweight0[model.geom_bodyid[g2], 0])
+            setting = contact_setting(cfg, jt, a_hat)
+            p = spec.pair(N.pair(jt))
+            p.solref = list(setting.solref)
+            p.solimp = list(setting.solimp)
+            p.friction = [setting.friction, setting.friction, 0.0, 0.0, 0.0]
+            info.contacts[jt] = setting
+            info.a_hat[jt] = a_hat
+        try:
+            model = spec.compile()
+        except Exception as err:
+            raise ModelError(f"MuJoCo could not compile the model of {cfg.name}: {err}") from None
+    return spec, model, info
+
+
+def build_model(cfg: BenchConfig) -> mujoco.MjModel:
+    """Compiled model of a configuration."""
+    return build(cfg)[1]
+
+
+def export_xml(cfg: BenchConfig) -> str:
+    """MJCF text of the configuration's compiled variant (opens in MuJoCo's viewer)."""
+    spec, _model, info = build(cfg)
+    head = (f"<!-- twin export of '{cfg.name}' (config digest {cfg.digest()}).\n"
+            f"     Clearance joints: {', '.join(cfg.joints.clearance_joints) or 'none'}; contact parameters: "
+            + "; ".join(f"{jt}: solref [{s.solref[0]:.6g}, {s.solref[1]:.6g}] solimp {[float(v) for v in s.solimp]} ({s.source})"
+                        for jt, s in info.contacts.items())
+            + ".\n     Bushing geoms (user=\"7301\") need the twin's bore collider: run clearance variants "
+              "through twin, e.g. 'twin viewer'. -->\n")
+    xml = spec.to_xml()
+    i = xml.find("<mujoco")
+    return xml[:i] + head + xml[i:]

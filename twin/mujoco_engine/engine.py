@@ -1,0 +1,167 @@
+"""The MuJoCo engine: steps the compiled bench inside the engine with ``mujoco.rollout``.
+
+Each chunk of ``simulation.chunk_s`` is one rollout call (no per-step Python): the control
+sequence holds the drive reference [θ_ref, ω_ref] for every step, sensor data come back for
+every step (computed at the state before the step, i.e. at t_k = k h) and are decimated to
+the output rate. The data object carries the state (and the solver warmstart) from one chunk
+to the next, so chunking does not change the result.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any, Iterator
+
+import mujoco
+import numpy as np
+from mujoco import rollout
+
+from twin import names as N
+from twin.channels import channel_specs, encoder_from_bench
+from twin.config import BenchConfig
+from twin.drive import DriveReference
+from twin.errors import SimulationError
+from twin.kinematics import initial_pose, rot2
+from twin.mujoco_engine.builder import build
+from twin.run import Channel, Run
+from twin.simulate import n_samples, output_stride
+
+_STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
+
+
+class MujocoEngine:
+    """MuJoCo twin of the bench (see module docstring)."""
+
+    name = "mujoco"
+
+    def __init__(self, cfg: BenchConfig):
+        self.cfg = cfg
+        t0 = time.perf_counter()
+        self.spec, self.model, self.info = build(cfg)
+        self.data = mujoco.MjData(self.model)
+        self.ref = DriveReference(cfg)
+        self.stride, self.rate = output_stride(cfg)
+        self.n_out = n_samples(cfg)
+        self.specs = channel_specs(cfg)
+        self.meta: dict[str, Any] = {
+            "engine": self.name,
+            "engine_version": mujoco.__version__,
+            "timestep_s": cfg.simulation.timestep_s,
+            "integrator": cfg.mujoco.integrator,
+            "solver": cfg.mujoco.solver,
+            "steps": 0,
+            "wall_s": 0.0,
+            "build_s": time.perf_counter() - t0,
+            "contact": {j: {"solref": list(s.solref), "solimp": list(s.solimp), "friction": s.friction,
+                            "source": s.source, "stiffness_n_per_m": s.stiffness_n_per_m,
+                            "damping_ns_per_m": s.damping_ns_per_m}
+                        for j, s in self.info.contacts.items()},
+            "nq": int(self.model.nq), "nv": int(self.model.nv),
+        }
+        self._sensor_slices = {self.model.sensor(i).name: slice(int(self.model.sensor_adr[i]),
+                                                                 int(self.model.sensor_adr[i] + self.model.sensor_dim[i]))
+                               for i in range(self.model.nsensor)}
+
+    # -------------------------------------------------------------- initial state
+    def set_initial_state(self) -> None:
+        """Mechanism at rest at the drive's initial crank angle, eccentricities as configured."""
+        m, d, cfg = self.model, self.data, self.cfg
+        mujoco.mj_resetData(m, d)
+        theta0 = float(self.ref(np.array([0.0]))[0][0])
+        pose = initial_pose(cfg, theta0)
+        d.qpos[m.jnt_qposadr[m.joint(N.CRANK_HINGE).id]] = pose.theta
+        d.qpos[m.jnt_qposadr[m.joint(N.ROD_HINGE).id]] = pose.phi - pose.theta
+        if cfg.joints.diametral_mm("B") > 0:
+            # slide joints: bushing centre relative to the pin, in the crank frame
+            rel = rot2(pose.theta).T @ (pose.b_bush - pose.b_pin)
+            d.qpos[m.jnt_qposadr[m.joint(N.ECC_B_X).id]] = rel[0]
+            d.qpos[m.jnt_qposadr[m.joint(N.ECC_B_Y).id]] = rel[1]
+        d.qpos[m.jnt_qposadr[m.joint(N.SLIDER_SLIDE).id]] = pose.slider_x
+        mujoco.mj_forward(m, d)
+
+    # -------------------------------------------------------------------- chunks
+    def chunks(self) -> Iterator[Run]:
+        cfg, m, d = self.cfg, self.model, self.data
+        h = cfg.simulation.timestep_s
+        self.set_initial_state()
+        per_chunk = max(1, int(round(cfg.simulation.chunk_s * self.rate)))
+        nstate = mujoco.mj_stateSize(m, _STATE)
+        state0 = np.empty((1, nstate))
+        warm = np.empty((1, m.nv))
+        done = 0
+        wall = 0.0
+        while done < self.n_out:
+            n_out = min(per_chunk, self.n_out - done)
+            nstep = n_out * self.stride
+            t_start = time.perf_counter()
+            k0 = done * self.stride
+            t_steps = (k0 + np.arange(nstep)) * h
+            theta_ref, omega_ref = self.ref(t_steps)
+            ctrl = np.stack([theta_ref, omega_ref], axis=-1)[None]
+            sens = np.empty((1, nstep, m.nsensordata))
+            state = np.empty((1, nstep, nstate))
+            mujoco.mj_getState(m, d, state0[0], _STATE)
+            warm[0] = d.qacc_warmstart
+            rollout.rollout(m, d, state0, ctrl, nstep=nstep, initial_warmstart=warm,
+                            state=state, sensordata=sens)
+            # rollout leaves the last state in `state`; continue from it
+            mujoco.mj_setState(m, d, state[0, -1], _STATE)
+            t_end_expected = (k0 + nstep) * h
+            if not math.isclose(d.time, t_end_expected, rel_tol=0, abs_tol=h * 0.5) or \
+                    not np.all(np.isfinite(state[0, -1])):
+                raise SimulationError(self._divergence_message(state[0], t_steps))
+            chunk = self._channels(sens[0, ::self.stride], theta_ref[::self.stride],
+                                   omega_ref[::self.stride], done)
+            wall += time.perf_counter() - t_start
+            done += n_out
+            self.meta.update(steps=done * self.stride, wall_s=wall,
+                             real_time_factor=(done * self.stride * h) / wall if wall > 0 else None)
+            yield chunk
+
+    def _divergence_message(self, states: np.ndarray, t_steps: np.ndarray) -> str:
+        times = states[:, 0]
+        bad = np.flatnonzero(~np.isfinite(states).all(axis=1))
+        stuck = np.flatnonzero(np.diff(times) <= 0)
+        warn = [f"{mujoco.mjtWarning(i).name}({int(self.data.warning[i].number)})"
+                for i in range(len(self.data.warning)) if self.data.warning[i].number]
+        at = t_steps[bad[0]] if bad.size else (t_steps[stuck[0]] if stuck.size else t_steps[-1])
+        return (f"{self.cfg.name}: MuJoCo run diverged or stopped near t = {at:.6f} s "
+                f"(warnings: {', '.join(warn) or 'none'}); try a smaller timestep or stiffer settings")
+
+    def _channels(self, sens: np.ndarray, theta_ref: np.ndarray, omega_ref: np.ndarray, first: int) -> Run:
+        cfg, sl = self.cfg, self._sensor_slices
+        out: dict[str, np.ndarray] = {}
+
+        def col(name: str, k: int = 0) -> np.ndarray:
+            return sens[:, sl[name].start + k]
+
+        groups = cfg.sensors.channels
+        if "accel" in groups:
+            for a in N.ACCEL_SENSORS:
+                out[a] = col(a, 0)  # site x axis = sensitive axis
+        if "encoder" in groups:
+            out["encoder_angle"] = encoder_from_bench(col(N.SENSOR_CRANK_ANGLE), cfg.mechanism.crank_direction)
+        if "crank" in groups:
+            out["crank_angle"] = col(N.SENSOR_CRANK_ANGLE)
+            out["crank_speed"] = col(N.SENSOR_CRANK_SPEED)
+        if "slider" in groups:
+            out["slider_position"] = col(N.SENSOR_SLIDER_POSITION)
+        if "joints" in groups:
+            for jt in cfg.joints.clearance_joints:
+                ex, ey = col(N.sensor_ecc(jt), 0), col(N.sensor_ecc(jt), 1)
+                found = col(N.sensor_contact(jt), 0) > 0
+                out[f"ecc_{jt}_x"] = ex
+                out[f"ecc_{jt}_y"] = ey
+                out[f"pen_{jt}"] = np.maximum(np.hypot(ex, ey) - cfg.joints.radial_m(jt), 0.0)
+                # contact force on geom2 (bushing) in the contact frame [normal, tangent1, axis]:
+                # normal >= 0; the friction on the pin along t = z x n is minus tangent1
+                out[f"fn_{jt}"] = np.where(found, col(N.sensor_contact(jt), 1), 0.0)
+                out[f"ft_{jt}"] = np.where(found, -col(N.sensor_contact(jt), 2), 0.0)
+        if "drive" in groups:
+            out["theta_ref"] = theta_ref
+            out["omega_ref"] = omega_ref
+            out["crank_torque"] = col(N.SENSOR_CRANK_TORQUE)
+        chans = {s.name: Channel(s.name, s.unit, s.group, np.ascontiguousarray(out[s.name], dtype=s.dtype))
+                 for s in self.specs}
+        return Run(first / self.rate, self.rate, chans, cfg, {})
