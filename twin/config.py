@@ -407,7 +407,8 @@ class PID:
 
     torque = kp (θ_ref − θ) + kv (ω_ref − ω) + ki ∫(θ_ref − θ) dt, integral clamped to ±imax.
     Gains from ``analysis/tune_pid.py`` (pole placement on the crank's largest effective
-    inertia over a turn; see its docstring), rounded.
+    inertia over a turn, kp sized for 0.5 encoder count of error at 750 motor rpm; see its
+    docstring), rounded to two digits.
 
     Attributes:
         kp: proportional gain [N m/rad].
@@ -416,10 +417,10 @@ class PID:
         imax: anti-windup clamp of the integral state [rad s]; 0 = unclamped.
     """
 
-    kp: float = 6.0e4
-    kv: float = 1.5e2
-    ki: float = 6.0e5
-    imax: float = 0.05
+    kp: float = 1.7e5
+    kv: float = 270.0
+    ki: float = 2.0e7
+    imax: float = 1.6e-6
 
     def __post_init__(self) -> None:
         _positive(self.kp, "kp", "N m/rad")
