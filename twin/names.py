@@ -67,9 +67,14 @@ def sensor_ecc(joint: str) -> str:
 
 
 def sensor_contact(joint: str) -> str:
-    """contact sensor of the pin/bushing pair (added by the builder)."""
+    """contact sensor of the pin/bushing pair (normal force)."""
     return f"contact_{joint}"
 
 
-#: marker of a bushing bore in geom user[0] (must match BORE_MAGIC in _bore.c)
+def sensor_friction(joint: str) -> str:
+    """user sensor: friction force on the pin (filled by the native module's mjcb_sensor)."""
+    return f"friction_{joint}"
+
+
+#: marker of a bushing bore in geom user[0] (must match BORE_MAGIC in _bore.c); user[1:4] = mu0, v0, v1
 BORE_MAGIC = 7301.0

@@ -9,8 +9,15 @@ What the builder does to the base model:
 * an ideal joint B is a hinge in the kinematic tree (exact); an ideal joint C is the
   loop-closure ``connect`` of the base model (stiff soft constraint);
 * a clearance joint replaces that by two slide joints (B: rod eye relative to the crank pin)
-  or drops the connect (C), and adds an explicit ``<pair>`` pin/bushing whose contact is
-  computed by the native bore collider (exact circle) and governed by solref/solimp/friction;
+  or drops the connect (C), and adds an explicit frictionless ``<pair>`` pin/bushing whose
+  contact is computed by the native bore collider (exact circle) and governed by
+  solref/solimp; the reference's regularized Coulomb friction (μ0, v0, v1 of the ``contact``
+  section, stored in the bushing geom's user data) is applied by the native module as a
+  passive force. Why not MuJoCo's own friction cone: with soft contacts the elliptic cone
+  adds μ × (the would-be sticking force) to the normal force while sliding; on test 12 that
+  inflated the normal force by a median 23 % (up to 27×) over the k δ + c δ̇ law, and making
+  the friction rows softer turned Coulomb friction into viscous friction
+  (``analysis/friction_cone.py`` measures both);
 * sensors: only those the configuration's channel groups need;
 * the crank PID gains.
 
@@ -44,8 +51,8 @@ FLAT_SOLIMP = (1e-4, 1e-4, 1e-3, 0.5, 2.0)
 #: impact speed at which the first guess matches the reference law [m/s]. PLACEHOLDER until
 #: the calibration (impact speeds on the bench span ~1 mm/s to 0.5 m/s).
 FIRST_GUESS_SPEED = 0.1
-#: torsional and rolling friction are irrelevant for a planar pin in a bore (condim 3)
-_CONDIM = 3
+#: frictionless MuJoCo contact; friction is the native passive force (see module docstring)
+_CONDIM = 1
 
 _SENSORS_BY_GROUP = {
     "accel": list(N.ACCEL_SENSORS),
@@ -70,7 +77,7 @@ class ContactSetting:
     Attributes:
         solref: the pair's solref (2 numbers; negative = direct stiffness/damping).
         solimp: the pair's solimp (5 numbers).
-        friction: sliding friction coefficient μ [-].
+        friction: μ0 of the native regularized Coulomb friction [-].
         source: "config", "calibration" or "first-guess".
         stiffness_n_per_m: physical linear stiffness k, if defined that way [N/m].
         damping_ns_per_m: physical linear damping c [N s/m].
@@ -143,7 +150,7 @@ def contact_setting(cfg: BenchConfig, joint: str, a_hat: float) -> ContactSettin
     if entry is not None:
         k, c = entry["stiffness_n_per_m"], entry["damping_ns_per_m"]
         solimp = tuple(entry.get("solimp", FLAT_SOLIMP))
-        return ContactSetting((-k * a_hat, -c * a_hat), solimp, entry.get("friction", mu), "calibration", k, c)
+        return ContactSetting((-k * a_hat, -c * a_hat), solimp, mu, "calibration", k, c)
     k, c = first_guess_contact(cfg, joint, 1.0 / a_hat)
     return ContactSetting((-k * a_hat, -c * a_hat), FLAT_SOLIMP, mu, "first-guess", k, c)
 
@@ -209,10 +216,12 @@ def build_spec(cfg: BenchConfig) -> mujoco.MjSpec:
     for obj in (spec.geom(N.pin("C")), spec.site(N.pin("C"))):
         obj.pos = [0, mech.d_off_m, 0]
 
-    # pins, bushings and their visual rings
+    # pins, bushings (user data: bore marker and friction law) and their visual rings
+    friction_law = [N.BORE_MAGIC, cfg.contact.mu0, cfg.contact.v0_mps, cfg.contact.v1_mps]
     for jt in ("B", "C"):
         spec.geom(N.pin(jt)).size = [rj, half_len, 0]
         spec.geom(N.bushing(jt)).size = [j.bushing_radius_m(jt), half_len, 0]
+        spec.geom(N.bushing(jt)).userdata = friction_law
         spec.geom(N.bushing_ring(jt)).size = [j.bushing_radius_m(jt) + 0.006, half_len * 1.05, 0]
 
     # accelerometer sites
@@ -250,7 +259,7 @@ def build_spec(cfg: BenchConfig) -> mujoco.MjSpec:
         keep.update(_SENSORS_BY_GROUP.get(g, []))
         if g == "joints":
             for jt in j.clearance_joints:
-                keep.update((N.sensor_ecc(jt), N.sensor_contact(jt)))
+                keep.update((N.sensor_ecc(jt), N.sensor_contact(jt), N.sensor_friction(jt)))
     for s in list(spec.sensors):
         if s.name not in keep:
             spec.delete(s)
@@ -282,7 +291,6 @@ def build(cfg: BenchConfig) -> tuple[mujoco.MjSpec, mujoco.MjModel, BuildInfo]:
             p = spec.pair(N.pair(jt))
             p.solref = list(setting.solref)
             p.solimp = list(setting.solimp)
-            p.friction = [setting.friction, setting.friction, 0.0, 0.0, 0.0]
             info.contacts[jt] = setting
             info.a_hat[jt] = a_hat
         try:

@@ -1,8 +1,10 @@
-"""Installs the native pin-in-bore collider (``_bore.c``) into MuJoCo's collision table.
+"""Installs the native pin-in-bore collider and its friction (``_bore.c``) into MuJoCo.
 
-The table ``mjCOLLISIONFUNC`` is a global of the MuJoCo library; its address is taken with
-ctypes from the very library the ``mujoco`` module loaded. Installation is idempotent and
-process-wide; other cylinder-cylinder pairs keep MuJoCo's own collider.
+``mjCOLLISIONFUNC`` (collision table), ``mjcb_passive`` and ``mjcb_sensor`` are globals of
+the MuJoCo library; their addresses, and that of ``mj_applyFT``, are taken with ctypes from
+the very library the ``mujoco`` module loaded. Installation is idempotent and process-wide;
+other cylinder-cylinder pairs keep MuJoCo's own collider, and callbacks installed earlier
+are chained. Models without bore geoms are unaffected.
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ import mujoco
 from twin.errors import EngineUnavailableError
 from twin.names import BORE_MAGIC
 
-_installed = False
+_addresses: tuple[int, int, int, int] | None = None
 
 
 def _library_path() -> str:
@@ -27,9 +29,15 @@ def _library_path() -> str:
 
 
 def ensure_installed() -> None:
-    """Install the collider once per process; clear errors if the build is missing or stale."""
-    global _installed
-    if _installed:
+    """Install the collider and callbacks (idempotent; re-installs a hook someone replaced).
+
+    Clear errors if the native module is missing or was built against another MuJoCo.
+    """
+    global _addresses
+    if _addresses is not None:
+        from twin.mujoco_engine import _bore
+
+        _bore.install(*_addresses)
         return
     try:
         from twin.mujoco_engine import _bore
@@ -44,5 +52,8 @@ def ensure_installed() -> None:
         raise EngineUnavailableError("twin.names.BORE_MAGIC and _bore.c disagree")
     lib = ctypes.CDLL(_library_path())
     table = ctypes.addressof(ctypes.c_void_p.in_dll(lib, "mjCOLLISIONFUNC"))
-    _bore.install(table)
-    _installed = True
+    passive = ctypes.addressof(ctypes.c_void_p.in_dll(lib, "mjcb_passive"))
+    sensor = ctypes.addressof(ctypes.c_void_p.in_dll(lib, "mjcb_sensor"))
+    apply_ft = ctypes.cast(lib.mj_applyFT, ctypes.c_void_p).value
+    _addresses = (table, passive, sensor, apply_ft)
+    _bore.install(*_addresses)

@@ -149,10 +149,9 @@ class MujocoEngine:
                 out[f"ecc_{jt}_x"] = ex
                 out[f"ecc_{jt}_y"] = ey
                 out[f"pen_{jt}"] = np.maximum(np.hypot(ex, ey) - cfg.joints.radial_m(jt), 0.0)
-                # contact force on geom2 (bushing) in the contact frame [normal, tangent1, axis]:
-                # normal >= 0; the friction on the pin along t = z x n is minus tangent1
+                # normal force of the frictionless contact; friction from the native user sensor
                 out[f"fn_{jt}"] = np.where(found, col(N.sensor_contact(jt), 1), 0.0)
-                out[f"ft_{jt}"] = np.where(found, -col(N.sensor_contact(jt), 2), 0.0)
+                out[f"ft_{jt}"] = col(N.sensor_friction(jt))
         if "drive" in groups:
             out["theta_ref"] = theta_ref
             out["omega_ref"] = omega_ref
