@@ -42,7 +42,7 @@ def output_stride(cfg: BenchConfig) -> tuple[int, float]:
     h, rate = cfg.simulation.timestep_s, cfg.sensors.output_rate_hz
     k = 1.0 / (h * rate)
     if k < 1.0 - 1e-9:
-        return 1, 1.0 / h
+        return 1, round(1.0 / h, 6)  # 1/2e-5 = 49999.99999999999 otherwise
     stride = int(round(k))
     if abs(stride - k) > 1e-6 * k:
         raise ConfigError("simulation.timestep_s",

@@ -1,0 +1,102 @@
+"""The command line: clear one-line errors, no partial files, the summary JSON."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from twin import simulate as simulate_mod
+from twin.cli import main
+from twin.errors import SimulationError
+from twin.mcapfile import read_run, read_summary
+
+
+def _run(capsys, *argv):
+    rc = main(list(argv))
+    out, err = capsys.readouterr()
+    return rc, out, err
+
+
+@pytest.mark.parametrize("argv, fragment", [
+    (["--clearance-b", "0.3"], "joints.clearance_b_mm"),
+    (["--speed", "2000"], "drive.motor_rpm"),
+    (["--test", "13"], "--test"),
+    (["--duration", "-1"], "simulation.duration_s"),
+    (["--timestep", "7e-6"], "does not divide"),
+    (["--set", "drive.motor_rmp=3"], "drive.motor_rmp"),
+    (["--set", "nonsense"], "KEY=VALUE"),
+    (["--config", "missing.toml"], "cannot read"),
+    (["--trace", "missing.npz"], "drive.trace_file"),
+    (["--channels", "accel,gps"], "sensors.channels"),
+    (["--summary-json", "s.txt"], "--summary-json"),
+])
+def test_bad_input_is_one_line_and_writes_nothing(argv, fragment, capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "old.mcap").write_bytes(b"old")
+    rc, out, err = _run(capsys, "simulate", "--out", "old.mcap", "--duration", "0.01", *argv)
+    assert rc == 2
+    assert err.count("\n") == 1 and err.startswith("twin: error:") and fragment in err
+    assert "Traceback" not in err
+    assert (tmp_path / "old.mcap").read_bytes() == b"old"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["old.mcap"]
+
+
+def test_argparse_errors_are_one_line(capsys):
+    with pytest.raises(SystemExit) as e:
+        main(["simulate", "--orientation", "w"])
+    assert e.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "invalid choice" in err
+
+
+def test_engine_failure_midway_keeps_old_file(capsys, tmp_path, monkeypatch):
+    real = simulate_mod.make_engine
+
+    class Dying:
+        def __init__(self, cfg):
+            self.inner = real(cfg)
+            self.meta = self.inner.meta
+
+        def chunks(self):
+            it = self.inner.chunks()
+            yield next(it)
+            raise SimulationError("diverged at t = 0.01 s (test)")
+
+    monkeypatch.setattr(simulate_mod, "make_engine", Dying)
+    out = tmp_path / "run.mcap"
+    out.write_bytes(b"old")
+    rc, _, err = _run(capsys, "simulate", "--test", "6", "--duration", "0.03", "--set", "simulation.chunk_s=0.01",
+                      "--out", str(out), "--summary-json", str(tmp_path / "s.json"))
+    assert rc == 2 and "diverged" in err and err.count("\n") == 1
+    assert out.read_bytes() == b"old" and not (tmp_path / "s.json").exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.mcap"]
+
+
+def test_simulate_writes_run_and_summary(capsys, tmp_path):
+    out, js = tmp_path / "t12.mcap", tmp_path / "s.json"
+    rc, stdout, _ = _run(capsys, "simulate", "--test", "12", "--duration", "0.05", "--out", str(out),
+                         "--summary-json", str(js), "--no-progress")
+    assert rc == 0 and "test12" in stdout
+    s = json.loads(js.read_text())
+    for key in ("engine", "duration_s", "timestep_s", "steps", "wall_s", "real_time_factor"):
+        assert key in s
+    assert s["engine"] == "mujoco" and s["steps"] == 5000 and s["duration_s"] == pytest.approx(0.05)
+    assert s["real_time_factor"] == pytest.approx(0.05 / s["wall_s"])
+    for j in ("B", "C"):
+        assert set(s[j]) == {"clearance_mm", "max_eccentricity_m", "max_penetration_m", "impacts",
+                             "max_contact_force_N"}
+        assert s[j]["clearance_mm"] == 0.1 and s[j]["max_eccentricity_m"] > 0
+    for a in ("AC1", "AC2", "AC3", "AC4", "AC5", "AC6"):
+        assert s[a]["peak_mps2"] >= s[a]["rms_mps2"] > 0
+    run = read_run(out)
+    assert run.n == 5000 and run.config.name == "test12"
+    assert read_summary(out) == s
+
+
+def test_export_mjcf(capsys, tmp_path):
+    rc, out, _ = _run(capsys, "export-mjcf", "--test", "9", "--out", str(tmp_path / "m.xml"))
+    assert rc == 0 and (tmp_path / "m.xml").read_text().count("<pair") == 1
+    rc, _, err = _run(capsys, "export-mjcf", "--test", "9", "--out", str(tmp_path / "m.txt"))
+    assert rc == 2 and "must end in .xml" in err

@@ -1,0 +1,113 @@
+"""Run files: bit-identical round trip, independent readers, damage detection, atomic writes."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from mcap.reader import make_reader
+from mcap_ros2.decoder import DecoderFactory
+
+from twin.config import preset
+from twin.errors import RecordingError
+from twin.mcapfile import RunWriter, read_metadata, read_run, write_run
+from twin.run import Run
+from twin.simulate import simulate
+from twin.summary import summarize
+
+from conftest import short
+
+
+@pytest.fixture(scope="module")
+def run12() -> Run:
+    return simulate(short(preset(12), 0.0505))  # not a multiple of the 1000-sample block
+
+
+def test_round_trip_is_bit_identical(run12, tmp_path):
+    p = write_run(tmp_path / "r.mcap", run12, summary=summarize(run12))
+    back = read_run(p)
+    assert list(back.channels) == list(run12.channels)
+    for name, ch in run12.channels.items():
+        assert back[name].dtype == ch.data.dtype
+        assert back[name].tobytes() == ch.data.tobytes(), name
+        assert back.channels[name].unit == ch.unit and back.channels[name].group == ch.group
+    assert (back.t0, back.rate_hz, back.n) == (run12.t0, run12.rate_hz, run12.n)
+    assert back.config == run12.config
+    assert back.meta == run12.meta
+    # selective read of one group
+    acc = read_run(p, groups=["accel"])
+    assert list(acc.channels) == ["AC1", "AC2", "AC3", "AC4", "AC5", "AC6"]
+
+
+def test_streaming_in_odd_chunks_equals_whole_write(run12, tmp_path):
+    whole = write_run(tmp_path / "a.mcap", run12)
+    with RunWriter(tmp_path / "b.mcap", run12.config) as w:
+        for i0, i1 in ((0, 1), (1, 777), (777, 3001), (3001, run12.n)):
+            w.write(run12.slice(i0, i1))
+        w.close(run12.meta)
+    a, b = read_run(whole), read_run(tmp_path / "b.mcap")
+    for name in run12.channels:
+        assert np.array_equal(a[name], b[name])
+
+
+def test_independent_decoders_read_the_file(run12, tmp_path):
+    p = write_run(tmp_path / "r.mcap", run12)
+    # Python ros2msg/CDR decoder (not twin's)
+    with open(p, "rb") as fh:
+        reader = make_reader(fh, decoder_factories=[DecoderFactory()])
+        _, channel, msg, decoded = next(reader.iter_decoded_messages(topics=["/twin/joint_C"]))
+        assert channel.message_encoding == "cdr" and decoded.first_index == 0 and decoded.rate_hz == 1e5
+        assert np.array_equal(np.asarray(decoded.ecc_c_x), run12["ecc_C_x"][:1000])
+        assert msg.log_time == 0
+    # rerun's MCAP reader (Rust), when the CLI is installed
+    rerun = shutil.which("rerun") or str(Path(sys.executable).with_name("rerun"))
+    if Path(rerun).exists():
+        out = subprocess.run([rerun, "mcap", "check", str(p)], capture_output=True, text=True)
+        assert out.returncode == 0, out.stderr
+        assert "/twin/accel" in out.stdout
+
+
+def test_log_times_are_simulation_time(run12, tmp_path):
+    p = write_run(tmp_path / "r.mcap", run12)
+    with open(p, "rb") as fh:
+        times = [m.log_time for _, _, m in make_reader(fh).iter_messages(topics=["/twin/crank"])]
+    assert times == [round(i * 1000 / run12.rate_hz * 1e9) for i in range(len(times))]
+
+
+def test_damaged_files_give_clear_errors(run12, tmp_path):
+    p = write_run(tmp_path / "r.mcap", run12)
+    data = p.read_bytes()
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(data[: len(data) // 2])
+    with pytest.raises(RecordingError, match="cut.mcap"):
+        read_run(cut)
+    junk = tmp_path / "junk.mcap"
+    junk.write_bytes(b"not an mcap file at all" * 10)
+    with pytest.raises(RecordingError):
+        read_run(junk)
+    with pytest.raises(RecordingError, match="no such file"):
+        read_run(tmp_path / "missing.mcap")
+    flipped = bytearray(data)
+    flipped[len(data) // 3] ^= 0xFF  # corrupt a compressed chunk: CRC or decompression fails
+    bad = tmp_path / "flipped.mcap"
+    bad.write_bytes(bytes(flipped))
+    with pytest.raises(RecordingError):
+        read_run(bad)
+    with pytest.raises(RecordingError, match="no groups"):
+        read_run(p, groups=["nonexistent"])
+    assert "twin.run" in read_metadata(p)
+
+
+def test_failed_write_leaves_existing_file_untouched(run12, tmp_path):
+    target = tmp_path / "keep.mcap"
+    target.write_bytes(b"precious")
+    with pytest.raises(RuntimeError):
+        with RunWriter(target, run12.config) as w:
+            w.write(run12.slice(0, 2500))
+            raise RuntimeError("engine died")
+    assert target.read_bytes() == b"precious"
+    assert sorted(x.name for x in tmp_path.iterdir()) == ["keep.mcap"]

@@ -1,0 +1,103 @@
+"""The compiled MuJoCo variants: names, what each scene contains, determinism, export."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import pytest
+
+from twin import names as N
+from twin.config import preset
+from twin.errors import ConfigError
+from twin.mujoco_engine.builder import build, export_xml
+from twin.simulate import output_stride, simulate
+
+from conftest import short
+
+
+def _resolve(model: mujoco.MjModel, kind: str, name: str) -> int:
+    return getattr(model, kind)(name).id
+
+
+def test_every_python_name_resolves_in_the_compiled_models():
+    ideal = build(preset(3))[1]
+    both = build(preset(12))[1]
+    for m in (ideal, both):
+        for b in N.BODIES:
+            _resolve(m, "body", b)
+        for j in (N.CRANK_HINGE, N.ROD_HINGE, N.SLIDER_SLIDE):
+            _resolve(m, "joint", j)
+        for g in (N.CRANK_ARM, N.ROD_BEAM, N.SLIDER_BLOCK, N.GUIDE_RAIL):
+            _resolve(m, "geom", g)
+        for jt in ("B", "C"):
+            _resolve(m, "geom", N.pin(jt))
+            _resolve(m, "geom", N.bushing(jt))
+            _resolve(m, "geom", N.bushing_ring(jt))
+            _resolve(m, "site", N.pin(jt))
+            _resolve(m, "site", N.bushing(jt))
+        _resolve(m, "actuator", N.CRANK_PID)
+        for s in (*N.ACCEL_SENSORS, N.SENSOR_CRANK_ANGLE, N.SENSOR_CRANK_SPEED, N.SENSOR_SLIDER_POSITION,
+                  N.SENSOR_CRANK_TORQUE):
+            _resolve(m, "sensor", s)
+    _resolve(ideal, "equality", N.JOINT_C_CONNECT)
+    for jt in ("B", "C"):
+        _resolve(both, "pair", N.pair(jt))
+        for s in (N.sensor_ecc(jt), N.sensor_contact(jt), N.sensor_friction(jt)):
+            _resolve(both, "sensor", s)
+    for j in (N.ECC_B_X, N.ECC_B_Y):
+        _resolve(both, "joint", j)
+    assert both.geom_user[both.geom(N.bushing("B")).id, 0] == N.BORE_MAGIC
+
+
+@pytest.mark.parametrize("test_id, nv, npair, neq", [(3, 1 + 2, 0, 1), (6, 3, 1, 0), (9, 5, 1, 1), (12, 5, 2, 0)])
+def test_each_scene_holds_only_what_it_needs(test_id, nv, npair, neq):
+    m = build(preset(test_id))[1]
+    assert (m.nv, m.npair, m.neq) == (nv, npair, neq)
+    contact_off = bool(m.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_CONTACT)
+    assert contact_off == (npair == 0)  # ideal scenes skip collision detection entirely
+    # only the pin/bushing pairs may collide: every geom has contype = conaffinity = 0
+    assert not m.geom_contype.any() and not m.geom_conaffinity.any()
+
+
+def test_channel_groups_select_sensors():
+    full = build(preset(12))[1]
+    lean = build(preset(12).replace(**{"sensors.channels": ["encoder"]}))[1]
+    assert lean.nsensor == 1 and lean.sensor(0).name == N.SENSOR_CRANK_ANGLE
+    assert full.nsensor == 6 + 4 + 2 * 3
+    run = simulate(short(preset(12), 0.02, **{"sensors.channels": ["encoder", "accel"]}))
+    assert list(run.channels) == ["AC1", "AC2", "AC3", "AC4", "AC5", "AC6", "encoder_angle"]
+
+
+def test_same_config_gives_identical_output_whatever_the_chunking():
+    cfg = short(preset(12), 0.1)
+    a = simulate(cfg)
+    b = simulate(cfg)
+    c = simulate(cfg.replace(**{"simulation.chunk_s": 0.013}))
+    for name in a.channels:
+        assert np.array_equal(a[name], b[name]), name
+        assert np.array_equal(a[name], c[name]), name
+
+
+@pytest.mark.parametrize("h, rate, n", [(1e-5, 1e5, 2000), (5e-6, 1e5, 2000), (2e-5, 5e4, 1000)])
+def test_output_rate_and_length(h, rate, n):
+    cfg = short(preset(6), 0.02, **{"simulation.timestep_s": h, "sensors.channels": ["crank"]})
+    run = simulate(cfg)
+    assert (run.rate_hz, run.n) == (rate, n)
+    assert run.meta["steps"] == round(0.02 / h)
+
+
+def test_timestep_must_divide_the_output_period():
+    with pytest.raises(ConfigError, match="does not divide"):
+        output_stride(preset(6).replace(**{"simulation.timestep_s": 7e-6}))
+
+
+def test_exported_xml_compiles_to_the_same_model(tmp_path):
+    cfg = preset(12)
+    xml = export_xml(cfg)
+    assert "bore collider" in xml and cfg.digest() in xml
+    m = mujoco.MjModel.from_xml_string(xml)
+    ref = build(cfg)[1]
+    assert (m.nq, m.nv, m.nu, m.na, m.npair, m.nsensor) == (ref.nq, ref.nv, ref.nu, ref.na, ref.npair, ref.nsensor)
+    np.testing.assert_allclose(m.pair_solref, ref.pair_solref, rtol=1e-5)  # XML keeps 6 digits
+    np.testing.assert_allclose(m.body_mass, ref.body_mass)
+    np.testing.assert_allclose(m.geom_size, ref.geom_size)

@@ -1,0 +1,131 @@
+"""Physics of the MuJoCo twin: closed-form kinematics, the calibration pose, the clearance
+bound, the exact bore geometry and the contact and friction laws."""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+import pytest
+
+from twin import names as N
+from twin.config import BenchConfig, preset
+from twin.kinematics import slider_position
+from twin.mujoco_engine.builder import build
+from twin.mujoco_engine.engine import MujocoEngine
+from twin.simulate import simulate
+
+from conftest import short
+
+G = 9.81
+
+
+@pytest.mark.parametrize("d_off", [0.0, 0.02])
+def test_ideal_slider_follows_closed_form_over_a_turn(d_off):
+    cfg = short(preset(3), 0.7, **{"drive.ramp_s": 0.2, "mechanism.d_off_m": d_off})
+    run = simulate(cfg)
+    th = run["crank_angle"]
+    assert th.max() - th.min() > 2 * math.pi  # more than a full turn
+    closed = slider_position(th, 0.12, 0.60, d_off)
+    # the loop closure at C is a stiff soft constraint: sub-micrometre agreement
+    assert np.max(np.abs(run["slider_position"] - closed)) < 1e-7
+
+
+# rod horizontal at rest (crank along +x): BENCH.md calibration pose, for each vertical axis
+@pytest.mark.parametrize("orientation, expected_g", [
+    ("y", {"AC1": 0, "AC2": 1, "AC3": 1, "AC4": 0, "AC5": 1, "AC6": 0}),
+    ("x", {"AC1": 1, "AC2": 0, "AC3": 0, "AC4": 1, "AC5": 0, "AC6": 1}),
+    ("z", {"AC1": 0, "AC2": 0, "AC3": 0, "AC4": 0, "AC5": 0, "AC6": 0}),
+])
+def test_calibration_pose_readings(orientation, expected_g):
+    cfg = BenchConfig().replace(**{
+        "joints.clearance_c_mm": 0.0, "drive.motor_rpm": 0.0, "mechanism.orientation": orientation,
+        "drive.initial_encoder_angle_rad": math.pi / 2,  # encoder zero is -y: +π/2 puts the crank on +x
+        "simulation.duration_s": 0.05})
+    run = simulate(cfg)
+    for a, g in expected_g.items():
+        assert run[a][-500:].mean() / G == pytest.approx(g, abs=1e-4), a
+
+
+def test_clearance_eccentricity_bounded_by_radial_clearance():
+    cfg = short(preset(12), 0.4)
+    run = simulate(cfg)
+    for j in ("B", "C"):
+        c = cfg.joints.radial_m(j)
+        ecc = np.hypot(run[f"ecc_{j}_x"], run[f"ecc_{j}_y"])
+        assert ecc.max() > 0.99 * c          # the journal does reach the bushing
+        assert ecc.max() < 1.05 * c          # and penetrates it by only a few percent of c
+        assert np.max(run[f"pen_{j}"]) == pytest.approx(max(ecc.max() - c, 0), abs=1e-12)
+        assert run[f"fn_{j}"].max() > 0
+
+
+def test_bore_collider_is_an_exact_circle():
+    cfg = preset(6)
+    _, model, _ = build(cfg)
+    model.pair_margin[:] = 1e-3
+    d = mujoco.MjData(model)
+    c = cfg.joints.radial_m("C")
+    pin = model.geom(N.pin("C")).id
+    model.geom_sameframe[pin] = 0  # geom_pos is edited below: do not reuse the body frame
+    slide = model.jnt_qposadr[model.joint(N.SLIDER_SLIDE).id]
+    x_bush = cfg.bodies.crank.length_m + cfg.bodies.rod.length_m   # all joint angles 0
+    rng = np.random.default_rng(1)
+    for alpha, rho in zip(rng.uniform(0, 2 * np.pi, 200), rng.uniform(0.2, 1.3, 200)):
+        mujoco.mj_resetData(model, d)
+        d.qpos[slide] = x_bush + rho * c * math.cos(alpha)
+        model.geom_pos[pin, 1] = rho * c * math.sin(alpha)
+        mujoco.mj_forward(model, d)
+        con = [d.contact[i] for i in range(d.ncon)]
+        assert len(con) == 1
+        assert con[0].dist == pytest.approx(c * (1 - rho), abs=1e-15)
+        # MuJoCo's convention: the normal points from contact geom[0] to geom[1]; from the
+        # pin towards the bushing material it is along e, outwards
+        sign = 1.0 if con[0].geom[0] == pin else -1.0
+        assert np.allclose(con[0].frame[:3], sign * np.array([math.cos(alpha), math.sin(alpha), 0]), atol=1e-9)
+
+
+def test_contact_force_is_the_linear_law_and_friction_is_regularized_coulomb():
+    cfg = short(preset(12), 0.2, **{"drive.ramp_s": 0.02})
+    eng = MujocoEngine(cfg)
+    m, d = eng.model, eng.data
+    eng.set_initial_state()
+    law = eng.info.contacts
+    sens = eng._sensor_slices
+    ratio, mu, sign = [], [], []
+    for _ in range(8000):
+        th, om = eng.ref(np.array([d.time]))
+        d.ctrl[:] = [th[0], om[0]]
+        mujoco.mj_step(m, d)
+        for ci in range(d.ncon):
+            con = d.contact[ci]
+            j = m.geom(con.geom[0]).name[-1]
+            a = con.efc_address
+            lin = law[j].stiffness_n_per_m * -d.efc_pos[a] + law[j].damping_ns_per_m * -d.efc_vel[a]
+            if lin < 5:
+                continue
+            ratio.append(d.efc_force[a] / lin)
+            jp, jb = np.zeros((3, m.nv)), np.zeros((3, m.nv))
+            mujoco.mj_jac(m, d, jp, None, con.pos, m.geom_bodyid[con.geom[0]])
+            mujoco.mj_jac(m, d, jb, None, con.pos, m.geom_bodyid[con.geom[1]])
+            vt = ((jp - jb) @ d.qvel) @ np.cross([0, 0, 1], con.frame[:3])
+            ft = d.sensordata[sens[N.sensor_friction(j)].start]
+            if abs(vt) > 2 * cfg.contact.v1_mps:
+                mu.append(abs(ft) / d.efc_force[a])
+                sign.append(np.sign(ft * vt))
+    assert len(ratio) > 1000 and len(mu) > 1000
+    assert np.median(ratio) == pytest.approx(1.0, abs=2e-3)
+    assert np.max(np.abs(np.array(ratio) - 1)) < 0.02
+    assert np.median(mu) == pytest.approx(cfg.contact.mu0, rel=2e-3)
+    assert np.all(np.array(sign) == -1)  # friction on the pin opposes its slip
+
+
+def test_first_guess_contact_reproduces_reference_restitution():
+    from twin.impact import hysteresis_restitution, impact_linear
+
+    cfg = preset(12)
+    eng = MujocoEngine(cfg)
+    for j, s in eng.info.contacts.items():
+        assert s.source in ("first-guess", "calibration")
+        r = impact_linear(s.stiffness_n_per_m, s.damping_ns_per_m, 1 / eng.info.a_hat[j], 0.1)
+        assert r.restitution == pytest.approx(hysteresis_restitution("lankarani-nikravesh", 0.4), abs=0.02)
