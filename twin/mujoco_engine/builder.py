@@ -312,8 +312,9 @@ def export_xml(cfg: BenchConfig) -> str:
             f"     Clearance joints: {', '.join(cfg.joints.clearance_joints) or 'none'}; contact parameters: "
             + "; ".join(f"{jt}: solref [{s.solref[0]:.6g}, {s.solref[1]:.6g}] solimp {[float(v) for v in s.solimp]} ({s.source})"
                         for jt, s in info.contacts.items())
-            + ".\n     Bushing geoms (user=\"7301\") need the twin's bore collider: run clearance variants "
-              "through twin, e.g. 'twin viewer'. -->\n")
+            + ".\n     Bushing geoms (user=\"7301 ...\") need the twin's native bore collider and friction "
+              "(twin/mujoco_engine/_bore.c):\n     a plain MuJoCo viewer shows and simulates ideal variants "
+              "faithfully; simulate clearance variants with 'twin simulate'. -->\n")
     xml = spec.to_xml()
     i = xml.find("<mujoco")
     return xml[:i] + head + xml[i:]
