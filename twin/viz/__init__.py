@@ -1,0 +1,72 @@
+"""Visual inspection of runs and recordings in rerun (issue 6).
+
+* :func:`convert_file`: a run/recording MCAP file -> ``.rrd`` (``twin view``);
+* :func:`write_rrd`: an in-memory :class:`~twin.run.Run` -> ``.rrd``;
+* :class:`RerunWriter`: the streaming sink behind both, also used by
+  ``twin simulate --rerun`` to record a run while it is simulated;
+* :mod:`twin.viz.pose`: body poses reconstructed from the run's channels.
+
+The recording holds the 3-D bench moving in time, the clearance joints' journal orbits,
+contact force arrows, every channel as a time series, spectra of a window and the
+configuration, with a default blueprint (:mod:`twin.viz.blueprint`).
+"""
+
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+
+from twin.run import Run
+from twin.viz.options import ViewOptions
+from twin.viz.writer import RerunWriter
+
+__all__ = ["RerunWriter", "ViewOptions", "convert_file", "default_output", "file_recording_id",
+           "simulation_recording_id", "write_rrd"]
+
+
+def file_recording_id(path: str | Path) -> str:
+    """Recording id derived from a file's content (SHA-256): same input, same id."""
+    with open(path, "rb") as fh:
+        return "twin-" + hashlib.file_digest(fh, "sha256").hexdigest()[:32]
+
+
+def simulation_recording_id(cfg_digest: str) -> str:
+    """Recording id of a run streamed while it is simulated: from its configuration digest."""
+    return f"twin-sim-{cfg_digest}"
+
+
+def default_output(path: str | Path) -> Path:
+    """``RUN.mcap`` -> ``RUN.rrd`` beside it."""
+    return Path(path).with_suffix(".rrd")
+
+
+def write_rrd(run: Run, out: str | Path, *, recording_id: str, name: str, options: ViewOptions = ViewOptions(),
+              source: str = "", summary: dict | None = None) -> Path:
+    """Write ``run`` as a rerun recording ``out`` (temp file + rename)."""
+    w = RerunWriter(out, run.config, recording_id=recording_id, name=name, options=options,
+                    t_start=run.t0, t_end=run.t0 + run.duration_s, source=source)
+    try:
+        w.write(run)
+        return w.close(run.meta, summary)
+    except BaseException:
+        w.abort()
+        raise
+
+
+def convert_file(path: str | Path, out: str | Path | None = None, options: ViewOptions = ViewOptions()) -> Path:
+    """Convert a twin run file (simulated run, bench recording or replay) into ``out``."""
+    from twin.mcapfile import read_run, read_summary
+
+    p = Path(path)
+    out = Path(out) if out is not None else default_output(p)
+    if out.resolve() == p.resolve():
+        from twin.errors import TwinError
+
+        raise TwinError(f"{out}: output would overwrite the input")
+    run = read_run(p)
+    if run.n == 0:
+        from twin.errors import TwinError
+
+        raise TwinError(f"{p}: the run holds no samples")
+    return write_rrd(run, out, recording_id=file_recording_id(p), name=p.stem, options=options,
+                     source=p.name, summary=read_summary(p))

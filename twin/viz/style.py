@@ -1,0 +1,60 @@
+"""Series labels and colours shared by the recording and its blueprint."""
+
+from __future__ import annotations
+
+from twin.config import ACCELEROMETERS
+from twin.run import Channel
+
+SIM_COLOUR = (31, 119, 180)
+MEAS_COLOUR = (255, 127, 14)
+REF_COLOUR = (160, 160, 160)
+JOINT_COLOUR = {"B": (44, 160, 44), "C": (214, 39, 40)}
+COLOUR_NAMES = {SIM_COLOUR: "blue", MEAS_COLOUR: "orange", REF_COLOUR: "grey",
+                JOINT_COLOUR["B"]: "green", JOINT_COLOUR["C"]: "red"}
+
+
+def unit_text(unit: str) -> str:
+    return unit.replace("m/s^2", "m/s²") if unit else "-"
+
+
+def series_label(ch: Channel) -> str:
+    """Legend label of a channel: name ('simulated'/'recorded' for accelerations) and unit."""
+    unit = unit_text(ch.unit)
+    if ch.name.startswith("meas_"):
+        return f"{ch.name[5:]} recorded [{unit}]"
+    if ch.name in ACCELEROMETERS:
+        return f"{ch.name} simulated [{unit}]"
+    return f"{ch.name} [{unit}]"
+
+
+def series_colour(ch: Channel) -> tuple[int, int, int]:
+    """Colour of a channel's series: simulated blue, recorded orange, references grey,
+    joint B green, joint C red."""
+    if ch.name in ("omega_ref", "theta_ref"):
+        return REF_COLOUR
+    if ch.name.startswith("meas_") or ch.group == "daq":
+        return MEAS_COLOUR
+    for j, c in JOINT_COLOUR.items():
+        if ch.name.endswith(f"_{j}") or f"_{j}_" in ch.name:
+            return c
+    return SIM_COLOUR
+
+
+def view_title(title: str, chans: list[Channel]) -> str:
+    """Plot title naming each shown series and its colour (legends are hidden: a group
+    entity's legend would list its hidden series too).
+
+    One series: its label (``AC1 simulated [m/s²]``); several with one unit:
+    ``AC1 [m/s²]: simulated (blue), recorded (orange)``.
+    """
+    if len(chans) == 1:
+        return series_label(chans[0])
+    shorts = []
+    for c in chans:
+        short = series_label(c).rsplit(" [", 1)[0]
+        if short.startswith(title + " "):
+            short = short[len(title) + 1:]
+        shorts.append(f"{short} ({COLOUR_NAMES.get(series_colour(c), '?')})")
+    units = {unit_text(c.unit) for c in chans}
+    head = f"{title} [{units.pop()}]" if len(units) == 1 else title
+    return f"{head}: " + ", ".join(shorts)
