@@ -26,6 +26,7 @@ from twin.errors import ConfigError, TwinError
 COMMANDS: list[str] = [
     "twin.commands.simulate",
     "twin.commands.export_mjcf",
+    "twin.commands.view",
 ]
 
 
