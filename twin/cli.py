@@ -27,6 +27,7 @@ COMMANDS: list[str] = [
     "twin.commands.simulate",
     "twin.commands.export_mjcf",
     "twin.commands.view",
+    "twin.commands.study",
 ]
 
 

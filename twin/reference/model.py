@@ -1,0 +1,797 @@
+r"""Natural-coordinate model of the bench and its R-matrix dynamics (S003 §3, Eq. 11–16).
+
+Coordinates (S003 Eq. 14), bench frame of :mod:`twin.config` (A at the origin)::
+
+    q = [x_B, y_B, x'_B, y'_B, x_C, y_C, x'_C, θ]      indices 0..7
+
+* B = (x_B, y_B): centre of the crank pin (crank body 1, which turns about A);
+* B' = (x'_B, y'_B): centre of the rod's eye at B (rod body 2, origin of the rod frame);
+* C = (x_C, y_C): centre of the rod's eye at C (rod body 2);
+* C' = (x'_C, d_off): centre of the slider pin (slider body 3 translates on the guide
+  y = 0 through A; C' is ``d_off`` above it, so only x'_C is a coordinate);
+* θ: crank bench angle from +x.
+
+Pins sit on the crank (B) and on the slider (C'); bushings are the rod eyes (B', C).
+
+Equations. Eight rows, always the same (the "augmented" set)::
+
+    0  x_B² + y_B² − r²                  crank length            constraint
+    1  x_B sin θ − y_B cos θ             crank angle             constraint
+    2  (x_C − x'_B)² + (y_C − y'_B)² − l²  rod length            constraint
+    3  x_B − x'_B        = e_Bx          pair B (Eq. 15)  constraint (= 0) or independent
+    4  y_B − y'_B        = e_By          pair B (Eq. 15)  constraint (= 0) or independent
+    5  x'_C − x_C        = e_Cx          pair C (Eq. 16)  constraint (= 0) or independent
+    6  d_off − y_C       = e_Cy          pair C (Eq. 16)  constraint (= 0) or independent
+    7  θ                                 crank angle              independent
+
+An ideal joint keeps its two pair rows as constraints (seven constraints, one degree of
+freedom, S003 §3). A clearance joint drops them from the constraint set and uses the same two
+expressions — the eccentricity e = pin − bushing in the bench frame, the "relative journal
+position" — as independent coordinates, next to θ; its contact is a force element. q itself
+never changes. Independent coordinates z: θ (r = 1), plus e_B and/or e_C (r = 3 or 5).
+
+Crank angle equation. S003 writes θ "as a function of x_B or y_B": x_B = r cos θ is
+singular with the crank length row where y_B = 0, y_B = r sin θ where x_B = 0, so a code
+must switch between them during a turn. Row 1 uses both at once: x_B sin θ − y_B cos θ = 0
+(B parallel to (cos θ, sin θ)). Together with row 0 the dependent crank block
+[[2x_B, 2y_B], [sin θ, −cos θ]] has determinant −2(x_B cos θ + y_B sin θ) = −2r: never
+singular over a turn, and smooth (no switching). The rod block is singular only with the rod
+perpendicular to the guide, which the bench's geometry (l > r + |d_off|) excludes.
+
+Velocity transformation (S003 Eq. 11–13). With A(q) the 8×8 Jacobian of the eight rows
+(constant rows 3–7), A q̇ = [0, 0, 0, ė_B or 0, ė_C or 0, θ̇]: the columns of
+R = A⁻¹[0; I] belonging to the independent rows give q̇ = R ż with Φ_q R = 0, and
+differentiating once more, q̈ = R z̈ + Ṙż with Ṙż = A⁻¹[−Φ̇_q q̇; 0]. The reduced equations
+Rᵀ M R z̈ = Rᵀ (Q − M Ṙż) have r ≤ 5 unknowns. A is solved in closed form (a 2×2 block for
+the crank, one row for the rod, substitutions for the rest: about 30 flops), never inverted.
+
+Mass matrix (derivation). A planar rigid body described by two of its points i and j at
+distance L, a material point at body coordinates (ξ along i→j, η normal to it) is
+p = r_i + (ξ/L) d + (η/L) R₉₀ d, d = r_j − r_i, R₉₀ the +90° rotation. With u = ṙ_i:
+ṗ = u + (ξ/L) ḋ + (η/L) R₉₀ ḋ, and since ḋ·R₉₀ḋ = 0, integrating ρ|ṗ|² over the body gives
+
+    T = ½ [ m|u|² + 2 (m ξ_G / L) u·ḋ + (I_i / L²) |ḋ|² ],   I_i = I_G + m ξ_G²   (η_G = 0)
+
+which, with ḋ = ṙ_j − ṙ_i, is T = ½ [ṙ_iᵀ ṙ_jᵀ] M [ṙ_i; ṙ_j] with 2×2 identity blocks
+
+    M_ii = m − 2 m ξ_G/L + I_i/L²,   M_ij = m ξ_G/L − I_i/L²,   M_jj = I_i/L².
+
+Exact as long as |d| = L, which the length constraints keep. For the rod (Table 1: m₂, ξ_G
+from B, I_G) i = B', j = C, L = l. The crank turns about the fixed point A (r_i = 0): only
+M_jj = I_A / r² remains, on (x_B, y_B), I_A = I_G + m₁ ξ_G². The slider translates: m₃ on x'_C
+(its y and rotation are taken by the guide). θ carries no mass (it is tied to B by rows 0–1).
+
+Generalized forces Q (virtual work over δq):
+
+* gravity g = (g_x, g_y) (in-plane components of ``mechanism.gravity_vector``; the normal
+  component does no work): centre of mass of the crank (ξ_G/r) B, of the rod
+  (1 − ξ_G/l) B' + (ξ_G/l) C, slider m₃ g_x on x'_C (the guide takes m₃ g_y);
+* drive torque τ about +z on θ (virtual work τ δθ);
+* a force F at a crank point P: torque (P × F)_z on θ; at a rod point
+  P = B' + α u + β R₉₀ u (u = C − B'): (1 − α) F − β R₉₀ᵀF on B', α F + β R₉₀ᵀF on C; on the
+  slider pin: F_x on x'_C;
+* contact at a clearance joint (:mod:`twin.reference.contact`): penetration δ = |e| − c,
+  n = e/|e|, t = ẑ × n; force on the pin −f_N n + f_T t at the pin's surface point
+  (pin centre + R_pin n), the opposite on the rod at the bushing's surface point
+  (bushing centre + R_bushing n). f_T acts on the true tangential relative velocity of those two
+  material points: v_t = ė·t + ω₁ R_pin − ω₂ R_bushing at B (crank ω₁ = θ̇, rod ω₂), and
+  v_t = ė·t − ω₂ R_bushing at C (the slider does not rotate);
+* slider guide friction (S003 §3: 2.5 N whenever the slider moves): −F_g ρ(|ẋ'_C|) sign(ẋ'_C)
+  on x'_C, with ρ the same regularization ramp as the joint friction (0 below v0, linear to 1
+  at v1; :func:`twin.reference.contact.ramp`). A discontinuous sign() would chatter at the
+  slider's dead centres; the ramp makes the guide force exactly F_g once |ẋ| ≥ v1 = 1 mm/s.
+
+Integration (S003 Eq. 21, symplectic Euler on the independent coordinates): ż ← ż + h z̈,
+z ← z + h ż (velocity first: the printed Eq. 21 shows ẏ_k in the position update, which would
+be explicit Euler; the symplectic variant, as in MuJoCo's Euler, uses the new velocity). The
+dependent coordinates follow q̈ = R z̈ + Ṙż the same way, then are projected with z held:
+Newton–Raphson on A(q) Δq = −[Φ(q); 0] (z rows of the right-hand side zero), then
+q̇ ← R(q) ż. ‖Φ‖ and ‖Φ̇‖ therefore stay at round-off.
+
+Drive: MuJoCo's native ``<pid>`` law: τ_k = kp (θ_ref − θ) + kv (ω_ref − ω) + ki I_k, then
+I_{k+1} = clamp(I_k + h (θ_ref − θ_k), ±imax) (imax = 0: no clamp).
+
+Everything here is compiled with numba (``cache=True``); the parameter vector layout is
+given by the ``P_*`` indices and built by :func:`build_params`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from twin.config import ACCELEROMETERS, BenchConfig, ln_stiffness
+from twin.kinematics import initial_pose
+from twin.reference.contact import LAW_CODES, friction_force, normal_force, ramp
+
+# ----------------------------------------------------------------- parameter layout
+P_R, P_L, P_DOFF, P_GX, P_GY = 0, 1, 2, 3, 4
+P_MC, P_RA, P_RB, P_RC, P_M3 = 5, 6, 7, 8, 9
+P_M1, P_XG1, P_M2, P_XG2 = 10, 11, 12, 13
+P_CLR_B, P_CLR_C = 14, 15
+P_C_B, P_C_C, P_RPIN, P_RBUSH_B, P_RBUSH_C = 16, 17, 18, 19, 20
+P_LAW, P_K_B, P_K_C, P_N, P_E, P_CLIN_B, P_CLIN_C, P_VMIN = 21, 22, 23, 24, 25, 26, 27, 28
+P_MU0, P_V0, P_V1, P_FGUIDE = 29, 30, 31, 32
+P_KP, P_KV, P_KI, P_IMAX, P_H = 33, 34, 35, 36, 37
+P_NEWTON_TOL, P_NEWTON_MAXIT = 38, 39
+P_SENS = 40            # 6 sensors × (body 0 rod / 1 slider, x, y, axis 0 +x 1 −x 2 +y 3 −y)
+N_PARAMS = P_SENS + 24
+
+# --------------------------------------------------------------------- state layout
+S_Q, S_QD = 0, 8       # q[0:8], q̇[8:16]
+S_I = 16               # PID integral state [rad s]
+S_IN_B, S_VIMP_B = 17, 18  # contact event flag and stored impact speed at B
+S_IN_C, S_VIMP_C = 19, 20  # same at C
+N_STATE = 21
+
+# ------------------------------------------------------------------- output columns
+O_THETA, O_OMEGA, O_SLIDER = 0, 1, 2
+O_ACC = 3              # AC1..AC6: 3..8
+O_TORQUE = 9
+O_JOINT_B, O_JOINT_C = 10, 15  # ecc_x, ecc_y, pen, fn, ft
+N_OUT = 20
+
+#: integration status codes of :func:`run_steps`
+OK, NEWTON_FAILED, NOT_FINITE = 0, 1, 2
+
+_AXES = {"+x": 0, "-x": 1, "+y": 2, "-y": 3}
+#: impact speed at which the linear law's default stiffness matches the LN contact duration [m/s]
+#: (the MuJoCo twin's first-guess speed, ``twin.mujoco_engine.builder.FIRST_GUESS_SPEED``)
+LINEAR_MATCH_SPEED = 0.1
+
+
+@dataclass(frozen=True)
+class JointContact:
+    """Resolved contact parameters of one clearance joint (for run metadata).
+
+    Attributes:
+        radial_clearance_m: c [m].
+        stiffness: K of the law [N/m^n] (linear law: [N/m]).
+        exponent: n [-].
+        damping_ns_per_m: damping of the linear law [N s/m] (None for the hysteresis laws).
+        effective_mass_kg: mass seen along the initial contact normal (reduced mass matrix) [kg].
+    """
+
+    radial_clearance_m: float
+    stiffness: float
+    exponent: float
+    damping_ns_per_m: float | None
+    effective_mass_kg: float
+
+
+# ------------------------------------------------------------------------- kernels
+@njit(cache=True)
+def solve_aug(q, s, c, b, out):
+    """Solve A(q) v = b for v (closed form, see module docstring); s, c = sin θ, cos θ."""
+    xB, yB, xBp, yBp, xC, yC = q[0], q[1], q[2], q[3], q[4], q[5]
+    th_d = b[7]
+    rp = xB * c + yB * s
+    rhs1 = b[1] - rp * th_d
+    det = -2.0 * rp
+    vxB = (-c * b[0] - 2.0 * yB * rhs1) / det
+    vyB = (2.0 * xB * rhs1 - s * b[0]) / det
+    vxBp = vxB - b[3]
+    vyBp = vyB - b[4]
+    vyC = -b[6]
+    dx = xC - xBp
+    dy = yC - yBp
+    vxC = (b[2] + 2.0 * dx * vxBp + 2.0 * dy * vyBp - 2.0 * dy * vyC) / (2.0 * dx)
+    out[0] = vxB
+    out[1] = vyB
+    out[2] = vxBp
+    out[3] = vyBp
+    out[4] = vxC
+    out[5] = vyC
+    out[6] = b[5] + vxC
+    out[7] = th_d
+
+
+@njit(cache=True)
+def residual(P, q, s, c, out):
+    """Constraint residuals of the eight rows (independent rows: 0)."""
+    r, l = P[P_R], P[P_L]
+    out[0] = q[0] * q[0] + q[1] * q[1] - r * r
+    out[1] = q[0] * s - q[1] * c
+    dx = q[4] - q[2]
+    dy = q[5] - q[3]
+    out[2] = dx * dx + dy * dy - l * l
+    if P[P_CLR_B] > 0.5:
+        out[3] = 0.0
+        out[4] = 0.0
+    else:
+        out[3] = q[0] - q[2]
+        out[4] = q[1] - q[3]
+    if P[P_CLR_C] > 0.5:
+        out[5] = 0.0
+        out[6] = 0.0
+    else:
+        out[5] = q[6] - q[4]
+        out[6] = P[P_DOFF] - q[5]
+    out[7] = 0.0
+
+
+@njit(cache=True)
+def constraint_norm(P, q):
+    """‖Φ‖₂ of the mechanism's constraints at q."""
+    res = np.empty(8)
+    residual(P, q, math.sin(q[7]), math.cos(q[7]), res)
+    acc = 0.0
+    for i in range(7):
+        acc += res[i] * res[i]
+    return math.sqrt(acc)
+
+
+@njit(cache=True)
+def velocity_constraint_norm(P, q, qd):
+    """‖Φ̇‖₂ = ‖Φ_q q̇‖₂ of the mechanism's constraints."""
+    s, c = math.sin(q[7]), math.cos(q[7])
+    v0 = 2.0 * (q[0] * qd[0] + q[1] * qd[1])
+    v1 = s * qd[0] - c * qd[1] + (q[0] * c + q[1] * s) * qd[7]
+    dx, dy = q[4] - q[2], q[5] - q[3]
+    v2 = 2.0 * (dx * (qd[4] - qd[2]) + dy * (qd[5] - qd[3]))
+    acc = v0 * v0 + v1 * v1 + v2 * v2
+    if P[P_CLR_B] < 0.5:
+        acc += (qd[0] - qd[2]) ** 2 + (qd[1] - qd[3]) ** 2
+    if P[P_CLR_C] < 0.5:
+        acc += (qd[6] - qd[4]) ** 2 + qd[5] ** 2
+    return math.sqrt(acc)
+
+
+@njit(cache=True)
+def quadratic_terms(q, qd, s, c, out):
+    """Right-hand side [−Φ̇_q q̇; 0] of Ṙż (rows 3–7 are linear: zero)."""
+    th_d = qd[7]
+    out[0] = -2.0 * (qd[0] * qd[0] + qd[1] * qd[1])
+    out[1] = -(2.0 * th_d * (qd[0] * c + qd[1] * s) + th_d * th_d * (q[1] * c - q[0] * s))
+    ddx = qd[4] - qd[2]
+    ddy = qd[5] - qd[3]
+    out[2] = -2.0 * (ddx * ddx + ddy * ddy)
+    for i in range(3, 8):
+        out[i] = 0.0
+
+
+@njit(cache=True)
+def independent_rows(P, rows):
+    """Rows of the augmented set that are independent coordinates; returns their number."""
+    rows[0] = 7
+    nz = 1
+    if P[P_CLR_B] > 0.5:
+        rows[nz] = 3
+        rows[nz + 1] = 4
+        nz += 2
+    if P[P_CLR_C] > 0.5:
+        rows[nz] = 5
+        rows[nz + 1] = 6
+        nz += 2
+    return nz
+
+
+@njit(cache=True)
+def mass_times(P, v, out):
+    """out = M v (natural-coordinate mass matrix, see module docstring)."""
+    mc, a, b, cc, m3 = P[P_MC], P[P_RA], P[P_RB], P[P_RC], P[P_M3]
+    out[0] = mc * v[0]
+    out[1] = mc * v[1]
+    out[2] = a * v[2] + b * v[4]
+    out[3] = a * v[3] + b * v[5]
+    out[4] = b * v[2] + cc * v[4]
+    out[5] = b * v[3] + cc * v[5]
+    out[6] = m3 * v[6]
+    out[7] = 0.0
+
+
+@njit(cache=True)
+def _rod_force(P, q, Fx, Fy, px, py, Q):
+    """Add a force (Fx, Fy) acting on the rod at bench point (px, py) to Q."""
+    ux, uy = q[4] - q[2], q[5] - q[3]
+    uu = ux * ux + uy * uy
+    rx, ry = px - q[2], py - q[3]
+    alpha = (rx * ux + ry * uy) / uu
+    beta = (-rx * uy + ry * ux) / uu
+    # R90ᵀ F = (F_y, −F_x)
+    Q[2] += (1.0 - alpha) * Fx - beta * Fy
+    Q[3] += (1.0 - alpha) * Fy + beta * Fx
+    Q[4] += alpha * Fx + beta * Fy
+    Q[5] += alpha * Fy - beta * Fx
+
+
+@njit(cache=True)
+def _joint(P, q, qd, joint, cst, Q, jout):
+    """Contact force element of clearance joint 0 (B) or 1 (C): adds to Q, updates the
+    contact event state cst = [in_contact, v_impact], writes jout = [ecc_x, ecc_y (bench),
+    pen, fn, ft]."""
+    if joint == 0:
+        ex, ey = q[0] - q[2], q[1] - q[3]
+        edx, edy = qd[0] - qd[2], qd[1] - qd[3]
+        c, Rb, K, clin = P[P_C_B], P[P_RBUSH_B], P[P_K_B], P[P_CLIN_B]
+    else:
+        ex, ey = q[6] - q[4], P[P_DOFF] - q[5]
+        edx, edy = qd[6] - qd[4], -qd[5]
+        c, Rb, K, clin = P[P_C_C], P[P_RBUSH_C], P[P_K_C], P[P_CLIN_C]
+    Rp = P[P_RPIN]
+    d = math.sqrt(ex * ex + ey * ey)
+    if d > 0.0:
+        nx, ny = ex / d, ey / d
+    else:
+        nx, ny = 1.0, 0.0
+    delta = d - c
+    ddelta = nx * edx + ny * edy
+    jout[0] = ex
+    jout[1] = ey
+    if delta > 0.0:
+        if cst[0] < 0.5:  # start of a contact event: store the impact speed
+            cst[0] = 1.0
+            cst[1] = ddelta if ddelta > P[P_VMIN] else P[P_VMIN]
+        fn = normal_force(int(P[P_LAW]), delta, ddelta, cst[1], K, P[P_N], P[P_E], clin)
+        jout[2] = delta
+    else:
+        cst[0] = 0.0
+        fn = 0.0
+        jout[2] = 0.0
+    tx, ty = -ny, nx
+    # rod angular velocity
+    ux, uy = q[4] - q[2], q[5] - q[3]
+    udx, udy = qd[4] - qd[2], qd[5] - qd[3]
+    w2 = (ux * udy - uy * udx) / (ux * ux + uy * uy)
+    vt = edx * tx + edy * ty - w2 * Rb
+    if joint == 0:
+        vt += qd[7] * Rp
+    ft = friction_force(vt, fn, P[P_MU0], P[P_V0], P[P_V1]) if fn > 0.0 else 0.0
+    jout[3] = fn
+    jout[4] = ft
+    if fn == 0.0:
+        return
+    Fx = -fn * nx + ft * tx  # on the pin
+    Fy = -fn * ny + ft * ty
+    if joint == 0:
+        pcx, pcy = q[0] + Rp * nx, q[1] + Rp * ny  # crank material point: torque about A
+        Q[7] += pcx * Fy - pcy * Fx
+        _rod_force(P, q, -Fx, -Fy, q[2] + Rb * nx, q[3] + Rb * ny, Q)
+    else:
+        Q[6] += Fx                                 # slider pin: the guide takes F_y
+        _rod_force(P, q, -Fx, -Fy, q[4] + Rb * nx, q[5] + Rb * ny, Q)
+
+
+@njit(cache=True)
+def generalized_forces(P, q, qd, tau, cst_b, cst_c, Q, jb, jc):
+    """Q(q, q̇, τ): gravity, drive torque, guide friction and contact elements."""
+    gx, gy = P[P_GX], P[P_GY]
+    w1 = P[P_M1] * P[P_XG1] / P[P_R]
+    a2 = P[P_XG2] / P[P_L]
+    m2 = P[P_M2]
+    Q[0] = w1 * gx
+    Q[1] = w1 * gy
+    Q[2] = m2 * (1.0 - a2) * gx
+    Q[3] = m2 * (1.0 - a2) * gy
+    Q[4] = m2 * a2 * gx
+    Q[5] = m2 * a2 * gy
+    Q[6] = P[P_M3] * gx
+    Q[7] = tau
+    fg = P[P_FGUIDE]
+    if fg > 0.0:
+        v = qd[6]
+        f = fg * ramp(v, P[P_V0], P[P_V1])
+        if v > 0.0:
+            Q[6] -= f
+        elif v < 0.0:
+            Q[6] += f
+    if P[P_CLR_B] > 0.5:
+        _joint(P, q, qd, 0, cst_b, Q, jb)
+    if P[P_CLR_C] > 0.5:
+        _joint(P, q, qd, 1, cst_c, Q, jc)
+
+
+@njit(cache=True)
+def _cholesky_solve(A, b, n):
+    """Solve the SPD system A x = b (n × n, in place: A -> L, b -> x)."""
+    for j in range(n):
+        sacc = A[j, j]
+        for k in range(j):
+            sacc -= A[j, k] * A[j, k]
+        if not sacc > 0.0:
+            return False
+        ljj = math.sqrt(sacc)
+        A[j, j] = ljj
+        for i in range(j + 1, n):
+            t = A[i, j]
+            for k in range(j):
+                t -= A[i, k] * A[j, k]
+            A[i, j] = t / ljj
+    for i in range(n):
+        t = b[i]
+        for k in range(i):
+            t -= A[i, k] * b[k]
+        b[i] = t / A[i, i]
+    for i in range(n - 1, -1, -1):
+        t = b[i]
+        for k in range(i + 1, n):
+            t -= A[k, i] * b[k]
+        b[i] = t / A[i, i]
+    return True
+
+
+@njit(cache=True)
+def r_matrix(P, q, qd, R, S):
+    """R (8 × r, first r columns of ``R``) and Ṙż (``S``) at (q, q̇); returns r."""
+    s, c = math.sin(q[7]), math.cos(q[7])
+    rows = np.empty(5, dtype=np.int64)
+    nz = independent_rows(P, rows)
+    b = np.zeros(8)
+    col = np.empty(8)
+    for j in range(nz):
+        b[:] = 0.0
+        b[rows[j]] = 1.0
+        solve_aug(q, s, c, b, col)
+        R[:, j] = col
+    quadratic_terms(q, qd, s, c, b)
+    solve_aug(q, s, c, b, S)
+    return nz
+
+
+@njit(cache=True)
+def reduced_mass(P, q):
+    """Reduced mass matrix Rᵀ M R at q (r × r)."""
+    R = np.zeros((8, 5))
+    S = np.zeros(8)
+    nz = r_matrix(P, q, np.zeros(8), R, S)
+    Mb = np.zeros((nz, nz))
+    mr = np.empty(8)
+    for j in range(nz):
+        mass_times(P, R[:, j], mr)
+        for i in range(nz):
+            acc = 0.0
+            for k in range(8):
+                acc += R[k, i] * mr[k]
+            Mb[i, j] = acc
+    return Mb
+
+
+@njit(cache=True)
+def accelerations(P, q, qd, s, c, Q, rows, nz, Rt, S, Mb, rhs, tmp, qdd):
+    """q̈ = R z̈ + Ṙż from Rᵀ M R z̈ = Rᵀ (Q − M Ṙż); returns False if Rᵀ M R is not SPD.
+
+    ``Rt`` holds Rᵀ (r × 8, rows contiguous); ``tmp`` is (r + 2) × 8 scratch (M R rows, b)."""
+    b = tmp[nz]
+    mr = tmp[nz + 1]
+    for j in range(nz):
+        for i in range(8):
+            b[i] = 0.0
+        b[rows[j]] = 1.0
+        solve_aug(q, s, c, b, Rt[j])
+        mass_times(P, Rt[j], tmp[j])
+    quadratic_terms(q, qd, s, c, b)
+    solve_aug(q, s, c, b, S)
+    # rhs = Rᵀ (Q − M S)
+    mass_times(P, S, mr)
+    for i in range(8):
+        b[i] = Q[i] - mr[i]
+    for j in range(nz):
+        acc = 0.0
+        for k in range(8):
+            acc += Rt[j, k] * b[k]
+        rhs[j] = acc
+    for j in range(nz):
+        for i in range(j, nz):
+            acc = 0.0
+            for k in range(8):
+                acc += Rt[i, k] * tmp[j, k]
+            Mb[i, j] = acc
+            Mb[j, i] = acc
+    if not _cholesky_solve(Mb, rhs, nz):
+        return False
+    for i in range(8):
+        acc = S[i]
+        for j in range(nz):
+            acc += Rt[j, i] * rhs[j]
+        qdd[i] = acc
+    return True
+
+
+@njit(cache=True)
+def project(P, q, qd, s, c, res, dq, b):
+    """Position then velocity projection with the independent coordinates held.
+
+    Newton–Raphson on A(q) Δq = −[Φ(q); 0] until max|Δq| ≤ tol, then q̇ ← R(q) ż.
+    Returns the number of Newton iterations, or −1 if it did not converge.
+    """
+    tol = P[P_NEWTON_TOL]
+    maxit = int(P[P_NEWTON_MAXIT])
+    it = 0
+    conv = False
+    while it < maxit:
+        residual(P, q, s, c, res)
+        for i in range(8):
+            res[i] = -res[i]
+        solve_aug(q, s, c, res, dq)
+        big = 0.0
+        for i in range(8):
+            q[i] += dq[i]
+            a = abs(dq[i])
+            if a > big:
+                big = a
+        it += 1
+        if big <= tol:
+            conv = True
+            break
+    if not conv:
+        return -1
+    # velocities: ż from the integrated q̇, dependent ones re-solved
+    for i in range(8):
+        b[i] = 0.0
+    b[7] = qd[7]
+    if P[P_CLR_B] > 0.5:
+        b[3] = qd[0] - qd[2]
+        b[4] = qd[1] - qd[3]
+    if P[P_CLR_C] > 0.5:
+        b[5] = qd[6] - qd[4]
+        b[6] = -qd[5]
+    solve_aug(q, s, c, b, dq)
+    for i in range(8):
+        qd[i] = dq[i]
+    return it
+
+
+@njit(cache=True)
+def energy(P, q, qd):
+    """Mechanical energy T + V [J]: T = ½ q̇ᵀ M q̇, V = −Σ m g·r_G (zero with every centre of
+    mass at A; the slider's constant guide-normal term is dropped)."""
+    mv = np.empty(8)
+    mass_times(P, qd, mv)
+    T = 0.0
+    for i in range(8):
+        T += 0.5 * qd[i] * mv[i]
+    gx, gy = P[P_GX], P[P_GY]
+    w1 = P[P_M1] * P[P_XG1] / P[P_R]
+    a2 = P[P_XG2] / P[P_L]
+    m2 = P[P_M2]
+    V = -(w1 * (gx * q[0] + gy * q[1])
+          + m2 * (gx * ((1.0 - a2) * q[2] + a2 * q[4]) + gy * ((1.0 - a2) * q[3] + a2 * q[5]))
+          + P[P_M3] * gx * q[6])
+    return T + V
+
+
+@njit(cache=True)
+def _outputs(P, q, qd, qdd, tau, jb, jc, row):
+    """One output sample (layout ``O_*``) from the state, its accelerations and forces."""
+    row[O_THETA] = q[7]
+    row[O_OMEGA] = qd[7]
+    row[O_SLIDER] = q[6]
+    row[O_TORQUE] = tau
+    ux, uy = q[4] - q[2], q[5] - q[3]
+    L = math.sqrt(ux * ux + uy * uy)
+    hx, hy = ux / L, uy / L          # rod x axis (B' -> C)
+    px_, py_ = -hy, hx               # rod y axis
+    uddx, uddy = qdd[4] - qdd[2], qdd[5] - qdd[3]
+    gx, gy = P[P_GX], P[P_GY]
+    for i in range(6):
+        base = P_SENS + 4 * i
+        body = P[base]
+        sx, sy = P[base + 1], P[base + 2]
+        axis = int(P[base + 3])
+        if body < 0.5:   # rod: P = B' + sx x̂ + sy ŷ, rigid with |u| = L
+            ax = qdd[2] + (sx * uddx - sy * uddy) / L - gx
+            ay = qdd[3] + (sx * uddy + sy * uddx) / L - gy
+            if axis < 2:
+                v = ax * hx + ay * hy
+            else:
+                v = ax * px_ + ay * py_
+        else:            # slider: translates along x, frame = bench frame
+            ax = qdd[6] - gx
+            ay = -gy
+            v = ax if axis < 2 else ay
+        if axis == 1 or axis == 3:
+            v = -v
+        row[O_ACC + i] = v
+    for j in range(2):
+        jo = jb if j == 0 else jc
+        base = O_JOINT_B if j == 0 else O_JOINT_C
+        if (j == 0 and P[P_CLR_B] > 0.5) or (j == 1 and P[P_CLR_C] > 0.5):
+            row[base] = jo[0] * hx + jo[1] * hy       # eccentricity in the rod frame
+            row[base + 1] = jo[0] * px_ + jo[1] * py_
+            row[base + 2] = jo[2]
+            row[base + 3] = jo[3]
+            row[base + 4] = jo[4]
+        else:
+            for k in range(5):
+                row[base + k] = 0.0
+
+
+@njit(cache=True)
+def run_steps(P, st, theta_ref, omega_ref, stride, out, want_out):
+    """Integrate ``len(theta_ref)`` steps from state ``st`` (updated in place).
+
+    Step k uses the references theta_ref[k], omega_ref[k]; every ``stride``-th step writes
+    the sample of its starting state (and of the accelerations of that step) to ``out``
+    (if ``want_out``). Returns (status, steps done); status ``OK``, ``NEWTON_FAILED`` or
+    ``NOT_FINITE``.
+    """
+    h = P[P_H]
+    kp, kv, ki, imax = P[P_KP], P[P_KV], P[P_KI], P[P_IMAX]
+    q = st[S_Q:S_Q + 8].copy()
+    qd = st[S_QD:S_QD + 8].copy()
+    integ = st[S_I]
+    cst_b = np.empty(2)
+    cst_c = np.empty(2)
+    cst_b[0], cst_b[1] = st[S_IN_B], st[S_VIMP_B]
+    cst_c[0], cst_c[1] = st[S_IN_C], st[S_VIMP_C]
+    Q = np.empty(8)
+    jb = np.zeros(5)
+    jc = np.zeros(5)
+    rows = np.empty(5, dtype=np.int64)
+    nz = independent_rows(P, rows)
+    Rt = np.empty((5, 8))
+    S = np.empty(8)
+    Mb = np.empty((5, 5))
+    rhs = np.empty(5)
+    tmp = np.empty((7, 8))
+    qdd = np.empty(8)
+    res = np.empty(8)
+    dq = np.empty(8)
+    bb = np.empty(8)
+    s, c = math.sin(q[7]), math.cos(q[7])
+    n = theta_ref.shape[0]
+    status = OK
+    k = 0
+    while k < n:
+        err = theta_ref[k] - q[7]
+        tau = kp * err + kv * (omega_ref[k] - qd[7]) + ki * integ
+        generalized_forces(P, q, qd, tau, cst_b, cst_c, Q, jb, jc)
+        if not accelerations(P, q, qd, s, c, Q, rows, nz, Rt, S, Mb, rhs, tmp, qdd):
+            status = NOT_FINITE
+            break
+        if want_out and k % stride == 0:
+            _outputs(P, q, qd, qdd, tau, jb, jc, out[k // stride])
+        integ += h * err
+        if imax > 0.0:
+            if integ > imax:
+                integ = imax
+            elif integ < -imax:
+                integ = -imax
+        for i in range(8):
+            qd[i] += h * qdd[i]
+            q[i] += h * qd[i]
+        s, c = math.sin(q[7]), math.cos(q[7])
+        if project(P, q, qd, s, c, res, dq, bb) < 0:
+            status = NEWTON_FAILED
+            k += 1
+            break
+        fin = True
+        for i in range(8):
+            if not (math.isfinite(q[i]) and math.isfinite(qd[i])):
+                fin = False
+        if not fin:
+            status = NOT_FINITE
+            k += 1
+            break
+        k += 1
+    st[S_Q:S_Q + 8] = q
+    st[S_QD:S_QD + 8] = qd
+    st[S_I] = integ
+    st[S_IN_B], st[S_VIMP_B] = cst_b[0], cst_b[1]
+    st[S_IN_C], st[S_VIMP_C] = cst_c[0], cst_c[1]
+    return status, k
+
+
+@njit(cache=True)
+def free_motion(P, st, nsteps, every, th_d, en, phi, phid):
+    """Unforced run (τ = 0) recording θ̇, energy, ‖Φ‖, ‖Φ̇‖ before step 0 and after every
+    ``every`` steps. Returns (status, steps done, samples written)."""
+    zero = np.zeros(every)
+    out = np.empty((1, N_OUT))
+    m = 0
+    k = 0
+    status = OK
+    while True:
+        q = st[S_Q:S_Q + 8]
+        qd = st[S_QD:S_QD + 8]
+        th_d[m] = qd[7]
+        en[m] = energy(P, q, qd)
+        phi[m] = constraint_norm(P, q)
+        phid[m] = velocity_constraint_norm(P, q, qd)
+        m += 1
+        if k + every > nsteps or status != OK:
+            break
+        status, done = run_steps(P, st, zero, zero, every, out, False)
+        k += done
+    return status, k, m
+
+
+# ----------------------------------------------------------------- Python helpers
+def build_params(cfg: BenchConfig, *, min_impact_speed_mps: float = 1e-3, newton_tol_m: float = 1e-10,
+                 newton_max_iter: int = 20, drive: bool = True, guide_friction: bool = True,
+                 joint_friction: bool = True) -> np.ndarray:
+    """Parameter vector of a configuration (layout ``P_*``).
+
+    ``drive=False`` zeroes the PID gains (free motion), ``guide_friction``/``joint_friction``
+    False switch those forces off (§4.1 study). The linear law's stiffness and damping are
+    resolved here (see :func:`contact_parameters`).
+    """
+    b, j, mech, con = cfg.bodies, cfg.joints, cfg.mechanism, cfg.contact
+    P = np.zeros(N_PARAMS)
+    r, l = b.crank.length_m, b.rod.length_m
+    P[P_R], P[P_L], P[P_DOFF] = r, l, mech.d_off_m
+    g = mech.gravity_vector
+    P[P_GX], P[P_GY] = g[0], g[1]
+    ia = b.crank.inertia_kgm2 + b.crank.mass_kg * b.crank.x_g_m ** 2
+    P[P_MC] = ia / r ** 2
+    m2, xg2 = b.rod.mass_kg, b.rod.x_g_m
+    ii = b.rod.inertia_kgm2 + m2 * xg2 ** 2
+    P[P_RA] = m2 - 2.0 * m2 * xg2 / l + ii / l ** 2
+    P[P_RB] = m2 * xg2 / l - ii / l ** 2
+    P[P_RC] = ii / l ** 2
+    P[P_M3] = b.slider.mass_kg
+    P[P_M1], P[P_XG1], P[P_M2], P[P_XG2] = b.crank.mass_kg, b.crank.x_g_m, m2, xg2
+    P[P_CLR_B] = 1.0 if j.diametral_mm("B") > 0 else 0.0
+    P[P_CLR_C] = 1.0 if j.diametral_mm("C") > 0 else 0.0
+    P[P_C_B], P[P_C_C] = j.radial_m("B"), j.radial_m("C")
+    P[P_RPIN] = j.pin_radius_m
+    P[P_RBUSH_B], P[P_RBUSH_C] = j.bushing_radius_m("B"), j.bushing_radius_m("C")
+    P[P_LAW] = LAW_CODES[con.law]
+    P[P_N], P[P_E] = con.exponent, con.restitution
+    P[P_VMIN] = min_impact_speed_mps
+    P[P_MU0] = con.mu0 if joint_friction else 0.0
+    P[P_V0], P[P_V1] = con.v0_mps, con.v1_mps
+    P[P_FGUIDE] = mech.guide_friction_n if guide_friction else 0.0
+    if drive:
+        P[P_KP], P[P_KV], P[P_KI], P[P_IMAX] = cfg.pid.kp, cfg.pid.kv, cfg.pid.ki, cfg.pid.imax
+    P[P_H] = cfg.simulation.timestep_s
+    P[P_NEWTON_TOL], P[P_NEWTON_MAXIT] = newton_tol_m, newton_max_iter
+    for i, name in enumerate(ACCELEROMETERS):
+        mnt = cfg.sensors.accelerometers[name]
+        base = P_SENS + 4 * i
+        P[base] = 0.0 if mnt.body == "rod" else 1.0
+        P[base + 1], P[base + 2] = mnt.position_m
+        P[base + 3] = _AXES[mnt.axis]
+    return P
+
+
+def contact_parameters(cfg: BenchConfig, P: np.ndarray, st: np.ndarray) -> dict[str, JointContact]:
+    """Resolve K (and the linear law's k, c) of each clearance joint into ``P`` (in place).
+
+    Hysteresis laws: K = ``contact.stiffness`` if set, else S003 Eq. 18 (:func:`ln_stiffness`),
+    exponent ``contact.exponent``. Linear law f = k δ + c δ̇: k = ``contact.stiffness`` [N/m] if
+    set, else the linear contact with the Lankarani–Nikravesh law's contact duration for an impact
+    at 0.1 m/s (the MuJoCo twin's first guess, :func:`twin.impact.linear_equivalent`); c gives that
+    linear contact the restitution ``contact.restitution``: c = 2 ζ(e) sqrt(k m_eff), with m_eff
+    the effective mass along the initial contact normal from the reduced mass matrix.
+    """
+    from twin.impact import linear_damping_ratio, linear_equivalent
+
+    out: dict[str, JointContact] = {}
+    con = cfg.contact
+    q = st[S_Q:S_Q + 8]
+    Mb = reduced_mass(P, q)
+    W = np.linalg.inv(Mb)
+    off = 1
+    for jt, kidx, cidx in (("B", P_K_B, P_CLIN_B), ("C", P_K_C, P_CLIN_C)):
+        if cfg.joints.diametral_mm(jt) <= 0:
+            continue
+        e = np.array([q[0] - q[2], q[1] - q[3]]) if jt == "B" else np.array([q[6] - q[4], P[P_DOFF] - q[5]])
+        n = e / np.linalg.norm(e) if np.linalg.norm(e) > 0 else np.array([0.0, 1.0])
+        w = W[off:off + 2, off:off + 2]
+        m_eff = float(1.0 / (n @ w @ n))
+        off += 2
+        K_ln = con.stiffness if con.stiffness > 0 else ln_stiffness(cfg.joints, cfg.materials, jt)
+        if con.law == "linear":
+            k = con.stiffness if con.stiffness > 0 else \
+                linear_equivalent(K_ln, con.exponent, con.restitution, m_eff, LINEAR_MATCH_SPEED)[0]
+            c = 2.0 * linear_damping_ratio(con.restitution) * math.sqrt(k * m_eff)
+            P[kidx], P[cidx] = k, c
+            out[jt] = JointContact(cfg.joints.radial_m(jt), float(k), 1.0, float(c), m_eff)
+        else:
+            P[kidx] = K_ln
+            out[jt] = JointContact(cfg.joints.radial_m(jt), float(K_ln), con.exponent, None, m_eff)
+    return out
+
+
+def initial_state(cfg: BenchConfig, theta: float) -> np.ndarray:
+    """State vector (layout ``S_*``) at rest at crank angle θ with the configured initial
+    eccentricities (:func:`twin.kinematics.initial_pose`), PID integral 0, no contact event."""
+    pose = initial_pose(cfg, theta)
+    st = np.zeros(N_STATE)
+    st[S_Q:S_Q + 8] = [pose.b_pin[0], pose.b_pin[1], pose.b_bush[0], pose.b_bush[1],
+                       pose.c_bush[0], pose.c_bush[1], pose.c_pin[0], pose.theta]
+    return st
