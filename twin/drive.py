@@ -82,6 +82,13 @@ def _ramp(tau: np.ndarray, T: float) -> tuple[np.ndarray, np.ndarray]:
     return s, integral
 
 
+def _extrapolate(x: np.ndarray, n: int) -> np.ndarray:
+    """``n`` samples continuing ``x`` (uniformly sampled) by its least-squares quadratic."""
+    k = np.arange(x.size, dtype=np.float64) - (x.size - 1)
+    c = np.polyfit(k, x, 2 if x.size >= 3 else 1)
+    return np.polyval(c, np.arange(1, n + 1, dtype=np.float64))
+
+
 class DriveReference:
     """Reference bench angle θ_ref(t) [rad] and rate ω_ref(t) [rad/s] of a configuration."""
 
@@ -115,11 +122,11 @@ class DriveReference:
         """Zero-phase filtered reference from an encoder trace (cutoff ``drive.trace_filter_hz``).
 
         The trace is put on a uniform grid (its median spacing; linear interpolation only if it
-        is not uniform already), the straight line through its end points is removed (so the
-        filter's edge padding continues a constant-speed motion without a transient), the rest
-        is low-passed forward and backward with a 4th-order Butterworth (no lag; −6 dB at the
-        cutoff), the line is added back, and a C2 cubic spline through the filtered samples
-        gives θ_ref(t) and its derivative ω_ref(t).
+        is not uniform already), extended at both ends by 3/cutoff seconds of the quadratic that
+        fits its first/last 1/cutoff seconds (constant acceleration: no start/end transient in
+        the filtered angle, rate or acceleration), low-passed forward and backward with a
+        4th-order Butterworth (no lag; −6 dB at the cutoff) and cut back; a C2 cubic spline
+        through the filtered samples gives θ_ref(t) and its derivative ω_ref(t).
         """
         from scipy.interpolate import make_interp_spline  # scipy import only when needed
         from scipy.signal import butter, sosfiltfilt
@@ -136,10 +143,11 @@ class DriveReference:
             if fc >= 0.5 * fs:
                 raise ConfigError("drive.trace_filter_hz",
                                   f"must be below half the trace's sample rate ({0.5 * fs:g} Hz), got {fc:g}")
-            line = theta[0] + (theta[-1] - theta[0]) * (tt / tt[-1])
             sos = butter(4, fc, fs=fs, output="sos")
-            padlen = min(theta.size - 1, int(np.ceil(3.0 * fs / fc)))
-            theta = line + sosfiltfilt(sos, theta - line, padtype="odd", padlen=padlen)
+            pad = int(np.ceil(3.0 * fs / fc))
+            fit = max(8, min(theta.size, int(np.ceil(fs / fc))))
+            ext = np.concatenate([_extrapolate(theta[:fit][::-1], pad)[::-1], theta, _extrapolate(theta[-fit:], pad)])
+            theta = sosfiltfilt(sos, ext, padtype=None)[pad:pad + theta.size]
         spline = make_interp_spline(tt, theta, k=3)
         self.theta0 = float(theta[0])
         self.trace_duration_s = float(tt[-1])

@@ -176,11 +176,18 @@ class RunWriter:
                                     data=encode_block(stamp, idx, self.rate_hz, arrays))
         self._written += run.n
 
-    def close(self, meta: dict[str, Any] | None = None, summary: dict[str, Any] | None = None) -> Path:
-        """Flush, write the metadata records, finish and rename into place."""
+    def close(self, meta: dict[str, Any] | None = None, summary: dict[str, Any] | None = None,
+              extra_metadata: dict[str, dict[str, str]] | None = None) -> Path:
+        """Flush, write the metadata records, finish and rename into place.
+
+        ``extra_metadata``: further metadata records by name (string keys and values), e.g.
+        ``twin.recording`` of a bench recording (``twin/recording.py``).
+        """
         if self._pending is not None and self._pending.n:
             self._emit(self._pending)
             self._pending = None
+        for name, record in (extra_metadata or {}).items():
+            self._w.add_metadata(name, {str(k): str(v) for k, v in record.items()})
         if self.config is not None:
             self._w.add_metadata("twin.config", {"toml": self.config.to_toml()})
         self._w.add_metadata("twin.run", {
@@ -225,11 +232,12 @@ def _json_default(o: Any) -> Any:
 
 
 def write_run(path: str | Path, run: Run, summary: dict[str, Any] | None = None,
-              block: int = DEFAULT_BLOCK) -> Path:
-    """Write a whole run to ``path`` (temporary file + rename)."""
+              block: int = DEFAULT_BLOCK, extra_metadata: dict[str, dict[str, str]] | None = None) -> Path:
+    """Write a whole run to ``path`` (temporary file + rename); ``extra_metadata`` as in
+    :meth:`RunWriter.close`."""
     with RunWriter(path, run.config, block=block) as w:
         w.write(run)
-        return w.close(run.meta, summary)
+        return w.close(run.meta, summary, extra_metadata)
 
 
 def read_metadata(path: str | Path) -> dict[str, dict[str, str]]:

@@ -1,0 +1,479 @@
+"""Replay a bench recording through the twin and compare measured with simulated accelerations.
+
+S003 §4.3 and Fig. 16: the crank angle measured by the encoder drives the simulation through the
+PID; the virtual accelerometers go through the same sensor chain and the same calibration as the
+real ones; the two are compared. Steps of :func:`replay`:
+
+1. read and validate the recording (:func:`twin.recording.read_recording`), repairs reported;
+2. encoder counts → encoder angle (count centres) → ``encoder_trace.npz`` in the output folder;
+   the drive's ``trace`` program turns it into the reference angle and rate with its zero-phase
+   filter (``drive.trace_filter_hz``, :meth:`twin.drive.DriveReference._prepare_trace`);
+3. simulate with the recording's bench configuration, or an overridden one (e.g. ideal joints
+   on a clearance recording, as in Fig. 16), at the recording's sample rate
+   (:func:`twin.simulate.simulate`);
+4. virtual sensor chain on the simulated run (:func:`twin.instrument.apply_chain`), its zero-g
+   offsets set to the recording's calibration so that raw volts are comparable, calibrated
+   with a simulated static recording exactly as the bench calibrates (Eq. 1–4);
+5. comparison over an analysis window: time alignment (lag of the cross-correlation of all
+   sensors within ``max_lag_s``), per-sensor errors (RMS, peak, NRMSE vs the recorded range,
+   correlation), the paper's normalized DTW distance and time shift (:mod:`twin.signals`),
+   Hann-windowed spectra with the crank rate and its harmonics and the 1 kHz / 3 kHz band
+   energies, crank tracking error in encoder counts;
+6. output folder: ``replay.mcap`` (recorded and simulated channels side by side, names in
+   ``recordings/FORMAT.md``), ``report.json``, ``report.md``, PNG plots.
+
+The simulation starts at rest at the first recorded angle: recordings should start with the
+crank at rest (the bench protocol does); otherwise exclude the catch-up from the window.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from twin.channels import encoder_from_bench
+from twin.config import ACCELEROMETERS, CHANNEL_GROUPS, BenchConfig
+from twin.errors import RecordingError, TwinError
+from twin.instrument import (apply_chain, counts_to_angle, measured_accel, simulated_calibration)
+from twin.instrument.encoder import count_step_rad
+from twin.recording import RecordingInfo, read_recording
+from twin.run import Channel, Run
+from twin.signals import band_energy_db, dtw_compare, hann_spectrum
+
+#: Frequency bands of S003 Fig. 15 where clearance raises spectral activity [Hz]. The paper
+#: shades them without giving edges; ±200 Hz around 1 kHz and ±300 Hz around 3 kHz is our
+#: reading of the figure (PLACEHOLDER).
+DEFAULT_BANDS_HZ: tuple[tuple[float, float], ...] = ((800.0, 1200.0), (2700.0, 3300.0))
+
+
+@dataclass(frozen=True)
+class ReplayOptions:
+    """Analysis settings of a replay.
+
+    Attributes:
+        window_s: analysis window (start, stop) in recording time from its first sample [s];
+            None = the second half of the recording, at most 1 s, ending 2/``drive.trace_filter_hz``
+            before the end (edge of the trace filter).
+        max_lag_s: largest time lag searched when aligning simulated to recorded signals [s].
+        dtw_window_s: Sakoe–Chiba half-width of the DTW comparison [s] (the replay is aligned by
+            construction, so a narrow band suffices).
+        dtw_max_s: DTW is computed on at most this much of the window, from its start [s] (cost).
+        bands_hz: frequency bands whose energy is compared [Hz].
+        harmonics: number of crank-rate multiples marked and tabulated (rate and harmonics).
+        static_s: length of the simulated static calibration recording [s].
+        nan: NaN policy of the recording reader ("error" or "interpolate").
+        plots: write PNG plots.
+        progress: show a progress bar while simulating.
+    """
+
+    window_s: tuple[float, float] | None = None
+    max_lag_s: float = 0.005
+    dtw_window_s: float = 0.002
+    dtw_max_s: float = 0.5
+    bands_hz: tuple[tuple[float, float], ...] = DEFAULT_BANDS_HZ
+    harmonics: int = 7
+    static_s: float = 1.0
+    nan: str = "error"
+    plots: bool = True
+    progress: bool = False
+
+
+def replay_config(rec_cfg: BenchConfig, trace_file: Path, rec: Run, zero_g_v: dict[str, float]) -> BenchConfig:
+    """Simulation configuration of a replay: ``rec_cfg`` driven by the trace at the recording's rate."""
+    return rec_cfg.replace(**{
+        "drive.program": "trace", "drive.trace_file": str(trace_file),
+        "simulation.duration_s": rec.n / rec.rate_hz,
+        "sensors.output_rate_hz": rec.rate_hz, "sensors.channels": list(CHANNEL_GROUPS),
+        "instrumentation.zero_g_v": dict(zero_g_v),
+    })
+
+
+def _window_indices(n: int, rate: float, window_s: tuple[float, float] | None,
+                    edge_s: float = 0.0) -> tuple[int, int]:
+    T = n / rate
+    if window_s is None:
+        t1 = T - min(edge_s, T / 10.0)
+        t0 = max(T / 2.0, t1 - 1.0)
+    else:
+        t0, t1 = window_s
+        if not (0 <= t0 < t1 <= T + 1e-12):
+            raise TwinError(f"--window: need 0 <= start < stop <= {T:g} s (recording length), got {t0:g} {t1:g}")
+    i0, i1 = int(round(t0 * rate)), min(n, int(round(t1 * rate)))
+    if i1 - i0 < 16:
+        raise TwinError(f"--window: {t0:g}..{t1:g} s holds fewer than 16 samples")
+    return i0, i1
+
+
+def estimate_lag(rec: list[np.ndarray], sim: list[np.ndarray], max_lag: int) -> int:
+    """Lag k (samples) maximizing Σ_sensors corr(rec[i + k], sim[i]), |k| ≤ max_lag.
+
+    k > 0: the recorded signals are late with respect to the simulated ones.
+    """
+    if max_lag <= 0:
+        return 0
+    n = len(rec[0])
+    nfft = 1 << int(math.ceil(math.log2(2 * n)))
+    total = np.zeros(2 * max_lag + 1)
+    for x, y in zip(rec, sim):
+        x = x - x.mean()
+        y = y - y.mean()
+        den = math.sqrt(float(np.dot(x, x)) * float(np.dot(y, y)))
+        if den == 0:
+            continue
+        c = np.fft.irfft(np.fft.rfft(x, nfft) * np.conj(np.fft.rfft(y, nfft)), nfft)
+        lags = np.r_[c[nfft - max_lag:], c[:max_lag + 1]]  # k = -max_lag .. max_lag
+        total += lags / den
+    return int(np.argmax(total)) - max_lag
+
+
+def _harmonic_amplitudes(f: np.ndarray, amp: np.ndarray, freqs: np.ndarray) -> list[float]:
+    df = f[1] - f[0]
+    out = []
+    for fh in freqs:
+        k = int(round(fh / df))
+        lo, hi = max(0, k - 1), min(len(f), k + 2)
+        out.append(float(np.max(amp[lo:hi])) if lo < hi else float("nan"))
+    return out
+
+
+def compare_accelerations(rec: dict[str, np.ndarray], sim: dict[str, np.ndarray], rate: float,
+                          crank_rate_hz: float, opts: ReplayOptions) -> dict[str, Any]:
+    """Per-sensor comparison of aligned recorded and simulated accelerations [m/s²]."""
+    out: dict[str, Any] = {}
+    harm = crank_rate_hz * np.arange(1, opts.harmonics + 1)
+    n_dtw = min(len(next(iter(rec.values()))), max(16, int(round(opts.dtw_max_s * rate))))
+    for name in rec:
+        x, y = rec[name].astype(np.float64), sim[name].astype(np.float64)
+        e = y - x
+        rng = float(np.max(x) - np.min(x))
+        sx, sy = float(np.std(x)), float(np.std(y))
+        corr = float(np.corrcoef(x, y)[0, 1]) if sx > 0 and sy > 0 else float("nan")
+        d = dtw_compare(x[:n_dtw], y[:n_dtw], rate, opts.dtw_window_s) if rng > 0 else None
+        f, ax = hann_spectrum(x, rate, remove_mean=True)
+        _, ay = hann_spectrum(y, rate, remove_mean=True)
+        bands = []
+        for lo, hi in opts.bands_hz:
+            if hi <= rate / 2 and len(x) / rate * (hi - lo) >= 1:
+                er, es = band_energy_db(x, rate, lo, hi), band_energy_db(y, rate, lo, hi)
+                bands.append({"f_lo_hz": lo, "f_hi_hz": hi, "recorded_db": er, "simulated_db": es,
+                              "difference_db": es - er})
+        out[name] = {
+            "rms_error_mps2": float(np.sqrt(np.mean(e * e))),
+            "max_abs_error_mps2": float(np.max(np.abs(e))),
+            "nrmse_pct": 100.0 * float(np.sqrt(np.mean(e * e))) / rng if rng > 0 else float("nan"),
+            "correlation": corr,
+            "recorded_rms_mps2": float(np.sqrt(np.mean(x * x))), "simulated_rms_mps2": float(np.sqrt(np.mean(y * y))),
+            "recorded_peak_mps2": float(np.max(np.abs(x))), "simulated_peak_mps2": float(np.max(np.abs(y))),
+            "dtw_distance_pct": d.distance_pct if d else float("nan"),
+            "dtw_mean_shift_s": d.mean_shift_s if d else float("nan"),
+            "dtw_samples": n_dtw,
+            "harmonics_hz": [float(h) for h in harm],
+            "recorded_harmonic_amplitudes_mps2": _harmonic_amplitudes(f, ax, harm),
+            "simulated_harmonic_amplitudes_mps2": _harmonic_amplitudes(f, ay, harm),
+            "bands": bands,
+        }
+    return out
+
+
+def _shifted(x: np.ndarray, k: int, i0: int, i1: int) -> np.ndarray:
+    """x[i0 + k : i1 + k] clipped to the array (the window shrinks at the edges)."""
+    return x[max(0, i0 + k):min(len(x), i1 + k)]
+
+
+def replay(recording: str | Path, out_dir: str | Path,
+           configure: Callable[[BenchConfig], BenchConfig] | None = None,
+           opts: ReplayOptions = ReplayOptions()) -> dict[str, Any]:
+    """Replay ``recording`` (see the module docstring); returns the report dict.
+
+    ``configure`` maps the recording's bench configuration to the one to simulate (CLI
+    overrides); None keeps it.
+    """
+    from twin.mcapfile import write_run
+    from twin.simulate import output_stride, simulate
+    from twin.util import atomic_write_json, atomic_write_text
+
+    wall0 = time.perf_counter()
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise TwinError(f"--out: {out} exists and is not a directory")
+    rec, info, repairs = read_recording(recording, nan=opts.nan)
+    if info.calibration is None:
+        raise RecordingError(f"{recording}: no calibration data; re-import it with --calibration STATIC "
+                             "(a static recording in the calibration pose) or --zero-g AC1=V,...")
+    rec_cfg = rec.config
+    base = configure(rec_cfg) if configure is not None else rec_cfg
+    inst = base.instrumentation
+    if abs(inst.daq_rate_hz - rec.rate_hz) > 1e-6 * rec.rate_hz:
+        raise RecordingError(f"instrumentation.daq_rate_hz ({inst.daq_rate_hz:g} Hz) differs from the recording's "
+                             f"rate ({rec.rate_hz:g} Hz)")
+    out.mkdir(parents=True, exist_ok=True)
+
+    # 1-2. encoder counts -> angle trace for the drive
+    cpr = inst.encoder_counts_per_rev
+    count = count_step_rad(cpr)
+    phi = counts_to_angle(rec["encoder_counts"], cpr, centre=inst.encoder_quantization)
+    t_rel = np.arange(rec.n) / rec.rate_hz
+    trace = out / "encoder_trace.npz"
+    tmp = out / ".encoder_trace.tmp.npz"
+    np.savez(tmp, t=t_rel, angle=phi)
+    tmp.replace(trace)
+    cfg = replay_config(base, trace, rec, dict(info.calibration.zero_g_v))
+    output_stride(cfg)
+
+    # 3. simulate
+    t_sim = time.perf_counter()
+    sim = simulate(cfg, progress=opts.progress)
+    sim_wall = time.perf_counter() - t_sim
+    if sim.n != rec.n:
+        raise TwinError(f"internal: simulated {sim.n} samples for a {rec.n}-sample recording")
+
+    # 4. virtual sensor chain + the bench's calibration on both sides
+    sim_daq = apply_chain(sim, cfg, prefix="sim_")
+    sim_cal = simulated_calibration(cfg, opts.static_s)
+    sim_meas = measured_accel(sim_daq, sim_cal, prefix="sim_")
+    rec_meas = measured_accel(rec, info.calibration)
+    sensors = [a for a in ACCELEROMETERS if f"meas_{a}" in rec_meas]
+
+    # 5. comparison
+    # default window: skip the last 2/cutoff seconds, where the trace filter's edge extension
+    # (constant acceleration) departs from the true motion
+    edge = 2.0 / cfg.drive.trace_filter_hz if cfg.drive.trace_filter_hz > 0 else 0.0
+    i0, i1 = _window_indices(rec.n, rec.rate_hz, opts.window_s, edge)
+    rate = rec.rate_hz
+    max_lag = int(round(opts.max_lag_s * rate))
+    lag = estimate_lag([rec_meas[f"meas_{a}"][i0:i1] for a in sensors],
+                       [sim_meas[f"sim_meas_{a}"][i0:i1] for a in sensors], max_lag)
+    # aligned pairs: rec[i + lag] vs sim[i]
+    j0, j1 = max(i0, -lag, 0), min(i1, rec.n - lag, rec.n)
+    rec_al = {a: rec_meas[f"meas_{a}"][j0 + lag:j1 + lag] for a in sensors}
+    sim_al = {a: sim_meas[f"sim_meas_{a}"][j0:j1] for a in sensors}
+    turns = (phi[i1 - 1] - phi[i0]) / (2 * math.pi)
+    crank_rate_hz = abs(turns) / ((i1 - 1 - i0) / rate)
+    comparison = compare_accelerations(rec_al, sim_al, rate, crank_rate_hz, opts)
+
+    sim_phi = sim["encoder_angle"].astype(np.float64)
+    track = (sim_phi - phi)[i0:i1] / count
+    ref_phi = encoder_from_bench(sim["theta_ref"], cfg.mechanism.crank_direction)
+    pid = (sim_phi - ref_phi)[i0:i1] / count
+    ref_vs_counts = (ref_phi - phi)[i0:i1] / count
+    tracking = {
+        "window_counts_note": "errors in encoder counts (1 count = 2*pi/counts_per_rev rad)",
+        "sim_vs_recorded_max_counts": float(np.max(np.abs(track))),
+        "sim_vs_recorded_rms_counts": float(np.sqrt(np.mean(track ** 2))),
+        "sim_vs_reference_max_counts": float(np.max(np.abs(pid))),
+        "reference_vs_recorded_max_counts": float(np.max(np.abs(ref_vs_counts))),
+        "count_rad": count,
+    }
+
+    report: dict[str, Any] = {
+        "recording": str(recording),
+        "recording_info": {"notes": info.notes, "synthetic": info.synthetic, "source_file": info.source_file,
+                           "created_by": info.created_by, "extra": info.extra},
+        "repairs": list(info.repairs) + repairs,
+        "configuration": {"name": cfg.name, "engine": cfg.simulation.engine,
+                          "timestep_s": cfg.simulation.timestep_s,
+                          "clearance_b_mm": cfg.joints.clearance_b_mm, "clearance_c_mm": cfg.joints.clearance_c_mm,
+                          "orientation": cfg.mechanism.orientation, "trace_filter_hz": cfg.drive.trace_filter_hz,
+                          "same_as_recording": _same_model(rec_cfg, base)},
+        "sample_rate_hz": rate, "samples": rec.n, "duration_s": rec.n / rate,
+        "window_s": [i0 / rate, i1 / rate],
+        "crank_rate_hz": crank_rate_hz,
+        "time_lag_s": lag / rate, "time_lag_note": "> 0: recorded signals lag the simulated ones",
+        "tracking": tracking,
+        "calibration": {"recorded": info.calibration.to_dict(), "simulated": sim_cal.to_dict()},
+        "sensors": comparison,
+        "bands_hz": [list(b) for b in opts.bands_hz],
+        "simulation": {k: sim.meta.get(k) for k in ("engine", "timestep_s", "steps", "wall_s", "real_time_factor")},
+        "files": {},
+    }
+
+    # 6. outputs
+    rec_angle = Channel("rec_encoder_angle", "rad", "rec_encoder", phi)
+    chans = {**rec.channels, **rec_meas.channels, rec_angle.name: rec_angle, **sim.channels,
+             **sim_daq.channels, **sim_meas.channels}
+    chans = {k: dataclasses.replace(c, data=np.ascontiguousarray(c.data, dtype=np.float32 if c.data.dtype == np.float32
+                                                                  else np.float64)) for k, c in chans.items()}
+    both = Run(rec.t0, rate, chans, cfg, {**sim.meta, "replay_of": str(recording)})
+    mcap_path = out / "replay.mcap"
+    write_run(mcap_path, both, extra_metadata={"twin.replay": {"json": json.dumps(report, default=_json_default)},
+                                               "twin.recording": info.to_record()})
+    report["files"]["mcap"] = mcap_path.name
+    report["files"]["trace"] = trace.name
+    if opts.plots:
+        report["files"]["plots"] = _plots(out, rec_al, sim_al, rate, j0, comparison, crank_rate_hz, opts,
+                                          track, pid, i0, sim, phi, cfg)
+    report["wall_s"] = {"simulation": sim_wall, "total": time.perf_counter() - wall0}
+    atomic_write_json(out / "report.json", json.loads(json.dumps(report, default=_json_default)))
+    atomic_write_text(out / "report.md", render_markdown(report))
+    report["files"]["report"] = ["report.json", "report.md"]
+    return report
+
+
+def _same_model(a: BenchConfig, b: BenchConfig) -> bool:
+    """Whether the simulated model equals the recording's (ignoring drive and run settings)."""
+    keep = ("bodies", "materials", "joints", "mechanism", "contact", "sensors")
+    return all(getattr(a, k) == getattr(b, k) for k in keep)
+
+
+def _json_default(o: Any) -> Any:
+    if isinstance(o, (np.floating, np.integer)):
+        return o.item()
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, Path):
+        return str(o)
+    raise TypeError(f"not JSON serializable: {type(o).__name__}")
+
+
+def _fmt(v: Any, spec: str = ".3g") -> str:
+    if isinstance(v, float) and not math.isfinite(v):
+        return "–"
+    return format(v, spec) if isinstance(v, (int, float)) else str(v)
+
+
+def render_markdown(r: dict[str, Any]) -> str:
+    """Markdown version of a replay report."""
+    c = r["configuration"]
+    tr = r["tracking"]
+    lines = [
+        f"# Replay of `{r['recording']}`", "",
+        f"- recording: {r['duration_s']:.3f} s at {r['sample_rate_hz']:g} Hz"
+        + (" (synthetic)" if r["recording_info"]["synthetic"] else "")
+        + (f"; notes: {r['recording_info']['notes']}" if r["recording_info"]["notes"] else ""),
+        f"- model: {c['name']}, engine {c['engine']}, h = {c['timestep_s']:g} s, clearance B {c['clearance_b_mm']:g} mm, "
+        f"C {c['clearance_c_mm']:g} mm, orientation {c['orientation']} "
+        f"({'same model as the recording' if c['same_as_recording'] else 'model differs from the recording'})",
+        f"- analysis window: {r['window_s'][0]:.3f}–{r['window_s'][1]:.3f} s; crank rate {r['crank_rate_hz']:.3f} Hz; "
+        f"time lag {r['time_lag_s'] * 1e3:+.3f} ms",
+        f"- crank tracking (window): simulated vs recorded angle max {tr['sim_vs_recorded_max_counts']:.2f} counts, "
+        f"RMS {tr['sim_vs_recorded_rms_counts']:.2f} counts; PID vs reference max {tr['sim_vs_reference_max_counts']:.2f} "
+        f"counts; filtered reference vs counts max {tr['reference_vs_recorded_max_counts']:.2f} counts",
+    ]
+    if r["repairs"]:
+        lines += ["- repairs: " + "; ".join(r["repairs"])]
+    lines += ["", "## Accelerations (calibrated, m/s²)", "",
+              "| sensor | RMS rec | RMS sim | RMS error | NRMSE % | peak rec | peak sim | corr | DTW % | DTW shift ms |",
+              "|---|---|---|---|---|---|---|---|---|---|"]
+    for a, m in r["sensors"].items():
+        lines.append(f"| {a} | {_fmt(m['recorded_rms_mps2'])} | {_fmt(m['simulated_rms_mps2'])} | "
+                     f"{_fmt(m['rms_error_mps2'])} | {_fmt(m['nrmse_pct'])} | {_fmt(m['recorded_peak_mps2'])} | "
+                     f"{_fmt(m['simulated_peak_mps2'])} | {_fmt(m['correlation'], '.4f')} | "
+                     f"{_fmt(m['dtw_distance_pct'])} | {_fmt(m['dtw_mean_shift_s'] * 1e3)} |")
+    if any(m["bands"] for m in r["sensors"].values()):
+        lines += ["", "## Band energies (Hann PSD, dB re 1 (m/s²)²)", "",
+                  "| sensor | band Hz | recorded dB | simulated dB | sim − rec dB |", "|---|---|---|---|---|"]
+        for a, m in r["sensors"].items():
+            for b in m["bands"]:
+                lines.append(f"| {a} | {b['f_lo_hz']:g}–{b['f_hi_hz']:g} | {_fmt(b['recorded_db'], '.1f')} | "
+                             f"{_fmt(b['simulated_db'], '.1f')} | {_fmt(b['difference_db'], '+.1f')} |")
+    lines += ["", "## Crank-rate harmonics (Hann amplitude, m/s²)", ""]
+    any_sensor = next(iter(r["sensors"].values()), None)
+    if any_sensor:
+        hz = any_sensor["harmonics_hz"]
+        lines += ["| sensor | " + " | ".join(f"{h:.2f} Hz rec / sim" for h in hz) + " |",
+                  "|---|" + "---|" * len(hz)]
+        for a, m in r["sensors"].items():
+            cells = [f"{_fmt(x)} / {_fmt(y)}" for x, y in zip(m["recorded_harmonic_amplitudes_mps2"],
+                                                           m["simulated_harmonic_amplitudes_mps2"])]
+            lines.append(f"| {a} | " + " | ".join(cells) + " |")
+    lines += ["", "Definitions: NRMSE = RMS(sim − rec) / (max − min of rec); DTW % = RMS difference along the "
+              "optimal warping path / (max − min of rec) (twin/signals.py); errors after removing the time lag.", ""]
+    files = r.get("files", {})
+    if files.get("plots"):
+        lines += ["## Plots", ""] + [f"![{p}]({p})" for p in files["plots"]] + [""]
+    return "\n".join(lines)
+
+
+def _plots(out: Path, rec: dict[str, np.ndarray], sim: dict[str, np.ndarray], rate: float, j0: int,
+           comparison: dict[str, Any], crank_rate_hz: float, opts: ReplayOptions, track: np.ndarray,
+           pid: np.ndarray, i0: int, simrun: Run, phi: np.ndarray, cfg: BenchConfig) -> list[str]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    names = list(rec)
+    files = []
+    # time histories: about 1.2 crank turns from the window start
+    n = len(next(iter(rec.values())))
+    m = n if crank_rate_hz <= 0 else min(n, int(round(1.2 / crank_rate_hz * rate)))
+    t = (j0 + np.arange(m)) / rate
+    fig, axes = plt.subplots(len(names), 1, figsize=(11, 2.0 * len(names)), sharex=True, squeeze=False)
+    for ax, a in zip(axes[:, 0], names):
+        ax.plot(t, rec[a][:m], lw=0.7, label="recorded", color="k")
+        ax.plot(t, sim[a][:m], lw=0.7, label=f"simulated ({cfg.name})", color="tab:red", alpha=0.8)
+        ax.set_ylabel(f"{a} [m/s²]")
+        ax.grid(alpha=0.3)
+    axes[0, 0].legend(loc="upper right", fontsize=8)
+    axes[-1, 0].set_xlabel("time [s]")
+    fig.suptitle(f"Calibrated accelerations, recorded vs simulated (clearance B {cfg.joints.clearance_b_mm:g} mm, "
+                 f"C {cfg.joints.clearance_c_mm:g} mm)")
+    fig.tight_layout()
+    fig.savefig(out / "accelerations.png", dpi=110)
+    plt.close(fig)
+    files.append("accelerations.png")
+
+    # spectra: low frequency with harmonics, and up to 5 kHz with the bands
+    fig, axes = plt.subplots(len(names), 2, figsize=(13, 2.0 * len(names)), squeeze=False)
+    harm = crank_rate_hz * np.arange(1, opts.harmonics + 1)
+    for row, a in enumerate(names):
+        f, ar = hann_spectrum(rec[a], rate, remove_mean=True)
+        _, as_ = hann_spectrum(sim[a], rate, remove_mean=True)
+        for col, (fmax, log) in enumerate(((max(harm[-1] * 1.3, 10.0), False), (5000.0, True))):
+            ax = axes[row, col]
+            sel = f <= fmax
+            ax.plot(f[sel], ar[sel], lw=0.7, color="k", label="recorded")
+            ax.plot(f[sel], as_[sel], lw=0.7, color="tab:red", alpha=0.8, label="simulated")
+            if log:
+                ax.set_yscale("log")
+                for lo, hi in opts.bands_hz:
+                    ax.axvspan(lo, hi, color="tab:orange", alpha=0.15)
+            else:
+                for h in harm:
+                    ax.axvline(h, color="tab:blue", ls="--", lw=0.6)
+            ax.set_ylabel(f"{a} [m/s²]")
+            ax.grid(alpha=0.3)
+    axes[0, 0].set_title("Hann FFT, crank rate and harmonics (dashed)")
+    axes[0, 1].set_title("Hann FFT to 5 kHz, bands shaded")
+    axes[0, 0].legend(fontsize=8)
+    axes[-1, 0].set_xlabel("frequency [Hz]")
+    axes[-1, 1].set_xlabel("frequency [Hz]")
+    fig.tight_layout()
+    fig.savefig(out / "spectra.png", dpi=110)
+    plt.close(fig)
+    files.append("spectra.png")
+
+    # crank tracking
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(11, 5), sharex=True)
+    ts = simrun.time
+    dphi = np.gradient(phi, 1.0 / rate)
+    from scipy.signal import butter, sosfiltfilt
+
+    if len(dphi) > 30 and cfg.drive.trace_filter_hz > 0 and cfg.drive.trace_filter_hz < rate / 2:
+        dphi = sosfiltfilt(butter(2, cfg.drive.trace_filter_hz, fs=rate, output="sos"), dphi)
+    a1.plot(ts, dphi * cfg.mechanism.crank_direction, lw=0.7, color="k", label="recorded (filtered counts)")
+    a1.plot(ts, simrun["crank_speed"], lw=0.7, color="tab:red", alpha=0.8, label="simulated")
+    a1.set_ylabel("crank rate [rad/s]")
+    a1.legend(fontsize=8)
+    a1.grid(alpha=0.3)
+    tw = (i0 + np.arange(len(track))) / rate
+    a2.plot(tw, track, lw=0.7, color="k", label="simulated − recorded")
+    a2.plot(tw, pid, lw=0.7, color="tab:red", alpha=0.8, label="simulated − reference (PID error)")
+    a2.axhline(1, color="gray", ls=":")
+    a2.axhline(-1, color="gray", ls=":")
+    a2.set_ylabel("angle error [counts]")
+    a2.set_xlabel("time [s]")
+    a2.legend(fontsize=8)
+    a2.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(out / "tracking.png", dpi=110)
+    plt.close(fig)
+    files.append("tracking.png")
+    return files
