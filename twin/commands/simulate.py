@@ -18,6 +18,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", metavar="RUN.mcap", help="run file to write (default: <name>.mcap)")
     p.add_argument("--no-out", action="store_true", help="do not write a run file")
     p.add_argument("--summary-json", metavar="FILE", help="write the run summary as JSON")
+    p.add_argument("--rerun", metavar="OUT.rrd", help="also stream the run into a rerun recording (as twin view)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
 
@@ -43,28 +44,47 @@ def run(args: argparse.Namespace) -> int:
         _check_out(out, ".mcap", "--out")
     if args.summary_json:
         _check_out(Path(args.summary_json), ".json", "--summary-json")
+    if args.rerun:
+        _check_out(Path(args.rerun), ".rrd", "--rerun")
 
     engine, chunks = run_chunks(cfg, progress=not args.no_progress and sys.stderr.isatty())
     writer = RunWriter(out, cfg) if out is not None else None
+    rerun = _rerun_writer(Path(args.rerun), cfg) if args.rerun else None
     kept = []
     try:
         for chunk in chunks:
             if writer is not None:
                 writer.write(chunk)
+            if rerun is not None:
+                rerun.write(chunk)
             kept.append(chunk)
         run_ = Run.concat(kept)
         run_.meta = dict(engine.meta)
         summary = summarize(run_)
         if writer is not None:
             writer.close(run_.meta, summary)
+        if rerun is not None:
+            rerun.close(run_.meta, summary)
     except BaseException:
         if writer is not None:
             writer.abort()
+        if rerun is not None:
+            rerun.abort()
         raise
     if args.summary_json:
         atomic_write_json(args.summary_json, summary)
     _print_summary(summary, out)
+    if rerun is not None:
+        print(f"  wrote {rerun.path}")
     return 0
+
+
+def _rerun_writer(path: Path, cfg):
+    """Streaming rerun sink of ``twin view``'s layout (twin/viz), id from the configuration."""
+    from twin.viz import RerunWriter, simulation_recording_id
+
+    return RerunWriter(path, cfg, recording_id=simulation_recording_id(cfg.digest()), name=cfg.name,
+                       source=f"twin simulate ({cfg.simulation.engine})")
 
 
 def _print_summary(s: dict, out: Path | None) -> None:

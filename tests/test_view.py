@@ -1,0 +1,333 @@
+"""twin view / twin.viz: run -> rerun recording (issue 6).
+
+Short simulated runs (0.2 s) are converted and read back with rerun's own chunk reader and
+CLI: the file verifies, holds the expected entities and sample counts, carries the run's
+values and time stamps exactly, reconstructs the mechanism's pose consistently with the run,
+and is reproducible; bad inputs fail with one line and leave no file.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pytest
+from rerun.chunk import RrdReader
+
+from conftest import short
+from twin.channels import encoder_from_bench
+from twin.cli import main
+from twin.config import preset
+from twin.kinematics import rod_angle as ideal_rod_angle
+from twin.mcapfile import read_run, write_run
+from twin.run import Channel, Run
+from twin.simulate import simulate
+from twin.viz import RerunWriter, ViewOptions, convert_file, file_recording_id, write_rrd
+from twin.viz import blueprint as bp
+from twin.viz.pose import ENCODER_COUNTS_PER_REV, poses, rod_angle
+from twin.viz.scene import nice_magnification
+from twin.viz.spectrum import amplitude_db, default_window
+
+RERUN = str(Path(sys.executable).with_name("rerun"))
+P = 100  # pose stride at 100 kHz / 1 kHz
+SO = 10  # orbit stride at 100 kHz / 10 kHz
+
+
+# ----------------------------------------------------------------------------- helpers
+def read_rrd(path: Path) -> dict[str, dict]:
+    """{entity: {"static": {col: value}, "time": int ns array, col: list of row values}}."""
+    out: dict[str, dict] = {}
+    batches: dict[str, list[pa.RecordBatch]] = {}
+    for ch in RrdReader(str(path)).stream().to_chunks():
+        rb = ch.to_record_batch()
+        ent = out.setdefault(ch.entity_path, {"static": {}})
+        if ch.is_static:
+            for name in rb.schema.names:
+                if not name.startswith("rerun."):
+                    ent["static"][name] = rb.column(name).to_pylist()[-1]
+        else:
+            batches.setdefault(ch.entity_path, []).append(rb)
+    for ent_path, rbs in batches.items():
+        table = pa.Table.from_batches(rbs) if len({b.schema for b in rbs}) == 1 else pa.concat_tables(
+            [pa.Table.from_batches([b]) for b in rbs], promote_options="default")
+        t = table.column("time").cast(pa.int64()).to_numpy()
+        order = np.argsort(t, kind="stable")
+        ent = out[ent_path]
+        ent["time"] = t[order]
+        for name in table.column_names:
+            if name != "time" and not name.startswith("rerun."):
+                rows = table.column(name).to_pylist()
+                ent[name] = [rows[i] for i in order]
+    return out
+
+
+def scalars(ent: dict) -> np.ndarray:
+    return np.array(ent["Scalars:scalars"], dtype=float)
+
+
+def cli(*argv: str) -> int:
+    return main([str(a) for a in argv])
+
+
+# ---------------------------------------------------------------------------- fixtures
+@pytest.fixture(scope="module")
+def clearance_run() -> Run:
+    """Table 4 test 12 (0.1 mm at B and C, 750 rpm), 0.2 s: impacts at both joints."""
+    return simulate(short(preset(12), 0.2))
+
+
+@pytest.fixture(scope="module")
+def clearance_file(clearance_run: Run, tmp_path_factory) -> tuple[Path, Path, dict]:
+    d = tmp_path_factory.mktemp("view")
+    mcap = d / "run12.mcap"
+    write_run(mcap, clearance_run)
+    assert cli("view", mcap) == 0
+    rrd = d / "run12.rrd"
+    return mcap, rrd, read_rrd(rrd)
+
+
+# -------------------------------------------------------------------------------- tests
+def test_view_writes_verified_rrd_beside_input(clearance_file):
+    mcap, rrd, _ = clearance_file
+    assert rrd.is_file() and rrd.parent == mcap.parent
+    res = subprocess.run([RERUN, "rrd", "verify", str(rrd)], capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr
+    assert sorted(p.name for p in mcap.parent.iterdir()) == ["run12.mcap", "run12.rrd"]  # no temp files left
+
+
+def test_rrd_holds_entities_counts_and_exact_values(clearance_run, clearance_file):
+    _, _, rr_ = clearance_file
+    run = clearance_run
+    n = run.n
+    expected = {"/bench/crank", "/bench/rod", "/bench/slider", "/bench/rod/orbit_B/journal",
+                "/bench/rod/orbit_C/journal", "/bench/rod/contact_B", "/bench/rod/contact_C",
+                "/orbit/B/journal", "/orbit/C/journal", "/orbit/B/clearance", "/orbit/C/clearance", "/config",
+                *(f"/fft/AC{i}/sim" for i in range(1, 7)), *(f"/signals/{g}" for g in run.groups)}
+    assert expected <= set(rr_)
+    # every channel at its full rate, one series per channel of its group, exact values and times
+    for group, names in run.groups.items():
+        ent = rr_[f"/signals/{group}"]
+        assert len(ent["time"]) == n
+        np.testing.assert_array_equal(ent["time"], np.arange(n, dtype=np.int64) * 10_000)
+        vals = scalars(ent)
+        assert vals.shape == (n, len(names))
+        for k, name in enumerate(names):
+            np.testing.assert_array_equal(vals[:, k], run[name].astype(np.float64))
+        assert len(ent["static"]["SeriesLines:names"]) == len(names)
+    # poses at 1 kHz, orbits at 10 kHz
+    for ent in ("/bench/crank", "/bench/rod", "/bench/slider", "/bench/rod/contact_C", "/bench/rod/orbit_C/journal"):
+        assert len(rr_[ent]["time"]) == -(-n // P), ent
+        np.testing.assert_array_equal(rr_[ent]["time"], np.arange(0, n, P, dtype=np.int64) * 10_000)
+    for j in ("B", "C"):
+        orbit = rr_[f"/orbit/{j}/journal"]
+        assert len(orbit["time"]) == n // SO
+        pos = np.array([r[0] for r in orbit["Points3D:positions"]])
+        np.testing.assert_allclose(pos[:, 0], run[f"ecc_{j}_x"][::SO] * 1e6, rtol=1e-6, atol=1e-9)
+        np.testing.assert_allclose(pos[:, 1], run[f"ecc_{j}_y"][::SO] * 1e6, rtol=1e-6, atol=1e-9)
+    text = rr_["/config"]["static"]["TextDocument:text"][0]
+    assert "[joints]" in text and "clearance_b_mm = 0.1" in text and "×" in text
+
+
+def test_poses_close_the_loop_and_match_the_run(clearance_run, clearance_file):
+    run = clearance_run
+    p = poses(run)
+    # the rod angle from the y equation makes the x of C' equal the simulated slider position
+    np.testing.assert_allclose(p.slider_x, run["slider_position"], atol=1e-9)
+    # eccentricities move the slider by up to ~c: visibly different from ideal kinematics
+    ideal = ideal_rod_angle(p.theta, 0.12, 0.60)
+    assert np.max(np.abs(p.phi - ideal)) > 1e-5
+    _, _, rr_ = clearance_file
+    slider = np.array([r[0] for r in rr_["/bench/slider"]["Transform3D:translation"]])
+    np.testing.assert_allclose(slider[:, 0], run["slider_position"][::P], atol=1e-9)
+    q = np.array([r[0] for r in rr_["/bench/crank"]["Transform3D:quaternion"]])
+    ang = 2 * np.arctan2(q[:, 2], q[:, 3])
+    np.testing.assert_allclose(np.angle(np.exp(1j * (ang - run["crank_angle"][::P]))), 0, atol=1e-6)
+    # rod frame origin = B' = B - R(phi) e_B
+    rod = np.array([r[0] for r in rr_["/bench/rod"]["Transform3D:translation"]])
+    np.testing.assert_allclose(rod[:, :2], p.b_bush[::P], atol=1e-7)
+
+
+def test_pose_from_encoder_and_ideal_kinematics():
+    r, l, d = 0.12, 0.60, 0.01
+    theta = np.linspace(-3, 10, 500)
+    np.testing.assert_allclose(rod_angle(theta, r, l, d), ideal_rod_angle(theta, r, l, d), atol=1e-14)
+    # with eccentricities: the loop closes in y exactly
+    rng = np.random.default_rng(1)
+    eb, ec = rng.uniform(-5e-5, 5e-5, (500, 2)), rng.uniform(-5e-5, 5e-5, (500, 2))
+    phi = rod_angle(theta, r, l, d, eb, ec)
+    rot = lambda a, v: np.stack([np.cos(a) * v[:, 0] - np.sin(a) * v[:, 1],  # noqa: E731
+                                 np.sin(a) * v[:, 0] + np.cos(a) * v[:, 1]], axis=1)
+    c_pin_y = r * np.sin(theta) - rot(phi, eb)[:, 1] + l * np.sin(phi) + rot(phi, ec)[:, 1]
+    np.testing.assert_allclose(c_pin_y, d, atol=1e-15)
+    assert np.all(np.cos(phi) > 0)
+    # a recording with only encoder counts gives the same pose to within one count
+    cfg = preset(3)
+    counts = np.round(encoder_from_bench(theta) * ENCODER_COUNTS_PER_REV / (2 * np.pi))
+    rec = Run.from_arrays(0.0, 1e5, {"encoder_counts": counts}, config=cfg, units={"encoder_counts": "count"},
+                          groups={"encoder_counts": "daq"})
+    p = poses(rec)
+    assert np.max(np.abs(p.theta - theta)) <= np.pi / ENCODER_COUNTS_PER_REV + 1e-12
+
+
+def test_contact_arrows_show_peak_force_of_each_window(clearance_run, clearance_file):
+    run = clearance_run
+    _, _, rr_ = clearance_file
+    s = ViewOptions().force_scale_m_per_n
+    for j in ("B", "C"):
+        fn, ft = run[f"fn_{j}"].astype(float), run[f"ft_{j}"].astype(float)
+        ent = rr_[f"/bench/rod/contact_{j}"]
+        n_arrows = [len(v) for v in ent["Arrows3D:vectors"]]
+        for k, count in enumerate(n_arrows):
+            win = fn[max(0, k * P - P // 2): k * P + P // 2]
+            assert count == (1 if win.max() > 0 else 0)
+            if count:
+                i = max(0, k * P - P // 2) + int(np.argmax(win))
+                v = np.array(ent["Arrows3D:vectors"][k][0])
+                assert np.hypot(v[0], v[1]) == pytest.approx(s * np.hypot(fn[i], ft[i]), rel=1e-5)
+                assert ent["Arrows3D:labels"][k][0] == f"{fn[i]:.0f} N"
+        assert sum(n_arrows) > 0
+
+
+def test_streamed_chunks_give_the_same_recording(clearance_run, clearance_file, tmp_path):
+    """Odd chunk sizes through the streaming sink = whole-run conversion (buffering is exact)."""
+    run = clearance_run
+    out = tmp_path / "stream.rrd"
+    w = RerunWriter(out, run.config, recording_id="x", name="run12", t_start=0.0, t_end=run.duration_s)
+    for i in range(0, run.n, 3337):
+        w.write(run.slice(i, i + 3337))
+    w.close(run.meta)
+    a, b = clearance_file[2], read_rrd(out)
+    assert set(a) == set(b)
+    for ent in a:
+        if ent == "/config":
+            continue
+        assert a[ent].keys() == b[ent].keys(), ent
+        for col in a[ent]:
+            if col == "time":
+                np.testing.assert_array_equal(a[ent][col], b[ent][col])
+            else:
+                assert a[ent][col] == b[ent][col], (ent, col)
+
+
+def test_same_input_same_recording(clearance_file, tmp_path):
+    mcap, rrd, _ = clearance_file
+    again = tmp_path / "again.rrd"
+    assert cli("view", mcap, "--save", again) == 0
+    res = subprocess.run([RERUN, "rrd", "compare", str(rrd), str(again)], capture_output=True, text=True)
+    assert res.returncode == 0, res.stdout[-2000:] + res.stderr[-2000:]
+    ids = {e.recording_id for e in RrdReader(str(again)).recordings()}
+    assert ids == {file_recording_id(mcap)}
+
+
+def test_bench_recording_overlays_measured_on_simulated(clearance_run, tmp_path):
+    """A recording/replay with measured accelerations, raw DAQ channels and only encoder counts."""
+    run = clearance_run
+    rng = np.random.default_rng(0)
+    extra = [Channel(f"meas_AC{i}", "m/s^2", "meas_accel",
+                     (run[f"AC{i}"] + rng.normal(0, 0.5, run.n)).astype(np.float32)) for i in range(1, 7)]
+    extra += [Channel(f"volt_AC{i}", "V", "daq", (2.5 + run[f"AC{i}"] / 9.81 * 0.02).astype(np.float32))
+              for i in range(1, 7)]
+    counts = np.round(run["encoder_angle"] * ENCODER_COUNTS_PER_REV / (2 * np.pi))
+    extra += [Channel("encoder_counts", "count", "daq", counts),
+              Channel("motor_command", "V", "daq", np.full(run.n, 7.5, dtype=np.float32))]
+    keep = [n for n in run.channels if n.startswith("AC") or n.startswith("ecc_") or n.startswith("fn_")]
+    rec = run.select(keep).with_channels(extra)
+    mcap = tmp_path / "replay.mcap"
+    write_run(mcap, rec)
+    out = convert_file(mcap)
+    rr_ = read_rrd(out)
+    assert {"/signals/meas_accel", "/signals/daq", "/fft/AC4/meas", "/fft/AC4/sim"} <= set(rr_)
+    assert scalars(rr_["/signals/daq"]).shape == (run.n, 8)
+    # pose from encoder counts: slider within a count's worth of the simulated slider position
+    slider = np.array([r[0] for r in rr_["/bench/slider"]["Transform3D:translation"]])
+    assert np.max(np.abs(slider[:, 0] - run["slider_position"][::P])) < 0.12 * 2 * np.pi / ENCODER_COUNTS_PER_REV
+    # the accelerometer plots overlay simulated and recorded; raw volts go to their own tab
+    back = read_run(mcap)
+    blue = bp.default_blueprint(back.config, back.groups, back.channels, ("B", "C"), True, (0.1, 0.2),
+                                [f"AC{i}" for i in range(1, 7)], ViewOptions())
+    views = {v.name: v for v in _walk(blue.root_container)}
+    ac4 = views["AC4 [m/s²]: simulated (blue), recorded (orange)"]
+    assert sorted(ac4.contents) == ["/signals/accel", "/signals/meas_accel"]
+    assert any(n.startswith("motor_command") for n in views)
+    assert any(n.startswith("encoder_counts") for n in views)
+
+
+def _walk(node):
+    contents = getattr(node, "contents", None)
+    if isinstance(contents, (list, tuple)) and contents and hasattr(contents[0], "id"):
+        for c in contents:
+            yield from _walk(c)
+    else:
+        yield node
+
+
+def test_ideal_run_has_no_orbits(tmp_path):
+    run = simulate(short(preset(3), 0.05))
+    out = write_rrd(run, tmp_path / "ideal.rrd", recording_id="ideal", name="ideal")
+    rr_ = read_rrd(out)
+    assert "/bench/rod" in rr_ and not any(e.startswith("/orbit") or "contact_" in e for e in rr_)
+    phi_ideal = ideal_rod_angle(run["crank_angle"][::P], 0.12, 0.60)
+    q = np.array([r[0] for r in rr_["/bench/rod"]["Transform3D:quaternion"]])
+    np.testing.assert_allclose(2 * np.arctan2(q[:, 2], q[:, 3]), phi_ideal, atol=1e-6)
+
+
+def test_magnification_makes_10_um_visible():
+    m = nice_magnification(10e-6, ViewOptions().orbit_inset_radius_m)
+    assert m == 5000 and 10e-6 * m == pytest.approx(0.05)  # a 10 µm clearance is drawn 50 mm wide
+    assert nice_magnification(0.5e-3, 0.06) == 100
+    assert nice_magnification(0.0, 0.06) == 1
+
+
+def test_spectrum_reads_amplitude_and_default_windows():
+    rate, f0 = 1e5, 1000.0
+    t = np.arange(100_000) / rate
+    f, db = amplitude_db(9.81 + 2.0 * np.sin(2 * np.pi * f0 * t), rate, 15_000)
+    assert f[np.argmax(db)] == f0
+    assert db.max() == pytest.approx(20 * np.log10(2.0 / 1e-3), abs=0.01)  # 2 m/s² = 66 dB re 1 mm/s²
+    assert f.max() <= 15_000
+    proto = preset(6).replace(**{"drive.program": "protocol", "simulation.duration_s": 0.0})
+    assert default_window(proto, 0.0, 38.0) == (34.0, 35.0)
+    assert default_window(preset(6), 0.0, 0.2) == pytest.approx((0.1, 0.2))
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["view", "{d}/missing.mcap"], "no such file"),
+    (["view", "{d}/notes.txt"], "expected a .mcap"),
+    (["view", "{d}/broken.mcap"], "MCAP"),
+    (["view", "{d}/good.mcap", "--save", "{d}/out.png"], "must end in .rrd"),
+    (["view", "{d}/good.mcap", "--save", "{d}/nodir/out.rrd"], "does not exist"),
+    (["view", "{d}/good.mcap", "--fft-window", "0.5", "2.0"], "outside the run"),
+    (["view", "{d}/good.mcap", "--fft-window", "0.1", "0.05"], "T0 < T1"),
+])
+def test_bad_inputs_give_one_line_errors_and_no_file(argv, message, clearance_file, tmp_path, capsys):
+    mcap = clearance_file[0]
+    (tmp_path / "notes.txt").write_text("x")
+    (tmp_path / "broken.mcap").write_bytes(mcap.read_bytes()[:100_000])
+    (tmp_path / "good.mcap").write_bytes(mcap.read_bytes())
+    before = sorted(p.name for p in tmp_path.iterdir())
+    assert cli(*[a.format(d=tmp_path) for a in argv]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("twin: error:") and message in err and "\n" not in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == before  # nothing written, no temp file
+
+
+def test_simulate_streams_a_recording(tmp_path, capsys):
+    out = tmp_path / "sim.rrd"
+    assert cli("simulate", "--test", "12", "--duration", "0.05", "--set", "drive.ramp_s=0.01", "--no-out",
+               "--no-progress", "--rerun", out) == 0
+    assert f"wrote {out}" in capsys.readouterr().out
+    assert subprocess.run([RERUN, "rrd", "verify", str(out)], capture_output=True).returncode == 0
+    rr_ = read_rrd(out)
+    assert len(rr_["/signals/accel"]["time"]) == 5000
+    assert len(rr_["/bench/rod"]["time"]) == 50 and len(rr_["/orbit/C/journal"]["time"]) == 500
+    assert "real_time_factor" in rr_["/config"]["static"]["TextDocument:text"][0]
+    assert list(tmp_path.iterdir()) == [out]
+
+
+def test_simulate_rerun_rejects_bad_path(tmp_path, capsys):
+    assert cli("simulate", "--duration", "0.01", "--no-out", "--rerun", tmp_path / "x.mcap") == 2
+    assert "--rerun: must end in .rrd" in capsys.readouterr().err
