@@ -388,8 +388,8 @@ def _time_base(t: np.ndarray | None, rate_hz: float | None, n: int, where: str) 
 
 def import_table(path: str | Path, cfg: BenchConfig, mapping: Mapping[str, tuple[str, str | None]] | None = None,
                  rate_hz: float | None = None, time_column: str = "t", nan: str = "error",
-                 encoder_modulus: int | None = None, require: tuple[str, ...] = REQUIRED_CHANNELS
-                 ) -> tuple[Run, list[str]]:
+                 encoder_modulus: int | None = None, require: tuple[str, ...] = REQUIRED_CHANNELS,
+                 encoder_repair: bool = True) -> tuple[Run, list[str]]:
     """Convert a DAQ export (CSV/NPZ) into a validated ``daq`` run at the recording's rate.
 
     ``mapping``: target channel → (source column, unit or None); targets not mapped are looked
@@ -434,7 +434,8 @@ def import_table(path: str | Path, cfg: BenchConfig, mapping: Mapping[str, tuple
     groups = {k: DAQ_GROUP for k in arrays}
     run = Run.from_arrays(t0, rate, arrays, cfg, {"imported_from": str(p)}, units=units, groups=groups)
     if set(require) == set(REQUIRED_CHANNELS):
-        run, more = validate_daq(run, cfg, nan=nan, encoder_modulus=encoder_modulus, where=where)
+        run, more = validate_daq(run, cfg, nan=nan, encoder_repair=encoder_repair,
+                                 encoder_modulus=encoder_modulus, where=where)
         repairs.extend(more)
     else:
         rate_cfg = cfg.instrumentation.daq_rate_hz

@@ -1,0 +1,94 @@
+"""``twin replay``: drive the twin with a bench recording's encoder trace and compare accelerations."""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+from twin.cli import add_config_args, config_from_args
+from twin.config import BenchConfig
+from twin.errors import TwinError
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "replay", help="replay a bench recording through the twin and compare accelerations",
+        description="Unwrap and filter the recording's encoder counts into a crank reference, simulate with the "
+                    "recording's bench configuration (configuration options override it, e.g. --clearance-c 0 "
+                    "for the ideal model on a clearance recording, as in S003 Fig. 16), put the virtual sensors "
+                    "through the bench's sensor chain and calibration, and compare with the recorded "
+                    "accelerations. Writes replay.mcap, report.json, report.md and PNG plots to --out.")
+    p.add_argument("recording", metavar="RECORDING.mcap", help="bench recording (see recordings/FORMAT.md)")
+    add_config_args(p)
+    p.add_argument("--out", metavar="DIR", help="output folder (default: replay_<recording name>)")
+    p.add_argument("--window", nargs=2, type=float, metavar=("START", "STOP"),
+                   help="analysis window in recording time [s] (default: second half, at most 1 s)")
+    p.add_argument("--max-lag", type=float, default=0.005, metavar="S", help="largest alignment lag searched [s]")
+    p.add_argument("--dtw-window", type=float, default=0.002, metavar="S", help="DTW Sakoe-Chiba half-width [s]")
+    p.add_argument("--dtw-max", type=float, default=0.5, metavar="S", help="DTW on at most this much of the window [s]")
+    p.add_argument("--repair-nan", action="store_true", help="interpolate short NaN gaps (reported) instead of failing")
+    p.add_argument("--no-plots", action="store_true", help="no PNG plots")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=run)
+
+
+def replay_overrides(args: argparse.Namespace, rec_cfg: BenchConfig) -> BenchConfig:
+    """The recording's configuration with the command line's configuration options applied
+    (``--config``/``--test`` replace it as a whole)."""
+    if args.speed is not None or args.protocol or args.trace:
+        raise TwinError("--speed/--protocol/--trace: a replay is driven by the recording's encoder trace")
+    if args.config or args.test is not None:
+        return config_from_args(args)
+    fd, tmp = tempfile.mkstemp(suffix=".toml", prefix="twin_replay_")
+    try:
+        with os.fdopen(fd, "w") as fh:
+            fh.write(rec_cfg.to_toml())
+        ns = copy.copy(args)
+        ns.config = tmp
+        return config_from_args(ns)
+    finally:
+        os.unlink(tmp)
+
+
+def run(args: argparse.Namespace) -> int:
+    from twin.replay import ReplayOptions, replay
+
+    rec = Path(args.recording)
+    if rec.suffix != ".mcap":
+        raise TwinError(f"{rec}: a recording is an .mcap file; convert DAQ exports with 'twin import'")
+    out = Path(args.out) if args.out else Path(f"replay_{rec.stem}")
+    if not out.parent.exists():
+        raise TwinError(f"--out: directory {out.parent} does not exist")
+    for name in ("max_lag", "dtw_window", "dtw_max"):
+        v = getattr(args, name)
+        if not (v >= 0):
+            raise TwinError(f"--{name.replace('_', '-')}: must be >= 0 s, got {v!r}")
+    opts = ReplayOptions(window_s=tuple(args.window) if args.window else None, max_lag_s=args.max_lag,
+                         dtw_window_s=args.dtw_window, dtw_max_s=args.dtw_max,
+                         nan="interpolate" if args.repair_nan else "error", plots=not args.no_plots,
+                         progress=not args.no_progress and sys.stderr.isatty())
+    r = replay(rec, out, lambda c: replay_overrides(args, c), opts)
+    _print(r, out)
+    return 0
+
+
+def _print(r: dict, out: Path) -> None:
+    c, tr = r["configuration"], r["tracking"]
+    print(f"{r['recording']}: {r['duration_s']:.3f} s at {r['sample_rate_hz']:g} Hz; model {c['name']} "
+          f"({c['engine']}, B {c['clearance_b_mm']:g} mm, C {c['clearance_c_mm']:g} mm"
+          f"{'' if c['same_as_recording'] else ', differs from the recording'})")
+    for rep in r["repairs"]:
+        print(f"  repair: {rep}")
+    print(f"  window {r['window_s'][0]:.3f}-{r['window_s'][1]:.3f} s, crank {r['crank_rate_hz']:.3f} Hz, "
+          f"lag {r['time_lag_s'] * 1e3:+.3f} ms; tracking sim-recorded max {tr['sim_vs_recorded_max_counts']:.2f} "
+          f"counts (RMS {tr['sim_vs_recorded_rms_counts']:.2f})")
+    print("  sensor  NRMSE%   corr    DTW%  " + "  ".join(f"{lo / 1e3:g}-{hi / 1e3:g}kHz rec/sim dB"
+                                                      for lo, hi in r["bands_hz"]))
+    for a, m in r["sensors"].items():
+        bands = "  ".join(f"{b['recorded_db']:8.1f}/{b['simulated_db']:<8.1f}" for b in m["bands"])
+        print(f"  {a:6s} {m['nrmse_pct']:7.2f} {m['correlation']:7.4f} {m['dtw_distance_pct']:7.3f}  {bands}")
+    print(f"  wrote {out}/: {', '.join([r['files']['mcap'], *r['files'].get('report', []), *r['files'].get('plots', [])])}")
