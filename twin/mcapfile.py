@@ -29,6 +29,7 @@ from typing import Any, Iterable
 
 import numpy as np
 from mcap.exceptions import McapError
+from zstandard import ZstdError
 from mcap.reader import make_reader
 from mcap.writer import CompressionType, Writer
 
@@ -246,7 +247,7 @@ def read_metadata(path: str | Path) -> dict[str, dict[str, str]]:
     try:
         with open(p, "rb") as fh:
             return {m.name: dict(m.metadata) for m in make_reader(fh).iter_metadata()}
-    except (McapError, EOFError, struct.error, ValueError, KeyError) as err:
+    except (McapError, ZstdError, EOFError, struct.error, ValueError, KeyError) as err:
         raise RecordingError(f"{p}: not a readable MCAP file ({type(err).__name__}: {err})") from None
 
 
@@ -295,7 +296,7 @@ def read_run(path: str | Path, groups: Iterable[str] | None = None) -> Run:
                 blocks.setdefault(topic, []).append(arrays)
     except TwinError:
         raise
-    except (McapError, EOFError, struct.error, ValueError, KeyError, OSError) as err:
+    except (McapError, ZstdError, EOFError, struct.error, ValueError, KeyError, OSError) as err:
         raise RecordingError(f"{p}: corrupt or truncated MCAP file ({type(err).__name__}: {err})") from None
     order = info.get("channels", "").split(",") if info.get("channels") else None
     chans: dict[str, Channel] = {}

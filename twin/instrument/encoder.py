@@ -100,7 +100,7 @@ def check_counts(counts: np.ndarray, rate_hz: float, max_step: float, repair: bo
         if bad.size == 0:
             break
         k = i + int(bad[0])  # jump between k and k+1
-        t = k / rate_hz
+        t = (k + 1) / rate_hz
         jump = c[k + 1] - c[k]
         end = None
         for j in range(k + 2, min(n, k + 2 + MAX_GLITCH_SAMPLES)):
