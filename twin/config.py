@@ -607,9 +607,11 @@ class Instrumentation:
         _choice(self.daq_range, "daq_range", tuple(DAQ_RANGES))
         _check(isinstance(self.adc_bits, int) and 8 <= self.adc_bits <= 24, "adc_bits",
                f"must be an integer in [8, 24], got {self.adc_bits!r}")
-        _check(isinstance(self.anti_alias_hz, (int, float)) and 0 < self.anti_alias_hz < self.daq_rate_hz / 2,
-               "anti_alias_hz", f"must lie in (0, daq_rate_hz/2 = {self.daq_rate_hz / 2:g}) Hz, "
-                                f"got {self.anti_alias_hz!r}")
+        _positive(self.anti_alias_hz, "anti_alias_hz", "Hz")
+        if self.anti_alias:
+            _check(self.anti_alias_hz < self.daq_rate_hz / 2, "anti_alias_hz",
+                   f"must lie below daq_rate_hz/2 = {self.daq_rate_hz / 2:g} Hz when anti_alias is on, "
+                   f"got {self.anti_alias_hz!r}")
         _check(isinstance(self.anti_alias_order, int) and 1 <= self.anti_alias_order <= 10,
                "anti_alias_order", f"must be an integer in [1, 10], got {self.anti_alias_order!r}")
         _check(isinstance(self.encoder_counts_per_rev, int) and self.encoder_counts_per_rev >= 4,

@@ -1,0 +1,147 @@
+"""Replay of synthetic bench recordings: crank motion recovered, accelerations reproduced by the same
+model, clearance content that the ideal model lacks (S003 Fig. 16), outputs and errors."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from twin.cli import main
+from twin.config import preset
+from twin.errors import RecordingError
+from twin.mcapfile import read_run
+from twin.recording import RecordingInfo, crank_trace, synthetic_recording, write_recording
+from twin.replay import ReplayOptions, replay
+from twin.simulate import simulate
+
+COUNT = 2 * math.pi / 32768
+OFFSETS = {"AC1": 2.513, "AC2": 2.488, "AC3": 2.506, "AC4": 2.471, "AC5": 2.522, "AC6": 2.494}
+
+
+def _make(tmp, test_id: int, duration: float, name: str):
+    """Synthetic recording of Table 4 test ``test_id`` with a rippled crank speed; returns (path, truth run)."""
+    base = preset(test_id).replace(**{"simulation.duration_s": duration, "drive.ramp_s": 0.1,
+                                      "instrumentation.zero_g_v": OFFSETS, "instrumentation.seed": 1})
+    t, phi = crank_trace(base.drive.motor_rpm, base.drive.belt_ratio, duration, 1e5, ramp_s=0.1)
+    np.savez(tmp / f"{name}_truth_trace.npz", t=t, angle=phi)
+    truth = simulate(base.replace(**{"drive.program": "trace", "drive.trace_file": str(tmp / f"{name}_truth_trace.npz"),
+                                     "drive.trace_filter_hz": 0.0}))
+    daq, info = synthetic_recording(truth, base, notes=f"test {test_id}", static_s=0.2)
+    path = tmp / f"{name}.mcap"
+    write_recording(path, daq, info)
+    return path, truth
+
+
+@pytest.fixture(scope="module")
+def ideal(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("ideal")
+    path, truth = _make(tmp, 3, 0.4, "t3")
+    report = replay(path, tmp / "out", opts=ReplayOptions(plots=False))
+    return path, truth, report, tmp / "out"
+
+
+@pytest.fixture(scope="module")
+def clearance(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("clear")
+    path, truth = _make(tmp, 6, 0.45, "t6")
+    return path, truth, tmp
+
+
+def test_replay_recovers_the_crank_motion(ideal):
+    _, truth, report, out = ideal
+    rep = read_run(out / "replay.mcap")
+    i0, i1 = (int(round(x * 1e5)) for x in report["window_s"])
+    assert report["window_s"][0] == pytest.approx(0.2)  # steady speed after the 0.1 s ramp
+    # simulated crank vs the true crank motion behind the counts: well below one count
+    err = (rep["encoder_angle"][i0:i1] - truth["encoder_angle"][i0:i1]) / COUNT
+    assert np.max(np.abs(err)) < 0.5
+    # vs the recorded counts (count centres, +-0.5 count of quantization): below one count
+    assert report["tracking"]["sim_vs_recorded_max_counts"] < 1.0
+    assert report["tracking"]["sim_vs_recorded_rms_counts"] < 0.45
+    assert report["tracking"]["sim_vs_reference_max_counts"] < 0.5
+    assert report["time_lag_s"] == 0.0
+    assert report["crank_rate_hz"] == pytest.approx(750 / 3.97 / 60, rel=0.03)  # rippled speed around nominal
+
+
+def test_replay_with_the_same_model_reproduces_the_accelerations(ideal):
+    _, _, report, _ = ideal
+    assert report["configuration"]["same_as_recording"]
+    for a in ("AC1", "AC2", "AC3", "AC4", "AC6"):
+        m = report["sensors"][a]
+        assert m["nrmse_pct"] < 1.0, a
+        assert m["correlation"] > 0.999, a
+        assert m["dtw_distance_pct"] < 0.5, a
+        assert m["simulated_rms_mps2"] == pytest.approx(m["recorded_rms_mps2"], rel=0.01)
+        amp_r, amp_s = m["recorded_harmonic_amplitudes_mps2"][0], m["simulated_harmonic_amplitudes_mps2"][0]
+        assert amp_s == pytest.approx(amp_r, rel=0.02)
+    # AC5 (slider, vertical) reads a nearly constant 1 g: its error is the noise
+    assert report["sensors"]["AC5"]["rms_error_mps2"] < 0.05
+    assert report["calibration"]["recorded"]["zero_g_v"] == pytest.approx(OFFSETS, abs=3e-5)
+    assert report["calibration"]["simulated"]["zero_g_v"] == pytest.approx(OFFSETS, abs=3e-5)
+
+
+def test_clearance_model_shows_impacts_the_ideal_model_does_not(clearance):
+    path, truth, tmp = clearance
+    assert truth["fn_C"].max() > 300  # the recording (0.1 mm at C) has an impact near t = 0.2 s
+    opts = ReplayOptions(window_s=(0.1, 0.43), plots=False)
+    same = replay(path, tmp / "same", opts=opts)
+    ideal = replay(path, tmp / "ideal", lambda c: c.replace(**{"joints.clearance_c_mm": 0.0}), opts)
+    assert not ideal["configuration"]["same_as_recording"]
+    for a in ("AC4", "AC6"):
+        rec_db = same["sensors"][a]["bands"][0]["recorded_db"]  # 0.8-1.2 kHz
+        assert abs(same["sensors"][a]["bands"][0]["difference_db"]) < 3.0, a
+        assert ideal["sensors"][a]["bands"][0]["simulated_db"] < rec_db - 15.0, a
+        assert ideal["sensors"][a]["recorded_peak_mps2"] == same["sensors"][a]["recorded_peak_mps2"]
+    # AC6 (slider, horizontal): the impact spikes; the ideal model stays smooth (Fig. 16)
+    s6, i6 = same["sensors"]["AC6"], ideal["sensors"]["AC6"]
+    assert s6["simulated_peak_mps2"] > 1.5 * i6["simulated_peak_mps2"]
+    assert i6["nrmse_pct"] > 3 * s6["nrmse_pct"]
+    # the crank input is the same for both models
+    assert ideal["tracking"]["sim_vs_recorded_max_counts"] < 1.0
+
+
+def test_cli_replay_writes_side_by_side_mcap_report_and_plots(clearance, capsys):
+    path, _, tmp = clearance
+    out = tmp / "cli"
+    assert main(["replay", str(path), "--out", str(out), "--window", "0.1", "0.43", "--no-progress"]) == 0
+    text = capsys.readouterr().out
+    assert "AC6" in text and "wrote" in text
+    for f in ("replay.mcap", "report.json", "report.md", "accelerations.png", "spectra.png", "tracking.png",
+              "encoder_trace.npz"):
+        assert (out / f).stat().st_size > 0, f
+    run = read_run(out / "replay.mcap")
+    groups = run.groups
+    assert groups["daq"][:2] == ["volt_AC1", "volt_AC2"] and "encoder_counts" in groups["daq"]
+    assert groups["meas_accel"] == [f"meas_AC{i}" for i in range(1, 7)]
+    assert groups["sim_meas_accel"] == [f"sim_meas_AC{i}" for i in range(1, 7)]
+    assert "sim_volt_AC1" in groups["sim_daq"] and groups["rec_encoder"] == ["rec_encoder_angle"]
+    assert groups["accel"] == [f"AC{i}" for i in range(1, 7)] and "fn_C" in run
+    assert run.config.drive.program == "trace"
+    report = json.loads((out / "report.json").read_text())
+    assert set(report["sensors"]) == {f"AC{i}" for i in range(1, 7)}
+    assert "## Accelerations" in (out / "report.md").read_text()
+
+
+def test_replay_errors(clearance, tmp_path, capsys):
+    path, _, _ = clearance
+    assert main(["replay", str(path), "--out", str(tmp_path / "o"), "--speed", "500"]) == 2
+    assert "encoder trace" in capsys.readouterr().err
+    assert main(["replay", str(tmp_path / "x.csv"), "--out", str(tmp_path / "o")]) == 2
+    assert "twin import" in capsys.readouterr().err
+    assert main(["replay", str(path), "--out", str(tmp_path / "o"), "--window", "0.3", "9"]) == 2
+    assert "--window" in capsys.readouterr().err
+    # a recording without calibration data
+    from twin.recording import read_recording
+
+    daq, info, _ = read_recording(path)
+    bare = tmp_path / "bare.mcap"
+    write_recording(bare, daq, RecordingInfo(daq.rate_hz, notes="no calibration"))
+    with pytest.raises(RecordingError, match="no calibration data"):
+        replay(bare, tmp_path / "o2")
+    # a recording whose rate does not match the configuration
+    assert main(["replay", str(path), "--out", str(tmp_path / "o3"), "--set",
+                 "instrumentation.daq_rate_hz=50000.0"]) == 2
+    assert "50000" in capsys.readouterr().err
