@@ -494,8 +494,8 @@ def crank_trace(motor_rpm: float, belt_ratio: float, duration_s: float, rate_hz:
 
     The crank rests for ``rest_s``, then the speed follows a cosine ramp of ``ramp_s`` to the
     nominal crank speed (motor_rpm / belt_ratio) and fluctuates within each turn:
-    dθ/dt = ω_nom · s(t) · (1 + Σ_k ripple[k-1] · sin(k θ + ripple_phase[k-1])), θ the crank angle
-    turned since the start. A belt-driven slider–crank's speed varies with the crank angle
+    dφ/dt = direction · ω_nom · s(t) · (1 + Σ_k ripple[k-1] · sin(k φ + ripple_phase[k-1])), φ the
+    encoder angle (starting at ``phi0``), so the fluctuation is tied to the mechanism's position. A belt-driven slider–crank's speed varies with the crank angle
     because the load torque and the effective inertia do (S003 §4.3: "speed is not constant
     within a turn"); the ripple amplitudes are illustrative (PLACEHOLDER: not measured).
     Integrated with scipy's RK45 at tight tolerance on the sample grid.
@@ -514,15 +514,18 @@ def crank_trace(motor_rpm: float, belt_ratio: float, duration_s: float, rate_hz:
             return 1.0
         return 0.5 * (1.0 - math.cos(math.pi * tau / ramp_s))
 
+    if len(ripple) != len(ripple_phase):
+        raise ValueError("crank_trace: ripple and ripple_phase need the same length")
+
     def rhs(tt: float, y: np.ndarray) -> list[float]:
         mod = 1.0 + sum(r * math.sin((k + 1) * y[0] + p) for k, (r, p) in enumerate(zip(ripple, ripple_phase)))
-        return [w_nom * s(tt) * mod]
+        return [direction * w_nom * s(tt) * mod]
 
-    sol = solve_ivp(rhs, (0.0, float(t[-1]) if n > 1 else 0.0), [0.0], t_eval=t, rtol=1e-10, atol=1e-12,
+    sol = solve_ivp(rhs, (0.0, float(t[-1]) if n > 1 else 0.0), [float(phi0)], t_eval=t, rtol=1e-10, atol=1e-12,
                     max_step=min(1e-3, ramp_s / 20 if ramp_s > 0 else 1e-3))
     if not sol.success:
         raise RecordingError(f"crank_trace: integration failed ({sol.message})")
-    return t, phi0 + direction * sol.y[0]
+    return t, sol.y[0]
 
 
 def synthetic_recording(truth: Run, cfg: BenchConfig, notes: str = "", static_s: float = 1.0,

@@ -35,11 +35,40 @@ def register(sub: argparse._SubParsersAction) -> None:
     r.add_argument("--stop", type=float, metavar="S", help="window stop, run time [s] (default: end)")
     r.add_argument("--dtw-window", type=float, default=0.05, metavar="S",
                    help="Sakoe-Chiba half-width [s] (default 0.05; the paper's shifts are ~0.015 s)")
+    r.add_argument("--align-angle", type=float, metavar="DEG",
+                   help="start each run's window at its first pass through this encoder angle after --start "
+                        "(runs whose start position differs, S003 §5); the window keeps the length stop - start")
     r.add_argument("--decimate", type=int, default=1, metavar="K",
                    help="use every K-th sample after a zero-phase anti-alias filter (faster DTW)")
     r.add_argument("--json", metavar="FILE", help="write the table as JSON")
     r.add_argument("--no-progress", action="store_true", help="no progress bar")
     r.set_defaults(func=run_repeatability)
+
+
+def load_encoder_angle(path: str | Path) -> np.ndarray:
+    """Encoder angle [rad] of a run (``encoder_angle``) or recording (count centres of ``encoder_counts``)."""
+    from twin.instrument import counts_to_angle
+    from twin.mcapfile import read_metadata, read_run
+    from twin.recording import RECORDING_RECORD, read_recording
+
+    p = Path(path)
+    if RECORDING_RECORD in read_metadata(p):
+        rec, _, _ = read_recording(p)
+        inst = rec.config.instrumentation
+        return counts_to_angle(rec["encoder_counts"], inst.encoder_counts_per_rev, centre=inst.encoder_quantization)
+    run = read_run(p)
+    if "encoder_angle" not in run:
+        raise RecordingError(f"{p}: no encoder_angle channel to align on")
+    return run["encoder_angle"].astype(np.float64)
+
+
+def first_pass(phi: np.ndarray, i_from: int, angle_rad: float) -> int:
+    """First sample >= i_from at which the encoder angle passes ``angle_rad`` (mod 2π) in either direction."""
+    k = np.floor((phi[i_from:] - angle_rad) / (2 * np.pi))
+    hits = np.flatnonzero(np.diff(k) != 0)
+    if hits.size == 0:
+        raise TwinError(f"--align-angle: the crank never passes {np.degrees(angle_rad):g} deg after the window start")
+    return i_from + int(hits[0]) + 1
 
 
 def load_signal(path: str | Path, channel: str) -> tuple[np.ndarray, float, float, str]:
@@ -76,6 +105,7 @@ def run_repeatability(args: argparse.Namespace) -> int:
     if args.json and not Path(args.json).parent.exists():
         raise TwinError(f"--json: directory {Path(args.json).parent} does not exist")
     sigs = []
+    starts: list[float] = []
     rate = None
     for path in args.runs:
         x, t0, r, used = load_signal(path, args.channel)
@@ -85,11 +115,22 @@ def run_repeatability(args: argparse.Namespace) -> int:
         t = t0 + np.arange(x.size) / r
         lo = args.start if args.start is not None else t[0]
         hi = args.stop if args.stop is not None else t[-1] + 1 / r
+        if args.align_angle is not None:
+            i_from = int(np.searchsorted(t, lo))
+            k = first_pass(load_encoder_angle(path), i_from, np.radians(args.align_angle))
+            lo, hi = t[k], t[k] + (hi - lo)
         sel = (t >= lo) & (t < hi)
         if sel.sum() < 16:
             raise TwinError(f"{path}: the window {lo:g}..{hi:g} s holds {int(sel.sum())} samples "
                             f"(run covers {t[0]:g}..{t[-1]:g} s)")
         sigs.append((str(path), x[sel], used))
+        starts.append(float(lo))
+    lengths = [x.size for _, x, _ in sigs]
+    if max(lengths) - min(lengths) > 1:
+        print(f"  note: windows hold {min(lengths)}..{max(lengths)} samples (a run ends inside the window); "
+              f"all are cut to {min(lengths)} samples")
+    n_common = min(lengths)
+    sigs = [(p, x[:n_common], u) for p, x, u in sigs]
     k = args.decimate
     if k > 1:
         from scipy.signal import decimate
@@ -115,14 +156,14 @@ def run_repeatability(args: argparse.Namespace) -> int:
         bar.close()
     worst = max(rows, key=lambda r: r["distance_pct"])
     result = {"channel": args.channel, "runs": [p for p, _, _ in sigs], "channels_used": [u for _, _, u in sigs],
-              "window_s": [args.start, args.stop], "rate_hz": rate_used, "dtw_window_s": args.dtw_window,
+              "window_s": [args.start, args.stop], "window_starts_s": starts, "align_angle_deg": args.align_angle, "rate_hz": rate_used, "dtw_window_s": args.dtw_window,
               "normalizer": norm, "normalizer_note": "max - min of the first run in the window",
               "pairs": rows, "worst": worst,
               "mean_distance_pct": float(np.mean([r["distance_pct"] for r in rows]))}
     print(f"repeatability of {args.channel} over {len(sigs)} runs ({sigs[0][1].size} samples at {rate_used:g} Hz, "
           f"range of run 1 = {norm:.3g}):")
     for n, (p, _, u) in enumerate(sigs, 1):
-        print(f"  run {n}: {p} [{u}]")
+        print(f"  run {n}: {p} [{u}] from t = {starts[n - 1]:.5f} s")
     print("  pair   DTW %    mean shift [s]")
     for r in rows:
         print(f"  {r['run_a']}-{r['run_b']}  {r['distance_pct']:7.4f}  {r['mean_shift_s']:.5f}")
