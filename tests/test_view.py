@@ -250,7 +250,7 @@ def test_bench_recording_overlays_measured_on_simulated(clearance_run, tmp_path)
     blue = bp.default_blueprint(back.config, back.groups, back.channels, ("B", "C"), True, (0.1, 0.2),
                                 [f"AC{i}" for i in range(1, 7)], ViewOptions())
     views = {v.name: v for v in _walk(blue.root_container)}
-    ac4 = views["AC4 [m/s²]: simulated (blue), recorded (orange)"]
+    ac4 = views["AC4 [m/s²]: sim (blue), rec (orange)"]
     assert sorted(ac4.contents) == ["/signals/accel", "/signals/meas_accel"]
     assert any(n.startswith("motor_command") for n in views)
     assert any(n.startswith("encoder_counts") for n in views)
@@ -331,3 +331,21 @@ def test_simulate_streams_a_recording(tmp_path, capsys):
 def test_simulate_rerun_rejects_bad_path(tmp_path, capsys):
     assert cli("simulate", "--duration", "0.01", "--no-out", "--rerun", tmp_path / "x.mcap") == 2
     assert "--rerun: must end in .rrd" in capsys.readouterr().err
+
+
+def _has_vulkan() -> bool:
+    d = Path("/usr/share/vulkan/icd.d")
+    return d.is_dir() and any(d.glob("*.json"))
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not _has_vulkan(), reason="no Vulkan driver (Debian: mesa-vulkan-drivers) for the headless viewer")
+def test_headless_screenshot_of_default_view(clearance_file, tmp_path):
+    from twin.viz.screenshot import screenshot
+
+    png = screenshot(clearance_file[1], tmp_path / "view.png", at_s=0.15, wait_s=8.0, port=9893)
+    head = png.read_bytes()[:24]
+    assert head[:8] == b"\x89PNG\r\n\x1a\n"
+    width, height = int.from_bytes(head[16:20], "big"), int.from_bytes(head[20:24], "big")
+    assert width >= 1600 and height >= 900 and width * 9 == height * 16
+    assert list(tmp_path.iterdir()) == [png]

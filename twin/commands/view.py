@@ -25,6 +25,14 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="time window of the spectra [s] (default: a steady-speed second near the end)")
     p.add_argument("--pose-rate", type=float, metavar="HZ", default=1000.0,
                    help="rate of the 3-D poses and contact arrows [Hz] (signals keep their rate; default 1000)")
+    p.add_argument("--plot-window", type=float, metavar="S", default=1.0,
+                   help="time window around the cursor of the accelerometer and contact plots [s] "
+                        "(0 = whole run; default 1)")
+    p.add_argument("--screenshot", metavar="OUT.png",
+                   help="also save a PNG of the default view from a headless viewer (needs Vulkan, e.g. Mesa's)")
+    p.add_argument("--at", type=float, metavar="T", help="time cursor of the screenshot [s]")
+    p.add_argument("--wait", type=float, metavar="S", default=60.0,
+                   help="seconds the headless viewer loads before the screenshot (default 60)")
     p.set_defaults(func=run)
 
 
@@ -41,11 +49,20 @@ def run(args: argparse.Namespace) -> int:
         raise TwinError(f"--save: must end in .rrd, got {out.name}")
     if not out.parent.is_dir():
         raise TwinError(f"--save: directory {out.parent} does not exist")
-    opts = ViewOptions(pose_rate_hz=args.pose_rate,
+    if args.screenshot and (Path(args.screenshot).suffix != ".png" or not Path(args.screenshot).parent.is_dir()):
+        raise TwinError(f"--screenshot: must be a .png in an existing directory, got {args.screenshot}")
+    opts = ViewOptions(pose_rate_hz=args.pose_rate, plot_window_s=args.plot_window,
                        fft_window_s=tuple(args.fft_window) if args.fft_window else None)
     t = time.perf_counter()
-    path = convert_file(src, out, opts)
-    print(f"wrote {path} ({path.stat().st_size / 1e6:.1f} MB) in {time.perf_counter() - t:.2f} s")
+    tm: dict[str, float] = {}
+    path = convert_file(src, out, opts, timings=tm)
+    print(f"wrote {path} ({path.stat().st_size / 1e6:.1f} MB) in {time.perf_counter() - t:.2f} s "
+          f"(read {tm['read']:.2f} s, id {tm['hash']:.2f} s, convert {tm['convert']:.2f} s)")
+    if args.screenshot:
+        from twin.viz.screenshot import screenshot
+
+        shot = screenshot(path, args.screenshot, at_s=args.at, wait_s=args.wait)
+        print(f"saved {shot}")
     if args.spawn:
         _spawn(path)
     return 0

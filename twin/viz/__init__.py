@@ -53,8 +53,15 @@ def write_rrd(run: Run, out: str | Path, *, recording_id: str, name: str, option
         raise
 
 
-def convert_file(path: str | Path, out: str | Path | None = None, options: ViewOptions = ViewOptions()) -> Path:
-    """Convert a twin run file (simulated run, bench recording or replay) into ``out``."""
+def convert_file(path: str | Path, out: str | Path | None = None, options: ViewOptions = ViewOptions(),
+                 timings: dict[str, float] | None = None) -> Path:
+    """Convert a twin run file (simulated run, bench recording or replay) into ``out``.
+
+    ``timings`` (optional) receives the measured wall times [s] of ``read`` (MCAP -> Run),
+    ``hash`` (recording id) and ``convert`` (Run -> .rrd, flushed and renamed).
+    """
+    import time
+
     from twin.mcapfile import read_run, read_summary
 
     p = Path(path)
@@ -63,10 +70,17 @@ def convert_file(path: str | Path, out: str | Path | None = None, options: ViewO
         from twin.errors import TwinError
 
         raise TwinError(f"{out}: output would overwrite the input")
+    t0 = time.perf_counter()
     run = read_run(p)
+    summary = read_summary(p)
+    t1 = time.perf_counter()
     if run.n == 0:
         from twin.errors import TwinError
 
         raise TwinError(f"{p}: the run holds no samples")
-    return write_rrd(run, out, recording_id=file_recording_id(p), name=p.stem, options=options,
-                     source=p.name, summary=read_summary(p))
+    rid = file_recording_id(p)
+    t2 = time.perf_counter()
+    path = write_rrd(run, out, recording_id=rid, name=p.stem, options=options, source=p.name, summary=summary)
+    if timings is not None:
+        timings.update(read=t1 - t0, hash=t2 - t1, convert=time.perf_counter() - t2)
+    return path

@@ -38,7 +38,8 @@ class _Series:
         self.used.update(out)
         return out
 
-    def view(self, title: str, names: list[str], legend: bool = False) -> rrb.TimeSeriesView:
+    def view(self, title: str, names: list[str], legend: bool = False,
+             window: rrb.VisibleTimeRange | None = None) -> rrb.TimeSeriesView:
         masks: dict[str, list[bool]] = {}
         for n in names:
             g, k = self.where[n]
@@ -47,18 +48,19 @@ class _Series:
             origin="/", contents=[f"/signals/{g}" for g in masks],
             name=view_title(title, [self.channels[n] for n in names]),
             overrides={f"/signals/{g}": rr.SeriesLines.from_fields(visible_series=m) for g, m in masks.items()},
-            plot_legend=rrb.PlotLegend(corner="LeftTop", visible=legend))
+            plot_legend=rrb.PlotLegend(corner="LeftTop", visible=legend),
+            time_ranges=[window] if window is not None else None)
 
 
 def _eye(cfg: BenchConfig) -> rrb.EyeControls3D:
     r, l = cfg.bodies.crank.length_m, cfg.bodies.rod.length_m
-    cx = l / 2.0  # the mechanism spans x = -r .. l + r
+    cx = (l + 0.02) / 2.0  # the mechanism spans x = -r .. l + r (+ the guide)
     up = cfg.mechanism.orientation
     if up == "y":
-        return rrb.EyeControls3D(kind=rrb.Eye3DKind.Orbital, position=(cx, 0.09, 0.52),
+        return rrb.EyeControls3D(kind=rrb.Eye3DKind.Orbital, position=(cx, 0.10, 0.60),
                                  look_target=(cx, -0.02, 0.0), eye_up=(0.0, 1.0, 0.0))
     if up == "x":
-        return rrb.EyeControls3D(kind=rrb.Eye3DKind.Orbital, position=(cx + 0.09, 0.0, 0.52),
+        return rrb.EyeControls3D(kind=rrb.Eye3DKind.Orbital, position=(cx + 0.10, 0.0, 0.60),
                                  look_target=(cx, 0.0, 0.0), eye_up=(1.0, 0.0, 0.0))
     return rrb.EyeControls3D(kind=rrb.Eye3DKind.Orbital, position=(cx, -0.33, 0.42),
                              look_target=(cx, 0.0, 0.0), eye_up=(0.0, 0.0, 1.0))
@@ -72,29 +74,34 @@ def default_blueprint(cfg: BenchConfig, groups: dict[str, list[str]], channels: 
     S = _Series(groups, channels)
     paths = S.pick
     _series = S.view
+    win = None
+    if opts.plot_window_s > 0:
+        half = opts.plot_window_s / 2.0
+        win = rrb.VisibleTimeRange(TIMELINE, start=rr.TimeRangeBoundary.cursor_relative(seconds=-half),
+                                   end=rr.TimeRangeBoundary.cursor_relative(seconds=half))
 
     # accelerometers: simulated + recorded overlaid; raw volts only when nothing calibrated exists
     accel_views = []
     for a in ACCELEROMETERS:
-        p = paths(a, f"meas_{a}")
+        p = paths(a, f"sim_meas_{a}", f"meas_{a}")
         if not p:
-            p = paths(f"volt_{a}")
+            p = paths(f"volt_{a}", f"sim_volt_{a}")
         if p:
-            accel_views.append(_series(a, p))
+            accel_views.append(_series(a, p, window=win))
     speed = paths("crank_speed", "omega_ref")
     force = paths(*[f"fn_{j}" for j in ("B", "C")])
     pen = paths(*[f"pen_{j}" for j in ("B", "C")])
     friction = paths(*[f"ft_{j}" for j in ("B", "C")])
     ecc = paths(*[f"ecc_{j}_{k}" for j in ("B", "C") for k in ("x", "y")])
-    encoder = paths("encoder_angle", "encoder_counts")
-    motor = paths("motor_command")
+    encoder = paths("encoder_angle", "rec_encoder_angle") or paths("encoder_counts", "sim_encoder_counts")
+    motor = paths("motor_command", "sim_motor_command")
     torque = paths("crank_torque")
     angle = paths("crank_angle", "theta_ref")
     slider = paths("slider_position")
 
     tabs: list[rrb.Container | rrb.View] = []
     bottom = [v for v in (_series("crank speed", speed) if speed else None,
-                          _series("contact force", force) if force else None,
+                          _series("contact force", force, window=win) if force else None,
                           _series("encoder", encoder) if encoder and not speed else None) if v is not None]
     if accel_views:
         grid = rrb.Grid(*accel_views, grid_columns=2, name="accelerometers")
@@ -105,17 +112,21 @@ def default_blueprint(cfg: BenchConfig, groups: dict[str, list[str]], channels: 
                                          ("slider position", slider)) if p]
     if drive:
         tabs.append(rrb.Grid(*drive, grid_columns=2, name="Drive & encoder"))
-    contact = [_series(n, p) for n, p in (("contact force", force), ("friction force", friction),
-                                           ("penetration", pen), ("eccentricity (rod frame)", ecc)) if p]
+    contact = [_series(n, p, window=win) for n, p in (("contact force", force), ("friction force", friction),
+                                                       ("penetration", pen), ("eccentricity (rod frame)", ecc)) if p]
     if contact:
         tabs.append(rrb.Grid(*contact, grid_columns=2, name="Contact"))
     if fft_window is not None and fft_names:
         t0, t1 = fft_window
-        sensors = [a for a in ACCELEROMETERS if a in fft_names or f"meas_{a}" in fft_names]
-        bars = [rrb.BarChartView(origin=f"/fft/{a}", name=f"{a} spectrum {t0:g}–{t1:g} s [dB re 1 mm/s²]",
-                                 plot_legend=rrb.PlotLegend(visible=False)) for a in sensors]
+        sensors = [a for a in ACCELEROMETERS if any(n in fft_names for n in (a, f"meas_{a}", f"sim_meas_{a}"))]
+        kinds = (("", "sim (blue)"), ("sim_meas_", "sim+chain (purple)"), ("meas_", "rec (orange)"))
+        bars = []
+        for a in sensors:
+            shown = ", ".join(text for pre, text in kinds if f"{pre}{a}" in fft_names)
+            bars.append(rrb.BarChartView(origin=f"/fft/{a}", name=f"{a} {t0:g}–{t1:g} s [dB re 1 mm/s²]: {shown}",
+                                         plot_legend=rrb.PlotLegend(visible=False)))
         tabs.append(rrb.Grid(*bars, grid_columns=2, name="Spectra"))
-    daq = [_series(n, paths(n)) for n in groups.get("daq", []) if n not in S.used]
+    daq = [_series(n, paths(n, f"sim_{n}")) for n in groups.get("daq", []) if n not in S.used]
     if daq:
         tabs.append(rrb.Grid(*daq, name="DAQ (raw)"))
     rest = [_series(n, paths(n)) for n in channels if n not in S.used]

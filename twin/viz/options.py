@@ -19,6 +19,10 @@ class ViewOptions:
         orbit_rate_hz: rate of the journal-centre orbit points [Hz].
         block_rows: rows per ``send_columns`` block of a signal.
         orbit_trail_s: length of the orbit trail shown behind the time cursor [s].
+        plot_window_s: time window around the cursor shown by the accelerometer and contact
+            plots [s] (waveforms and impacts stay readable while scrubbing, and the viewer
+            draws a bounded number of points); 0 = the whole run. The crank-speed plot and
+            the drive tab always show the whole run.
         orbit_inset_radius_m: drawn radius of the magnified clearance circle in the 3-D view [m];
             the magnification is the 1-2-5 number that brings the radial clearance closest to it
             without exceeding it.
@@ -33,6 +37,7 @@ class ViewOptions:
     orbit_rate_hz: float = 10_000.0
     block_rows: int = 10_000
     orbit_trail_s: float = 0.2
+    plot_window_s: float = 1.0
     orbit_inset_radius_m: float = 0.06
     force_scale_m_per_n: float = 2e-4
     fft_window_s: tuple[float, float] | None = None
@@ -44,6 +49,9 @@ class ViewOptions:
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ConfigError(name, f"must be a finite number > 0, got {v!r}")
+        if not (isinstance(self.plot_window_s, (int, float)) and math.isfinite(self.plot_window_s)
+                and self.plot_window_s >= 0):
+            raise ConfigError("plot_window_s", f"must be a finite number >= 0 [s], got {self.plot_window_s!r}")
         if not (isinstance(self.block_rows, int) and 100 <= self.block_rows <= 1_000_000):
             raise ConfigError("block_rows", f"must be an integer in [100, 1000000], got {self.block_rows!r}")
         if self.fft_window_s is not None:

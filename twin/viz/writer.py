@@ -18,7 +18,8 @@ Entity paths (see :mod:`twin.viz.scene` for ``/bench``):
   ``/bench/rod/contact_J``: contact force on the pin, peak of each pose window;
 * ``/orbit/J/clearance`` and ``/orbit/J/journal``: the journal-centre orbit in the rod frame
   in micrometres at ``orbit_rate_hz`` (red while in contact);
-* ``/fft/<ACi>/sim`` and ``/fft/<ACi>/meas``: amplitude spectra of the FFT window (static);
+* ``/fft/<ACi>/sim``, ``/fft/<ACi>/meas`` (recorded ``meas_ACi``) and ``/fft/<ACi>/sim_chain``
+  (a replay's ``sim_meas_ACi``): amplitude spectra of the FFT window (static);
 * ``/config``: the configuration, run metadata and summary as a markdown document.
 
 Timeline values are integers (nanoseconds from t = 0), and the recording id, name and every
@@ -45,7 +46,7 @@ from twin.viz import scene
 from twin.viz.options import ViewOptions
 from twin.viz.pose import poses
 from twin.viz.spectrum import DB_REF_MPS2, amplitude_db, check_window, default_window
-from twin.viz.style import MEAS_COLOUR, SIM_COLOUR, series_colour, series_label
+from twin.viz.style import CHAIN_COLOUR, MEAS_COLOUR, SIM_COLOUR, series_colour, series_label
 
 APP_ID = "twin"
 TIMELINE = "time"
@@ -141,7 +142,7 @@ class RerunWriter:
         self._pose_stride = so * max(1, int(round(rate / self.opts.pose_rate_hz / so)))
         self._has_pose = any(a in chunk for a in _ANGLE_SOURCES)
         self._joints = tuple(j for j in ("B", "C") if f"ecc_{j}_x" in chunk and f"ecc_{j}_y" in chunk)
-        fft_names = [n for a in ACCELEROMETERS for n in (a, f"meas_{a}") if n in chunk]
+        fft_names = [n for a in ACCELEROMETERS for n in (a, f"sim_meas_{a}", f"meas_{a}") if n in chunk]
         if fft_names:
             w = self.opts.fft_window_s or default_window(self.cfg, self.t_start, self.t_end)
             check_window(w, self.t_start, self.t_end, rate)
@@ -382,9 +383,13 @@ class RerunWriter:
             if len(x) < 2:
                 continue
             f, db = amplitude_db(x, self._rate, self.opts.fft_max_hz)
-            sensor, kind = (name[5:], "meas") if name.startswith("meas_") else (name, "sim")
-            self.rec.log(f"/fft/{sensor}/{kind}", rr.BarChart(db.astype(np.float32), abscissa=f,
-                                                               color=MEAS_COLOUR if kind == "meas" else SIM_COLOUR),
+            if name.startswith("meas_"):
+                sensor, kind, colour = name[5:], "meas", MEAS_COLOUR
+            elif name.startswith("sim_meas_"):
+                sensor, kind, colour = name[9:], "sim_chain", CHAIN_COLOUR
+            else:
+                sensor, kind, colour = name, "sim", SIM_COLOUR
+            self.rec.log(f"/fft/{sensor}/{kind}", rr.BarChart(db.astype(np.float32), abscissa=f, color=colour),
                          static=True)
 
     def _document(self, meta: dict[str, Any] | None, summary: dict[str, Any] | None) -> str:
@@ -406,9 +411,9 @@ class RerunWriter:
             t0, t1 = self._fft_window
             lines.append(f"- spectra: {t0:g}–{t1:g} s, Hann window, amplitude in dB re {DB_REF_MPS2 * 1e3:g} mm/s² "
                          "(floored at 0 dB)")
+        lines += ["", "## Configuration", "", "```toml", cfg.to_toml().rstrip(), "```"]
         if summary:
             lines += ["", "## Summary", "", "```json", json.dumps(summary, indent=2, default=str), "```"]
         if meta:
             lines += ["", "## Run metadata", "", "```json", json.dumps(meta, indent=2, default=str), "```"]
-        lines += ["", "## Configuration", "", "```toml", cfg.to_toml().rstrip(), "```", ""]
-        return "\n".join(lines)
+        return "\n".join(lines) + "\n"
