@@ -74,8 +74,10 @@ def channel_specs(cfg: BenchConfig) -> list[ChannelSpec]:
         if group not in cfg.sensors.channels:
             continue
         if group == "joints":
+            # MuJoCo's ring and tendon bushings give no signed friction force on the pin
+            no_ft = cfg.simulation.engine == "mujoco" and cfg.mujoco.bushing in ("ring", "tendon")
             for j in cfg.joints.clearance_joints:
-                out.extend(_joint_specs(j))
+                out.extend(s for s in _joint_specs(j) if not (no_ft and s.name.startswith("ft_")))
         else:
             out.extend(_STATIC[group])
     return out

@@ -313,6 +313,16 @@ class MujocoSettings:
         equality_solref: ``solref`` of the loop-closure ``connect`` at an ideal joint C.
         equality_solimp: ``solimp`` of that connect.
         guide_solreffriction: ``solreffriction`` of the guide's dry friction (frictionloss).
+        bushing: representation of a bushing bore: "bore" (native pin-in-bore collider, exact
+            circle; the default, chosen by ``analysis/bushing_representations.py``), "ring"
+            (``ring_boxes`` boxes whose faces form a regular polygon tangent to the bore) or
+            "tendon" (pin-bushing distance limited to c: exact, frictionless).
+        ring_boxes: number of boxes of the "ring" representation.
+        friction: clearance-joint friction: "native" (the reference's regularized Coulomb law
+            as a passive force, default; bore only) or "cone" (MuJoCo's elliptic friction
+            cone, μ0; bore or ring). A tendon bushing is frictionless whatever this says.
+        contact_source: "calibration" (the calibration table, first guess where it has no entry)
+            or "first-guess" (ignore the table); ``contact_solref``/``solimp`` override both.
     """
 
     integrator: str = "Euler"
@@ -324,9 +334,20 @@ class MujocoSettings:
     equality_solref: tuple[float, ...] = (2e-5, 1.0)
     equality_solimp: tuple[float, ...] = (0.99, 0.9999, 1e-6, 0.5, 2.0)
     guide_solreffriction: tuple[float, ...] = (2e-5, 1.0)
+    bushing: str = "bore"
+    ring_boxes: int = 48
+    friction: str = "native"
+    contact_source: str = "calibration"
 
     def __post_init__(self) -> None:
         _choice(self.integrator, "integrator", ("Euler", "implicitfast", "implicit", "RK4"))
+        _choice(self.bushing, "bushing", ("bore", "ring", "tendon"))
+        _check(isinstance(self.ring_boxes, int) and 8 <= self.ring_boxes <= 512, "ring_boxes",
+               f"must be an integer in [8, 512], got {self.ring_boxes!r}")
+        _choice(self.friction, "friction", ("native", "cone"))
+        _choice(self.contact_source, "contact_source", ("calibration", "first-guess"))
+        _check(self.bushing == "bore" or self.friction == "cone" or self.bushing == "tendon", "friction",
+               "a ring bushing takes MuJoCo's friction cone: set friction = \"cone\" (native friction needs the bore)")
         _choice(self.solver, "solver", ("Newton", "CG", "PGS"))
         _check(isinstance(self.iterations, int) and 1 <= self.iterations <= 1000,
                "iterations", f"must be an integer in [1, 1000], got {self.iterations!r}")

@@ -146,7 +146,7 @@ def contact_setting(cfg: BenchConfig, joint: str, a_hat: float) -> ContactSettin
     ms = cfg.mujoco
     if ms.contact_solref and ms.contact_solimp:
         return ContactSetting(tuple(ms.contact_solref), tuple(ms.contact_solimp), mu, "config")
-    entry = _calibration_entry(load_calibration(), cfg, joint)
+    entry = _calibration_entry(load_calibration(), cfg, joint) if ms.contact_source == "calibration" else None
     if entry is not None:
         k, c = entry["stiffness_n_per_m"], entry["damping_ns_per_m"]
         solimp = tuple(entry.get("solimp", FLAT_SOLIMP))
@@ -272,32 +272,102 @@ def build_spec(cfg: BenchConfig) -> mujoco.MjSpec:
     return spec
 
 
-def build(cfg: BenchConfig) -> tuple[mujoco.MjSpec, mujoco.MjModel, BuildInfo]:
-    """Spec, compiled model and build info of a configuration (collider installed)."""
-    ensure_installed()
-    spec = build_spec(cfg)
+def _compile(spec: mujoco.MjSpec, cfg: BenchConfig) -> mujoco.MjModel:
     try:
-        model = spec.compile()
+        return spec.compile()
     except Exception as err:
         raise ModelError(f"MuJoCo could not compile the model of {cfg.name}: {err}") from None
-    info = BuildInfo(sensors=[s.name for s in spec.sensors])
-    if cfg.joints.clearance_joints:
-        for jt in cfg.joints.clearance_joints:
-            g1 = model.geom(N.pin(jt)).id
-            g2 = model.geom(N.bushing(jt)).id
-            a_hat = float(model.body_invweight0[model.geom_bodyid[g1], 0] +
-                          model.body_invweight0[model.geom_bodyid[g2], 0])
-            setting = contact_setting(cfg, jt, a_hat)
+
+
+def _ring(spec: mujoco.MjSpec, cfg: BenchConfig, jt: str) -> list[str]:
+    """Replace the bore of ``jt`` by ``mujoco.ring_boxes`` boxes; returns the box names."""
+    n = cfg.mujoco.ring_boxes
+    bush = spec.geom(N.bushing(jt))
+    centre = np.array(bush.pos)
+    ri = cfg.joints.bushing_radius_m(jt)
+    half_w, t = ri * math.tan(math.pi / n), 1e-3
+    names = []
+    for k in range(n):
+        beta = 2 * math.pi * k / n
+        g = spec.body(N.ROD).add_geom(
+            name=f"{N.bushing(jt)}_box{k}", type=mujoco.mjtGeom.mjGEOM_BOX, size=[t, half_w, cfg.joints.bushing_length_m / 2],
+            pos=list(centre + (ri + t) * np.array([math.cos(beta), math.sin(beta), 0.0])),
+            quat=[math.cos(beta / 2), 0.0, 0.0, math.sin(beta / 2)], contype=0, conaffinity=0, mass=0, group=3)
+        names.append(g.name)
+    return names
+
+
+def build(cfg: BenchConfig) -> tuple[mujoco.MjSpec, mujoco.MjModel, BuildInfo]:
+    """Spec, compiled model and build info of a configuration (collider installed).
+
+    The bushing representation (``mujoco.bushing``) and the friction model
+    (``mujoco.friction``) are applied here: "bore" keeps the base model's pair; "ring"
+    replaces it by one pair per box; "tendon" by a distance-limited tendon. Their contact
+    parameters are the same physical law (k, c, solimp), converted with each row's Â.
+    """
+    ensure_installed()
+    ms = cfg.mujoco
+    spec = build_spec(cfg)
+    info = BuildInfo()
+    if not cfg.joints.clearance_joints:
+        info.sensors = [x.name for x in spec.sensors]
+        return spec, _compile(spec, cfg), info
+    rings: dict[str, list[str]] = {}
+    if ms.bushing == "ring":
+        # box-cylinder contacts go through MuJoCo's convex (CCD) collider, whose default
+        # tolerance (1e-6 m) is a large fraction of a 10-500 um clearance: measured chatter
+        # (200+ false impacts in 0.5 s) until it is tightened
+        spec.option.ccd_tolerance = 1e-10
+        spec.option.ccd_iterations = 100
+    for jt in cfg.joints.clearance_joints:
+        if ms.bushing == "ring":
+            spec.delete(spec.pair(N.pair(jt)))
+            rings[jt] = _ring(spec, cfg, jt)
+            for k, box in enumerate(rings[jt]):
+                spec.add_pair(name=f"{N.pair(jt)}_{k}", geomname1=N.pin(jt), geomname2=box, condim=3,
+                              friction=[cfg.contact.mu0, cfg.contact.mu0, 0, 0, 0])
+            if spec.sensor(N.sensor_contact(jt)) is not None:
+                sc = spec.sensor(N.sensor_contact(jt))
+                sc.reftype, sc.refname = mujoco.mjtObj.mjOBJ_BODY, N.ROD
+                sc.intprm = [3, 3, 1]  # found + force, reduce = netforce (global frame), one slot
+        elif ms.bushing == "tendon":
+            spec.delete(spec.pair(N.pair(jt)))
+            t = spec.add_tendon(name=N.pair(jt), limited=True, range=[0.0, cfg.joints.radial_m(jt)])
+            t.wrap_site(N.pin(jt))
+            t.wrap_site(N.bushing(jt))
+            if spec.sensor(N.sensor_contact(jt)) is not None:
+                sc = spec.sensor(N.sensor_contact(jt))
+                sc.type, sc.objtype, sc.objname = mujoco.mjtSensor.mjSENS_TENDONLIMITFRC, mujoco.mjtObj.mjOBJ_TENDON, N.pair(jt)
+                sc.reftype, sc.refname, sc.intprm = mujoco.mjtObj.mjOBJ_UNKNOWN, "", [0, 0, 0]
+        elif ms.friction == "cone":
             p = spec.pair(N.pair(jt))
-            p.solref = list(setting.solref)
-            p.solimp = list(setting.solimp)
-            info.contacts[jt] = setting
-            info.a_hat[jt] = a_hat
-        try:
-            model = spec.compile()
-        except Exception as err:
-            raise ModelError(f"MuJoCo could not compile the model of {cfg.name}: {err}") from None
-    return spec, model, info
+            p.condim = 3
+            p.friction = [cfg.contact.mu0, cfg.contact.mu0, 0, 0, 0]
+        if ms.bushing != "bore" or ms.friction == "cone":
+            ud = list(spec.geom(N.bushing(jt)).userdata)
+            spec.geom(N.bushing(jt)).userdata = [ud[0], 0.0, ud[2], ud[3]]  # native friction off
+            if spec.sensor(N.sensor_friction(jt)) is not None:
+                spec.delete(spec.sensor(N.sensor_friction(jt)))
+    model = _compile(spec, cfg)
+    for jt in cfg.joints.clearance_joints:
+        if ms.bushing == "tendon":
+            a_hat = float(model.tendon_invweight0[model.tendon(N.pair(jt)).id])
+        else:
+            a_hat = float(model.body_invweight0[model.geom_bodyid[model.geom(N.pin(jt)).id], 0] +
+                          model.body_invweight0[model.geom_bodyid[model.geom(N.bushing(jt)).id], 0])
+        setting = contact_setting(cfg, jt, a_hat)
+        if ms.bushing == "tendon":
+            t = spec.tendon(N.pair(jt))
+            t.solref_limit, t.solimp_limit = list(setting.solref), list(setting.solimp)
+        else:
+            pairs = [f"{N.pair(jt)}_{k}" for k in range(len(rings[jt]))] if jt in rings else [N.pair(jt)]
+            for name in pairs:
+                p = spec.pair(name)
+                p.solref, p.solimp = list(setting.solref), list(setting.solimp)
+        info.contacts[jt] = setting
+        info.a_hat[jt] = a_hat
+    info.sensors = [x.name for x in spec.sensors]
+    return spec, _compile(spec, cfg), info
 
 
 def build_model(cfg: BenchConfig) -> mujoco.MjModel:

@@ -145,13 +145,25 @@ class MujocoEngine:
         if "joints" in groups:
             for jt in cfg.joints.clearance_joints:
                 ex, ey = col(N.sensor_ecc(jt), 0), col(N.sensor_ecc(jt), 1)
-                found = col(N.sensor_contact(jt), 0) > 0
+                found = col(N.sensor_contact(jt), 0) > 0 if cfg.mujoco.bushing != "tendon" else None
                 out[f"ecc_{jt}_x"] = ex
                 out[f"ecc_{jt}_y"] = ey
                 out[f"pen_{jt}"] = np.maximum(np.hypot(ex, ey) - cfg.joints.radial_m(jt), 0.0)
-                # normal force of the frictionless contact; friction from the native user sensor
-                out[f"fn_{jt}"] = np.where(found, col(N.sensor_contact(jt), 1), 0.0)
-                out[f"ft_{jt}"] = col(N.sensor_friction(jt))
+                bushing, friction = cfg.mujoco.bushing, cfg.mujoco.friction
+                if bushing == "bore":
+                    # contact sensor slot [found, force in the contact frame (normal, t1, axis)]
+                    out[f"fn_{jt}"] = np.where(found, col(N.sensor_contact(jt), 1), 0.0)
+                    if friction == "native":
+                        out[f"ft_{jt}"] = col(N.sensor_friction(jt))  # native module's user sensor
+                    else:
+                        # force on geom2 (bushing) along t1 = axis x normal: the pin feels minus that
+                        out[f"ft_{jt}"] = np.where(found, -col(N.sensor_contact(jt), 2), 0.0)
+                elif bushing == "ring":
+                    # netforce of all pin/box contacts in the global frame: its in-plane magnitude
+                    out[f"fn_{jt}"] = np.where(found, np.hypot(col(N.sensor_contact(jt), 1),
+                                                               col(N.sensor_contact(jt), 2)), 0.0)
+                else:  # tendon limit force (the sensor is the tendon's limit force)
+                    out[f"fn_{jt}"] = np.abs(col(N.sensor_contact(jt), 0))
         if "drive" in groups:
             out["theta_ref"] = theta_ref
             out["omega_ref"] = omega_ref
