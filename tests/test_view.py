@@ -8,7 +8,6 @@ and is reproducible; bad inputs fail with one line and leave no file.
 
 from __future__ import annotations
 
-import dataclasses
 import subprocess
 import sys
 from pathlib import Path
