@@ -317,9 +317,11 @@ def replay(recording: str | Path, out_dir: str | Path,
 
 
 def _same_model(a: BenchConfig, b: BenchConfig) -> bool:
-    """Whether the simulated model equals the recording's (ignoring drive and run settings)."""
-    keep = ("bodies", "materials", "joints", "mechanism", "contact", "sensors")
-    return all(getattr(a, k) == getattr(b, k) for k in keep)
+    """Whether the simulated model equals the recording's: same mechanism, contact, sensors,
+    engine and step (drive program, duration and output settings aside)."""
+    keep = ("bodies", "materials", "joints", "mechanism", "contact", "sensors", "mujoco", "pid")
+    return (all(getattr(a, k) == getattr(b, k) for k in keep)
+            and a.simulation.engine == b.simulation.engine and a.simulation.timestep_s == b.simulation.timestep_s)
 
 
 def _json_default(o: Any) -> Any:
