@@ -43,7 +43,7 @@ from twin.config import ACCELEROMETERS, CHANNEL_GROUPS, BenchConfig
 from twin.errors import RecordingError, TwinError
 from twin.instrument import (apply_chain, counts_to_angle, measured_accel, simulated_calibration)
 from twin.instrument.encoder import count_step_rad
-from twin.recording import RecordingInfo, read_recording
+from twin.recording import read_recording
 from twin.run import Channel, Run
 from twin.signals import band_energy_db, dtw_compare, hann_spectrum
 
@@ -180,11 +180,6 @@ def compare_accelerations(rec: dict[str, np.ndarray], sim: dict[str, np.ndarray]
             "bands": bands,
         }
     return out
-
-
-def _shifted(x: np.ndarray, k: int, i0: int, i1: int) -> np.ndarray:
-    """x[i0 + k : i1 + k] clipped to the array (the window shrinks at the edges)."""
-    return x[max(0, i0 + k):min(len(x), i1 + k)]
 
 
 def replay(recording: str | Path, out_dir: str | Path,
