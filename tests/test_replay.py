@@ -62,7 +62,7 @@ def test_replay_recovers_the_crank_motion(ideal):
     assert report["tracking"]["sim_vs_recorded_max_counts"] < 1.0
     assert report["tracking"]["sim_vs_recorded_rms_counts"] < 0.45
     assert report["tracking"]["sim_vs_reference_max_counts"] < 0.5
-    assert report["time_lag_s"] == 0.0
+    assert abs(report["time_lag_s"]) <= 2e-5  # aligned by construction (the noise decides +-1 sample)
     assert report["crank_rate_hz"] == pytest.approx(750 / 3.97 / 60, rel=0.03)  # rippled speed around nominal
 
 
@@ -71,14 +71,19 @@ def test_replay_with_the_same_model_reproduces_the_accelerations(ideal):
     assert report["configuration"]["same_as_recording"]
     for a in ("AC1", "AC2", "AC3", "AC4", "AC6"):
         m = report["sensors"][a]
-        assert m["nrmse_pct"] < 1.0, a
-        assert m["correlation"] > 0.999, a
-        assert m["dtw_distance_pct"] < 0.5, a
+        # the virtual sensors' noise is independent of the recording's: the error is about
+        # sqrt(2) x 0.066 m/s^2 (ADXL1001) / 0.055 m/s^2 (ADXL1002) of noise, plus the physics
+        assert m["rms_error_mps2"] < 0.15, a
+        assert m["nrmse_pct"] < 1.5, a  # AC3 spans only ~8 m/s^2 in test 3
+        assert m["correlation"] > 0.998, a
+        assert m["dtw_distance_pct"] < 0.6, a
         assert m["simulated_rms_mps2"] == pytest.approx(m["recorded_rms_mps2"], rel=0.01)
         amp_r, amp_s = m["recorded_harmonic_amplitudes_mps2"][0], m["simulated_harmonic_amplitudes_mps2"][0]
         assert amp_s == pytest.approx(amp_r, rel=0.02)
-    # AC5 (slider, vertical) reads a nearly constant 1 g: its error is the noise
-    assert report["sensors"]["AC5"]["rms_error_mps2"] < 0.05
+    # AC5 (slider, vertical) reads a nearly constant 1 g: its error is the difference of two
+    # independent noise records of 25 ug/sqrt(Hz) over 50 kHz: sqrt(2) * 0.055 m/s^2
+    sigma = 25e-6 * 9.80665 * math.sqrt(50_000)
+    assert report["sensors"]["AC5"]["rms_error_mps2"] == pytest.approx(math.sqrt(2) * sigma, rel=0.1)
     assert report["calibration"]["recorded"]["zero_g_v"] == pytest.approx(OFFSETS, abs=3e-5)
     assert report["calibration"]["simulated"]["zero_g_v"] == pytest.approx(OFFSETS, abs=3e-5)
 

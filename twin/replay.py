@@ -230,8 +230,9 @@ def replay(recording: str | Path, out_dir: str | Path,
         raise TwinError(f"internal: simulated {sim.n} samples for a {rec.n}-sample recording")
 
     # 4. virtual sensor chain + the bench's calibration on both sides
-    sim_daq = apply_chain(sim, cfg, prefix="sim_")
-    sim_cal = simulated_calibration(cfg, opts.static_s)
+    # noise streams 2 and 3: independent of a synthetic recording's own (0 and 1)
+    sim_daq = apply_chain(sim, cfg, prefix="sim_", stream=2)
+    sim_cal = simulated_calibration(cfg, opts.static_s, stream=3)
     sim_meas = measured_accel(sim_daq, sim_cal, prefix="sim_")
     rec_meas = measured_accel(rec, info.calibration)
     sensors = [a for a in ACCELEROMETERS if f"meas_{a}" in rec_meas]

@@ -15,7 +15,9 @@ The physics runs once; the chain is a few vectorized filters (a 2 s run takes we
 second). Noise is drawn from ``numpy.random.default_rng([seed, stream, sensor index])``: the same
 seed gives the same recording, each sensor has its own stream, and ``stream`` separates e.g. the
 static calibration recording (1) from the test itself (0). Apply the chain to a whole run, not
-chunk by chunk (filters and noise would restart at each chunk).
+chunk by chunk (filters and noise would restart at each chunk). Streams in use: 0 a recording
+made by the twin, 1 its static calibration recording, 2 and 3 the same for the virtual sensors of
+a replay (so a replay of a synthetic recording does not reuse the recording's noise).
 """
 
 from __future__ import annotations
@@ -105,18 +107,18 @@ def static_truth_run(cfg: BenchConfig, duration_s: float = 1.0) -> Run:
     return Run.from_arrays(0.0, rate, arrays, cfg, {"kind": "static calibration pose (truth)"})
 
 
-def static_recording(cfg: BenchConfig, duration_s: float = 1.0) -> Run:
+def static_recording(cfg: BenchConfig, duration_s: float = 1.0, stream: int = 1) -> Run:
     """A simulated static calibration recording: the pose's truth through the sensor chain
-    (noise stream 1; motor command 0 V)."""
-    daq = apply_chain(static_truth_run(cfg, duration_s), cfg, stream=1, command=False)
+    (noise stream ``stream``, 1 by default; motor command 0 V)."""
+    daq = apply_chain(static_truth_run(cfg, duration_s), cfg, stream=stream, command=False)
     zero = quantize(np.zeros(daq.n), cfg.instrumentation) if cfg.instrumentation.quantization else np.zeros(daq.n)
     return daq.with_channels([Channel("motor_command", "V", DAQ_GROUP, zero)])
 
 
-def simulated_calibration(cfg: BenchConfig, duration_s: float = 1.0) -> Calibration:
+def simulated_calibration(cfg: BenchConfig, duration_s: float = 1.0, stream: int = 1) -> Calibration:
     """Calibrate the virtual sensors the way the bench calibrates the real ones (Eq. 1–4) on a
-    simulated static recording of ``duration_s``."""
-    static = static_recording(cfg, duration_s)
+    simulated static recording of ``duration_s`` (noise stream ``stream``)."""
+    static = static_recording(cfg, duration_s, stream)
     volts = {a: static[f"volt_{a}"] for a in ACCELEROMETERS}
     return calibrate_static(volts, nominal_sensitivities(cfg), calibration_pose_g(cfg),
                             source=f"simulated static recording, {duration_s:g} s, seed {cfg.instrumentation.seed}")
