@@ -42,6 +42,7 @@ def test_every_python_name_resolves_in_the_compiled_models():
     _resolve(ideal, "equality", N.JOINT_C_CONNECT)
     for jt in ("B", "C"):
         _resolve(both, "pair", N.pair(jt))
+        _resolve(both, "pair", N.pair(jt, 1))  # second term of the calibrated law
         for s in (N.sensor_ecc(jt), N.sensor_contact(jt), N.sensor_friction(jt)):
             _resolve(both, "sensor", s)
     for j in (N.ECC_B_X, N.ECC_B_Y):
@@ -49,7 +50,8 @@ def test_every_python_name_resolves_in_the_compiled_models():
     assert both.geom_user[both.geom(N.bushing("B")).id, 0] == N.BORE_MAGIC
 
 
-@pytest.mark.parametrize("test_id, nv, npair, neq", [(3, 1 + 2, 0, 1), (6, 3, 1, 0), (9, 5, 1, 1), (12, 5, 2, 0)])
+# pairs: one per clearance joint and term of its calibrated contact law (two terms)
+@pytest.mark.parametrize("test_id, nv, npair, neq", [(3, 1 + 2, 0, 1), (6, 3, 2, 0), (9, 5, 2, 1), (12, 5, 4, 0)])
 def test_each_scene_holds_only_what_it_needs(test_id, nv, npair, neq):
     m = build(preset(test_id))[1]
     assert (m.nv, m.npair, m.neq) == (nv, npair, neq)

@@ -55,13 +55,16 @@ def test_clearance_eccentricity_bounded_by_radial_clearance():
         c = cfg.joints.radial_m(j)
         ecc = np.hypot(run[f"ecc_{j}_x"], run[f"ecc_{j}_y"])
         assert ecc.max() > 0.99 * c          # the journal does reach the bushing
-        assert ecc.max() < 1.05 * c          # and penetrates it by only a few percent of c
+        # and penetrates it by a few percent of c: the calibrated contact, like the reference's
+        # Hertzian law, lets the pin sink 2.6 um into the 50 um clearance at C under ~650 N
+        # (measured: twin 2.58 um, reference 2.65 um on this run)
+        assert ecc.max() < 1.08 * c
         assert np.max(run[f"pen_{j}"]) == pytest.approx(max(ecc.max() - c, 0), abs=1e-12)
         assert run[f"fn_{j}"].max() > 0
 
 
 def test_bore_collider_is_an_exact_circle():
-    cfg = preset(6)
+    cfg = preset(6).replace(**{"mujoco.contact_source": "first-guess"})  # one pair: one contact
     _, model, _ = build(cfg)
     model.pair_margin[:] = 1e-3
     d = mujoco.MjData(model)
@@ -86,7 +89,8 @@ def test_bore_collider_is_an_exact_circle():
 
 
 def test_contact_force_is_the_linear_law_and_friction_is_regularized_coulomb():
-    cfg = short(preset(12), 0.2, **{"drive.ramp_s": 0.02})
+    # the first guess is one linear term with a flat impedance: f = k δ + c δ̇ exactly
+    cfg = short(preset(12), 0.2, **{"drive.ramp_s": 0.02, "mujoco.contact_source": "first-guess"})
     eng = MujocoEngine(cfg)
     m, d = eng.model, eng.data
     eng.set_initial_state()
@@ -123,9 +127,9 @@ def test_contact_force_is_the_linear_law_and_friction_is_regularized_coulomb():
 def test_first_guess_contact_reproduces_reference_restitution():
     from twin.impact import hysteresis_restitution, impact_linear
 
-    cfg = preset(12)
+    cfg = preset(12).replace(**{"mujoco.contact_source": "first-guess"})
     eng = MujocoEngine(cfg)
     for j, s in eng.info.contacts.items():
-        assert s.source in ("first-guess", "calibration")
+        assert s.source == "first-guess"
         r = impact_linear(s.stiffness_n_per_m, s.damping_ns_per_m, 1 / eng.info.a_hat[j], 0.1)
         assert r.restitution == pytest.approx(hysteresis_restitution("lankarani-nikravesh", 0.4), abs=0.02)

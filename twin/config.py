@@ -323,6 +323,9 @@ class MujocoSettings:
             cone, μ0; bore or ring). A tendon bushing is frictionless whatever this says.
         contact_source: "calibration" (the calibration table, first guess where it has no entry)
             or "first-guess" (ignore the table); ``contact_solref``/``solimp`` override both.
+        contact_stiffness_scale: factor on the resolved law's stiffness (every term) [-];
+            1 = as calibrated. For sensitivity and stress studies.
+        contact_damping_scale: factor on the resolved law's damping (every term) [-].
     """
 
     integrator: str = "Euler"
@@ -338,8 +341,13 @@ class MujocoSettings:
     ring_boxes: int = 48
     friction: str = "native"
     contact_source: str = "calibration"
+    contact_stiffness_scale: float = 1.0
+    contact_damping_scale: float = 1.0
 
     def __post_init__(self) -> None:
+        for name in ("contact_stiffness_scale", "contact_damping_scale"):
+            v = getattr(self, name)
+            _check(isinstance(v, (int, float)) and 0.01 <= v <= 100, name, f"must lie in [0.01, 100], got {v!r}")
         _choice(self.integrator, "integrator", ("Euler", "implicitfast", "implicit", "RK4"))
         _choice(self.bushing, "bushing", ("bore", "ring", "tendon"))
         _check(isinstance(self.ring_boxes, int) and 8 <= self.ring_boxes <= 512, "ring_boxes",

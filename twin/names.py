@@ -44,9 +44,13 @@ def bushing_ring(joint: str) -> str:
     return f"bushing_{joint}_ring"
 
 
-def pair(joint: str) -> str:
-    """Contact pair pin/bushing of a clearance joint (added by the builder)."""
-    return f"contact_{joint}"
+def pair(joint: str, term: int = 0) -> str:
+    """Contact pair pin/bushing of a clearance joint (added by the builder).
+
+    A calibrated contact law may be the sum of several terms, one MuJoCo pair each on the
+    same two geoms: term 0 is ``contact_<J>``, term i > 0 is ``contact_<J>_t<i>``.
+    """
+    return f"contact_{joint}" if term == 0 else f"contact_{joint}_t{term}"
 
 
 # equality, actuator

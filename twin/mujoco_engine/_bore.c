@@ -174,12 +174,11 @@ static void sensor_friction(const mjModel* m, mjData* d, int stage) {
     if (m->sensor_type[s] != mjSENS_USER || m->sensor_objtype[s] != mjOBJ_GEOM) continue;
     const int gb = m->sensor_objid[s];
     if (gb < 0 || !is_bore(m, gb)) continue;
-    mjtNum value = 0;
+    mjtNum value = 0;  /* summed over the bore's contacts (one per term of the contact law) */
     for (int i = 0; i < d->ncon; i++) {
       if (d->contact[i].geom[0] != gb && d->contact[i].geom[1] != gb) continue;
       friction_t f;
-      if (bore_friction(m, d, i, &f)) value = f.ft;
-      break;
+      if (bore_friction(m, d, i, &f)) value += f.ft;
     }
     d->sensordata[m->sensor_adr[s]] = value;
   }

@@ -40,7 +40,7 @@ import numpy as np
 
 from twin import names as N
 from twin.config import BenchConfig, ln_stiffness
-from twin.errors import ModelError
+from twin.errors import ConfigError, ModelError
 from twin.mujoco_engine.collider import ensure_installed
 
 CALIBRATION_FILE = Path(__file__).resolve().parent.parent / "data" / "contact_calibration.json"
@@ -71,24 +71,61 @@ _AXIS_QUAT = {  # site orientation whose x axis is the sensitive axis (rotation 
 
 
 @dataclass(frozen=True)
-class ContactSetting:
-    """MuJoCo parameters of one pin/bushing pair and where they came from.
+class ContactTerm:
+    """One MuJoCo pair of a pin/bushing contact law.
 
     Attributes:
         solref: the pair's solref (2 numbers; negative = direct stiffness/damping).
         solimp: the pair's solimp (5 numbers).
-        friction: μ0 of the native regularized Coulomb friction [-].
-        source: "config", "calibration" or "first-guess".
-        stiffness_n_per_m: physical linear stiffness k, if defined that way [N/m].
-        damping_ns_per_m: physical linear damping c [N s/m].
+        stiffness_n_per_m: physical stiffness k at full impedance, if defined that way [N/m].
+        damping_ns_per_m: physical damping c at full impedance [N s/m].
     """
 
     solref: tuple[float, float]
     solimp: tuple[float, ...]
-    friction: float
-    source: str
     stiffness_n_per_m: float | None = None
     damping_ns_per_m: float | None = None
+
+
+@dataclass(frozen=True)
+class ContactSetting:
+    """MuJoCo parameters of one pin/bushing contact and where they came from.
+
+    The contact force is the sum of the terms' forces, one pair each on the same two geoms
+    (the calibration uses two: see :mod:`twin.calibrate`).
+
+    Attributes:
+        terms: the pairs' parameters (at least one).
+        friction: μ0 of the native regularized Coulomb friction [-].
+        source: "config", "calibration" or "first-guess".
+    """
+
+    terms: tuple[ContactTerm, ...]
+    friction: float
+    source: str
+
+    # the first term's values (the whole law when it has one term)
+    @property
+    def solref(self) -> tuple[float, float]:
+        return self.terms[0].solref
+
+    @property
+    def solimp(self) -> tuple[float, ...]:
+        return self.terms[0].solimp
+
+    @property
+    def stiffness_n_per_m(self) -> float | None:
+        return self.terms[0].stiffness_n_per_m
+
+    @property
+    def damping_ns_per_m(self) -> float | None:
+        return self.terms[0].damping_ns_per_m
+
+    def to_json(self) -> dict:
+        return {"source": self.source, "friction": self.friction,
+                "terms": [{"solref": list(t.solref), "solimp": [float(v) for v in t.solimp],
+                           "stiffness_n_per_m": t.stiffness_n_per_m, "damping_ns_per_m": t.damping_ns_per_m}
+                          for t in self.terms]}
 
 
 @dataclass
@@ -140,19 +177,41 @@ def _calibration_entry(table: dict, cfg: BenchConfig, joint: str) -> dict | None
     return entry if same and cfg.contact.stiffness == 0 else None
 
 
-def contact_setting(cfg: BenchConfig, joint: str, a_hat: float) -> ContactSetting:
-    """Resolve the pair parameters of a clearance joint (see module docstring)."""
+def contact_setting(cfg: BenchConfig, joint: str, a_hat: float, multi_term: bool = True) -> ContactSetting:
+    """Resolve the pair parameters of a clearance joint (see module docstring).
+
+    ``multi_term`` is False for representations that take one pair per contact (ring of
+    boxes, tendon limit): a multi-term calibration entry then falls back to the first guess.
+    ``mujoco.contact_stiffness_scale``/``contact_damping_scale`` multiply the result.
+    """
+    s = _resolve_contact(cfg, joint, a_hat, multi_term)
+    ks, cs = cfg.mujoco.contact_stiffness_scale, cfg.mujoco.contact_damping_scale
+    if ks == 1.0 and cs == 1.0:
+        return s
+    terms = []
+    for t in s.terms:
+        if t.solref[0] >= 0:
+            raise ConfigError("mujoco.contact_stiffness_scale",
+                              "needs a direct (negative) contact_solref; scale only physical stiffness/damping")
+        terms.append(ContactTerm((t.solref[0] * ks, t.solref[1] * cs), t.solimp,
+                                 None if t.stiffness_n_per_m is None else t.stiffness_n_per_m * ks,
+                                 None if t.damping_ns_per_m is None else t.damping_ns_per_m * cs))
+    return ContactSetting(tuple(terms), s.friction, s.source)
+
+
+def _resolve_contact(cfg: BenchConfig, joint: str, a_hat: float, multi_term: bool) -> ContactSetting:
     mu = cfg.contact.mu0
     ms = cfg.mujoco
     if ms.contact_solref and ms.contact_solimp:
-        return ContactSetting(tuple(ms.contact_solref), tuple(ms.contact_solimp), mu, "config")
+        return ContactSetting((ContactTerm(tuple(ms.contact_solref), tuple(ms.contact_solimp)),), mu, "config")
     entry = _calibration_entry(load_calibration(), cfg, joint) if ms.contact_source == "calibration" else None
-    if entry is not None:
-        k, c = entry["stiffness_n_per_m"], entry["damping_ns_per_m"]
-        solimp = tuple(entry.get("solimp", FLAT_SOLIMP))
-        return ContactSetting((-k * a_hat, -c * a_hat), solimp, mu, "calibration", k, c)
+    if entry is not None and (multi_term or len(entry["terms"]) == 1):
+        terms = tuple(ContactTerm((-t["stiffness_n_per_m"] * a_hat, -t["damping_ns_per_m"] * a_hat),
+                                  tuple(t["solimp"]), t["stiffness_n_per_m"], t["damping_ns_per_m"])
+                      for t in entry["terms"])
+        return ContactSetting(terms, mu, "calibration")
     k, c = first_guess_contact(cfg, joint, 1.0 / a_hat)
-    return ContactSetting((-k * a_hat, -c * a_hat), FLAT_SOLIMP, mu, "first-guess", k, c)
+    return ContactSetting((ContactTerm((-k * a_hat, -c * a_hat), FLAT_SOLIMP, k, c),), mu, "first-guess")
 
 
 # --------------------------------------------------------------------------- builder
@@ -355,15 +414,24 @@ def build(cfg: BenchConfig) -> tuple[mujoco.MjSpec, mujoco.MjModel, BuildInfo]:
         else:
             a_hat = float(model.body_invweight0[model.geom_bodyid[model.geom(N.pin(jt)).id], 0] +
                           model.body_invweight0[model.geom_bodyid[model.geom(N.bushing(jt)).id], 0])
-        setting = contact_setting(cfg, jt, a_hat)
+        setting = contact_setting(cfg, jt, a_hat, multi_term=ms.bushing == "bore")
         if ms.bushing == "tendon":
             t = spec.tendon(N.pair(jt))
             t.solref_limit, t.solimp_limit = list(setting.solref), list(setting.solimp)
-        else:
-            pairs = [f"{N.pair(jt)}_{k}" for k in range(len(rings[jt]))] if jt in rings else [N.pair(jt)]
-            for name in pairs:
-                p = spec.pair(name)
+        elif jt in rings:
+            for k in range(len(rings[jt])):
+                p = spec.pair(f"{N.pair(jt)}_{k}")
                 p.solref, p.solimp = list(setting.solref), list(setting.solimp)
+        else:
+            base = spec.pair(N.pair(jt))
+            for i, term in enumerate(setting.terms):
+                p = base if i == 0 else spec.add_pair(name=N.pair(jt, i), geomname1=N.pin(jt),
+                                                      geomname2=N.bushing(jt), condim=base.condim,
+                                                      friction=list(base.friction))
+                p.solref, p.solimp = list(term.solref), list(term.solimp)
+            if spec.sensor(N.sensor_contact(jt)) is not None:
+                # one slot per term; the engine sums their normal (and friction-cone) forces
+                spec.sensor(N.sensor_contact(jt)).intprm = [3, 0, len(setting.terms)]
         info.contacts[jt] = setting
         info.a_hat[jt] = a_hat
     info.sensors = [x.name for x in spec.sensors]
@@ -380,8 +448,7 @@ def export_xml(cfg: BenchConfig) -> str:
     spec, _model, info = build(cfg)
     head = (f"<!-- twin export of '{cfg.name}' (config digest {cfg.digest()}).\n"
             f"     Clearance joints: {', '.join(cfg.joints.clearance_joints) or 'none'}; contact parameters: "
-            + "; ".join(f"{jt}: solref [{s.solref[0]:.6g}, {s.solref[1]:.6g}] solimp {[float(v) for v in s.solimp]} ({s.source})"
-                        for jt, s in info.contacts.items())
+            + "; ".join(f"{jt}: {len(s.terms)} pair(s) ({s.source})" for jt, s in info.contacts.items())
             + ".\n     Bushing geoms (user=\"7301 ...\") need the twin's native bore collider and friction "
               "(twin/mujoco_engine/_bore.c):\n     a plain MuJoCo viewer shows and simulates ideal variants "
               "faithfully; simulate clearance variants with 'twin simulate'. -->\n")

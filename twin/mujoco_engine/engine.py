@@ -53,10 +53,7 @@ class MujocoEngine:
             "steps": 0,
             "wall_s": 0.0,
             "build_s": time.perf_counter() - t0,
-            "contact": {j: {"solref": list(s.solref), "solimp": list(s.solimp), "friction": s.friction,
-                            "source": s.source, "stiffness_n_per_m": s.stiffness_n_per_m,
-                            "damping_ns_per_m": s.damping_ns_per_m}
-                        for j, s in self.info.contacts.items()},
+            "contact": {j: s.to_json() for j, s in self.info.contacts.items()},
             "nq": int(self.model.nq), "nv": int(self.model.nv),
         }
         self._sensor_slices = {self.model.sensor(i).name: slice(int(self.model.sensor_adr[i]),
@@ -151,13 +148,18 @@ class MujocoEngine:
                 out[f"pen_{jt}"] = np.maximum(np.hypot(ex, ey) - cfg.joints.radial_m(jt), 0.0)
                 bushing, friction = cfg.mujoco.bushing, cfg.mujoco.friction
                 if bushing == "bore":
-                    # contact sensor slot [found, force in the contact frame (normal, t1, axis)]
-                    out[f"fn_{jt}"] = np.where(found, col(N.sensor_contact(jt), 1), 0.0)
+                    # contact sensor: one slot per term of the law, each [found, force in the
+                    # contact frame (normal, t1, axis)]; the terms act at the same point and add
+                    nterm = len(self.info.contacts[jt].terms)
+                    slot = [col(N.sensor_contact(jt), 4 * i) > 0 for i in range(nterm)]
+                    out[f"fn_{jt}"] = sum(np.where(slot[i], col(N.sensor_contact(jt), 4 * i + 1), 0.0)
+                                          for i in range(nterm))
                     if friction == "native":
                         out[f"ft_{jt}"] = col(N.sensor_friction(jt))  # native module's user sensor
                     else:
                         # force on geom2 (bushing) along t1 = axis x normal: the pin feels minus that
-                        out[f"ft_{jt}"] = np.where(found, -col(N.sensor_contact(jt), 2), 0.0)
+                        out[f"ft_{jt}"] = -sum(np.where(slot[i], col(N.sensor_contact(jt), 4 * i + 2), 0.0)
+                                               for i in range(nterm))
                 elif bushing == "ring":
                     # netforce of all pin/box contacts in the global frame: its in-plane magnitude
                     out[f"fn_{jt}"] = np.where(found, np.hypot(col(N.sensor_contact(jt), 1),
