@@ -103,7 +103,11 @@ def test_clearance_model_shows_impacts_the_ideal_model_does_not(clearance):
     # AC6 (slider, horizontal): the impact spikes; the ideal model stays smooth (Fig. 16)
     s6, i6 = same["sensors"]["AC6"], ideal["sensors"]["AC6"]
     assert s6["simulated_peak_mps2"] > 1.5 * i6["simulated_peak_mps2"]
-    assert i6["nrmse_pct"] > 1.5 * s6["nrmse_pct"]
+    # pointwise NRMSE punishes an impact spike shifted by a few samples (the replayed crank follows
+    # the quantized counts, so impact instants move by ~10-50 us with the soft calibrated contact);
+    # the paper's DTW distance tolerates that shift and separates the models by ~10x
+    assert i6["dtw_distance_pct"] > 5.0 * s6["dtw_distance_pct"]
+    assert i6["nrmse_pct"] > s6["nrmse_pct"]
     # the crank input is the same for both models
     assert ideal["tracking"]["sim_vs_recorded_max_counts"] < 1.0
 
