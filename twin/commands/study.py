@@ -11,10 +11,12 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import math
 
 #: "module:function" registering each ``twin study`` subcommand, in help order
 STUDIES: list[str] = [
     "twin.commands.study:register_formulations",
+    "twin.commands.study:register_accuracy",
 ]
 
 
@@ -68,4 +70,55 @@ def _run_formulations(args: argparse.Namespace) -> int:
     for r in data["rows"]:
         print(f"  {r['case']:38s} dE {r['final_energy_error_J'] * 1e3:10.3f} mJ  max|Phi| {r['max_phi']:9.2e}  "
               f"{'DIVERGED at %.3f s' % r['t_end_s'] if r['diverged'] else 'ok':22s} wall {r['wall_s']:.3f} s")
+    return 0
+
+
+# ------------------------------------------------------------------ accuracy
+def register_accuracy(studies: argparse._SubParsersAction) -> None:
+    p = studies.add_parser(
+        "accuracy", help="run time versus error of the twin's variants against the converged reference",
+        description="Table 4 tests 4-12: every MuJoCo variant (timestep, integrator, solver, contact calibration, "
+                    "bushing representation) and the reference at its default step, against the reference at "
+                    "h = 1e-6 s. Writes accuracy.md, accuracy.json and work-precision PNGs. See "
+                    "twin/studies/accuracy.py for the method.")
+    p.add_argument("--out", metavar="DIR", required=True, help="output directory (created if missing)")
+    p.add_argument("--quick", action="store_true",
+                   help="reduced version (tests 6 and 12, 0.3 s windows, 4 variants; about a minute)")
+    p.add_argument("--tests", metavar="IDS", help="comma-separated Table 4 tests with a clearance (default 4..12)")
+    p.add_argument("--window", type=float, metavar="S", help="analysed window [s] (default 2; quick 0.3)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=_run_accuracy)
+
+
+def _run_accuracy(args: argparse.Namespace) -> int:
+    import dataclasses
+    import sys
+    from pathlib import Path
+
+    from twin.errors import ConfigError, TwinError
+    from twin.studies import accuracy as A
+
+    settings = A.QUICK if args.quick else A.StudySettings()
+    if args.tests is not None:
+        try:
+            tests = tuple(int(x) for x in args.tests.split(",") if x.strip())
+        except ValueError:
+            raise ConfigError("--tests", f"must be comma-separated integers from {list(A.CLEARANCE_TESTS)}, "
+                                         f"got {args.tests!r}") from None
+        settings = dataclasses.replace(settings, tests=tests)
+    if args.window is not None:
+        if not (math.isfinite(args.window) and 0.05 <= args.window <= 60):
+            raise ConfigError("--window", f"must lie in [0.05, 60] s, got {args.window!r}")
+        settings = dataclasses.replace(settings, window_s=args.window)
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise TwinError(f"--out: {out} exists and is not a directory")
+    if not out.parent.exists():
+        raise TwinError(f"--out: parent directory {out.parent} does not exist")
+    data = A.run_study(out, settings, quick=args.quick, progress=not args.no_progress and sys.stderr.isatty(),
+                       log=lambda m: print(m, file=sys.stderr, flush=True))
+    print(f"wrote {out / 'accuracy.md'}, {out / 'accuracy.json'} and {len(data['figures'])} PNG plots")
+    for r in data["summary"]:
+        print(f"  {r['key']:32s} {r['wall_per_sim_s']:7.3f} s/sim s  score {r['score']:6.2f}"
+              f"{'  (default)' if r['key'] == data['default'] else ''}{'  P' if r.get('pareto') else ''}")
     return 0

@@ -1,0 +1,1 @@
+"""Numerical studies of the twin (``twin study ...``): accuracy versus run time, stability."""
