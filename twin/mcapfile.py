@@ -37,6 +37,7 @@ from twin import __version__
 from twin.config import BenchConfig, config_from_toml
 from twin.errors import RecordingError, TwinError
 from twin.run import Channel, Run
+from twin.util import json_default
 
 FORMAT = "twin-run/1"
 TOPIC_PREFIX = "/twin/"
@@ -194,9 +195,9 @@ class RunWriter:
         self._w.add_metadata("twin.run", {
             "format": FORMAT, "t0": repr(float(self.t0 or 0.0)), "rate_hz": repr(float(self.rate_hz or 0.0)),
             "n": str(self._written), "channels": ",".join(self._channels or []),
-            "meta": json.dumps(meta or {}, sort_keys=True, default=_json_default)})
+            "meta": json.dumps(meta or {}, sort_keys=True, default=json_default)})
         if summary is not None:
-            self._w.add_metadata("twin.summary", {"json": json.dumps(summary, sort_keys=True, default=_json_default)})
+            self._w.add_metadata("twin.summary", {"json": json.dumps(summary, sort_keys=True, default=json_default)})
         self._w.finish()
         self._fh.close()
         os.replace(self.tmp, self.path)
@@ -222,14 +223,6 @@ class RunWriter:
             self.abort()
 
 
-def _json_default(o: Any) -> Any:
-    if isinstance(o, (np.floating, np.integer)):
-        return o.item()
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    if isinstance(o, Path):
-        return str(o)
-    raise TypeError(f"not JSON serializable: {type(o).__name__}")
 
 
 def write_run(path: str | Path, run: Run, summary: dict[str, Any] | None = None,

@@ -46,6 +46,7 @@ from twin.instrument.encoder import count_step_rad
 from twin.recording import read_recording
 from twin.run import Channel, Run
 from twin.signals import band_energy_db, dtw_compare, hann_spectrum
+from twin.util import json_default
 
 #: Frequency bands of S003 Fig. 15 where clearance raises spectral activity [Hz]. The paper
 #: shades them without giving edges; ±200 Hz around 1 kHz and ±300 Hz around 3 kHz is our
@@ -307,7 +308,7 @@ def replay(recording: str | Path, out_dir: str | Path,
                                                                   else np.float64)) for k, c in chans.items()}
     both = Run(rec.t0, rate, chans, cfg, {**sim.meta, "replay_of": str(recording)})
     mcap_path = out / "replay.mcap"
-    write_run(mcap_path, both, extra_metadata={"twin.replay": {"json": json.dumps(report, default=_json_default)},
+    write_run(mcap_path, both, extra_metadata={"twin.replay": {"json": json.dumps(report, default=json_default)},
                                                "twin.recording": info.to_record()})
     report["files"]["mcap"] = mcap_path.name
     report["files"]["trace"] = trace.name
@@ -315,7 +316,7 @@ def replay(recording: str | Path, out_dir: str | Path,
         report["files"]["plots"] = _plots(out, rec_al, sim_al, rate, j0, comparison, crank_rate_hz, opts,
                                           track, pid, i0, sim, phi, cfg)
     report["wall_s"] = {"simulation": sim_wall, "total": time.perf_counter() - wall0}
-    atomic_write_json(out / "report.json", json.loads(json.dumps(report, default=_json_default)))
+    atomic_write_json(out / "report.json", json.loads(json.dumps(report, default=json_default)))
     atomic_write_text(out / "report.md", render_markdown(report))
     report["files"]["report"] = ["report.json", "report.md"]
     return report
@@ -329,14 +330,6 @@ def _same_model(a: BenchConfig, b: BenchConfig) -> bool:
             and a.simulation.engine == b.simulation.engine and a.simulation.timestep_s == b.simulation.timestep_s)
 
 
-def _json_default(o: Any) -> Any:
-    if isinstance(o, (np.floating, np.integer)):
-        return o.item()
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    if isinstance(o, Path):
-        return str(o)
-    raise TypeError(f"not JSON serializable: {type(o).__name__}")
 
 
 def _fmt(v: Any, spec: str = ".3g") -> str:

@@ -7,7 +7,20 @@ import os
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from twin.errors import TwinError
+
+
+def json_default(o: Any) -> Any:
+    """``json.dumps(default=...)`` for numpy scalars and arrays and paths."""
+    if isinstance(o, (np.floating, np.integer)):
+        return o.item()
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, Path):
+        return str(o)
+    raise TypeError(f"not JSON serializable: {type(o).__name__}")
 
 
 def atomic_write_bytes(path: str | Path, data: bytes) -> Path:

@@ -79,34 +79,6 @@ def _jacobian(P, q, J):
 
 
 @njit(cache=True)
-def _chol_solve(A, b, n):
-    for j in range(n):
-        sacc = A[j, j]
-        for k in range(j):
-            sacc -= A[j, k] * A[j, k]
-        if not sacc > 0.0:
-            return False
-        ljj = math.sqrt(sacc)
-        A[j, j] = ljj
-        for i in range(j + 1, n):
-            t = A[i, j]
-            for k in range(j):
-                t -= A[i, k] * A[j, k]
-            A[i, j] = t / ljj
-    for i in range(n):
-        t = b[i]
-        for k in range(i):
-            t -= A[i, k] * b[k]
-        b[i] = t / A[i, i]
-    for i in range(n - 1, -1, -1):
-        t = b[i]
-        for k in range(i + 1, n):
-            t -= A[k, i] * b[k]
-        b[i] = t / A[i, i]
-    return True
-
-
-@njit(cache=True)
 def penalty_run(P, q, qd, alpha, zeta, omega, nsteps, every, th_d, en, phi, phid):
     """Integrate Eq. 10 from (q, q̇) for ``nsteps`` steps of P[P_H] (τ = 0, ideal joints),
     recording θ̇, energy, ‖Φ‖, ‖Φ̇‖ before step 0 and every ``every`` steps.
@@ -173,7 +145,7 @@ def penalty_run(P, q, qd, alpha, zeta, omega, nsteps, every, th_d, en, phi, phid
                 for r in range(7):
                     acc2 += alpha * J[r, i] * J[r, j]
                 K[i, j] = acc2
-        if not _chol_solve(K, rhs, 8):
+        if not M._cholesky_solve(K, rhs, 8):
             diverged = True
             break
         for i in range(8):
