@@ -18,6 +18,10 @@ Conventions (bench frame of :mod:`twin.config`):
   along the in-plane tangent ẑ × n (n = e/|e|) [N].
 * ``theta_ref`` / ``omega_ref``: the drive's reference bench angle [rad] and rate [rad/s];
   ``crank_torque``: torque applied by the PID to the crank about +z [N m].
+* optional group ``energy`` (MuJoCo engine only; not computed unless asked for):
+  ``energy_kinetic`` / ``energy_potential``: kinetic and gravitational potential energy of the
+  three bodies (MuJoCo's ``e_kinetic``/``e_potential`` sensors; the soft contacts' elastic
+  energy is not included) [J]; ``slider_speed``: dx/dt of the slider on the guide [m/s].
 """
 
 from __future__ import annotations
@@ -26,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from twin.config import ACCELEROMETERS, CHANNEL_GROUPS, BenchConfig
+from twin.config import ACCELEROMETERS, ALL_CHANNEL_GROUPS, BenchConfig
 
 
 @dataclass(frozen=True)
@@ -64,13 +68,20 @@ _STATIC: dict[str, list[ChannelSpec]] = {
         ChannelSpec("omega_ref", "rad/s", "drive", "float64", "reference crank rate"),
         ChannelSpec("crank_torque", "N m", "drive", "float32", "PID torque on the crank"),
     ],
+    # optional group (not in the default channel list): energy balances
+    "energy": [
+        ChannelSpec("energy_kinetic", "J", "energy", "float64", "kinetic energy of the mechanism"),
+        ChannelSpec("energy_potential", "J", "energy", "float64",
+                    "gravitational potential energy of the mechanism (zero at the bench origin)"),
+        ChannelSpec("slider_speed", "m/s", "energy", "float64", "slider velocity along the guide"),
+    ],
 }
 
 
 def channel_specs(cfg: BenchConfig) -> list[ChannelSpec]:
-    """Channels a run of ``cfg`` produces, in canonical order (groups as in CHANNEL_GROUPS)."""
+    """Channels a run of ``cfg`` produces, in canonical order (groups as in ALL_CHANNEL_GROUPS)."""
     out: list[ChannelSpec] = []
-    for group in CHANNEL_GROUPS:
+    for group in ALL_CHANNEL_GROUPS:
         if group not in cfg.sensors.channels:
             continue
         if group == "joints":

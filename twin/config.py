@@ -44,6 +44,11 @@ ENGINES: tuple[str, ...] = ("mujoco", "reference")
 PROGRAMS: tuple[str, ...] = ("constant", "protocol", "trace")
 #: Output channel groups a run can carry (see :mod:`twin.channels`).
 CHANNEL_GROUPS: tuple[str, ...] = ("accel", "encoder", "crank", "slider", "joints", "drive")
+#: Channel groups a scene may ask for but that are not in the default list (they cost time):
+#: "energy" (mechanical energy and slider speed, for energy balances; MuJoCo engine only).
+OPTIONAL_CHANNEL_GROUPS: tuple[str, ...] = ("energy",)
+#: Every channel group, in canonical order (the defaults, then the optional ones).
+ALL_CHANNEL_GROUPS: tuple[str, ...] = CHANNEL_GROUPS + OPTIONAL_CHANNEL_GROUPS
 #: Accelerometers of the bench (S003 Table 3).
 ACCELEROMETERS: tuple[str, ...] = ("AC1", "AC2", "AC3", "AC4", "AC5", "AC6")
 
@@ -512,7 +517,8 @@ class Sensors:
     Attributes:
         accelerometers: mounting of AC1–AC6 (keys must be AC1..AC6).
         channels: channel groups to compute (subset of accel, encoder, crank, slider,
-            joints, drive); a scene computes only the sensors these need.
+            joints, drive, and the optional energy); a scene computes only the sensors these
+            need. The default is every group except the optional ones.
         output_rate_hz: sample rate of the run's channels [Hz] (the bench logs at 100 kHz).
     """
 
@@ -524,7 +530,7 @@ class Sensors:
         _check(sorted(self.accelerometers) == list(ACCELEROMETERS), "accelerometers",
                f"must define exactly {', '.join(ACCELEROMETERS)}, got {', '.join(sorted(self.accelerometers))}")
         for g in self.channels:
-            _choice(g, "channels", CHANNEL_GROUPS)
+            _choice(g, "channels", ALL_CHANNEL_GROUPS)
         _check(len(set(self.channels)) == len(self.channels), "channels", "must not repeat a group")
         _positive(self.output_rate_hz, "output_rate_hz", "Hz")
         # hashability of the frozen config: store the mapping as a read-only proxy

@@ -63,6 +63,10 @@ SENSOR_CRANK_ANGLE = "crank_angle"
 SENSOR_CRANK_SPEED = "crank_speed"
 SENSOR_SLIDER_POSITION = "slider_position"
 SENSOR_CRANK_TORQUE = "crank_torque"
+# sensors added by the builder for the optional "energy" channel group
+SENSOR_ENERGY_KINETIC = "energy_kinetic"
+SENSOR_ENERGY_POTENTIAL = "energy_potential"
+SENSOR_SLIDER_SPEED = "slider_speed"
 
 
 def sensor_ecc(joint: str) -> str:

@@ -17,6 +17,7 @@ import math
 STUDIES: list[str] = [
     "twin.commands.study:register_formulations",
     "twin.commands.study:register_accuracy",
+    "twin.studies.stability:register",
 ]
 
 

@@ -18,7 +18,9 @@ What the builder does to the base model:
   inflated the normal force by a median 23 % (up to 27×) over the k δ + c δ̇ law, and making
   the friction rows softer turned Coulomb friction into viscous friction
   (``analysis/friction_cone.py`` measures both);
-* sensors: only those the configuration's channel groups need;
+* sensors: only those the configuration's channel groups need (the optional "energy" group
+  adds ``e_kinetic``/``e_potential`` sensors and the slider's velocity, and switches on
+  MuJoCo's energy computation, ``mjENBL_ENERGY``);
 * the crank PID gains.
 
 Contact parameters of a clearance joint, in order of precedence:
@@ -322,6 +324,13 @@ def build_spec(cfg: BenchConfig) -> mujoco.MjSpec:
     for s in list(spec.sensors):
         if s.name not in keep:
             spec.delete(s)
+    if "energy" in cfg.sensors.channels:
+        # optional energy group: MuJoCo computes energies only with the energy flag on
+        opt.enableflags |= mujoco.mjtEnableBit.mjENBL_ENERGY
+        spec.add_sensor(name=N.SENSOR_ENERGY_KINETIC, type=mujoco.mjtSensor.mjSENS_E_KINETIC)
+        spec.add_sensor(name=N.SENSOR_ENERGY_POTENTIAL, type=mujoco.mjtSensor.mjSENS_E_POTENTIAL)
+        spec.add_sensor(name=N.SENSOR_SLIDER_SPEED, type=mujoco.mjtSensor.mjSENS_JOINTVEL,
+                        objtype=mujoco.mjtObj.mjOBJ_JOINT, objname=N.SLIDER_SLIDE)
 
     # crank PID (native <pid>: gainprm = ki, biasprm = [0, -kp, -kv], dynprm = imax)
     act = spec.actuator(N.CRANK_PID)

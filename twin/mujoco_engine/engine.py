@@ -55,6 +55,7 @@ class MujocoEngine:
             "build_s": time.perf_counter() - t0,
             "contact": {j: s.to_json() for j, s in self.info.contacts.items()},
             "nq": int(self.model.nq), "nv": int(self.model.nv),
+            "warnings": {},
         }
         self._sensor_slices = {self.model.sensor(i).name: slice(int(self.model.sensor_adr[i]),
                                                                  int(self.model.sensor_adr[i] + self.model.sensor_dim[i]))
@@ -111,8 +112,14 @@ class MujocoEngine:
             wall += time.perf_counter() - t_start
             done += n_out
             self.meta.update(steps=done * self.stride, wall_s=wall,
-                             real_time_factor=(done * self.stride * h) / wall if wall > 0 else None)
+                             real_time_factor=(done * self.stride * h) / wall if wall > 0 else None,
+                             warnings=self.warnings())
             yield chunk
+
+    def warnings(self) -> dict[str, int]:
+        """MuJoCo warnings raised so far in this run (``mjData.warning``): {name: count}, nonzero only."""
+        return {mujoco.mjtWarning(i).name: int(self.data.warning[i].number)
+                for i in range(len(self.data.warning)) if self.data.warning[i].number}
 
     def _divergence_message(self, t_reached: float, t_start: float, t_expected: float) -> str:
         warn = [f"{mujoco.mjtWarning(i).name}({int(self.data.warning[i].number)})"
@@ -166,6 +173,10 @@ class MujocoEngine:
                                                                col(N.sensor_contact(jt), 2)), 0.0)
                 else:  # tendon limit force (the sensor is the tendon's limit force)
                     out[f"fn_{jt}"] = np.abs(col(N.sensor_contact(jt), 0))
+        if "energy" in groups:
+            out["energy_kinetic"] = col(N.SENSOR_ENERGY_KINETIC)
+            out["energy_potential"] = col(N.SENSOR_ENERGY_POTENTIAL)
+            out["slider_speed"] = col(N.SENSOR_SLIDER_SPEED)
         if "drive" in groups:
             out["theta_ref"] = theta_ref
             out["omega_ref"] = omega_ref

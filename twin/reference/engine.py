@@ -85,6 +85,9 @@ class ReferenceEngine:
 
     def __init__(self, cfg: BenchConfig, options: ReferenceOptions | None = None):
         self.cfg = cfg
+        if "energy" in cfg.sensors.channels:
+            raise ConfigError("sensors.channels", "the optional group 'energy' is produced by the MuJoCo engine "
+                                                  "only; remove it for --engine reference")
         self.options = options or ReferenceOptions()
         self.ref = DriveReference(cfg)
         self.stride, self.rate = output_stride(cfg)

@@ -1,0 +1,555 @@
+"""Numerical-stability stress test of the MuJoCo twin (``twin study stability``).
+
+Method
+------
+``N`` randomized scenes are drawn; scene ``i`` of seed ``S`` depends on ``(S, i)`` only
+(``numpy.random.default_rng([S, i])``), so a campaign can be extended or one scene re-run alone.
+Each scene draws (:func:`sample_scene`):
+
+* clearances: which joints have one ("B", "C" or "both", equally likely) and, for each, a
+  catalogue diametral value (S003 §2.2.1, uniformly); the other joint is ideal;
+* orientation: the vertical bench axis, x, y or z (equally likely);
+* drive program (equally likely): ``constant`` (a motor speed uniform in [100, 800] rpm with a
+  random cosine ``ramp_s``), ``startstop`` (the ``trace`` program on a generated crank-angle
+  trace: rest, accelerate, hold, brake to rest, stop, restart to a second speed, hold) and
+  ``protocol`` (the paper's three-speed program, shortened through ``protocol_hold_s`` and
+  ``protocol_stop_s`` to the scene's duration, three random speeds); a random initial crank
+  angle;
+* timestep: 1e-5 s (half the scenes), 5e-6 s or 2e-5 s (a quarter each); the output rate stays
+  100 kHz (2e-5 s outputs every step, i.e. 50 kHz: :func:`twin.simulate.output_stride`);
+* contact parameters within the calibrated uncertainty: ``mujoco.contact_stiffness_scale``
+  uniform in [0.8, 1.2], ``mujoco.contact_damping_scale`` uniform in [0.7, 1.3];
+* duration uniform in [0.3, 1.0] s (``--quick``) or [0.5, 3.0] s (full campaign).
+
+Metrics per scene (:func:`scene_metrics`):
+
+* ``diverged``: the engine raised (NaN/Inf in the state or sensors, time not reached), or a
+  channel holds NaN/Inf, or MuJoCo raised a warning (``mjData.warning``, exposed by the engine
+  as ``run.meta["warnings"]``), or the run is shorter than asked;
+* ``pen_over_c``: max penetration / radial clearance c = diametral/2 per clearance joint;
+* tracking: max and RMS of |crank_angle − theta_ref| from ``settle_s`` (the end of the first
+  speed ramp) to the end [rad];
+* energy balance. With W_in(t) = ∫ τ ω dt (the PID's work on the crank, trapezoidal rule on
+  the output samples), D_guide(t) = ∫ F_guide |v_slider| dt (the guide's dry friction at its
+  nominal force) and E = kinetic + gravitational potential energy (MuJoCo's energy sensors,
+  the optional channel group ``energy``), the *residual* is
+
+      R(t) = W_in(t) − D_guide(t) − (E(t) − E(0)).
+
+  R lumps together everything the balance does not model explicitly: the energy dissipated
+  by the clearance contacts' damping and by the joints' regularized Coulomb friction (both
+  ≥ 0), the elastic energy held in the soft contacts at time t (≥ 0), the guide friction's
+  shortfall at velocity reversals (its soft frictionloss acts below the nominal force at very
+  low speed; ≥ 0 up to the overestimate of D_guide), the soft loop-closure constraint of an
+  ideal joint C, and the integrator's and the quadrature's energy error (either sign).
+  Physically R ≥ 0 up to the numerical error. It is reported relative to the positive work
+  input W+ = ∫ max(τ ω, 0) dt: ``residual_rel`` = R(end)/W+ and ``residual_min_rel`` =
+  min_t R(t)/W+. ``energy_created`` flags a scene where min_t R(t) < −ENERGY_TOL · W+, i.e.
+  the model generated more than ENERGY_TOL of the work input. On an ideal scene (no contact)
+  R is the integration error alone (tests: |R|/W+ < 1e-3).
+
+A scene *passes* when it did not diverge and pen/c ≤ PEN_LIMIT at each clearance joint; the
+study's exit status is 0 when all pass. ``energy_created`` is reported, not a failure. A scene
+over PEN_LIMIT is re-run by the reference engine (R-matrix, Lankarani–Nikravesh, h = 1e-5 s;
+``metrics["reference"]``): where the twin's pen/c is within REFERENCE_AGREEMENT (1.25) times
+the reference's (``agrees``), the penetration is the contact law's own deflection (at the 0.02 mm catalogue clearance, c = 10 µm, a 1.5 kN impact
+already deflects 2.5 µm), not a numerical failure of the twin; the scene still fails.
+
+Outputs (``--out DIR``): ``stability.json`` (per scene: parameters and metrics; summary),
+``stability.md`` (table and summary), ``stability.png`` (histograms of pen/c and of the
+residual), all written atomically.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+import tempfile
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from twin.config import CATALOGUE_DIAMETRAL_MM, ORIENTATIONS, BenchConfig, preset
+from twin.errors import ConfigError, TwinError
+from twin.util import atomic_write_bytes, atomic_write_json, atomic_write_text
+
+#: Largest admissible penetration / radial clearance [-].
+PEN_LIMIT = 0.25
+#: Tolerance of the energy-created flag, relative to the positive work input [-].
+ENERGY_TOL = 0.01
+#: Programs the sampler draws.
+PROGRAMS: tuple[str, ...] = ("constant", "startstop", "protocol")
+#: Timesteps [s] and their probabilities.
+TIMESTEPS: tuple[float, ...] = (1e-5, 5e-6, 2e-5)
+TIMESTEP_P: tuple[float, ...] = (0.5, 0.25, 0.25)
+#: Motor speed range [rpm].
+RPM_RANGE = (100.0, 800.0)
+#: Contact-parameter ranges (calibrated uncertainty) [-].
+STIFFNESS_SCALE = (0.8, 1.2)
+DAMPING_SCALE = (0.7, 1.3)
+#: Sample rate of generated start/stop traces [Hz].
+TRACE_RATE_HZ = 10_000.0
+#: Step of the reference engine that re-runs a scene exceeding PEN_LIMIT [s].
+REFERENCE_TIMESTEP_S = 1e-5
+#: A twin pen/c within this factor of the reference's counts as agreeing with it [-].
+REFERENCE_AGREEMENT = 1.25
+#: Channel groups a scene computes.
+CHANNELS = ("crank", "slider", "joints", "drive", "energy")
+
+
+@dataclass(frozen=True)
+class StudySettings:
+    """What a campaign runs.
+
+    Attributes:
+        scenes: number of scenes N (≥ 1).
+        seed: seed S (≥ 0); scene i draws from ``default_rng([S, i])``.
+        duration_range_s: range of the scenes' simulated durations [s].
+    """
+
+    scenes: int = 500
+    seed: int = 1
+    duration_range_s: tuple[float, float] = (0.5, 3.0)
+
+    def __post_init__(self) -> None:
+        if isinstance(self.scenes, bool) or not isinstance(self.scenes, int) or self.scenes < 1:
+            raise ConfigError("--scenes", f"must be an integer >= 1, got {self.scenes!r}")
+        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
+            raise ConfigError("--seed", f"must be an integer >= 0, got {self.seed!r}")
+
+
+def quick(scenes: int = 20, seed: int = 1) -> StudySettings:
+    """The CI version: short scenes (0.3–1.0 s)."""
+    return StudySettings(scenes=scenes, seed=seed, duration_range_s=(0.3, 1.0))
+
+
+# ----------------------------------------------------------------------- sampler
+def sample_scene(seed: int, index: int, duration_range_s: tuple[float, float] = (0.5, 3.0)) -> dict[str, Any]:
+    """Parameters of scene ``index`` of seed ``seed`` (JSON-ready; see module docstring).
+
+    Durations and program times are rounded to 0.1 ms so they fall on the output grid.
+    """
+    rng = np.random.default_rng([seed, index])
+    r4 = lambda x: round(float(x), 4)  # noqa: E731
+    which = ("B", "C", "both")[rng.integers(3)]
+    cb = float(rng.choice(CATALOGUE_DIAMETRAL_MM)) if which in ("B", "both") else 0.0
+    cc = float(rng.choice(CATALOGUE_DIAMETRAL_MM)) if which in ("C", "both") else 0.0
+    orientation = ORIENTATIONS[rng.integers(len(ORIENTATIONS))]
+    program = PROGRAMS[rng.integers(len(PROGRAMS))]
+    timestep = float(TIMESTEPS[rng.choice(len(TIMESTEPS), p=TIMESTEP_P)])
+    ks = r4(rng.uniform(*STIFFNESS_SCALE))
+    cs = r4(rng.uniform(*DAMPING_SCALE))
+    duration = r4(rng.uniform(*duration_range_s))
+    phi0 = r4(rng.uniform(0.0, 2.0 * math.pi))
+    drive: dict[str, Any] = {"program": program}
+    if program == "constant":
+        drive["motor_rpm"] = r4(rng.uniform(*RPM_RANGE))
+        drive["ramp_s"] = r4(rng.uniform(0.05, 0.4) * duration)
+        settle = drive["ramp_s"]
+    elif program == "protocol":
+        stop = r4(rng.uniform(0.04, 0.08) * duration)
+        hold = r4((duration - 4 * stop) / 3)
+        drive["protocol_rpm"] = [r4(rng.uniform(*RPM_RANGE)) for _ in range(3)]
+        drive["protocol_stop_s"] = stop
+        drive["protocol_hold_s"] = hold
+        drive["ramp_s"] = r4(rng.uniform(0.2, 0.5) * hold)
+        duration = r4(4 * stop + 3 * hold)
+        settle = r4(stop + drive["ramp_s"])
+    else:  # start/stop: fractions of the duration for rest, ramps, holds, stop
+        f = rng.uniform(0.08, 0.14, size=4)  # ramp up, brake, restart ramp; stop
+        rest = r4(0.03 * duration)
+        up, down, up2, stop = (r4(x * duration) for x in f)
+        free = duration - rest - up - down - stop - up2
+        hold1 = r4(free * rng.uniform(0.3, 0.6))
+        drive["segments"] = {"rest_s": rest, "ramp_up_s": up, "hold_s": hold1, "brake_s": down, "stop_s": stop,
+                             "ramp_up2_s": up2}
+        drive["motor_rpm"] = [r4(rng.uniform(*RPM_RANGE)) for _ in range(2)]
+        settle = r4(rest + up)
+    return {"index": index, "seed": seed, "clearance_b_mm": cb, "clearance_c_mm": cc, "orientation": orientation,
+            "drive": drive, "initial_encoder_angle_rad": phi0, "timestep_s": timestep,
+            "contact_stiffness_scale": ks, "contact_damping_scale": cs, "duration_s": duration, "settle_s": settle}
+
+
+def startstop_trace(scene: dict[str, Any], belt_ratio: float) -> tuple[np.ndarray, np.ndarray]:
+    """Encoder trace (t [s], angle [rad]) of a start/stop scene: rest, cosine ramp to the first
+    speed, hold, cosine brake to rest, stop, cosine ramp to the second speed, hold to the end
+    (the trace runs 10 ms past the scene so the reference never extrapolates)."""
+    seg = scene["drive"]["segments"]
+    w1, w2 = (r / belt_ratio * 2.0 * math.pi / 60.0 for r in scene["drive"]["motor_rpm"])
+    t = np.arange(int(round((scene["duration_s"] + 0.01) * TRACE_RATE_HZ)) + 1) / TRACE_RATE_HZ
+
+    def ramp(tau: np.ndarray, T: float) -> np.ndarray:
+        return 0.5 * (1.0 - np.cos(np.pi * np.clip(tau / T, 0.0, 1.0)))
+
+    t1 = seg["rest_s"]
+    t2 = t1 + seg["ramp_up_s"] + seg["hold_s"]
+    t3 = t2 + seg["brake_s"] + seg["stop_s"]
+    omega = (w1 * ramp(t - t1, seg["ramp_up_s"]) - w1 * ramp(t - t2, seg["brake_s"])
+             + w2 * ramp(t - t3, seg["ramp_up2_s"]))
+    angle = scene["initial_encoder_angle_rad"] + np.concatenate(
+        [[0.0], np.cumsum(0.5 * (omega[1:] + omega[:-1]) / TRACE_RATE_HZ)])
+    return t, angle
+
+
+def scene_config(scene: dict[str, Any], trace_dir: Path | None = None) -> BenchConfig:
+    """Bench configuration of a scene (MuJoCo engine). A start/stop scene writes its trace to
+    ``trace_dir`` (required for it)."""
+    base = preset(1)
+    d = scene["drive"]
+    ov: dict[str, Any] = {
+        "name": f"stability_s{scene['seed']}_{scene['index']:05d}",
+        "joints.clearance_b_mm": scene["clearance_b_mm"], "joints.clearance_c_mm": scene["clearance_c_mm"],
+        "mechanism.orientation": scene["orientation"],
+        "drive.initial_encoder_angle_rad": scene["initial_encoder_angle_rad"],
+        "simulation.engine": "mujoco", "simulation.timestep_s": scene["timestep_s"],
+        "simulation.duration_s": scene["duration_s"],
+        "mujoco.contact_stiffness_scale": scene["contact_stiffness_scale"],
+        "mujoco.contact_damping_scale": scene["contact_damping_scale"],
+        "sensors.channels": list(CHANNELS),
+    }
+    if d["program"] == "constant":
+        ov.update({"drive.program": "constant", "drive.motor_rpm": d["motor_rpm"], "drive.ramp_s": d["ramp_s"]})
+    elif d["program"] == "protocol":
+        ov.update({"drive.program": "protocol", "drive.protocol_rpm": d["protocol_rpm"],
+                   "drive.protocol_hold_s": d["protocol_hold_s"], "drive.protocol_stop_s": d["protocol_stop_s"],
+                   "drive.ramp_s": d["ramp_s"]})
+    else:
+        if trace_dir is None:
+            raise TwinError("scene_config: a start/stop scene needs a directory for its trace file")
+        t, angle = startstop_trace(scene, base.drive.belt_ratio)
+        path = Path(trace_dir) / f"trace_s{scene['seed']}_{scene['index']:05d}.npz"
+        np.savez(path, t=t, angle=angle)
+        ov.update({"drive.program": "trace", "drive.trace_file": str(path)})
+    return base.replace(**ov)
+
+
+# ----------------------------------------------------------------------- metrics
+def _cumtrapz(y: np.ndarray, dt: float) -> np.ndarray:
+    return np.concatenate([[0.0], np.cumsum(0.5 * (y[1:] + y[:-1]) * dt)])
+
+
+def energy_balance(run: Any, cfg: BenchConfig) -> dict[str, float]:
+    """Energy balance of a run with the ``drive``, ``crank`` and ``energy`` groups (module
+    docstring): work in, guide dissipation, ΔE [J], residual [J] and relative to W+ [-]."""
+    dt = run.dt
+    power = np.asarray(run["crank_torque"], dtype=np.float64) * run["crank_speed"]
+    w_in = _cumtrapz(power, dt)
+    w_pos = float(_cumtrapz(np.maximum(power, 0.0), dt)[-1])
+    d_guide = _cumtrapz(cfg.mechanism.guide_friction_n * np.abs(run["slider_speed"]), dt)
+    energy = run["energy_kinetic"] + run["energy_potential"]
+    res = w_in - d_guide - (energy - energy[0])
+    scale = max(w_pos, 1e-12)
+    return {"work_in_J": float(w_in[-1]), "work_pos_J": w_pos, "guide_dissipation_J": float(d_guide[-1]),
+            "delta_energy_J": float(energy[-1] - energy[0]), "residual_J": float(res[-1]),
+            "residual_rel": float(res[-1] / scale), "residual_min_rel": float(res.min() / scale),
+            "energy_created": bool(res.min() < -ENERGY_TOL * w_pos)}
+
+
+def scene_metrics(run: Any, cfg: BenchConfig, scene: dict[str, Any]) -> dict[str, Any]:
+    """Metrics of one finished run (see module docstring)."""
+    nonfinite = [k for k, c in run.channels.items() if not np.all(np.isfinite(c.data))]
+    warnings = dict(run.meta.get("warnings", {}))
+    expected = int(round(cfg.duration_s * run.rate_hz))
+    short = run.n < expected
+    out: dict[str, Any] = {"diverged": bool(nonfinite or warnings or short), "error": None,
+                           "nonfinite_channels": nonfinite, "warnings": warnings,
+                           "samples": run.n, "samples_expected": expected}
+    pen = {}
+    for j in cfg.joints.clearance_joints:
+        c = cfg.joints.radial_m(j)
+        p = run[f"pen_{j}"]
+        pen[j] = {"max_pen_m": float(np.nanmax(p)), "c_m": c, "pen_over_c": float(np.nanmax(p) / c)}
+    out["joints"] = pen
+    out["max_pen_over_c"] = max((v["pen_over_c"] for v in pen.values()), default=0.0)
+    i0 = min(int(math.ceil(scene["settle_s"] * run.rate_hz)), run.n - 1)
+    err = np.abs(run["crank_angle"][i0:] - run["theta_ref"][i0:])
+    out["tracking_max_rad"] = float(np.max(err))
+    out["tracking_rms_rad"] = float(np.sqrt(np.mean(err ** 2)))
+    out.update(energy_balance(run, cfg) if not nonfinite else {})
+    out["wall_s"] = float(run.meta.get("wall_s", 0.0))
+    out["passed"] = bool(not out["diverged"] and out["max_pen_over_c"] <= PEN_LIMIT)
+    return out
+
+
+def run_scene(scene: dict[str, Any], trace_dir: Path) -> dict[str, Any]:
+    """Simulate one scene and return its metrics (a raised engine error counts as a divergence)."""
+    from twin.errors import SimulationError
+    from twin.simulate import simulate
+
+    cfg = scene_config(scene, trace_dir)
+    t0 = time.perf_counter()
+    try:
+        run = simulate(cfg)
+    except SimulationError as err:
+        return {"diverged": True, "passed": False, "error": str(err), "warnings": {}, "nonfinite_channels": [],
+                "joints": {}, "max_pen_over_c": float("nan"), "wall_s": time.perf_counter() - t0}
+    met = scene_metrics(run, cfg, scene)
+    if not met["diverged"] and met["max_pen_over_c"] > PEN_LIMIT:
+        met["reference"] = reference_check(cfg)
+        _mark_agreement(met)
+    return met
+
+
+def reference_check(cfg: BenchConfig) -> dict[str, Any]:
+    """pen/c of the reference engine (Lankarani–Nikravesh, h = REFERENCE_TIMESTEP_S) on the same
+    scene: tells a physical exceedance of PEN_LIMIT (the reference agrees) from a numerical one."""
+    from twin.simulate import simulate
+
+    ref_cfg = cfg.replace(**{"simulation.engine": "reference", "simulation.timestep_s": REFERENCE_TIMESTEP_S,
+                             "sensors.channels": ["crank", "joints", "drive"]})
+    try:
+        run = simulate(ref_cfg)
+    except TwinError as err:
+        return {"error": str(err)}
+    pen = {j: float(np.max(run[f"pen_{j}"]) / cfg.joints.radial_m(j)) for j in cfg.joints.clearance_joints}
+    return {"timestep_s": REFERENCE_TIMESTEP_S, "pen_over_c": pen}
+
+
+def _mark_agreement(met: dict[str, Any]) -> None:
+    """Set ``met["reference"]["agrees"]``: the twin's pen/c over PEN_LIMIT is at most
+    REFERENCE_AGREEMENT × the reference's at each such joint."""
+    ref = met.get("reference", {})
+    if "pen_over_c" not in ref:
+        return
+    over = [j for j, v in met["joints"].items() if v["pen_over_c"] > PEN_LIMIT]
+    ref["agrees"] = bool(all(met["joints"][j]["pen_over_c"] <= REFERENCE_AGREEMENT * ref["pen_over_c"][j]
+                             for j in over))
+
+
+# ------------------------------------------------------------------------- study
+def _stats(x: list[float]) -> dict[str, float]:
+    a = np.asarray([v for v in x if v is not None and np.isfinite(v)], dtype=float)
+    if a.size == 0:
+        return {"n": 0}
+    return {"n": int(a.size), "min": float(a.min()), "median": float(np.median(a)), "mean": float(a.mean()),
+            "p95": float(np.percentile(a, 95)), "max": float(a.max())}
+
+
+def summarize(rows: list[dict[str, Any]], wall_s: float) -> dict[str, Any]:
+    """Campaign summary of the per-scene rows."""
+    m = [r["metrics"] for r in rows]
+    pen = [(x["max_pen_over_c"], r["scene"]["index"]) for r, x in zip(rows, m) if np.isfinite(x["max_pen_over_c"])]
+    worst = max(pen) if pen else (float("nan"), None)
+    res = [(x["residual_min_rel"], r["scene"]["index"]) for r, x in zip(rows, m) if "residual_min_rel" in x]
+    most_neg = min(res) if res else (float("nan"), None)
+    return {
+        "scenes": len(rows),
+        "passed": sum(x["passed"] for x in m),
+        "diverged": sum(x["diverged"] for x in m),
+        "diverged_scenes": [r["scene"]["index"] for r, x in zip(rows, m) if x["diverged"]],
+        "failed_scenes": [r["scene"]["index"] for r, x in zip(rows, m) if not x["passed"]],
+        "pen_exceeded_scenes": [r["scene"]["index"] for r, x in zip(rows, m)
+                                if not x["diverged"] and x["max_pen_over_c"] > PEN_LIMIT],
+        "pen_exceeded_reference_agrees": [r["scene"]["index"] for r, x in zip(rows, m)
+                                          if x.get("reference", {}).get("agrees")],
+        "max_pen_over_c": worst[0], "max_pen_over_c_scene": worst[1],
+        "pen_over_c": _stats([p for p, _ in pen]),
+        "energy_created": sum(bool(x.get("energy_created")) for x in m),
+        "energy_created_scenes": [r["scene"]["index"] for r, x in zip(rows, m) if x.get("energy_created")],
+        "residual_rel": _stats([x.get("residual_rel") for x in m]),
+        "residual_min_rel": _stats([x.get("residual_min_rel") for x in m]),
+        "most_negative_residual_rel": most_neg[0], "most_negative_residual_scene": most_neg[1],
+        "tracking_max_rad": _stats([x.get("tracking_max_rad") for x in m]),
+        "tracking_rms_rad": _stats([x.get("tracking_rms_rad") for x in m]),
+        "wall_s": wall_s,
+        "engine_wall_s": float(sum(x.get("wall_s", 0.0) for x in m)),
+    }
+
+
+def run_study(out: Path | None, settings: StudySettings, progress: bool = False,
+              log: Callable[[str], None] | None = None) -> dict[str, Any]:
+    """Run the campaign; write the outputs to ``out`` (if given); return the JSON data."""
+    scenes = [sample_scene(settings.seed, i, settings.duration_range_s) for i in range(settings.scenes)]
+    rows = []
+    t0 = time.perf_counter()
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=len(scenes), desc="stability", unit="scene", mininterval=1.0)
+    try:
+        with tempfile.TemporaryDirectory(prefix="twin_stability_") as tmp:
+            for sc in scenes:
+                met = run_scene(sc, Path(tmp))
+                rows.append({"scene": sc, "metrics": met})
+                if bar is not None:
+                    bar.update(1)
+                if log is not None and not met["passed"]:
+                    log(f"scene {sc['index']}: FAILED ({met.get('error') or 'see stability.json'})")
+    finally:
+        if bar is not None:
+            bar.close()
+    data = {"study": "stability", "settings": {**asdict(settings), "pen_limit": PEN_LIMIT, "energy_tol": ENERGY_TOL},
+            "summary": summarize(rows, time.perf_counter() - t0), "scenes": rows, "figures": []}
+    if out is not None:
+        out = Path(out)
+        out.mkdir(exist_ok=True)
+        data["figures"] = [_figure(out, rows)]
+        atomic_write_json(out / "stability.json", _jsonable(data))
+        atomic_write_text(out / "stability.md", markdown(data))
+    return data
+
+
+def _jsonable(o: Any) -> Any:
+    """Replace non-finite floats by None (strict JSON)."""
+    if isinstance(o, dict):
+        return {k: _jsonable(v) for k, v in o.items()}
+    if isinstance(o, (list, tuple)):
+        return [_jsonable(v) for v in o]
+    if isinstance(o, float) and not math.isfinite(o):
+        return None
+    return o
+
+
+def one_line(data: dict[str, Any]) -> str:
+    """The one-line summary the CLI prints."""
+    s = data["summary"]
+    verdict = "PASS" if s["passed"] == s["scenes"] else "FAIL"
+    return (f"stability {verdict}: {s['passed']}/{s['scenes']} scenes passed, {s['diverged']} diverged, "
+            f"max pen/c {s['max_pen_over_c']:.3f} (scene {s['max_pen_over_c_scene']}), "
+            f"pen/c > {PEN_LIMIT:g} in {len(s['pen_exceeded_scenes'])} "
+            f"({len(s['pen_exceeded_reference_agrees'])} within {REFERENCE_AGREEMENT:g}x the reference engine's), "
+            f"energy created in {s['energy_created']}, residual/W+ median "
+            f"{s['residual_rel'].get('median', float('nan')):.2e}, wall {s['wall_s']:.1f} s")
+
+
+def _program_label(sc: dict[str, Any]) -> str:
+    d = sc["drive"]
+    if d["program"] == "constant":
+        return f"constant {d['motor_rpm']:.0f} rpm, ramp {d['ramp_s']:.3f} s"
+    if d["program"] == "protocol":
+        return f"protocol {'/'.join(f'{r:.0f}' for r in d['protocol_rpm'])} rpm"
+    return f"start/stop {'/'.join(f'{r:.0f}' for r in d['motor_rpm'])} rpm"
+
+
+def markdown(data: dict[str, Any]) -> str:
+    """stability.md: summary and per-scene table."""
+    s, st = data["summary"], data["settings"]
+
+    def f(stats: dict[str, float], key: str, fmt: str = ".2e") -> str:
+        return format(stats[key], fmt) if key in stats else "-"
+
+    lines = [
+        "# Stability study of the MuJoCo twin",
+        "",
+        f"{s['scenes']} randomized scenes, seed {st['seed']}, durations {st['duration_range_s'][0]:g}-"
+        f"{st['duration_range_s'][1]:g} s; method in `twin/studies/stability.py`. A scene passes with no "
+        f"divergence (engine error, NaN/Inf, MuJoCo warning, short run) and pen/c <= {st['pen_limit']:g}.",
+        "",
+        "## Summary",
+        "",
+        f"* scenes passed: **{s['passed']} / {s['scenes']}**; diverged: **{s['diverged']}**"
+        + (f" (scenes {', '.join(map(str, s['diverged_scenes']))})" if s["diverged_scenes"] else ""),
+        f"* max pen/c: **{s['max_pen_over_c']:.4f}** (scene {s['max_pen_over_c_scene']}); median "
+        f"{f(s['pen_over_c'], 'median', '.4f')}, 95th percentile {f(s['pen_over_c'], 'p95', '.4f')}",
+        f"* pen/c > {st['pen_limit']:g}: {len(s['pen_exceeded_scenes'])} scenes"
+        + (f" ({', '.join(map(str, s['pen_exceeded_scenes']))})" if s["pen_exceeded_scenes"] else "")
+        + f"; re-run by the reference engine (h = {REFERENCE_TIMESTEP_S:g} s), the twin's pen/c is within "
+          f"{REFERENCE_AGREEMENT:g}x the reference's in {len(s['pen_exceeded_reference_agrees'])} of them: "
+          "there the penetration is the contact law's deflection at a small clearance, not a numerical "
+          "failure (the scene still fails the criterion)",
+        f"* energy residual R(end)/W+: median {f(s['residual_rel'], 'median')}, min {f(s['residual_rel'], 'min')}, "
+        f"max {f(s['residual_rel'], 'max')}; most negative min_t R(t)/W+: {s['most_negative_residual_rel']:.2e} "
+        f"(scene {s['most_negative_residual_scene']}); energy created (< -{st['energy_tol']:g} W+) in "
+        f"**{s['energy_created']}** scenes"
+        + (f" ({', '.join(map(str, s['energy_created_scenes']))})" if s["energy_created_scenes"] else ""),
+        f"* tracking error after the first ramp: max |θ−θ_ref| median {f(s['tracking_max_rad'], 'median')} rad, "
+        f"worst {f(s['tracking_max_rad'], 'max')} rad; RMS median {f(s['tracking_rms_rad'], 'median')} rad",
+        f"* wall time {s['wall_s']:.1f} s (engine stepping {s['engine_wall_s']:.1f} s)",
+        "",
+        "R = W_in − D_guide − ΔE lumps contact damping, joint friction, soft-contact elastic energy and "
+        "integration error (R ≥ 0 is physical dissipation).",
+        "",
+        "## Scenes",
+        "",
+        "| # | B [mm] | C [mm] | up | program | h [s] | k× | c× | T [s] | pen/c B | pen/c C | track max [rad] "
+        "| R/W+ | min R/W+ | status |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for r in data["scenes"]:
+        sc, m = r["scene"], r["metrics"]
+        pj = {j: m["joints"].get(j, {}).get("pen_over_c") for j in ("B", "C")}
+        status = "ok" if m["passed"] else ("DIVERGED" if m["diverged"] else "pen/c")
+        if "pen_over_c" in m.get("reference", {}):
+            status += " (ref " + ", ".join(f"{j} {v:.3f}" for j, v in m["reference"]["pen_over_c"].items()) + ")"
+        if m.get("energy_created"):
+            status += " E+"
+        lines.append(
+            f"| {sc['index']} | {sc['clearance_b_mm']:g} | {sc['clearance_c_mm']:g} | {sc['orientation']} | "
+            f"{_program_label(sc)} | {sc['timestep_s']:g} | {sc['contact_stiffness_scale']:.2f} | "
+            f"{sc['contact_damping_scale']:.2f} | {sc['duration_s']:.3f} | "
+            + " | ".join("-" if pj[j] is None else f"{pj[j]:.4f}" for j in ("B", "C"))
+            + f" | {m.get('tracking_max_rad', float('nan')):.2e} | {m.get('residual_rel', float('nan')):.2e} | "
+              f"{m.get('residual_min_rel', float('nan')):.2e} | {status} |")
+    return "\n".join(lines) + "\n"
+
+
+def _figure(out: Path, rows: list[dict[str, Any]]) -> str:
+    """stability.png: histograms of pen/c per joint and of the relative energy residual."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4))
+    for j, color in (("B", "tab:blue"), ("C", "tab:orange")):
+        v = [r["metrics"]["joints"][j]["pen_over_c"] for r in rows if j in r["metrics"].get("joints", {})]
+        if v:
+            a1.hist(v, bins=30, alpha=0.6, color=color, label=f"joint {j} ({len(v)})")
+    a1.axvline(PEN_LIMIT, color="r", ls="--", label=f"limit {PEN_LIMIT:g}")
+    a1.set_xlabel("max penetration / radial clearance [-]")
+    a1.set_ylabel("scenes")
+    a1.legend()
+    res = [r["metrics"]["residual_rel"] for r in rows if "residual_rel" in r["metrics"]]
+    resmin = [r["metrics"]["residual_min_rel"] for r in rows if "residual_min_rel" in r["metrics"]]
+    if res:
+        a2.hist(res, bins=30, alpha=0.6, label="R(end)/W+")
+        a2.hist(resmin, bins=30, alpha=0.6, label="min_t R(t)/W+")
+    a2.axvline(-ENERGY_TOL, color="r", ls="--", label=f"energy created < -{ENERGY_TOL:g}")
+    a2.set_xlabel("energy residual / positive work input [-]")
+    a2.legend()
+    fig.suptitle(f"twin study stability: {len(rows)} scenes")
+    fig.tight_layout()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110)
+    plt.close(fig)
+    atomic_write_bytes(out / "stability.png", buf.getvalue())
+    return "stability.png"
+
+
+# --------------------------------------------------------------------------- CLI
+def register(studies: Any) -> None:
+    """Add ``twin study stability`` to the ``twin study`` group."""
+    p = studies.add_parser(
+        "stability", help="numerical-stability stress test of the MuJoCo twin over random scenes",
+        description="N randomized scenes (clearances, orientation, drive program, timestep, contact parameters "
+                    "within their calibrated uncertainty); per scene divergence, max penetration/clearance, "
+                    "tracking error and an energy-balance residual. Writes stability.json, stability.md and "
+                    "stability.png; exit status 0 when every scene passes (no divergence, pen/c <= 0.25). "
+                    "See twin/studies/stability.py for the method.")
+    p.add_argument("--scenes", type=int, required=True, metavar="N", help="number of scenes (>= 1)")
+    p.add_argument("--seed", type=int, required=True, metavar="S", help="seed (>= 0); scene i depends on (S, i)")
+    p.add_argument("--out", metavar="DIR", default="stability", help="output directory (default ./stability)")
+    p.add_argument("--quick", action="store_true", help="short scenes (0.3-1.0 s instead of 0.5-3.0 s): the CI version")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=_run)
+
+
+def _run(args: Any) -> int:
+    import sys
+
+    settings = (quick if args.quick else lambda scenes, seed: StudySettings(scenes=scenes, seed=seed))(
+        args.scenes, args.seed)
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise TwinError(f"--out: {out} exists and is not a directory")
+    if not out.parent.exists():
+        raise TwinError(f"--out: parent directory {out.parent} does not exist")
+    data = run_study(out, settings, progress=not args.no_progress,
+                     log=lambda m: print(m, file=sys.stderr, flush=True))
+    print(one_line(data))
+    s = data["summary"]
+    return 0 if s["passed"] == s["scenes"] else 1
