@@ -378,7 +378,7 @@ def run_study(out: Path | None, settings: StudySettings, progress: bool = False,
                 if bar is not None:
                     bar.update(1)
                 if log is not None and not met["passed"]:
-                    log(f"scene {sc['index']}: FAILED ({met.get('error') or 'see stability.json'})")
+                    log(f"scene {sc['index']}: FAILED ({_failure(met)})")
     finally:
         if bar is not None:
             bar.close()
@@ -402,6 +402,18 @@ def _jsonable(o: Any) -> Any:
     if isinstance(o, float) and not math.isfinite(o):
         return None
     return o
+
+
+def _failure(met: dict[str, Any]) -> str:
+    """Why a scene failed, in a few words."""
+    if met.get("error"):
+        return met["error"]
+    if met["diverged"]:
+        return (f"diverged: warnings {met['warnings'] or 'none'}, non-finite {met['nonfinite_channels'] or 'none'}, "
+                f"{met['samples']}/{met['samples_expected']} samples")
+    ref = met.get("reference", {}).get("pen_over_c", {})
+    return "pen/c " + ", ".join(f"{j} {v['pen_over_c']:.3f}" + (f" (reference {ref[j]:.3f})" if j in ref else "")
+                                for j, v in met["joints"].items())
 
 
 def one_line(data: dict[str, Any]) -> str:
