@@ -48,6 +48,11 @@ def test_every_python_name_resolves_in_the_compiled_models():
     for j in (N.ECC_B_X, N.ECC_B_Y):
         _resolve(both, "joint", j)
     assert both.geom_user[both.geom(N.bushing("B")).id, 0] == N.BORE_MAGIC
+    # sensors the builder adds for the optional "energy" channel group
+    energy = build(preset(12).replace(**{"sensors.channels": ["energy"]}))[1]
+    for s in (N.SENSOR_ENERGY_KINETIC, N.SENSOR_ENERGY_POTENTIAL, N.SENSOR_SLIDER_SPEED):
+        _resolve(energy, "sensor", s)
+    assert energy.opt.enableflags & mujoco.mjtEnableBit.mjENBL_ENERGY
 
 
 # pairs: one per clearance joint and term of its calibrated contact law (two terms)

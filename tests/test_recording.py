@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import math
 
 import numpy as np
 import pytest
@@ -11,8 +10,8 @@ import pytest
 from twin.cli import main
 from twin.config import ACCELEROMETERS, BenchConfig
 from twin.errors import RecordingError
-from twin.instrument import STANDARD_G, apply_chain, measured_accel
-from twin.mcapfile import read_metadata, read_run, write_run
+from twin.instrument import measured_accel
+from twin.mcapfile import read_metadata, write_run
 from twin.recording import (RECORDING_RECORD, import_table, read_recording, synthetic_recording,
                             write_recording)
 from twin.run import Run

@@ -11,7 +11,7 @@ import pytest
 
 from twin.cli import main
 from twin.config import BenchConfig
-from twin.instrument import STANDARD_G, measured_accel
+from twin.instrument import measured_accel
 from twin.mcapfile import write_run
 from twin.recording import read_recording
 from twin.replay import ReplayOptions, replay

@@ -9,7 +9,7 @@ import pytest
 
 from twin.channels import channel_specs
 from twin.cli import main
-from twin.config import CHANNEL_GROUPS, BenchConfig, preset
+from twin.config import CHANNEL_GROUPS, preset
 from twin.errors import ConfigError
 from twin.simulate import simulate
 from twin.studies import stability as S

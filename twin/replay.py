@@ -202,12 +202,10 @@ def replay(recording: str | Path, out_dir: str | Path,
     """
     from twin.mcapfile import write_run
     from twin.simulate import output_stride, simulate
-    from twin.util import atomic_write_json, atomic_write_text
+    from twin.util import atomic_write_json, atomic_write_text, check_out_dir
 
     wall0 = time.perf_counter()
-    out = Path(out_dir)
-    if out.exists() and not out.is_dir():
-        raise TwinError(f"--out: {out} exists and is not a directory")
+    out = check_out_dir(out_dir, need_parent=False)
     rec, info, repairs = read_recording(recording, nan=opts.nan)
     if info.calibration is None:
         raise RecordingError(f"{recording}: no calibration data; re-import it with --calibration STATIC "

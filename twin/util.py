@@ -45,3 +45,15 @@ def atomic_write_text(path: str | Path, text: str) -> Path:
 def atomic_write_json(path: str | Path, obj: Any) -> Path:
     """Pretty JSON, written atomically."""
     return atomic_write_text(path, json.dumps(obj, indent=2, sort_keys=False) + "\n")
+
+
+def check_out_dir(path: str | Path, flag: str = "--out", need_parent: bool = True) -> Path:
+    """An output directory given on the command line: it may exist (as a directory) or be
+    created (in an existing parent unless ``need_parent`` is False, for callers that create
+    parents). Raises TwinError naming ``flag`` otherwise."""
+    out = Path(path)
+    if out.exists() and not out.is_dir():
+        raise TwinError(f"{flag}: {out} exists and is not a directory")
+    if need_parent and not out.parent.exists():
+        raise TwinError(f"{flag}: parent directory {out.parent} does not exist")
+    return out

@@ -49,18 +49,14 @@ def register_formulations(studies: argparse._SubParsersAction) -> None:
 
 def _run_formulations(args: argparse.Namespace) -> int:
     import sys
-    from pathlib import Path
 
     from twin.config import load_config
-    from twin.errors import ConfigError, TwinError
+    from twin.errors import ConfigError
+    from twin.util import check_out_dir
 
     if not (0 < args.duration <= 60):
         raise ConfigError("--duration", f"must lie in (0, 60] s, got {args.duration!r}")
-    out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise TwinError(f"--out: {out} exists and is not a directory")
-    if not out.parent.exists():
-        raise TwinError(f"--out: parent directory {out.parent} does not exist")
+    out = check_out_dir(args.out)
     cfg = load_config(args.config) if args.config else None
 
     from twin.reference.formulations import run_study
@@ -94,10 +90,10 @@ def register_accuracy(studies: argparse._SubParsersAction) -> None:
 def _run_accuracy(args: argparse.Namespace) -> int:
     import dataclasses
     import sys
-    from pathlib import Path
 
-    from twin.errors import ConfigError, TwinError
+    from twin.errors import ConfigError
     from twin.studies import accuracy as A
+    from twin.util import check_out_dir
 
     settings = A.QUICK if args.quick else A.StudySettings()
     if args.tests is not None:
@@ -111,11 +107,7 @@ def _run_accuracy(args: argparse.Namespace) -> int:
         if not (math.isfinite(args.window) and 0.05 <= args.window <= 60):
             raise ConfigError("--window", f"must lie in [0.05, 60] s, got {args.window!r}")
         settings = dataclasses.replace(settings, window_s=args.window)
-    out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise TwinError(f"--out: {out} exists and is not a directory")
-    if not out.parent.exists():
-        raise TwinError(f"--out: parent directory {out.parent} does not exist")
+    out = check_out_dir(args.out)
     data = A.run_study(out, settings, quick=args.quick, progress=not args.no_progress and sys.stderr.isatty(),
                        log=lambda m: print(m, file=sys.stderr, flush=True))
     print(f"wrote {out / 'accuracy.md'}, {out / 'accuracy.json'} and {len(data['figures'])} PNG plots")

@@ -16,7 +16,6 @@ Entry point: :func:`run_study` (``twin study formulations --out DIR``).
 
 from __future__ import annotations
 
-import json
 import math
 import time
 from dataclasses import dataclass, field

@@ -53,7 +53,7 @@ class _Series:
 
 
 def _eye(cfg: BenchConfig) -> rrb.EyeControls3D:
-    r, l = cfg.bodies.crank.length_m, cfg.bodies.rod.length_m
+    l = cfg.bodies.rod.length_m
     cx = (l + 0.02) / 2.0  # the mechanism spans x = -r .. l + r (+ the guide)
     up = cfg.mechanism.orientation
     if up == "y":
