@@ -223,8 +223,6 @@ class RunWriter:
             self.abort()
 
 
-
-
 def write_run(path: str | Path, run: Run, summary: dict[str, Any] | None = None,
               block: int = DEFAULT_BLOCK, extra_metadata: dict[str, dict[str, str]] | None = None) -> Path:
     """Write a whole run to ``path`` (temporary file + rename); ``extra_metadata`` as in

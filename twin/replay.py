@@ -328,8 +328,6 @@ def _same_model(a: BenchConfig, b: BenchConfig) -> bool:
             and a.simulation.engine == b.simulation.engine and a.simulation.timestep_s == b.simulation.timestep_s)
 
 
-
-
 def _fmt(v: Any, spec: str = ".3g") -> str:
     if isinstance(v, float) and not math.isfinite(v):
         return "–"
