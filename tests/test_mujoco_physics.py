@@ -133,3 +133,40 @@ def test_first_guess_contact_reproduces_reference_restitution():
         assert s.source == "first-guess"
         r = impact_linear(s.stiffness_n_per_m, s.damping_ns_per_m, 1 / eng.info.a_hat[j], 0.1)
         assert r.restitution == pytest.approx(hysteresis_restitution("lankarani-nikravesh", 0.4), abs=0.02)
+
+
+@pytest.mark.parametrize("orientation", ["x", "y"])
+def test_static_pin_forces_balance_rod_and_slider(orientation):
+    from twin.kinematics import rod_angle, static_pin_forces
+    cfg = BenchConfig().replace(**{"mechanism.orientation": orientation, "mechanism.d_off_m": 0.02})
+    b = cfg.bodies
+    g = np.asarray(cfg.mechanism.gravity_vector[:2])
+    r, l, xg = b.crank.length_m, b.rod.length_m, b.rod.x_g_m
+    for theta in np.linspace(0, 2 * math.pi, 7):
+        f_b, f_c = static_pin_forces(cfg, theta)     # forces of the rod eyes on the pins
+        phi = float(rod_angle(theta, r, l, cfg.mechanism.d_off_m))
+        u = np.array([math.cos(phi), math.sin(phi)])
+        cross = lambda a, f: a[0] * f[1] - a[1] * f[0]  # noqa: E731
+        # rod: its weight and the pins' reactions (−F_B, −F_C) balance in force and moment about B
+        assert np.allclose(b.rod.mass_kg * g - f_b - f_c, 0, atol=1e-9)
+        assert cross(xg * u, b.rod.mass_kg * g) + cross(l * u, -f_c) == pytest.approx(0, abs=1e-9)
+        # slider: the guide reacts across it only, so the rod carries the weight along the guide
+        assert (b.slider.mass_kg * g + f_c)[0] == pytest.approx(0, abs=1e-9)
+
+
+@pytest.mark.parametrize("engine", ["mujoco", "reference"])
+@pytest.mark.parametrize("orientation", ["x", "y"])
+def test_loaded_start_is_at_rest(engine, orientation):
+    """The "loaded" start puts each pin where its static load holds it: a crank held still
+    leaves both journals where they started (a wrong side would drop the pin across 2c)."""
+    cfg = BenchConfig().replace(**{
+        "joints.clearance_b_mm": 0.5, "joints.clearance_c_mm": 0.5, "drive.motor_rpm": 0.0,
+        "mechanism.orientation": orientation, "drive.initial_encoder_angle_rad": 2.2,
+        "simulation.engine": engine, "sensors.channels": ["crank", "joints"],
+        "simulation.duration_s": 0.03})
+    run = simulate(cfg)
+    for j in ("B", "C"):
+        c = cfg.joints.radial_m(j)
+        e = np.stack([run[f"ecc_{j}_x"], run[f"ecc_{j}_y"]], axis=1)
+        assert np.linalg.norm(e[0]) > 0.99 * c, j   # starts touching
+        assert np.max(np.linalg.norm(e - e[0], axis=1)) < 0.05 * c, (j, np.max(np.linalg.norm(e - e[0], axis=1)) / c)

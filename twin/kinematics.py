@@ -61,26 +61,55 @@ class Pose:
     slider_x: float
 
 
-def loaded_eccentricity(cfg: BenchConfig, joint: str) -> np.ndarray:
-    """Initial eccentricity of a clearance joint, bench frame [m].
+def static_pin_forces(cfg: BenchConfig, theta: float) -> tuple[np.ndarray, np.ndarray]:
+    """Static forces of the rod eyes on the pins B (crank) and C' (slider) at crank angle θ,
+    bench frame, in-plane [N]: the mechanism at rest under gravity, ideal geometry.
 
-    ``joints.initial_eccentricity = "loaded"``: the rod's weight pulls both rod eyes down
-    onto their pins, so the pin touches the bushing on the side opposite to gravity:
-    e = c · (−ĝ in the plane of motion). Zero if gravity is normal to the plane (z vertical),
-    for ``"centred"`` and for ideal joints.
+    The guide carries the slider's weight across the guide (y) only; along the guide (x) the
+    rod carries it (the guide's friction is left out: the reference's regularized friction is
+    zero at rest). The rod (mass m_r, centre of mass x_g along B→C) is a two-pin member: its
+    moment balance about B gives the force across it at C. Force of the rod eye on the slider
+    pin: F_C = (−m_s g_x, tan φ F_C,x + (x_g/l) m_r (g_y − tan φ g_x)); on the crank pin:
+    F_B = m_r g − F_C.
+    """
+    b, mech = cfg.bodies, cfg.mechanism
+    g = np.asarray(mech.gravity_vector[:2], dtype=float)
+    r, l = b.crank.length_m, b.rod.length_m
+    phi = float(rod_angle(theta, r, l, mech.d_off_m))
+    tan_phi = np.tan(phi)
+    m_r, m_s = b.rod.mass_kg, b.slider.mass_kg
+    fcx = -m_s * g[0]
+    fcy = tan_phi * fcx + b.rod.x_g_m / l * m_r * (g[1] - tan_phi * g[0])
+    f_c = np.array([fcx, fcy])
+    return m_r * g - f_c, f_c
+
+
+def loaded_eccentricity(cfg: BenchConfig, joint: str, theta: float = 0.0) -> np.ndarray:
+    """Initial eccentricity of a clearance joint at crank angle θ, bench frame [m].
+
+    ``joints.initial_eccentricity = "loaded"``: the pin touches the bushing on the side its
+    static load (:func:`static_pin_forces`) pushes it to. The contact force on the pin is
+    −f_n e/|e|, so e = −c F/|F| with F the static force on the pin. With y vertical the rod's
+    weight pulls both rod eyes down onto their pins (e = +c ŷ at B and C); with x vertical (the
+    guide vertical) the rod carries the slider's weight, so the slider pin rests on the lower
+    side of the C eye (e ≈ −c x̂) while the crank pin carries rod and slider (e ≈ +c x̂ at B).
+    Zero if gravity is normal to the plane (z vertical), for ``"centred"`` and for ideal joints.
     """
     c = cfg.joints.radial_m(joint)
-    g = np.asarray(cfg.mechanism.gravity_vector[:2], dtype=float)
-    gn = np.linalg.norm(g)
-    if c == 0 or cfg.joints.initial_eccentricity == "centred" or gn == 0:
+    if c == 0 or cfg.joints.initial_eccentricity == "centred":
         return np.zeros(2)
-    return -c * g / gn
+    f_b, f_c = static_pin_forces(cfg, theta)
+    f = f_b if joint == "B" else f_c
+    fn = float(np.linalg.norm(f))
+    if fn < 1e-12:
+        return np.zeros(2)
+    return -c * f / fn
 
 
 def initial_pose(cfg: BenchConfig, theta: float) -> Pose:
     """Pose at crank angle θ with the configured initial eccentricities, at rest."""
     r, l = cfg.bodies.crank.length_m, cfg.bodies.rod.length_m
-    e_b, e_c = loaded_eccentricity(cfg, "B"), loaded_eccentricity(cfg, "C")
+    e_b, e_c = loaded_eccentricity(cfg, "B", theta), loaded_eccentricity(cfg, "C", theta)
     b_pin = r * np.array([np.cos(theta), np.sin(theta)])
     b_bush = b_pin - e_b
     s = (cfg.mechanism.d_off_m - e_c[1] - b_bush[1]) / l
