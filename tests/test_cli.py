@@ -99,3 +99,27 @@ def test_export_mjcf(capsys, tmp_path):
     assert rc == 0 and (tmp_path / "m.xml").read_text().count("<pair") == 2  # C: two-term contact law
     rc, _, err = _run(capsys, "export-mjcf", "--test", "9", "--out", str(tmp_path / "m.txt"))
     assert rc == 2 and "must end in .xml" in err
+
+
+@pytest.mark.parametrize("sig, rc", [("SIGTERM", 143), ("SIGINT", 130)])
+def test_killed_run_leaves_no_file(tmp_path, sig, rc):
+    """A run stopped by SIGTERM (a job scheduler, `kill`) or Ctrl-C removes its temporary file
+    and leaves nothing under the final name; the exit status says which signal stopped it."""
+    import signal
+    import subprocess
+    import sys
+    import time
+    out = tmp_path / "run.mcap"
+    proc = subprocess.Popen([sys.executable, "-m", "twin.cli", "simulate", "--test", "12",
+                             "--duration", "60", "--no-progress", "--out", str(out)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    while not list(tmp_path.glob(".run.mcap.*.tmp")):   # wait until the writer is under way
+        assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()
+        time.sleep(0.05)
+    time.sleep(0.3)
+    proc.send_signal(getattr(signal, sig))
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == rc, err
+    assert list(tmp_path.iterdir()) == []
+    assert err.strip().splitlines()[-1] in ("twin: terminated", "twin: interrupted")
