@@ -110,9 +110,12 @@ def test_killed_run_leaves_no_file(tmp_path, sig, rc):
     import sys
     import time
     out = tmp_path / "run.mcap"
+    # a shell's background job (`cmd &`, nohup) inherits SIGINT ignored, and Python then keeps
+    # ignoring it (as it should); give the child the default disposition Ctrl-C would meet
     proc = subprocess.Popen([sys.executable, "-m", "twin.cli", "simulate", "--test", "12",
                              "--duration", "60", "--no-progress", "--out", str(out)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     deadline = time.monotonic() + 60
     while not list(tmp_path.glob(".run.mcap.*.tmp")):   # wait until the writer is under way
         assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()
