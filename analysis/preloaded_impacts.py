@@ -1,0 +1,104 @@
+"""Why the twin counts more impacts than the reference in tests 6 and 12: impacts under a preload.
+
+The contact calibration (``twin/calibrate.py``) fits the twin's two-term MuJoCo contact to
+*free* single impacts of the reference's Lankarani–Nikravesh (LN) law: a mass m_eff hits the
+bushing at speed v with nothing else acting on it. In the mechanism the pin is also pushed
+towards the bushing wall by the load it carries (tens of N at C in test 6: the flight between
+the first rebound and the next approach shows ~25 m/s² on ~1.3 kg). This script repeats the
+calibration's single impacts with a constant preload P pressing the mass into the wall:
+
+* reference: m δ̈ = P − max(0, K δ^n (1 + χ δ̇/v)), LN damping χ from e, solved by scipy at
+  tight tolerance (the same law and ratio clamp as ``twin.impact.impact_hysteresis``);
+* twin: the calibration's own probe model (``twin.calibrate.probe_model``: real bore collider,
+  the table's law, the twin's timestep and integrator) with P applied as gravity along the
+  impact direction, stepped by MuJoCo.
+
+It prints the restitution −δ̇(separation)/v of both ("captured" when the mass never leaves
+the wall within 5 ms). Free impacts (P = 0) agree within the calibration's ±0.02; with a
+preload the reference's damping χ K δ^n δ̇ / v, which grows without bound as v falls,
+captures slow impacts the twin still bounces off. That extra bounce is the micro-rebound that
+turns the reference's impact + rebound into three impacts in the twin (README, issue 4).
+
+Run: ``python analysis/preloaded_impacts.py [--joint C] [--clearance-mm 0.1] [--mass KG]``
+(about 20 s).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+import mujoco
+from scipy.integrate import solve_ivp
+
+from twin.calibrate import ContactLaw, probe_model
+from twin.config import BenchConfig, ln_stiffness
+from twin.impact import DAMPING_FACTOR
+from twin.mujoco_engine.builder import CALIBRATION_FILE
+
+PRELOADS_N = (0.0, 10.0, 30.0, 100.0)
+SPEEDS_MPS = (0.002, 0.005, 0.008, 0.014, 0.03, 0.1)
+T_MAX_S = 5e-3
+
+
+def reference_restitution(K: float, n: float, e: float, m: float, v: float, preload: float) -> float:
+    """Restitution of an LN impact at speed v under a constant preload (0 = captured)."""
+    chi = DAMPING_FACTOR["lankarani-nikravesh"](e)
+
+    def rhs(_t, y):
+        d, dv = y
+        f = K * d ** n * (1.0 + chi * max(dv / v, -1.0)) if d > 0 else 0.0
+        return [dv, (preload - max(f, 0.0)) / m]
+
+    def back(_t, y):
+        return y[0] + 1e-15
+
+    back.terminal, back.direction = True, -1
+    sol = solve_ivp(rhs, (0.0, T_MAX_S), [0.0, v], events=back, rtol=1e-10, atol=[1e-16, 1e-12], max_step=2e-7)
+    return float(-sol.y_events[0][0][1] / v) if sol.t_events[0].size else 0.0
+
+
+def twin_restitution(cfg: BenchConfig, joint: str, law: ContactLaw, m: float, v: float, preload: float) -> float:
+    """Restitution of the twin's calibrated contact (MuJoCo probe) under a preload (0 = captured)."""
+    model = probe_model(cfg, joint, m, law)
+    model.opt.gravity[:] = [preload / m, 0.0, 0.0]  # the probe's slide axis points into the wall
+    d = mujoco.MjData(model)
+    c, h = cfg.joints.radial_m(joint), model.opt.timestep
+    d.qpos[0], d.qvel[0] = c - v * h * 0.5, v
+    touched = False
+    for _ in range(int(T_MAX_S / h)):
+        mujoco.mj_step(model, d)
+        touched |= d.qpos[0] > c
+        if touched and d.qpos[0] <= c:
+            return float(-d.qvel[0] / v)
+    return 0.0
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--joint", default="C", choices=("B", "C"))
+    ap.add_argument("--clearance-mm", type=float, default=0.1)
+    ap.add_argument("--mass", type=float, default=1.31, help="effective mass [kg] (C's median: 1.31)")
+    a = ap.parse_args()
+    over = {f"joints.clearance_{a.joint.lower()}_mm": a.clearance_mm}
+    cfg = BenchConfig().replace(**over)
+    table = json.loads(CALIBRATION_FILE.read_text())
+    key = f"{a.joint}:{a.clearance_mm:g}"
+    law = ContactLaw.from_json(table["entries"][key])
+    K = ln_stiffness(cfg.joints, cfg.materials, a.joint)
+    n, e = cfg.contact.exponent, cfg.contact.restitution
+    print(f"joint {a.joint}, clearance {a.clearance_mm} mm, m_eff {a.mass} kg, LN e = {e}, n = {n}; "
+          f"restitution reference / twin (0 = captured)")
+    print("| preload [N] | " + " | ".join(f"{v * 1e3:g} mm/s" for v in SPEEDS_MPS) + " |")
+    print("|---:|" + "---:|" * len(SPEEDS_MPS))
+    for p in PRELOADS_N:
+        cells = []
+        for v in SPEEDS_MPS:
+            r = reference_restitution(K, n, e, a.mass, v, p)
+            t = twin_restitution(cfg, a.joint, law, a.mass, v, p)
+            cells.append(f"{r:.2f} / {t:.2f}")
+        print(f"| {p:g} | " + " | ".join(cells) + " |")
+
+
+if __name__ == "__main__":
+    main()
