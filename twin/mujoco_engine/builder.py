@@ -51,7 +51,7 @@ CALIBRATION_FILE = Path(__file__).resolve().parent.parent / "data" / "contact_ca
 #: (−k Â, −c Â), Â the row's inverse-inertia estimate (ENGINEERING_NOTES, re-measured in tests)
 FLAT_SOLIMP = (1e-4, 1e-4, 1e-3, 0.5, 2.0)
 #: impact speed at which the first guess matches the reference law [m/s]. PLACEHOLDER until
-#: the calibration (impact speeds on the bench span ~1 mm/s to 0.5 m/s).
+#: the calibration (impact speeds on the bench: 0.4-201 mm/s, ``analysis/impact_speeds.py``).
 FIRST_GUESS_SPEED = 0.1
 #: frictionless MuJoCo contact; friction is the native passive force (see module docstring)
 _CONDIM = 1
