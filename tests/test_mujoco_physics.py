@@ -89,8 +89,10 @@ def test_bore_collider_is_an_exact_circle():
 
 
 def test_contact_force_is_the_linear_law_and_friction_is_regularized_coulomb():
-    # the first guess is one linear term with a flat impedance: f = k δ + c δ̇ exactly
-    cfg = short(preset(12), 0.2, **{"drive.ramp_s": 0.02, "mujoco.contact_source": "first-guess"})
+    # the first guess is one linear term with a flat impedance: f = k δ + c δ̇ exactly (with the
+    # fixed damping; the impact-speed term is tested on its own below)
+    cfg = short(preset(12), 0.2, **{"drive.ramp_s": 0.02, "mujoco.contact_source": "first-guess",
+                                    "mujoco.contact_damping": "fixed"})
     eng = MujocoEngine(cfg)
     m, d = eng.model, eng.data
     eng.set_initial_state()
@@ -127,7 +129,7 @@ def test_contact_force_is_the_linear_law_and_friction_is_regularized_coulomb():
 def test_first_guess_contact_reproduces_reference_restitution():
     from twin.impact import hysteresis_restitution, impact_linear
 
-    cfg = preset(12).replace(**{"mujoco.contact_source": "first-guess"})
+    cfg = preset(12).replace(**{"mujoco.contact_source": "first-guess", "mujoco.contact_damping": "fixed"})
     eng = MujocoEngine(cfg)
     for j, s in eng.info.contacts.items():
         assert s.source == "first-guess"
@@ -170,3 +172,76 @@ def test_loaded_start_is_at_rest(engine, orientation):
         e = np.stack([run[f"ecc_{j}_x"], run[f"ecc_{j}_y"]], axis=1)
         assert np.linalg.norm(e[0]) > 0.99 * c, j   # starts touching
         assert np.max(np.linalg.norm(e - e[0], axis=1)) < 0.05 * c, (j, np.max(np.linalg.norm(e - e[0], axis=1)) / c)
+
+
+def test_impact_speed_damping_adds_the_lankarani_nikravesh_term():
+    """``mujoco.contact_damping = "impact-speed"``: the native module adds χK δⁿ δ̇ / v_imp to
+    the contact force (v_imp stored when the event starts, floored, the ratio δ̇/v_imp clamped
+    at −1 while separating) and forgets v_imp when the pin leaves the wall."""
+    from twin.calibrate import ContactLaw, probe_model
+    from twin.mujoco_engine.builder import CALIBRATION_FILE
+    import json
+    cfg = BenchConfig().replace(**{"joints.clearance_c_mm": 0.1})
+    c = cfg.joints.radial_m("C")
+    law = ContactLaw.from_json(json.loads(CALIBRATION_FILE.read_text())["entries"]["C:0.1"])
+    coef, n, floor = 2.0e10, 1.5, 1e-3
+    on = probe_model(cfg, "C", 1.3, law, (coef, n, floor))
+    off = probe_model(cfg, "C", 1.3, law)
+
+    def force(model, delta, ddelta, v_imp=0.0):
+        d = mujoco.MjData(model)
+        d.qpos[0], d.qvel[0] = c + delta, ddelta   # the probe's slide axis points into the wall
+        if model.nuserdata:
+            d.userdata[0] = v_imp
+        mujoco.mj_forward(model, d)
+        return float(np.sum(d.efc_force[:d.nefc])), d
+
+    delta = 2e-6
+    for ddelta, v_imp, ratio in [(0.01, 0.02, 0.5), (-0.005, 0.02, -0.25), (-0.05, 0.02, -1.0)]:
+        f_on, d = force(on, delta, ddelta, v_imp)
+        f_off, _ = force(off, delta, ddelta)
+        assert d.userdata[0] == v_imp                       # an event under way keeps its speed
+        assert f_on - f_off == pytest.approx(coef * delta ** n * ratio, rel=0.03), (ddelta, ratio)
+    # a new event stores its approach speed, or the floor
+    assert force(on, delta, 0.004)[1].userdata[0] == pytest.approx(0.004)
+    assert force(on, delta, 0.0002)[1].userdata[0] == pytest.approx(floor)
+    # out of contact: no event
+    assert force(on, -1e-6, 0.01, 0.02)[1].userdata[0] == 0.0
+    # the stored speed is not part of mjSTATE_FULLPHYSICS: it lives in the MjData the engine
+    # keeps across its rollout chunks, and rollout must leave it there
+    from mujoco import rollout
+    _, d = force(on, delta, 0.001, 0.02)
+    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    state = np.empty(mujoco.mj_stateSize(on, spec))
+    mujoco.mj_getState(on, d, state, spec)
+    rollout.rollout(on, d, state[None], nstep=3)
+    assert d.userdata[0] == 0.02
+
+
+@pytest.mark.parametrize("bushing, friction, native", [("bore", "native", True), ("bore", "cone", True),
+                                                      ("ring", "cone", False), ("tendon", "native", False)])
+def test_impact_speed_damping_is_set_where_the_bore_applies_it(bushing, friction, native):
+    """The default "impact-speed" damping: the bore bushing carries the native term (χK, n,
+    floor, a userdata slot) and its pairs keep 1 % of their damping; ring and tendon bushings,
+    which the native module does not see, keep their whole fixed damping."""
+    from twin.impact import DAMPING_FACTOR
+    from twin.config import ln_stiffness
+    from twin.mujoco_engine.builder import IMPACT_SPEED_RESIDUAL_DAMPING
+    cfg = preset(6).replace(**{"mujoco.bushing": bushing, "mujoco.friction": friction})
+    fixed = cfg.replace(**{"mujoco.contact_damping": "fixed"})
+    _, m, info = build(cfg)
+    _, _, info_fixed = build(fixed)
+    user = m.geom_user[m.geom(N.bushing("C")).id]
+    K = ln_stiffness(cfg.joints, cfg.materials, "C")
+    if native:
+        chi = DAMPING_FACTOR["lankarani-nikravesh"](cfg.contact.restitution)
+        assert user[4] == pytest.approx(chi * K) and user[5] == 1.5 and user[6] == 1e-3
+        assert 0 <= user[7] < m.nuserdata
+        for t, tf in zip(info.contacts["C"].terms, info_fixed.contacts["C"].terms):
+            assert t.damping_ns_per_m == pytest.approx(tf.damping_ns_per_m * IMPACT_SPEED_RESIDUAL_DAMPING)
+        # the stress studies' damping factor perturbs the native term too
+        m2 = build(cfg.replace(**{"mujoco.contact_damping_scale": 1.3}))[1]
+        assert m2.geom_user[m2.geom(N.bushing("C")).id][4] == pytest.approx(1.3 * chi * K)
+    else:
+        assert user[4] == 0 and m.nuserdata == 0
+        assert info.contacts["C"].terms == info_fixed.contacts["C"].terms

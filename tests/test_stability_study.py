@@ -32,14 +32,11 @@ def test_ci_campaign_is_stable(ci):
         assert not m["warnings"] and not m["nonfinite_channels"] and m["samples"] == m["samples_expected"]
         assert m["tracking_max_rad"] < 2e-3  # PID holds the crank within ~5 encoder counts
         assert not m["energy_created"], (r["scene"]["index"], m["residual_min_rel"])
-        if m["max_pen_over_c"] > S.PEN_LIMIT:
-            # Seed 1 scene 6 (B = 0.02 mm, c = 10 um, 580 rpm, h = 2e-5 s): pen/c = 0.264. Not numerical:
-            # the same at h = 5e-6 s (0.268) and the reference engine's Lankarani-Nikravesh contact gives
-            # 0.245 at B; a ~1.7 kN impact deflects the contact 2.6 um. The study reports it as a failure.
-            assert m["reference"]["agrees"], (r["scene"]["index"], m["joints"], m["reference"])
-            assert m["max_pen_over_c"] < 0.3
-    assert s["failed_scenes"] == s["pen_exceeded_scenes"] == s["pen_exceeded_reference_agrees"] == [6]
-    assert s["max_pen_over_c_scene"] == 6 and 0.25 < s["max_pen_over_c"] < 0.3
+    # Seed 1 scene 6 (B = 0.02 mm, c = 10 um, 580 rpm, h = 2e-5 s) is the deepest: pen/c = 0.221 with the
+    # default impact-speed damping (the reference engine's Lankarani-Nikravesh contact: 0.245 at B);
+    # with the fixed damping it read 0.264 and failed the 0.25 criterion
+    assert s["failed_scenes"] == s["pen_exceeded_scenes"] == []
+    assert s["max_pen_over_c_scene"] == 6 and 0.2 < s["max_pen_over_c"] < S.PEN_LIMIT
 
 
 def test_ci_outputs(ci):
@@ -47,10 +44,10 @@ def test_ci_outputs(ci):
     saved = json.loads((out / "stability.json").read_text())
     assert len(saved["scenes"]) == 20 and saved["summary"]["diverged"] == 0
     md = (out / "stability.md").read_text()
-    assert "scenes passed: **19 / 20**" in md and md.count("\n| ") == 21
+    assert "scenes passed: **20 / 20**" in md and md.count("\n| ") == 21
     assert (out / "stability.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert not list(out.glob(".*tmp"))
-    assert S.one_line(data).startswith("stability FAIL: 19/20 scenes passed, 0 diverged")
+    assert S.one_line(data).startswith("stability PASS: 20/20 scenes passed, 0 diverged")
 
 
 def test_sampler_covers_the_space(ci):

@@ -330,7 +330,18 @@ class MujocoSettings:
             or "first-guess" (ignore the table); ``contact_solref``/``solimp`` override both.
         contact_stiffness_scale: factor on the resolved law's stiffness (every term) [-];
             1 = as calibrated. For sensitivity and stress studies.
-        contact_damping_scale: factor on the resolved law's damping (every term) [-].
+        contact_damping_scale: factor on the resolved law's damping (every term, and the native
+            impact-speed term) [-].
+        contact_damping: "impact-speed" (the default): the reference's Lankarani–Nikravesh
+            hysteresis damping χ K δⁿ δ̇ / v_imp (S003 Eq. 17–18, v_imp stored at the start of
+            each contact event) added inside the soft constraint by the native module
+            (``_bore.c``), the pairs keeping ``IMPACT_SPEED_RESIDUAL_DAMPING`` of their
+            calibrated damping; chosen by ``twin study accuracy`` (README, issue 4). "fixed":
+            the pairs' calibrated solref damping alone (the calibration's single-impact law).
+            Applies to the bore bushing; ring and tendon bushings keep the fixed damping.
+        impact_damping_gain: factor on χ K of that damping [-] (1 = the reference's law).
+        impact_speed_floor_mps: floor of the stored impact speed [m/s] (the reference engine's
+            ``min_impact_speed_mps``, 1 mm/s).
     """
 
     integrator: str = "Euler"
@@ -348,6 +359,9 @@ class MujocoSettings:
     contact_source: str = "calibration"
     contact_stiffness_scale: float = 1.0
     contact_damping_scale: float = 1.0
+    contact_damping: str = "impact-speed"
+    impact_damping_gain: float = 1.0
+    impact_speed_floor_mps: float = 1e-3
 
     def __post_init__(self) -> None:
         for name in ("contact_stiffness_scale", "contact_damping_scale"):
@@ -359,6 +373,11 @@ class MujocoSettings:
                f"must be an integer in [8, 512], got {self.ring_boxes!r}")
         _choice(self.friction, "friction", ("native", "cone"))
         _choice(self.contact_source, "contact_source", ("calibration", "first-guess"))
+        _choice(self.contact_damping, "contact_damping", ("fixed", "impact-speed"))
+        _check(isinstance(self.impact_damping_gain, (int, float)) and 0.1 <= self.impact_damping_gain <= 10,
+               "impact_damping_gain", f"must lie in [0.1, 10], got {self.impact_damping_gain!r}")
+        _check(isinstance(self.impact_speed_floor_mps, (int, float)) and 1e-6 <= self.impact_speed_floor_mps <= 1,
+               "impact_speed_floor_mps", f"must lie in [1e-6, 1] m/s, got {self.impact_speed_floor_mps!r}")
         _check(self.bushing == "bore" or self.friction == "cone" or self.bushing == "tendon", "friction",
                "a ring bushing takes MuJoCo's friction cone: set friction = \"cone\" (native friction needs the bore)")
         _choice(self.solver, "solver", ("Newton", "CG", "PGS"))

@@ -31,9 +31,24 @@
  * bore (rotations included). f_N is the contact's soft-constraint force predicted from its
  * own row, f_N = aref / (A_hat + R) with aref = -B vel - K I pos (MuJoCo's reference
  * acceleration, impedance I): exactly k d + c d' for a flat, tiny impedance. The bore geom's
- * user data carry the law: user = [BORE_MAGIC, mu0, v0, v1]. A user sensor (mjcb_sensor,
+ * user data carry the law: user = [BORE_MAGIC, mu0, v0, v1, ...]. A user sensor (mjcb_sensor,
  * objtype geom = the bore) reports the friction force on the pin along t = axis x n, where
  * n points from the bore centre towards the pin.
+ *
+ * Impact-speed damping (optional: user[4] > 0, nuser_geom >= 8). The reference's
+ * Lankarani-Nikravesh law damps with chi K d^n d'/v_imp, v_imp the approach speed stored at
+ * the start of the contact event (S003 Eq. 17), which a fixed solref cannot express. Here,
+ * in mjcb_passive (after MuJoCo has built the constraint rows, before it computes their
+ * reference accelerations), the damping B of the bore's first contact row is raised by
+ *
+ *   B_x = coef d^n / v_imp * (A_hat + R),   coef = user[4], n = user[5],
+ *
+ * which adds coef d^n d'/v_imp to that row's force and lets the solver treat it implicitly
+ * (no explicit-damping step limit). v_imp = max(approach speed, user[6]) is taken when the
+ * bore has a contact and had none at the previous call, and kept in d->userdata[user[7]]
+ * (0 = no event; mj_resetData clears it). As in the reference, the ratio d'/v_imp is kept
+ * above -1 while separating. Assumes one mjcb_passive call per constraint build (mj_step,
+ * mj_forward; not mj_forwardSkip from the velocity stage).
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -154,8 +169,52 @@ static int bore_friction(const mjModel* m, const mjData* d, int icon, friction_t
   return 1;
 }
 
+/* normal relative velocity of contact icon (> 0: separating), as the row's efc_vel */
+static mjtNum normal_velocity(const mjModel* m, const mjData* d, int icon) {
+  const mjContact* con = d->contact + icon;
+  mjtNum va[3], vb[3];
+  point_velocity(m, d, m->geom_bodyid[con->geom[0]], con->pos, va);
+  point_velocity(m, d, m->geom_bodyid[con->geom[1]], con->pos, vb);
+  const mjtNum* n12 = con->frame;
+  return n12[0] * (vb[0] - va[0]) + n12[1] * (vb[1] - va[1]) + n12[2] * (vb[2] - va[2]);
+}
+
+static void impact_speed_damping(const mjModel* m, mjData* d) {
+  const int nu = m->nuser_geom;
+  if (nu < 8) return;
+  for (int gb = 0; gb < m->ngeom; gb++) {
+    const mjtNum* user = m->geom_user + gb * nu;
+    if (user[0] != BORE_MAGIC || !(user[4] > 0)) continue;
+    const int slot = (int)user[7];
+    if (slot < 0 || slot >= m->nuserdata) continue;
+    int icon = -1;
+    for (int i = 0; i < d->ncon; i++) {
+      const mjContact* con = d->contact + i;
+      if ((con->geom[0] == gb || con->geom[1] == gb) && !con->exclude && con->efc_address >= 0) {
+        icon = i;
+        break;
+      }
+    }
+    if (icon < 0) {
+      d->userdata[slot] = 0;
+      continue;
+    }
+    const int row = d->contact[icon].efc_address;
+    const mjtNum vel = normal_velocity(m, d, icon);
+    if (!(d->userdata[slot] > 0)) d->userdata[slot] = fmax(-vel, user[6]);
+    const mjtNum vimp = d->userdata[slot];
+    const mjtNum pen = -(d->efc_pos[row] - d->efc_margin[row]);
+    if (!(pen > 0)) continue;
+    mjtNum b = user[4] * pow(pen, user[5]) / vimp * (d->efc_diagA[row] + d->efc_R[row]);
+    const mjtNum ratio = -vel / vimp;           /* d'/v_imp */
+    if (ratio < -1) b /= -ratio;                /* clamp: force as at d'/v_imp = -1 */
+    d->efc_KBIP[4 * row + 1] += b;
+  }
+}
+
 static void passive_friction(const mjModel* m, mjData* d) {
   if (g_prev_passive) g_prev_passive(m, d);
+  impact_speed_damping(m, d);
   if (!g_applyFT || m->nuser_geom < 4) return;
   for (int i = 0; i < d->ncon; i++) {
     friction_t f;

@@ -43,6 +43,7 @@ import numpy as np
 from twin import names as N
 from twin.config import BenchConfig, ln_stiffness
 from twin.errors import ConfigError, ModelError
+from twin.impact import DAMPING_FACTOR
 from twin.mujoco_engine.collider import ensure_installed
 
 CALIBRATION_FILE = Path(__file__).resolve().parent.parent / "data" / "contact_calibration.json"
@@ -53,6 +54,11 @@ FLAT_SOLIMP = (1e-4, 1e-4, 1e-3, 0.5, 2.0)
 #: impact speed at which the first guess matches the reference law [m/s]. PLACEHOLDER until
 #: the calibration (impact speeds on the bench: 0.4-201 mm/s, ``analysis/impact_speeds.py``).
 FIRST_GUESS_SPEED = 0.1
+#: with ``mujoco.contact_damping = "impact-speed"`` the pairs keep this fraction of their
+#: calibrated damping (the native Lankarani–Nikravesh term replaces the rest); 1 % keeps the
+#: soft constraint's own damping from vanishing (value of the prototype measured in the
+#: README, issue 4)
+IMPACT_SPEED_RESIDUAL_DAMPING = 0.01
 #: frictionless MuJoCo contact; friction is the native passive force (see module docstring)
 _CONDIM = 1
 
@@ -188,6 +194,8 @@ def contact_setting(cfg: BenchConfig, joint: str, a_hat: float, multi_term: bool
     """
     s = _resolve_contact(cfg, joint, a_hat, multi_term)
     ks, cs = cfg.mujoco.contact_stiffness_scale, cfg.mujoco.contact_damping_scale
+    if impact_speed_damping(cfg):
+        cs *= IMPACT_SPEED_RESIDUAL_DAMPING
     if ks == 1.0 and cs == 1.0:
         return s
     terms = []
@@ -278,7 +286,9 @@ def build_spec(cfg: BenchConfig) -> mujoco.MjSpec:
         obj.pos = [0, mech.d_off_m, 0]
 
     # pins, bushings (user data: bore marker and friction law) and their visual rings
-    friction_law = [N.BORE_MAGIC, cfg.contact.mu0, cfg.contact.v0_mps, cfg.contact.v1_mps]
+    # [marker, mu0, v0, v1, impact-speed damping: coef, n, floor, userdata slot] (_bore.c);
+    # the damping is off (coef 0) unless build() switches it on
+    friction_law = [N.BORE_MAGIC, cfg.contact.mu0, cfg.contact.v0_mps, cfg.contact.v1_mps, 0.0, 0.0, 0.0, -1.0]
     for jt in ("B", "C"):
         spec.geom(N.pin(jt)).size = [rj, half_len, 0]
         spec.geom(N.bushing(jt)).size = [j.bushing_radius_m(jt), half_len, 0]
@@ -413,7 +423,7 @@ def build(cfg: BenchConfig) -> tuple[mujoco.MjSpec, mujoco.MjModel, BuildInfo]:
             p.friction = [cfg.contact.mu0, cfg.contact.mu0, 0, 0, 0]
         if ms.bushing != "bore" or ms.friction == "cone":
             ud = list(spec.geom(N.bushing(jt)).userdata)
-            spec.geom(N.bushing(jt)).userdata = [ud[0], 0.0, ud[2], ud[3]]  # native friction off
+            spec.geom(N.bushing(jt)).userdata = [ud[0], 0.0] + ud[2:]  # native friction off
             if spec.sensor(N.sensor_friction(jt)) is not None:
                 spec.delete(spec.sensor(N.sensor_friction(jt)))
     model = _compile(spec, cfg)
@@ -443,8 +453,34 @@ def build(cfg: BenchConfig) -> tuple[mujoco.MjSpec, mujoco.MjModel, BuildInfo]:
                 spec.sensor(N.sensor_contact(jt)).intprm = [3, 0, len(setting.terms)]
         info.contacts[jt] = setting
         info.a_hat[jt] = a_hat
+    if impact_speed_damping(cfg):
+        _impact_speed_damping(spec, cfg)
     info.sensors = [x.name for x in spec.sensors]
     return spec, _compile(spec, cfg), info
+
+
+def impact_speed_damping(cfg: BenchConfig) -> bool:
+    """Whether the scene's bushings take the native impact-speed damping (bore bushing with
+    ``mujoco.contact_damping = "impact-speed"``, and a clearance joint to apply it to)."""
+    ms = cfg.mujoco
+    return ms.contact_damping == "impact-speed" and ms.bushing == "bore" and bool(cfg.joints.clearance_joints)
+
+
+def _impact_speed_damping(spec: mujoco.MjSpec, cfg: BenchConfig) -> None:
+    """Switch on the native impact-speed (Lankarani–Nikravesh) damping of each clearance
+    bushing: coef = gain · χ(e) · K (S003 Eq. 17–18; times ``contact_damping_scale``, which
+    perturbs all of the law's damping), exponent n, speed floor, and one ``userdata`` slot per
+    joint for the stored impact speed (``_bore.c``)."""
+    ms, ct = cfg.mujoco, cfg.contact
+    chi = DAMPING_FACTOR["lankarani-nikravesh"](ct.restitution)
+    joints = cfg.joints.clearance_joints
+    spec.nuserdata = len(joints)
+    for slot, jt in enumerate(joints):
+        K = ct.stiffness or ln_stiffness(cfg.joints, cfg.materials, jt)
+        ud = list(spec.geom(N.bushing(jt)).userdata)
+        coef = ms.impact_damping_gain * ms.contact_damping_scale * chi * K
+        spec.geom(N.bushing(jt)).userdata = ud[:4] + [coef, ct.exponent,
+                                                       ms.impact_speed_floor_mps, float(slot)]
 
 
 def build_model(cfg: BenchConfig) -> mujoco.MjModel:
