@@ -245,3 +245,17 @@ def test_impact_speed_damping_is_set_where_the_bore_applies_it(bushing, friction
     else:
         assert user[4] == 0 and m.nuserdata == 0
         assert info.contacts["C"].terms == info_fixed.contacts["C"].terms
+
+
+def test_impact_speed_damping_follows_the_configured_hysteresis_law():
+    from twin.impact import DAMPING_FACTOR
+    from twin.config import ln_stiffness
+    for law, native in (("hunt-crossley", True), ("linear", False)):
+        cfg = preset(6).replace(**{"contact.law": law})
+        m = build(cfg)[1]
+        coef = m.geom_user[m.geom(N.bushing("C")).id][4]
+        if native:
+            K = ln_stiffness(cfg.joints, cfg.materials, "C")
+            assert coef == pytest.approx(DAMPING_FACTOR[law](cfg.contact.restitution) * K)
+        else:  # a linear law has no impact-speed damping to carry over
+            assert coef == 0 and m.nuserdata == 0

@@ -338,7 +338,9 @@ class MujocoSettings:
             (``_bore.c``), the pairs keeping ``IMPACT_SPEED_RESIDUAL_DAMPING`` of their
             calibrated damping; chosen by ``twin study accuracy`` (README, issue 4). "fixed":
             the pairs' calibrated solref damping alone (the calibration's single-impact law).
-            Applies to the bore bushing; ring and tendon bushings keep the fixed damping.
+            Applies to the bore bushing with a hysteresis law (``contact.law`` LN, Hunt–Crossley or
+            Flores, whose χ it takes); ring and tendon bushings and the linear law keep the fixed
+            damping.
         impact_damping_gain: factor on χ K of that damping [-] (1 = the reference's law).
         impact_speed_floor_mps: floor of the stored impact speed [m/s] (the reference engine's
             ``min_impact_speed_mps``, 1 mm/s).

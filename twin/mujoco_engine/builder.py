@@ -461,18 +461,21 @@ def build(cfg: BenchConfig) -> tuple[mujoco.MjSpec, mujoco.MjModel, BuildInfo]:
 
 def impact_speed_damping(cfg: BenchConfig) -> bool:
     """Whether the scene's bushings take the native impact-speed damping (bore bushing with
-    ``mujoco.contact_damping = "impact-speed"``, and a clearance joint to apply it to)."""
+    ``mujoco.contact_damping = "impact-speed"``, a hysteresis contact law of the reference, i.e.
+    one whose damping is χ K δⁿ δ̇ / v_imp, and a clearance joint to apply it to)."""
     ms = cfg.mujoco
-    return ms.contact_damping == "impact-speed" and ms.bushing == "bore" and bool(cfg.joints.clearance_joints)
+    return (ms.contact_damping == "impact-speed" and ms.bushing == "bore" and cfg.contact.law in DAMPING_FACTOR
+            and bool(cfg.joints.clearance_joints))
 
 
 def _impact_speed_damping(spec: mujoco.MjSpec, cfg: BenchConfig) -> None:
     """Switch on the native impact-speed (Lankarani–Nikravesh) damping of each clearance
-    bushing: coef = gain · χ(e) · K (S003 Eq. 17–18; times ``contact_damping_scale``, which
-    perturbs all of the law's damping), exponent n, speed floor, and one ``userdata`` slot per
-    joint for the stored impact speed (``_bore.c``)."""
+    bushing: coef = gain · χ(e) · K (S003 Eq. 17–18, χ of the configured law: LN by default,
+    Hunt–Crossley or Flores; times ``contact_damping_scale``, which perturbs all of the law's
+    damping), exponent n, speed floor, and one ``userdata`` slot per joint for the stored impact
+    speed (``_bore.c``)."""
     ms, ct = cfg.mujoco, cfg.contact
-    chi = DAMPING_FACTOR["lankarani-nikravesh"](ct.restitution)
+    chi = DAMPING_FACTOR[ct.law](ct.restitution)
     joints = cfg.joints.clearance_joints
     spec.nuserdata = len(joints)
     for slot, jt in enumerate(joints):
