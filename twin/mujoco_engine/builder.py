@@ -56,8 +56,8 @@ FLAT_SOLIMP = (1e-4, 1e-4, 1e-3, 0.5, 2.0)
 FIRST_GUESS_SPEED = 0.1
 #: with ``mujoco.contact_damping = "impact-speed"`` the pairs keep this fraction of their
 #: calibrated damping (the native Lankarani–Nikravesh term replaces the rest); 1 % keeps the
-#: soft constraint's own damping from vanishing (value of the prototype measured in the
-#: README, issue 4)
+#: soft constraint's own damping from vanishing. Not tuned: the value measured by ``twin study
+#: accuracy`` (analysis/results/accuracy, variant "mujoco default")
 IMPACT_SPEED_RESIDUAL_DAMPING = 0.01
 #: frictionless MuJoCo contact; friction is the native passive force (see module docstring)
 _CONDIM = 1
