@@ -34,7 +34,7 @@ from tqdm import tqdm
 from twin.calibrate import SPEEDS
 from twin.config import CATALOGUE_DIAMETRAL_MM, BenchConfig, preset
 from twin.simulate import simulate
-from twin.summary import MIN_FREE_S
+from twin.summary import MIN_FREE_S, contact_onsets
 
 CHANNELS = ["crank", "joints"]
 #: onsets in the first SETTLE_S of a run are left out: a loaded start settles onto its static
@@ -60,16 +60,10 @@ def scenes() -> list[tuple[str, BenchConfig]]:
 def onset_speeds(run, joint: str) -> tuple[np.ndarray, np.ndarray]:
     """(approach speed at every contact onset [m/s], separation before it [s]) of ``joint``."""
     rate = run.rate_hz
-    fn = np.asarray(run[f"fn_{joint}"])
     e = np.hypot(np.asarray(run[f"ecc_{joint}_x"], float), np.asarray(run[f"ecc_{joint}_y"], float))
-    c = fn > 0
-    idx = np.flatnonzero(np.diff(c.astype(np.int8))) + 1
-    onsets = idx[c[idx]]
-    onsets = onsets[onsets >= max(1, int(round(SETTLE_S * rate)))]
-    offsets = idx[~c[idx]]
-    prev = np.searchsorted(offsets, onsets) - 1
-    free = np.full(onsets.shape, np.inf)
-    free[prev >= 0] = (onsets[prev >= 0] - offsets[prev[prev >= 0]]) / rate
+    onsets, free = contact_onsets(np.asarray(run[f"fn_{joint}"]) > 0)
+    keep = onsets >= max(1, int(round(SETTLE_S * rate)))
+    onsets, free = onsets[keep], free[keep] / rate  # no separation before: ~9e18 samples, "forever"
     return (e[onsets] - e[onsets - 1]) * rate, free
 
 

@@ -7,8 +7,8 @@ towards the bushing wall by the load it carries (tens of N at C in test 6: the f
 the first rebound and the next approach shows ~25 m/s² on ~1.3 kg). This script repeats the
 calibration's single impacts with a constant preload P pressing the mass into the wall:
 
-* reference: m δ̈ = P − max(0, K δ^n (1 + χ δ̇/v)), LN damping χ from e, solved by scipy at
-  tight tolerance (the same law and ratio clamp as ``twin.impact.impact_hysteresis``);
+* reference: m δ̈ = P − max(0, K δ^n (1 + χ δ̇/v)), LN damping χ from e, solved at tight
+  tolerance by ``twin.impact.impact_hysteresis`` (its ``preload_n``);
 * twin with fixed damping: the calibration's own probe model (``twin.calibrate.probe_model``:
   real bore collider, the table's law, the twin's timestep and integrator) with P applied as
   gravity along the impact direction, stepped by MuJoCo;
@@ -34,45 +34,28 @@ import argparse
 import json
 
 import mujoco
-from scipy.integrate import solve_ivp
 
 from twin.calibrate import ContactLaw, ContactTerm, probe_model
 from twin.config import BenchConfig, ln_stiffness
-from twin.impact import DAMPING_FACTOR
-from twin.mujoco_engine.builder import CALIBRATION_FILE, IMPACT_SPEED_RESIDUAL_DAMPING
+from twin.impact import impact_hysteresis
+from twin.mujoco_engine.builder import CALIBRATION_FILE, IMPACT_SPEED_RESIDUAL_DAMPING, impact_speed_coefficient
 
 PRELOADS_N = (0.0, 10.0, 30.0, 100.0)
 SPEEDS_MPS = (0.002, 0.005, 0.008, 0.014, 0.03, 0.1)
-T_MAX_S = 5e-3
+T_MAX_S = 5e-3  # the twin probe's horizon: no separation by then = captured
 
 
 def reference_restitution(K: float, n: float, e: float, m: float, v: float, preload: float) -> float:
     """Restitution of an LN impact at speed v under a constant preload (0 = captured)."""
-    chi = DAMPING_FACTOR["lankarani-nikravesh"](e)
-
-    def rhs(_t, y):
-        d, dv = y
-        f = K * d ** n * (1.0 + chi * max(dv / v, -1.0)) if d > 0 else 0.0
-        return [dv, (preload - max(f, 0.0)) / m]
-
-    def back(_t, y):
-        return y[0] + 1e-15
-
-    back.terminal, back.direction = True, -1
-    sol = solve_ivp(rhs, (0.0, T_MAX_S), [0.0, v], events=back, rtol=1e-10, atol=[1e-16, 1e-12], max_step=2e-7)
-    return float(-sol.y_events[0][0][1] / v) if sol.t_events[0].size else 0.0
+    return impact_hysteresis("lankarani-nikravesh", K, n, e, m, v, preload).restitution
 
 
 def impact_speed_variant(cfg: BenchConfig, joint: str, law: ContactLaw) -> tuple[ContactLaw, tuple]:
-    """The law and native damping of ``mujoco.contact_damping = "impact-speed"`` (builder's
-    rule: the terms keep IMPACT_SPEED_RESIDUAL_DAMPING of their damping, the native term is
-    gain · χ K δⁿ δ̇ / v_imp)."""
-    ms, ct = cfg.mujoco, cfg.contact
+    """The law and native damping of ``mujoco.contact_damping = "impact-speed"`` (the builder's
+    rule: the terms keep IMPACT_SPEED_RESIDUAL_DAMPING of their damping, plus the native term)."""
     law = ContactLaw(tuple(ContactTerm(t.stiffness_n_per_m, t.damping_ns_per_m * IMPACT_SPEED_RESIDUAL_DAMPING,
                                        t.solimp) for t in law.terms))
-    coef = ms.impact_damping_gain * DAMPING_FACTOR["lankarani-nikravesh"](ct.restitution) * \
-        ln_stiffness(cfg.joints, cfg.materials, joint)
-    return law, (coef, ct.exponent, ms.impact_speed_floor_mps)
+    return law, (impact_speed_coefficient(cfg, joint), cfg.contact.exponent, cfg.mujoco.impact_speed_floor_mps)
 
 
 def twin_restitution(cfg: BenchConfig, joint: str, law: ContactLaw, m: float, v: float, preload: float,
@@ -107,7 +90,7 @@ def main() -> None:
     n, e = cfg.contact.exponent, cfg.contact.restitution
     law_is, damp_is = impact_speed_variant(cfg, a.joint, law)
     print(f"joint {a.joint}, clearance {a.clearance_mm} mm, m_eff {a.mass} kg, LN e = {e}, n = {n}; restitution "
-          f"reference / twin default (fixed damping) / twin impact-speed damping (0 = captured)")
+          f"reference / twin with fixed damping / twin with impact-speed damping (the default; 0 = captured)")
     print("| preload [N] | " + " | ".join(f"{v * 1e3:g} mm/s" for v in SPEEDS_MPS) + " |")
     print("|---:|" + "---:|" * len(SPEEDS_MPS))
     for p in PRELOADS_N:

@@ -49,9 +49,9 @@ class ImpactResult:
     max_penetration_m: float
 
 
-def _integrate(force, m: float, v: float, t_scale: float) -> ImpactResult:
+def _integrate(force, m: float, v: float, t_scale: float, preload_n: float = 0.0) -> ImpactResult:
     def rhs(_t, y):
-        return [y[1], -max(force(y[0], y[1]), 0.0) / m if y[0] > 0 else 0.0]
+        return [y[1], (preload_n - max(force(y[0], y[1]), 0.0)) / m if y[0] > 0 else 0.0]
 
     def back(_t, y):
         return y[0]
@@ -59,11 +59,13 @@ def _integrate(force, m: float, v: float, t_scale: float) -> ImpactResult:
     back.terminal, back.direction = True, -1
     sol = solve_ivp(rhs, (0.0, 50 * t_scale), [0.0, v], events=back, rtol=1e-10, atol=[1e-16, 1e-12],
                     max_step=t_scale / 200, dense_output=False)
+    f = np.array([max(force(d, dv), 0.0) for d, dv in zip(sol.y[0], sol.y[1])])
     if not sol.t_events[0].size:
+        if preload_n > 0:  # captured: the preload keeps the bodies together
+            return ImpactResult(0.0, float(f.max()), math.inf, float(sol.y[0].max()))
         raise RuntimeError("impact did not end: the law keeps the bodies in contact")
     t_end = float(sol.t_events[0][0])
     v_end = float(sol.y_events[0][0][1])
-    f = np.array([max(force(d, dv), 0.0) for d, dv in zip(sol.y[0], sol.y[1])])
     return ImpactResult(-v_end / v, float(f.max()), t_end, float(sol.y[0].max()))
 
 
@@ -73,18 +75,20 @@ def hertz_duration(K: float, n: float, m: float, v: float) -> float:
     return delta_max / v
 
 
-def impact_hysteresis(law: str, K: float, n: float, e: float, m: float, v: float) -> ImpactResult:
+def impact_hysteresis(law: str, K: float, n: float, e: float, m: float, v: float,
+                      preload_n: float = 0.0) -> ImpactResult:
     """Impact with a hysteresis-damped Hertzian law (LN, Hunt–Crossley, Flores).
 
     The ratio δ̇/v⁻ is kept above −1 during separation (S003 §3), so the damping term never
-    makes the force pull.
+    makes the force pull. ``preload_n`` [N] presses the mass into the wall during contact; a
+    captured mass (no separation) gives restitution 0 and an infinite duration.
     """
     chi = DAMPING_FACTOR[law](e)
 
     def force(d, dv):
         return K * max(d, 0.0) ** n * (1.0 + chi * max(dv / v, -1.0))
 
-    return _integrate(force, m, v, hertz_duration(K, n, m, v))
+    return _integrate(force, m, v, hertz_duration(K, n, m, v), preload_n)
 
 
 def impact_linear(k: float, c: float, m: float, v: float) -> ImpactResult:

@@ -25,15 +25,13 @@ from twin.run import Run
 MIN_FREE_S = 1e-4
 
 
-def count_impacts(in_contact: np.ndarray, rate_hz: float, min_free_s: float = MIN_FREE_S) -> int:
-    """Contact onsets preceded by at least ``min_free_s`` of separation.
+def contact_onsets(in_contact: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(sample index of every contact onset, samples of separation before it).
 
-    The run start counts as separated: a run starting in contact has no impact at t = 0.
+    An onset is the first sample of a rising edge of ``in_contact``; an onset with no
+    separation before it in the record (the record starts free) gets the largest int64.
     """
     c = np.asarray(in_contact, dtype=bool)
-    if c.size == 0:
-        return 0
-    min_free = max(1, int(round(min_free_s * rate_hz)))
     idx = np.flatnonzero(np.diff(c.astype(np.int8))) + 1  # first sample after each transition
     onsets = idx[c[idx]]                                  # off -> on
     offsets = idx[~c[idx]]                                # on -> off (first free sample)
@@ -41,6 +39,18 @@ def count_impacts(in_contact: np.ndarray, rate_hz: float, min_free_s: float = MI
     free = np.full(onsets.shape, np.iinfo(np.int64).max)  # no offset before: free since the start
     has_prev = prev >= 0
     free[has_prev] = onsets[has_prev] - offsets[prev[has_prev]]
+    return onsets, free
+
+
+def count_impacts(in_contact: np.ndarray, rate_hz: float, min_free_s: float = MIN_FREE_S) -> int:
+    """Contact onsets preceded by at least ``min_free_s`` of separation.
+
+    The run start counts as separated: a run starting in contact has no impact at t = 0.
+    """
+    if np.size(in_contact) == 0:
+        return 0
+    min_free = max(1, int(round(min_free_s * rate_hz)))
+    _, free = contact_onsets(in_contact)
     return int(np.count_nonzero(free >= min_free))
 
 

@@ -119,6 +119,16 @@ static void point_velocity(const mjModel* m, const mjData* d, int b, const mjtNu
   v[2] = cv[5] + cv[0] * r[1] - cv[1] * r[0];
 }
 
+/* velocities va, vb of the contact point on geom1's and geom2's bodies; returns the normal
+ * relative velocity (> 0: separating), as the contact row's efc_vel */
+static mjtNum contact_velocity(const mjModel* m, const mjData* d, const mjContact* con,
+                               mjtNum va[3], mjtNum vb[3]) {
+  point_velocity(m, d, m->geom_bodyid[con->geom[0]], con->pos, va);
+  point_velocity(m, d, m->geom_bodyid[con->geom[1]], con->pos, vb);
+  const mjtNum* n12 = con->frame;               /* from geom1 to geom2 */
+  return n12[0] * (vb[0] - va[0]) + n12[1] * (vb[1] - va[1]) + n12[2] * (vb[2] - va[2]);
+}
+
 typedef struct {
   int pin_body, bore_body;
   mjtNum t[3];   /* in-plane tangent axis x n (n: bore centre -> pin) */
@@ -139,12 +149,9 @@ static int bore_friction(const mjModel* m, const mjData* d, int icon, friction_t
   const mjtNum mu0 = user[1], v0 = user[2], v1 = user[3];
   const int row = con->efc_address;
   const mjtNum* kbip = d->efc_KBIP + 4 * row;
-  const int bo1 = m->geom_bodyid[g1], bo2 = m->geom_bodyid[g2];
   mjtNum va[3], vb[3];
-  point_velocity(m, d, bo1, con->pos, va);
-  point_velocity(m, d, bo2, con->pos, vb);
+  const mjtNum vel = contact_velocity(m, d, con, va, vb);
   const mjtNum* n12 = con->frame;               /* from geom1 to geom2 */
-  const mjtNum vel = n12[0] * (vb[0] - va[0]) + n12[1] * (vb[1] - va[1]) + n12[2] * (vb[2] - va[2]);
   const mjtNum aref = -kbip[1] * vel - kbip[0] * kbip[2] * (d->efc_pos[row] - d->efc_margin[row]);
   const mjtNum fn = aref / (d->efc_diagA[row] + d->efc_R[row]);
   out->pin_body = m->geom_bodyid[gp];
@@ -169,16 +176,6 @@ static int bore_friction(const mjModel* m, const mjData* d, int icon, friction_t
   return 1;
 }
 
-/* normal relative velocity of contact icon (> 0: separating), as the row's efc_vel */
-static mjtNum normal_velocity(const mjModel* m, const mjData* d, int icon) {
-  const mjContact* con = d->contact + icon;
-  mjtNum va[3], vb[3];
-  point_velocity(m, d, m->geom_bodyid[con->geom[0]], con->pos, va);
-  point_velocity(m, d, m->geom_bodyid[con->geom[1]], con->pos, vb);
-  const mjtNum* n12 = con->frame;
-  return n12[0] * (vb[0] - va[0]) + n12[1] * (vb[1] - va[1]) + n12[2] * (vb[2] - va[2]);
-}
-
 static void impact_speed_damping(const mjModel* m, mjData* d) {
   const int nu = m->nuser_geom;
   if (nu < 8) return;
@@ -200,7 +197,8 @@ static void impact_speed_damping(const mjModel* m, mjData* d) {
       continue;
     }
     const int row = d->contact[icon].efc_address;
-    const mjtNum vel = normal_velocity(m, d, icon);
+    mjtNum va[3], vb[3];
+    const mjtNum vel = contact_velocity(m, d, d->contact + icon, va, vb);
     if (!(d->userdata[slot] > 0)) d->userdata[slot] = fmax(-vel, user[6]);
     const mjtNum vimp = d->userdata[slot];
     const mjtNum pen = -(d->efc_pos[row] - d->efc_margin[row]);

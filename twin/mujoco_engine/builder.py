@@ -454,7 +454,7 @@ def build(cfg: BenchConfig) -> tuple[mujoco.MjSpec, mujoco.MjModel, BuildInfo]:
         info.contacts[jt] = setting
         info.a_hat[jt] = a_hat
     if impact_speed_damping(cfg):
-        _impact_speed_damping(spec, cfg)
+        _set_impact_speed_damping(spec, cfg)
     info.sensors = [x.name for x in spec.sensors]
     return spec, _compile(spec, cfg), info
 
@@ -468,22 +468,25 @@ def impact_speed_damping(cfg: BenchConfig) -> bool:
             and bool(cfg.joints.clearance_joints))
 
 
-def _impact_speed_damping(spec: mujoco.MjSpec, cfg: BenchConfig) -> None:
-    """Switch on the native impact-speed (Lankarani–Nikravesh) damping of each clearance
-    bushing: coef = gain · χ(e) · K (S003 Eq. 17–18, χ of the configured law: LN by default,
-    Hunt–Crossley or Flores; times ``contact_damping_scale``, which perturbs all of the law's
-    damping), exponent n, speed floor, and one ``userdata`` slot per joint for the stored impact
-    speed (``_bore.c``)."""
+def impact_speed_coefficient(cfg: BenchConfig, joint: str) -> float:
+    """χ K of the native impact-speed damping of ``joint`` [N/mⁿ]: χ(e) of the configured
+    hysteresis law (LN by default, Hunt–Crossley or Flores) and K of S003 Eq. 18, times
+    ``impact_damping_gain`` and ``contact_damping_scale`` (which perturbs all of the law's damping)."""
     ms, ct = cfg.mujoco, cfg.contact
-    chi = DAMPING_FACTOR[ct.law](ct.restitution)
+    K = ct.stiffness or ln_stiffness(cfg.joints, cfg.materials, joint)
+    return ms.impact_damping_gain * ms.contact_damping_scale * DAMPING_FACTOR[ct.law](ct.restitution) * K
+
+
+def _set_impact_speed_damping(spec: mujoco.MjSpec, cfg: BenchConfig) -> None:
+    """Switch on the native impact-speed damping of each clearance bushing (``_bore.c``): the
+    coefficient, exponent n, speed floor, and one ``userdata`` slot per joint for the stored
+    impact speed."""
     joints = cfg.joints.clearance_joints
     spec.nuserdata = len(joints)
     for slot, jt in enumerate(joints):
-        K = ct.stiffness or ln_stiffness(cfg.joints, cfg.materials, jt)
         ud = list(spec.geom(N.bushing(jt)).userdata)
-        coef = ms.impact_damping_gain * ms.contact_damping_scale * chi * K
-        spec.geom(N.bushing(jt)).userdata = ud[:4] + [coef, ct.exponent,
-                                                       ms.impact_speed_floor_mps, float(slot)]
+        spec.geom(N.bushing(jt)).userdata = ud[:4] + [impact_speed_coefficient(cfg, jt), cfg.contact.exponent,
+                                                       cfg.mujoco.impact_speed_floor_mps, float(slot)]
 
 
 def build_model(cfg: BenchConfig) -> mujoco.MjModel:
