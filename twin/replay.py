@@ -202,10 +202,10 @@ def replay(recording: str | Path, out_dir: str | Path,
     """
     from twin.mcapfile import write_run
     from twin.simulate import output_stride, simulate
-    from twin.util import atomic_write_json, atomic_write_text, check_out_dir
+    from twin.util import atomic_write_json, atomic_write_text, check_output_dir
 
     wall0 = time.perf_counter()
-    out = check_out_dir(out_dir, need_parent=False)
+    out = check_output_dir(out_dir, need_parent=False)
     rec, info, repairs = read_recording(recording, nan=opts.nan)
     if info.calibration is None:
         raise RecordingError(f"{recording}: no calibration data; re-import it with --calibration STATIC "

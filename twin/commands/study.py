@@ -52,11 +52,11 @@ def _run_formulations(args: argparse.Namespace) -> int:
 
     from twin.config import load_config
     from twin.errors import ConfigError
-    from twin.util import check_out_dir
+    from twin.util import check_output_dir
 
     if not (0 < args.duration <= 60):
         raise ConfigError("--duration", f"must lie in (0, 60] s, got {args.duration!r}")
-    out = check_out_dir(args.out)
+    out = check_output_dir(args.out)
     cfg = load_config(args.config) if args.config else None
 
     from twin.reference.formulations import run_study
@@ -93,7 +93,7 @@ def _run_accuracy(args: argparse.Namespace) -> int:
 
     from twin.errors import ConfigError
     from twin.studies import accuracy as A
-    from twin.util import check_out_dir
+    from twin.util import check_output_dir
 
     settings = A.QUICK if args.quick else A.StudySettings()
     if args.tests is not None:
@@ -107,7 +107,7 @@ def _run_accuracy(args: argparse.Namespace) -> int:
         if not (math.isfinite(args.window) and 0.05 <= args.window <= 60):
             raise ConfigError("--window", f"must lie in [0.05, 60] s, got {args.window!r}")
         settings = dataclasses.replace(settings, window_s=args.window)
-    out = check_out_dir(args.out)
+    out = check_output_dir(args.out)
     data = A.run_study(out, settings, quick=args.quick, progress=not args.no_progress and sys.stderr.isatty(),
                        log=lambda m: print(m, file=sys.stderr, flush=True))
     print(f"wrote {out / 'accuracy.md'}, {out / 'accuracy.json'} and {len(data['figures'])} PNG plots")

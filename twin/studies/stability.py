@@ -74,7 +74,7 @@ import numpy as np
 
 from twin.config import CATALOGUE_DIAMETRAL_MM, ORIENTATIONS, BenchConfig, preset
 from twin.errors import ConfigError, TwinError
-from twin.util import atomic_write_bytes, atomic_write_json, atomic_write_text, check_out_dir
+from twin.util import atomic_write_bytes, atomic_write_json, atomic_write_text, check_output_dir
 
 #: Largest admissible penetration / radial clearance [-].
 PEN_LIMIT = 0.25
@@ -555,7 +555,7 @@ def _run(args: Any) -> int:
 
     settings = (quick if args.quick else lambda scenes, seed: StudySettings(scenes=scenes, seed=seed))(
         args.scenes, args.seed)
-    out = check_out_dir(args.out)
+    out = check_output_dir(args.out)
     data = run_study(out, settings, progress=not args.no_progress,
                      log=lambda m: print(m, file=sys.stderr, flush=True))
     print(one_line(data))
