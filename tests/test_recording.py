@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import json
+import warnings
+import zipfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -273,3 +276,162 @@ def test_cli_import_errors_are_one_line_and_leave_no_file(tmp_path, good_cols, c
     assert main(["import", str(p), "--out", str(tmp_path / "x.txt")]) == 2
     assert main(["import", str(p), "--out", str(out), "--map", "volt_AC9=ai0"]) == 2
     assert "unknown target channel" in capsys.readouterr().err
+
+
+# ------------------------------------------------------- bad inputs through the CLI
+ZERO_G = ",".join(f"{k}={v}" for k, v in OFFSETS.items())
+
+
+def _npz(path, cols, **over):
+    """An NPZ export of ``cols`` with a ``units`` entry; ``over`` replaces or (None) drops columns."""
+    arrays = {**cols, "units": np.array(json.dumps(_std_units(cols)))}
+    arrays.update(over)
+    np.savez(path, **{k: v for k, v in arrays.items() if v is not None})
+    return path
+
+
+def _csv_lines(path, cols, edit) -> None:
+    """A CSV export of ``cols`` whose text lines (header = line 1) are changed by ``edit(lines)``."""
+    _write_csv(path, cols, _std_units(cols))
+    lines = path.read_text().splitlines()
+    edit(lines)
+    path.write_text("\n".join(lines) + "\n")
+
+
+def _zip(path, members: dict[str, str]):
+    with zipfile.ZipFile(path, "w") as zf:
+        for name, text in members.items():
+            zf.writestr(name, text)
+    return path
+
+
+def _truncated(path, size: int):
+    path.write_bytes(path.read_bytes()[:size])
+    return path
+
+
+def _cell(lines, lineno, col, value) -> None:
+    cells = lines[lineno - 1].split(",")
+    cells[col] = value
+    lines[lineno - 1] = ",".join(cells)
+
+
+BAD_IMPORTS = {
+    # NPZ columns must be 1-D arrays of real numbers
+    "npz bool": (lambda d, c: _npz(d / "bad.npz", c, volt_AC1=c["volt_AC1"] > 2.5), [],
+                 ["bad.npz", "'volt_AC1'", "boolean", "real numbers"]),
+    "npz complex": (lambda d, c: _npz(d / "bad.npz", c, encoder_counts=c["encoder_counts"].astype(complex)), [],
+                    ["bad.npz", "'encoder_counts'", "complex", "real numbers"]),
+    "npz object (pickle)": (lambda d, c: _npz(d / "bad.npz", c, volt_AC2=np.array([1.0, "x", None], dtype=object)),
+                            [], ["bad.npz", "'volt_AC2'", "Python objects", "real numbers"]),
+    "npz strings": (lambda d, c: _npz(d / "bad.npz", c, volt_AC1=c["volt_AC1"].astype(str)), [],
+                    ["bad.npz", "'volt_AC1'", "string", "real numbers"]),
+    "npz bytes": (lambda d, c: _npz(d / "bad.npz", c, volt_AC1=c["volt_AC1"].astype("S12")), [],
+                  ["bad.npz", "'volt_AC1'", "bytes"]),
+    "npz datetime time": (lambda d, c: _npz(d / "bad.npz", c, t=np.arange(N).astype("datetime64[us]")), [],
+                          ["bad.npz", "'t'", "datetime"]),
+    "npz 0-d": (lambda d, c: _npz(d / "bad.npz", c, volt_AC3=np.array(2.5)), [], ["bad.npz", "'volt_AC3'", "1-D"]),
+    "npz 2-D": (lambda d, c: _npz(d / "bad.npz", c, volt_AC3=c["volt_AC3"][:, None]), [],
+                ["bad.npz", "'volt_AC3'", "(4000, 1)", "1-D"]),
+    "npz unequal lengths": (lambda d, c: _npz(d / "bad.npz", c, volt_AC4=c["volt_AC4"][:10]), [],
+                            ["bad.npz", "'volt_AC4'", "same length"]),
+    "npz one sample": (lambda d, c: _npz(d / "bad.npz", {k: v[:1] for k, v in c.items()}), [],
+                       ["bad.npz", "1 data row", "at least 2"]),
+    "npz empty archive": (lambda d, c: (np.savez(d / "bad.npz"), d / "bad.npz")[1], [], ["bad.npz", "no columns"]),
+    "npz not a zip": (lambda d, c: (d / "bad.npz", (d / "bad.npz").write_text("hello"))[0], [],
+                      ["bad.npz", "not a .npz file"]),
+    "npz is a .npy": (lambda d, c: (np.save(d / "bad.npy", c["t"]), (d / "bad.npy").rename(d / "bad.npz"),
+                                    d / "bad.npz")[2], [], ["bad.npz", "single .npy array"]),
+    "npz truncated": (lambda d, c: _truncated(_npz(d / "bad.npz", c), 5000), [], ["bad.npz", "not a readable .npz"]),
+    "npz member not .npy": (lambda d, c: _zip(d / "bad.npz", {"t.npy": "junk"}), [], ["bad.npz", "member 't'", "not a numpy array"]),
+    "npz huge volts": (lambda d, c: _npz(d / "bad.npz", c, volt_AC5=np.full(N, 1e308)), [],
+                       ["bad.npz", "volt_AC5", "1e+308", "daq_range", "[-10, 10] V"]),
+    "npz count beyond 2**53": (lambda d, c: _npz(d / "bad.npz", c, encoder_counts=np.full(N, 2**64 - 1, np.uint64)),
+                               [], ["bad.npz", "encoder_counts", "2**53"]),
+    "npz time step underflow": (lambda d, c: _npz(d / "bad.npz", c, t=np.arange(N) * 1e-320), [],
+                                ["bad.npz", "time step", "seconds"]),
+    # CSV
+    "csv non-numeric cell": (lambda d, c: _csv_lines(d / "bad.csv", c, lambda ls: _cell(ls, 7, 2, "2.5V")), [],
+                             ["bad.csv", "line 7, column 3 ('volt_AC2')", "'2.5V' is not a number"]),
+    "csv ragged row": (lambda d, c: _csv_lines(d / "bad.csv", c, lambda ls: ls.__setitem__(9, ls[9] + ",1")), [],
+                       ["bad.csv", "line 10 has 10 fields", "9 columns"]),
+    "csv empty file": (lambda d, c: (d / "bad.csv").write_text(""), [], ["bad.csv", "empty file"]),
+    "csv header only": (lambda d, c: _csv_lines(d / "bad.csv", c, lambda ls: ls.__delitem__(slice(1, None))), [],
+                        ["bad.csv", "no data rows"]),
+    "csv one data row": (lambda d, c: _csv_lines(d / "bad.csv", c, lambda ls: ls.__delitem__(slice(2, None))), [],
+                         ["bad.csv", "1 data row", "at least 2"]),
+    "csv duplicate names": (lambda d, c: _csv_lines(d / "bad.csv", c, lambda ls: ls.__setitem__(
+        0, ls[0].replace("volt_AC3 [V]", "volt_AC2 [V]"))), [], ["bad.csv", "'volt_AC2' appears twice", "columns 3 and 4"]),
+    "csv not UTF-8": (lambda d, c: (d / "bad.csv").write_bytes("t [s],Temp [°C]\n0,1\n".encode("latin-1")), [],
+                      ["bad.csv", "not UTF-8", "0xb0"]),
+    "csv not UTF-8 further down": (lambda d, c: (_csv_lines(d / "bad.csv", c, lambda ls: None),
+                                                 (d / "bad.csv").write_bytes((d / "bad.csv").read_bytes() + b"1,\xff\n")),
+                                   [], ["bad.csv", "line 4002 is not UTF-8", "0xff"]),
+    "csv binary": (lambda d, c: (d / "bad.csv").write_bytes(bytes(range(256)) * 8), [], ["bad.csv", "binary"]),
+    "csv inf in time": (lambda d, c: _csv_lines(d / "bad.csv", c, lambda ls: _cell(ls, 4001, 0, "inf")), [],
+                        ["bad.csv", "time column", "infinite", "row 3999"]),
+    "csv time in ms": (lambda d, c: _csv_lines(d / "bad.csv", c, lambda ls: ls.__setitem__(
+        0, ls[0].replace("t [s]", "t [ms]"))), [], ["bad.csv", "time column 't'", "'ms'", "allowed: s"]),
+    "csv volts beyond the DAQ range": (lambda d, c: _csv_lines(d / "bad.csv", c, lambda ls: _cell(ls, 50, 6, "12.5")),
+                                       [], ["bad.csv", "volt_AC6", "12.5 at sample 48", "daq_range"]),
+    # not an export file
+    "unsupported suffix": (lambda d, c: (d / "bad.txt", (d / "bad.txt").write_text("t,x\n0,1\n"))[0], [],
+                           ["bad.txt", "unsupported export format '.txt'", ".csv", ".npz"]),
+    "missing file": (lambda d, c: d / "nope.csv", [], ["nope.csv", "no such file"]),
+    "directory": (lambda d, c: (d / "dir.csv", (d / "dir.csv").mkdir())[0], [], ["dir.csv", "is a directory"]),
+    # options
+    "--rate inf": (None, ["--rate", "inf"], ["--rate", "finite", "> 0"]),
+    "--rate 0": (None, ["--rate", "0"], ["--rate", "> 0"]),
+    "--rate nan": (None, ["--rate", "nan"], ["--rate", "> 0"]),
+    "--map no =": (None, ["--map", "volt_AC1"], ["--map", "TARGET=SOURCE"]),
+    "--map empty unit": (None, ["--map", "volt_AC1=volt_AC1:"], ["--map", "empty unit"]),
+    "--map unknown unit": (None, ["--map", "volt_AC1=volt_AC1:furlong"], ["good.csv", "'furlong'", "allowed: V"]),
+    "--map target twice": (None, ["--map", "volt_AC1=volt_AC1,volt_AC1=volt_AC2"], ["--map", "volt_AC1 is mapped twice"]),
+    "--map column used twice": (None, ["--map", "volt_AC1=volt_AC2"], ["good.csv", "'volt_AC2'", "both volt_AC1 and volt_AC2"]),
+    "--map time column missing": (None, ["--map", "t=time"], ["good.csv", "no time column 'time'", "--map t="]),
+    "--time-column missing": (None, ["--time-column", "time"], ["good.csv", "no time column 'time'", "--time-column"]),
+    "--zero-g unknown sensor": (None, ["--zero-g", ZERO_G.replace("AC6", "AC7")], ["--zero-g", "'AC7'", "allowed: AC1"]),
+    "--zero-g out of range": (None, ["--zero-g", ZERO_G.replace("AC3=2.506", "AC3=7")],
+                              ["--zero-g", "AC3 = 7 V", "(0, supply_v = 5) V"]),
+    "--zero-g negative": (None, ["--zero-g", ZERO_G.replace("AC3=2.506", "AC3=-0.1")], ["--zero-g", "AC3 = -0.1 V"]),
+    "--encoder-modulus 0": (None, ["--encoder-modulus", "0"], ["--encoder-modulus", "[2, 2**64]", "got 0"]),
+    "--encoder-modulus negative": (None, ["--encoder-modulus", "-5"], ["--encoder-modulus", "got -5"]),
+    "--encoder-modulus too small": (None, ["--encoder-modulus", "4"], ["--encoder-modulus", "too small"]),
+    "--encoder-modulus below the counts": (None, ["--encoder-modulus", "1000"],
+                                           ["good.csv", "encoder_counts reaches", "does not wrap at 1000"]),
+    "--calibration missing": (None, ["--calibration", "{d}/static.csv"], ["static.csv", "no such file"]),
+    "--calibration directory": (None, ["--calibration", "{d}"], ["is a directory"]),
+    "--calibration .txt": (lambda d, c: (d / "static.txt").write_text("x"), ["--calibration", "{d}/static.txt"],
+                           ["static.txt", "allowed: .mcap", ".csv or .npz"]),
+    "--calibration bool npz": (lambda d, c: _npz(d / "static.npz", c, volt_AC1=c["volt_AC1"] > 2.5),
+                               ["--calibration", "{d}/static.npz"], ["static.npz", "'volt_AC1'", "boolean"]),
+    "--calibration not a static recording": (
+        lambda d, c: _write_csv(d / "static.csv", {k: (v + 6.0 if k.startswith("volt") else v) for k, v in c.items()},
+                                _std_units(c)), ["--calibration", "{d}/static.csv"],
+        ["static.csv", "zero-g offset", "outside the sensor's output range"]),
+}
+
+
+@pytest.mark.parametrize("case", list(BAD_IMPORTS))
+def test_bad_imports_are_one_line_errors_and_write_nothing(case, tmp_path, good_cols, capsys):
+    make, extra, expect = BAD_IMPORTS[case]
+    good = tmp_path / "good.csv"
+    _write_csv(good, good_cols, _std_units(good_cols))
+    export = good  # option cases import the good export (and may make other files)
+    if make is not None:
+        made = make(tmp_path, {k: v.copy() for k, v in good_cols.items()})
+        if not extra:  # export cases: the file made (or the bad.csv it wrote)
+            export = made if isinstance(made, Path) else tmp_path / "bad.csv"
+    before = sorted(p.name for p in tmp_path.iterdir())
+    out = tmp_path / "out.mcap"
+    argv = ["import", str(export), "--test", "6", "--out", str(out), *(a.format(d=tmp_path) for a in extra)]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a numpy warning is a failure too
+        assert main(argv) == 2
+    cap = capsys.readouterr()
+    err = cap.err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("twin: error: "), cap.err
+    assert "Traceback" not in cap.err and "Warning" not in cap.err
+    for word in expect:
+        assert word in err[0], (word, err[0])
+    assert sorted(p.name for p in tmp_path.iterdir()) == before  # nothing written, no temporary left

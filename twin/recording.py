@@ -24,7 +24,13 @@ samples (or, with ``nan="interpolate"``, a reported repair of gaps up to
 :data:`MAX_NAN_GAP` samples), a sample rate different from ``instrumentation.daq_rate_hz``,
 non-integer encoder counts, and encoder jumps the crank cannot make (short glitches are
 repaired and reported, steps are errors). Table imports also check that the time column is
-strictly increasing and regular, and that it agrees with ``--rate``.
+strictly increasing and regular, in seconds, and that it agrees with ``--rate``; that NPZ columns
+are 1-D arrays of real numbers (int, uint, float: no bool, complex, object/pickle, string or date
+types) of one length and CSV files UTF-8 text with one number per header column on every line
+(the error names the line and column); that imported volts lie in the DAQ's input range
+(``instrumentation.daq_range``, the motor command in ±10 V) and counts within ±2**53; and that
+``--map``, ``--rate``, ``--zero-g`` (inside the sensor's output range) and ``--encoder-modulus``
+make sense. Every such error is one :class:`RecordingError` line naming the file or option.
 """
 
 from __future__ import annotations
@@ -33,6 +39,8 @@ import hashlib
 import json
 import math
 import re
+import zipfile
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
@@ -211,8 +219,19 @@ def validate_daq(run: Run, cfg: BenchConfig, nan: str = "error", encoder_repair:
                 i = int(np.flatnonzero(x != np.round(x))[0])
                 raise RecordingError(f"{where}: encoder_counts holds a non-integer count {x[i]!r} at sample {i}: "
                                      "not quadrature counts (unit?)")
-            if encoder_modulus:
-                x = unwrap_counts(x, int(encoder_modulus))
+            if encoder_modulus is not None:
+                check_encoder_modulus(encoder_modulus)
+                m = int(encoder_modulus)
+                step = encoder_max_step(cfg, run.rate_hz)
+                if m <= 2 * step:
+                    raise RecordingError(f"--encoder-modulus: {m} is too small: at {run.rate_hz:g} Hz the crank can move "
+                                         f"{step:.3g} counts per sample, so a counter wrapping at {m} cannot be "
+                                         f"unwrapped (needs more than {2 * step:.3g})")
+                if np.max(np.abs(x)) >= m:
+                    i = int(np.argmax(np.abs(x) >= m))
+                    raise RecordingError(f"{where}: encoder_counts reaches {x[i]:.0f} at sample {i}, not below "
+                                         f"--encoder-modulus {m}: the counter does not wrap at {m}")
+                x = unwrap_counts(x, m)
                 repairs.append(f"encoder_counts: unwrapped a counter of modulus {int(encoder_modulus)}")
             try:
                 x, rep = check_counts(x, run.rate_hz, encoder_max_step(cfg, run.rate_hz), repair=encoder_repair)
@@ -281,21 +300,79 @@ def parse_mapping(items: list[str] | None) -> dict[str, tuple[str, str | None]]:
             unit = None
             if ":" in src:
                 src, unit = (s.strip() for s in src.rsplit(":", 1))
+                if not unit:
+                    raise RecordingError(f"--map: empty unit after ':' in {part!r}; give TARGET=SOURCE:UNIT or "
+                                         "leave out ':'")
             allowed = REQUIRED_CHANNELS + OPTIONAL_CHANNELS + ("t",)
             if target not in allowed:
                 raise RecordingError(f"--map: unknown target channel {target!r}; allowed: {', '.join(allowed)}")
             if not src:
                 raise RecordingError(f"--map: empty source column for {target!r}")
+            if target in out:
+                raise RecordingError(f"--map: {target} is mapped twice ({out[target][0]!r} and {src!r}); give it once")
             out[target] = (src, unit)
     return out
 
 
+#: dtype kinds accepted in a table column: signed and unsigned integers, floats (real numbers only).
+_NUMERIC_KINDS = "iuf"
+_KIND_NAMES = {"b": "boolean", "c": "complex", "O": "Python object", "U": "string", "S": "bytes",
+               "M": "datetime", "m": "timedelta", "V": "structured/void"}
+_ALLOWED_COLUMNS = "allowed: 1-D arrays of real numbers (int, uint or float)"
+
+
+def _bad_line(path: Path, delim: str, names: list[str], err: Exception) -> RecordingError:
+    """The first line of a CSV export that numpy could not read, located and named (error path only:
+    numpy's own row numbers skip comment lines and are 0-based)."""
+    n = len(names)
+    try:
+        with open(path, "rb") as fh:
+            for lineno, raw in enumerate(fh, 1):
+                try:
+                    line = raw.decode("utf-8-sig" if lineno == 1 else "utf-8")
+                except UnicodeDecodeError as uerr:
+                    return RecordingError(f"{path}: line {lineno} is not UTF-8 text (byte 0x{raw[uerr.start]:02x}); "
+                                          "export the table as UTF-8 CSV")
+                if lineno == 1:
+                    continue
+                text = line.split("#", 1)[0].strip()
+                if not text:
+                    continue
+                cells = text.split(delim)
+                if len(cells) != n:
+                    return RecordingError(f"{path}: line {lineno} has {len(cells)} fields but the header names {n} "
+                                          f"columns (delimiter {delim!r}); every row needs one value per column")
+                for i, cell in enumerate(cells):
+                    try:
+                        float(cell)
+                    except ValueError:
+                        return RecordingError(f"{path}: line {lineno}, column {i + 1} ({names[i]!r}): {cell.strip()[:40]!r} "
+                                              "is not a number (allowed: decimal numbers with '.', nan, inf)")
+    except OSError as oerr:
+        return RecordingError(f"{path}: cannot read ({oerr.strerror or oerr})")
+    return RecordingError(f"{path}: unreadable data ({str(err).splitlines()[0] if str(err) else type(err).__name__})")
+
+
 def _read_csv(path: Path) -> tuple[dict[str, np.ndarray], dict[str, str]]:
-    with open(path, "r", encoding="utf-8-sig") as fh:
-        header = fh.readline()
-        first = fh.readline()
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(1 << 16)
+        if b"\x00" in head:
+            raise RecordingError(f"{path}: binary content (NUL bytes), not a CSV text file")
+        with open(path, "r", encoding="utf-8-sig") as fh:
+            header = fh.readline()
+            first = ""
+            for line in fh:  # first data line: blank and '#' comment lines are skipped, as numpy does
+                if line.split("#", 1)[0].strip():
+                    first = line
+                    break
+    except UnicodeDecodeError as err:
+        raise RecordingError(f"{path}: not UTF-8 text (byte 0x{err.object[err.start]:02x} in the first lines); "
+                             "a CSV export must be UTF-8 text with a header row") from None
+    except OSError as err:
+        raise RecordingError(f"{path}: cannot read ({err.strerror or err})") from None
     if not header.strip():
-        raise RecordingError(f"{path}: empty file")
+        raise RecordingError(f"{path}: empty file (a CSV export needs a header row and data rows)")
     delim = max((",", ";", "\t"), key=header.count)
     if header.count(delim) == 0:
         delim = ","
@@ -306,47 +383,99 @@ def _read_csv(path: Path) -> tuple[dict[str, np.ndarray], dict[str, str]]:
         if m and m.group("unit"):
             units[name] = m.group("unit").strip()
         names.append(name)
-    if len(set(names)) != len(names):
-        raise RecordingError(f"{path}: repeated column names in the header")
-    if not first.strip():
+    for i, name in enumerate(names):
+        if name in names[:i]:
+            raise RecordingError(f"{path}: column name {name!r} appears twice in the header (columns "
+                                 f"{names.index(name) + 1} and {i + 1}); column names must be unique")
+    if not first:
         raise RecordingError(f"{path}: no data rows after the header")
     try:
         data = np.loadtxt(path, delimiter=delim, skiprows=1, ndmin=2, dtype=np.float64, encoding="utf-8-sig")
-    except ValueError as err:
-        raise RecordingError(f"{path}: unreadable data ({err})") from None
+    except ValueError as err:  # includes UnicodeDecodeError
+        raise _bad_line(path, delim, names, err) from None
+    except OSError as err:
+        raise RecordingError(f"{path}: cannot read ({err.strerror or err})") from None
     if data.shape[1] != len(names):
-        raise RecordingError(f"{path}: {data.shape[1]} data columns but {len(names)} header names")
+        raise RecordingError(f"{path}: the data rows have {data.shape[1]} fields but the header names {len(names)} "
+                             f"columns (delimiter {delim!r})")
     return {n: data[:, i] for i, n in enumerate(names)}, units
+
+
+def _check_column(path: Path, name: str, v: Any) -> np.ndarray:
+    """An NPZ column: a 1-D array of real numbers, else a one-line error naming it."""
+    if isinstance(v, bytes):  # a member that is not a .npy array (np.load returns its raw bytes)
+        raise RecordingError(f"{path}: member {name!r} is not a numpy array (.npy); {_ALLOWED_COLUMNS}")
+    v = np.asarray(v)
+    if v.dtype.kind not in _NUMERIC_KINDS:
+        what = _KIND_NAMES.get(v.dtype.kind, str(v.dtype))
+        raise RecordingError(f"{path}: column {name!r} holds {what} values (dtype {v.dtype}); {_ALLOWED_COLUMNS}")
+    if v.ndim != 1:
+        raise RecordingError(f"{path}: column {name!r} has shape {v.shape}, not 1-D; {_ALLOWED_COLUMNS}")
+    return v
 
 
 def _read_npz(path: Path) -> tuple[dict[str, np.ndarray], dict[str, str]]:
     try:
-        with np.load(path, allow_pickle=False) as z:
-            arrays = {k: np.asarray(z[k]) for k in z.files}
-    except (OSError, ValueError, EOFError) as err:
-        raise RecordingError(f"{path}: not a readable .npz file ({err})") from None
+        with open(path, "rb") as fh:
+            magic = fh.read(6)
+    except OSError as err:
+        raise RecordingError(f"{path}: cannot read ({err.strerror or err})") from None
+    if not magic:
+        raise RecordingError(f"{path}: empty file (a .npz export is a zip archive of named 1-D arrays)")
+    if magic.startswith(b"\x93NUMPY"):
+        raise RecordingError(f"{path}: a single .npy array, not a .npz archive of named columns (np.savez)")
+    if not magic.startswith((b"PK\x03\x04", b"PK\x05\x06")):
+        raise RecordingError(f"{path}: not a .npz file (no zip archive signature); write it with np.savez")
+    arrays: dict[str, Any] = {}
+    unreadable = (OSError, ValueError, EOFError, KeyError, NotImplementedError, zipfile.BadZipFile, zlib.error)
+    try:  # our own file object: np.load leaks its own when the zip directory is unreadable
+        with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as z:
+            for k in z.files:
+                try:
+                    arrays[k] = z[k]
+                except ValueError as err:
+                    if "allow_pickle" in str(err):
+                        raise RecordingError(f"{path}: column {k!r} holds Python objects (pickled, not loaded); "
+                                             f"{_ALLOWED_COLUMNS}") from None
+                    raise RecordingError(f"{path}: column {k!r} is unreadable ({err})") from None
+                except unreadable as err:
+                    raise RecordingError(f"{path}: column {k!r} is unreadable ({type(err).__name__}: {err}); "
+                                         "the file is truncated or corrupt") from None
+    except unreadable as err:
+        raise RecordingError(f"{path}: not a readable .npz file ({type(err).__name__}: {err})") from None
     units: dict[str, str] = {}
     if "units" in arrays:
         try:
             units = {str(k): str(v) for k, v in json.loads(str(arrays.pop("units"))).items()}
         except (ValueError, AttributeError) as err:
             raise RecordingError(f"{path}: entry 'units' must be a JSON object string ({err})") from None
-    for k, v in arrays.items():
-        if v.ndim != 1:
-            raise RecordingError(f"{path}: array {k!r} must be 1-D, got shape {v.shape}")
-    return arrays, units
+    if not arrays:
+        raise RecordingError(f"{path}: holds no columns")
+    cols = {k: _check_column(path, k, v) for k, v in arrays.items()}
+    lengths = {k: v.size for k, v in cols.items()}
+    first = next(iter(lengths))
+    for k, n in lengths.items():
+        if n != lengths[first]:
+            raise RecordingError(f"{path}: column {k!r} has {n} rows but {first!r} has {lengths[first]}; "
+                                 "all columns need the same length")
+    return cols, units
 
 
 def read_table(path: str | Path) -> tuple[dict[str, np.ndarray], dict[str, str]]:
-    """Columns and header units of a DAQ export (``.csv`` with a header row, or ``.npz``)."""
+    """Columns and header units of a DAQ export (``.csv`` with a header row, or ``.npz`` of named 1-D
+    arrays of real numbers). Anything else is a one-line :class:`RecordingError` naming the file."""
     p = Path(path)
-    if not p.is_file():
+    if p.is_dir():
+        raise RecordingError(f"{p}: is a directory; give a .csv or .npz export file")
+    if not p.exists():
         raise RecordingError(f"{p}: no such file")
+    if not p.is_file():
+        raise RecordingError(f"{p}: not a regular file; give a .csv or .npz export file")
     if p.suffix.lower() == ".csv":
         return _read_csv(p)
     if p.suffix.lower() == ".npz":
         return _read_npz(p)
-    raise RecordingError(f"{p}: unsupported export format {p.suffix!r}; use .csv or .npz (or a .mcap recording)")
+    raise RecordingError(f"{p}: unsupported export format {p.suffix!r}; allowed: .csv (header row) or .npz")
 
 
 def _time_base(t: np.ndarray | None, rate_hz: float | None, n: int, where: str) -> tuple[float, float]:
@@ -355,11 +484,19 @@ def _time_base(t: np.ndarray | None, rate_hz: float | None, n: int, where: str) 
         if rate_hz is None:
             raise RecordingError(f"{where}: no time column; give the sample rate with --rate")
         return 0.0, float(rate_hz)
-    t = np.asarray(t, dtype=np.float64)
+    with np.errstate(over="ignore", invalid="ignore"):
+        t = np.asarray(t, dtype=np.float64)
+    if t.size < 2:
+        raise RecordingError(f"{where}: the time column holds {t.size} sample(s); a recording needs at least 2")
     if not np.all(np.isfinite(t)):
         i = int(np.flatnonzero(~np.isfinite(t))[0])
         raise RecordingError(f"{where}: time column has a NaN or infinite value at row {i}")
-    dt = np.diff(t)
+    with np.errstate(over="ignore", invalid="ignore"):
+        dt = np.diff(t)
+    if not np.all(np.isfinite(dt)):
+        i = int(np.flatnonzero(~np.isfinite(dt))[0])
+        raise RecordingError(f"{where}: time column values too large (step from row {i} to {i + 1} overflows); "
+                             "the time column must be in seconds")
     if np.any(dt <= 0):
         i = int(np.flatnonzero(dt <= 0)[0])
         raise RecordingError(f"{where}: time is not strictly increasing at row {i + 1} "
@@ -373,7 +510,10 @@ def _time_base(t: np.ndarray | None, rate_hz: float | None, n: int, where: str) 
         raise RecordingError(f"{where}: irregular time base: step {dt[i]:.9g} s at row {i + 1} (t = {t[i]:.9g} s) "
                              f"differs from the median period {h:.9g} s; the DAQ samples uniformly, so samples "
                              "were dropped or the export is not one acquisition")
-    rate = 1.0 / h
+    with np.errstate(over="ignore", divide="ignore"):
+        rate = float(np.float64(1.0) / np.float64(h))
+    if not math.isfinite(rate):
+        raise RecordingError(f"{where}: time step {h:.3g} s is too small (the time column must be in seconds)")
     if rate_hz is not None and abs(rate - rate_hz) > RATE_TOL * rate_hz:
         raise RecordingError(f"{where}: wrong sample rate: the time column says {rate:.6g} Hz, --rate says {rate_hz:g} Hz")
     if rate_hz is not None:
@@ -384,6 +524,53 @@ def _time_base(t: np.ndarray | None, rate_hz: float | None, n: int, where: str) 
         if abs(rate - nominal) <= RATE_TOL * rate:
             rate = float(nominal)
     return float(t[0]), rate
+
+
+#: Units accepted for the time column.
+TIME_UNITS: tuple[str, ...] = ("s", "sec", "second", "seconds")
+#: Largest count magnitude a float64 holds exactly (2**53); a wrapping counter has at most 64 bits.
+MAX_EXACT_COUNT = 2 ** 53
+MAX_ENCODER_MODULUS = 2 ** 64
+#: Full scale of the motor command [V] (±10 V ↔ ±1000 motor rpm).
+MOTOR_COMMAND_RANGE_V = (-10.0, 10.0)
+#: Values this fraction of the span beyond an input range are refused on import.
+RANGE_MARGIN = 0.01
+
+
+def check_encoder_modulus(modulus: Any) -> None:
+    """``--encoder-modulus``: None (no wrapping) or an integer in [2, 2**64]."""
+    if modulus is None:
+        return
+    if isinstance(modulus, bool) or not isinstance(modulus, (int, np.integer)) \
+            or not 2 <= int(modulus) <= MAX_ENCODER_MODULUS:
+        raise RecordingError(f"--encoder-modulus: must be an integer in [2, 2**64] (the count at which the "
+                             f"counter wraps, e.g. 4294967296), got {modulus!r}")
+
+
+def _check_range(x: np.ndarray, target: str, src: str, cfg: BenchConfig, rate: float, where: str) -> None:
+    """Imported samples the instrument cannot produce: volts outside the DAQ's input range (or the
+    motor command's ±10 V), counts a float64 cannot hold exactly. NaN/inf are reported elsewhere."""
+    from twin.config import DAQ_RANGES
+
+    finite = np.isfinite(x)
+    if target == "encoder_counts":
+        bad = finite & (np.abs(np.where(finite, x, 0.0)) > MAX_EXACT_COUNT)
+        what = "beyond ±2**53, the largest count a float64 holds exactly"
+    else:
+        if target == "motor_command":
+            lo, hi = MOTOR_COMMAND_RANGE_V
+            rng = "the motor command's full scale"
+        else:
+            lo, hi = DAQ_RANGES[cfg.instrumentation.daq_range]
+            rng = f"instrumentation.daq_range = {cfg.instrumentation.daq_range!r}"
+        margin = RANGE_MARGIN * (hi - lo)
+        xf = np.where(finite, x, 0.0)
+        bad = finite & ((xf < lo - margin) | (xf > hi + margin))
+        what = f"outside {rng} [{lo:g}, {hi:g}] V"
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise RecordingError(f"{where}: {target} (column {src!r}) is {x[i]:.6g} at sample {i} "
+                             f"(t = {i / rate:.6f} s), {what}; wrong column, unit or scale?")
 
 
 def import_table(path: str | Path, cfg: BenchConfig, mapping: Mapping[str, tuple[str, str | None]] | None = None,
@@ -399,18 +586,37 @@ def import_table(path: str | Path, cfg: BenchConfig, mapping: Mapping[str, tuple
     export needs only the volt channels).
     """
     p = Path(path)
+    if rate_hz is not None and not (isinstance(rate_hz, (int, float)) and math.isfinite(rate_hz) and rate_hz > 0):
+        raise RecordingError(f"--rate: must be a finite sample rate > 0 Hz, got {rate_hz!r}")
+    check_encoder_modulus(encoder_modulus)
     cols, header_units = read_table(p)
     mapping = dict(mapping or {})
     where = str(p)
-    tname = mapping.pop("t", (time_column, None))[0]
+    flag = "--map t=" if "t" in mapping else "--time-column"
+    explicit_t = "t" in mapping or time_column != "t"
+    tname, tunit = mapping.pop("t", (time_column, None))
     t = cols.get(tname)
+    if t is None and explicit_t:
+        raise RecordingError(f"{where}: no time column {tname!r} ({flag}); columns: {', '.join(cols)}")
+    if t is not None:
+        tunit = tunit or header_units.get(tname)
+        if tunit is not None and tunit not in TIME_UNITS:
+            raise RecordingError(f"{where}: time column {tname!r} is in unit {tunit!r}; allowed: "
+                                 f"{', '.join(TIME_UNITS)}")
     n_rows = len(next(iter(cols.values()))) if cols else 0
+    if n_rows < 2:
+        raise RecordingError(f"{where}: holds {n_rows} data row(s); a recording needs at least 2")
     t0, rate = _time_base(t, rate_hz, n_rows, where)
     repairs: list[str] = []
     arrays: dict[str, np.ndarray] = {}
     units: dict[str, str] = {}
+    used: dict[str, str] = {tname: "the time column"} if t is not None else {}
     for target in REQUIRED_CHANNELS + OPTIONAL_CHANNELS:
         src, unit = mapping.get(target, (target, None))
+        if src in used and src in cols:
+            raise RecordingError(f"{where}: column {src!r} would be both {used[src]} and {target}; each channel "
+                                 f"needs its own column (--map {target}=COLUMN)")
+        used[src] = target
         if src not in cols:
             if target in require:
                 raise RecordingError(f"{where}: missing channel {target} (no column {src!r}; columns: "
@@ -425,10 +631,12 @@ def import_table(path: str | Path, cfg: BenchConfig, mapping: Mapping[str, tuple
             raise RecordingError(f"{where}: unknown unit {unit!r} for {target} (column {src!r}); "
                                  f"allowed: {', '.join(ok)}")
         stored, factor = UNIT_ALIASES[unit]
-        x = np.asarray(cols[src], dtype=np.float64)
-        if factor != 1.0:
-            x = x * factor
-            repairs.append(f"{target}: converted {unit} to {stored}")
+        with np.errstate(over="ignore", invalid="ignore"):  # out-of-range values become inf: reported below
+            x = np.asarray(cols[src], dtype=np.float64)
+            if factor != 1.0:
+                x = x * factor
+                repairs.append(f"{target}: converted {unit} to {stored}")
+        _check_range(x, target, src, cfg, rate, where)
         arrays[target] = x
         units[target] = stored
     groups = {k: DAQ_GROUP for k in arrays}
@@ -456,6 +664,11 @@ def static_calibration_from(path: str | Path, cfg: BenchConfig,
     """Calibration (Eq. 1–4) from a static recording file: a bench recording (.mcap) or a DAQ
     export (.csv/.npz) with the volt channels, taken in the calibration pose of ``cfg``."""
     p = Path(path)
+    if p.is_dir():
+        raise RecordingError(f"{p}: is a directory; give a static recording file (.mcap, .csv or .npz)")
+    if p.suffix.lower() not in (".mcap", ".csv", ".npz"):
+        raise RecordingError(f"{p}: unsupported static recording format {p.suffix!r}; allowed: .mcap (bench "
+                             "recording), .csv or .npz (DAQ export)")
     if p.suffix.lower() == ".mcap":
         from twin.mcapfile import read_run
 
@@ -466,10 +679,25 @@ def static_calibration_from(path: str | Path, cfg: BenchConfig,
         for c in VOLT_CHANNELS:
             if run.channels[c].unit != "V":
                 raise RecordingError(f"{p}: channel {c} is in unit {run.channels[c].unit!r}; expected 'V'")
+            if run.n < 2:
+                raise RecordingError(f"{p}: holds {run.n} sample(s); a static recording needs at least 2")
+            x = np.asarray(run[c], dtype=np.float64)
+            if not np.all(np.isfinite(x)):
+                raise RecordingError(f"{p}: channel {c} has NaN or infinite samples")
+            _check_range(x, c, c, cfg, run.rate_hz, str(p))
     else:
         run, _ = import_table(p, cfg, mapping, rate_hz, nan=nan, require=VOLT_CHANNELS)
     volts = {a: run[f"volt_{a}"] for a in ACCELEROMETERS}
-    return calibrate_static(volts, nominal_sensitivities(cfg), calibration_pose_g(cfg), source=p.name)
+    try:
+        cal = calibrate_static(volts, nominal_sensitivities(cfg), calibration_pose_g(cfg), source=p.name)
+    except RecordingError as err:
+        raise RecordingError(f"{p}: {err}") from None
+    supply = cfg.instrumentation.supply_v
+    for k, v in cal.zero_g_v.items():
+        if not 0.0 < v < supply:
+            raise RecordingError(f"{p}: gives a zero-g offset of {v:.4g} V for {k}, outside the sensor's output "
+                                 f"range (0, supply_v = {supply:g}) V; not a static recording of the accelerometers?")
+    return cal
 
 
 def calibration_from_offsets(cfg: BenchConfig, zero_g_v: Mapping[str, float], source: str = "given offsets") -> Calibration:
@@ -477,8 +705,12 @@ def calibration_from_offsets(cfg: BenchConfig, zero_g_v: Mapping[str, float], so
     for k, v in zero_g_v.items():
         if k not in ACCELEROMETERS:
             raise RecordingError(f"--zero-g: unknown sensor {k!r}; allowed: {', '.join(ACCELEROMETERS)}")
-        if not math.isfinite(v):
+        if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) or not math.isfinite(v):
             raise RecordingError(f"--zero-g: {k} must be a finite voltage, got {v!r}")
+        supply = cfg.instrumentation.supply_v
+        if not 0.0 < v < supply:
+            raise RecordingError(f"--zero-g: {k} = {v:g} V is outside the sensor's output range; allowed: "
+                                 f"(0, supply_v = {supply:g}) V (nominal {supply / 2:g} V)")
     missing = [a for a in ACCELEROMETERS if a not in zero_g_v]
     if missing:
         raise RecordingError(f"--zero-g: no offset for {', '.join(missing)}")
