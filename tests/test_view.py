@@ -8,6 +8,8 @@ and is reproducible; bad inputs fail with one line and leave no file.
 
 from __future__ import annotations
 
+import os
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -24,7 +26,7 @@ from twin.config import preset
 from twin.kinematics import rod_angle as ideal_rod_angle
 from twin.mcapfile import read_run, write_run
 from twin.run import Channel, Run
-from twin.simulate import simulate
+from twin.simulate import simulate_run
 from twin.viz import RerunWriter, ViewOptions, convert_file, file_recording_id, write_rrd
 from twin.viz import blueprint as bp
 from twin.viz.pose import ENCODER_COUNTS_PER_REV, poses, rod_angle
@@ -76,7 +78,7 @@ def cli(*argv: str) -> int:
 @pytest.fixture(scope="module")
 def clearance_run() -> Run:
     """Table 4 test 12 (0.1 mm at B and C, 750 rpm), 0.2 s: impacts at both joints."""
-    return simulate(short(preset(12), 0.2))
+    return simulate_run(short(preset(12), 0.2))
 
 
 @pytest.fixture(scope="module")
@@ -265,7 +267,7 @@ def _walk(node):
 
 
 def test_ideal_run_has_no_orbits(tmp_path):
-    run = simulate(short(preset(3), 0.05))
+    run = simulate_run(short(preset(3), 0.05))
     out = write_rrd(run, tmp_path / "ideal.rrd", recording_id="ideal", name="ideal")
     rr_ = read_rrd(out)
     assert "/bench/rod" in rr_ and not any(e.startswith("/orbit") or "contact_" in e for e in rr_)
@@ -299,6 +301,15 @@ def test_spectrum_reads_amplitude_and_default_windows():
     (["view", "{d}/broken.mcap"], "MCAP"),
     (["view", "{d}/good.mcap", "--save", "{d}/out.png"], "must end in .rrd"),
     (["view", "{d}/good.mcap", "--save", "{d}/nodir/out.rrd"], "does not exist"),
+    (["view", "{d}/good.mcap", "--save", "{d}/adir.rrd"], "--save: {d}/adir.rrd is a directory"),
+    (["view", "{d}/adir.rrd"], "expected a .mcap"),
+    (["view", "{d}/good.mcap", "--screenshot", "{d}/shot.jpg"], "--screenshot: must end in .png"),
+    (["view", "{d}/good.mcap", "--screenshot", "{d}/nodir/shot.png"], "--screenshot: directory"),
+    (["view", "{d}/good.mcap", "--screenshot", "{d}/shot.png", "--wait", "-1"], "--wait: must be a finite number"),
+    (["view", "{d}/good.mcap", "--screenshot", "{d}/shot.png", "--wait", "nan"], "--wait: must be a finite number"),
+    (["view", "{d}/good.mcap", "--screenshot", "{d}/shot.png", "--at", "inf"], "--at: must be a finite time"),
+    (["view", "{d}/good.mcap", "--at", "0.1"], "--at: applies to --screenshot only"),
+    (["view", "{d}/good.mcap", "--wait", "5"], "--wait: applies to --screenshot only"),
     (["view", "{d}/good.mcap", "--fft-window", "0.5", "2.0"], "outside the run"),
     (["view", "{d}/good.mcap", "--fft-window", "0.1", "0.05"], "T0 < T1"),
 ])
@@ -307,10 +318,11 @@ def test_bad_inputs_give_one_line_errors_and_no_file(argv, message, clearance_fi
     (tmp_path / "notes.txt").write_text("x")
     (tmp_path / "broken.mcap").write_bytes(mcap.read_bytes()[:100_000])
     (tmp_path / "good.mcap").write_bytes(mcap.read_bytes())
+    (tmp_path / "adir.rrd").mkdir()
     before = sorted(p.name for p in tmp_path.iterdir())
     assert cli(*[a.format(d=tmp_path) for a in argv]) == 2
     err = capsys.readouterr().err.strip()
-    assert err.startswith("twin: error:") and message in err and "\n" not in err
+    assert err.startswith("twin: error:") and message.format(d=tmp_path) in err and "\n" not in err
     assert sorted(p.name for p in tmp_path.iterdir()) == before  # nothing written, no temp file
 
 
@@ -332,9 +344,164 @@ def test_simulate_rerun_rejects_bad_path(tmp_path, capsys):
     assert "--rerun: must end in .rrd" in capsys.readouterr().err
 
 
+# ------------------------------------------- what the machine needs: display, Vulkan driver
+@pytest.fixture(scope="module")
+def small_mcap(tmp_path_factory) -> Path:
+    d = tmp_path_factory.mktemp("small")
+    return write_run(d / "small.mcap", simulate_run(short(preset(3), 0.02)))
+
+
+@pytest.fixture
+def work(small_mcap, tmp_path) -> Path:
+    """A folder holding only a copy of the small run file."""
+    (tmp_path / "run.mcap").write_bytes(small_mcap.read_bytes())
+    return tmp_path
+
+
+def _one_line_error(capsys, *words: str) -> str:
+    cap = capsys.readouterr()
+    err = cap.err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("twin: error: "), cap.err
+    assert "Traceback" not in cap.err and "panicked" not in cap.err
+    for w in words:
+        assert w in err[0], (w, err[0])
+    return err[0]
+
+
+def _no_vulkan(monkeypatch, tmp_path: Path) -> None:
+    """Vulkan ICD search pointed at empty folders, override variables removed."""
+    import twin.viz.screenshot as shot
+
+    empty = tmp_path / "empty-icd"
+    empty.mkdir()
+    for var in ("VK_DRIVER_FILES", "VK_ICD_FILENAMES", "VK_ADD_DRIVER_FILES"):
+        monkeypatch.delenv(var, raising=False)
+    for var in ("HOME", "XDG_CONFIG_HOME", "XDG_CONFIG_DIRS", "XDG_DATA_HOME", "XDG_DATA_DIRS"):
+        monkeypatch.setenv(var, str(empty))
+    monkeypatch.setattr(shot, "SYSTEM_ICD_DIRS", (str(empty),))
+
+
+linux_only = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="display/Vulkan checks are for Linux")
+
+
+@linux_only
+def test_spawn_without_display_is_refused_before_converting(work, monkeypatch, capsys):
+    for var in ("DISPLAY", "WAYLAND_DISPLAY", "WAYLAND_SOCKET"):
+        monkeypatch.delenv(var, raising=False)
+    assert cli("view", work / "run.mcap", "--spawn") == 2
+    _one_line_error(capsys, "--spawn: no display", "DISPLAY", "WAYLAND_DISPLAY")
+    assert sorted(p.name for p in work.iterdir()) == ["run.mcap"]  # no .rrd, no temporary
+
+
+@linux_only
+@pytest.mark.parametrize("how", ["empty search folders", "VK_ICD_FILENAMES at nothing", "VK_DRIVER_FILES empty dir"])
+def test_screenshot_without_vulkan_driver_is_refused_before_converting(how, work, monkeypatch, capsys):
+    _no_vulkan(monkeypatch, work)
+    if how == "VK_ICD_FILENAMES at nothing":
+        monkeypatch.setenv("VK_ICD_FILENAMES", str(work / "missing_icd.json"))
+    elif how == "VK_DRIVER_FILES empty dir":
+        monkeypatch.setenv("VK_DRIVER_FILES", str(work / "empty-icd"))
+    assert cli("view", work / "run.mcap", "--screenshot", work / "shot.png", "--wait", "0") == 2
+    _one_line_error(capsys, "--screenshot: no Vulkan driver", "mesa-vulkan-drivers")
+    assert sorted(p.name for p in work.iterdir()) == ["empty-icd", "run.mcap"]
+
+
+def test_vulkan_driver_lookup(tmp_path, monkeypatch):
+    import twin.viz.screenshot as shot
+
+    _no_vulkan(monkeypatch, tmp_path)
+    assert shot.vulkan_drivers() == []
+    icd = tmp_path / "empty-icd" / "lvp_icd.x86_64.json"
+    icd.write_text("{}")
+    assert shot.vulkan_drivers() == [icd]  # found in the (patched) system folder
+    monkeypatch.setenv("VK_ICD_FILENAMES", str(tmp_path / "other.json"))
+    assert shot.vulkan_drivers() == []  # the override replaces the search
+    monkeypatch.setenv("VK_ADD_DRIVER_FILES", str(icd))
+    assert shot.vulkan_drivers() == [icd]
+
+
+def test_viewer_message_is_one_line():
+    from twin.viz.screenshot import viewer_message
+
+    panic = ("\x1b[2m2026\x1b[0m INFO telemetry\n\nthread 'main' panicked at 'Failed to create render state: "
+             "CustomNativeAdapterSelectionError(\"No graphics adapter\")'\negui_kittest/src/wgpu.rs:77\nstack backtrace:\n")
+    assert viewer_message(panic) == 'Failed to create render state: CustomNativeAdapterSelectionError("No graphics adapter")'
+    assert viewer_message("thread 'main' panicked at src/main.rs:3:5:\nno adapter\n") == "no adapter"
+    assert viewer_message(b"INFO x\nError: winit EventLoopError: os error at /x/src/linux/mod.rs:788: Failed to open "
+                          b"connection to X server\n") == "Error: winit EventLoopError: os error: Failed to open connection to X server"
+    assert viewer_message("") == "no message"
+
+
+def _fake_viewer(d: Path, body: str) -> Path:
+    """A 'rerun' executable first on PATH that runs ``body`` (sh)."""
+    bindir = d / "bin"
+    bindir.mkdir()
+    exe = bindir / "rerun"
+    exe.write_text("#!/bin/sh\n" + body + "\n")
+    exe.chmod(0o755)
+    return bindir
+
+
+@linux_only
+def test_spawn_reports_a_viewer_that_exits_at_once(tmp_path, small_mcap, monkeypatch, capsys):
+    import twin.commands.view as view
+
+    bindir = _fake_viewer(tmp_path, 'echo "Error: winit EventLoopError: Failed to open connection to X server" >&2\nexit 1')
+    monkeypatch.setenv("PATH", f"{bindir}{os.pathsep}{os.environ['PATH']}")
+    monkeypatch.setenv("DISPLAY", ":97")
+    monkeypatch.setattr(view, "SPAWN_CHECK_S", 5.0)
+    out = tmp_path / "run.rrd"
+    assert cli("view", small_mcap, "--save", out, "--spawn") == 2
+    _one_line_error(capsys, "--spawn: the rerun viewer exited at once (status 1", "Failed to open connection to X server",
+                    f"{out} is written")
+    assert out.is_file()
+
+
+@linux_only
+def test_spawn_reports_open_only_when_the_viewer_keeps_running(tmp_path, small_mcap, monkeypatch, capsys):
+    import twin.commands.view as view
+
+    pidfile = tmp_path / "pid"
+    bindir = _fake_viewer(tmp_path, f'echo $$ > "{pidfile}"\nexec sleep 30')
+    monkeypatch.setenv("PATH", f"{bindir}{os.pathsep}{os.environ['PATH']}")
+    monkeypatch.setenv("DISPLAY", ":97")
+    monkeypatch.setattr(view, "SPAWN_CHECK_S", 0.5)
+    try:
+        assert cli("view", small_mcap, "--save", tmp_path / "run.rrd", "--spawn") == 0
+        assert "opened the rerun viewer" in capsys.readouterr().out
+    finally:
+        if pidfile.exists():
+            os.kill(int(pidfile.read_text()), signal.SIGTERM)
+
+
+@linux_only
+@pytest.mark.skipif(Path("/tmp/.X11-unix/X97").exists(), reason="an X server runs on :97")
+def test_spawn_real_viewer_without_x_server(tmp_path, small_mcap, monkeypatch, capfd):
+    monkeypatch.setenv("DISPLAY", ":97")
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_SOCKET", raising=False)
+    assert cli("view", small_mcap, "--save", tmp_path / "run.rrd", "--spawn") == 2
+    _one_line_error(capfd, "--spawn: the rerun viewer exited at once")
+
+
+@linux_only
+def test_screenshot_reports_a_viewer_that_panics(tmp_path, small_mcap, monkeypatch, capfd):
+    """A registered driver whose library is missing: the real headless viewer panics (no adapter)."""
+    icd = tmp_path / "broken_icd.json"
+    icd.write_text('{"file_format_version": "1.0.0", "ICD": {"library_path": "/nonexistent/libvulkan_broken.so", '
+                   '"api_version": "1.3.0"}}')
+    monkeypatch.setenv("VK_ICD_FILENAMES", str(icd))
+    monkeypatch.delenv("VK_DRIVER_FILES", raising=False)
+    out, png = tmp_path / "run.rrd", tmp_path / "shot.png"
+    assert cli("view", small_mcap, "--save", out, "--screenshot", png, "--wait", "20") == 2
+    _one_line_error(capfd, "--screenshot: the headless viewer")  # file descriptors: the viewer and rerun's logger
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["broken_icd.json", "run.rrd"]  # no PNG, no temporary
+
+
 def _has_vulkan() -> bool:
-    d = Path("/usr/share/vulkan/icd.d")
-    return d.is_dir() and any(d.glob("*.json"))
+    from twin.viz.screenshot import vulkan_drivers
+
+    return bool(vulkan_drivers())
 
 
 @pytest.mark.slow

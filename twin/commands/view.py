@@ -1,15 +1,37 @@
-"""``twin view``: turn a run or bench recording into a rerun recording (and open it)."""
+"""``twin view``: turn a run or bench recording into a rerun recording (and open it).
+
+Everything that can be checked is checked before the (possibly long) conversion, so that nothing
+is written when the command cannot do what it was asked: the input, the output paths
+(:func:`twin.util.check_output_file`), and what the machine needs:
+
+* ``--spawn`` opens a window: on Linux and other X11/Wayland systems (not macOS or Windows) a
+  display is there when ``DISPLAY``, ``WAYLAND_DISPLAY`` or ``WAYLAND_SOCKET`` is set (the
+  variables the viewer's windowing library, winit, connects with); none set = no display, a
+  one-line error. With a display, the viewer must still run :data:`SPAWN_CHECK_S` seconds after it
+  started, else its own message (e.g. "Failed to open connection to X server") is the error line
+  (the recording is written by then; the line says where).
+* ``--screenshot`` needs a Vulkan driver (:func:`twin.viz.screenshot.check_vulkan`); a viewer that
+  exits or panics while loading is a one-line error quoting it.
+"""
 
 from __future__ import annotations
 
 import argparse
+import math
+import os
 import shutil
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
 from twin.errors import TwinError
+
+#: Seconds the spawned viewer must keep running before ``twin view --spawn`` reports it open.
+SPAWN_CHECK_S = 1.5
+#: Seconds the headless viewer loads before a screenshot, unless --wait says otherwise.
+DEFAULT_WAIT_S = 60.0
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -30,27 +52,42 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "(0 = whole run; default 1)")
     p.add_argument("--screenshot", metavar="OUT.png",
                    help="also save a PNG of the default view from a headless viewer (needs Vulkan, e.g. Mesa's)")
-    p.add_argument("--at", type=float, metavar="T", help="time cursor of the screenshot [s]")
-    p.add_argument("--wait", type=float, metavar="S", default=60.0,
-                   help="seconds the headless viewer loads before the screenshot (default 60)")
+    p.add_argument("--at", type=float, metavar="T", help="time cursor of the screenshot [s] (with --screenshot)")
+    p.add_argument("--wait", type=float, metavar="S", default=None,
+                   help=f"seconds the headless viewer loads before the screenshot (with --screenshot; "
+                        f"default {DEFAULT_WAIT_S:g})")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
+    from twin.util import check_output_file
     from twin.viz import ViewOptions, convert_file, default_output
 
     src = Path(args.input)
     if src.suffix != ".mcap":
         raise TwinError(f"{src}: expected a .mcap run or recording file")
+    if src.is_dir():
+        raise TwinError(f"{src}: is a directory; expected a .mcap run or recording file")
     if not src.is_file():
         raise TwinError(f"{src}: no such file")
-    out = Path(args.save) if args.save else default_output(src)
-    if out.suffix != ".rrd":
-        raise TwinError(f"--save: must end in .rrd, got {out.name}")
-    if not out.parent.is_dir():
-        raise TwinError(f"--save: directory {out.parent} does not exist")
-    if args.screenshot and (Path(args.screenshot).suffix != ".png" or not Path(args.screenshot).parent.is_dir()):
-        raise TwinError(f"--screenshot: must be a .png in an existing directory, got {args.screenshot}")
+    out = check_output_file(args.save if args.save else default_output(src), "--save", ".rrd", inputs=[src])
+    wait = DEFAULT_WAIT_S if args.wait is None else args.wait
+    if args.screenshot:
+        check_output_file(args.screenshot, "--screenshot", ".png")
+        if not (math.isfinite(wait) and wait >= 0):
+            raise TwinError(f"--wait: must be a finite number of seconds >= 0, got {args.wait!r}")
+        if args.at is not None and not math.isfinite(args.at):
+            raise TwinError(f"--at: must be a finite time [s], got {args.at!r}")
+        from twin.viz.screenshot import check_vulkan, rerun_executable
+
+        rerun_executable()
+        check_vulkan()
+    else:
+        for flag, value in (("--at", args.at), ("--wait", args.wait)):
+            if value is not None:
+                raise TwinError(f"{flag}: applies to --screenshot only; give --screenshot OUT.png or leave it out")
+    if args.spawn:
+        exe = _viewer_for_spawn()
     opts = ViewOptions(pose_rate_hz=args.pose_rate, plot_window_s=args.plot_window,
                        fft_window_s=tuple(args.fft_window) if args.fft_window else None)
     t = time.perf_counter()
@@ -61,17 +98,48 @@ def run(args: argparse.Namespace) -> int:
     if args.screenshot:
         from twin.viz.screenshot import screenshot
 
-        shot = screenshot(path, args.screenshot, at_s=args.at, wait_s=args.wait)
+        shot = screenshot(path, args.screenshot, at_s=args.at, wait_s=wait)
         print(f"saved {shot}")
     if args.spawn:
-        _spawn(path)
+        _spawn(exe, path)
     return 0
 
 
-def _spawn(path: Path) -> None:
-    """Open the rerun viewer on ``path`` in the background."""
+def has_display() -> bool:
+    """Whether a window can be opened (see the module docstring); always True on macOS and Windows."""
+    if sys.platform == "darwin" or sys.platform.startswith("win"):
+        return True
+    return any(os.environ.get(v) for v in ("DISPLAY", "WAYLAND_DISPLAY", "WAYLAND_SOCKET"))
+
+
+def _viewer_for_spawn() -> str:
+    """The rerun viewer to open, after checking there is a display to open it on."""
+    if not has_display():
+        raise TwinError("--spawn: no display (none of DISPLAY, WAYLAND_DISPLAY, WAYLAND_SOCKET is set), so the rerun "
+                        "viewer cannot open a window; leave out --spawn and open the .rrd with 'rerun FILE.rrd' "
+                        "where there is a display, or use --screenshot OUT.png")
     exe = shutil.which("rerun") or str(Path(sys.executable).with_name("rerun"))
-    if not Path(exe).exists() and shutil.which(exe) is None:
+    if not Path(exe).is_file():
         raise TwinError("--spawn: the rerun viewer ('rerun' from rerun-sdk) is not on PATH")
-    subprocess.Popen([exe, str(path)], start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    print(f"opened the rerun viewer on {path}")
+    return exe
+
+
+def _spawn(exe: str, path: Path) -> None:
+    """Open the rerun viewer on ``path`` in the background; it must still run after
+    :data:`SPAWN_CHECK_S` seconds (its output until then goes to a log quoted on failure)."""
+    from twin.viz.screenshot import viewer_message
+
+    env = dict(os.environ)
+    env.setdefault("RUST_LOG", "error")
+    with tempfile.TemporaryFile() as log:
+        proc = subprocess.Popen([exe, str(path)], start_new_session=True, stdin=subprocess.DEVNULL,
+                                stdout=log, stderr=log, env=env)
+        try:
+            code = proc.wait(timeout=SPAWN_CHECK_S)
+        except subprocess.TimeoutExpired:
+            print(f"opened the rerun viewer on {path}")
+            return
+        log.seek(0)
+        msg = viewer_message(log.read())
+    raise TwinError(f"--spawn: the rerun viewer exited at once (status {code}: {msg}); {path} is written, "
+                    f"open it with 'rerun {path}' where there is a display")
