@@ -1,13 +1,18 @@
-"""Build of the native bushing collider (twin.mujoco_engine._bore).
+"""Package layout and the build of the native bushing collider (twin.mujoco_engine._bore).
 
-Everything else is declared in pyproject.toml. The collider is compiled against the C headers
-shipped in the mujoco-core wheel (a build requirement), located without importing mujoco.
+Metadata and dependencies are declared in pyproject.toml. The collider is compiled against the
+C headers shipped in the mujoco-core wheel (a build requirement), located without importing
+mujoco.
+
+Layout: the packages under twin/, plus the repository's top-level mjcf/ folder (the base MJCF
+model) installed as the package ``twin.mjcf``, so that the model ships in wheels and works in
+editable installs alike (twin.names.BASE_XML finds it with importlib.resources).
 """
 
 import importlib.util
 import os
 
-from setuptools import Extension, setup
+from setuptools import Extension, find_namespace_packages, setup
 
 spec = importlib.util.find_spec("mujoco")
 if spec is None or not spec.submodule_search_locations:
@@ -15,6 +20,12 @@ if spec is None or not spec.submodule_search_locations:
 include = os.path.join(list(spec.submodule_search_locations)[0], "include")
 
 setup(
+    packages=find_namespace_packages(include=["twin*"]) + ["twin.mjcf"],
+    package_dir={"twin.mjcf": "mjcf"},
+    package_data={
+        "twin": ["data/*.toml", "data/*.json", "data/*.xml", "mujoco_engine/*.c"],
+        "twin.mjcf": ["*.xml"],
+    },
     ext_modules=[
         Extension(
             "twin.mujoco_engine._bore",

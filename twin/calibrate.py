@@ -66,7 +66,7 @@ from mujoco import rollout
 from twin.config import CATALOGUE_DIAMETRAL_MM, BenchConfig, ln_stiffness, with_overrides
 from twin.impact import ImpactResult, impact_hysteresis
 from twin.mujoco_engine.collider import ensure_installed
-from twin.names import BORE_MAGIC
+from twin.names import BORE_USERDATA_FIELDS, bore_userdata
 
 #: impact speeds of the calibration [m/s] (issue: at least 1 mm/s to 0.5 m/s). Measured on reference
 #: runs (``analysis/impact_speeds.py``, analysis/results/impact_speeds): bench impacts span
@@ -140,17 +140,19 @@ def probe_model(cfg: BenchConfig, joint: str, m_eff: float, law: ContactLaw,
     half = cfg.joints.bushing_length_m / 2
     spec = mujoco.MjSpec()
     spec.compiler.autolimits = True
-    spec.nuser_geom = 8
-    damping = [0.0, 0.0, 0.0, -1.0]
+    spec.nuser_geom = len(BORE_USERDATA_FIELDS)
+    damping = {}
     if impact_damping is not None:
         spec.nuserdata = 1
-        damping = [*map(float, impact_damping), 0.0]
+        coef, n, floor = map(float, impact_damping)
+        damping = {"damping_coef": coef, "exponent": n, "speed_floor": floor, "slot": 0}
     spec.option.timestep = cfg.simulation.timestep_s
     spec.option.integrator = getattr(mujoco.mjtIntegrator, f"mjINT_{cfg.mujoco.integrator.upper()}")
     spec.option.gravity = [0, 0, 0]
     spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_EULERDAMP
     bore = spec.worldbody.add_geom(name="bore", type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[ri, half, 0],
-                                   contype=0, conaffinity=0, userdata=[BORE_MAGIC, 0.0, 1.0, 2.0, *damping])
+                                   contype=0, conaffinity=0,
+                                   userdata=bore_userdata(mu0=0.0, v0=1.0, v1=2.0, **damping))  # frictionless
     body = spec.worldbody.add_body(name="pin_body")
     body.add_joint(name="x", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1, 0, 0])
     body.explicitinertial = True

@@ -5,6 +5,12 @@ paper, ``../shared/seeds/003_...``; tables refer to it). Values the papers leave
 marked PLACEHOLDER in the docstrings: they are configuration, documented, never hidden
 in code.
 
+Numbers the base MuJoCo model ``mjcf/bench.xml`` also holds (Table 1 bodies, pin and bushing
+sizes, the bushing friction law, guide friction, gravity, d_off, PID gains, accelerometer
+mounts, timestep and solver numerics) are written once, in that file with their sources: the
+fields' defaults are read from it by :mod:`twin.model_xml` ("default: mjcf/bench.xml" in
+their docstrings). The other defaults are written here.
+
 Bench frame (used by both engines): origin at the crank pivot A, ``x`` along the slider
 guide towards the slider, ``y`` perpendicular in the plane of the mechanism (up in the
 paper's tests), ``z = x × y`` along the crank axis. The bench angle ``θ`` of the crank is
@@ -30,7 +36,11 @@ from typing import Any, Mapping
 
 import tomli_w
 
+from twin import model_xml
 from twin.errors import ConfigError
+
+#: defaults held by the base model mjcf/bench.xml (parsed once; ModelError if unreadable)
+_XML = model_xml.defaults()
 
 #: Diametral clearances of the bushing catalogue [mm] (S003 §2.2.1).
 CATALOGUE_DIAMETRAL_MM: tuple[float, ...] = (0.02, 0.05, 0.07, 0.10, 0.50, 1.00)
@@ -75,7 +85,7 @@ def _choice(value: str, name: str, allowed: tuple[str, ...]) -> None:
 # --------------------------------------------------------------------------- bodies
 @dataclass(frozen=True)
 class BodyParams:
-    """Rigid body of the mechanism (S003 Table 1).
+    """Rigid body of the mechanism (S003 Table 1). Defaults: mjcf/bench.xml (S003 Table 1).
 
     Attributes:
         mass_kg: mass [kg].
@@ -99,11 +109,15 @@ class BodyParams:
 
 @dataclass(frozen=True)
 class Bodies:
-    """The three moving bodies (S003 Table 1; crank includes shaft and pulley)."""
+    """The three moving bodies (S003 Table 1; crank includes shaft and pulley).
 
-    crank: BodyParams = BodyParams(5.72, 0.12, 0.0115, 0.0293)
-    rod: BodyParams = BodyParams(3.55, 0.60, 0.3000, 0.1970)
-    slider: BodyParams = BodyParams(1.97, 0.05, 0.0040, 0.0025)
+    Default: mjcf/bench.xml (source S003 Table 1: each body's ``<inertial>`` mass, pos x and
+    diaginertia z; lengths from pin B's x, bushing C's x and the slider block's length).
+    """
+
+    crank: BodyParams = BodyParams(**dataclasses.asdict(_XML.crank))
+    rod: BodyParams = BodyParams(**dataclasses.asdict(_XML.rod))
+    slider: BodyParams = BodyParams(**dataclasses.asdict(_XML.slider))
 
 
 # ------------------------------------------------------------------------ materials
@@ -151,9 +165,11 @@ class Joints:
             joint, S003 §2.2.1 case A), otherwise a catalogue value.
         clearance_c_mm: diametral clearance at C [mm], same rules.
         allow_noncatalogue: accept clearances outside the catalogue (0.02–1.00 mm values).
-        pin_diameter_m: journal (pin) diameter [m]. PLACEHOLDER: not given by S003;
-            20 mm is the documented default (BENCH.md), consistent with its K ≈ 1.3e11.
-        bushing_length_m: axial length of the bushing [m]. PLACEHOLDER: not given; 20 mm.
+        pin_diameter_m: journal (pin) diameter [m]. PLACEHOLDER: not given by S003.
+            Default: mjcf/bench.xml (pin class size, BENCH.md's documented placeholder,
+            consistent with its K ≈ 1.3e11).
+        bushing_length_m: axial length of the bushing [m]. PLACEHOLDER: not given.
+            Default: mjcf/bench.xml (pin/bushing class half length × 2).
         initial_eccentricity: ``"loaded"`` starts each journal touching the bushing on the side
             its static load pushes it to (no artificial drop at t = 0); ``"centred"`` starts
             it at the bushing centre.
@@ -162,8 +178,8 @@ class Joints:
     clearance_b_mm: float = 0.0
     clearance_c_mm: float = 0.0
     allow_noncatalogue: bool = False
-    pin_diameter_m: float = 0.020
-    bushing_length_m: float = 0.020
+    pin_diameter_m: float = _XML.pin_diameter_m
+    bushing_length_m: float = _XML.bushing_length_m
     initial_eccentricity: str = "loaded"
 
     def __post_init__(self) -> None:
@@ -213,19 +229,22 @@ class Mechanism:
 
     Attributes:
         orientation: bench axis that points up ("x", "y" or "z"); gravity acts along its
-            negative direction. S003 tested only "y" (§2.2.3, §4.3).
-        gravity_mps2: magnitude of gravity [m/s²] (S003 §4.1).
+            negative direction. S003 tested only "y" (§2.2.3, §4.3). Default: mjcf/bench.xml
+            (the axis of ``<option gravity>``).
+        gravity_mps2: magnitude of gravity [m/s²]. Default: mjcf/bench.xml (source S003 §4.1).
         d_off_m: offset of C' above the slider guide centre line [m] (S003 Fig. 7).
-            PLACEHOLDER: not given; 0 m. The guide line through A is also an assumption.
-        guide_friction_n: slider guide friction force whenever the slider moves [N] (S003 §3).
+            PLACEHOLDER: not given. Default: mjcf/bench.xml (y of pin C on the slider). The
+            guide line through A is also an assumption.
+        guide_friction_n: slider guide friction force whenever the slider moves [N].
+            Default: mjcf/bench.xml (source S003 §3: frictionloss of the slide joint).
         crank_direction: +1 if a positive motor speed turns the crank counter-clockwise about
             +z (bench angle increasing), −1 otherwise. PLACEHOLDER: not given; +1.
     """
 
-    orientation: str = "y"
-    gravity_mps2: float = 9.81
-    d_off_m: float = 0.0
-    guide_friction_n: float = 2.5
+    orientation: str = _XML.orientation
+    gravity_mps2: float = _XML.gravity_mps2
+    d_off_m: float = _XML.d_off_m
+    guide_friction_n: float = _XML.guide_friction_n
     crank_direction: int = 1
 
     def __post_init__(self) -> None:
@@ -259,18 +278,21 @@ class Contact:
         exponent: force exponent n [-] (S003: 1.5).
         stiffness: contact stiffness K [N/m^n]; 0 = computed from the pin/bushing geometry
             and materials with Eq. 18.
-        mu0: dynamic friction coefficient μ0 [-] (S003: 0.05).
-        v0_mps: friction regularization velocity below which μ = 0 [m/s] (S003: 5e-4).
-        v1_mps: velocity above which μ = μ0 [m/s] (S003: 1e-3).
+        mu0: dynamic friction coefficient μ0 [-]. Default: mjcf/bench.xml (source S003
+            Eq. 19–20; bushing geom user data, field ``mu0`` of twin.names.BORE_USERDATA_FIELDS).
+        v0_mps: friction regularization velocity below which μ = 0 [m/s]. Default:
+            mjcf/bench.xml (source S003 Eq. 19–20; user data field ``v0``).
+        v1_mps: velocity above which μ = μ0 [m/s]. Default: mjcf/bench.xml (source S003
+            Eq. 19–20; user data field ``v1``).
     """
 
     law: str = "lankarani-nikravesh"
     restitution: float = 0.4
     exponent: float = 1.5
     stiffness: float = 0.0
-    mu0: float = 0.05
-    v0_mps: float = 5e-4
-    v1_mps: float = 1e-3
+    mu0: float = _XML.mu0
+    v0_mps: float = _XML.v0_mps
+    v1_mps: float = _XML.v1_mps
 
     LAWS: typing.ClassVar[tuple[str, ...]] = ("lankarani-nikravesh", "hunt-crossley", "flores", "linear")
 
@@ -309,6 +331,8 @@ class MujocoSettings:
 
     Attributes:
         integrator: MuJoCo integrator ("Euler", "implicitfast", "implicit", "RK4").
+            Default: mjcf/bench.xml (``<option>``, with the reasons there), as are solver,
+            iterations and tolerance.
         solver: constraint solver ("Newton", "CG", "PGS").
         iterations: maximum solver iterations.
         tolerance: solver tolerance (0 disables the early exit).
@@ -316,8 +340,10 @@ class MujocoSettings:
             table ``twin/data/contact_calibration.json`` (see ``twin calibrate contact``).
         contact_solimp: pin/bushing ``solimp`` (5 numbers); empty = calibration table.
         equality_solref: ``solref`` of the loop-closure ``connect`` at an ideal joint C.
+            Default: mjcf/bench.xml (the ``joint_C`` connect), as is equality_solimp.
         equality_solimp: ``solimp`` of that connect.
         guide_solreffriction: ``solreffriction`` of the guide's dry friction (frictionloss).
+            Default: mjcf/bench.xml (the slide joint).
         bushing: representation of a bushing bore: "bore" (native pin-in-bore collider, exact
             circle; the default, chosen by ``analysis/bushing_representations.py``), "ring"
             (``ring_boxes`` boxes whose faces form a regular polygon tangent to the bore) or
@@ -346,15 +372,15 @@ class MujocoSettings:
             ``min_impact_speed_mps``, 1 mm/s).
     """
 
-    integrator: str = "Euler"
-    solver: str = "Newton"
-    iterations: int = 20
-    tolerance: float = 1e-10
+    integrator: str = _XML.integrator
+    solver: str = _XML.solver
+    iterations: int = _XML.iterations
+    tolerance: float = _XML.tolerance
     contact_solref: tuple[float, ...] = ()
     contact_solimp: tuple[float, ...] = ()
-    equality_solref: tuple[float, ...] = (2e-5, 1.0)
-    equality_solimp: tuple[float, ...] = (0.99, 0.9999, 1e-6, 0.5, 2.0)
-    guide_solreffriction: tuple[float, ...] = (2e-5, 1.0)
+    equality_solref: tuple[float, ...] = _XML.equality_solref
+    equality_solimp: tuple[float, ...] = _XML.equality_solimp
+    guide_solreffriction: tuple[float, ...] = _XML.guide_solreffriction
     bushing: str = "bore"
     ring_boxes: int = 48
     friction: str = "native"
@@ -473,7 +499,7 @@ class PID:
     torque = kp (θ_ref − θ) + kv (ω_ref − ω) + ki ∫(θ_ref − θ) dt, integral clamped to ±imax.
     Gains from ``analysis/tune_pid.py`` (pole placement on the crank's largest effective
     inertia over a turn, kp sized for 0.5 encoder count of error at 750 motor rpm; see its
-    docstring), rounded to two digits.
+    docstring), rounded to two digits. Defaults: mjcf/bench.xml (the ``crank_pid`` actuator).
 
     Attributes:
         kp: proportional gain [N m/rad].
@@ -482,10 +508,10 @@ class PID:
         imax: anti-windup clamp of the integral state [rad s]; 0 = unclamped.
     """
 
-    kp: float = 1.7e5
-    kv: float = 270.0
-    ki: float = 2.0e7
-    imax: float = 1.6e-6
+    kp: float = _XML.kp
+    kv: float = _XML.kv
+    ki: float = _XML.ki
+    imax: float = _XML.imax
 
     def __post_init__(self) -> None:
         _positive(self.kp, "kp", "N m/rad")
@@ -521,14 +547,9 @@ class AccelMount:
 
 
 def _default_mounts() -> dict[str, AccelMount]:
-    return {
-        "AC1": AccelMount("rod", (0.05, 0.0), "+x"),
-        "AC2": AccelMount("rod", (0.05, 0.0), "+y"),
-        "AC3": AccelMount("rod", (0.55, 0.0), "+y"),
-        "AC4": AccelMount("rod", (0.55, 0.0), "+x"),
-        "AC5": AccelMount("slider", (0.0, 0.0), "+y"),
-        "AC6": AccelMount("slider", (0.0, 0.0), "+x"),
-    }
+    """Default: mjcf/bench.xml (the AC1..AC6 sites: parent body, position, x axis; positions
+    PLACEHOLDERS of S003 Table 3, "near the joint")."""
+    return {name: AccelMount(m.body, m.position_m, m.axis) for name, m in _XML.accelerometers}
 
 
 @dataclass(frozen=True)
@@ -536,7 +557,8 @@ class Sensors:
     """Virtual sensors and the channel groups a run computes and keeps.
 
     Attributes:
-        accelerometers: mounting of AC1–AC6 (keys must be AC1..AC6).
+        accelerometers: mounting of AC1–AC6 (keys must be AC1..AC6). Default: mjcf/bench.xml
+            (the AC1..AC6 sites).
         channels: channel groups to compute (subset of accel, encoder, crank, slider,
             joints, drive, and the optional energy); a scene computes only the sensors these
             need. The default is every group except the optional ones.
@@ -696,13 +718,14 @@ class Simulation:
         engine: "mujoco" (the twin) or "reference" (R-matrix, Lankarani–Nikravesh).
         duration_s: simulated time [s]; 0 = the drive program's natural length
             (38 s for the protocol, the trace's length for a trace).
-        timestep_s: integration step [s] (S003 §4.3: 1e-5 s, matches the 100 kHz logging).
+        timestep_s: integration step [s]. Default: mjcf/bench.xml (source S003 §4.3, matching
+            the 100 kHz logging).
         chunk_s: simulated time per chunk streamed to the sinks [s].
     """
 
     engine: str = "mujoco"
     duration_s: float = 2.0
-    timestep_s: float = 1e-5
+    timestep_s: float = _XML.timestep_s
     chunk_s: float = 0.5
 
     def __post_init__(self) -> None:

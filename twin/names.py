@@ -1,12 +1,24 @@
 """Every MJCF name Python uses, in one place (``tests/test_names.py`` resolves each one in
-the compiled models). The base model is ``mjcf/bench.xml``."""
+the compiled models), and the layout of a bushing geom's user data. The base model is
+``mjcf/bench.xml``, installed as the package ``twin.mjcf``."""
 
 from __future__ import annotations
 
+from importlib import resources
 from pathlib import Path
+from typing import Sequence
 
-#: the readable base model
-BASE_XML = Path(__file__).resolve().parent.parent / "mjcf" / "bench.xml"
+
+def _base_xml() -> Path:
+    try:
+        return Path(str(resources.files("twin.mjcf").joinpath("bench.xml")))
+    except ModuleNotFoundError:  # a broken installation: twin.model_xml and the builder report it
+        return Path(__file__).resolve().parent / "mjcf" / "bench.xml"
+
+
+#: the readable base model: the repository's ``mjcf/bench.xml``, shipped as package data of
+#: ``twin.mjcf`` (setup.py maps the folder into the package; wheels and editable installs alike)
+BASE_XML = _base_xml()
 
 # bodies
 CRANK = "crank"
@@ -84,5 +96,49 @@ def sensor_friction(joint: str) -> str:
     return f"friction_{joint}"
 
 
-#: marker of a bushing bore in geom user[0] (must match BORE_MAGIC in _bore.c); user[1:4] = mu0, v0, v1
+#: marker of a bushing bore in the geom user data's "marker" field (must match BORE_MAGIC in _bore.c)
 BORE_MAGIC = 7301.0
+
+#: Layout of a bushing bore's geom user data (``nuser_geom`` = its length), read by index by the
+#: native module ``twin/mujoco_engine/_bore.c`` (its ``enum bore_user``, same order; the module
+#: reports its layout and :func:`twin.mujoco_engine.collider.ensure_installed` compares them):
+#:
+#: * ``marker``: :data:`BORE_MAGIC` makes the native collider treat the geom as a hollow bore;
+#: * ``mu0``, ``v0``, ``v1``: regularized Coulomb friction (S003 Eq. 19-20; μ0 [-], v0, v1 [m/s]),
+#:   applied as a passive force; mu0 = 0 switches it off;
+#: * ``damping_coef``, ``exponent``, ``speed_floor``, ``slot``: impact-speed damping
+#:   coef δⁿ δ̇ / v_imp (coef = χ K [N/mⁿ], 0 = off; n [-]; floor of v_imp [m/s]; index of the
+#:   ``mjData.userdata`` slot that keeps v_imp, -1 = none).
+BORE_USERDATA_FIELDS: tuple[str, ...] = ("marker", "mu0", "v0", "v1", "damping_coef", "exponent", "speed_floor", "slot")
+#: values of the optional fields when not given (damping off, no slot)
+_BORE_USERDATA_OPTIONAL = {"marker": BORE_MAGIC, "damping_coef": 0.0, "exponent": 0.0, "speed_floor": 0.0,
+                           "slot": -1.0}
+
+
+def bore_userdata(**fields: float) -> list[float]:
+    """User data vector of a bushing bore from its named fields (:data:`BORE_USERDATA_FIELDS`).
+
+    ``mu0``, ``v0`` and ``v1`` are required; ``marker`` defaults to :data:`BORE_MAGIC`, the
+    damping fields to off and ``slot`` to -1. Unknown names raise ``KeyError``.
+    """
+    unknown = set(fields) - set(BORE_USERDATA_FIELDS)
+    if unknown:
+        raise KeyError(f"unknown bore user data field(s) {sorted(unknown)}; layout: {BORE_USERDATA_FIELDS}")
+    values = {**_BORE_USERDATA_OPTIONAL, **fields}
+    missing = [f for f in BORE_USERDATA_FIELDS if f not in values]
+    if missing:
+        raise KeyError(f"bore user data needs {missing}")
+    return [float(values[f]) for f in BORE_USERDATA_FIELDS]
+
+
+def read_bore_userdata(user: Sequence[float]) -> dict[str, float]:
+    """Named fields of a bushing bore's user data vector (inverse of :func:`bore_userdata`)."""
+    if len(user) != len(BORE_USERDATA_FIELDS):
+        raise ValueError(f"bore user data holds {len(user)} numbers, the layout {len(BORE_USERDATA_FIELDS)}: "
+                         f"{BORE_USERDATA_FIELDS}")
+    return {f: float(v) for f, v in zip(BORE_USERDATA_FIELDS, user)}
+
+
+def replace_bore_userdata(user: Sequence[float], **fields: float) -> list[float]:
+    """``user`` with some named fields changed."""
+    return bore_userdata(**{**read_bore_userdata(user), **fields})

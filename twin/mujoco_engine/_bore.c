@@ -5,7 +5,7 @@
  * documented extension point is the global collision table mjCOLLISIONFUNC[type1][type2]
  * (MuJoCo docs, programming/simulation "Collision detection"). This module installs a
  * function for the cylinder-cylinder pair: when exactly one of the two geoms is marked as a
- * bore (geom user[0] == BORE_MAGIC), the pair is treated as a pin of radius R_j inside a bore
+ * bore (geom user data field marker == BORE_MAGIC), the pair is treated as a pin of radius R_j inside a bore
  * of radius R_i (both taken from geom_size[0]) with parallel axes (the bore's z axis):
  *
  *   e    = pin centre - bore centre, projected on the plane normal to the bore axis
@@ -31,21 +31,21 @@
  * bore (rotations included). f_N is the contact's soft-constraint force predicted from its
  * own row, f_N = aref / (A_hat + R) with aref = -B vel - K I pos (MuJoCo's reference
  * acceleration, impedance I): exactly k d + c d' for a flat, tiny impedance. The bore geom's
- * user data carry the law: user = [BORE_MAGIC, mu0, v0, v1, ...]. A user sensor (mjcb_sensor,
+ * user data carry the law: fields BORE_MU0, BORE_V0, BORE_V1 (enum bore_user). A user sensor (mjcb_sensor,
  * objtype geom = the bore) reports the friction force on the pin along t = axis x n, where
  * n points from the bore centre towards the pin.
  *
- * Impact-speed damping (optional: user[4] > 0, nuser_geom >= 8). The reference's
+ * Impact-speed damping (optional: user[BORE_DAMPING_COEF] > 0, nuser_geom >= BORE_NUSER). The reference's
  * Lankarani-Nikravesh law damps with chi K d^n d'/v_imp, v_imp the approach speed stored at
  * the start of the contact event (S003 Eq. 17), which a fixed solref cannot express. Here,
  * in mjcb_passive (after MuJoCo has built the constraint rows, before it computes their
  * reference accelerations), the damping B of the bore's first contact row is raised by
  *
- *   B_x = coef d^n / v_imp * (A_hat + R),   coef = user[4], n = user[5],
+ *   B_x = coef d^n / v_imp * (A_hat + R),   coef = user[BORE_DAMPING_COEF], n = user[BORE_EXPONENT],
  *
  * which adds coef d^n d'/v_imp to that row's force and lets the solver treat it implicitly
- * (no explicit-damping step limit). v_imp = max(approach speed, user[6]) is taken when the
- * bore has a contact and had none at the previous call, and kept in d->userdata[user[7]]
+ * (no explicit-damping step limit). v_imp = max(approach speed, user[BORE_SPEED_FLOOR]) is taken when the
+ * bore has a contact and had none at the previous call, and kept in d->userdata[user[BORE_SLOT]]
  * (0 = no event; mj_resetData clears it). As in the reference, the ratio d'/v_imp is kept
  * above -1 while separating. Assumes one mjcb_passive call per constraint build (mj_step,
  * mj_forward; not mj_forwardSkip from the velocity stage).
@@ -57,6 +57,27 @@
 
 #define BORE_MAGIC 7301.0
 
+/* Layout of a bore geom's user data (m->geom_user row, nuser_geom = BORE_NUSER): the one
+ * definition is twin/names.py BORE_USERDATA_FIELDS (same names, same order). The module reports
+ * its layout (userdata_fields()) and twin/mujoco_engine/collider.py refuses to install it if
+ * the two differ. */
+enum bore_user {
+  BORE_MARKER = 0,       /* BORE_MAGIC marks the geom as a bore */
+  BORE_MU0,              /* regularized Coulomb friction: mu0 [-] (0 = off) */
+  BORE_V0,               /* v0 [m/s]: mu = 0 below */
+  BORE_V1,               /* v1 [m/s]: mu = mu0 above */
+  BORE_DAMPING_COEF,     /* impact-speed damping coef = chi K [N/m^n] (0 = off) */
+  BORE_EXPONENT,         /* its exponent n [-] */
+  BORE_SPEED_FLOOR,      /* floor of the stored impact speed [m/s] */
+  BORE_SLOT,             /* d->userdata index that keeps v_imp (-1 = none) */
+  BORE_NUSER             /* number of fields */
+};
+static const char* const bore_user_names[] = {
+  "marker", "mu0", "v0", "v1", "damping_coef", "exponent", "speed_floor", "slot"
+};
+_Static_assert(sizeof(bore_user_names) / sizeof(bore_user_names[0]) == BORE_NUSER,
+               "bore_user_names must name every field of enum bore_user");
+
 static mjfCollision g_previous = NULL;
 static mjfGeneric g_prev_passive = NULL;
 static mjfSensor g_prev_sensor = NULL;
@@ -65,7 +86,7 @@ static applyFT_t g_applyFT = NULL;
 static int g_installed = 0;
 
 static int is_bore(const mjModel* m, int g) {
-  return m->nuser_geom > 0 && m->geom_user[g * m->nuser_geom] == BORE_MAGIC;
+  return m->nuser_geom > BORE_MARKER && m->geom_user[g * m->nuser_geom + BORE_MARKER] == BORE_MAGIC;
 }
 
 static int collide_pin_bore(const mjModel* m, mjData* d, mjPreContact* con,
@@ -144,9 +165,9 @@ static int bore_friction(const mjModel* m, const mjData* d, int icon, friction_t
   const int b1 = is_bore(m, g1), b2 = is_bore(m, g2);
   if (b1 == b2 || con->exclude || con->efc_address < 0) return 0;
   const int gb = b1 ? g1 : g2, gp = b1 ? g2 : g1;
-  if (m->nuser_geom < 4) return 0;
+  if (m->nuser_geom <= BORE_V1) return 0;
   const mjtNum* user = m->geom_user + gb * m->nuser_geom;
-  const mjtNum mu0 = user[1], v0 = user[2], v1 = user[3];
+  const mjtNum mu0 = user[BORE_MU0], v0 = user[BORE_V0], v1 = user[BORE_V1];
   const int row = con->efc_address;
   const mjtNum* kbip = d->efc_KBIP + 4 * row;
   mjtNum va[3], vb[3];
@@ -178,11 +199,11 @@ static int bore_friction(const mjModel* m, const mjData* d, int icon, friction_t
 
 static void impact_speed_damping(const mjModel* m, mjData* d) {
   const int nu = m->nuser_geom;
-  if (nu < 8) return;
+  if (nu < BORE_NUSER) return;
   for (int gb = 0; gb < m->ngeom; gb++) {
     const mjtNum* user = m->geom_user + gb * nu;
-    if (user[0] != BORE_MAGIC || !(user[4] > 0)) continue;
-    const int slot = (int)user[7];
+    if (user[BORE_MARKER] != BORE_MAGIC || !(user[BORE_DAMPING_COEF] > 0)) continue;
+    const int slot = (int)user[BORE_SLOT];
     if (slot < 0 || slot >= m->nuserdata) continue;
     int icon = -1;
     for (int i = 0; i < d->ncon; i++) {
@@ -199,11 +220,11 @@ static void impact_speed_damping(const mjModel* m, mjData* d) {
     const int row = d->contact[icon].efc_address;
     mjtNum va[3], vb[3];
     const mjtNum vel = contact_velocity(m, d, d->contact + icon, va, vb);
-    if (!(d->userdata[slot] > 0)) d->userdata[slot] = fmax(-vel, user[6]);
+    if (!(d->userdata[slot] > 0)) d->userdata[slot] = fmax(-vel, user[BORE_SPEED_FLOOR]);
     const mjtNum vimp = d->userdata[slot];
     const mjtNum pen = -(d->efc_pos[row] - d->efc_margin[row]);
     if (!(pen > 0)) continue;
-    mjtNum b = user[4] * pow(pen, user[5]) / vimp * (d->efc_diagA[row] + d->efc_R[row]);
+    mjtNum b = user[BORE_DAMPING_COEF] * pow(pen, user[BORE_EXPONENT]) / vimp * (d->efc_diagA[row] + d->efc_R[row]);
     const mjtNum ratio = -vel / vimp;           /* d'/v_imp */
     if (ratio < -1) b /= -ratio;                /* clamp: force as at d'/v_imp = -1 */
     d->efc_KBIP[4 * row + 1] += b;
@@ -213,7 +234,7 @@ static void impact_speed_damping(const mjModel* m, mjData* d) {
 static void passive_friction(const mjModel* m, mjData* d) {
   if (g_prev_passive) g_prev_passive(m, d);
   impact_speed_damping(m, d);
-  if (!g_applyFT || m->nuser_geom < 4) return;
+  if (!g_applyFT || m->nuser_geom <= BORE_V1) return;
   for (int i = 0; i < d->ncon; i++) {
     friction_t f;
     if (!bore_friction(m, d, i, &f) || f.ft == 0) continue;
@@ -226,7 +247,7 @@ static void passive_friction(const mjModel* m, mjData* d) {
 
 static void sensor_friction(const mjModel* m, mjData* d, int stage) {
   if (g_prev_sensor) g_prev_sensor(m, d, stage);
-  if (stage != mjSTAGE_VEL || m->nuser_geom < 4) return;
+  if (stage != mjSTAGE_VEL || m->nuser_geom <= BORE_V1) return;
   for (int s = 0; s < m->nsensor; s++) {
     if (m->sensor_type[s] != mjSENS_USER || m->sensor_objtype[s] != mjOBJ_GEOM) continue;
     const int gb = m->sensor_objid[s];
@@ -283,10 +304,25 @@ static PyObject* py_bore_magic(PyObject* self, PyObject* args) {
   return PyFloat_FromDouble(BORE_MAGIC);
 }
 
+static PyObject* py_userdata_fields(PyObject* self, PyObject* args) {
+  PyObject* out = PyTuple_New(BORE_NUSER);
+  if (!out) return NULL;
+  for (int i = 0; i < BORE_NUSER; i++) {
+    PyObject* name = PyUnicode_FromString(bore_user_names[i]);
+    if (!name) {
+      Py_DECREF(out);
+      return NULL;
+    }
+    PyTuple_SET_ITEM(out, i, name);
+  }
+  return out;
+}
+
 static PyMethodDef methods[] = {
   {"install", py_install, METH_VARARGS, "install(table, passive, sensor, applyFT): addresses of mjCOLLISIONFUNC, mjcb_passive, mjcb_sensor and the function mj_applyFT."},
   {"header_version", py_header_version, METH_NOARGS, "mjVERSION_HEADER the module was compiled against."},
-  {"bore_magic", py_bore_magic, METH_NOARGS, "geom user[0] value that marks a bore."},
+  {"bore_magic", py_bore_magic, METH_NOARGS, "geom user data marker value that marks a bore."},
+  {"userdata_fields", py_userdata_fields, METH_NOARGS, "names of the bore geom's user data fields, in order (enum bore_user)."},
   {NULL, NULL, 0, NULL}
 };
 

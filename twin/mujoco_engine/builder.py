@@ -35,6 +35,7 @@ import json
 import math
 from dataclasses import dataclass, field
 from functools import lru_cache
+from importlib import resources
 from pathlib import Path
 
 import mujoco
@@ -46,7 +47,8 @@ from twin.errors import ConfigError, ModelError
 from twin.impact import DAMPING_FACTOR
 from twin.mujoco_engine.collider import ensure_installed
 
-CALIBRATION_FILE = Path(__file__).resolve().parent.parent / "data" / "contact_calibration.json"
+#: the contact calibration table, package data of twin (``twin/data``)
+CALIBRATION_FILE = Path(str(resources.files("twin").joinpath("data", "contact_calibration.json")))
 
 #: flat, tiny impedance: the contact force is then exactly k δ + c δ̇ with a direct solref
 #: (−k Â, −c Â), Â the row's inverse-inertia estimate (ENGINEERING_NOTES, re-measured in tests)
@@ -284,11 +286,12 @@ def build_spec(cfg: BenchConfig) -> mujoco.MjSpec:
     spec.joint(N.SLIDER_SLIDE).solref_friction = list(cfg.mujoco.guide_solreffriction)
     for obj in (spec.geom(N.pin("C")), spec.site(N.pin("C"))):
         obj.pos = [0, mech.d_off_m, 0]
+    block = spec.geom(N.SLIDER_BLOCK)
+    block.size = [b.slider.length_m / 2, block.size[1], block.size[2]]
 
-    # pins, bushings (user data: bore marker and friction law) and their visual rings
-    # [marker, mu0, v0, v1, impact-speed damping: coef, n, floor, userdata slot] (_bore.c);
-    # the damping is off (coef 0) unless build() switches it on
-    friction_law = [N.BORE_MAGIC, cfg.contact.mu0, cfg.contact.v0_mps, cfg.contact.v1_mps, 0.0, 0.0, 0.0, -1.0]
+    # pins, bushings (user data: bore marker and friction law, layout N.BORE_USERDATA_FIELDS)
+    # and their visual rings; the impact-speed damping is off unless build() switches it on
+    friction_law = N.bore_userdata(mu0=cfg.contact.mu0, v0=cfg.contact.v0_mps, v1=cfg.contact.v1_mps)
     for jt in ("B", "C"):
         spec.geom(N.pin(jt)).size = [rj, half_len, 0]
         spec.geom(N.bushing(jt)).size = [j.bushing_radius_m(jt), half_len, 0]
@@ -352,9 +355,14 @@ def build_spec(cfg: BenchConfig) -> mujoco.MjSpec:
 
 def _compile(spec: mujoco.MjSpec, cfg: BenchConfig) -> mujoco.MjModel:
     try:
-        return spec.compile()
+        model = spec.compile()
     except Exception as err:
         raise ModelError(f"MuJoCo could not compile the model of {cfg.name}: {err}") from None
+    if model.nuser_geom != len(N.BORE_USERDATA_FIELDS):  # _bore.c reads the user data by this layout
+        raise ModelError(f"the model of {cfg.name} has nuser_geom = {model.nuser_geom}, the bore user data layout "
+                         f"{len(N.BORE_USERDATA_FIELDS)} fields {N.BORE_USERDATA_FIELDS} (twin.names); "
+                         f"fix <size nuser_geom> in {N.BASE_XML}")
+    return model
 
 
 def _ring(spec: mujoco.MjSpec, cfg: BenchConfig, jt: str) -> list[str]:
@@ -422,8 +430,8 @@ def build(cfg: BenchConfig) -> tuple[mujoco.MjSpec, mujoco.MjModel, BuildInfo]:
             p.condim = 3
             p.friction = [cfg.contact.mu0, cfg.contact.mu0, 0, 0, 0]
         if ms.bushing != "bore" or ms.friction == "cone":
-            ud = list(spec.geom(N.bushing(jt)).userdata)
-            spec.geom(N.bushing(jt)).userdata = [ud[0], 0.0] + ud[2:]  # native friction off
+            bush = spec.geom(N.bushing(jt))
+            bush.userdata = N.replace_bore_userdata(list(bush.userdata), mu0=0.0)  # native friction off
             if spec.sensor(N.sensor_friction(jt)) is not None:
                 spec.delete(spec.sensor(N.sensor_friction(jt)))
     model = _compile(spec, cfg)
@@ -484,9 +492,10 @@ def _set_impact_speed_damping(spec: mujoco.MjSpec, cfg: BenchConfig) -> None:
     joints = cfg.joints.clearance_joints
     spec.nuserdata = len(joints)
     for slot, jt in enumerate(joints):
-        ud = list(spec.geom(N.bushing(jt)).userdata)
-        spec.geom(N.bushing(jt)).userdata = ud[:4] + [impact_speed_coefficient(cfg, jt), cfg.contact.exponent,
-                                                       cfg.mujoco.impact_speed_floor_mps, float(slot)]
+        bush = spec.geom(N.bushing(jt))
+        bush.userdata = N.replace_bore_userdata(
+            list(bush.userdata), damping_coef=impact_speed_coefficient(cfg, jt), exponent=cfg.contact.exponent,
+            speed_floor=cfg.mujoco.impact_speed_floor_mps, slot=slot)
 
 
 def build_model(cfg: BenchConfig) -> mujoco.MjModel:

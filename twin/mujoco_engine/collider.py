@@ -16,7 +16,7 @@ import os
 import mujoco
 
 from twin.errors import EngineUnavailableError
-from twin.names import BORE_MAGIC
+from twin import names as N
 
 _addresses: tuple[int, int, int, int] | None = None
 
@@ -31,7 +31,8 @@ def _library_path() -> str:
 def ensure_installed() -> None:
     """Install the collider and callbacks (idempotent; re-installs a hook someone replaced).
 
-    Clear errors if the native module is missing or was built against another MuJoCo.
+    Clear errors if the native module is missing, was built against another MuJoCo, or reads
+    the bore user data with another layout than :data:`twin.names.BORE_USERDATA_FIELDS`.
     """
     global _addresses
     if _addresses is not None:
@@ -48,8 +49,13 @@ def ensure_installed() -> None:
         raise EngineUnavailableError(
             f"the bushing collider was compiled against MuJoCo {_bore.header_version()} but "
             f"{mujoco.mj_version()} is installed; reinstall twin ('pip install -e .')")
-    if _bore.bore_magic() != BORE_MAGIC:
+    if _bore.bore_magic() != N.BORE_MAGIC:
         raise EngineUnavailableError("twin.names.BORE_MAGIC and _bore.c disagree")
+    fields = tuple(_bore.userdata_fields()) if hasattr(_bore, "userdata_fields") else None
+    if fields != N.BORE_USERDATA_FIELDS:
+        raise EngineUnavailableError(
+            f"the bushing collider reads the bore user data as {fields} but twin.names.BORE_USERDATA_FIELDS "
+            f"is {N.BORE_USERDATA_FIELDS}; rebuild the extension ('pip install -e .') after changing either")
     lib = ctypes.CDLL(_library_path())
     table = ctypes.addressof(ctypes.c_void_p.in_dll(lib, "mjCOLLISIONFUNC"))
     passive = ctypes.addressof(ctypes.c_void_p.in_dll(lib, "mjcb_passive"))
