@@ -77,6 +77,8 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _print(r: dict, out: Path) -> None:
+    from twin.replay import _lag_text
+
     c, tr = r["configuration"], r["tracking"]
     print(f"{r['recording']}: {r['duration_s']:.3f} s at {r['sample_rate_hz']:g} Hz; model {c['name']} "
           f"({c['engine']}, B {c['clearance_b_mm']:g} mm, C {c['clearance_c_mm']:g} mm"
@@ -84,7 +86,7 @@ def _print(r: dict, out: Path) -> None:
     for rep in r["repairs"]:
         print(f"  repair: {rep}")
     print(f"  window {r['window_s'][0]:.3f}-{r['window_s'][1]:.3f} s, crank {r['crank_rate_hz']:.3f} Hz, "
-          f"lag {r['time_lag_s'] * 1e3:+.3f} ms; tracking sim-recorded max {tr['sim_vs_recorded_max_counts']:.2f} "
+          f"lag {_lag_text(r)}; tracking sim-recorded max {tr['sim_vs_recorded_max_counts']:.2f} "
           f"counts (RMS {tr['sim_vs_recorded_rms_counts']:.2f})")
     print("  sensor  NRMSE%   corr    DTW%  " + "  ".join(f"{lo / 1e3:g}-{hi / 1e3:g}kHz rec/sim dB"
                                                       for lo, hi in r["bands_hz"]))
