@@ -30,7 +30,8 @@ from mujoco import rollout
 
 from twin.config import preset
 from twin.mujoco_engine.engine import MujocoEngine
-from twin.simulate import simulate
+from twin.drive import DriveReference
+from twin.simulate import run_chunks, simulate_run
 
 _STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
 SCENES = {"ideal (test 3)": 3, "C only (test 6)": 6, "B+C (test 12)": 12}
@@ -42,12 +43,12 @@ def prepare(test_id: int, steps: int, channels=None):
     if channels is not None:
         over["sensors.channels"] = channels
     eng = MujocoEngine(preset(test_id).replace(**over))
-    for _ in eng.chunks():
+    for _ in run_chunks(eng.cfg, engine=eng):
         pass
     state = np.empty(mujoco.mj_stateSize(eng.model, _STATE))
     mujoco.mj_getState(eng.model, eng.data, state, _STATE)
     t = eng.data.time + np.arange(steps) * eng.cfg.simulation.timestep_s
-    th, om = eng.ref(t)
+    th, om = DriveReference(eng.cfg)(t)
     return eng.model, state, np.stack([th, om], -1)[None]
 
 
@@ -84,7 +85,7 @@ def main() -> None:
     rtf = {}
     for lab, tid in SCENES.items():
         cfg = preset(tid).replace(**{"simulation.duration_s": 1.0, "drive.ramp_s": 0.2})
-        rtf[lab] = simulate(cfg).meta["real_time_factor"]
+        rtf[lab] = simulate_run(cfg).meta["real_time_factor"]
     h = 1e-5
     print(f"MuJoCo {mujoco.__version__}, h = {h:g} s, {args.steps} steps, best of {args.repeats} (interleaved)")
     head = "| scene | us/step | RTF | floor us/step | floor RTF | ratio scene/floor | engine RTF (1 s run) |"

@@ -10,7 +10,7 @@ Prints, for the ideal (test 3), C-only (test 6) and B+C (test 12) scenes at 750 
 * compile and first-call time, each in a fresh Python process: with an empty numba cache (cold: the
   compile a first installation pays once) and with the cache just written (what every later process
   pays: import + load + first chunk);
-* with ``--floor``: the sensitivity of test 12 to ``ReferenceOptions.min_impact_speed_mps`` (floor of the
+* with ``--floor``: the sensitivity of test 12 to ``contact.impact_speed_floor_mps`` (floor of the
   stored impact speed δ̇⁻ of the Lankarani–Nikravesh law) at h = 1e-5 s and 2.5e-6 s: impact counts, peak
   forces, accelerometer RMS/peak. A floor is stable if its results do not change when h shrinks.
 
@@ -29,7 +29,6 @@ import time
 
 
 from twin.config import preset
-from twin.run import Run
 from twin.summary import summarize
 
 SCENES = {"ideal (test 3)": 3, "C only (test 6)": 6, "B+C (test 12)": 12}
@@ -39,11 +38,12 @@ import time
 t0 = time.perf_counter()
 from twin.config import preset
 from twin.reference.engine import ReferenceEngine
+from twin.simulate import run_chunks
 t1 = time.perf_counter()
 cfg = preset(12).replace(**{"simulation.duration_s": 0.01, "simulation.engine": "reference"})
 eng = ReferenceEngine(cfg)
 t2 = time.perf_counter()
-for _ in eng.chunks():
+for _ in run_chunks(cfg, engine=eng):
     pass
 t3 = time.perf_counter()
 print(f"{t1 - t0:.3f} {eng.meta['compile_s']:.3f} {t3 - t0:.3f}")
@@ -57,6 +57,7 @@ def _scene(test: int, duration: float, engine: str, **ov):
 
 def speed(duration: float, repeats: int, with_mujoco: bool) -> None:
     from twin.reference.engine import ReferenceEngine
+    from twin.simulate import run_chunks
 
     print(f"\nstepping speed, h = 1e-5 s, {duration:g} s per run, best of {repeats} (µs/step, real-time factor)")
     print(f"{'scene':18s} {'reference':>22s}" + (f" {'mujoco':>22s} {'ref speed-up':>13s}" if with_mujoco else ""))
@@ -73,7 +74,7 @@ def speed(duration: float, repeats: int, with_mujoco: bool) -> None:
                     from twin.mujoco_engine.engine import MujocoEngine
 
                     eng = MujocoEngine(cfg)
-                for _chunk in eng.chunks():
+                for _chunk in run_chunks(cfg, engine=eng):
                     pass
                 walls.append(eng.meta["wall_s"])
             best[eng_name] = (min(walls), eng.meta["steps"])
@@ -99,20 +100,19 @@ def first_call() -> None:
 
 
 def floor_sensitivity(duration: float) -> None:
-    from twin.reference.engine import ReferenceEngine, ReferenceOptions
+    from twin.simulate import simulate_run
 
-    print(f"\nimpact-speed floor (min_impact_speed_mps), test 12, {duration:g} s: "
+    print(f"\nimpact-speed floor (contact.impact_speed_floor_mps), test 12, {duration:g} s: "
           "impacts / max force [N] per joint, AC1 AC3 AC6 rms/peak [m/s²], wall [s]")
     for v in (1e-4, 1e-3, 1e-2, 1e-1):
         for h in (1e-5, 2.5e-6):
-            cfg = _scene(12, duration, "reference", **{"simulation.timestep_s": h, "drive.ramp_s": 0.3})
-            eng = ReferenceEngine(cfg, ReferenceOptions(min_impact_speed_mps=v))
-            run = Run.concat(list(eng.chunks()))
-            run.meta = eng.meta
+            cfg = _scene(12, duration, "reference", **{"simulation.timestep_s": h, "drive.ramp_s": 0.3,
+                                                        "contact.impact_speed_floor_mps": v})
+            run = simulate_run(cfg)
             s = summarize(run)
             joints = "  ".join(f"{j}: {s[j]['impacts']:3d} / {s[j]['max_contact_force_N']:6.1f}" for j in "BC")
             acc = "  ".join(f"{a} {s[a]['rms_mps2']:6.2f}/{s[a]['peak_mps2']:6.1f}" for a in ("AC1", "AC3", "AC6"))
-            print(f"  floor {v:6.0e} m/s  h {h:6.1e} s   {joints}   {acc}   {eng.meta['wall_s']:.2f}")
+            print(f"  floor {v:6.0e} m/s  h {h:6.1e} s   {joints}   {acc}   {run.meta['wall_s']:.2f}")
 
 
 def main() -> None:

@@ -44,7 +44,9 @@ from mujoco import rollout
 from twin import names as N
 from twin.config import preset
 from twin.mujoco_engine.builder import build
+from twin.drive import DriveReference
 from twin.mujoco_engine.engine import MujocoEngine
+from twin.simulate import run_chunks
 
 STEPS = 20_000
 REPEATS = 5
@@ -110,12 +112,12 @@ def geometric_error(model: mujoco.MjModel, kind: str) -> float:
 
 def steady_state():
     eng = MujocoEngine(base_config())
-    for _ in eng.chunks():
+    for _ in run_chunks(eng.cfg, engine=eng):
         pass
     st = np.empty(mujoco.mj_stateSize(eng.model, _STATE))
     mujoco.mj_getState(eng.model, eng.data, st, _STATE)
     t = eng.data.time + np.arange(STEPS) * eng.cfg.simulation.timestep_s
-    th, om = eng.ref(t)
+    th, om = DriveReference(eng.cfg)(t)
     return st, np.stack([th, om], -1)[None], eng.info
 
 

@@ -33,7 +33,7 @@ from tqdm import tqdm
 
 from twin.calibrate import SPEEDS
 from twin.config import CATALOGUE_DIAMETRAL_MM, BenchConfig, preset
-from twin.simulate import simulate
+from twin.simulate import simulate_run
 from twin.summary import MIN_FREE_S, contact_onsets
 
 CHANNELS = ["crank", "joints"]
@@ -75,7 +75,7 @@ def main() -> None:
     speeds: dict[str, list[np.ndarray]] = {"B": [], "C": []}
     free: dict[str, list[np.ndarray]] = {"B": [], "C": []}
     for label, cfg in tqdm(scenes(), disable=a.no_progress, unit="run"):
-        run = simulate(cfg)
+        run = simulate_run(cfg)
         for j in cfg.joints.clearance_joints:
             v, f = onset_speeds(run, j)
             speeds[j].append(v)

@@ -55,7 +55,7 @@ def impact_speed_variant(cfg: BenchConfig, joint: str, law: ContactLaw) -> tuple
     rule: the terms keep IMPACT_SPEED_RESIDUAL_DAMPING of their damping, plus the native term)."""
     law = ContactLaw(tuple(ContactTerm(t.stiffness_n_per_m, t.damping_ns_per_m * IMPACT_SPEED_RESIDUAL_DAMPING,
                                        t.solimp) for t in law.terms))
-    return law, (impact_speed_coefficient(cfg, joint), cfg.contact.exponent, cfg.mujoco.impact_speed_floor_mps)
+    return law, (impact_speed_coefficient(cfg, joint), cfg.contact.exponent, cfg.contact.impact_speed_floor_mps)
 
 
 def twin_restitution(cfg: BenchConfig, joint: str, law: ContactLaw, m: float, v: float, preload: float,

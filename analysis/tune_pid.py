@@ -30,7 +30,7 @@ import numpy as np
 from twin.config import BenchConfig, preset
 from twin.drive import RPM_TO_RAD_S
 from twin.kinematics import rod_angle, slider_position
-from twin.simulate import simulate
+from twin.simulate import simulate_run
 
 ERROR_COUNTS = 0.5          # target steady tracking error [encoder counts]
 COUNTS_PER_REV = 32768      # 4x quadrature of the SICK DGS80 (S003 §2.3.3)
@@ -99,7 +99,7 @@ def check(gains: dict[str, float]) -> None:
     for test in (3, 12):
         cfg = preset(test).replace(**{"simulation.duration_s": 1.5, "drive.ramp_s": 0.5,
                                       **{f"pid.{k}": v for k, v in gains.items()}})
-        run = simulate(cfg)
+        run = simulate_run(cfg)
         steady = run.window(1.0, 1.5)
         e = steady["theta_ref"] - steady["crank_angle"]
         print(f"test {test}: steady tracking error max {np.abs(e).max() / count:.2f} counts, "

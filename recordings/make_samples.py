@@ -46,7 +46,7 @@ import numpy as np
 from twin.config import preset
 from twin.instrument.chain import static_recording
 from twin.recording import RecordingInfo, crank_trace, synthetic_recording, write_recording
-from twin.simulate import simulate
+from twin.simulate import simulate_run
 
 #: zero-g output voltages of the six (synthetic) sensors [V]; mid-supply is 2.5 V
 OFFSETS = {"AC1": 2.513, "AC2": 2.488, "AC3": 2.506, "AC4": 2.471, "AC5": 2.522, "AC6": 2.494}
@@ -76,7 +76,7 @@ def make(out: Path, engine: str) -> None:
                                  rest_s=rest, ripple=RIPPLE, ripple_phase=phases, phi0=phi0)
             trace = Path(tmp) / f"{stem}.npz"
             np.savez(trace, t=t, angle=phi)
-            truth = simulate(base.replace(**{"drive.program": "trace", "drive.trace_file": str(trace),
+            truth = simulate_run(base.replace(**{"drive.program": "trace", "drive.trace_file": str(trace),
                                              "drive.trace_filter_hz": 0.0}))
             notes = (f"SYNTHETIC recording (not bench data): Table 4 test {test}, {duration:g} s, made by "
                      f"recordings/make_samples.py with the {engine} engine and the twin's sensor chain "

@@ -66,7 +66,7 @@ def test_presets_follow_table4(test_id):
     ({"mujoco.contact_solref": [0.1]}, "mujoco.contact_solref", "2 numbers"),
     ({"mujoco.contact_damping": "viscous"}, "mujoco.contact_damping", "fixed, impact-speed"),
     ({"mujoco.impact_damping_gain": 0.0}, "mujoco.impact_damping_gain", "[0.1, 10]"),
-    ({"mujoco.impact_speed_floor_mps": 5.0}, "mujoco.impact_speed_floor_mps", "[1e-6, 1] m/s"),
+    ({"contact.impact_speed_floor_mps": 5.0}, "contact.impact_speed_floor_mps", "[1e-6, 1] m/s"),
     ({"sensors.channels": ["accel", "gps"]}, "sensors.channels", "accel"),
     ({"materials.pin.poisson": 0.7}, "materials.pin.poisson", "(-1, 0.5)"),
     ({"drive.nope": 1}, "drive.nope", "unknown field"),

@@ -10,7 +10,7 @@ import pytest
 from twin.config import BenchConfig, preset
 from twin.drive import RPM_TO_RAD_S, DriveReference, command_events
 from twin.errors import RecordingError
-from twin.simulate import simulate
+from twin.simulate import simulate_run
 
 from conftest import short
 
@@ -46,7 +46,7 @@ def test_initial_angle_follows_encoder_zero():
 
 
 def test_pid_tracks_the_constant_program_within_one_count():
-    run = simulate(short(preset(3), 1.2, **{"drive.ramp_s": 0.4}))
+    run = simulate_run(short(preset(3), 1.2, **{"drive.ramp_s": 0.4}))
     steady = run.window(0.8, 1.2)
     err = steady["theta_ref"] - steady["crank_angle"]
     assert np.max(np.abs(err)) < COUNT
@@ -59,7 +59,7 @@ def test_trace_program_tracks_a_file(tmp_path):
     np.savez(tmp_path / "trace.npz", t=t, angle=phi)
     cfg = BenchConfig().replace(**{"drive.program": "trace", "drive.trace_file": str(tmp_path / "trace.npz"),
                                    "simulation.duration_s": 0.5, "sensors.channels": ["encoder", "drive"]})
-    run = simulate(cfg)
+    run = simulate_run(cfg)
     expected = np.interp(run.time, t, phi)
     assert np.max(np.abs(run["encoder_angle"][1000:] - expected[1000:])) < 2 * COUNT
 

@@ -16,7 +16,7 @@ from twin.config import preset
 from twin.errors import RecordingError
 from twin.mcapfile import RunWriter, read_metadata, read_run, write_run
 from twin.run import Run
-from twin.simulate import simulate
+from twin.simulate import simulate_run
 from twin.summary import summarize
 
 from conftest import short
@@ -24,7 +24,7 @@ from conftest import short
 
 @pytest.fixture(scope="module")
 def run12() -> Run:
-    return simulate(short(preset(12), 0.0505))  # not a multiple of the 1000-sample block
+    return simulate_run(short(preset(12), 0.0505))  # not a multiple of the 1000-sample block
 
 
 def test_round_trip_is_bit_identical(run12, tmp_path):

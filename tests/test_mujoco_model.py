@@ -10,7 +10,7 @@ from twin import names as N
 from twin.config import preset
 from twin.errors import ConfigError
 from twin.mujoco_engine.builder import build, export_xml
-from twin.simulate import output_stride, simulate
+from twin.simulate import simulate_run
 
 from conftest import short
 
@@ -71,7 +71,7 @@ def test_channel_groups_select_sensors():
     lean = build(preset(12).replace(**{"sensors.channels": ["encoder"]}))[1]
     assert lean.nsensor == 1 and lean.sensor(0).name == N.SENSOR_CRANK_ANGLE
     assert full.nsensor == 6 + 4 + 2 * 3
-    run = simulate(short(preset(12), 0.02, **{"sensors.channels": ["encoder", "accel"]}))
+    run = simulate_run(short(preset(12), 0.02, **{"sensors.channels": ["encoder", "accel"]}))
     assert list(run.channels) == ["AC1", "AC2", "AC3", "AC4", "AC5", "AC6", "encoder_angle"]
 
 
@@ -80,9 +80,9 @@ def test_same_config_gives_identical_output_whatever_the_chunking(damping):
     # impact-speed damping keeps each contact event's impact speed in mjData.userdata: it must
     # carry over chunk boundaries like the rest of the state
     cfg = short(preset(12), 0.1, **{"mujoco.contact_damping": damping})
-    a = simulate(cfg)
-    b = simulate(cfg)
-    c = simulate(cfg.replace(**{"simulation.chunk_s": 0.013}))
+    a = simulate_run(cfg)
+    b = simulate_run(cfg)
+    c = simulate_run(cfg.replace(**{"simulation.chunk_s": 0.013}))
     for name in a.channels:
         assert np.array_equal(a[name], b[name]), name
         assert np.array_equal(a[name], c[name]), name
@@ -90,15 +90,22 @@ def test_same_config_gives_identical_output_whatever_the_chunking(damping):
 
 @pytest.mark.parametrize("h, rate, n", [(1e-5, 1e5, 2000), (5e-6, 1e5, 2000), (2e-5, 5e4, 1000)])
 def test_output_rate_and_length(h, rate, n):
-    cfg = short(preset(6), 0.02, **{"simulation.timestep_s": h, "sensors.channels": ["crank"]})
-    run = simulate(cfg)
+    cfg = short(preset(6), 0.02, **{"simulation.timestep_s": h, "sensors.output_rate_hz": rate,
+                                    "sensors.channels": ["crank"]})
+    run = simulate_run(cfg)
     assert (run.rate_hz, run.n) == (rate, n)
     assert run.meta["steps"] == round(0.02 / h)
 
 
 def test_timestep_must_divide_the_output_period():
+    # a configuration that exists can be run: the rule is checked when it is made
     with pytest.raises(ConfigError, match="does not divide"):
-        output_stride(preset(6).replace(**{"simulation.timestep_s": 7e-6}))
+        preset(6).replace(**{"simulation.timestep_s": 7e-6})
+    with pytest.raises(ConfigError, match="output-rate"):  # 2e-5 s does not divide 1/100 kHz' period
+        preset(6).replace(**{"simulation.timestep_s": 3e-5})
+    cfg = preset(6).replace(**{"simulation.timestep_s": 2e-5, "sensors.output_rate_hz": 50_000.0})
+    assert (cfg.output_stride, cfg.n_samples) == (1, 100_000)
+    assert preset(6).replace(**{"simulation.timestep_s": 2.5e-6}).output_stride == 4
 
 
 def test_exported_xml_compiles_to_the_same_model(tmp_path):

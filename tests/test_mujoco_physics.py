@@ -11,10 +11,11 @@ import pytest
 
 from twin import names as N
 from twin.config import BenchConfig, preset
+from twin.drive import DriveReference
 from twin.kinematics import slider_position
 from twin.mujoco_engine.builder import build
 from twin.mujoco_engine.engine import MujocoEngine
-from twin.simulate import simulate
+from twin.simulate import simulate_run
 
 from conftest import short
 
@@ -24,7 +25,7 @@ G = 9.81
 @pytest.mark.parametrize("d_off", [0.0, 0.02])
 def test_ideal_slider_follows_closed_form_over_a_turn(d_off):
     cfg = short(preset(3), 0.7, **{"drive.ramp_s": 0.2, "mechanism.d_off_m": d_off})
-    run = simulate(cfg)
+    run = simulate_run(cfg)
     th = run["crank_angle"]
     assert th.max() - th.min() > 2 * math.pi  # more than a full turn
     closed = slider_position(th, 0.12, 0.60, d_off)
@@ -43,14 +44,14 @@ def test_calibration_pose_readings(orientation, expected_g):
         "joints.clearance_c_mm": 0.0, "drive.motor_rpm": 0.0, "mechanism.orientation": orientation,
         "drive.initial_encoder_angle_rad": math.pi / 2,  # encoder zero is -y: +π/2 puts the crank on +x
         "simulation.duration_s": 0.05})
-    run = simulate(cfg)
+    run = simulate_run(cfg)
     for a, g in expected_g.items():
         assert run[a][-500:].mean() / G == pytest.approx(g, abs=1e-4), a
 
 
 def test_clearance_eccentricity_bounded_by_radial_clearance():
     cfg = short(preset(12), 0.4)
-    run = simulate(cfg)
+    run = simulate_run(cfg)
     for j in ("B", "C"):
         c = cfg.joints.radial_m(j)
         ecc = np.hypot(run[f"ecc_{j}_x"], run[f"ecc_{j}_y"])
@@ -95,12 +96,13 @@ def test_contact_force_is_the_linear_law_and_friction_is_regularized_coulomb():
                                     "mujoco.contact_damping": "fixed"})
     eng = MujocoEngine(cfg)
     m, d = eng.model, eng.data
-    eng.set_initial_state()
+    eng.reset()
+    ref = DriveReference(cfg)
     law = eng.info.contacts
     sens = eng._sensor_slices
     ratio, mu, sign = [], [], []
     for _ in range(8000):
-        th, om = eng.ref(np.array([d.time]))
+        th, om = ref(np.array([d.time]))
         d.ctrl[:] = [th[0], om[0]]
         mujoco.mj_step(m, d)
         for ci in range(d.ncon):
@@ -166,7 +168,7 @@ def test_loaded_start_is_at_rest(engine, orientation):
         "mechanism.orientation": orientation, "drive.initial_encoder_angle_rad": 2.2,
         "simulation.engine": engine, "sensors.channels": ["crank", "joints"],
         "simulation.duration_s": 0.03})
-    run = simulate(cfg)
+    run = simulate_run(cfg)
     for j in ("B", "C"):
         c = cfg.joints.radial_m(j)
         e = np.stack([run[f"ecc_{j}_x"], run[f"ecc_{j}_y"]], axis=1)
@@ -231,19 +233,20 @@ def test_impact_speed_damping_is_set_where_the_bore_applies_it(bushing, friction
     fixed = cfg.replace(**{"mujoco.contact_damping": "fixed"})
     _, m, info = build(cfg)
     _, _, info_fixed = build(fixed)
-    user = m.geom_user[m.geom(N.bushing("C")).id]
+    user = N.read_bore_userdata(m.geom_user[m.geom(N.bushing("C")).id])
     K = ln_stiffness(cfg.joints, cfg.materials, "C")
     if native:
         chi = DAMPING_FACTOR["lankarani-nikravesh"](cfg.contact.restitution)
-        assert user[4] == pytest.approx(chi * K) and user[5] == 1.5 and user[6] == 1e-3
-        assert 0 <= user[7] < m.nuserdata
+        assert user["damping_coef"] == pytest.approx(chi * K) and user["exponent"] == 1.5
+        assert user["speed_floor"] == 1e-3 and 0 <= user["slot"] < m.nuserdata
         for t, tf in zip(info.contacts["C"].terms, info_fixed.contacts["C"].terms):
             assert t.damping_ns_per_m == pytest.approx(tf.damping_ns_per_m * IMPACT_SPEED_RESIDUAL_DAMPING)
         # the stress studies' damping factor perturbs the native term too
         m2 = build(cfg.replace(**{"mujoco.contact_damping_scale": 1.3}))[1]
-        assert m2.geom_user[m2.geom(N.bushing("C")).id][4] == pytest.approx(1.3 * chi * K)
+        assert N.read_bore_userdata(m2.geom_user[m2.geom(N.bushing("C")).id])["damping_coef"] == \
+            pytest.approx(1.3 * chi * K)
     else:
-        assert user[4] == 0 and m.nuserdata == 0
+        assert user["damping_coef"] == 0 and m.nuserdata == 0
         assert info.contacts["C"].terms == info_fixed.contacts["C"].terms
 
 
@@ -253,7 +256,7 @@ def test_impact_speed_damping_follows_the_configured_hysteresis_law():
     for law, native in (("hunt-crossley", True), ("linear", False)):
         cfg = preset(6).replace(**{"contact.law": law})
         m = build(cfg)[1]
-        coef = m.geom_user[m.geom(N.bushing("C")).id][4]
+        coef = N.read_bore_userdata(m.geom_user[m.geom(N.bushing("C")).id])["damping_coef"]
         if native:
             K = ln_stiffness(cfg.joints, cfg.materials, "C")
             assert coef == pytest.approx(DAMPING_FACTOR[law](cfg.contact.restitution) * K)

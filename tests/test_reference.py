@@ -16,7 +16,8 @@ from twin.errors import ConfigError
 from twin.reference import model as M
 from twin.reference.engine import ReferenceEngine, ReferenceOptions
 from twin.run import Run
-from twin.simulate import simulate
+from twin.drive import DriveReference
+from twin.simulate import run_chunks, simulate_run
 from twin.summary import summarize
 
 from conftest import short
@@ -171,11 +172,12 @@ def test_constraints_stay_at_round_off_over_the_5s_study_run():
 def test_constraints_stay_at_round_off_with_clearances():
     cfg = short(preset(12), 0.1)
     eng = ReferenceEngine(cfg)
+    eng.reset()
     st = eng.state0.copy()
     h = cfg.simulation.timestep_s
     buf = np.empty((1000, M.N_OUT))
     ref_t = np.arange(10000) * h
-    th, om = eng.ref(ref_t)
+    th, om = DriveReference(cfg)(ref_t)
     for k in range(10):
         sl = slice(1000 * k, 1000 * (k + 1))
         status, _ = M.run_steps(eng.P, st, th[sl].copy(), om[sl].copy(), 1, buf, True)
@@ -288,13 +290,13 @@ def test_rmatrix_equals_euler_on_minimal_ode():
 def test_engine_channels_chunks_and_summary():
     cfg = short(preset(12), 0.06, **{"simulation.chunk_s": 0.025})
     eng = ReferenceEngine(cfg)
-    chunks = list(eng.chunks())
+    chunks = list(run_chunks(cfg, engine=eng))
     assert len(chunks) == 3
     run = Run.concat(chunks)
     run.meta = dict(eng.meta)
     assert list(run.channels) == [s.name for s in channel_specs(cfg)]
     assert run.n == 6000 and run.rate_hz == 100_000
-    whole = simulate(cfg.replace(**{"simulation.engine": "reference", "simulation.chunk_s": 1.0}))
+    whole = simulate_run(cfg.replace(**{"simulation.engine": "reference", "simulation.chunk_s": 1.0}))
     for name in run.channels:  # chunking does not change the result
         np.testing.assert_array_equal(run[name], whole[name])
     for key in ("engine", "engine_version", "timestep_s", "steps", "wall_s", "real_time_factor"):
@@ -317,7 +319,7 @@ def test_calibration_pose_readings(orientation, expected_g):
         "joints.clearance_c_mm": 0.0, "drive.motor_rpm": 0.0, "mechanism.orientation": orientation,
         "drive.initial_encoder_angle_rad": math.pi / 2, "simulation.duration_s": 0.05,
         "simulation.engine": "reference"})
-    run = simulate(cfg)
+    run = simulate_run(cfg)
     for a, g in expected_g.items():
         assert run[a][-500:].mean() / G == pytest.approx(g, abs=1e-4), a
 
@@ -326,8 +328,8 @@ def test_matches_mujoco_on_ideal_test3():
     """Ideal joints (test 3 scene): the two engines agree closely (MuJoCo's loop closure at C is
     a stiff soft constraint, the reference's is exact)."""
     cfg = short(preset(3), 0.5, **{"drive.ramp_s": 0.2})
-    mj = simulate(cfg.replace(**{"simulation.engine": "mujoco"}))
-    ref = simulate(cfg.replace(**{"simulation.engine": "reference"}))
+    mj = simulate_run(cfg.replace(**{"simulation.engine": "mujoco"}))
+    ref = simulate_run(cfg.replace(**{"simulation.engine": "reference"}))
     assert np.max(np.abs(mj["slider_position"] - ref["slider_position"])) < 1e-6
     assert np.max(np.abs(mj["crank_angle"] - ref["crank_angle"])) < 1e-5
     for a in ("AC1", "AC2", "AC3", "AC4", "AC6"):
@@ -340,17 +342,15 @@ def test_matches_mujoco_on_ideal_test3():
 
 # ---------------------------------------------------------------------- bad input
 def test_bad_options_give_clear_errors():
-    with pytest.raises(ConfigError, match="min_impact_speed_mps"):
-        ReferenceOptions(min_impact_speed_mps=0.0)
     with pytest.raises(ConfigError, match="newton_tol_m"):
         ReferenceOptions(newton_tol_m=1.0)
     with pytest.raises(ConfigError, match="newton_max_iter"):
         ReferenceOptions(newton_max_iter=0)
-    with pytest.raises(ConfigError, match="timestep"):
-        ReferenceEngine(preset(6).replace(**{"simulation.timestep_s": 3e-6}))
+    with pytest.raises(ConfigError, match="impact_speed_floor_mps"):
+        preset(6).replace(**{"contact.impact_speed_floor_mps": 0.0})
 
 
 def test_geometry_the_rod_cannot_close_is_a_config_error():
     cfg = preset(3).replace(**{"bodies.rod.length_m": 0.1})  # rod shorter than the crank
     with pytest.raises(ConfigError, match="bodies"):
-        ReferenceEngine(cfg)
+        ReferenceEngine(cfg).reset()

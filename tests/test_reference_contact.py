@@ -11,7 +11,7 @@ from twin.config import BenchConfig, ln_stiffness, preset
 from twin.impact import hysteresis_restitution, impact_hysteresis
 from twin.reference import contact as C
 from twin.reference import model as M
-from twin.simulate import simulate
+from twin.simulate import simulate_run
 
 from conftest import short
 
@@ -105,7 +105,7 @@ def test_single_impact_linear_law_has_the_configured_restitution():
 @pytest.fixture(scope="module")
 def run12():
     cfg = short(preset(12), 0.3, **{"drive.ramp_s": 0.1, "simulation.engine": "reference"})
-    return cfg, simulate(cfg)
+    return cfg, simulate_run(cfg)
 
 
 def test_clearance_never_exceeded_by_more_than_a_small_penetration(run12):

@@ -15,7 +15,7 @@ from twin.errors import RecordingError
 from twin.mcapfile import read_run
 from twin.recording import RecordingInfo, crank_trace, synthetic_recording, write_recording
 from twin.replay import ReplayOptions, replay
-from twin.simulate import simulate
+from twin.simulate import simulate_run
 
 COUNT = 2 * math.pi / 32768
 OFFSETS = {"AC1": 2.513, "AC2": 2.488, "AC3": 2.506, "AC4": 2.471, "AC5": 2.522, "AC6": 2.494}
@@ -27,7 +27,7 @@ def _make(tmp, test_id: int, duration: float, name: str):
                                       "instrumentation.zero_g_v": OFFSETS, "instrumentation.seed": 1})
     t, phi = crank_trace(base.drive.motor_rpm, base.drive.belt_ratio, duration, 1e5, ramp_s=0.1)
     np.savez(tmp / f"{name}_truth_trace.npz", t=t, angle=phi)
-    truth = simulate(base.replace(**{"drive.program": "trace", "drive.trace_file": str(tmp / f"{name}_truth_trace.npz"),
+    truth = simulate_run(base.replace(**{"drive.program": "trace", "drive.trace_file": str(tmp / f"{name}_truth_trace.npz"),
                                      "drive.trace_filter_hz": 0.0}))
     daq, info = synthetic_recording(truth, base, notes=f"test {test_id}", static_s=0.2)
     path = tmp / f"{name}.mcap"
@@ -136,8 +136,9 @@ def test_cli_replay_writes_side_by_side_mcap_report_and_plots(clearance, capsys)
 
 def test_replay_errors(clearance, tmp_path, capsys):
     path, _, _ = clearance
+    # options that do not apply to a replay (it is driven by the recording's encoder trace)
     assert main(["replay", str(path), "--out", str(tmp_path / "o"), "--speed", "500"]) == 2
-    assert "encoder trace" in capsys.readouterr().err
+    assert "unrecognized arguments: --speed" in capsys.readouterr().err
     assert main(["replay", str(tmp_path / "x.csv"), "--out", str(tmp_path / "o")]) == 2
     assert "twin import" in capsys.readouterr().err
     assert main(["replay", str(path), "--out", str(tmp_path / "o"), "--window", "0.3", "9"]) == 2
@@ -150,7 +151,11 @@ def test_replay_errors(clearance, tmp_path, capsys):
     write_recording(bare, daq, RecordingInfo(daq.rate_hz, notes="no calibration"))
     with pytest.raises(RecordingError, match="no calibration data"):
         replay(bare, tmp_path / "o2")
-    # a recording whose rate does not match the configuration
+    # the replay sets the DAQ rate from the recording: --set refuses it; a configuration whose rate
+    # does not match the recording's is refused
     assert main(["replay", str(path), "--out", str(tmp_path / "o3"), "--set",
                  "instrumentation.daq_rate_hz=50000.0"]) == 2
-    assert "50000" in capsys.readouterr().err
+    assert "does not apply" in capsys.readouterr().err
+    with pytest.raises(RecordingError, match="50000"):
+        replay(path, tmp_path / "o3", lambda c: c.replace(**{"instrumentation.daq_rate_hz": 50000.0}))
+    assert not (tmp_path / "o3").exists()

@@ -11,7 +11,7 @@ from twin.channels import channel_specs
 from twin.cli import main
 from twin.config import CHANNEL_GROUPS, preset
 from twin.errors import ConfigError
-from twin.simulate import simulate
+from twin.simulate import simulate_run
 from twin.studies import stability as S
 
 
@@ -112,11 +112,11 @@ def test_energy_group_is_optional():
     e = cfg.replace(**{"sensors.channels": ["crank", "energy"], "simulation.duration_s": 0.02})
     assert [s.name for s in channel_specs(e)] == ["crank_angle", "crank_speed", "energy_kinetic",
                                                   "energy_potential", "slider_speed"]
-    run = simulate(e)
+    run = simulate_run(e)
     assert run.meta["warnings"] == {}
     assert np.all(np.isfinite(run["energy_kinetic"])) and run["energy_kinetic"][0] == 0.0
-    with pytest.raises(ConfigError, match="sensors.channels.*MuJoCo engine only"):
-        simulate(e.replace(**{"simulation.engine": "reference"}))
+    with pytest.raises(ConfigError, match="sensors.channels.*mujoco engine only"):
+        simulate_run(e.replace(**{"simulation.engine": "reference"}))
 
 
 @pytest.mark.parametrize("argv, fragment", [

@@ -251,8 +251,7 @@ def effective_masses(cfg: BenchConfig, joint: str, n_theta: int = 24, n_dir: int
     pin_b = m.geom_bodyid[m.geom(N.pin(joint)).id]
     bush_b = m.geom_bodyid[m.geom(N.bushing(joint)).id]
     for theta in np.linspace(0, 2 * np.pi, n_theta, endpoint=False):
-        eng.ref = _Fixed(theta)
-        eng.set_initial_state()
+        eng.reset(float(theta))
         p = d.site_xpos[m.site(N.bushing(joint)).id].copy()
         jp, jb = np.zeros((3, m.nv)), np.zeros((3, m.nv))
         mujoco.mj_jac(m, d, jp, None, p, pin_b)
@@ -264,17 +263,6 @@ def effective_masses(cfg: BenchConfig, joint: str, n_theta: int = 24, n_dir: int
             mujoco.mj_solveM(m, d, x.reshape(1, -1), J.reshape(1, -1))
             out.append(1.0 / float(J @ x))
     return np.array(out)
-
-
-class _Fixed:
-    """Drive reference frozen at one crank angle (for configuration sweeps)."""
-
-    def __init__(self, theta: float):
-        self.theta = theta
-
-    def __call__(self, t):
-        t = np.asarray(t, float)
-        return np.full_like(t, self.theta), np.zeros_like(t)
 
 
 # ------------------------------------------------------------------------------ fit

@@ -18,11 +18,14 @@ import signal
 import sys
 import threading
 import tomllib
-from typing import Any, Sequence
+from typing import TYPE_CHECKING, Any, Sequence
 
-from twin.config import (CHANNEL_GROUPS, ENGINES, ORIENTATIONS, BenchConfig, load_config,
-                         preset, with_overrides)
-from twin.errors import ConfigError, TwinError
+from twin.errors import ConfigError, Terminated, TwinError
+
+if TYPE_CHECKING:
+    from twin.config import BenchConfig
+# twin.config is imported where it is used: it reads the packaged base model, and a broken
+# installation must still give one line (main catches its ModelError), not an import traceback
 
 #: modules providing subcommands (``register(subparsers)``), in help order
 COMMANDS: list[str] = [
@@ -37,31 +40,76 @@ COMMANDS: list[str] = [
 ]
 
 
+class UsageError(TwinError):
+    """A command line argparse refuses (unknown option, bad value type, missing argument)."""
+
+
 class _Parser(argparse.ArgumentParser):
-    """ArgumentParser whose errors are one line (no usage dump), exit status 2."""
+    """ArgumentParser whose errors are one line (no usage dump): :func:`main` prints them and
+    returns exit status 2 like every other bad input."""
 
     def error(self, message: str) -> None:  # type: ignore[override]
-        self.exit(2, f"{self.prog}: error: {message}\n")
+        raise UsageError(f"{message} (see '{self.prog} --help')")
 
 
-def add_config_args(p: argparse.ArgumentParser) -> None:
-    """Options that select and override a bench configuration."""
+#: configuration options, by what they describe (``add_config_args(p, options=...)``)
+SELECT_OPTIONS = ("config", "test")
+MODEL_OPTIONS = ("clearance_b", "clearance_c", "orientation", "set")
+DRIVE_OPTIONS = ("speed", "protocol", "trace")
+RUN_OPTIONS = ("duration", "timestep", "engine", "channels", "output_rate")
+ALL_CONFIG_OPTIONS = SELECT_OPTIONS + MODEL_OPTIONS + DRIVE_OPTIONS + RUN_OPTIONS
+
+
+def add_config_args(p: argparse.ArgumentParser, options: Sequence[str] = ALL_CONFIG_OPTIONS,
+                    refused_set: Sequence[str] = ()) -> None:
+    """Options that select and override a bench configuration.
+
+    ``options`` names those that apply to the command (the others are not offered, so argparse
+    refuses them in one line); ``refused_set`` lists dotted ``--set`` keys (or prefixes ending in
+    ".") that the command decides itself and refuses.
+    """
+    from twin.config import ALL_CHANNEL_GROUPS, ENGINES, ORIENTATIONS
+
+    unknown = set(options) - set(ALL_CONFIG_OPTIONS)
+    assert not unknown, unknown
+    has = set(options)
     g = p.add_argument_group("bench configuration")
-    g.add_argument("--config", metavar="FILE", help="TOML configuration (partial files override the defaults)")
-    g.add_argument("--test", type=int, metavar="ID", help="Table 4 test preset, 1..12")
-    g.add_argument("--clearance-b", type=float, metavar="MM", help="diametral clearance at B [mm], 0 = ball bearing")
-    g.add_argument("--clearance-c", type=float, metavar="MM", help="diametral clearance at C [mm], 0 = ball bearing")
-    g.add_argument("--orientation", choices=ORIENTATIONS, help="bench axis that points up")
-    sp = g.add_mutually_exclusive_group()
-    sp.add_argument("--speed", type=float, metavar="MOTOR_RPM", help="constant motor speed [rpm]")
-    sp.add_argument("--protocol", action="store_true", help="the 38 s three-speed protocol of S003 §4.3")
-    sp.add_argument("--trace", metavar="FILE", help="drive by an encoder trace (.npz/.csv with t, angle)")
-    g.add_argument("--duration", type=float, metavar="S", help="simulated time [s] (0 = program length)")
-    g.add_argument("--timestep", type=float, metavar="S", help="integration step [s]")
-    g.add_argument("--engine", choices=ENGINES, help="mujoco (the twin) or reference (R-matrix)")
-    g.add_argument("--channels", metavar="G,G", help=f"channel groups to compute: {','.join(CHANNEL_GROUPS)}")
-    g.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                   help="override any field by dotted path, TOML value (e.g. drive.ramp_s=0.2)")
+    if "config" in has:
+        g.add_argument("--config", metavar="FILE", help="TOML configuration (partial files override the defaults)")
+    if "test" in has:
+        g.add_argument("--test", type=int, metavar="ID", help="Table 4 test preset, 1..12")
+    if "clearance_b" in has:
+        g.add_argument("--clearance-b", type=float, metavar="MM",
+                       help="diametral clearance at B [mm], 0 = ball bearing")
+    if "clearance_c" in has:
+        g.add_argument("--clearance-c", type=float, metavar="MM",
+                       help="diametral clearance at C [mm], 0 = ball bearing")
+    if "orientation" in has:
+        g.add_argument("--orientation", choices=ORIENTATIONS, help="bench axis that points up")
+    drive = [o for o in DRIVE_OPTIONS if o in has]
+    sp = g.add_mutually_exclusive_group() if len(drive) > 1 else g
+    if "speed" in has:
+        sp.add_argument("--speed", type=float, metavar="MOTOR_RPM", help="constant motor speed [rpm]")
+    if "protocol" in has:
+        sp.add_argument("--protocol", action="store_true", help="the 38 s three-speed protocol of S003 §4.3")
+    if "trace" in has:
+        sp.add_argument("--trace", metavar="FILE", help="drive by an encoder trace (.npz/.csv with t, angle)")
+    if "duration" in has:
+        g.add_argument("--duration", type=float, metavar="S", help="simulated time [s] (0 = protocol length)")
+    if "timestep" in has:
+        g.add_argument("--timestep", type=float, metavar="S", help="integration step [s]")
+    if "output_rate" in has:
+        g.add_argument("--output-rate", type=float, metavar="HZ",
+                       help="sample rate of the run's channels [Hz] (default 100000; the timestep must divide "
+                            "its period)")
+    if "engine" in has:
+        g.add_argument("--engine", choices=ENGINES, help="mujoco (the twin) or reference (R-matrix)")
+    if "channels" in has:
+        g.add_argument("--channels", metavar="G,G", help=f"channel groups to compute: {','.join(ALL_CHANNEL_GROUPS)}")
+    if "set" in has:
+        g.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                       help="override any field by dotted path, TOML value (e.g. drive.ramp_s=0.2)")
+    p.set_defaults(_refused_set=tuple(refused_set))
 
 
 def _parse_value(key: str, text: str) -> Any:
@@ -71,41 +119,67 @@ def _parse_value(key: str, text: str) -> Any:
         return text  # bare strings: --set mechanism.orientation=x
 
 
+def _opt(args: argparse.Namespace, name: str) -> Any:
+    return getattr(args, name, None)
+
+
 def config_from_args(args: argparse.Namespace) -> BenchConfig:
-    """Configuration from ``--config``/``--test`` plus the override options."""
-    if args.config and args.test is not None:
+    """Configuration from ``--config``/``--test`` plus the override options the command offers."""
+    from twin.config import ALL_CHANNEL_GROUPS, BenchConfig, load_config, preset, with_overrides
+
+    if _opt(args, "config") and _opt(args, "test") is not None:
         raise ConfigError("--test", "cannot be combined with --config (put 'test = N' in the file)")
-    cfg = load_config(args.config) if args.config else (preset(args.test) if args.test is not None else BenchConfig())
+    if _opt(args, "config"):
+        cfg = load_config(args.config)
+    elif _opt(args, "test") is not None:
+        cfg = preset(args.test)
+    else:
+        cfg = BenchConfig()
     ov: dict[str, Any] = {}
-    if args.clearance_b is not None:
+    if _opt(args, "clearance_b") is not None:
         ov["joints.clearance_b_mm"] = args.clearance_b
-    if args.clearance_c is not None:
+    if _opt(args, "clearance_c") is not None:
         ov["joints.clearance_c_mm"] = args.clearance_c
-    if args.orientation:
+    if _opt(args, "orientation"):
         ov["mechanism.orientation"] = args.orientation
-    if args.speed is not None:
+    if _opt(args, "speed") is not None:
         ov["drive.program"], ov["drive.motor_rpm"] = "constant", args.speed
-    if args.protocol:
+    if _opt(args, "protocol"):
         ov["drive.program"] = "protocol"
-        if args.duration is None:
+        if _opt(args, "duration") is None:
             ov["simulation.duration_s"] = 0.0
-    if args.trace:
+    if _opt(args, "trace") is not None:
+        from twin.drive import trace_duration
+
         ov["drive.program"], ov["drive.trace_file"] = "trace", args.trace
-        if args.duration is None:
-            ov["simulation.duration_s"] = 0.0
-    if args.duration is not None:
+        if _opt(args, "duration") is None:
+            ov["simulation.duration_s"] = trace_duration(args.trace)
+    if _opt(args, "duration") is not None:
         ov["simulation.duration_s"] = args.duration
-    if args.timestep is not None:
+    if _opt(args, "timestep") is not None:
         ov["simulation.timestep_s"] = args.timestep
-    if args.engine:
+    if _opt(args, "output_rate") is not None:
+        ov["sensors.output_rate_hz"] = args.output_rate
+    if _opt(args, "engine"):
         ov["simulation.engine"] = args.engine
-    if args.channels:
-        ov["sensors.channels"] = [c.strip() for c in args.channels.split(",") if c.strip()]
-    for item in args.set:
+    if _opt(args, "channels") is not None:
+        groups = [c.strip() for c in args.channels.split(",")]
+        if not all(groups):
+            raise ConfigError("--channels", f"expects comma-separated groups of {', '.join(ALL_CHANNEL_GROUPS)}; "
+                                            f"got {args.channels!r}")
+        ov["sensors.channels"] = groups
+    refused = getattr(args, "_refused_set", ())
+    for item in _opt(args, "set") or []:
         if "=" not in item:
             raise ConfigError("--set", f"expects KEY=VALUE, got {item!r}")
-        key, text = item.split("=", 1)
-        ov[key.strip()] = _parse_value(key, text.strip())
+        key, text = (x.strip() for x in item.split("=", 1))
+        if not key:
+            raise ConfigError("--set", f"expects KEY=VALUE with a dotted key, got {item!r}")
+        for r in refused:
+            if key == r or (r.endswith(".") and key.startswith(r)):
+                raise ConfigError(f"--set {key}", f"does not apply to this command (it sets {r.rstrip('.')} itself "
+                                                  "or does not use it)")
+        ov[key] = _parse_value(key, text)
     return with_overrides(cfg, ov) if ov else cfg
 
 
@@ -118,18 +192,17 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-class Terminated(KeyboardInterrupt):
-    """SIGTERM, raised in the main thread like Ctrl-C so that every writer's clean-up runs
-    (temporary files removed, nothing half-written left under the final name)."""
-
-
 def _raise_terminated(signum, frame):  # noqa: ARG001 - signal handler signature
     raise Terminated()
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        parser = build_parser()
+        args = parser.parse_args(argv)
+    except TwinError as err:  # usage errors; a broken installation (ModelError, EngineUnavailableError)
+        print(f"twin: error: {err}", file=sys.stderr)
+        return 2
     previous = None
     if threading.current_thread() is threading.main_thread():
         previous = signal.signal(signal.SIGTERM, _raise_terminated)

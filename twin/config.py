@@ -1,6 +1,6 @@
 """Bench configuration: one frozen dataclass per component, loadable from TOML.
 
-Every number of the physical bench lives here with its source (``S003`` is the bench
+Every number of the physical bench is a field here with its source (``S003`` is the bench
 paper, ``../shared/seeds/003_...``; tables refer to it). Values the papers leave open are
 marked PLACEHOLDER in the docstrings: they are configuration, documented, never hidden
 in code.
@@ -27,6 +27,7 @@ import collections.abc
 import dataclasses
 import hashlib
 import math
+import re
 import tomllib
 import types
 import typing
@@ -59,6 +60,10 @@ CHANNEL_GROUPS: tuple[str, ...] = ("accel", "encoder", "crank", "slider", "joint
 OPTIONAL_CHANNEL_GROUPS: tuple[str, ...] = ("energy",)
 #: Every channel group, in canonical order (the defaults, then the optional ones).
 ALL_CHANNEL_GROUPS: tuple[str, ...] = CHANNEL_GROUPS + OPTIONAL_CHANNEL_GROUPS
+#: Optional channel groups that only some engines produce: group -> engines.
+ENGINE_ONLY_GROUPS: dict[str, tuple[str, ...]] = {"energy": ("mujoco",)}
+#: Configuration names (they name default output files).
+_NAME_RE = re.compile(r"[A-Za-z0-9_+=@,-][A-Za-z0-9._+=@,-]*")
 #: Accelerometers of the bench (S003 Table 3).
 ACCELEROMETERS: tuple[str, ...] = ("AC1", "AC2", "AC3", "AC4", "AC5", "AC6")
 
@@ -284,6 +289,18 @@ class Contact:
             mjcf/bench.xml (source S003 Eq. 19–20; user data field ``v0``).
         v1_mps: velocity above which μ = μ0 [m/s]. Default: mjcf/bench.xml (source S003
             Eq. 19–20; user data field ``v1``).
+        impact_speed_floor_mps: floor of the stored impact speed δ̇⁻ of the hysteresis laws
+            [m/s], used by both engines (the reference's LN damping and the MuJoCo twin's native
+            impact-speed damping). A contact event that starts with δ̇ below it (resting or
+            grazing contact, e.g. the "loaded" start with δ̇ = 0) uses this value: the damping
+            term K δⁿ χ δ̇/δ̇⁻ would otherwise have an unbounded coefficient and make explicit
+            integration unstable. PLACEHOLDER: S003 does not say what it did. 1 mm/s is measured
+            (``analysis/bench_reference.py --floor``, test 12, 2 s): the smallest decade that is
+            stable at h = 1e-5 s (1e-4 m/s rings at B: 794 N peak instead of 298 N, AC1 RMS 52
+            instead of 32 m/s²); at h = 2.5e-6 s, where 1e-4 m/s is stable too, the two floors give
+            the same impact counts, peaks within 0.3 % (B) and 0.4 % (C) and accelerometer RMS
+            within 0.6 %. Larger floors change the physics of slow impacts (1e-2 m/s: 19 instead
+            of 25 impacts at C; 1e-1 m/s: 49).
     """
 
     law: str = "lankarani-nikravesh"
@@ -293,6 +310,7 @@ class Contact:
     mu0: float = _XML.mu0
     v0_mps: float = _XML.v0_mps
     v1_mps: float = _XML.v1_mps
+    impact_speed_floor_mps: float = 1e-3
 
     LAWS: typing.ClassVar[tuple[str, ...]] = ("lankarani-nikravesh", "hunt-crossley", "flores", "linear")
 
@@ -309,6 +327,8 @@ class Contact:
         _positive(self.v0_mps, "v0_mps", "m/s")
         _positive(self.v1_mps, "v1_mps", "m/s")
         _check(self.v1_mps > self.v0_mps, "v1_mps", f"must exceed v0_mps ({self.v0_mps}), got {self.v1_mps!r}")
+        _check(isinstance(self.impact_speed_floor_mps, (int, float)) and 1e-6 <= self.impact_speed_floor_mps <= 1,
+               "impact_speed_floor_mps", f"must lie in [1e-6, 1] m/s, got {self.impact_speed_floor_mps!r}")
 
 
 def ln_stiffness(joints: Joints, materials: Materials, joint: str) -> float:
@@ -368,8 +388,6 @@ class MujocoSettings:
             Flores, whose χ it takes); ring and tendon bushings and the linear law keep the fixed
             damping.
         impact_damping_gain: factor on χ K of that damping [-] (1 = the reference's law).
-        impact_speed_floor_mps: floor of the stored impact speed [m/s] (the reference engine's
-            ``min_impact_speed_mps``, 1 mm/s).
     """
 
     integrator: str = _XML.integrator
@@ -389,7 +407,6 @@ class MujocoSettings:
     contact_damping_scale: float = 1.0
     contact_damping: str = "impact-speed"
     impact_damping_gain: float = 1.0
-    impact_speed_floor_mps: float = 1e-3
 
     def __post_init__(self) -> None:
         for name in ("contact_stiffness_scale", "contact_damping_scale"):
@@ -404,8 +421,6 @@ class MujocoSettings:
         _choice(self.contact_damping, "contact_damping", ("fixed", "impact-speed"))
         _check(isinstance(self.impact_damping_gain, (int, float)) and 0.1 <= self.impact_damping_gain <= 10,
                "impact_damping_gain", f"must lie in [0.1, 10], got {self.impact_damping_gain!r}")
-        _check(isinstance(self.impact_speed_floor_mps, (int, float)) and 1e-6 <= self.impact_speed_floor_mps <= 1,
-               "impact_speed_floor_mps", f"must lie in [1e-6, 1] m/s, got {self.impact_speed_floor_mps!r}")
         _check(self.bushing == "bore" or self.friction == "cone" or self.bushing == "tendon", "friction",
                "a ring bushing takes MuJoCo's friction cone: set friction = \"cone\" (native friction needs the bore)")
         _choice(self.solver, "solver", ("Newton", "CG", "PGS"))
@@ -572,6 +587,8 @@ class Sensors:
     def __post_init__(self) -> None:
         _check(sorted(self.accelerometers) == list(ACCELEROMETERS), "accelerometers",
                f"must define exactly {', '.join(ACCELEROMETERS)}, got {', '.join(sorted(self.accelerometers))}")
+        _check(len(self.channels) >= 1, "channels",
+               f"must name at least one group of {', '.join(ALL_CHANNEL_GROUPS)}, got none")
         for g in self.channels:
             _choice(g, "channels", ALL_CHANNEL_GROUPS)
         _check(len(set(self.channels)) == len(self.channels), "channels", "must not repeat a group")
@@ -716,11 +733,16 @@ class Simulation:
 
     Attributes:
         engine: "mujoco" (the twin) or "reference" (R-matrix, Lankarani–Nikravesh).
-        duration_s: simulated time [s]; 0 = the drive program's natural length
-            (38 s for the protocol, the trace's length for a trace).
+        duration_s: simulated time [s]; 0 = the protocol's length (38 s for the paper's) with
+            ``drive.program = "protocol"``. The constant and trace programs need a duration > 0
+            (``twin simulate --trace FILE`` and configuration files fill in the trace's length;
+            the configuration itself never reads files).
         timestep_s: integration step [s]. Default: mjcf/bench.xml (source S003 §4.3, matching
-            the 100 kHz logging).
-        chunk_s: simulated time per chunk streamed to the sinks [s].
+            the 100 kHz logging). It must divide the output period ``1/sensors.output_rate_hz``
+            (an integer number of steps per output sample): a step that does not divide
+            1/100 kHz needs the output rate set explicitly.
+        chunk_s: simulated time per chunk streamed to the sinks [s] (memory per chunk grows
+            with it; the result does not depend on it).
     """
 
     engine: str = "mujoco"
@@ -731,10 +753,11 @@ class Simulation:
     def __post_init__(self) -> None:
         _choice(self.engine, "engine", ENGINES)
         _check(isinstance(self.duration_s, (int, float)) and 0 <= self.duration_s <= 3600,
-               "duration_s", f"must lie in [0, 3600] s (0 = program length), got {self.duration_s!r}")
+               "duration_s", f"must lie in [0, 3600] s (0 = the protocol's length), got {self.duration_s!r}")
         _check(isinstance(self.timestep_s, (int, float)) and 1e-7 <= self.timestep_s <= 1e-3,
                "timestep_s", f"must lie in [1e-7, 1e-3] s, got {self.timestep_s!r}")
-        _positive(self.chunk_s, "chunk_s", "s")
+        _check(isinstance(self.chunk_s, (int, float)) and math.isfinite(self.chunk_s) and 1e-3 <= self.chunk_s <= 10,
+               "chunk_s", f"must lie in [0.001, 10] s, got {self.chunk_s!r}")
 
 
 # --------------------------------------------------------------------------- config
@@ -756,23 +779,57 @@ class BenchConfig:
     instrumentation: Instrumentation = field(default_factory=Instrumentation)
 
     def __post_init__(self) -> None:
-        _check(isinstance(self.name, str) and 0 < len(self.name) <= 80, "name",
-               f"must be a non-empty string of at most 80 characters, got {self.name!r}")
+        _check(isinstance(self.name, str) and 0 < len(self.name) <= 80 and _NAME_RE.fullmatch(self.name) is not None,
+               "name", "must be 1-80 characters of letters, digits and . _ - + = @ , (it names the default output "
+               f"file), not starting with '.'; got {self.name!r}")
+        # cross-field rules: a configuration that exists can be run
+        sim, sen = self.simulation, self.sensors
+        if sim.duration_s == 0 and self.drive.program != "protocol":
+            raise ConfigError("simulation.duration_s",
+                              f"must be > 0 for the {self.drive.program} program (0 = the protocol's length); "
+                              + ("--trace FILE and configuration files fill in the trace's length"
+                                 if self.drive.program == "trace" else "got 0"))
+        k = 1.0 / (sim.timestep_s * sen.output_rate_hz)
+        stride = int(round(k))
+        if stride < 1 or abs(stride - k) > 1e-6 * k:
+            every = 1.0 / sim.timestep_s
+            raise ConfigError("simulation.timestep_s",
+                              f"{sim.timestep_s:g} s does not divide the output period 1/{sen.output_rate_hz:g} Hz; "
+                              f"use a timestep of (1/output_rate)/k for an integer k, or set the output rate "
+                              f"explicitly (sensors.output_rate_hz, --output-rate), e.g. {every:.10g} Hz for a "
+                              "sample every step")
+        if round(self.duration_s * sen.output_rate_hz) < 1:
+            raise ConfigError("simulation.duration_s",
+                              f"must hold at least one output sample (>= {1.0 / sen.output_rate_hz:g} s at "
+                              f"{sen.output_rate_hz:g} Hz), got {sim.duration_s!r}")
+        for group, engines in ENGINE_ONLY_GROUPS.items():
+            if group in sen.channels and sim.engine not in engines:
+                raise ConfigError("sensors.channels",
+                                  f"the optional group {group!r} is produced by the {' and '.join(engines)} engine "
+                                  f"only; remove it for simulation.engine = {sim.engine!r}")
 
     # -- derived
     @property
     def duration_s(self) -> float:
-        """Simulated time of the run [s] (resolves ``simulation.duration_s = 0``)."""
+        """Simulated time of the run [s] (resolves ``simulation.duration_s = 0`` of the protocol)."""
         if self.simulation.duration_s > 0:
             return float(self.simulation.duration_s)
-        if self.drive.program == "protocol":
-            return self.drive.protocol_duration_s
-        if self.drive.program == "trace":
-            from twin.drive import load_trace  # local import: drive imports config
+        return self.drive.protocol_duration_s
 
-            t, _ = load_trace(self.drive.trace_file)
-            return float(t[-1] - t[0])
-        raise ConfigError("simulation.duration_s", "must be > 0 for the constant program")
+    @property
+    def output_rate_hz(self) -> float:
+        """Sample rate of the run's channels [Hz] (``sensors.output_rate_hz``)."""
+        return float(self.sensors.output_rate_hz)
+
+    @property
+    def output_stride(self) -> int:
+        """Integration steps per output sample (an integer by construction)."""
+        return int(round(1.0 / (self.simulation.timestep_s * self.sensors.output_rate_hz)))
+
+    @property
+    def n_samples(self) -> int:
+        """Number of output samples of a run of this configuration."""
+        return int(round(self.duration_s * self.sensors.output_rate_hz))
 
     # -- serialization
     def to_dict(self) -> dict[str, Any]:
@@ -874,12 +931,23 @@ def from_dict(cls: type, data: Mapping[str, Any], path: str = "") -> Any:
 
 
 def load_config(path: str | Path) -> BenchConfig:
-    """Read a TOML configuration file (partial files override the defaults)."""
+    """Read a TOML configuration file (partial files override the defaults).
+
+    A file with ``drive.program = "trace"`` and no duration (or 0) gets the trace's length: the
+    loader reads the trace, the configuration never does.
+    """
     p = Path(path)
     try:
-        text = p.read_text()
+        raw = p.read_bytes()
+    except IsADirectoryError:
+        raise ConfigError("--config", f"{p} is a directory, not a TOML file") from None
     except OSError as err:
         raise ConfigError("--config", f"cannot read {p}: {err.strerror}") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as err:
+        raise ConfigError("--config", f"{p} is not a UTF-8 text (TOML) file: byte {err.start} "
+                                      f"is {raw[err.start:err.start + 1]!r}") from None
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
@@ -888,7 +956,14 @@ def load_config(path: str | Path) -> BenchConfig:
     if "test" in data:  # a config may start from a Table 4 preset: test = 6
         test = data.pop("test")
         base = preset(test).to_dict()
-    return from_dict(BenchConfig, _deep_merge(base, data))
+    merged = _deep_merge(base or BenchConfig().to_dict(), data)
+    drive, sim = merged.get("drive"), merged.get("simulation")
+    if (isinstance(drive, Mapping) and isinstance(sim, Mapping) and drive.get("program") == "trace"
+            and sim.get("duration_s", 1) == 0 and isinstance(drive.get("trace_file"), str) and drive["trace_file"]):
+        from twin.drive import trace_duration  # local import: drive imports config
+
+        merged["simulation"] = {**sim, "duration_s": trace_duration(drive["trace_file"])}
+    return from_dict(BenchConfig, merged)
 
 
 def _deep_merge(a: Mapping[str, Any], b: Mapping[str, Any]) -> dict[str, Any]:
@@ -899,11 +974,19 @@ def _deep_merge(a: Mapping[str, Any], b: Mapping[str, Any]) -> dict[str, Any]:
 
 
 def config_from_toml(text: str) -> BenchConfig:
-    """Parse a configuration from TOML text (e.g. the copy stored in a run file)."""
+    """Parse a configuration from TOML text (e.g. the copy stored in a run file).
+
+    Files written by earlier versions are migrated: ``mujoco.impact_speed_floor_mps`` is now
+    ``contact.impact_speed_floor_mps`` (one floor for both engines).
+    """
     try:
-        return from_dict(BenchConfig, tomllib.loads(text))
+        data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise ConfigError("config", f"stored configuration is not valid TOML: {err}") from None
+    mj = data.get("mujoco")
+    if isinstance(mj, dict) and "impact_speed_floor_mps" in mj:
+        data.setdefault("contact", {}).setdefault("impact_speed_floor_mps", mj.pop("impact_speed_floor_mps"))
+    return from_dict(BenchConfig, data)
 
 
 def with_overrides(cfg: BenchConfig, overrides: Mapping[str, Any]) -> BenchConfig:

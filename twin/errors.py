@@ -38,3 +38,8 @@ class RecordingError(TwinError):
 
 class EngineUnavailableError(TwinError):
     """An engine or native extension is not available in this installation."""
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised in the main thread like Ctrl-C so that every writer's clean-up runs
+    (temporary files removed, nothing half-written left under the final name)."""

@@ -37,7 +37,7 @@ from twin import __version__
 from twin.config import BenchConfig, config_from_toml
 from twin.errors import RecordingError, TwinError
 from twin.run import Channel, Run
-from twin.util import json_default
+from twin.util import json_default, remove_stale_temps, temp_path
 
 FORMAT = "twin-run/1"
 TOPIC_PREFIX = "/twin/"
@@ -116,24 +116,25 @@ def decode_block(data: bytes, dtypes: list[str]) -> tuple[int, int, float, list[
 
 
 class RunWriter:
-    """Streams a run, chunk by chunk, into an MCAP file (temporary file + rename).
+    """Streams a run, chunk by chunk, into an MCAP file (temporary file + rename): a
+    :class:`twin.simulate.Sink`.
 
-    Use as a context manager; :meth:`close` finalizes, leaving the exception path to
-    delete the temporary file.
+    The temporary file ``.NAME.PID.tmp`` is created at the first :meth:`write` (so a writer
+    made before a run that then fails to start leaves nothing), :meth:`close` finalizes and
+    renames it into place, :meth:`abort` deletes it. Use as a context manager to abort on error.
     """
 
     def __init__(self, path: str | Path, config: BenchConfig | None, block: int = DEFAULT_BLOCK):
         self.path = Path(path)
         if self.path.suffix != ".mcap":
             raise TwinError(f"--out: run files must end in .mcap, got {self.path.name}")
-        if not self.path.parent.exists():
+        if not self.path.parent.is_dir():
             raise TwinError(f"--out: directory {self.path.parent} does not exist")
-        self.tmp = self.path.with_name(f".{self.path.name}.{os.getpid()}.tmp")
+        self.tmp = temp_path(self.path)
         self.config = config
         self.block = int(block)
-        self._fh = open(self.tmp, "wb")
-        self._w = Writer(self._fh, compression=CompressionType.ZSTD, chunk_size=4 * 1024 * 1024)
-        self._w.start(profile="", library=f"twin {__version__}")
+        self._fh = None
+        self._w: Writer | None = None
         self._groups: dict[str, tuple[int, list[str]]] = {}
         self._pending: Run | None = None
         self._written = 0
@@ -141,6 +142,15 @@ class RunWriter:
         self.rate_hz: float | None = None
         self._channels: list[str] | None = None
         self._done = False
+
+    def _open(self) -> None:
+        remove_stale_temps(self.path)
+        try:
+            self._fh = open(self.tmp, "wb")
+        except OSError as err:
+            raise TwinError(f"{self.path}: cannot write ({err.strerror})") from None
+        self._w = Writer(self._fh, compression=CompressionType.ZSTD, chunk_size=4 * 1024 * 1024)
+        self._w.start(profile="", library=f"twin {__version__}")
 
     def _register(self, run: Run) -> None:
         self.t0, self.rate_hz = run.t0, run.rate_hz
@@ -156,6 +166,10 @@ class RunWriter:
 
     def write(self, chunk: Run) -> None:
         """Append the samples of ``chunk`` (the next consecutive piece of the run)."""
+        if self._done:
+            raise TwinError(f"{self.path}: write after close or abort")
+        if self._w is None:
+            self._open()
         if self._channels is None:
             self._register(chunk)
         elif list(chunk.channels) != self._channels or chunk.rate_hz != self.rate_hz:
@@ -165,8 +179,12 @@ class RunWriter:
                 raise RecordingError(f"channel {c.name}: dtype {c.data.dtype} not storable (float32/float64)")
         run = chunk if self._pending is None else Run.concat([self._pending, chunk])
         full = (run.n // self.block) * self.block
-        self._emit(run.slice(0, full))
-        self._pending = run.slice(full, run.n)
+        try:
+            self._emit(run.slice(0, full))
+        except OSError as err:
+            raise TwinError(f"{self.path}: cannot write ({err.strerror})") from None
+        # keep a copy of the incomplete block only, not a view that pins the whole chunk
+        self._pending = Run.concat([run.slice(full, run.n)]) if full < run.n else None
 
     def _emit(self, run: Run) -> None:
         for i in range(0, run.n, self.block):
@@ -185,6 +203,10 @@ class RunWriter:
         ``extra_metadata``: further metadata records by name (string keys and values), e.g.
         ``twin.recording`` of a bench recording (``twin/recording.py``).
         """
+        if self._done:
+            raise TwinError(f"{self.path}: close after close or abort")
+        if self._w is None:
+            self._open()  # a run with no chunks: a valid file with metadata only
         if self._pending is not None and self._pending.n:
             self._emit(self._pending)
             self._pending = None
@@ -198,20 +220,25 @@ class RunWriter:
             "meta": json.dumps(meta or {}, sort_keys=True, default=json_default)})
         if summary is not None:
             self._w.add_metadata("twin.summary", {"json": json.dumps(summary, sort_keys=True, default=json_default)})
-        self._w.finish()
-        self._fh.close()
-        os.replace(self.tmp, self.path)
+        try:
+            self._w.finish()
+            self._fh.close()
+            os.replace(self.tmp, self.path)
+        except OSError as err:
+            self.abort()
+            raise TwinError(f"{self.path}: cannot write ({err.strerror})") from None
         self._done = True
         return self.path
 
     def abort(self) -> None:
         """Drop the temporary file (on error); an existing file at ``path`` is untouched."""
         if not self._done:
+            self._done = True
             try:
-                self._fh.close()
+                if self._fh is not None:
+                    self._fh.close()
             finally:
                 self.tmp.unlink(missing_ok=True)
-            self._done = True
 
     def __enter__(self) -> "RunWriter":
         return self

@@ -14,13 +14,18 @@ real ones; the two are compared. Steps of :func:`replay`:
 4. virtual sensor chain on the simulated run (:func:`twin.instrument.apply_chain`), its zero-g
    offsets set to the recording's calibration so that raw volts are comparable, calibrated
    with a simulated static recording exactly as the bench calibrates (Eq. 1–4);
-5. comparison over an analysis window: time alignment (lag of the cross-correlation of all
-   sensors, low-passed at 500 Hz, within ``max_lag_s``), per-sensor errors (RMS, peak, NRMSE vs the recorded range,
+5. comparison over an analysis window: time alignment (:func:`twin.signals.estimate_lag`: the
+   lag that best explains the recorded sensors by the simulated ones, each sensor weighted by its
+   evidence, with a 95 % confidence interval; no shift is kept when the data cannot tell), per-sensor errors (RMS, peak, NRMSE vs the recorded range,
    correlation), the paper's normalized DTW distance and time shift (:mod:`twin.signals`),
    Hann-windowed spectra with the crank rate and its harmonics and the 1 kHz / 3 kHz band
    energies, crank tracking error in encoder counts;
 6. output folder: ``replay.mcap`` (recorded and simulated channels side by side, names in
-   ``recordings/FORMAT.md``), ``report.json``, ``report.md``, PNG plots.
+   ``recordings/FORMAT.md``), ``report.json``, ``report.md``, PNG plots, ``encoder_trace.npz``.
+   The folder is written under a temporary name beside it and renamed into place at the end, so
+   an existing folder is replaced whole or left as it was (bad input found late, an error,
+   Ctrl-C, SIGTERM); every input (recording, configuration, window) is checked before anything
+   is written.
 
 The simulation starts at rest at the first recorded angle: recordings should start with the
 crank at rest (the bench protocol does); otherwise exclude the catch-up from the window.
@@ -179,12 +184,10 @@ def replay(recording: str | Path, out_dir: str | Path,
     ``configure`` maps the recording's bench configuration to the one to simulate (CLI
     overrides); None keeps it.
     """
-    from twin.mcapfile import write_run
-    from twin.simulate import output_stride, simulate
-    from twin.util import atomic_write_json, atomic_write_text, check_output_dir
+    from twin.util import check_output_dir, remove_stale_temps, replace_dir, temp_path
 
     wall0 = time.perf_counter()
-    out = check_output_dir(out_dir, need_parent=False)
+    final = check_output_dir(out_dir, need_parent=False)
     rec, info, repairs = read_recording(recording, nan=opts.nan)
     if info.calibration is None:
         raise RecordingError(f"{recording}: no calibration data; re-import it with --calibration STATIC "
@@ -195,23 +198,50 @@ def replay(recording: str | Path, out_dir: str | Path,
     if abs(inst.daq_rate_hz - rec.rate_hz) > 1e-6 * rec.rate_hz:
         raise RecordingError(f"instrumentation.daq_rate_hz ({inst.daq_rate_hz:g} Hz) differs from the recording's "
                              f"rate ({rec.rate_hz:g} Hz)")
-    out.mkdir(parents=True, exist_ok=True)
+    trace = final / "encoder_trace.npz"
+    # the simulated configuration (checked before anything is written) and the analysis window
+    cfg = replay_config(base, trace, rec, dict(info.calibration.zero_g_v))
+    edge = 2.0 / cfg.drive.trace_filter_hz if cfg.drive.trace_filter_hz > 0 else 0.0
+    window = _window_indices(rec.n, rec.rate_hz, opts.window_s, edge)
+    # everything is written into a temporary folder beside the target, renamed into place at the
+    # end: an existing folder is replaced whole or left as it was (error, Ctrl-C, SIGTERM)
+    final.parent.mkdir(parents=True, exist_ok=True)
+    remove_stale_temps(final)
+    tmp = temp_path(final)
+    tmp.mkdir()
+    try:
+        report = _replay_into(tmp, recording, rec, info, repairs, rec_cfg, base, cfg, window, opts, wall0)
+        replace_dir(tmp, final)
+    except BaseException:
+        import shutil
+
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return report
+
+
+def _replay_into(out: Path, recording: str | Path, rec: Run, info: Any, repairs: list[str],
+                 rec_cfg: BenchConfig, base: BenchConfig, cfg: BenchConfig, window: tuple[int, int],
+                 opts: ReplayOptions, wall0: float) -> dict[str, Any]:
+    """Steps 2-6 of :func:`replay`, writing into the folder ``out`` (renamed into place by the
+    caller); the configuration ``cfg`` names the trace at its final place."""
+    from twin.mcapfile import write_run
+    from twin.simulate import simulate_run
+    from twin.util import atomic_write_json, atomic_write_text
 
     # 1-2. encoder counts -> angle trace for the drive
+    inst = cfg.instrumentation
     cpr = inst.encoder_counts_per_rev
     count = count_step_rad(cpr)
     phi = counts_to_angle(rec["encoder_counts"], cpr, centre=inst.encoder_quantization)
     t_rel = np.arange(rec.n) / rec.rate_hz
     trace = out / "encoder_trace.npz"
-    tmp = out / ".encoder_trace.tmp.npz"
-    np.savez(tmp, t=t_rel, angle=phi)
-    tmp.replace(trace)
-    cfg = replay_config(base, trace, rec, dict(info.calibration.zero_g_v))
-    output_stride(cfg)
+    np.savez(trace, t=t_rel, angle=phi)
+    stored_cfg, cfg = cfg, cfg.replace(**{"drive.trace_file": str(trace)})  # run from here, store the final place
 
     # 3. simulate
     t_sim = time.perf_counter()
-    sim = simulate(cfg, progress=opts.progress)
+    sim = simulate_run(cfg, progress=opts.progress)
     sim_wall = time.perf_counter() - t_sim
     if sim.n != rec.n:
         raise TwinError(f"internal: simulated {sim.n} samples for a {rec.n}-sample recording")
@@ -225,10 +255,9 @@ def replay(recording: str | Path, out_dir: str | Path,
     sensors = [a for a in ACCELEROMETERS if f"meas_{a}" in rec_meas]
 
     # 5. comparison
-    # default window: skip the last 2/cutoff seconds, where the trace filter's edge extension
-    # (constant acceleration) departs from the true motion
-    edge = 2.0 / cfg.drive.trace_filter_hz if cfg.drive.trace_filter_hz > 0 else 0.0
-    i0, i1 = _window_indices(rec.n, rec.rate_hz, opts.window_s, edge)
+    # default window (replay()): skip the last 2/cutoff seconds, where the trace filter's edge
+    # extension (constant acceleration) departs from the true motion
+    i0, i1 = window
     rate = rec.rate_hz
     max_lag = int(round(opts.max_lag_s * rate))
     from twin.signals import estimate_lag as _estimate_lag
@@ -288,7 +317,7 @@ def replay(recording: str | Path, out_dir: str | Path,
              **sim_daq.channels, **sim_meas.channels}
     chans = {k: dataclasses.replace(c, data=np.ascontiguousarray(c.data, dtype=np.float32 if c.data.dtype == np.float32
                                                                   else np.float64)) for k, c in chans.items()}
-    both = Run(rec.t0, rate, chans, cfg, {**sim.meta, "replay_of": str(recording)})
+    both = Run(rec.t0, rate, chans, stored_cfg, {**sim.meta, "replay_of": str(recording)})
     mcap_path = out / "replay.mcap"
     write_run(mcap_path, both, extra_metadata={"twin.replay": {"json": json.dumps(report, default=json_default)},
                                                "twin.recording": info.to_record()})

@@ -1,60 +1,110 @@
-"""One entry point for both engines: a configuration in, a :class:`~twin.run.Run` out.
+"""One entry point for both engines: a configuration in, a stream of chunks out, sinks consume it.
 
-Engines implement :class:`Engine`: built from a :class:`~twin.config.BenchConfig`, they
-yield consecutive chunks (runs of ``simulation.chunk_s`` each) carrying exactly the channels
-of :func:`twin.channels.channel_specs`, sampled at :func:`output_stride`'s rate, and fill
-``meta`` (engine, timestep_s, steps, wall_s, real_time_factor, ...) as they go. Sinks
-consume the chunks; :func:`simulate` concatenates them into one run.
+The chunk loop lives here and only here (:func:`run_chunks`). An engine supplies its stepping
+and how its state maps to channels (:class:`Engine`); it never imports this module. For each
+chunk of ``simulation.chunk_s`` the loop evaluates the drive reference at every integration
+step, lets the engine advance, adds the channels every engine shares (drive reference, encoder
+angle), converts each channel to its storage type (:func:`twin.channels.channel_specs`) and
+keeps the run's metadata (steps, wall time, real-time factor).
+
+:func:`simulate` owns the life of a run: it builds the engine, streams every chunk to the sinks
+(:class:`Sink`: the MCAP file, the rerun recording, a collector for callers that want the whole
+run in memory, ...), keeps the summary incrementally (:class:`twin.summary.SummaryAccumulator`)
+and closes the sinks with the metadata and summary at the end. On any error or signal
+(KeyboardInterrupt; SIGTERM is turned into one while it runs) every sink is aborted: no sink
+leaves a partial file. Nothing here keeps a chunk after the sinks have seen it, so memory does
+not grow with the duration.
 """
 
 from __future__ import annotations
 
+import contextlib
 import importlib
+import signal
+import threading
 import time
-from typing import Any, Callable, Iterable, Iterator, Protocol
+from dataclasses import dataclass, field
+from typing import Any, Iterable, Iterator, Protocol, runtime_checkable
 
+import numpy as np
+
+from twin.channels import channel_specs, encoder_from_bench
 from twin.config import BenchConfig
-from twin.errors import ConfigError
-from twin.run import Run
+from twin.errors import SimulationError, Terminated
+from twin.run import Channel, Run
 
-#: engine name -> "module:class"
+#: engine name -> "module:class" (imported on demand: the reference engine pulls in numba)
 ENGINES: dict[str, str] = {
     "mujoco": "twin.mujoco_engine.engine:MujocoEngine",
     "reference": "twin.reference.engine:ReferenceEngine",
 }
 
+#: channels the loop computes itself (from the drive reference and the crank angle)
+LOOP_CHANNELS = ("theta_ref", "omega_ref", "encoder_angle")
+
 
 class Engine(Protocol):
-    """What an engine provides (see module docstring)."""
+    """What an engine supplies to the chunk loop.
+
+    ``meta`` holds the engine's metadata (name, version, build and compile times, contact
+    settings, warnings...); the loop adds ``steps``, ``wall_s`` and ``real_time_factor``.
+    """
 
     name: str
     meta: dict[str, Any]
 
-    def chunks(self) -> Iterator[Run]: ...
+    def reset(self, theta0: float | None = None) -> None:
+        """Put the mechanism at rest at crank bench angle ``theta0`` [rad] (None: the drive
+        program's initial angle), eccentricities as configured."""
+
+    def advance(self, theta_ref: np.ndarray, omega_ref: np.ndarray, stride: int) -> dict[str, np.ndarray]:
+        """Integrate ``len(theta_ref)`` steps, step k tracking ``theta_ref[k]`` [rad] and
+        ``omega_ref[k]`` [rad/s]; return the engine's channels at steps 0, stride, 2·stride, ...
+        (the state at the start of those steps): every channel of :func:`channel_specs` except
+        :data:`LOOP_CHANNELS`, plus ``crank_angle`` whenever the encoder group is asked for.
+        Raise :class:`~twin.errors.SimulationError` on divergence."""
 
 
-def output_stride(cfg: BenchConfig) -> tuple[int, float]:
-    """(integration steps per output sample, output rate [Hz]).
+@runtime_checkable
+class Sink(Protocol):
+    """Consumer of a run's chunks: ``write`` for consecutive chunks, then exactly one of
+    ``close`` (success: finalize, e.g. rename the temporary file into place) or ``abort``
+    (failure or interruption: drop everything, leave nothing behind)."""
 
-    The output rate is ``sensors.output_rate_hz`` when the timestep divides its period;
-    a timestep longer than that period outputs every step (rate 1/h).
-    """
-    h, rate = cfg.simulation.timestep_s, cfg.sensors.output_rate_hz
-    k = 1.0 / (h * rate)
-    if k < 1.0 - 1e-9:
-        return 1, round(1.0 / h, 6)  # 1/2e-5 = 49999.99999999999 otherwise
-    stride = int(round(k))
-    if abs(stride - k) > 1e-6 * k:
-        raise ConfigError("simulation.timestep_s",
-                          f"{h:g} s does not divide the output period 1/{rate:g} Hz; "
-                          "use a timestep of (1/output_rate)/k for an integer k")
-    return stride, rate
+    def write(self, chunk: Run) -> None: ...
+
+    def close(self, meta: dict[str, Any], summary: dict[str, Any]) -> Any: ...
+
+    def abort(self) -> None: ...
 
 
-def n_samples(cfg: BenchConfig) -> int:
-    """Number of output samples of a run of ``cfg``."""
-    _, rate = output_stride(cfg)
-    return int(round(cfg.duration_s * rate))
+class Collector:
+    """Sink that keeps every chunk, for callers that want the whole run in memory
+    (:func:`simulate_run`; tests, studies of short windows). Its memory grows with the run."""
+
+    def __init__(self) -> None:
+        self._chunks: list[Run] = []
+        self.run: Run | None = None
+
+    def write(self, chunk: Run) -> None:
+        self._chunks.append(chunk)
+
+    def close(self, meta: dict[str, Any], summary: dict[str, Any]) -> Run:
+        self.run = Run.concat(self._chunks)
+        self.run.meta = dict(meta)
+        self._chunks = []
+        return self.run
+
+    def abort(self) -> None:
+        self._chunks = []
+
+
+@dataclass
+class Outcome:
+    """What :func:`simulate` returns: the run's metadata and summary (the data went to the sinks)."""
+
+    meta: dict[str, Any] = field(default_factory=dict)
+    summary: dict[str, Any] = field(default_factory=dict)
 
 
 def make_engine(cfg: BenchConfig) -> Engine:
@@ -64,7 +114,7 @@ def make_engine(cfg: BenchConfig) -> Engine:
 
 
 class Progress:
-    """Minimal progress callback protocol: called with (simulated seconds done, total)."""
+    """Progress bar on stderr (tqdm), in simulated seconds."""
 
     def __init__(self, total_s: float, enabled: bool = True, desc: str = "simulating"):
         self.bar = None
@@ -84,34 +134,112 @@ class Progress:
             self.bar.close()
 
 
-def run_chunks(cfg: BenchConfig, progress: bool = False) -> tuple[Engine, Iterator[Run]]:
-    """Engine and its chunk iterator (progress bar on stderr if ``progress``)."""
-    engine = make_engine(cfg)
+def run_chunks(cfg: BenchConfig, engine: Engine | None = None, progress: bool = False) -> Iterator[Run]:
+    """The chunk loop (see the module docstring): yields consecutive chunks of the run of ``cfg``
+    on ``engine`` (default: a new engine of ``cfg.simulation.engine``). ``engine.meta`` holds the
+    run's metadata as it goes."""
+    from twin.drive import DriveReference
 
-    def gen() -> Iterator[Run]:
-        bar = Progress(cfg.duration_s, progress, desc=f"{cfg.simulation.engine} {cfg.name}")
-        try:
-            for chunk in engine.chunks():
-                bar.update(chunk)
-                yield chunk
-        finally:
-            bar.close()
+    engine = engine if engine is not None else make_engine(cfg)
+    ref = DriveReference(cfg)
+    h, stride, rate, n_out = cfg.simulation.timestep_s, cfg.output_stride, cfg.output_rate_hz, cfg.n_samples
+    specs = channel_specs(cfg)
+    encoder = "encoder" in cfg.sensors.channels
+    direction = cfg.mechanism.crank_direction
+    per_chunk = max(1, int(round(cfg.simulation.chunk_s * rate)))
+    engine.reset(float(ref(np.zeros(1))[0][0]))
+    engine.meta.update(steps=0, wall_s=0.0, real_time_factor=None)
+    bar = Progress(n_out / rate, progress, desc=f"{cfg.simulation.engine} {cfg.name}")
+    done, wall = 0, 0.0
+    try:
+        while done < n_out:
+            n = min(per_chunk, n_out - done)
+            nstep = n * stride
+            t_start = time.perf_counter()
+            k0 = done * stride
+            theta_ref, omega_ref = ref((k0 + np.arange(nstep)) * h)
+            cols = engine.advance(theta_ref, omega_ref, stride)
+            cols["theta_ref"], cols["omega_ref"] = theta_ref[::stride], omega_ref[::stride]
+            if encoder:
+                cols["encoder_angle"] = encoder_from_bench(cols["crank_angle"], direction)
+            try:
+                chans = {s.name: Channel(s.name, s.unit, s.group, np.ascontiguousarray(cols[s.name], dtype=s.dtype))
+                         for s in specs}
+            except KeyError as err:
+                raise SimulationError(f"internal: the {engine.name} engine did not produce channel {err}") from None
+            chunk = Run(done / rate, rate, chans, cfg, {})
+            if chunk.n != n:
+                raise SimulationError(f"internal: the {engine.name} engine returned {chunk.n} samples, expected {n}")
+            wall += time.perf_counter() - t_start
+            done += n
+            engine.meta.update(steps=done * stride, wall_s=wall,
+                               real_time_factor=(done * stride * h) / wall if wall > 0 else None)
+            bar.update(chunk)
+            yield chunk
+    finally:
+        bar.close()
 
-    return engine, gen()
+
+@contextlib.contextmanager
+def _sigterm_interrupts() -> Iterator[None]:
+    """While a run streams, SIGTERM raises :class:`Terminated` (a KeyboardInterrupt) in the main
+    thread, so that the sinks are aborted; a handler someone else installed is kept."""
+    if threading.current_thread() is not threading.main_thread() or \
+            signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL:
+        yield
+        return
+    previous = signal.signal(signal.SIGTERM, _raise_terminated)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
-def simulate(cfg: BenchConfig, progress: bool = False,
-             sinks: Iterable[Callable[[Run], None]] = ()) -> Run:
-    """Run ``cfg`` to the end and return the whole run (chunks also passed to ``sinks``)."""
-    engine, it = run_chunks(cfg, progress)
+def _raise_terminated(signum, frame):  # noqa: ARG001 - signal handler signature
+    raise Terminated()
+
+
+def simulate(cfg: BenchConfig, sinks: Iterable[Sink] = (), progress: bool = False,
+             engine: Engine | None = None) -> Outcome:
+    """Run ``cfg`` to the end, streaming every chunk to ``sinks``; returns metadata and summary.
+
+    Sinks are closed in the order given, with the run's metadata and summary. If anything fails
+    (engine construction, a diverging step, a sink's write or close) or the run is interrupted
+    (Ctrl-C, SIGTERM), every sink not yet closed is aborted and the error propagates.
+    """
+    from twin.summary import SummaryAccumulator
+
     sinks = list(sinks)
-    chunks = []
+    closed = 0
     t0 = time.perf_counter()
-    for chunk in it:
-        for s in sinks:
-            s(chunk)
-        chunks.append(chunk)
-    run = Run.concat(chunks)
-    run.meta = dict(engine.meta)
-    run.meta.setdefault("total_wall_s", time.perf_counter() - t0)
-    return run
+    try:
+        with _sigterm_interrupts():
+            engine = engine if engine is not None else make_engine(cfg)
+            acc = SummaryAccumulator(cfg)
+            for chunk in run_chunks(cfg, engine, progress):
+                acc.update(chunk)
+                for s in sinks:
+                    s.write(chunk)
+            meta = dict(engine.meta)
+            meta["total_wall_s"] = time.perf_counter() - t0
+            summary = acc.result(meta)
+            for s in sinks:
+                s.close(meta, summary)
+                closed += 1
+    except BaseException:
+        for s in sinks[closed:]:
+            try:
+                s.abort()
+            except Exception:  # noqa: BLE001 - the original error matters; abort is best effort
+                pass
+        raise
+    return Outcome(meta, summary)
+
+
+def simulate_run(cfg: BenchConfig, progress: bool = False, sinks: Iterable[Sink] = ()) -> Run:
+    """Run ``cfg`` and return the whole run in memory (plus any other ``sinks``): for short runs.
+    Long runs should stream to sinks with :func:`simulate` instead."""
+    keep = Collector()
+    simulate(cfg, [*sinks, keep], progress)
+    assert keep.run is not None
+    return keep.run

@@ -14,11 +14,12 @@ Definitions (identical for both engines, so summaries compare line by line):
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from twin.config import ACCELEROMETERS, JOINTS
+from twin.config import ACCELEROMETERS, JOINTS, BenchConfig
 from twin.run import Run
 
 #: Minimum separation before a contact onset counts as a new impact [s].
@@ -54,46 +55,142 @@ def count_impacts(in_contact: np.ndarray, rate_hz: float, min_free_s: float = MI
     return int(np.count_nonzero(free >= min_free))
 
 
-def joint_summary(run: Run, joint: str) -> dict[str, Any]:
-    """Summary numbers of one clearance joint (see module docstring)."""
-    cfg = run.config
-    out: dict[str, Any] = {"clearance_mm": cfg.joints.diametral_mm(joint) if cfg else None}
-    if f"ecc_{joint}_x" not in run:
+class ImpactCounter:
+    """:func:`count_impacts` over a stream of chunks: same count as on the whole record.
+
+    Keeps the contact state of the last sample seen and the global index of the last
+    contact-to-free transition, so onsets and separations that straddle chunk boundaries count
+    as on the whole record (the record start counts as separated; a record starting in contact
+    has no impact at t = 0).
+    """
+
+    def __init__(self, rate_hz: float, min_free_s: float = MIN_FREE_S):
+        self.min_free = max(1, int(round(min_free_s * rate_hz)))
+        self.count = 0
+        self._last: bool | None = None  # contact state of the last sample seen
+        self._last_off: int | None = None  # global index of the first free sample after contact
+        self._seen = 0
+
+    def update(self, in_contact: np.ndarray) -> None:
+        c = np.asarray(in_contact, dtype=bool)
+        if c.size == 0:
+            return
+        if self._last is None:
+            ext, base = c, self._seen
+        else:
+            ext, base = np.concatenate([[self._last], c]), self._seen - 1
+        idx = np.flatnonzero(np.diff(ext.astype(np.int8))) + 1
+        onsets = base + idx[ext[idx]]
+        offsets = base + idx[~ext[idx]]
+        offs = offsets if self._last_off is None else np.concatenate([[self._last_off], offsets])
+        prev = np.searchsorted(offs, onsets) - 1
+        has_prev = prev >= 0
+        free_ok = np.ones(onsets.shape, dtype=bool)  # no offset before: free since the start
+        free_ok[has_prev] = onsets[has_prev] - offs[prev[has_prev]] >= self.min_free
+        self.count += int(np.count_nonzero(free_ok))
+        if offs.size:
+            self._last_off = int(offs[-1])
+        self._last = bool(c[-1])
+        self._seen += c.size
+
+
+class SummaryAccumulator:
+    """The run summary (module docstring), kept chunk by chunk in memory that does not grow with
+    the run: maxima, sums of squares and the impact counters. ``result(meta)`` equals
+    :func:`summarize` of the whole run up to the rounding of the sums."""
+
+    def __init__(self, config: BenchConfig | None):
+        self.config = config
+        self.n = 0
+        self.rate_hz: float | None = None
+        self._joints: dict[str, dict[str, Any]] = {}
+        self._impacts: dict[str, ImpactCounter] = {}
+        self._acc: dict[str, list[float]] = {}  # name -> [sum of squares, peak |a|]
+        self._track: list[float] | None = None  # [max |err|, sum err^2]
+
+    def update(self, chunk: Run) -> None:
+        if self.rate_hz is None:
+            self.rate_hz = chunk.rate_hz
+        if chunk.n == 0:
+            return
+        for j in JOINTS:
+            if f"ecc_{j}_x" not in chunk:
+                continue
+            ex, ey, fn = chunk[f"ecc_{j}_x"], chunk[f"ecc_{j}_y"], chunk[f"fn_{j}"]
+            st = self._joints.setdefault(j, {"max_eccentricity_m": 0.0, "max_penetration_m": 0.0,
+                                             "max_contact_force_N": 0.0})
+            st["max_eccentricity_m"] = max(st["max_eccentricity_m"], float(np.max(np.hypot(ex, ey))))
+            st["max_penetration_m"] = max(st["max_penetration_m"], float(np.max(chunk[f"pen_{j}"])))
+            st["max_contact_force_N"] = max(st["max_contact_force_N"], float(np.max(fn)))
+            self._impacts.setdefault(j, ImpactCounter(chunk.rate_hz)).update(fn > 0)
+        for a in ACCELEROMETERS:
+            if a in chunk:
+                x = chunk[a].astype(np.float64)
+                acc = self._acc.setdefault(a, [0.0, 0.0])
+                acc[0] += float(np.dot(x, x))
+                acc[1] = max(acc[1], float(np.max(np.abs(x))))
+        if "crank_angle" in chunk and "theta_ref" in chunk:
+            err = chunk["theta_ref"] - chunk["crank_angle"]
+            tr = self._track if self._track is not None else [0.0, 0.0]
+            tr[0] = max(tr[0], float(np.max(np.abs(err))))
+            tr[1] += float(np.dot(err, err))
+            self._track = tr
+        self.n += chunk.n
+
+    def result(self, meta: dict[str, Any] | None = None) -> dict[str, Any]:
+        """Summary dict (keys documented in the module docstring and README)."""
+        meta = meta or {}
+        cfg, n, rate = self.config, self.n, self.rate_hz or 0.0
+        out: dict[str, Any] = {
+            "name": cfg.name if cfg else None,
+            "engine": meta.get("engine"),
+            "duration_s": n / rate if rate else 0.0,
+            "timestep_s": meta.get("timestep_s"),
+            "steps": meta.get("steps"),
+            "wall_s": meta.get("wall_s"),
+            "real_time_factor": meta.get("real_time_factor"),
+            "sample_rate_hz": rate,
+            "samples": n,
+        }
+        for j in JOINTS:
+            js: dict[str, Any] = {"clearance_mm": cfg.joints.diametral_mm(j) if cfg else None}
+            if j in self._joints:
+                st = self._joints[j]
+                js.update(max_eccentricity_m=st["max_eccentricity_m"], max_penetration_m=st["max_penetration_m"],
+                          impacts=self._impacts[j].count, max_contact_force_N=st["max_contact_force_N"])
+            out[j] = js
+        for a in ACCELEROMETERS:
+            if a in self._acc:
+                ss, peak = self._acc[a]
+                out[a] = {"rms_mps2": float(np.sqrt(ss / n)) if n else 0.0, "peak_mps2": peak}
+        if self._track is not None and n:
+            out["tracking"] = {"max_abs_error_rad": self._track[0], "rms_error_rad": float(np.sqrt(self._track[1] / n))}
         return out
-    ex, ey = run[f"ecc_{joint}_x"], run[f"ecc_{joint}_y"]
-    fn = run[f"fn_{joint}"]
-    out.update(
-        max_eccentricity_m=float(np.max(np.hypot(ex, ey))) if run.n else 0.0,
-        max_penetration_m=float(np.max(run[f"pen_{joint}"])) if run.n else 0.0,
-        impacts=count_impacts(fn > 0, run.rate_hz),
-        max_contact_force_N=float(np.max(fn)) if run.n else 0.0,
-    )
-    return out
 
 
 def summarize(run: Run) -> dict[str, Any]:
-    """Summary dict of a run (keys documented in the module docstring and README)."""
-    meta = run.meta
-    out: dict[str, Any] = {
-        "name": run.config.name if run.config else None,
-        "engine": meta.get("engine"),
-        "duration_s": run.n / run.rate_hz,
-        "timestep_s": meta.get("timestep_s"),
-        "steps": meta.get("steps"),
-        "wall_s": meta.get("wall_s"),
-        "real_time_factor": meta.get("real_time_factor"),
-        "sample_rate_hz": run.rate_hz,
-        "samples": run.n,
-    }
-    for j in JOINTS:
-        out[j] = joint_summary(run, j)
-    for a in ACCELEROMETERS:
-        if a in run:
-            x = run[a].astype(np.float64)
-            out[a] = {"rms_mps2": float(np.sqrt(np.mean(x * x))) if run.n else 0.0,
-                      "peak_mps2": float(np.max(np.abs(x))) if run.n else 0.0}
-    if "crank_angle" in run and "theta_ref" in run and run.n:
-        err = run["theta_ref"] - run["crank_angle"]
-        out["tracking"] = {"max_abs_error_rad": float(np.max(np.abs(err))),
-                           "rms_error_rad": float(np.sqrt(np.mean(err * err)))}
-    return out
+    """Summary dict of a whole run (the same numbers :class:`SummaryAccumulator` keeps while a
+    run streams)."""
+    acc = SummaryAccumulator(run.config)
+    acc.rate_hz = run.rate_hz
+    acc.update(run)
+    return acc.result(run.meta)
+
+
+class SummaryJsonWriter:
+    """Sink that writes the run's summary as JSON when the run closes (atomically); nothing on
+    abort. Check the path before the run (:func:`twin.util.check_output_file`)."""
+
+    def __init__(self, path: str | Path):
+        self.path = Path(path)
+
+    def write(self, chunk: Run) -> None:  # noqa: ARG002 - the summary is kept by simulate()
+        pass
+
+    def close(self, meta: dict[str, Any], summary: dict[str, Any]) -> Path:  # noqa: ARG002
+        from twin.util import atomic_write_json
+
+        return atomic_write_json(self.path, summary)
+
+    def abort(self) -> None:
+        pass

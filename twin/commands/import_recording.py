@@ -3,9 +3,8 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
-from twin.cli import add_config_args, config_from_args
+from twin.cli import MODEL_OPTIONS, SELECT_OPTIONS, add_config_args, config_from_args
 from twin.errors import TwinError
 
 
@@ -18,7 +17,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "recordings/FORMAT.md) with the bench configuration and calibration data. Use --test N (or "
                     "--config) to say which bench configuration the test ran with.")
     p.add_argument("export", metavar="EXPORT", help="DAQ export: .csv (header row; units as 'name [V]') or .npz")
-    add_config_args(p)
+    # the options that describe the bench the recording was made on (not how to simulate it)
+    add_config_args(p, SELECT_OPTIONS + MODEL_OPTIONS + ("speed", "protocol"),
+                    refused_set=("simulation.", "sensors.channels", "sensors.output_rate_hz", "drive.trace_file"))
     p.add_argument("--out", metavar="REC.mcap", required=True, help="recording to write")
     p.add_argument("--map", action="append", default=[], metavar="TARGET=SOURCE[:UNIT]",
                    help="column mapping, repeatable or comma-separated, e.g. volt_AC1=ai0:V,encoder_counts=ctr0:count "
@@ -36,11 +37,15 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _zero_g(text: str) -> dict[str, float]:
-    out = {}
+    from twin.config import ACCELEROMETERS
+
+    out: dict[str, float] = {}
     for part in text.split(","):
         if "=" not in part:
-            raise TwinError(f"--zero-g: expects AC1=V,AC2=V,..., got {part!r}")
+            raise TwinError(f"--zero-g: expects AC1=V,AC2=V,... for {', '.join(ACCELEROMETERS)}, got {part!r}")
         k, v = (s.strip() for s in part.split("=", 1))
+        if k in out:
+            raise TwinError(f"--zero-g: {k} is given twice")
         try:
             out[k] = float(v)
         except ValueError:
@@ -52,13 +57,12 @@ def run(args: argparse.Namespace) -> int:
     from twin.recording import (RecordingInfo, calibration_from_offsets, file_sha256, import_table,
                                 parse_mapping, static_calibration_from, write_recording)
 
+    from twin.util import check_output_file
+
     cfg = config_from_args(args)
-    out = Path(args.out)
-    if out.suffix != ".mcap":
-        raise TwinError(f"--out: must end in .mcap, got {out.name}")
-    if not out.parent.exists():
-        raise TwinError(f"--out: directory {out.parent} does not exist")
-    if args.calibration and args.zero_g:
+    inputs = [args.export] + ([args.calibration] if args.calibration else [])
+    out = check_output_file(args.out, "--out", ".mcap", inputs=inputs)
+    if args.calibration and args.zero_g is not None:
         raise TwinError("--calibration and --zero-g are alternatives; give one")
     if args.rate is not None and not args.rate > 0:
         raise TwinError(f"--rate: must be > 0 Hz, got {args.rate!r}")
@@ -70,7 +74,7 @@ def run(args: argparse.Namespace) -> int:
     if args.calibration:
         static_map = {k: v for k, v in mapping.items() if k.startswith("volt_") or k == "t"}
         cal = static_calibration_from(args.calibration, cfg, static_map, args.rate, nan=nan)
-    elif args.zero_g:
+    elif args.zero_g is not None:
         cal = calibration_from_offsets(cfg, _zero_g(args.zero_g))
     info = RecordingInfo(run_.rate_hz, source_file=str(args.export), source_sha256=file_sha256(args.export),
                          notes=args.notes, calibration=cal, synthetic=False, created_by="twin import",

@@ -9,7 +9,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from twin.cli import add_config_args, config_from_args
+from twin.cli import MODEL_OPTIONS, SELECT_OPTIONS, add_config_args, config_from_args
 from twin.config import BenchConfig
 from twin.errors import TwinError
 
@@ -23,7 +23,11 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "through the bench's sensor chain and calibration, and compare with the recorded "
                     "accelerations. Writes replay.mcap, report.json, report.md and PNG plots to --out.")
     p.add_argument("recording", metavar="RECORDING.mcap", help="bench recording (see recordings/FORMAT.md)")
-    add_config_args(p)
+    # the model to replay with; the drive, duration, channels and rate come from the recording
+    add_config_args(p, SELECT_OPTIONS + MODEL_OPTIONS + ("engine", "timestep"),
+                    refused_set=("drive.program", "drive.trace_file", "simulation.duration_s",
+                                 "sensors.channels", "sensors.output_rate_hz", "instrumentation.zero_g_v",
+                                 "instrumentation.daq_rate_hz"))
     p.add_argument("--out", metavar="DIR", help="output folder (default: replay_<recording name>)")
     p.add_argument("--window", nargs=2, type=float, metavar=("START", "STOP"),
                    help="analysis window in recording time [s] (default: second half, at most 1 s)")
@@ -39,8 +43,6 @@ def register(sub: argparse._SubParsersAction) -> None:
 def replay_overrides(args: argparse.Namespace, rec_cfg: BenchConfig) -> BenchConfig:
     """The recording's configuration with the command line's configuration options applied
     (``--config``/``--test`` replace it as a whole)."""
-    if args.speed is not None or args.protocol or args.trace:
-        raise TwinError("--speed/--protocol/--trace: a replay is driven by the recording's encoder trace")
     if args.config or args.test is not None:
         return config_from_args(args)
     fd, tmp = tempfile.mkstemp(suffix=".toml", prefix="twin_replay_")
@@ -55,18 +57,21 @@ def replay_overrides(args: argparse.Namespace, rec_cfg: BenchConfig) -> BenchCon
 
 
 def run(args: argparse.Namespace) -> int:
+    import math
+
     from twin.replay import ReplayOptions, replay
+    from twin.util import check_output_dir
 
     rec = Path(args.recording)
     if rec.suffix != ".mcap":
         raise TwinError(f"{rec}: a recording is an .mcap file; convert DAQ exports with 'twin import'")
-    out = Path(args.out) if args.out else Path(f"replay_{rec.stem}")
-    if not out.parent.exists():
-        raise TwinError(f"--out: directory {out.parent} does not exist")
+    if not rec.is_file():
+        raise TwinError(f"{rec}: no such file")
+    out = check_output_dir(args.out if args.out else f"replay_{rec.stem}", "--out")
     for name in ("max_lag", "dtw_window", "dtw_max"):
         v = getattr(args, name)
-        if not (v >= 0):
-            raise TwinError(f"--{name.replace('_', '-')}: must be >= 0 s, got {v!r}")
+        if not (math.isfinite(v) and 0 <= v <= 10):
+            raise TwinError(f"--{name.replace('_', '-')}: must lie in [0, 10] s, got {v!r}")
     opts = ReplayOptions(window_s=tuple(args.window) if args.window else None, max_lag_s=args.max_lag,
                          dtw_window_s=args.dtw_window, dtw_max_s=args.dtw_max,
                          nan="interpolate" if args.repair_nan else "error", plots=not args.no_plots,

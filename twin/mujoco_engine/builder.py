@@ -495,7 +495,7 @@ def _set_impact_speed_damping(spec: mujoco.MjSpec, cfg: BenchConfig) -> None:
         bush = spec.geom(N.bushing(jt))
         bush.userdata = N.replace_bore_userdata(
             list(bush.userdata), damping_coef=impact_speed_coefficient(cfg, jt), exponent=cfg.contact.exponent,
-            speed_floor=cfg.mujoco.impact_speed_floor_mps, slot=slot)
+            speed_floor=cfg.contact.impact_speed_floor_mps, slot=slot)
 
 
 def build_model(cfg: BenchConfig) -> mujoco.MjModel:

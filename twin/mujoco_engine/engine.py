@@ -11,27 +11,24 @@ from __future__ import annotations
 
 import math
 import time
-from typing import Any, Iterator
+from typing import Any
 
 import mujoco
 import numpy as np
 from mujoco import rollout
 
 from twin import names as N
-from twin.channels import channel_specs, encoder_from_bench
 from twin.config import BenchConfig
-from twin.drive import DriveReference
 from twin.errors import SimulationError
 from twin.kinematics import initial_pose, rot2
 from twin.mujoco_engine.builder import build
-from twin.run import Channel, Run
-from twin.simulate import n_samples, output_stride
 
 _STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
 
 
 class MujocoEngine:
-    """MuJoCo twin of the bench (see module docstring)."""
+    """MuJoCo twin of the bench (see module docstring); the chunk loop is
+    :func:`twin.simulate.run_chunks`."""
 
     name = "mujoco"
 
@@ -40,10 +37,6 @@ class MujocoEngine:
         t0 = time.perf_counter()
         self.spec, self.model, self.info = build(cfg)
         self.data = mujoco.MjData(self.model)
-        self.ref = DriveReference(cfg)
-        self.stride, self.rate = output_stride(cfg)
-        self.n_out = n_samples(cfg)
-        self.specs = channel_specs(cfg)
         self.meta: dict[str, Any] = {
             "engine": self.name,
             "engine_version": mujoco.__version__,
@@ -60,13 +53,20 @@ class MujocoEngine:
         self._sensor_slices = {self.model.sensor(i).name: slice(int(self.model.sensor_adr[i]),
                                                                  int(self.model.sensor_adr[i] + self.model.sensor_dim[i]))
                                for i in range(self.model.nsensor)}
+        self._nstate = mujoco.mj_stateSize(self.model, _STATE)
+        self._sens = np.empty((1, 0, self.model.nsensordata))
+        self._k = 0  # integration steps taken since reset
 
     # -------------------------------------------------------------- initial state
-    def set_initial_state(self) -> None:
-        """Mechanism at rest at the drive's initial crank angle, eccentricities as configured."""
+    def reset(self, theta0: float | None = None) -> None:
+        """Mechanism at rest at crank bench angle ``theta0`` [rad] (None: the drive program's
+        initial angle), eccentricities as configured."""
         m, d, cfg = self.model, self.data, self.cfg
+        if theta0 is None:
+            from twin.drive import DriveReference
+
+            theta0 = float(DriveReference(cfg)(np.array([0.0]))[0][0])
         mujoco.mj_resetData(m, d)
-        theta0 = float(self.ref(np.array([0.0]))[0][0])
         pose = initial_pose(cfg, theta0)
         d.qpos[m.jnt_qposadr[m.joint(N.CRANK_HINGE).id]] = pose.theta
         d.qpos[m.jnt_qposadr[m.joint(N.ROD_HINGE).id]] = pose.phi - pose.theta
@@ -77,44 +77,30 @@ class MujocoEngine:
             d.qpos[m.jnt_qposadr[m.joint(N.ECC_B_Y).id]] = rel[1]
         d.qpos[m.jnt_qposadr[m.joint(N.SLIDER_SLIDE).id]] = pose.slider_x
         mujoco.mj_forward(m, d)
+        self._k = 0
 
-    # -------------------------------------------------------------------- chunks
-    def chunks(self) -> Iterator[Run]:
-        cfg, m, d = self.cfg, self.model, self.data
-        h = cfg.simulation.timestep_s
-        self.set_initial_state()
-        per_chunk = max(1, int(round(cfg.simulation.chunk_s * self.rate)))
-        nstate = mujoco.mj_stateSize(m, _STATE)
-        state0 = np.empty((1, nstate))
-        warm = np.empty((1, m.nv))
-        sens = np.empty((1, min(per_chunk, self.n_out) * self.stride, m.nsensordata))
-        done = 0
-        wall = 0.0
-        while done < self.n_out:
-            n_out = min(per_chunk, self.n_out - done)
-            nstep = n_out * self.stride
-            t_start = time.perf_counter()
-            k0 = done * self.stride
-            t_steps = (k0 + np.arange(nstep)) * h
-            theta_ref, omega_ref = self.ref(t_steps)
-            ctrl = np.stack([theta_ref, omega_ref], axis=-1)[None]
-            mujoco.mj_getState(m, d, state0[0], _STATE)
-            warm[0] = d.qacc_warmstart
-            sd = sens[:, :nstep]
-            # no per-step state output: the data object ends holding the final state
-            rollout.rollout(m, d, state0, ctrl, nstep=nstep, initial_warmstart=warm, sensordata=sd)
-            t_end_expected = (k0 + nstep) * h
-            if not math.isclose(d.time, t_end_expected, rel_tol=0, abs_tol=h * 0.5) or \
-                    not (np.all(np.isfinite(d.qpos)) and np.all(np.isfinite(d.qvel)) and np.all(np.isfinite(sd))):
-                raise SimulationError(self._divergence_message(d.time, k0 * h, t_end_expected))
-            chunk = self._channels(sd[0, ::self.stride], theta_ref[::self.stride],
-                                   omega_ref[::self.stride], done)
-            wall += time.perf_counter() - t_start
-            done += n_out
-            self.meta.update(steps=done * self.stride, wall_s=wall,
-                             real_time_factor=(done * self.stride * h) / wall if wall > 0 else None,
-                             warnings=self.warnings())
-            yield chunk
+    # -------------------------------------------------------------------- stepping
+    def advance(self, theta_ref: np.ndarray, omega_ref: np.ndarray, stride: int) -> dict[str, np.ndarray]:
+        """One ``mujoco.rollout`` call over ``len(theta_ref)`` steps (see
+        :meth:`twin.simulate.Engine.advance`)."""
+        m, d, h = self.model, self.data, self.cfg.simulation.timestep_s
+        nstep = len(theta_ref)
+        if self._sens.shape[1] < nstep:
+            self._sens = np.empty((1, nstep, m.nsensordata))
+        sd = self._sens[:, :nstep]
+        state0 = np.empty((1, self._nstate))
+        mujoco.mj_getState(m, d, state0[0], _STATE)
+        warm = d.qacc_warmstart.copy()[None]
+        ctrl = np.stack([theta_ref, omega_ref], axis=-1)[None]
+        # no per-step state output: the data object ends holding the final state
+        rollout.rollout(m, d, state0, ctrl, nstep=nstep, initial_warmstart=warm, sensordata=sd)
+        t_start, t_end = self._k * h, (self._k + nstep) * h
+        if not math.isclose(d.time, t_end, rel_tol=0, abs_tol=h * 0.5) or \
+                not (np.all(np.isfinite(d.qpos)) and np.all(np.isfinite(d.qvel)) and np.all(np.isfinite(sd))):
+            raise SimulationError(self._divergence_message(d.time, t_start, t_end))
+        self._k += nstep
+        self.meta["warnings"] = self.warnings()
+        return self._channels(sd[0, ::stride])
 
     def warnings(self) -> dict[str, int]:
         """MuJoCo warnings raised so far in this run (``mjData.warning``): {name: count}, nonzero only."""
@@ -128,7 +114,7 @@ class MujocoEngine:
                 f"(time reached {t_reached:.6f} s; warnings: {', '.join(warn) or 'none'}; NaN or Inf in the state "
                 "or sensors); try a smaller timestep or stiffer settings")
 
-    def _channels(self, sens: np.ndarray, theta_ref: np.ndarray, omega_ref: np.ndarray, first: int) -> Run:
+    def _channels(self, sens: np.ndarray) -> dict[str, np.ndarray]:
         cfg, sl = self.cfg, self._sensor_slices
         out: dict[str, np.ndarray] = {}
 
@@ -139,10 +125,9 @@ class MujocoEngine:
         if "accel" in groups:
             for a in N.ACCEL_SENSORS:
                 out[a] = col(a, 0)  # site x axis = sensitive axis
-        if "encoder" in groups:
-            out["encoder_angle"] = encoder_from_bench(col(N.SENSOR_CRANK_ANGLE), cfg.mechanism.crank_direction)
-        if "crank" in groups:
+        if "encoder" in groups or "crank" in groups:
             out["crank_angle"] = col(N.SENSOR_CRANK_ANGLE)
+        if "crank" in groups:
             out["crank_speed"] = col(N.SENSOR_CRANK_SPEED)
         if "slider" in groups:
             out["slider_position"] = col(N.SENSOR_SLIDER_POSITION)
@@ -178,9 +163,5 @@ class MujocoEngine:
             out["energy_potential"] = col(N.SENSOR_ENERGY_POTENTIAL)
             out["slider_speed"] = col(N.SENSOR_SLIDER_SPEED)
         if "drive" in groups:
-            out["theta_ref"] = theta_ref
-            out["omega_ref"] = omega_ref
             out["crank_torque"] = col(N.SENSOR_CRANK_TORQUE)
-        chans = {s.name: Channel(s.name, s.unit, s.group, np.ascontiguousarray(out[s.name], dtype=s.dtype))
-                 for s in self.specs}
-        return Run(first / self.rate, self.rate, chans, cfg, {})
+        return out

@@ -106,7 +106,7 @@ def variants(quick: bool = False) -> list[Variant]:
     if quick:
         return [
             Variant(DEFAULT_KEY, m, "default"),
-            Variant("mujoco h=2e-5", m, "timestep", {"simulation.timestep_s": 2e-5}),
+            Variant("mujoco h=2e-5", m, "timestep", {"simulation.timestep_s": 2e-5, "sensors.output_rate_hz": 5e4}),
             Variant("mujoco first-guess contact", m, "contact", {"mujoco.contact_source": "first-guess"}),
             Variant("mujoco fixed damping", m, "contact", {"mujoco.contact_damping": "fixed"}),
             Variant("reference h=1e-5", "reference", "reference", {"simulation.timestep_s": 1e-5}),
@@ -114,8 +114,8 @@ def variants(quick: bool = False) -> list[Variant]:
     return [
         Variant(DEFAULT_KEY, m, "default"),
         Variant("mujoco h=5e-6", m, "timestep", {"simulation.timestep_s": 5e-6}),
-        Variant("mujoco h=2e-5", m, "timestep", {"simulation.timestep_s": 2e-5}),
-        Variant("mujoco h=5e-5", m, "timestep", {"simulation.timestep_s": 5e-5}),
+        Variant("mujoco h=2e-5", m, "timestep", {"simulation.timestep_s": 2e-5, "sensors.output_rate_hz": 5e4}),
+        Variant("mujoco h=5e-5", m, "timestep", {"simulation.timestep_s": 5e-5, "sensors.output_rate_hz": 2e4}),
         Variant("mujoco implicitfast", m, "integrator", {"mujoco.integrator": "implicitfast"}),
         Variant("mujoco RK4", m, "integrator", {"mujoco.integrator": "RK4"}),
         Variant("mujoco Newton 3 it, tol 1e-6", m, "solver", {"mujoco.iterations": 3, "mujoco.tolerance": 1e-6}),
@@ -260,11 +260,11 @@ def pareto_front(points: Sequence[Sequence[float]]) -> list[bool]:
 # ---------------------------------------------------------------------------- the study
 def run_variant(v: Variant, test_id: int, s: StudySettings) -> tuple[WindowStats, dict[str, Any]]:
     """Simulate one variant on one test; (window stats, timing)."""
-    from twin.simulate import simulate
+    from twin.simulate import simulate_run
 
     cfg = v.config(scene(test_id, s))
     t = time.perf_counter()
-    run = simulate(cfg)
+    run = simulate_run(cfg)
     total = time.perf_counter() - t
     stats = WindowStats.of(run, s.t0, s.duration_s)
     wall = float(run.meta.get("wall_s") or total)

@@ -40,6 +40,7 @@ import rerun as rr
 
 from twin.config import ACCELEROMETERS, BenchConfig
 from twin.errors import TwinError
+from twin.util import remove_stale_temps, temp_path
 from twin.run import Channel, Run
 from twin.viz import blueprint as bp
 from twin.viz import scene
@@ -113,7 +114,7 @@ class RerunWriter:
         self.source = source
         self.t_start = float(t_start)
         self.t_end = float(t_end if t_end is not None else t_start + self.cfg.duration_s)
-        self._tmp = self.path.with_name(f".{self.path.stem}.{os.getpid()}.tmp.rrd")
+        self._tmp = temp_path(self.path, keep_suffix=True)  # rerun wants the .rrd suffix
         self.rec: rr.RecordingStream | None = None
         self._n = 0  # samples written so far
         self._t0: float | None = None
@@ -151,6 +152,7 @@ class RerunWriter:
 
         blueprint = bp.default_blueprint(self.cfg, self._groups, self._channels, self._joints, self._has_pose,
                                          self._fft_window, fft_names, self.opts)
+        remove_stale_temps(self.path)
         rec = rr.RecordingStream(APP_ID, recording_id=self.recording_id, send_properties=False)
         rec.set_log_time_enabled(False)
         rec.set_log_tick_enabled(False)
