@@ -159,6 +159,10 @@ def run_chunks(cfg: BenchConfig, engine: Engine | None = None, progress: bool = 
             k0 = done * stride
             theta_ref, omega_ref = ref((k0 + np.arange(nstep)) * h)
             cols = engine.advance(theta_ref, omega_ref, stride)
+            short_cols = [k for k, v in cols.items() if len(v) != n]
+            if short_cols:
+                raise SimulationError(f"internal: the {engine.name} engine returned {len(cols[short_cols[0]])} samples "
+                                      f"of {short_cols[0]}, expected {n}")
             cols["theta_ref"], cols["omega_ref"] = theta_ref[::stride], omega_ref[::stride]
             if encoder:
                 cols["encoder_angle"] = encoder_from_bench(cols["crank_angle"], direction)
@@ -168,8 +172,6 @@ def run_chunks(cfg: BenchConfig, engine: Engine | None = None, progress: bool = 
             except KeyError as err:
                 raise SimulationError(f"internal: the {engine.name} engine did not produce channel {err}") from None
             chunk = Run(done / rate, rate, chans, cfg, {})
-            if chunk.n != n:
-                raise SimulationError(f"internal: the {engine.name} engine returned {chunk.n} samples, expected {n}")
             wall += time.perf_counter() - t_start
             done += n
             engine.meta.update(steps=done * stride, wall_s=wall,
