@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 
 import pytest
 
@@ -96,3 +97,15 @@ def test_bad_preset_and_bad_file(tmp_path):
         load_config(p)
     with pytest.raises(ConfigError, match="cannot read"):
         load_config(tmp_path / "missing.toml")
+
+
+@pytest.mark.parametrize("overrides, fragment", [
+    ({"drive.program": "steps"}, "drive.steps_s: must hold at least one step"),
+    ({"drive.steps_s": [0.0, 1.0], "drive.steps_rpm": [500.0]}, "drive.steps_rpm: must hold one speed"),
+    ({"drive.program": "steps", "drive.steps_s": [1.0, 0.5], "drive.steps_rpm": [1.0, 2.0]}, "increasing order"),
+    ({"drive.program": "steps", "drive.steps_s": [0.0], "drive.steps_rpm": [1500.0]}, "±1000 rpm"),
+    ({"contact.stiffness_scale": 0.0}, "contact.stiffness_scale"),
+])
+def test_steps_program_and_stiffness_scale_are_validated(overrides, fragment):
+    with pytest.raises(ConfigError, match=re.escape(fragment)):
+        preset(6).replace(**overrides)

@@ -72,3 +72,20 @@ def test_bad_trace_files(tmp_path):
         cfg = BenchConfig().replace(**{"drive.program": "trace", "drive.trace_file": str(tmp_path / name)})
         with pytest.raises(RecordingError, match=msg):
             DriveReference(cfg)
+
+
+def test_steps_program_is_a_sequence_of_constant_program_steps():
+    """A one-step "steps" program is the constant program; later steps take the speed to each
+    commanded motor speed / belt ratio once their ramp is over, and the command reads back."""
+    from twin.drive import DriveReference
+
+    base = preset(6).replace(**{"drive.ramp_s": 0.2})
+    t = np.linspace(0.0, 3.0, 3001)
+    one = base.replace(**{"drive.program": "steps", "drive.steps_s": [0.0], "drive.steps_rpm": [750.0]})
+    np.testing.assert_array_equal(DriveReference(one)(t)[0], DriveReference(base)(t)[0])
+    prof = base.replace(**{"drive.program": "steps", "drive.steps_s": [0.0, 1.0, 2.0],
+                           "drive.steps_rpm": [500.0, -250.0, 0.0]})
+    ref = DriveReference(prof)
+    _, om = ref(np.array([0.9, 1.9, 2.9]))
+    np.testing.assert_allclose(om * 3.97 * 60 / (2 * np.pi), [500.0, -250.0, 0.0], atol=1e-9)
+    np.testing.assert_array_equal(ref.command_rpm(np.array([0.5, 1.5, 2.5])), [500.0, -250.0, 0.0])

@@ -132,3 +132,26 @@ def test_joint_friction_is_regularized_coulomb(run12):
         assert np.all(np.abs(ft) <= mu0 * fn * (1 + 1e-6) + 1e-9)
         sliding = np.isclose(np.abs(ft), mu0 * fn, rtol=1e-5) & (fn > 1)
         assert sliding.mean() > 0.3                           # the journals mostly slide at μ0
+
+
+def test_stiffness_scale_multiplies_the_law_stiffness_in_both_engines():
+    """contact.stiffness_scale is a factor on Eq. 18's K (reference) and on the twin's calibrated
+    pair stiffness and impact-speed damping chi K (MuJoCo), so datasets can perturb K in either."""
+    from twin.config import ln_stiffness, preset
+    from twin.mujoco_engine.builder import build, impact_speed_coefficient
+    from twin.reference.engine import ReferenceEngine
+
+    cfg = preset(12)
+    s = cfg.replace(**{"contact.stiffness_scale": 1.2})
+    ref, ref_s = ReferenceEngine(cfg), ReferenceEngine(s)
+    ref.reset(), ref_s.reset()
+    for j in "BC":
+        K = ln_stiffness(cfg.joints, cfg.materials, j)
+        assert ref.contacts[j].stiffness == pytest.approx(K) and ref_s.contacts[j].stiffness == pytest.approx(1.2 * K)
+        assert impact_speed_coefficient(s, j) == pytest.approx(1.2 * impact_speed_coefficient(cfg, j))
+    _, _, info = build(cfg)
+    _, _, info_s = build(s)
+    for j in "BC":
+        for t, ts in zip(info.contacts[j].terms, info_s.contacts[j].terms):
+            assert ts.stiffness_n_per_m == pytest.approx(1.2 * t.stiffness_n_per_m)
+            assert ts.solref[0] == pytest.approx(1.2 * t.solref[0])

@@ -52,7 +52,7 @@ JOINTS: tuple[str, ...] = ("B", "C")
 #: Engines that speak this configuration.
 ENGINES: tuple[str, ...] = ("mujoco", "reference")
 #: Drive programs.
-PROGRAMS: tuple[str, ...] = ("constant", "protocol", "trace")
+PROGRAMS: tuple[str, ...] = ("constant", "protocol", "trace", "steps")
 #: Output channel groups a run can carry (see :mod:`twin.channels`).
 CHANNEL_GROUPS: tuple[str, ...] = ("accel", "encoder", "crank", "slider", "joints", "drive")
 #: Channel groups a scene may ask for but that are not in the default list (they cost time):
@@ -283,6 +283,10 @@ class Contact:
         exponent: force exponent n [-] (S003: 1.5).
         stiffness: contact stiffness K [N/m^n]; 0 = computed from the pin/bushing geometry
             and materials with Eq. 18.
+        stiffness_scale: factor on the normal law's stiffness in both engines [-] (K of the
+            hysteresis laws, k of the linear law; in the MuJoCo twin the calibrated pairs'
+            stiffness and the impact-speed damping's χK): the uncertainty of Eq. 18's K for
+            sensitivity studies and datasets. 1 = as computed.
         mu0: dynamic friction coefficient μ0 [-]. Default: mjcf/bench.xml (source S003
             Eq. 19–20; bushing geom user data, field ``mu0`` of twin.names.BORE_USERDATA_FIELDS).
         v0_mps: friction regularization velocity below which μ = 0 [m/s]. Default:
@@ -307,6 +311,7 @@ class Contact:
     restitution: float = 0.4
     exponent: float = 1.5
     stiffness: float = 0.0
+    stiffness_scale: float = 1.0
     mu0: float = _XML.mu0
     v0_mps: float = _XML.v0_mps
     v1_mps: float = _XML.v1_mps
@@ -322,6 +327,8 @@ class Contact:
                "exponent", f"must lie in [1, 3], got {self.exponent!r}")
         _check(isinstance(self.stiffness, (int, float)) and math.isfinite(self.stiffness)
                and self.stiffness >= 0, "stiffness", f"must be >= 0 (0 = from Eq. 18), got {self.stiffness!r}")
+        _check(isinstance(self.stiffness_scale, (int, float)) and 0.1 <= self.stiffness_scale <= 10,
+               "stiffness_scale", f"must lie in [0.1, 10], got {self.stiffness_scale!r}")
         _check(isinstance(self.mu0, (int, float)) and 0 <= self.mu0 <= 1,
                "mu0", f"must lie in [0, 1], got {self.mu0!r}")
         _positive(self.v0_mps, "v0_mps", "m/s")
@@ -442,7 +449,9 @@ class Drive:
     """Crank motion program tracked by the PID (S003 §2.2.2, §4.2–4.3).
 
     Attributes:
-        program: "constant" (spin up from rest to ``motor_rpm`` and hold), "protocol"
+        program: "constant" (spin up from rest to ``motor_rpm`` and hold), "steps" (motor
+            command steps ``steps_rpm`` at times ``steps_s``, each followed by the cosine ramp:
+            any speed profile, e.g. the random profiles of ``twin dataset``), "protocol"
             (the 38 s three-speed test of §4.3) or "trace" (crank angle from a file).
         motor_rpm: motor speed of the constant program [rpm] (S003: 250, 500, 750).
         belt_ratio: motor:crank speed ratio of the V-belt [-] (S003 §2.2.2: 3.97).
@@ -461,6 +470,8 @@ class Drive:
             filter and there is no lag. 100 Hz keeps ~30 harmonics of the fastest crank rate
             (3.15 Hz at 750 motor rpm) and removes the count quantization's broadband part.
             0 = no filtering (interpolating spline through the raw samples).
+        steps_s: times of the motor command steps of the "steps" program [s].
+        steps_rpm: motor speed commanded at each of those times [rpm] (0 = stop).
     """
 
     program: str = "constant"
@@ -473,6 +484,8 @@ class Drive:
     initial_encoder_angle_rad: float = 0.0
     trace_file: str = ""
     trace_filter_hz: float = 100.0
+    steps_s: tuple[float, ...] = ()
+    steps_rpm: tuple[float, ...] = ()
 
     def __post_init__(self) -> None:
         _choice(self.program, "program", PROGRAMS)
@@ -494,6 +507,15 @@ class Drive:
                f"must be >= 0 Hz (0 = no filtering), got {self.trace_filter_hz!r}")
         if self.program == "trace":
             _check(bool(self.trace_file), "trace_file", "must name a trace file when program = \"trace\"")
+        _check(len(self.steps_s) == len(self.steps_rpm), "steps_rpm",
+               f"must hold one speed per time of steps_s ({len(self.steps_s)}), got {len(self.steps_rpm)}")
+        if self.program == "steps":
+            _check(len(self.steps_s) >= 1, "steps_s", "must hold at least one step time for program = \"steps\"")
+        _check(all(isinstance(t, (int, float)) and math.isfinite(t) and t >= 0 for t in self.steps_s)
+               and all(b > a for a, b in zip(self.steps_s, self.steps_s[1:])), "steps_s",
+               f"must be times >= 0 s in increasing order, got {list(self.steps_s)!r}")
+        _check(all(isinstance(r, (int, float)) and math.isfinite(r) and abs(r) <= 1000 for r in self.steps_rpm),
+               "steps_rpm", f"must be motor speeds within ±1000 rpm, got {list(self.steps_rpm)!r}")
 
     @property
     def crank_rad_s(self) -> float:

@@ -32,6 +32,8 @@ def command_events(cfg: BenchConfig) -> list[tuple[float, float]]:
     d = cfg.drive
     if d.program == "constant":
         return [(0.0, d.motor_rpm)]
+    if d.program == "steps":
+        return [(float(t), float(r)) for t, r in zip(d.steps_s, d.steps_rpm)]
     if d.program == "protocol":
         ev, t = [], d.protocol_stop_s
         for rpm in d.protocol_rpm:

@@ -195,7 +195,7 @@ def contact_setting(cfg: BenchConfig, joint: str, a_hat: float, multi_term: bool
     ``mujoco.contact_stiffness_scale``/``contact_damping_scale`` multiply the result.
     """
     s = _resolve_contact(cfg, joint, a_hat, multi_term)
-    ks, cs = cfg.mujoco.contact_stiffness_scale, cfg.mujoco.contact_damping_scale
+    ks, cs = cfg.mujoco.contact_stiffness_scale * cfg.contact.stiffness_scale, cfg.mujoco.contact_damping_scale
     if impact_speed_damping(cfg):
         cs *= IMPACT_SPEED_RESIDUAL_DAMPING
     if ks == 1.0 and cs == 1.0:
@@ -478,10 +478,11 @@ def impact_speed_damping(cfg: BenchConfig) -> bool:
 
 def impact_speed_coefficient(cfg: BenchConfig, joint: str) -> float:
     """χ K of the native impact-speed damping of ``joint`` [N/mⁿ]: χ(e) of the configured
-    hysteresis law (LN by default, Hunt–Crossley or Flores) and K of S003 Eq. 18, times
-    ``impact_damping_gain`` and ``contact_damping_scale`` (which perturbs all of the law's damping)."""
+    hysteresis law (LN by default, Hunt–Crossley or Flores) and K of S003 Eq. 18 times
+    ``contact.stiffness_scale``, times ``impact_damping_gain`` and ``contact_damping_scale`` (which
+    perturbs all of the law's damping)."""
     ms, ct = cfg.mujoco, cfg.contact
-    K = ct.stiffness or ln_stiffness(cfg.joints, cfg.materials, joint)
+    K = (ct.stiffness or ln_stiffness(cfg.joints, cfg.materials, joint)) * ct.stiffness_scale
     return ms.impact_damping_gain * ms.contact_damping_scale * DAMPING_FACTOR[ct.law](ct.restitution) * K
 
 

@@ -756,7 +756,8 @@ def contact_parameters(cfg: BenchConfig, P: np.ndarray, st: np.ndarray) -> dict[
     set, else the linear contact with the Lankarani–Nikravesh law's contact duration for an impact
     at 0.1 m/s (the MuJoCo twin's first guess, :func:`twin.impact.linear_equivalent`); c gives that
     linear contact the restitution ``contact.restitution``: c = 2 ζ(e) sqrt(k m_eff), with m_eff
-    the effective mass along the initial contact normal from the reduced mass matrix.
+    the effective mass along the initial contact normal from the reduced mass matrix. K (or k)
+    is multiplied by ``contact.stiffness_scale``.
     """
     from twin.impact import linear_damping_ratio, linear_equivalent
 
@@ -778,10 +779,12 @@ def contact_parameters(cfg: BenchConfig, P: np.ndarray, st: np.ndarray) -> dict[
         if con.law == "linear":
             k = con.stiffness if con.stiffness > 0 else \
                 linear_equivalent(K_ln, con.exponent, con.restitution, m_eff, LINEAR_MATCH_SPEED)[0]
+            k *= con.stiffness_scale
             c = 2.0 * linear_damping_ratio(con.restitution) * math.sqrt(k * m_eff)
             P[kidx], P[cidx] = k, c
             out[jt] = JointContact(cfg.joints.radial_m(jt), float(k), 1.0, float(c), m_eff)
         else:
+            K_ln *= con.stiffness_scale
             P[kidx] = K_ln
             out[jt] = JointContact(cfg.joints.radial_m(jt), float(K_ln), con.exponent, None, m_eff)
     return out
