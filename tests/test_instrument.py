@@ -263,3 +263,197 @@ def test_encoder_glitches_repaired_or_refused():
     step[900:] += 500  # lost counts: never returns
     with pytest.raises(RecordingError, match=r"jumps by \+501 counts at sample 900 .*cannot repair"):
         check_counts(step, RATE, max_step=3.0)
+
+
+# ------------------------------------------------------------------ streaming chain
+# Independent basis: apply_chain on the whole run (its physics is tested above); a run fed to a
+# ChainStream in chunks must give the same DAQ samples bit for bit, whatever the chunking.
+from twin.instrument import ChainStream, daq_specs, meas_specs  # noqa: E402
+from twin.instrument.accel import AccelStream  # noqa: E402
+from twin.instrument.daq import DaqSampler, sample  # noqa: E402
+
+STEPS = {"drive.program": "steps", "drive.steps_s": (0.0, 0.5002, 0.50085), "drive.steps_rpm": (750.0, 500.0, -250.0)}
+
+
+def _pieces(n: int, chunking) -> list[tuple[int, int]]:
+    """[start, stop) pieces of range(n): a fixed size, a list of sizes repeated, or 'random'."""
+    if chunking == "random":
+        cuts = np.sort(np.random.default_rng(n).choice(np.arange(1, n), size=min(40, n - 1), replace=False))
+        edges = [0, *cuts.tolist(), n]
+        return list(zip(edges[:-1], edges[1:]))
+    sizes = chunking if isinstance(chunking, list) else [chunking]
+    out, i, j = [], 0, 0
+    while i < n:
+        step = sizes[j % len(sizes)]
+        out.append((i, min(n, i + step)))
+        i, j = i + step, j + 1
+    return out
+
+
+def _stream(run: Run, cfg: BenchConfig, chunking, **kw) -> list[Run]:
+    chain = ChainStream(cfg, run.rate_hz, **kw)
+    return [chain.process(run.slice(a, b)) for a, b in _pieces(run.n, chunking)]
+
+
+def _assert_same_bits(streamed: list[Run], whole: Run) -> None:
+    joined = Run.concat(streamed)
+    assert list(joined.channels) == list(whole.channels)
+    assert joined.t0 == whole.t0 and joined.rate_hz == whole.rate_hz and joined.meta == whole.meta
+    for name, c in whole.channels.items():
+        s = joined.channels[name]
+        assert (s.unit, s.group, s.data.dtype) == (c.unit, c.group, c.data.dtype), name
+        assert s.data.tobytes() == c.data.tobytes(), name  # bit-identical, not just close
+    # each chunk starts at the time of its first DAQ sample, on the whole run's time base
+    i = 0
+    for ch in streamed:
+        assert ch.t0 == pytest.approx(whole.t0 + i / whole.rate_hz, abs=1e-12) and ch.rate_hz == whole.rate_hz
+        i += ch.n
+    assert i == whole.n
+
+
+def _stream_truth(cfg: BenchConfig, rate: float, n: int, big: bool = False) -> Run:
+    rng = np.random.default_rng(7)
+    t = 0.5 + np.arange(n) / rate  # starts at 0.5 s; the motor command steps at 0.5002 and 0.50085 s
+    amp = 150 * STANDARD_G if big else 3 * STANDARD_G  # 150 g: range saturation and rails
+    arrays = {a: (amp * np.sin(2 * np.pi * (900 + 2500 * i) * t) + rng.normal(0, 20, n)).astype(np.float32)
+              for i, a in enumerate(ACCELEROMETERS)}
+    arrays["encoder_angle"] = 1.0 + 80.0 * (t - 0.5) + 0.01 * np.sin(2 * np.pi * 30 * t)
+    return Run.from_arrays(0.5, rate, arrays, cfg)
+
+
+STREAM_CASES = {
+    "datasheet": ({}, RATE, False),
+    "lowpass": ({"response": "lowpass"}, RATE, False),
+    "anti_alias": ({"anti_alias": True, "anti_alias_hz": 20_000.0}, RATE, False),
+    "saturation": ({"zero_g_v": OFFSETS}, RATE, True),
+    "ideal": ({"response": "off", "noise": False, "saturation": False, "quantization": False,
+               "encoder_quantization": False}, RATE, False),
+    "2x_rate": ({"response": "lowpass"}, 2 * RATE, True),
+    "2x_rate_anti_alias": ({"anti_alias": True, "anti_alias_hz": 30_000.0}, 2 * RATE, False),
+    "3x_rate_anti_alias": ({"anti_alias": True, "seed": 9}, 3 * RATE, False),
+}
+
+
+@pytest.mark.parametrize("case", list(STREAM_CASES))
+@pytest.mark.parametrize("chunking", [1, 7, 64, [1, 7, 3, 0, 250, 2], "random", 10**6])
+def test_streamed_chain_is_bit_identical_to_the_whole_run(case, chunking):
+    inst, rate, big = STREAM_CASES[case]
+    cfg = _cfg(**inst).replace(**STEPS)
+    n = 301 if chunking == 1 else 2001  # odd lengths: the last DAQ sample is the run's last sample
+    truth = _stream_truth(cfg, rate, n, big)
+    whole = apply_chain(truth, cfg, prefix="sim_", stream=2)
+    assert whole.n == (n + int(rate / RATE) - 1) // int(rate / RATE)
+    assert len(np.unique(whole["sim_motor_command"])) == 3  # the command steps twice inside the run
+    if big and cfg.instrumentation.saturation:  # both clippings are exercised
+        off = cfg.instrumentation.zero_g("AC1")  # AC1 range: +-100 g at 20 mV/g = +-2 V, plus noise
+        assert np.max(np.abs(whole["sim_volt_AC1"] - off)) == pytest.approx(2.0, abs=2e-3)
+        rail = cfg.instrumentation.supply_v - cfg.instrumentation.rail_margin_v
+        if cfg.instrumentation.zero_g("AC5") + 2.0 > rail:  # AC5: +-50 g at 40 mV/g beyond the rail
+            assert np.max(whole["sim_volt_AC5"]) == quantize(np.array([rail]), cfg.instrumentation)[0]
+    _assert_same_bits(_stream(truth, cfg, chunking, prefix="sim_", stream=2), whole)
+
+
+def test_streamed_chain_on_a_simulated_run_streamed_by_simulate():
+    """The use it is for: a sink putting simulate()'s chunks through the chain as they come."""
+    from twin.config import preset
+    from twin.simulate import Collector, simulate
+
+    from conftest import short
+
+    # DAQ at half the output rate (k = 2) and chunks of 127 samples (odd: the decimation phase alternates)
+    cfg = short(preset(12), 0.02, **{"simulation.chunk_s": 0.00127, "simulation.engine": "reference",
+                                     "instrumentation.daq_rate_hz": 50_000.0, "instrumentation.response": "off",
+                                     "instrumentation.anti_alias": True,
+                                     "instrumentation.anti_alias_hz": 20_000.0})
+
+    class ChainSink:
+        def __init__(self):
+            self.chain, self.out = None, []
+
+        def write(self, chunk):
+            self.chain = self.chain or ChainStream(cfg, chunk.rate_hz)
+            self.out.append(self.chain.process(chunk))
+
+        def close(self, meta, summary):
+            pass
+
+        def abort(self):
+            pass
+
+    keep, sink = Collector(), ChainSink()
+    simulate(cfg, [keep, sink])
+    assert len(sink.out) > 10 and {c.n for c in sink.out[:-1]} == {63, 64}
+    whole = apply_chain(keep.run, cfg)
+    assert [(s.name, s.unit, s.group, s.dtype) for s in daq_specs(cfg)] == \
+        [(c.name, c.unit, c.group, str(c.data.dtype)) for c in whole.channels.values()]
+    _assert_same_bits(sink.out, whole)
+    # calibration is per sample: chunk by chunk gives the whole run's values bit for bit
+    cal = simulated_calibration(cfg, 0.02)
+    meas_whole = measured_accel(whole, cal)
+    meas_chunks = Run.concat([measured_accel(c, cal) for c in sink.out])
+    assert [(s.name, s.unit, s.group, s.dtype) for s in meas_specs()] == \
+        [(c.name, c.unit, c.group, str(c.data.dtype)) for c in meas_whole.channels.values()]
+    for name, c in meas_whole.channels.items():
+        assert meas_chunks[name].tobytes() == c.data.tobytes()
+    assert [c.t0 for c in sink.out] == [measured_accel(c, cal).t0 for c in sink.out]
+
+
+@pytest.mark.parametrize("sizes", [[1] * 50, [7] * 20, [3, 0, 1, 96, 13, 1000]])
+def test_generator_normal_draws_do_not_depend_on_the_batching(sizes):
+    """The noise stage draws rng.normal(0, sigma, size) per chunk: sequential draws of any sizes
+    must continue the one stream (numpy's Generator keeps no buffer between calls)."""
+    sigma = 1.3e-4
+    whole = np.random.default_rng([0, 2, 5]).normal(0.0, sigma, sum(sizes))
+    rng = np.random.default_rng([0, 2, 5])
+    parts = np.concatenate([rng.normal(0.0, sigma, s) for s in sizes])
+    assert parts.tobytes() == whole.tobytes()
+
+
+def test_stage_streams_match_their_whole_signal_functions():
+    inst = Instrumentation(anti_alias=True, anti_alias_hz=30_000.0)
+    x = np.random.default_rng(3).normal(0, 200, 999).astype(np.float32)
+    whole = sample(accel_to_volts(x, "AC5", inst, 2 * RATE, np.random.default_rng(1)), 2 * RATE, inst)
+    acc, daq = AccelStream("AC5", inst, 2 * RATE, np.random.default_rng(1)), DaqSampler(2 * RATE, inst)
+    parts = [daq.process(acc.process(x[a:b])) for a, b in _pieces(x.size, [1, 7, 2, 33])]
+    assert np.concatenate(parts).tobytes() == whole.tobytes() and daq.seen == x.size
+    # the steady-state start is taken from the signal's first sample only: a constant input
+    # gives a constant output from the first sample, in every chunk
+    ideal = Instrumentation(noise=False, anti_alias=True)
+    acc = AccelStream("AC1", ideal, RATE, None)
+    out = np.concatenate([acc.process(np.full(s, 4 * STANDARD_G)) for s in (1, 5, 50)])
+    np.testing.assert_allclose(out, 2.5 + 4 * 0.02, rtol=0, atol=1e-12)
+
+
+def test_chain_stream_refuses_chunks_that_do_not_follow():
+    cfg = _cfg()
+    truth = _stream_truth(cfg, RATE, 100)
+    chain = ChainStream(cfg, RATE)
+    chain.process(truth.slice(0, 10))
+    with pytest.raises(RecordingError, match="consecutive"):
+        chain.process(truth.slice(20, 30))  # a gap
+    with pytest.raises(RecordingError, match="carries"):
+        chain.process(truth.slice(10, 20).select(["AC1", "encoder_angle"]))
+    with pytest.raises(RecordingError, match="Hz"):
+        chain.process(Run.from_arrays(truth.t0 + 10 / RATE, 2 * RATE, {a: truth[a][10:20] for a in truth.channels},
+                                      cfg))
+    assert chain.process(truth.slice(10, 100)).n == 90  # the refused chunks changed nothing
+    with pytest.raises(RecordingError, match="no AC1"):
+        ChainStream(cfg, RATE, command=False).process(Run.from_arrays(0.0, RATE, {"crank_speed": np.zeros(5)}, cfg))
+
+
+def test_daq_specs_without_running_anything():
+    cfg = BenchConfig()
+    names = [s.name for s in daq_specs(cfg, prefix="sim_")]
+    assert names == [f"sim_volt_{a}" for a in ACCELEROMETERS] + ["sim_encoder_counts", "sim_motor_command"]
+    assert {(s.group, s.dtype) for s in daq_specs(cfg)} == {("daq", "float64")}
+    assert [s.unit for s in daq_specs(cfg)] == ["V"] * 6 + ["count", "V"]
+    only = daq_specs(cfg, command=False, inputs=["AC2", "encoder_angle"])
+    assert [s.name for s in only] == ["volt_AC2", "encoder_counts"]
+    no_accel = cfg.replace(**{"sensors.channels": ("encoder", "crank")})
+    assert [s.name for s in daq_specs(no_accel)] == ["encoder_counts", "motor_command"]
+    # the specs are what apply_chain makes
+    truth = _stream_truth(cfg, RATE, 50).select(["AC2", "encoder_angle"])
+    run = apply_chain(truth, cfg, command=False)
+    assert [(s.name, s.unit, s.group, s.dtype) for s in only] == \
+        [(c.name, c.unit, c.group, str(c.data.dtype)) for c in run.channels.values()]
+    assert [s.name for s in meas_specs("sim_", ["AC3", "AC1"])] == ["sim_meas_AC1", "sim_meas_AC3"]

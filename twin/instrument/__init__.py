@@ -8,8 +8,9 @@
   detection and repair, counts ↔ angle);
 * :mod:`twin.instrument.calibration`: the static calibration of S003 Eq. 1–4, one function for
   real and simulated recordings;
-* :mod:`twin.instrument.chain`: the whole chain applied to a simulated :class:`~twin.run.Run`
-  (the physics runs once; the chain is cheap and deterministic for a seed).
+* :mod:`twin.instrument.chain`: the whole chain applied to a simulated :class:`~twin.run.Run`,
+  whole (:func:`apply_chain`) or chunk by chunk (:class:`ChainStream`, bit-identical) (the
+  physics runs once; the chain is cheap and deterministic for a seed).
 
 Parameters live in :class:`twin.config.Instrumentation` (``[instrumentation]`` in TOML).
 
@@ -21,14 +22,14 @@ calibrated accelerations, group ``meas_accel``: ``meas_AC1``..``meas_AC6`` [m/s�
 from twin.instrument.accel import ACCEL_MODELS, STANDARD_G, AccelModel
 from twin.instrument.calibration import (Calibration, apply_calibration, calibrate_static,
                                          calibration_pose_g, measured_accel)
-from twin.instrument.chain import (DAQ_GROUP, MEAS_GROUP, apply_chain, daq_names, meas_names,
-                                   simulated_calibration, static_truth_run)
+from twin.instrument.chain import (DAQ_GROUP, MEAS_GROUP, ChainStream, apply_chain, daq_names, daq_specs,
+                                   meas_names, meas_specs, simulated_calibration, static_truth_run)
 from twin.instrument.encoder import (EncoderReport, angle_to_counts, check_counts, counts_to_angle,
                                      max_counts_per_sample, unwrap_counts)
 
 __all__ = [
     "ACCEL_MODELS", "STANDARD_G", "AccelModel", "Calibration", "apply_calibration", "calibrate_static",
-    "calibration_pose_g", "measured_accel", "DAQ_GROUP", "MEAS_GROUP", "apply_chain", "daq_names",
-    "meas_names", "simulated_calibration", "static_truth_run", "EncoderReport", "angle_to_counts",
-    "check_counts", "counts_to_angle", "max_counts_per_sample", "unwrap_counts",
+    "calibration_pose_g", "measured_accel", "DAQ_GROUP", "MEAS_GROUP", "ChainStream", "apply_chain",
+    "daq_names", "daq_specs", "meas_names", "meas_specs", "simulated_calibration", "static_truth_run",
+    "EncoderReport", "angle_to_counts", "check_counts", "counts_to_angle", "max_counts_per_sample", "unwrap_counts",
 ]

@@ -22,6 +22,9 @@ Stages, in signal order (each can be switched off in :class:`twin.config.Instrum
 5. output-rail clipping (``saturation``): V within [rail_margin_v, supply_v − rail_margin_v].
 
 Acceleration in g: ``a_g = a / STANDARD_G`` (datasheet sensitivities are per standard g).
+
+:func:`accel_to_volts` takes a whole signal; :class:`AccelStream` takes it in consecutive pieces
+(filter state and noise stream carried) and gives the same volts bit for bit.
 """
 
 from __future__ import annotations
@@ -136,12 +139,44 @@ def response_gain_db(f_hz: np.ndarray, model: AccelModel, inst: Instrumentation,
     return 20.0 * np.log10(np.abs(h))
 
 
-def _filter_steady(b: np.ndarray, a: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """Causal filtering started in steady state at x[0] (no start-up transient)."""
-    from scipy.signal import lfilter, lfilter_zi
+class AccelStream:
+    """Accelerometer ``sensor`` turned into volts chunk by chunk (the stages of
+    :func:`accel_to_volts`, state carried across calls).
 
-    y, _ = lfilter(b, a, x, zi=lfilter_zi(b, a) * x[0])
-    return y
+    State: the response filter's state (started in steady state at the very first sample, then
+    carried: ``lfilter`` with ``zi``), and ``rng`` itself (its normal draws continue their
+    stream). Saturation, volts and rail clipping are per sample. Feeding a signal in pieces gives
+    bit-identical volts to feeding it whole (``tests/test_instrument.py``).
+    """
+
+    def __init__(self, sensor: str, inst: Instrumentation, rate_hz: float, rng: np.random.Generator | None):
+        self.sensor, self.inst, self.rate_hz, self.rng = sensor, inst, float(rate_hz), rng
+        self.model = model_of(inst, sensor)
+        self.ba = response_ba(self.model, inst, rate_hz)
+        if inst.noise and rng is None:
+            raise ValueError("accel_to_volts: noise is on but no random generator was given")
+        self.sigma = self.model.noise_g_rthz * self.model.sensitivity_v_per_g * math.sqrt(rate_hz / 2.0)
+        self._zi: np.ndarray | None = None  # response filter state; None until the first sample
+
+    def process(self, a_mps2: np.ndarray) -> np.ndarray:
+        """Output voltage [V] (float64) for the next samples ``a_mps2`` of proper acceleration [m/s²]."""
+        from scipy.signal import lfilter, lfilter_zi
+
+        inst, model = self.inst, self.model
+        a_g = np.asarray(a_mps2, dtype=np.float64) / STANDARD_G
+        if self.ba is not None and a_g.size:
+            b, a = self.ba
+            if self._zi is None:  # steady state at the first sample of the signal (no start-up transient)
+                self._zi = lfilter_zi(b, a) * a_g[0]
+            a_g, self._zi = lfilter(b, a, a_g, zi=self._zi)
+        if inst.saturation:
+            a_g = np.clip(a_g, -model.range_g, model.range_g)
+        v = inst.zero_g(self.sensor) + model.sensitivity_v_per_g * a_g
+        if inst.noise:
+            v = v + self.rng.normal(0.0, self.sigma, v.size)
+        if inst.saturation:
+            v = np.clip(v, inst.rail_margin_v, inst.supply_v - inst.rail_margin_v)
+        return v
 
 
 def accel_to_volts(a_mps2: np.ndarray, sensor: str, inst: Instrumentation, rate_hz: float,
@@ -149,21 +184,6 @@ def accel_to_volts(a_mps2: np.ndarray, sensor: str, inst: Instrumentation, rate_
     """Output voltage of accelerometer ``sensor`` for proper acceleration ``a_mps2`` [V] (float64).
 
     ``rng`` supplies the noise (required when ``inst.noise``); see the module docstring for the
-    stages and their order.
+    stages and their order. The whole signal at once; :class:`AccelStream` for a signal in pieces.
     """
-    model = model_of(inst, sensor)
-    a_g = np.asarray(a_mps2, dtype=np.float64) / STANDARD_G
-    ba = response_ba(model, inst, rate_hz)
-    if ba is not None and a_g.size:
-        a_g = _filter_steady(ba[0], ba[1], a_g)
-    if inst.saturation:
-        a_g = np.clip(a_g, -model.range_g, model.range_g)
-    v = inst.zero_g(sensor) + model.sensitivity_v_per_g * a_g
-    if inst.noise:
-        if rng is None:
-            raise ValueError("accel_to_volts: noise is on but no random generator was given")
-        sigma = model.noise_g_rthz * model.sensitivity_v_per_g * math.sqrt(rate_hz / 2.0)
-        v = v + rng.normal(0.0, sigma, v.size)
-    if inst.saturation:
-        v = np.clip(v, inst.rail_margin_v, inst.supply_v - inst.rail_margin_v)
-    return v
+    return AccelStream(sensor, inst, rate_hz, rng).process(a_mps2)

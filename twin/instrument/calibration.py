@@ -147,7 +147,9 @@ def apply_calibration(v: np.ndarray, zero_g_v: float, sensitivity_v_per_g: float
 def measured_accel(daq: Run, cal: Calibration, prefix: str = "") -> Run:
     """Calibrated accelerations ``{prefix}meas_ACi`` [m/s²] (group ``{prefix}meas_accel``) from a
     run holding ``{prefix}volt_ACi`` channels. Sensors without a volt channel are skipped; a
-    volt channel without calibration data is an error."""
+    volt channel without calibration data is an error. Per sample and stateless: applied to each
+    chunk of a streamed DAQ run (:class:`twin.instrument.chain.ChainStream`) it gives the whole
+    run's values bit for bit, with each chunk's ``t0``."""
     chans = []
     for name in ACCELEROMETERS:
         vname = f"{prefix}volt_{name}"

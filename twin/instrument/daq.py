@@ -8,6 +8,9 @@
 * ADC: ``adc_bits`` over the input range [lo, hi] of ``daq_range``: LSB = (hi − lo) / 2^bits;
   code = round((V − lo) / LSB) clipped to [0, 2^bits − 1]; the recorded value is lo + code · LSB
   (inputs beyond the range read the end codes: range clipping).
+
+:func:`sample` takes a whole signal, :class:`DaqSampler` consecutive pieces of it (filter state
+and decimation phase carried; same samples bit for bit); :func:`quantize` is per sample.
 """
 
 from __future__ import annotations
@@ -40,19 +43,52 @@ def decimation_factor(run_rate_hz: float, inst: Instrumentation) -> int:
     return ki
 
 
-def sample(x: np.ndarray, run_rate_hz: float, inst: Instrumentation, analog: bool = True) -> np.ndarray:
-    """Sample a signal of the run at the DAQ instants (anti-alias filter first for analog inputs)."""
-    k = decimation_factor(run_rate_hz, inst)
-    x = np.asarray(x, dtype=np.float64)
-    if analog and inst.anti_alias and x.size:
-        from scipy.signal import butter, sosfilt, sosfilt_zi
+class DaqSampler:
+    """One DAQ input sampling consecutive pieces of a run's signal (what :func:`sample` does to a
+    whole signal, bit for bit).
 
-        if inst.anti_alias_hz >= 0.5 * run_rate_hz:
-            raise ConfigError("instrumentation.anti_alias_hz",
-                              f"must be below half the run rate ({0.5 * run_rate_hz:g} Hz)")
-        sos = butter(inst.anti_alias_order, inst.anti_alias_hz, fs=run_rate_hz, output="sos")
-        x, _ = sosfilt(sos, x, zi=sosfilt_zi(sos) * x[0])
-    return x[::k] if k > 1 else x
+    State: the anti-alias filter's state (``sosfilt`` with ``zi``, started in steady state at the
+    very first sample of the signal, then carried) and the number of run samples seen, which
+    fixes the decimation phase: the DAQ takes the run's samples 0, k, 2k, ... whatever the
+    lengths of the pieces.
+    """
+
+    def __init__(self, run_rate_hz: float, inst: Instrumentation, analog: bool = True):
+        self.k = decimation_factor(run_rate_hz, inst)
+        self.run_rate_hz, self.inst, self.analog = float(run_rate_hz), inst, analog
+        self.seen = 0  # run samples seen so far
+        self._sos: np.ndarray | None = None
+        self._zi: np.ndarray | None = None  # anti-alias filter state; None until the first sample
+
+    def process(self, x: np.ndarray) -> np.ndarray:
+        """DAQ samples among the next run samples ``x`` (float64)."""
+        x = np.asarray(x, dtype=np.float64)
+        inst = self.inst
+        if self.analog and inst.anti_alias and x.size:
+            from scipy.signal import butter, sosfilt, sosfilt_zi
+
+            if self._sos is None:
+                if inst.anti_alias_hz >= 0.5 * self.run_rate_hz:
+                    raise ConfigError("instrumentation.anti_alias_hz",
+                                      f"must be below half the run rate ({0.5 * self.run_rate_hz:g} Hz)")
+                self._sos = butter(inst.anti_alias_order, inst.anti_alias_hz, fs=self.run_rate_hz, output="sos")
+                self._zi = sosfilt_zi(self._sos) * x[0]
+            x, self._zi = sosfilt(self._sos, x, zi=self._zi)
+        first = first_daq_sample(self.seen, self.k)
+        self.seen += x.size
+        return x[first::self.k] if self.k > 1 else x
+
+
+def first_daq_sample(seen: int, k: int) -> int:
+    """Index, within a piece starting at run sample ``seen``, of its first DAQ sample (every k-th
+    run sample from sample 0 is one)."""
+    return (-seen) % k
+
+
+def sample(x: np.ndarray, run_rate_hz: float, inst: Instrumentation, analog: bool = True) -> np.ndarray:
+    """Sample a signal of the run at the DAQ instants (anti-alias filter first for analog inputs).
+    A whole signal; :class:`DaqSampler` for a signal in pieces."""
+    return DaqSampler(run_rate_hz, inst, analog).process(x)
 
 
 def quantize(v: np.ndarray, inst: Instrumentation) -> np.ndarray:
