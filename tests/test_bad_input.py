@@ -53,6 +53,9 @@ def workspace(tmp_path_factory) -> Path:
     (ws / "test99.toml").write_text("test = 99\n")
     (ws / "name.toml").write_text('name = "../escape"\n')
     (ws / "confdir.toml").mkdir()
+    (ws / "confdir.toml" / "x").write_text("not a dataset")
+    (ws / "unknown_factor.toml").write_text('[dataset]\nname = "u"\n[factors]\nclearence_c_mm = [0.1]\n')
+    shutil.copy(ROOT / "analysis" / "datasets" / "tiny.toml", ws / "tiny.toml")
     # encoder traces
     t = np.arange(200) / 1000.0
     np.savez(ws / "bool_trace.npz", t=t, angle=np.ones(200, dtype=bool))
@@ -185,6 +188,18 @@ CASES: list[tuple[str, str]] = [
     ("view {ws}/run.mcap --save {ws}/afile/out.rrd", "--save"),
     ("view {ws}/garbage.mcap --save {ws}/g.rrd", "garbage.mcap"),
     ("view {ws}/run.mcap --save {ws}/v.rrd --screenshot {ws}/shot.jpg", "--screenshot"),
+    # dataset
+    ("dataset generate {ws}/missing.toml --out {ws}/ds", "missing.toml"),
+    ("dataset generate {ws}/syntax.toml --out {ws}/ds", "not valid TOML"),
+    ("dataset generate {ws}/unknown_factor.toml --out {ws}/ds", "factors.clearence_c_mm"),
+    ("dataset generate {ws}/tiny.toml --out {ws}/afile", "--out"),
+    ("dataset generate {ws}/tiny.toml --out {ws}/confdir.toml", "holds no dataset"),
+    ("dataset generate {ws}/tiny.toml --out {ws}/ds --workers 0", "--workers"),
+    ("dataset generate {ws}/tiny.toml --out {ws}/ds --limit -1", "--limit"),
+    ("dataset generate {ws}/tiny.toml --out {ws}/ds --scheduler bogus", "--scheduler"),
+    ("dataset plan {ws}/type.toml", "unknown section"),
+    ("dataset info {ws}/afile", "not a dataset folder"),
+    ("dataset verify {ws}/missing_ds", "not a dataset folder"),
     # study, calibrate, analyze
     ("study formulations --out {ws}/afile", "--out"),
     ("study formulations --out {ws}/f --duration -1", "--duration"),
@@ -253,8 +268,9 @@ def _wait_for(cond, proc: subprocess.Popen, timeout: float = 90.0) -> None:
 def test_sigterm_during_replay_leaves_no_folder(tmp_path):
     out = tmp_path / "rp"
     proc = _start(["replay", str(SAMPLE), "--out", str(out), "--no-plots"], tmp_path)
-    _wait_for(lambda: any(p.name.startswith(".rp.") for p in tmp_path.iterdir()), proc)
-    time.sleep(0.3)
+    # the temporary folder holds the trace once the simulation starts (it takes seconds)
+    _wait_for(lambda: any(p.name.startswith(".rp.") and (p / "encoder_trace.npz").exists()
+                          for p in tmp_path.iterdir()), proc)
     proc.send_signal(signal.SIGTERM)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 143, err

@@ -37,6 +37,7 @@ COMMANDS: list[str] = [
     "twin.commands.import_recording",
     "twin.commands.replay",
     "twin.commands.analyze",
+    "twin.commands.dataset",
 ]
 
 
@@ -217,6 +218,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("twin: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # `twin ... | head`: the reader left; nothing to report
+        import os
+
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1
     finally:
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)

@@ -40,7 +40,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "a rerun recording with a default layout: the 3-D bench moving in time, journal "
                                    "orbits, contact forces, every signal, spectra and the configuration. Writes "
                                    "RUN.rrd beside the input unless --save is given; no viewer is needed.")
-    p.add_argument("input", metavar="RUN_OR_RECORDING.mcap", help="twin run file to view")
+    p.add_argument("input", metavar="RUN_OR_RECORDING.mcap", help="twin run file to view, or a dataset folder with --run")
+    p.add_argument("--run", metavar="RUN_ID", help="with a dataset folder: the run to view (twin dataset info lists them)")
     p.add_argument("--save", metavar="OUT.rrd", help="recording to write (default: beside the input, .rrd)")
     p.add_argument("--spawn", action="store_true", help="open the rerun viewer on the recording")
     p.add_argument("--fft-window", nargs=2, type=float, metavar=("T0", "T1"),
@@ -64,13 +65,25 @@ def run(args: argparse.Namespace) -> int:
     from twin.viz import ViewOptions, convert_file, default_output
 
     src = Path(args.input)
-    if src.suffix != ".mcap":
-        raise TwinError(f"{src}: expected a .mcap run or recording file")
-    if src.is_dir():
-        raise TwinError(f"{src}: is a directory; expected a .mcap run or recording file")
-    if not src.is_file():
-        raise TwinError(f"{src}: no such file")
-    out = check_output_file(args.save if args.save else default_output(src), "--save", ".rrd", inputs=[src])
+    dataset_run = None
+    if src.is_dir() and (src / "info.json").is_file():
+        if not args.run:
+            raise TwinError(f"{src}: a dataset folder; give --run RUN_ID (twin dataset info {src} lists the runs)")
+        dataset_run = src / "data" / f"{args.run}.parquet"
+        if not dataset_run.is_file():
+            raise TwinError(f"--run: {args.run!r} is not a finished run of the dataset {src}")
+        default = src.parent / f"{src.name}-{args.run}.rrd"
+    else:
+        if args.run:
+            raise TwinError("--run: applies to a dataset folder, not to a run file")
+        if src.suffix != ".mcap":
+            raise TwinError(f"{src}: expected a .mcap run or recording file, or a dataset folder")
+        if src.is_dir():
+            raise TwinError(f"{src}: is a directory; expected a .mcap run or recording file, or a dataset folder")
+        if not src.is_file():
+            raise TwinError(f"{src}: no such file")
+        default = default_output(src)
+    out = check_output_file(args.save if args.save else default, "--save", ".rrd", inputs=[src])
     wait = DEFAULT_WAIT_S if args.wait is None else args.wait
     if args.screenshot:
         check_output_file(args.screenshot, "--screenshot", ".png")
@@ -92,9 +105,18 @@ def run(args: argparse.Namespace) -> int:
                        fft_window_s=tuple(args.fft_window) if args.fft_window else None)
     t = time.perf_counter()
     tm: dict[str, float] = {}
-    path = convert_file(src, out, opts, timings=tm)
-    print(f"wrote {path} ({path.stat().st_size / 1e6:.1f} MB) in {time.perf_counter() - t:.2f} s "
-          f"(read {tm['read']:.2f} s, id {tm['hash']:.2f} s, convert {tm['convert']:.2f} s)")
+    if dataset_run is not None:
+        from twin.dataset.storage import read_run
+        from twin.viz import write_rrd
+
+        run = read_run(dataset_run)
+        path = write_rrd(run, out, recording_id=f"twin-dataset-{args.run}", name=run.config.name if run.config
+                         else args.run, options=opts, source=f"dataset {src}, run {args.run}")
+        print(f"wrote {path} ({path.stat().st_size / 1e6:.1f} MB) in {time.perf_counter() - t:.2f} s")
+    else:
+        path = convert_file(src, out, opts, timings=tm)
+        print(f"wrote {path} ({path.stat().st_size / 1e6:.1f} MB) in {time.perf_counter() - t:.2f} s "
+              f"(read {tm['read']:.2f} s, id {tm['hash']:.2f} s, convert {tm['convert']:.2f} s)")
     if args.screenshot:
         from twin.viz.screenshot import screenshot
 

@@ -1,0 +1,135 @@
+"""``twin dataset``: synthetic datasets (generate, plan, info, verify); layout in twin/dataset/FORMAT.md."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+
+from twin.errors import TwinError
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("dataset", help="synthetic datasets: generate, plan, info, verify",
+                       description="Synthetic datasets of the bench for clearance identification and observers: "
+                                   "a TOML spec (analysis/datasets/*.toml) varies clearances, orientation, speed, "
+                                   "contact and sensor parameters; runs are simulated on all cores (or a Dask "
+                                   "cluster) into Parquet files any ML tool reads.")
+    ds = p.add_subparsers(dest="dataset_command", metavar="ACTION", parser_class=type(p))
+    ds.required = True
+
+    g = ds.add_parser("generate", help="simulate the runs of a spec into a dataset folder (resumes)",
+                      description="Simulate every run of SPEC into --out (or finish an interrupted generation "
+                                  "with the same command).")
+    g.add_argument("spec", metavar="SPEC.toml")
+    g.add_argument("--out", metavar="DIR", required=True, help="dataset folder (new, empty, or this spec's)")
+    g.add_argument("--workers", type=int, metavar="N", help="worker processes (default: the number of cores)")
+    g.add_argument("--scheduler", metavar="local|ADDRESS",
+                   help="run on Dask distributed: 'local' starts a LocalCluster of --workers processes, "
+                        "tcp://HOST:8786 uses a running cluster (workers must see --out)")
+    g.add_argument("--limit", type=int, metavar="K", help="simulate at most K of the missing runs this time")
+    g.add_argument("--no-progress", action="store_true", help="no progress bar")
+    g.set_defaults(func=_generate)
+
+    pl = ds.add_parser("plan", help="print the runs of a spec and estimate the time, without writing anything")
+    pl.add_argument("spec", metavar="SPEC.toml")
+    pl.add_argument("--workers", type=int, metavar="N", help="workers of the estimate (default: the cores)")
+    pl.add_argument("--show", type=int, default=20, metavar="K", help="runs listed (default 20; 0 = all)")
+    pl.add_argument("--no-estimate", action="store_true", help="skip the short timing runs of the estimate")
+    pl.set_defaults(func=_plan)
+
+    i = ds.add_parser("info", help="runs by status, class balance per split, channels")
+    i.add_argument("dir", metavar="DIR")
+    i.set_defaults(func=_info)
+
+    v = ds.add_parser("verify", help="check every file against the manifest (checksums, lengths, labels)")
+    v.add_argument("dir", metavar="DIR")
+    v.add_argument("--no-progress", action="store_true", help="no progress bar")
+    v.set_defaults(func=_verify)
+
+
+def _workers(n: int | None) -> int:
+    w = n if n is not None else (os.cpu_count() or 1)
+    if not 1 <= w <= 1024:
+        raise TwinError(f"--workers: must lie in [1, 1024], got {w}")
+    return w
+
+
+def _generate(args: argparse.Namespace) -> int:
+    from twin.dataset.generate import generate
+    from twin.dataset.reader import describe
+    from twin.dataset.spec import load_spec
+
+    if args.limit is not None and args.limit < 0:
+        raise TwinError(f"--limit: must be >= 0, got {args.limit}")
+    spec = load_spec(args.spec)
+    t = time.perf_counter()
+    info = generate(spec, args.out, workers=_workers(args.workers), scheduler=args.scheduler, limit=args.limit,
+                    progress=not args.no_progress and sys.stderr.isatty())
+    g = info["generation"]
+    print(f"{args.out}: {g['runs_this_call']} runs simulated ({g['failed_this_call']} failed) on {g['workers']} "
+          f"{g['scheduler']} workers in {time.perf_counter() - t:.1f} s")
+    print(describe(args.out))
+    return 0
+
+
+def _plan(args: argparse.Namespace) -> int:
+    from twin.dataset.design import plan
+    from twin.dataset.spec import load_spec
+
+    spec = load_spec(args.spec)
+    runs = plan(spec)
+    workers = _workers(args.workers)
+    sim = sum(r.config.duration_s for r in runs)
+    names = list(dict.fromkeys(k for r in runs for k in r.factors))
+    print(f"{spec.name}: {len(runs)} runs ({spec.design} design, {len(runs) // spec.repeats} points x "
+          f"{spec.repeats} repeats), {sim:.1f} s simulated, engine {spec.engine}, outputs at "
+          f"{spec.outputs.rate_hz:g} Hz")
+    counts: dict[tuple[str, str], int] = {}
+    for r in runs:
+        counts[(r.split, r.labels["fault"])] = counts.get((r.split, r.labels["fault"]), 0) + 1
+    for s in ("train", "val", "test"):
+        row = {f: counts.get((s, f), 0) for f in ("none", "B", "C", "BC")}
+        print(f"  {s:5s}: " + ", ".join(f"{f} {n}" for f, n in row.items()))
+    show = runs if args.show == 0 else runs[:args.show]
+    print("  index  run_id            split  fault  B mm   C mm   " + "  ".join(names))
+    for r in show:
+        vals = "  ".join(_fmt(r.factors.get(k)) for k in names)
+        print(f"  {r.index:5d}  {r.run_id}  {r.split:5s}  {r.labels['fault']:5s}  {r.labels['clearance_b_mm']:5.3g}"
+              f"  {r.labels['clearance_c_mm']:5.3g}  {vals}")
+    if len(show) < len(runs):
+        print(f"  ... {len(runs) - len(show)} more (--show 0 lists all)")
+    if not args.no_estimate:
+        from twin.dataset.estimate import estimate_wall
+
+        est = estimate_wall(spec, runs, workers)
+        print(f"  estimated wall time on {workers} workers: {est['wall_s'] / 60:.1f} min "
+              f"({est['per_sim_s']:.2f} s per simulated second per worker, measured on {est['probes']} short "
+              f"runs; {est['overhead_s']:.2f} s per run of set-up)")
+    return 0
+
+
+def _fmt(v) -> str:
+    return f"{v:.4g}" if isinstance(v, float) else str(v)
+
+
+def _info(args: argparse.Namespace) -> int:
+    from twin.dataset.reader import describe
+
+    print(describe(args.dir))
+    return 0
+
+
+def _verify(args: argparse.Namespace) -> int:
+    from twin.dataset.reader import Dataset, verify
+
+    problems = verify(args.dir, progress=not args.no_progress and sys.stderr.isatty())
+    n = len(Dataset(args.dir).runs)
+    if problems:
+        for p in problems:
+            print(f"  {p}")
+        print(f"{args.dir}: {len(problems)} problem(s) in {n} runs", file=sys.stderr)
+        return 1
+    print(f"{args.dir}: {n} runs, every file matches the manifest")
+    return 0

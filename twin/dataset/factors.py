@@ -1,0 +1,176 @@
+"""Factors a dataset can vary, and how a value becomes configuration.
+
+Named factors (below) cover what the bench's users vary; any other configuration field can be
+varied by its dotted path (``pid.kp``, ``drive.ramp_s``, ``mujoco.contact_damping_scale``): its
+values are checked by building the configuration. Factors drawn per run (sensor offsets, mounting
+errors, random speed profiles) take their randomness from the run's own seed, so a run is
+reproducible from its configuration alone (the configuration records what was drawn).
+
+Labels: ``fault`` ∈ {none, B, C, BC} and ``clearance_b_mm``/``clearance_c_mm`` (diametral, 0 for
+a ball bearing) are read back from the resolved configuration, whatever factors produced it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable
+
+import numpy as np
+
+from twin.config import ACCELEROMETERS, CATALOGUE_DIAMETRAL_MM, BenchConfig
+from twin.dataset.spec import SpecError
+
+#: fault classes: which joints have a clearance
+FAULTS = ("none", "B", "C", "BC")
+#: clearance of a faulty joint whose size is not varied [mm] (Table 4's 0.1 mm)
+DEFAULT_FAULT_CLEARANCE_MM = 0.1
+
+
+@dataclass(frozen=True)
+class Factor:
+    """A named factor.
+
+    Attributes:
+        name: the spec's key.
+        doc: what it sets, with units.
+        choices: allowed values of a categorical factor (None: numeric).
+        bounds: allowed numeric range [lo, hi] (None: categorical).
+        apply: ``apply(value, ov, rng, base)`` adds dotted-path overrides to ``ov``; ``rng`` is the
+            run's generator (for per-run draws), ``base`` the base configuration.
+        engines: engines that support it.
+    """
+
+    name: str
+    doc: str
+    choices: tuple[Any, ...] | None
+    bounds: tuple[float, float] | None
+    apply: Callable[[Any, dict[str, Any], np.random.Generator, BenchConfig], None]
+    engines: tuple[str, ...] = ("mujoco", "reference")
+
+
+def _set(path: str) -> Callable[[Any, dict[str, Any], np.random.Generator, BenchConfig], None]:
+    def apply(v, ov, rng, base):  # noqa: ARG001
+        ov[path] = v
+    return apply
+
+
+def _clearance(joint: str):
+    def apply(v, ov, rng, base):  # noqa: ARG001
+        ov[f"joints.clearance_{joint.lower()}_mm"] = float(v)
+        if v != 0 and not any(abs(v - c) < 1e-9 for c in CATALOGUE_DIAMETRAL_MM):
+            ov["joints.allow_noncatalogue"] = True
+    return apply
+
+
+def _fault(v, ov, rng, base):  # noqa: ARG001
+    # sizes: those of the clearance factors when varied (applied after), else 0.1 mm
+    for j in "BC":
+        key = f"joints.clearance_{j.lower()}_mm"
+        if j in v:
+            if ov.get(key, base.joints.diametral_mm(j)) == 0:
+                ov[key] = DEFAULT_FAULT_CLEARANCE_MM
+        else:
+            ov[key] = 0.0
+
+
+def _program(v, ov, rng, base):  # noqa: ARG001
+    ov["@program"] = v  # resolved by the design once every factor is known (needs the duration)
+
+
+def _pid_scale(v, ov, rng, base):  # noqa: ARG001
+    for k in ("kp", "kv", "ki"):
+        ov[f"pid.{k}"] = getattr(base.pid, k) * float(v)
+
+
+def _zero_g_spread(v, ov, rng, base):  # noqa: ARG001
+    supply = base.instrumentation.supply_v
+    offs = supply / 2 + float(v) * rng.standard_normal(len(ACCELEROMETERS))
+    ov["instrumentation.zero_g_v"] = {a: float(np.clip(o, 0.05 * supply, 0.95 * supply))
+                                      for a, o in zip(ACCELEROMETERS, offs)}
+
+
+def _mount_offset(v, ov, rng, base):  # noqa: ARG001
+    mounts = {}
+    for a in ACCELEROMETERS:
+        m = base.sensors.accelerometers[a]
+        dx, dy = float(v) * (2 * rng.random(2) - 1)
+        mounts[a] = {"body": m.body, "position_m": [m.position_m[0] + dx, m.position_m[1] + dy], "axis": m.axis}
+    ov["sensors.accelerometers"] = mounts
+
+
+#: the named factors, in the order they are applied (fault before the clearance sizes)
+NAMED: dict[str, Factor] = {f.name: f for f in (
+    Factor("fault", "joints with a clearance: none, B, C or BC (size: clearance_b_mm/_c_mm, else 0.1 mm)",
+           FAULTS, None, _fault),
+    Factor("clearance_b_mm", "diametral clearance at B [mm], 0 = ball bearing; any value in [0, 1] "
+           "(non-catalogue values allowed)", None, (0.0, 1.0), _clearance("B")),
+    Factor("clearance_c_mm", "diametral clearance at C [mm], as clearance_b_mm", None, (0.0, 1.0), _clearance("C")),
+    Factor("orientation", "bench axis that points up", ("x", "y", "z"), None, _set("mechanism.orientation")),
+    Factor("program", "speed program: constant (motor_rpm), protocol (S003 §4.3), random-profile (base.profile)",
+           ("constant", "protocol", "random-profile"), None, _program),
+    Factor("motor_rpm", "motor speed of the constant program [rpm]", None, (-1000.0, 1000.0), _set("drive.motor_rpm")),
+    Factor("d_off_m", "offset of C' above the guide line [m]", None, (-0.05, 0.05), _set("mechanism.d_off_m")),
+    Factor("restitution", "coefficient of restitution of the contact law [-]", None, (0.05, 1.0),
+           _set("contact.restitution")),
+    Factor("mu0", "clearance-joint friction coefficient [-]", None, (0.0, 1.0), _set("contact.mu0")),
+    Factor("stiffness_scale", "factor on the contact stiffness, both engines [-]", None, (0.1, 10.0),
+           _set("contact.stiffness_scale")),
+    Factor("guide_friction_n", "slider guide friction [N]", None, (0.0, 100.0), _set("mechanism.guide_friction_n")),
+    Factor("pid_scale", "factor on the three PID gains [-]", None, (0.1, 10.0), _pid_scale),
+    Factor("zero_g_spread_v", "standard deviation of the sensors' zero-g offsets around mid-supply [V] "
+           "(drawn per run)", None, (0.0, 0.5), _zero_g_spread),
+    Factor("mount_offset_m", "accelerometer mounting error: uniform ±value in x and y [m] (drawn per run)",
+           None, (0.0, 0.02), _mount_offset),
+    Factor("noise", "sensor noise on or off", (True, False), None, _set("instrumentation.noise")),
+)}
+
+
+def resolve(name: str, engine: str) -> Factor:
+    """The factor called ``name``: a named one, or a dotted configuration path."""
+    if name in NAMED:
+        f = NAMED[name]
+    elif "." in name:
+        section = name.split(".", 1)[0]
+        engines = ("mujoco",) if section == "mujoco" else ("mujoco", "reference")
+        f = Factor(name, f"configuration field {name}", None, None, _set(name), engines)
+    else:
+        raise SpecError(f"factors.{name}", f"unknown factor; named factors: {', '.join(NAMED)}, or any "
+                                           "configuration field by its dotted path (e.g. pid.kp)")
+    if engine not in f.engines:
+        raise SpecError(f"factors.{name}", f"is not supported by the {engine} engine (only {', '.join(f.engines)})")
+    return f
+
+
+def check_value(f: Factor, value: Any, key: str) -> Any:
+    """Check one value of factor ``f`` (categorical choice or numeric bounds)."""
+    if f.choices is not None:
+        if value not in f.choices or isinstance(value, bool) != isinstance(f.choices[0], bool):
+            raise SpecError(key, f"must be one of {', '.join(map(str, f.choices))}; got {value!r}")
+        return value
+    if f.bounds is not None:
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
+            raise SpecError(key, f"must be a number, got {value!r}")
+        lo, hi = f.bounds
+        if not lo <= value <= hi:
+            raise SpecError(key, f"must lie in [{lo:g}, {hi:g}], got {value!r}")
+        return float(value)
+    return value
+
+
+def labels(cfg: BenchConfig) -> dict[str, Any]:
+    """Labels of a resolved configuration: fault class and diametral clearances [mm]."""
+    b, c = cfg.joints.clearance_b_mm, cfg.joints.clearance_c_mm
+    fault = ("B" if b > 0 else "") + ("C" if c > 0 else "") or "none"
+    return {"fault": fault, "clearance_b_mm": float(b), "clearance_c_mm": float(c)}
+
+
+def random_profile(rng: np.random.Generator, duration_s: float, rpm: tuple[float, float],
+                   hold_s: tuple[float, float], stop_probability: float) -> tuple[list[float], list[float]]:
+    """Step times [s] and motor speeds [rpm] of a random speed profile over ``duration_s``: from
+    rest, a step every U(hold_s) seconds to U(rpm), or to a stop with ``stop_probability``."""
+    times, speeds, t = [], [], 0.0
+    while t < duration_s:
+        times.append(round(t, 9))
+        speeds.append(0.0 if (times[1:] and rng.random() < stop_probability) else float(rng.uniform(*rpm)))
+        t += float(rng.uniform(*hold_s))
+    return times, speeds

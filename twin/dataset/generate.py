@@ -1,0 +1,384 @@
+"""The dataset driver: plan, resume, execute on a process pool or Dask, write the manifest.
+
+Layout of ``DIR`` (``twin/dataset/FORMAT.md``): ``info.json``, ``runs.parquet``, ``stats.json``,
+``data/<run_id>.parquet`` (workers), ``results/<run_id>.json`` (the driver's record of each
+finished run, so that a killed generation resumes). Only the driver writes ``info.json``,
+``results/``, ``runs.parquet`` and ``stats.json``; every file is written under a temporary name
+and renamed.
+
+Resuming: a run is done when its result record exists and says ``failed``, or says ``ok`` and
+its data file exists with the recorded size (the checksum is checked by ``twin dataset
+verify``). Everything else is run again; temporary files of killed processes are removed. A
+``DIR`` whose ``info.json`` holds a different spec is refused before anything is written.
+
+Executors: ``--workers N`` local processes (``concurrent.futures.ProcessPoolExecutor``, spawn
+start method: every worker imports MuJoCo itself), or Dask distributed (``--scheduler local``
+starts a ``LocalCluster`` of N single-threaded worker processes; ``--scheduler tcp://HOST:PORT``
+submits to a running cluster whose workers see ``DIR`` on a shared file system). Workers call
+:func:`twin.dataset.worker.run_one` and return small dicts, never arrays.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable, Iterator
+
+from twin import __version__
+from twin.dataset.design import RunPlan, base_config, plan
+from twin.dataset.spec import SPLITS, DatasetSpec
+from twin.dataset.worker import column_specs
+from twin.errors import TwinError
+from twin.util import atomic_write_json, atomic_write_bytes, check_output_dir, remove_stale_temps
+
+FORMAT = "twin-dataset/1"
+
+
+class DatasetError(TwinError):
+    """A dataset folder cannot be used (another dataset, a missing or corrupt file)."""
+
+
+@dataclass
+class Prepared:
+    """A planned dataset and what is already done in its folder."""
+
+    spec: DatasetSpec
+    out: Path
+    runs: list[RunPlan]
+    columns: list[Any]
+    done: dict[str, dict[str, Any]]
+    identity: dict[str, Any]
+
+    @property
+    def pending(self) -> list[RunPlan]:
+        return [r for r in self.runs if r.run_id not in self.done]
+
+
+def identity(spec: DatasetSpec) -> dict[str, Any]:
+    """What makes two datasets the same: the spec (its base configuration by content, not path)."""
+    c = spec.canonical()
+    c["base_config"] = base_config(spec).to_toml() if spec.base_config else None
+    return c
+
+
+def dataset_columns(runs: list[RunPlan], spec: DatasetSpec) -> list[Any]:
+    """Stored columns of the dataset: the union over its runs, in canonical order (channels a run
+    lacks, e.g. the eccentricities of a joint without clearance, are stored as NaN there)."""
+    if not runs:
+        return []
+    probe = runs[0].config.replace(**{"joints.clearance_b_mm": 0.1, "joints.clearance_c_mm": 0.1,
+                                       "joints.allow_noncatalogue": True})
+    every = column_specs(probe, spec.outputs.truth, spec.outputs.instrumented, spec.outputs.dtype)
+    present: set[str] = set()
+    for r in runs:
+        present.update(c.name for c in column_specs(r.config, spec.outputs.truth, spec.outputs.instrumented,
+                                                    spec.outputs.dtype))
+    return [c for c in every if c.name in present]
+
+
+def prepare(spec: DatasetSpec, out_dir: str | Path, create: bool = True) -> Prepared:
+    """Plan the spec and read what ``out_dir`` already holds (refusing another dataset)."""
+    runs = plan(spec)
+    ident = identity(spec)
+    out = check_output_dir(out_dir, "--out", need_parent=False) if create else Path(out_dir)
+    info_path = out / "info.json"
+    if out.exists() and any(out.iterdir()):
+        if not info_path.is_file():
+            raise DatasetError(f"--out: {out} is not empty and holds no dataset (no info.json); choose an empty "
+                               "or new folder")
+        try:
+            info = json.loads(info_path.read_text())
+        except (OSError, ValueError) as err:
+            raise DatasetError(f"{info_path}: unreadable ({err})") from None
+        if info.get("format") != FORMAT:
+            raise DatasetError(f"{info_path}: format {info.get('format')!r}, expected {FORMAT}")
+        if info.get("identity") != json.loads(json.dumps(ident)):
+            diff = sorted(k for k in set(ident) | set(info.get("identity", {}))
+                          if info.get("identity", {}).get(k) != json.loads(json.dumps(ident)).get(k))
+            raise DatasetError(f"--out: {out} holds a different dataset ({info.get('identity', {}).get('name')!r}; "
+                               f"differs in {', '.join(diff)}); use another folder")
+    columns = dataset_columns(runs, spec)
+    done = _read_done(out, {r.run_id for r in runs}) if out.exists() else {}
+    return Prepared(spec, out, runs, columns, done, ident)
+
+
+def _read_done(out: Path, ids: set[str]) -> dict[str, dict[str, Any]]:
+    done = {}
+    res = out / "results"
+    if not res.is_dir():
+        return done
+    for p in res.glob("*.json"):
+        rid = p.stem
+        if rid not in ids:
+            continue
+        try:
+            r = json.loads(p.read_text())
+        except (OSError, ValueError):
+            continue  # a record that cannot be read is as good as none: run again
+        if r.get("status") == "failed":
+            done[rid] = r
+        elif r.get("status") == "ok":
+            f = out / "data" / f"{rid}.parquet"
+            if f.is_file() and f.stat().st_size == r.get("bytes"):
+                done[rid] = r
+    return done
+
+
+def task_of(p: Prepared, r: RunPlan) -> dict[str, Any]:
+    return {"run_id": r.run_id, "index": r.index, "config_toml": r.config.to_toml(),
+            "data_dir": str(p.out / "data"), "columns": [tuple(vars(c).values()) for c in p.columns],
+            "instrumented": list(p.spec.outputs.instrumented)}
+
+
+# ---------------------------------------------------------------------- executors
+def _local(workers: int) -> Callable[[list[dict]], Iterator[dict]]:
+    def run(tasks: list[dict]) -> Iterator[dict]:
+        import multiprocessing as mp
+        from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+
+        from twin.dataset.worker import run_one
+
+        ex = ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("spawn"))
+        try:
+            # keep at most 2 tasks per worker queued: an interrupt loses little queued work
+            it = iter(tasks)
+            pending = set()
+            for t in it:
+                pending.add(ex.submit(run_one, t))
+                if len(pending) >= 2 * workers:
+                    break
+            while pending:
+                finished, pending = wait(pending, return_when=FIRST_COMPLETED)
+                for f in finished:
+                    yield f.result()
+                    nxt = next(it, None)
+                    if nxt is not None:
+                        pending.add(ex.submit(run_one, nxt))
+        finally:
+            for proc in list(getattr(ex, "_processes", {}).values()):
+                if proc.is_alive() and sys.exc_info()[0] is not None:
+                    proc.terminate()  # interrupted: do not wait for the running simulations
+            ex.shutdown(wait=True, cancel_futures=True)
+    return run
+
+
+def _dask(address: str, workers: int) -> Callable[[list[dict]], Iterator[dict]]:
+    def run(tasks: list[dict]) -> Iterator[dict]:
+        try:
+            from distributed import Client, LocalCluster, as_completed
+        except ImportError:  # pragma: no cover - a dependency of the package
+            raise TwinError("--scheduler: Dask distributed is not installed (pip install distributed)") from None
+        from twin.dataset.worker import run_one
+
+        cluster = None
+        try:
+            if address == "local":
+                cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                       dashboard_address=None, silence_logs=40)
+                client = Client(cluster)
+            else:
+                try:
+                    client = Client(address, timeout="20s")
+                except (OSError, TimeoutError) as err:
+                    raise TwinError(f"--scheduler: cannot reach a Dask scheduler at {address} ({err})") from None
+            try:
+                futures = [client.submit(run_one, t, key=f"twin-run-{t['run_id']}", pure=False) for t in tasks]
+                for f in as_completed(futures):
+                    yield f.result()
+            finally:
+                client.close()
+        finally:
+            if cluster is not None:
+                cluster.close()
+    return run
+
+
+def executor(scheduler: str | None, workers: int) -> Callable[[list[dict]], Iterator[dict]]:
+    if scheduler is None:
+        return _local(workers)
+    if scheduler != "local" and not scheduler.startswith(("tcp://", "tls://", "ucx://", "inproc://")):
+        raise TwinError(f"--scheduler: must be 'local' or a Dask scheduler address like tcp://HOST:8786, got {scheduler!r}")
+    return _dask(scheduler, workers)
+
+
+# ------------------------------------------------------------------------ driver
+def generate(spec: DatasetSpec, out_dir: str | Path, workers: int | None = None, scheduler: str | None = None,
+             limit: int | None = None, progress: bool = True) -> dict[str, Any]:
+    """Generate (or finish) the dataset of ``spec`` in ``out_dir``; returns the info dict."""
+    workers = workers or os.cpu_count() or 1
+    if workers < 1 or workers > 1024:
+        raise TwinError(f"--workers: must lie in [1, 1024], got {workers}")
+    if limit is not None and limit < 0:
+        raise TwinError(f"--limit: must be >= 0, got {limit}")
+    run_tasks = executor(scheduler, workers)  # checks the scheduler before anything is written
+    p = prepare(spec, out_dir)
+    out = p.out
+    (out / "data").mkdir(parents=True, exist_ok=True)
+    (out / "results").mkdir(exist_ok=True)
+    for d in (out / "data", out / "results"):
+        for f in d.iterdir():
+            if ".tmp" in f.name:
+                remove_stale_temps(d / _target_of(f.name))
+    _write_info(p, complete=False)
+    todo = p.pending[:limit] if limit is not None else p.pending
+    t_start = time.perf_counter()
+    sim_total = sum(r.config.duration_s for r in todo)
+    bar = _Progress(len(todo), sim_total, progress)
+    failed = 0
+    try:
+        for res in run_tasks([task_of(p, r) for r in todo]):
+            rid = res["run_id"]
+            if res["status"] == "io-error":  # a full disk or a refused write: stop, keep what is done
+                finish(p)
+                raise DatasetError(f"run {rid}: {res['reason']}; the {len(p.done)} runs finished so far are kept, "
+                                   "run the same command again once there is room")
+            atomic_write_json(out / "results" / f"{rid}.json", res)
+            p.done[rid] = res
+            failed += res["status"] != "ok"
+            bar.update(res)
+    finally:
+        bar.close()
+    info = finish(p)
+    info["generation"] = {"runs_this_call": len(todo), "failed_this_call": failed,
+                          "wall_s": time.perf_counter() - t_start, "workers": workers,
+                          "scheduler": scheduler or "processes"}
+    return info
+
+
+def _target_of(tmp_name: str) -> str:
+    # ".NAME.PID.tmp[.ext]" -> NAME
+    return tmp_name[1:].rsplit(".tmp", 1)[0].rsplit(".", 1)[0]
+
+
+class _Progress:
+    def __init__(self, n: int, sim_s: float, enabled: bool):
+        self.bar = None
+        self.t0 = time.perf_counter()
+        self.sim = 0.0
+        if enabled and n:
+            from tqdm import tqdm
+
+            self.bar = tqdm(total=n, unit="run", desc="dataset", leave=False, file=sys.stderr)
+
+    def update(self, res: dict[str, Any]) -> None:
+        self.sim += res.get("simulated_s") or 0.0
+        if self.bar is not None:
+            rate = self.sim / max(time.perf_counter() - self.t0, 1e-9)
+            self.bar.set_postfix_str(f"{rate:.2f} sim s/s", refresh=False)
+            self.bar.update(1)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
+# --------------------------------------------------------------------- manifest
+def _row(p: Prepared, r: RunPlan) -> dict[str, Any]:
+    res = p.done.get(r.run_id, {})
+    row: dict[str, Any] = {"run_id": r.run_id, "index": r.index, "point": r.point, "repeat": r.repeat,
+                           "seed": r.seed, "split": r.split}
+    for k, v in r.factors.items():
+        row[f"factor_{k}"] = v
+    row.update(r.labels)
+    row.update(orientation=r.config.mechanism.orientation, program=r.config.drive.program,
+               motor_rpm=r.config.drive.motor_rpm if r.config.drive.program == "constant" else math.nan,
+               engine=r.config.simulation.engine, duration_s=r.config.duration_s,
+               status=res.get("status", "pending"), reason=res.get("reason", ""),
+               simulated_s=res.get("simulated_s") or 0.0, wall_s=res.get("wall_s") or 0.0,
+               rows=int(res.get("rows") or 0), bytes=int(res.get("bytes") or 0), sha256=res.get("sha256", ""),
+               file=f"data/{r.run_id}.parquet" if res.get("status") == "ok" else "")
+    for k, v in (res.get("summary") or {}).items():
+        row[f"summary_{k}"] = v
+    return row
+
+
+def manifest_table(p: Prepared):
+    """``runs.parquet`` as a pyarrow table (one row per planned run)."""
+    import pyarrow as pa
+
+    rows = [_row(p, r) for r in p.runs]
+    keys: list[str] = []
+    for row in rows:
+        keys.extend(k for k in row if k not in keys)
+    cols = {}
+    for k in keys:
+        vals = [row.get(k) for row in rows]
+        if k.startswith("summary_"):
+            vals = [math.nan if v is None else float(v) for v in vals]
+        elif k.startswith("factor_"):
+            kinds = {type(v) for v in vals if v is not None}
+            if kinds <= {int, float} and kinds:
+                vals = [math.nan if v is None else float(v) for v in vals]
+            else:
+                vals = [None if v is None else str(v) for v in vals]
+        cols[k] = pa.array(vals, type=pa.uint64()) if k == "seed" else vals
+    return pa.table(cols)
+
+
+def finish(p: Prepared) -> dict[str, Any]:
+    """Write runs.parquet, stats.json (train split, ok runs) and the final info.json."""
+    import io
+
+    import pyarrow.parquet as pq
+
+    from twin.dataset.storage import Stats
+
+    buf = io.BytesIO()
+    pq.write_table(manifest_table(p), buf, compression="zstd")
+    atomic_write_bytes(p.out / "runs.parquet", buf.getvalue())
+    st = Stats()
+    for r in p.runs:
+        res = p.done.get(r.run_id)
+        if r.split == "train" and res and res.get("status") == "ok":
+            for name, b in res.get("stats", {}).items():
+                if b[0] > 0:
+                    st.merge(name, b)
+    atomic_write_json(p.out / "stats.json", {"split": "train", "channels": st.as_dict()})
+    return _write_info(p, complete=all(r.run_id in p.done for r in p.runs))
+
+
+def _write_info(p: Prepared, complete: bool) -> dict[str, Any]:
+    import mujoco
+    import pyarrow
+
+    statuses = [p.done.get(r.run_id, {}).get("status", "pending") for r in p.runs]
+    splits: dict[str, dict[str, Any]] = {}
+    for r, s in zip(p.runs, statuses):
+        d = splits.setdefault(r.split, {"runs": 0, "points": set(), "by_fault": {}, "ok": 0})
+        d["runs"] += 1
+        d["ok"] += s == "ok"
+        d["points"].add(r.point)
+        d["by_fault"][r.labels["fault"]] = d["by_fault"].get(r.labels["fault"], 0) + 1
+    for d in splits.values():
+        d["points"] = len(d["points"])
+    rate = p.spec.outputs.rate_hz
+    info = {
+        "format": FORMAT,
+        "name": p.spec.name,
+        "complete": complete,
+        "identity": p.identity,
+        "runs": {"planned": len(p.runs), "ok": statuses.count("ok"), "failed": statuses.count("failed"),
+                 "pending": statuses.count("pending")},
+        "simulated_s_planned": sum(r.config.duration_s for r in p.runs),
+        "channels": [{"name": c.name, "unit": c.unit, "group": c.group, "dtype": c.dtype, "rate_hz": rate}
+                     for c in p.columns],
+        "splits": {s: splits[s] for s in SPLITS if s in splits},
+        "labels": ["fault", "clearance_b_mm", "clearance_c_mm"],
+        "encoder_counts_per_rev": p.runs[0].config.instrumentation.encoder_counts_per_rev if p.runs else None,
+        "versions": {"twin": __version__, "mujoco": mujoco.__version__, "pyarrow": pyarrow.__version__,
+                     "python": sys.version.split()[0]},
+        "files": {"runs": "runs.parquet", "stats": "stats.json", "data": "data/<run_id>.parquet",
+                  "results": "results/<run_id>.json"},
+    }
+    atomic_write_json(p.out / "info.json", info)
+    return info
+
+
+def remove_dataset(out: Path) -> None:  # pragma: no cover - a helper for scripts
+    shutil.rmtree(out)

@@ -1,0 +1,231 @@
+"""Reading a dataset for training: the manifest, run signals and windows as numpy arrays.
+
+``ds = twin.dataset.open(DIR)`` gives the manifest (``ds.runs``, a pyarrow table; ``ds.rows()``
+as dicts), the normalization statistics of the training split (``ds.stats``), the channels with
+units (``ds.channels``) and a window iterator::
+
+    for x, y in ds.windows("train", channels=["meas_AC4", "meas_AC6"], length_s=0.1, normalize=True):
+        ...   # x: float32 [channels, samples]; y: labels of the run (fault, clearances, run_id, ...)
+
+Windows are cut from each run in order (``hop_s`` apart, default ``length_s``: no overlap), or one
+per crank revolution (``per_revolution=True``, boundaries where the encoder passes a multiple of
+a turn; ``samples_per_rev`` resamples each revolution to that many points in the angle domain,
+order tracking). No torch: numpy arrays, for any framework. The files themselves need no twin:
+pyarrow, pandas, polars, DuckDB and Hugging Face ``datasets`` read them (FORMAT.md).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any, Iterable, Iterator
+
+import numpy as np
+
+from twin.dataset.generate import FORMAT, DatasetError
+from twin.dataset.storage import file_sha256, read_columns, read_meta
+
+
+class Dataset:
+    """An opened dataset folder (see module docstring)."""
+
+    def __init__(self, path: str | Path):
+        import pyarrow.parquet as pq
+
+        self.path = Path(path)
+        info_path = self.path / "info.json"
+        if not info_path.is_file():
+            raise DatasetError(f"{self.path}: not a dataset folder (no info.json)")
+        try:
+            self.info = json.loads(info_path.read_text())
+        except (OSError, ValueError) as err:
+            raise DatasetError(f"{info_path}: unreadable ({err})") from None
+        if self.info.get("format") != FORMAT:
+            raise DatasetError(f"{info_path}: format {self.info.get('format')!r}, expected {FORMAT}")
+        runs = self.path / "runs.parquet"
+        if not runs.is_file():
+            raise DatasetError(f"{self.path}: no runs.parquet (generation never finished a call; run it again)")
+        try:
+            self.runs = pq.read_table(runs)
+        except (OSError, ValueError) as err:
+            raise DatasetError(f"{runs}: unreadable ({err})") from None
+        stats = self.path / "stats.json"
+        self.stats: dict[str, dict[str, float]] = json.loads(stats.read_text())["channels"] if stats.is_file() else {}
+        self.channels = {c["name"]: c for c in self.info["channels"]}
+        self.rate_hz = float(self.info["channels"][0]["rate_hz"]) if self.info["channels"] else 0.0
+
+    def rows(self, split: str | None = None, status: str = "ok") -> list[dict[str, Any]]:
+        """Manifest rows (dicts), optionally of one split, by default the runs that succeeded."""
+        return [r for r in self.runs.to_pylist() if (split is None or r["split"] == split)
+                and (status is None or r["status"] == status)]
+
+    def read(self, run_id: str, channels: Iterable[str] | None = None, start: int = 0,
+             stop: int | None = None) -> dict[str, np.ndarray]:
+        """Signals of one run (rows [start, stop))."""
+        f = self.path / "data" / f"{run_id}.parquet"
+        if not f.is_file():
+            raise DatasetError(f"{self.path}: no data for run {run_id!r}")
+        return read_columns(f, channels, start, stop)
+
+    def _norm(self, names: list[str]) -> tuple[np.ndarray, np.ndarray]:
+        missing = [n for n in names if n not in self.stats]
+        if missing:
+            raise DatasetError(f"no training statistics for {', '.join(missing)} (stats.json)")
+        mean = np.array([self.stats[n]["mean"] for n in names], dtype=np.float64)[:, None]
+        std = np.array([self.stats[n]["std"] or 1.0 for n in names], dtype=np.float64)[:, None]
+        return mean, std
+
+    def windows(self, split: str = "train", channels: Iterable[str] | None = None, length_s: float = 0.1,
+                hop_s: float | None = None, per_revolution: bool = False, samples_per_rev: int | None = None,
+                normalize: bool = False, skip_s: float = 0.0) -> Iterator[tuple[np.ndarray, dict[str, Any]]]:
+        """(window [channels, samples] float32, labels) over the runs of ``split`` (module docstring).
+
+        ``skip_s`` leaves out the start of each run (the spin-up). Per-revolution windows need
+        ``encoder_counts`` or ``encoder_angle`` in the dataset.
+        """
+        names = list(channels) if channels is not None else [c for c, d in self.channels.items()
+                                                             if d["dtype"].startswith("float")]
+        unknown = [n for n in names if n not in self.channels]
+        if unknown:
+            raise DatasetError(f"unknown channels {', '.join(unknown)}; the dataset has {', '.join(self.channels)}")
+        mean, std = self._norm(names) if normalize else (None, None)
+        rate = self.rate_hz
+        n_win = int(round(length_s * rate))
+        hop = int(round((hop_s if hop_s is not None else length_s) * rate))
+        if not per_revolution and (n_win < 1 or hop < 1):
+            raise DatasetError(f"length_s and hop_s must hold at least one sample at {rate:g} Hz")
+        angle = None
+        if per_revolution:
+            angle = "encoder_counts" if "encoder_counts" in self.channels else \
+                "encoder_angle" if "encoder_angle" in self.channels else None
+            if angle is None:
+                raise DatasetError("per_revolution needs encoder_counts or encoder_angle in the dataset")
+        for row in self.rows(split):
+            start = int(round(skip_s * rate))
+            data = self.read(row["run_id"], names + ([angle] if angle and angle not in names else []), start=start)
+            x = np.stack([np.asarray(data[n], dtype=np.float64) for n in names])
+            if normalize:
+                x = (x - mean) / std
+            labels = {k: row[k] for k in ("run_id", "fault", "clearance_b_mm", "clearance_c_mm", "split")}
+            if not per_revolution:
+                for i in range(0, x.shape[1] - n_win + 1, hop):
+                    yield x[:, i:i + n_win].astype(np.float32), {**labels, "start_s": skip_s + i / rate}
+                continue
+            turns = _turns(np.asarray(data[angle], dtype=np.float64), angle, self)
+            edges = revolution_edges(turns)
+            for a, b in zip(edges[:-1], edges[1:]):
+                w = x[:, a:b]
+                if samples_per_rev:
+                    grid = np.floor(turns[a]) + (np.arange(samples_per_rev) + 0.5) / samples_per_rev \
+                        if turns[b - 1] >= turns[a] else np.ceil(turns[a]) - (np.arange(samples_per_rev) + 0.5) / samples_per_rev
+                    tt = turns[a:b]
+                    order = np.argsort(tt, kind="stable")
+                    w = np.stack([np.interp(grid, tt[order], ch[order]) for ch in w])
+                yield w.astype(np.float32), {**labels, "start_s": skip_s + a / rate}
+
+
+def revolution_edges(turns: np.ndarray) -> np.ndarray:
+    """Sample indices where the crank completes each whole turn (the first sample at or past
+    every integer number of turns, in the run's net direction of rotation): jitter of a count
+    around a boundary (a crank at rest on it) does not start a new revolution."""
+    if turns.size < 2 or turns[-1] == turns[0]:
+        return np.zeros(0, dtype=np.int64)
+    sign = 1.0 if turns[-1] > turns[0] else -1.0
+    run_max = np.maximum.accumulate(sign * turns)  # monotone: the furthest the crank has got
+    levels = np.arange(math.floor(run_max[0]) + 1, math.floor(run_max[-1]) + 1)
+    return np.searchsorted(run_max, levels, side="left")
+
+
+def _turns(phi: np.ndarray, kind: str, ds: Dataset) -> np.ndarray:
+    if kind == "encoder_counts":
+        cpr = _counts_per_rev(ds)
+        return phi / cpr
+    return phi / (2 * math.pi)
+
+
+def _counts_per_rev(ds: Dataset) -> float:
+    return float(ds.info.get("encoder_counts_per_rev") or 32768)
+
+
+def open(path: str | Path) -> Dataset:  # noqa: A001 - twin.dataset.open(DIR), like datasets' API
+    """Open a dataset folder for reading."""
+    return Dataset(path)
+
+
+# --------------------------------------------------------------------- checks
+def verify(path: str | Path, progress: bool = False) -> list[str]:
+    """Check every file of a dataset against its manifest: each ok run's file exists, has the
+    recorded SHA-256 and size, holds the expected rows and columns with the dataset's metadata,
+    and its labels agree with the configuration. Returns the problems (empty: all good)."""
+    ds = Dataset(path)
+    problems: list[str] = []
+    expected_cols = [c["name"] for c in ds.info["channels"]]
+    rows = ds.runs.to_pylist()
+    it = rows
+    if progress:
+        from tqdm import tqdm
+
+        it = tqdm(rows, unit="run", desc="verify", leave=False)
+    for r in it:
+        rid = r["run_id"]
+        f = ds.path / "data" / f"{rid}.parquet"
+        if r["status"] != "ok":
+            if f.exists():
+                problems.append(f"{rid}: status {r['status']} but a data file exists")
+            continue
+        if not f.is_file():
+            problems.append(f"{rid}: data file missing")
+            continue
+        if f.stat().st_size != r["bytes"]:
+            problems.append(f"{rid}: size {f.stat().st_size} bytes, manifest {r['bytes']}")
+            continue
+        if file_sha256(f) != r["sha256"]:
+            problems.append(f"{rid}: SHA-256 differs from the manifest (file changed or corrupt)")
+            continue
+        import pyarrow.parquet as pq
+
+        meta = read_meta(f)
+        pf = pq.ParquetFile(f)
+        if pf.metadata.num_rows != r["rows"] or r["rows"] != int(round(r["duration_s"] * ds.rate_hz)):
+            problems.append(f"{rid}: {pf.metadata.num_rows} rows, manifest {r['rows']}, expected "
+                            f"{int(round(r['duration_s'] * ds.rate_hz))}")
+        if pf.schema_arrow.names != expected_cols:
+            problems.append(f"{rid}: columns differ from info.json")
+        if meta.get("run_id") != rid:
+            problems.append(f"{rid}: file metadata names run {meta.get('run_id')!r}")
+        fault = ("B" if r["clearance_b_mm"] > 0 else "") + ("C" if r["clearance_c_mm"] > 0 else "") or "none"
+        if fault != r["fault"]:
+            problems.append(f"{rid}: label fault {r['fault']!r} disagrees with clearances "
+                            f"B {r['clearance_b_mm']} C {r['clearance_c_mm']} mm")
+    ids = {r["run_id"] for r in rows}
+    for f in (ds.path / "data").glob("*.parquet"):
+        if f.stem not in ids:
+            problems.append(f"{f.name}: not in the manifest")
+    return problems
+
+
+def describe(path: str | Path) -> str:
+    """``twin dataset info``: runs by status, class balance per split, size, channels."""
+    ds = Dataset(path)
+    info = ds.info
+    rows = ds.runs.to_pylist()
+    lines = [f"{ds.path}: dataset {info['name']!r} ({info['format']}), "
+             f"{'complete' if info['complete'] else 'INCOMPLETE (run generate again to finish)'}",
+             f"  runs: {info['runs']['planned']} planned, {info['runs']['ok']} ok, {info['runs']['failed']} failed, "
+             f"{info['runs']['pending']} pending; {sum(r['simulated_s'] for r in rows):.1f} s simulated, "
+             f"{sum(r['bytes'] for r in rows) / 1e6:.1f} MB of signals",
+             f"  channels ({len(ds.channels)}, {ds.rate_hz:g} Hz): " + ", ".join(ds.channels)]
+    faults = sorted({r["fault"] for r in rows}, key=["none", "B", "C", "BC"].index)
+    lines.append("  split   runs  groups  " + "  ".join(f"{f:>5s}" for f in faults))
+    for s in ("train", "val", "test"):
+        rs = [r for r in rows if r["split"] == s]
+        if not rs:
+            continue
+        counts = [sum(r["fault"] == f for r in rs) for f in faults]
+        lines.append(f"  {s:6s} {len(rs):5d} {len({r['point'] for r in rs}):7d}  "
+                     + "  ".join(f"{c:5d}" for c in counts))
+    failed = [r for r in rows if r["status"] == "failed"]
+    for r in failed[:10]:
+        lines.append(f"  failed {r['run_id']}: {r['reason']}")
+    return "\n".join(lines)

@@ -1,0 +1,244 @@
+"""Signals of a dataset run as a Parquet file: written chunk by chunk, read with pyarrow alone.
+
+One file per run, ``data/<run_id>.parquet``: one column per channel, no time column (sample k
+is at ``t0 + k / rate_hz``), one row group per chunk of the run (0.5 s by default), zstd.
+Key-value metadata ``twin.dataset``: JSON with ``run_id``, ``rate_hz``, ``t0``, ``units`` and
+``groups`` per column, the run's configuration ``config_toml``. Storage types (``outputs.dtype``):
+
+* ``auto``: float32 where the channel is float32 in the run (accelerometers, forces, torque,
+  calibrated accelerations) or float32 holds it exactly (quantized DAQ volts: 18-bit codes over
+  ±10 V are integer multiples of 2**-16 V below 2**20 of them, within float32's 24-bit mantissa;
+  checked on every block, an inexact value is an error, not a silent loss); encoder counts as
+  int32 (whole counts; an overflow is an error); float64 elsewhere (angles unwrapped over many
+  turns, eccentricities of a few µm, positions);
+* ``float32``: every float channel float32 (lossy for the float64 ones: documented, for users
+  who want the smallest files), counts int32.
+
+The writer is a :class:`twin.simulate.Sink`: a temporary file beside the target, renamed by
+``close``, deleted by ``abort``. Per-channel statistics (count, mean, M2, min, max; Chan's parallel
+update) are kept while writing, for the training split's normalization statistics.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Iterable
+
+import numpy as np
+
+from twin.errors import RecordingError, TwinError
+from twin.run import Channel, Run
+from twin.util import remove_stale_temps, temp_path
+
+META_KEY = b"twin.dataset"
+
+
+class WriteError(TwinError):
+    """The file system refused a write (full disk, quota, read-only, permissions): not the run's
+    fault, so a dataset stops instead of recording every following run as failed."""
+
+#: channels quantized by the DAQ (float32 holds them exactly when quantization is on)
+QUANTIZED = ("volt_AC1", "volt_AC2", "volt_AC3", "volt_AC4", "volt_AC5", "volt_AC6", "motor_command")
+COUNTS = ("encoder_counts",)
+
+
+@dataclass(frozen=True)
+class ColumnSpec:
+    """A stored column: channel name, unit, group, storage type, and whether a float32 cast must be
+    exact (checked)."""
+
+    name: str
+    unit: str
+    group: str
+    dtype: str  # float32 | float64 | int32
+    exact: bool = False
+
+
+def storage_dtype(name: str, run_dtype: str, mode: str, quantized: bool) -> tuple[str, bool]:
+    """(storage type, exact-cast check) of a channel (see module docstring)."""
+    if name in COUNTS:
+        return "int32", True
+    if mode == "float32" or run_dtype == "float32":
+        return "float32", False
+    if name in QUANTIZED and quantized:
+        return "float32", True
+    return "float64", False
+
+
+class Stats:
+    """Per-channel count, mean, M2 (sum of squared deviations), min, max; mergeable (Chan et al.)."""
+
+    def __init__(self) -> None:
+        self.d: dict[str, list[float]] = {}
+
+    def update(self, name: str, x: np.ndarray) -> None:
+        x = np.asarray(x, dtype=np.float64)
+        x = x[np.isfinite(x)]  # NaN: a channel the run lacks
+        if x.size == 0:
+            return
+        n_b, mean_b = x.size, float(np.mean(x))
+        m2_b = float(np.sum((x - mean_b) ** 2))
+        self.merge(name, [n_b, mean_b, m2_b, float(np.min(x)), float(np.max(x))])
+
+    def merge(self, name: str, b: list[float]) -> None:
+        a = self.d.get(name)
+        if a is None:
+            self.d[name] = list(map(float, b))
+            return
+        n = a[0] + b[0]
+        delta = b[1] - a[1]
+        self.d[name] = [n, a[1] + delta * b[0] / n, a[2] + b[2] + delta * delta * a[0] * b[0] / n,
+                        min(a[3], b[3]), max(a[4], b[4])]
+
+    def as_dict(self) -> dict[str, dict[str, float]]:
+        out = {}
+        for k, (n, mean, m2, lo, hi) in self.d.items():
+            out[k] = {"count": int(n), "mean": mean, "std": float(np.sqrt(m2 / n)) if n else 0.0, "min": lo, "max": hi}
+        return out
+
+
+class ParquetRunWriter:
+    """Sink writing the chunks of one run into ``path`` (see module docstring)."""
+
+    def __init__(self, path: str | Path, columns: list[ColumnSpec], run_id: str, extra_meta: dict | None = None):
+        self.path = Path(path)
+        self.columns = columns
+        self.run_id = run_id
+        self.extra = dict(extra_meta or {})
+        self.tmp = temp_path(self.path, keep_suffix=True)
+        self._w = None
+        self._rate: float | None = None
+        self._t0: float | None = None
+        self.rows = 0
+        self.stats = Stats()
+        self._done = False
+
+    def _open(self, chunk: Run) -> None:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        remove_stale_temps(self.path)
+        self._rate, self._t0 = chunk.rate_hz, chunk.t0
+        meta = {"run_id": self.run_id, "rate_hz": chunk.rate_hz, "t0": chunk.t0,
+                "units": {c.name: c.unit for c in self.columns}, "groups": {c.name: c.group for c in self.columns},
+                **self.extra}
+        schema = pa.schema([pa.field(c.name, c.dtype) for c in self.columns],
+                           metadata={META_KEY: json.dumps(meta, sort_keys=True).encode()})
+        try:
+            self._w = pq.ParquetWriter(self.tmp, schema, compression="zstd", write_statistics=False)
+        except OSError as err:
+            raise WriteError(f"{self.path}: cannot write ({err})") from None
+        self._schema = schema
+
+    def write(self, chunk: Run) -> None:
+        import pyarrow as pa
+
+        if self._done:
+            raise TwinError(f"{self.path}: write after close")
+        if chunk.n == 0:
+            return
+        if self._w is None:
+            self._open(chunk)
+        arrays = []
+        for c in self.columns:
+            x = chunk[c.name]
+            y = x.astype(c.dtype)
+            if c.exact and not np.array_equal(y.astype(np.float64), x.astype(np.float64)):
+                bad = int(np.flatnonzero(y.astype(np.float64) != x.astype(np.float64))[0])
+                raise RecordingError(f"{c.name}: value {x[bad]!r} does not fit {c.dtype} exactly "
+                                     f"(sample {self.rows + bad} of run {self.run_id})")
+            self.stats.update(c.name, y)
+            arrays.append(pa.array(y))
+        try:
+            self._w.write_table(pa.Table.from_arrays(arrays, schema=self._schema))
+        except OSError as err:
+            raise WriteError(f"{self.path}: cannot write ({err})") from None
+        self.rows += chunk.n
+
+    def close(self, meta: dict[str, Any] | None = None, summary: dict[str, Any] | None = None) -> Path:  # noqa: ARG002
+        if self._w is None:
+            raise TwinError(f"{self.path}: the run produced no samples")
+        try:
+            self._w.close()
+            os.replace(self.tmp, self.path)
+        except OSError as err:
+            self.abort()
+            raise WriteError(f"{self.path}: cannot write ({err})") from None
+        self._done = True
+        return self.path
+
+    def abort(self) -> None:
+        if self._done:
+            return
+        self._done = True
+        try:
+            if self._w is not None:
+                self._w.close()
+        except Exception:  # noqa: BLE001 - best effort on the error path
+            pass
+        self.tmp.unlink(missing_ok=True)
+
+
+def file_sha256(path: str | Path) -> str:
+    with open(path, "rb") as fh:
+        return hashlib.file_digest(fh, "sha256").hexdigest()
+
+
+def read_meta(path: str | Path) -> dict[str, Any]:
+    """The ``twin.dataset`` metadata of a run file."""
+    import pyarrow.parquet as pq
+
+    try:
+        md = pq.read_schema(path).metadata or {}
+    except (OSError, ValueError) as err:
+        raise RecordingError(f"{path}: not a readable Parquet file ({err})") from None
+    if META_KEY not in md:
+        raise RecordingError(f"{path}: no twin.dataset metadata (not a dataset run file)")
+    return json.loads(md[META_KEY])
+
+
+def read_columns(path: str | Path, columns: Iterable[str] | None = None, start: int = 0,
+                 stop: int | None = None) -> dict[str, np.ndarray]:
+    """Columns of a run file as numpy arrays, rows [start, stop) (only the row groups that hold
+    them are read)."""
+    import pyarrow.parquet as pq
+
+    try:
+        f = pq.ParquetFile(path)
+    except (OSError, ValueError) as err:
+        raise RecordingError(f"{path}: not a readable Parquet file ({err})") from None
+    names = list(columns) if columns is not None else f.schema_arrow.names
+    missing = [c for c in names if c not in f.schema_arrow.names]
+    if missing:
+        raise RecordingError(f"{path}: no channels {', '.join(missing)}; it holds {', '.join(f.schema_arrow.names)}")
+    n = f.metadata.num_rows
+    stop = n if stop is None else min(stop, n)
+    start = max(0, start)
+    if stop <= start:
+        return {c: np.zeros(0, dtype=f.schema_arrow.field(c).type.to_pandas_dtype()) for c in names}
+    groups, first, offset = [], None, 0
+    for g in range(f.num_row_groups):
+        m = f.metadata.row_group(g).num_rows
+        if offset + m > start and offset < stop:
+            groups.append(g)
+            first = offset if first is None else first
+        offset += m
+    table = f.read_row_groups(groups, columns=names)
+    return {c: table.column(c).to_numpy()[start - first:stop - first] for c in names}
+
+
+def read_run(path: str | Path, columns: Iterable[str] | None = None) -> Run:
+    """A run file as a :class:`~twin.run.Run` (for ``twin view``; configuration from the dataset)."""
+    from twin.config import config_from_toml
+
+    meta = read_meta(path)
+    cols = read_columns(path, columns)
+    # channels a run lacks are stored as NaN columns (the dataset's union): left out here
+    chans = {k: Channel(k, meta["units"].get(k, ""), meta["groups"].get(k, "extra"), v) for k, v in cols.items()
+             if not (v.dtype.kind == "f" and v.size and np.isnan(v[0]) and np.all(np.isnan(v)))}
+    cfg = config_from_toml(meta["config_toml"]) if meta.get("config_toml") else None
+    return Run(float(meta.get("t0", 0.0)), float(meta["rate_hz"]), chans, cfg, {"run_id": meta["run_id"]})

@@ -1,0 +1,152 @@
+"""One dataset run, in a worker process: simulate, instrument, write, return a small summary.
+
+:func:`run_one` is what the executors (a local process pool, Dask distributed) call. It takes a
+task of plain data (the run's configuration as TOML text, its id, the output settings) and
+returns a dict of numbers and strings, never arrays: status, wall time, file size and SHA-256,
+the run summary, and per-channel statistics. A failed run (an engine error, a MuJoCo warning,
+an exception) returns its reason instead and leaves no file. The signals go to
+``data/<run_id>.parquet`` through :class:`twin.dataset.storage.ParquetRunWriter` (temporary
+file, renamed when complete), chunk by chunk: a worker's memory does not grow with the run.
+
+Instrumented outputs (``outputs.instrumented``) put every chunk through the bench's sensor chain
+(:class:`twin.instrument.ChainStream`, noise stream 0, seeded by the run's
+``instrumentation.seed``) and, for calibrated accelerations, the static calibration of a
+simulated static recording (stream 1), as a bench recording is made.
+"""
+
+from __future__ import annotations
+
+import resource
+import time
+import traceback
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from twin.run import Channel, Run
+
+#: instrumented channel sets -> channel names (prefix-free)
+_INSTRUMENTED = {
+    "volts": [f"volt_AC{i}" for i in range(1, 7)],
+    "counts": ["encoder_counts"],
+    "command": ["motor_command"],
+    "calibrated": [f"meas_AC{i}" for i in range(1, 7)],
+}
+
+
+def column_specs(cfg, truth_groups: tuple[str, ...], instrumented: tuple[str, ...], dtype: str):
+    """The stored columns of a run of ``cfg`` (names, units, groups, storage types), in order."""
+    from twin.channels import channel_specs
+    from twin.dataset.storage import ColumnSpec, storage_dtype
+    from twin.instrument.chain import daq_specs, meas_specs
+
+    quantized = cfg.instrumentation.quantization
+    out = []
+    for s in channel_specs(cfg):
+        # channel groups of the configuration: "joints" covers the run file's joint_B, joint_C
+        if ("joints" if s.group.startswith("joint_") else s.group) in truth_groups:
+            out.append(ColumnSpec(s.name, s.unit, s.group, *storage_dtype(s.name, s.dtype, dtype, False)))
+    wanted = {n for k in instrumented for n in _INSTRUMENTED[k]}
+    for s in daq_specs(cfg) + meas_specs():
+        if s.name in wanted:
+            run_dtype = "float32" if s.name.startswith("meas_") else s.dtype
+            out.append(ColumnSpec(s.name, s.unit, s.group, *storage_dtype(s.name, run_dtype, dtype, quantized)))
+    return out
+
+
+class _Instrument:
+    """Sink adapter: truth chunk -> stored channels (truth groups kept, DAQ and calibrated added)."""
+
+    def __init__(self, cfg, columns, inner, instrumented: tuple[str, ...]):
+        from twin.instrument.chain import ChainStream
+
+        self.cfg, self.inner = cfg, inner
+        self.columns = columns
+        self.chain = ChainStream(cfg, cfg.output_rate_hz, stream=0, command="command" in instrumented) \
+            if instrumented else None
+        self.cal = None
+        if "calibrated" in instrumented:
+            from twin.instrument.chain import simulated_calibration
+
+            self.cal = simulated_calibration(cfg, 1.0, stream=1)
+
+    def write(self, chunk: Run) -> None:
+        chans = dict(chunk.channels)
+        if self.chain is not None:
+            daq = self.chain.process(chunk)
+            if daq.n != chunk.n:
+                from twin.errors import TwinError
+
+                raise TwinError("dataset outputs: the DAQ rate must equal the output rate")
+            chans.update(daq.channels)
+            if self.cal is not None:
+                from twin.instrument.calibration import measured_accel
+
+                chans.update(measured_accel(daq, self.cal).channels)
+        out = {}
+        for c in self.columns:
+            # a channel this run lacks (the eccentricities of a joint without clearance): NaN
+            out[c.name] = chans[c.name] if c.name in chans else \
+                Channel(c.name, c.unit, c.group, np.full(chunk.n, np.nan))
+        self.inner.write(Run(chunk.t0, chunk.rate_hz, out, chunk.config))
+
+    def close(self, meta, summary):
+        return self.inner.close(meta, summary)
+
+    def abort(self):
+        self.inner.abort()
+
+
+def run_one(task: dict[str, Any]) -> dict[str, Any]:
+    """Simulate one run of a dataset (see module docstring). ``task`` keys: ``run_id``, ``index``,
+    ``config_toml``, ``data_dir``, ``columns`` (fields of :class:`~twin.dataset.storage.ColumnSpec`),
+    ``instrumented``."""
+    from twin.config import config_from_toml
+    from twin.dataset.storage import ColumnSpec, ParquetRunWriter, WriteError, file_sha256
+    from twin.simulate import simulate
+
+    t0 = time.perf_counter()
+    rid = task["run_id"]
+    path = Path(task["data_dir"]) / f"{rid}.parquet"
+    out: dict[str, Any] = {"run_id": rid, "index": task["index"], "status": "ok", "reason": ""}
+    try:
+        cfg = config_from_toml(task["config_toml"])
+        columns = [ColumnSpec(*c) for c in task["columns"]]
+        writer = ParquetRunWriter(path, columns, rid, {"name": cfg.name, "config_toml": cfg.to_toml()})
+        sink = _Instrument(cfg, columns, writer, tuple(task["instrumented"]))
+        outcome = simulate(cfg, [sink])
+        warnings = outcome.meta.get("warnings") or {}
+        if warnings:
+            path.unlink(missing_ok=True)
+            raise _Failed("MuJoCo warnings: " + ", ".join(f"{k}({v})" for k, v in warnings.items()))
+        out.update(rows=writer.rows, bytes=path.stat().st_size, sha256=file_sha256(path),
+                   summary=_small_summary(outcome.summary), stats=writer.stats.d,
+                   sim_wall_s=outcome.meta.get("wall_s"), simulated_s=writer.rows / cfg.output_rate_hz)
+    except _Failed as err:
+        out.update(status="failed", reason=str(err))
+    except (WriteError, OSError) as err:  # the file system, not the run: the driver stops
+        out.update(status="io-error", reason=f"{type(err).__name__}: {err}".splitlines()[0][:500])
+    except Exception as err:  # noqa: BLE001 - recorded with its reason; the dataset goes on
+        reason = f"{type(err).__name__}: {err}".splitlines()[0]
+        if not isinstance(err, (ValueError, RuntimeError)) and "TwinError" not in [c.__name__ for c in type(err).__mro__]:
+            reason += " | " + traceback.format_exc(limit=2).replace("\n", " ")[-300:]
+        out.update(status="failed", reason=reason[:500])
+    out["wall_s"] = time.perf_counter() - t0
+    out["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    return out
+
+
+class _Failed(Exception):
+    pass
+
+
+def _small_summary(s: dict[str, Any]) -> dict[str, float]:
+    """The run summary flattened to numbers (``B_impacts``, ``AC4_rms_mps2``, ...)."""
+    out: dict[str, float] = {}
+    for k, v in s.items():
+        if isinstance(v, dict):
+            for kk, vv in v.items():
+                if isinstance(vv, (int, float)) and not isinstance(vv, bool) and kk != "clearance_mm":
+                    out[f"{k}_{kk}"] = float(vv)
+    return out
