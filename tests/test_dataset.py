@@ -428,3 +428,33 @@ def test_plan_prints_runs_and_an_estimate(capsys):
     out = capsys.readouterr().out
     assert "tiny: 8 runs" in out and "2.4 s simulated" in out and "estimated wall time on 2 workers" in out
     assert out.count("\n") >= 13
+
+
+def test_workers_of_a_killed_driver_do_not_outlive_it(tmp_path):
+    """SIGKILL leaves the pool's workers without a driver: they stop within seconds, not linger
+    (Linux: the processes are found through /proc)."""
+    out = tmp_path / "orphans"
+    proc = subprocess.Popen([sys.executable, "-m", "twin.cli", "dataset", "generate", str(TINY), "--out", str(out),
+                             "--workers", "2", "--no-progress"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + 120
+    kids: set[int] = set()
+    while not kids:  # the spawned workers of this driver
+        assert proc.poll() is None and time.monotonic() < deadline
+        for d in Path("/proc").iterdir():
+            if d.name.isdigit():
+                try:
+                    stat = (d / "stat").read_text().split()
+                except OSError:
+                    continue
+                if int(stat[3]) == proc.pid and "spawn_main" in (d / "cmdline").read_bytes().decode(errors="replace"):
+                    kids.add(int(d.name))
+        time.sleep(0.05)
+    time.sleep(1.0)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait(timeout=30)
+    deadline = time.monotonic() + 15
+    while any(Path(f"/proc/{k}").exists() and "Z" not in (Path(f"/proc/{k}") / "stat").read_text().split()[2]
+              for k in kids):
+        assert time.monotonic() < deadline, f"workers {kids} still running 15 s after their driver was killed"
+        time.sleep(0.2)
+    assert not [p for p in out.rglob("*") if ".tmp" in p.name]

@@ -15,7 +15,8 @@
   its split, so no configuration is in two splits), stratified by fault class: within each class
   the groups are shuffled with the spec's seed and cut by the split fractions (largest
   remainders, carried from class to class so that small classes still fill every split). Groups
-  holding a held-out factor value go to test only.
+  holding a held-out value go to test only (for fault and the clearances, the run's labels: a
+  clearance its fault class does not use is not held out).
 """
 
 from __future__ import annotations
@@ -194,6 +195,8 @@ def plan(spec: DatasetSpec) -> list[RunPlan]:
 
 
 def _holdout(spec: DatasetSpec, values: dict[str, Any]) -> bool:
+    """Whether a point holds a held-out value: of its labels for fault and the clearances (a
+    clearance the fault class leaves unused is not held out), of its factors otherwise."""
     for k, held in spec.splits.holdout.items():
         v = values.get(k)
         if any(v == h or (isinstance(v, float) and isinstance(h, (int, float)) and math.isclose(v, h, rel_tol=1e-9))
@@ -212,7 +215,7 @@ def assign_splits(spec: DatasetSpec, runs: list[RunPlan]) -> list[RunPlan]:
     split_of: dict[int, str] = {}
     by_class: dict[str, list[int]] = {}
     for p, rs in point_runs.items():
-        if _holdout(spec, rs[0].factors):
+        if _holdout(spec, {**rs[0].factors, **rs[0].labels}):
             split_of[p] = "test"
         else:
             by_class.setdefault(rs[0].labels["fault"], []).append(p)

@@ -142,9 +142,9 @@ def _local(workers: int) -> Callable[[list[dict]], Iterator[dict]]:
         import multiprocessing as mp
         from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
-        from twin.dataset.worker import run_one
+        from twin.dataset.worker import run_one, watch_parent
 
-        ex = ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("spawn"))
+        ex = ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("spawn"), initializer=watch_parent)
         try:
             # keep at most 2 tasks per worker queued: an interrupt loses little queued work
             it = iter(tasks)

@@ -308,6 +308,8 @@ def parse_spec(data: Mapping[str, Any], source: str = "") -> DatasetSpec:
     if not isinstance(hold, Mapping):
         raise SpecError("splits.holdout", f"must be a table factor = [values], got {hold!r}")
     names = {f.name for f in factors} | {k for p in points for k in p}
+    if names & {"fault", "clearance_b_mm", "clearance_c_mm"}:
+        names |= {"fault", "clearance_b_mm", "clearance_c_mm"}  # held out by the runs' labels
     holdout = {}
     for k, v in hold.items():
         if k not in names:

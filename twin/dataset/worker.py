@@ -141,6 +141,27 @@ class _Failed(Exception):
     pass
 
 
+def watch_parent(poll_s: float = 0.5, grace_s: float = 5.0) -> None:
+    """Initializer of local worker processes: when the driver dies (SIGKILL, a crash), the worker
+    would wait for work forever. A daemon thread notices the parent is gone (the worker was
+    reparented), interrupts the running simulation (its sink deletes the temporary file) and ends
+    the process."""
+    import _thread
+    import os
+    import threading
+
+    parent = os.getppid()
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(poll_s)
+        _thread.interrupt_main()
+        time.sleep(grace_s)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="twin-parent-watch", daemon=True).start()
+
+
 def _small_summary(s: dict[str, Any]) -> dict[str, float]:
     """The run summary flattened to numbers (``B_impacts``, ``AC4_rms_mps2``, ...)."""
     out: dict[str, float] = {}
