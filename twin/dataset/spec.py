@@ -302,8 +302,8 @@ def parse_spec(data: Mapping[str, Any], source: str = "") -> DatasetSpec:
 
     sp = _table(data, "splits", SPLITS + ("holdout",))
     fr = tuple(sp.get(s, d) for s, d in zip(SPLITS, Splits.fractions))
-    if not all(_num(x) and 0 <= x <= 1 for x in fr) or abs(sum(fr) - 1) > 1e-9 or fr[0] <= 0:
-        raise SpecError("splits", f"train, val, test must be fractions in [0, 1] summing to 1 with train > 0, got {fr!r}")
+    if not all(_num(x) and 0 <= x <= 1 for x in fr) or abs(sum(fr) - 1) > 1e-9:
+        raise SpecError("splits", f"train, val, test must be fractions in [0, 1] summing to 1, got {fr!r}")
     hold = sp.get("holdout", {})
     if not isinstance(hold, Mapping):
         raise SpecError("splits.holdout", f"must be a table factor = [values], got {hold!r}")
