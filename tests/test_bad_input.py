@@ -200,6 +200,17 @@ CASES: list[tuple[str, str]] = [
     ("dataset plan {ws}/type.toml", "unknown section"),
     ("dataset info {ws}/afile", "not a dataset folder"),
     ("dataset verify {ws}/missing_ds", "not a dataset folder"),
+    # identify
+    ("identify clearance {ws}/missing.mcap", "missing.mcap"),
+    ("identify clearance {ws}/export.csv", "twin import"),
+    ("identify clearance {ws}/rec.mcap --model {ws}/afile", "not a readable identification model"),
+    ("identify clearance {ws}/rec.mcap --model {ws}/missing.joblib", "no such model file"),
+    ("identify clearance {ws}/rec.mcap --json {ws}/a.txt", "--json"),
+    ("identify clearance {ws}/run.mcap", "twin.recording"),
+    ("identify train {ws}/afile --out {ws}/m.joblib", "not a dataset folder"),
+    ("identify train {ws}/missing_ds --out {ws}/m.txt", "--out"),
+    ("identify train {ws}/missing_ds --out {ws}/m.joblib --splits train,dev", "--splits"),
+    ("identify evaluate {ws}/afile {ws}/missing_ds --out {ws}/rep", "not a readable identification model"),
     # study, calibrate, analyze
     ("study formulations --out {ws}/afile", "--out"),
     ("study formulations --out {ws}/f --duration -1", "--duration"),

@@ -38,6 +38,7 @@ COMMANDS: list[str] = [
     "twin.commands.replay",
     "twin.commands.analyze",
     "twin.commands.dataset",
+    "twin.commands.identify",
 ]
 
 

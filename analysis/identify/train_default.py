@@ -1,0 +1,81 @@
+"""Make the clearance-identification model that ships with twin, and its evaluation report.
+
+Steps (each is a plain ``twin`` command; a step whose output exists is skipped, so the script
+resumes):
+
+1. ``twin dataset generate analysis/datasets/clearance_id.toml --out WORK/clearance_id``: the
+   training data, MuJoCo twin (400 runs of 3 s);
+2. ``twin identify train WORK/clearance_id --out twin/data/identify_default.joblib`` (train and
+   val splits);
+3. ``twin dataset generate analysis/datasets/clearance_id_test.toml --out WORK/clearance_id_test``:
+   the test data, reference engine, other seeds, unseen speeds and clearance value;
+4. ``twin identify evaluate ... --out analysis/results/identify``: the report (confusion matrix,
+   recall, size errors by clearance and speed, interval coverage, plots) and the answers on the
+   sample recordings in ``recordings/`` (``samples.json``).
+
+Run: ``python analysis/identify/train_default.py [--work DIR] [--workers N]`` (about 12 min on two
+cores, most of it the MuJoCo training data). The datasets stay in ``--work`` (default
+``../identify_work`` beside the checkout; about 3 GB), not in the repository.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+MODEL = ROOT / "twin" / "data" / "identify_default.joblib"
+REPORT = ROOT / "analysis" / "results" / "identify"
+
+
+def twin(*args: str) -> None:
+    cmd = [sys.executable, "-m", "twin.cli", *args]
+    print("$ twin " + " ".join(args), flush=True)
+    subprocess.run(cmd, check=True, cwd=ROOT)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--work", default=str(ROOT.parent / "identify_work"), help="folder of the datasets")
+    ap.add_argument("--workers", default=str(os.cpu_count() or 1))
+    ap.add_argument("--retrain", action="store_true", help="train again even if the model exists")
+    args = ap.parse_args()
+    work = Path(args.work)
+    work.mkdir(parents=True, exist_ok=True)
+    train_ds, test_ds = work / "clearance_id", work / "clearance_id_test"
+    t = time.perf_counter()
+    twin("dataset", "generate", "analysis/datasets/clearance_id.toml", "--out", str(train_ds), "--workers", args.workers,
+         "--no-progress")
+    print(f"training data: {time.perf_counter() - t:.0f} s (0 if it existed)")
+    if args.retrain or not MODEL.exists():
+        twin("identify", "train", str(train_ds), "--out", str(MODEL), "--workers", args.workers)
+    t = time.perf_counter()
+    twin("dataset", "generate", "analysis/datasets/clearance_id_test.toml", "--out", str(test_ds), "--workers",
+         args.workers, "--no-progress")
+    print(f"test data: {time.perf_counter() - t:.0f} s (0 if it existed)")
+    REPORT.mkdir(parents=True, exist_ok=True)
+    twin("identify", "evaluate", str(MODEL), str(test_ds), "--out", str(REPORT), "--workers", args.workers)
+    samples = {}
+    for rec in sorted((ROOT / "recordings").glob("*.mcap")):
+        out = REPORT / f".{rec.stem}.json"
+        r = subprocess.run([sys.executable, "-m", "twin.cli", "identify", "clearance", str(rec), "--json", str(out)],
+                           cwd=ROOT, capture_output=True, text=True)
+        if r.returncode == 0:
+            a = json.loads(out.read_text())
+            out.unlink()
+            samples[rec.name] = {k: a[k] for k in ("fault", "probabilities", "clearance_b_mm", "clearance_b_interval_mm",
+                                                 "clearance_c_mm", "clearance_c_interval_mm", "warnings", "seconds")}
+            samples[rec.name]["evidence"] = {k: a["evidence"][k] for k in ("windows", "revolutions", "crank_hz")}
+        else:
+            samples[rec.name] = {"refused": r.stderr.strip()}
+    (REPORT / "samples.json").write_text(json.dumps(samples, indent=2) + "\n")
+    print(json.dumps(samples, indent=2))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,130 @@
+"""``twin identify``: clearance identification (train, evaluate, clearance) from the twin's datasets."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+from pathlib import Path
+
+from twin.errors import TwinError
+
+#: the model that ships with the package (analysis/identify/train_default.py makes it)
+DEFAULT_MODEL = "identify_default.joblib"
+
+
+def default_model_path() -> Path:
+    from importlib.resources import files
+
+    return Path(str(files("twin") / "data" / DEFAULT_MODEL))
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("identify", help="identify clearance from a bench recording (train, evaluate, clearance)",
+                       description="Which joint has clearance, and how much: features of the calibrated "
+                                   "accelerations in the crank-angle domain, a gradient-boosting model trained on a "
+                                   "twin dataset (twin dataset generate).")
+    ids = p.add_subparsers(dest="identify_command", metavar="ACTION", parser_class=type(p))
+    ids.required = True
+
+    t = ids.add_parser("train", help="train a model on a dataset (train and val splits)")
+    t.add_argument("dataset", metavar="DATASET")
+    t.add_argument("--out", metavar="MODEL.joblib", required=True)
+    t.add_argument("--splits", default="train,val", help="splits to train on (default train,val)")
+    t.add_argument("--workers", type=int, metavar="N", help="processes for the features (default: the cores)")
+    t.set_defaults(func=_train)
+
+    e = ids.add_parser("evaluate", help="evaluate a model on a dataset: confusion matrix, recall, size errors")
+    e.add_argument("model", metavar="MODEL.joblib")
+    e.add_argument("dataset", metavar="DATASET")
+    e.add_argument("--out", metavar="REPORT_DIR", required=True)
+    e.add_argument("--splits", default="train,val,test", help="splits to evaluate (default: all)")
+    e.add_argument("--workers", type=int, metavar="N", help="processes for the features (default: the cores)")
+    e.set_defaults(func=_evaluate)
+
+    c = ids.add_parser("clearance", help="which joint has clearance in a bench recording, and how much")
+    c.add_argument("recording", metavar="REC.mcap")
+    c.add_argument("--model", metavar="MODEL.joblib", help="model (default: the one shipped with twin)")
+    c.add_argument("--json", metavar="OUT.json", help="also write the answer as JSON")
+    c.set_defaults(func=_clearance)
+
+
+def _workers(n: int | None) -> int:
+    w = n if n is not None else (os.cpu_count() or 1)
+    if not 1 <= w <= 1024:
+        raise TwinError(f"--workers: must lie in [1, 1024], got {w}")
+    return w
+
+
+def _splits(text: str) -> tuple[str, ...]:
+    s = tuple(x.strip() for x in text.split(","))
+    bad = [x for x in s if x not in ("train", "val", "test")]
+    if bad or not s:
+        raise TwinError(f"--splits: comma-separated train, val, test; got {text!r}")
+    return s
+
+
+def _train(args: argparse.Namespace) -> int:
+    from twin.identify.model import train
+    from twin.util import check_output_file
+
+    out = check_output_file(args.out, "--out", ".joblib")
+    model, info = train(args.dataset, _splits(args.splits), _workers(args.workers))
+    model.save(out)
+    print(f"{out}: trained on {info['runs']} runs ({info['windows']} windows) of dataset {info['dataset']} "
+          f"({info['engine']}); classes {info['classes']}; crank {info['crank_hz_range'][0]:.2f}-"
+          f"{info['crank_hz_range'][1]:.2f} Hz; features {info['feature_seconds']:.1f} s, fit {info['fit_seconds']:.1f} s")
+    if info["runs_left_out"]:
+        print(f"  {len(info['runs_left_out'])} runs left out: {info['runs_left_out'][0]['reason']} ...")
+    return 0
+
+
+def _evaluate(args: argparse.Namespace) -> int:
+    from twin.identify.evaluate import evaluate, write_report
+    from twin.identify.model import ClearanceModel
+    from twin.util import check_output_dir
+
+    out = check_output_dir(args.out, "--out")
+    model = ClearanceModel.load(args.model)
+    r = evaluate(model, args.dataset, _splits(args.splits), _workers(args.workers))
+    files = write_report(r, out)
+    print(f"{r['runs']} runs of {r['dataset']} ({r['engine']}): accuracy {r['accuracy'] * 100:.1f} %, recall "
+          + ", ".join(f"{c} {v * 100:.0f} %" for c, v in r["recall"].items() if v is not None))
+    for J, g in r["by_clearance"].items():
+        print(f"  size at {J}: interval coverage {g['interval_coverage'] * 100:.0f} %; "
+              + ", ".join(f"{c} mm: {v['median_abs_error_mm']:.3g} mm ({'ok' if v['meets_target'] else 'over'})"
+                          for c, v in g["values"].items()))
+    print(f"  wrote {out}/: {', '.join(files)}")
+    return 0
+
+
+def _clearance(args: argparse.Namespace) -> int:
+    from twin.identify.model import ClearanceModel, identify_recording
+    from twin.util import atomic_write_json, check_output_file
+
+    rec = Path(args.recording)
+    if rec.suffix != ".mcap":
+        raise TwinError(f"{rec}: a recording is an .mcap file; convert DAQ exports with 'twin import'")
+    js = check_output_file(args.json, "--json", ".json") if args.json else None
+    path = Path(args.model) if args.model else default_model_path()
+    if not args.model and not path.is_file():
+        raise TwinError(f"no default model in this installation ({path}); give --model MODEL.joblib")
+    model = ClearanceModel.load(path)
+    a = identify_recording(model, rec)
+    p = a["probabilities"]
+    print(f"{rec}: fault {a['fault']} (p = {p[a['fault']]:.2f}; " + ", ".join(f"{k} {v:.2f}" for k, v in p.items()) + ")")
+    for j in ("b", "c"):
+        lo, hi = a[f"clearance_{j}_interval_mm"]
+        v = a[f"clearance_{j}_mm"]
+        print(f"  clearance {j.upper()}: " + (f"{v:.3g} mm (90 % interval {lo:.3g}-{hi:.3g} mm)" if v > 0
+                                                else "none (ball bearing)"))
+    ev = a["evidence"]
+    print(f"  evidence: {ev['windows']} windows, {ev['revolutions']} revolutions over {ev['steady_s']:.2f} s at "
+          f"{ev['crank_hz']:.3f} Hz (model trained on {ev['model']['crank_hz_range'][0]:.2f}-"
+          f"{ev['model']['crank_hz_range'][1]:.2f} Hz, dataset {ev['model']['dataset']}); {a['seconds']:.2f} s")
+    for w in a["warnings"]:
+        print(f"  WARNING: {w}", file=sys.stderr)
+    if js is not None:
+        atomic_write_json(js, json.loads(json.dumps(a, default=float)))
+    return 0

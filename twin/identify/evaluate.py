@@ -1,0 +1,197 @@
+"""Evaluation of a clearance model on a dataset: per-run answers against the labels.
+
+Reported (``report.json``, ``report.md``, PNG plots): accuracy and the confusion matrix of the
+fault location, per-class recall, the size error per joint by true clearance value (median
+absolute error against half the gap to the neighbouring catalogue values: the issue's target),
+the coverage of the 90 % intervals, and every figure per clearance value and per speed. Sizes are
+judged on the runs whose joint truly has a clearance (a miss is counted in the confusion matrix).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from twin.config import CATALOGUE_DIAMETRAL_MM
+from twin.identify.model import CLASSES, ClearanceModel, dataset_features
+
+
+def half_gap_mm(c: float) -> float:
+    """Half the gap between ``c`` and its nearest neighbour in the catalogue (the size target)."""
+    cat = sorted(CATALOGUE_DIAMETRAL_MM)
+    gaps = [abs(c - x) for x in cat if abs(x - c) > 1e-9]
+    return 0.5 * min(gaps) if gaps else float("inf")
+
+
+def evaluate(model: ClearanceModel, dataset_dir: str | Path, splits: tuple[str, ...], workers: int = 1
+             ) -> dict[str, Any]:
+    from twin.dataset import open as open_dataset
+
+    t0 = time.perf_counter()
+    ds = open_dataset(dataset_dir)
+    X, rows, owner, skipped = dataset_features(ds, splits, workers)
+    owner = np.asarray(owner)
+    preds = []
+    for i, r in enumerate(rows):
+        a = model.identify(X[owner == i])
+        preds.append({"run_id": r["run_id"], "true_fault": r["fault"], "fault": a["fault"],
+                      "true_b_mm": r["clearance_b_mm"], "true_c_mm": r["clearance_c_mm"],
+                      "b_mm": a["clearance_b_if_faulty_mm"]["median"], "b_int": a["clearance_b_if_faulty_mm"]["interval_90"],
+                      "c_mm": a["clearance_c_if_faulty_mm"]["median"], "c_int": a["clearance_c_if_faulty_mm"]["interval_90"],
+                      "crank_hz": r["crank_hz"], "motor_rpm": r.get("motor_rpm"), "orientation": r["orientation"],
+                      "probabilities": a["probabilities"]})
+    t_pred = time.perf_counter() - t0
+    y = [p["true_fault"] for p in preds]
+    yhat = [p["fault"] for p in preds]
+    conf = {t: {q: sum(1 for a, b in zip(y, yhat) if a == t and b == q) for q in CLASSES} for t in CLASSES}
+    recall = {c: (conf[c][c] / sum(conf[c].values())) if sum(conf[c].values()) else None for c in CLASSES}
+    acc = float(np.mean([a == b for a, b in zip(y, yhat)])) if preds else float("nan")
+    report: dict[str, Any] = {
+        "dataset": ds.info["name"], "dataset_dir": str(dataset_dir), "splits": list(splits),
+        "engine": ds.info["identity"]["engine"], "runs": len(preds), "windows": int(len(X)),
+        "runs_left_out": skipped, "model": model.trained_on.get("dataset"),
+        "accuracy": acc, "recall": recall, "confusion": conf,
+        "targets": {"accuracy": 0.95, "recall_each_class": 0.90, "interval_coverage": 0.85},
+    }
+    # fault location by speed and by clearance value
+    report["by_speed"] = _group(preds, lambda p: _speed_key(p), lambda ps: {
+        "runs": len(ps), "accuracy": float(np.mean([p["fault"] == p["true_fault"] for p in ps]))})
+    report["by_clearance"] = {}
+    for j in ("b", "c"):
+        faulty = [p for p in preds if p[f"true_{j}_mm"] > 0]
+        J = j.upper()
+        groups = {}
+        for c in sorted({p[f"true_{j}_mm"] for p in faulty}):
+            ps = [p for p in faulty if p[f"true_{j}_mm"] == c]
+            err = np.array([abs(p[f"{j}_mm"] - c) for p in ps])
+            cover = np.mean([p[f"{j}_int"][0] <= c <= p[f"{j}_int"][1] for p in ps])
+            detected = np.mean([J in p["fault"] for p in ps])
+            groups[f"{c:g}"] = {"runs": len(ps), "detected": float(detected), "median_abs_error_mm": float(np.median(err)),
+                                "target_mm": half_gap_mm(c), "meets_target": bool(np.median(err) <= half_gap_mm(c)),
+                                "interval_coverage": float(cover),
+                                "median_estimate_mm": float(np.median([p[f"{j}_mm"] for p in ps]))}
+        cover_all = float(np.mean([p[f"{j}_int"][0] <= p[f"true_{j}_mm"] <= p[f"{j}_int"][1] for p in faulty])) \
+            if faulty else float("nan")
+        report["by_clearance"][J] = {"values": groups, "interval_coverage": cover_all, "runs": len(faulty)}
+    # the healthy runs: how often a joint without clearance is called faulty, by speed
+    report["false_alarms"] = {J: float(np.mean([J in p["fault"] for p in preds if p[f"true_{J.lower()}_mm"] == 0]))
+                              for J in ("B", "C")}
+    report["seconds"] = {"features_and_predictions": t_pred}
+    report["predictions"] = preds
+    return report
+
+
+def _speed_key(p: dict[str, Any]) -> str:
+    rpm = p.get("motor_rpm")
+    if rpm is not None and isinstance(rpm, float) and math.isfinite(rpm):
+        return f"{rpm:g} rpm"
+    return f"{p['crank_hz']:.2f} Hz"
+
+
+def _group(items, key, fn) -> dict[str, Any]:
+    out: dict[str, list] = {}
+    for it in items:
+        out.setdefault(key(it), []).append(it)
+    return {k: fn(v) for k, v in sorted(out.items(), key=lambda kv: _num(kv[0]))}
+
+
+def _num(s: str) -> float:
+    try:
+        return float(s.split()[0])
+    except ValueError:
+        return 0.0
+
+
+def render_markdown(r: dict[str, Any]) -> str:
+    lines = [f"# Clearance identification: model `{r['model']}` on dataset `{r['dataset']}`", "",
+             f"- test data: {r['runs']} runs ({r['windows']} windows of 2 crank revolutions), engine {r['engine']}, "
+             f"splits {', '.join(r['splits'])}; {len(r['runs_left_out'])} runs left out (fewer than 2 steady "
+             "revolutions)",
+             f"- fault location accuracy **{r['accuracy'] * 100:.1f} %** (target 95 %)", "",
+             "## Confusion matrix (rows: truth, columns: answer)", "",
+             "| truth \\ answer | " + " | ".join(CLASSES) + " | recall |", "|---|" + "---|" * (len(CLASSES) + 1)]
+    for t in CLASSES:
+        rc = r["recall"][t]
+        lines.append(f"| {t} | " + " | ".join(str(r["confusion"][t][q]) for q in CLASSES)
+                     + f" | {'–' if rc is None else f'{rc * 100:.0f} %'} |")
+    lines += ["", "## Fault location by speed", "", "| speed | runs | accuracy |", "|---|---|---|"]
+    for k, v in r["by_speed"].items():
+        lines.append(f"| {k} | {v['runs']} | {v['accuracy'] * 100:.0f} % |")
+    for J, g in r["by_clearance"].items():
+        lines += ["", f"## Size of the clearance at {J} (runs with a clearance at {J}: {g['runs']}; 90 % interval "
+                      f"coverage {g['interval_coverage'] * 100:.0f} %, target 85 %)", "",
+                  "| clearance mm | runs | detected | median estimate mm | median abs error mm | target mm | "
+                  "meets | interval coverage |", "|---|---|---|---|---|---|---|---|"]
+        for c, v in g["values"].items():
+            lines.append(f"| {c} | {v['runs']} | {v['detected'] * 100:.0f} % | {v['median_estimate_mm']:.3g} | "
+                         f"{v['median_abs_error_mm']:.3g} | {v['target_mm']:.3g} | {'yes' if v['meets_target'] else 'no'} "
+                         f"| {v['interval_coverage'] * 100:.0f} % |")
+    lines += ["", f"False alarms on healthy joints: B {r['false_alarms']['B'] * 100:.1f} %, "
+                  f"C {r['false_alarms']['C'] * 100:.1f} %.", ""]
+    for p in r.get("plots", []):
+        lines.append(f"![{p}]({p})")
+    return "\n".join(lines) + "\n"
+
+
+def plots(r: dict[str, Any], out: Path) -> list[str]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    files = []
+    fig, ax = plt.subplots(figsize=(4.8, 4.2))
+    m = np.array([[r["confusion"][t][q] for q in CLASSES] for t in CLASSES], dtype=float)
+    ax.imshow(m / np.maximum(m.sum(axis=1, keepdims=True), 1), cmap="Blues", vmin=0, vmax=1)
+    for i in range(4):
+        for k in range(4):
+            ax.text(k, i, int(m[i, k]), ha="center", va="center")
+    ax.set_xticks(range(4), CLASSES)
+    ax.set_yticks(range(4), CLASSES)
+    ax.set_xlabel("answer")
+    ax.set_ylabel("truth")
+    ax.set_title(f"fault location, accuracy {r['accuracy'] * 100:.1f} %")
+    fig.tight_layout()
+    fig.savefig(out / "confusion.png", dpi=110)
+    plt.close(fig)
+    files.append("confusion.png")
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4.2))
+    for ax, j in zip(axes, ("b", "c")):
+        ps = [p for p in r["predictions"] if p[f"true_{j}_mm"] > 0]
+        if not ps:
+            continue
+        t = np.array([p[f"true_{j}_mm"] for p in ps])
+        e = np.array([p[f"{j}_mm"] for p in ps])
+        lo = np.array([p[f"{j}_int"][0] for p in ps])
+        hi = np.array([p[f"{j}_int"][1] for p in ps])
+        jit = t * (1 + 0.06 * (np.random.default_rng(0).random(len(t)) - 0.5))
+        ax.errorbar(jit, e, yerr=[e - lo, hi - e], fmt="o", ms=3, alpha=0.5, lw=0.6)
+        lim = [0.01, 2.0]
+        ax.plot(lim, lim, "k--", lw=0.8)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlim(lim)
+        ax.set_ylim(lim)
+        ax.set_xlabel(f"true clearance at {j.upper()} [mm]")
+        ax.set_ylabel("estimate and 90 % interval [mm]")
+        ax.grid(alpha=0.3, which="both")
+    fig.tight_layout()
+    fig.savefig(out / "sizes.png", dpi=110)
+    plt.close(fig)
+    files.append("sizes.png")
+    return files
+
+
+def write_report(r: dict[str, Any], out: Path) -> list[str]:
+    from twin.util import atomic_write_json, atomic_write_text
+
+    out.mkdir(parents=True, exist_ok=True)
+    r["plots"] = plots(r, out)
+    atomic_write_json(out / "report.json", json.loads(json.dumps(r, default=float)))
+    atomic_write_text(out / "report.md", render_markdown(r))
+    return ["report.json", "report.md", *r["plots"]]

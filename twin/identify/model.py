@@ -1,0 +1,263 @@
+"""The clearance identification model: train on a dataset, save, load, identify.
+
+* **Fault location**: scikit-learn's ``HistGradientBoostingClassifier`` (none, B, C, BC) on the
+  window features (:mod:`twin.identify.features`), classes weighted to balance; a recording's
+  class probabilities are the mean over its windows.
+* **Clearance size**: per joint, three ``HistGradientBoostingRegressor`` with the quantile loss
+  (5 %, 50 %, 95 %) on log10 of the diametral clearance, trained on the windows of the runs
+  where that joint has a clearance; a recording's size and 90 % interval are the medians over its
+  windows of the three quantiles. A joint the classifier finds healthy reports 0 (ball bearing).
+* The model is saved (joblib) with its feature definition (version and names), what it was
+  trained on (dataset name, identity digest, rate, speed range, clearances and orientations seen)
+  and the library versions; loading checks the feature version, and identifying checks the
+  recording's rate and speed against the training data (a speed outside the training range is
+  answered with a warning, never silently).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from twin.errors import TwinError
+from twin.identify.features import FEATURE_VERSION, IdentifyError, feature_names, features
+
+CLASSES = ("none", "B", "C", "BC")
+QUANTILES = (0.05, 0.5, 0.95)
+MODEL_FORMAT = "twin-identify-model/1"
+
+
+class ModelError(TwinError):
+    """A model file is missing, unreadable or does not fit the data."""
+
+
+@dataclass
+class ClearanceModel:
+    """A trained identification model (see module docstring)."""
+
+    classifier: Any
+    size: dict[str, dict[float, Any]]
+    feature_version: str = FEATURE_VERSION
+    feature_names: list[str] = field(default_factory=feature_names)
+    trained_on: dict[str, Any] = field(default_factory=dict)
+    format: str = MODEL_FORMAT
+
+    # ------------------------------------------------------------------ io
+    def save(self, path: str | Path) -> Path:
+        import joblib
+
+        from twin.util import temp_path
+
+        p = Path(path)
+        tmp = temp_path(p, keep_suffix=True)
+        try:
+            joblib.dump(self, tmp, compress=3)
+            os.replace(tmp, p)
+        finally:
+            tmp.unlink(missing_ok=True)
+        return p
+
+    @staticmethod
+    def load(path: str | Path) -> "ClearanceModel":
+        import joblib
+
+        p = Path(path)
+        if not p.is_file():
+            raise ModelError(f"{p}: no such model file")
+        try:
+            m = joblib.load(p)
+        except Exception as err:  # noqa: BLE001 - any unpickling problem is one line
+            raise ModelError(f"{p}: not a readable identification model ({type(err).__name__}: {err})") from None
+        if not isinstance(m, ClearanceModel) or getattr(m, "format", None) != MODEL_FORMAT:
+            raise ModelError(f"{p}: not a {MODEL_FORMAT} model")
+        if m.feature_version != FEATURE_VERSION or m.feature_names != feature_names():
+            raise ModelError(f"{p}: made for features {m.feature_version!r}, this twin computes {FEATURE_VERSION!r}; "
+                             "retrain it with 'twin identify train'")
+        return m
+
+    # ------------------------------------------------------------- predict
+    def identify(self, X: np.ndarray) -> dict[str, Any]:
+        """Answer for one recording from its window features [windows, features]."""
+        proba = self.classifier.predict_proba(X).mean(axis=0)
+        classes = list(self.classifier.classes_)
+        p = {c: float(proba[classes.index(c)]) if c in classes else 0.0 for c in CLASSES}
+        fault = max(p, key=p.get)
+        out: dict[str, Any] = {"fault": fault, "probabilities": p}
+        for j in ("B", "C"):
+            q = {qq: float(np.median(10 ** self.size[j][qq].predict(X))) for qq in QUANTILES}
+            lo, mid, hi = sorted(q.values())
+            has = j in fault
+            out[f"clearance_{j.lower()}_mm"] = mid if has else 0.0
+            out[f"clearance_{j.lower()}_interval_mm"] = [lo, hi] if has else [0.0, 0.0]
+            out[f"clearance_{j.lower()}_if_faulty_mm"] = {"median": mid, "interval_90": [lo, hi]}
+        return out
+
+
+# ------------------------------------------------------------------ training data
+def run_features(path: str, skip_s: float, counts_per_rev: float, orientation: str = "y"
+                 ) -> tuple[np.ndarray, float] | str:
+    """Window features of one dataset run file (or the reason it has none)."""
+    from twin.dataset.storage import read_columns, read_meta
+
+    meta = read_meta(path)
+    cols = read_columns(path, [f"meas_{s}" for s in ("AC1", "AC2", "AC3", "AC4", "AC5", "AC6")] + ["encoder_counts"])
+    acc = {k[5:]: v for k, v in cols.items() if k.startswith("meas_")}
+    try:
+        X, w = features(acc, cols["encoder_counts"], float(meta["rate_hz"]), counts_per_rev, skip_s, orientation)
+    except IdentifyError as err:
+        return str(err)
+    return X, w.crank_hz
+
+
+def dataset_features(ds, splits: tuple[str, ...], workers: int = 1, progress: bool = False
+                     ) -> tuple[np.ndarray, list[dict[str, Any]], list[int], list[dict[str, Any]]]:
+    """Features of every ok run of ``splits``: (X [windows, features], run rows, window -> row index,
+    runs left out with their reason)."""
+    needed = [f"meas_AC{i}" for i in range(1, 7)] + ["encoder_counts"]
+    missing = [c for c in needed if c not in ds.channels]
+    if missing:
+        raise ModelError(f"{ds.path}: the dataset lacks {', '.join(missing)} (a dataset for identification needs "
+                         "outputs.instrumented with counts and calibrated)")
+    cpr = float(ds.info.get("encoder_counts_per_rev") or 32768)
+    rows = [r for r in ds.rows() if r["split"] in splits]
+    if not rows:
+        raise ModelError(f"{ds.path}: no finished runs in the split(s) {', '.join(splits)}")
+    paths = [str(ds.path / r["file"]) for r in rows]
+    results = []
+    if workers > 1:
+        import multiprocessing as mp
+        from concurrent.futures import ProcessPoolExecutor
+
+        with ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("spawn")) as ex:
+            results = list(ex.map(run_features, paths, [0.0] * len(paths), [cpr] * len(paths),
+                                  [r["orientation"] for r in rows], chunksize=4))
+    else:
+        results = [run_features(p, 0.0, cpr, r["orientation"]) for p, r in zip(paths, rows)]
+    X, kept, owner, skipped = [], [], [], []
+    for r, res in zip(rows, results):
+        if isinstance(res, str):
+            skipped.append({"run_id": r["run_id"], "reason": res})
+            continue
+        Xr, hz = res
+        r = dict(r, crank_hz=hz)
+        owner += [len(kept)] * len(Xr)
+        kept.append(r)
+        X.append(Xr)
+    if not X:
+        raise ModelError(f"{ds.path}: no run has {2} whole steady crank revolutions to identify")
+    return np.concatenate(X), kept, owner, skipped
+
+
+def train(dataset_dir: str | Path, splits: tuple[str, ...] = ("train", "val"), workers: int = 1,
+          progress: bool = False, seed: int = 0) -> tuple[ClearanceModel, dict[str, Any]]:
+    """Train on the ok runs of ``splits`` of a dataset (see module docstring)."""
+    from sklearn.ensemble import HistGradientBoostingClassifier, HistGradientBoostingRegressor
+
+    from twin.dataset import open as open_dataset
+
+    t0 = time.perf_counter()
+    ds = open_dataset(dataset_dir)
+    X, rows, owner, skipped = dataset_features(ds, splits, workers, progress)
+    y = np.array([rows[i]["fault"] for i in owner])
+    t_feat = time.perf_counter() - t0
+    # leaves of at least 20 windows (scikit-learn's default) on datasets of a thousand windows and
+    # more; smaller datasets (tests, first looks) get smaller leaves, and no early stopping below 500
+    leaf = int(min(20, max(3, len(X) // 48)))
+    clf = HistGradientBoostingClassifier(max_iter=400, learning_rate=0.08, max_leaf_nodes=15, l2_regularization=1.0,
+                                         min_samples_leaf=leaf, class_weight="balanced",
+                                         early_stopping=len(X) >= 500, validation_fraction=0.15, random_state=seed)
+    clf.fit(X, y)
+    size: dict[str, dict[float, Any]] = {}
+    for j in ("B", "C"):
+        key = f"clearance_{j.lower()}_mm"
+        sel = np.array([rows[i][key] > 0 for i in owner])
+        if sel.sum() < 10:
+            raise ModelError(f"{dataset_dir}: fewer than 10 windows with a clearance at {j}: cannot learn its size")
+        target = np.log10(np.array([rows[i][key] for i in owner])[sel])
+        size[j] = {}
+        for q in QUANTILES:
+            reg = HistGradientBoostingRegressor(loss="quantile", quantile=q, max_iter=300, learning_rate=0.08,
+                                                max_leaf_nodes=15, l2_regularization=1.0,
+                                                min_samples_leaf=int(min(20, max(3, int(sel.sum()) // 48))),
+                                                random_state=seed)
+            reg.fit(X[sel], target)
+            size[j][q] = reg
+    import sklearn
+
+    from twin import __version__
+
+    info = ds.info
+    digest = hashlib.sha256(json.dumps(info["identity"], sort_keys=True).encode()).hexdigest()[:16]
+    hz = np.array([r["crank_hz"] for r in rows])
+    trained_on = {
+        "dataset": info["name"], "dataset_dir": str(dataset_dir), "identity_sha256": digest,
+        "engine": info["identity"]["engine"], "rate_hz": ds.rate_hz,
+        "counts_per_rev": float(info.get("encoder_counts_per_rev") or 32768),
+        "splits": list(splits), "runs": len(rows), "windows": int(len(X)), "runs_left_out": skipped,
+        "crank_hz_range": [float(hz.min()), float(hz.max())],
+        "clearances_mm": {j: sorted({float(r[f"clearance_{j.lower()}_mm"]) for r in rows}) for j in ("B", "C")},
+        "orientations": sorted({r["orientation"] for r in rows}),
+        "classes": {c: int(np.sum(y == c)) for c in CLASSES},
+        "versions": {"twin": __version__, "sklearn": sklearn.__version__, "numpy": np.__version__},
+        "feature_seconds": t_feat, "fit_seconds": time.perf_counter() - t0 - t_feat,
+    }
+    return ClearanceModel(clf, size, trained_on=trained_on), trained_on
+
+
+# ----------------------------------------------------------------- a recording
+def recording_inputs(path: str | Path) -> tuple[dict[str, np.ndarray], np.ndarray, float, float, Any]:
+    """Calibrated accelerations, encoder counts, rate, counts per turn and configuration of a bench
+    recording (any recording ``twin replay`` accepts)."""
+    from twin.instrument.calibration import measured_accel
+    from twin.recording import read_recording
+
+    rec, info, _ = read_recording(path)
+    if "encoder_counts" not in rec:
+        raise IdentifyError(f"{path}: the recording has no encoder_counts channel")
+    if info.calibration is None:
+        raise IdentifyError(f"{path}: no calibration data; re-import it with --calibration STATIC or --zero-g")
+    meas = measured_accel(rec, info.calibration)
+    acc = {k[5:]: np.asarray(v.data) for k, v in meas.channels.items()}
+    cfg = rec.config
+    cpr = float(cfg.instrumentation.encoder_counts_per_rev) if cfg else 32768.0
+    return acc, np.asarray(rec["encoder_counts"]), rec.rate_hz, cpr, cfg
+
+
+def identify_recording(model: ClearanceModel, path: str | Path) -> dict[str, Any]:
+    """The answer for a bench recording (see module docstring), with the evidence used."""
+    t0 = time.perf_counter()
+    acc, counts, rate, cpr, cfg = recording_inputs(path)
+    tr = model.trained_on
+    if abs(rate - tr["rate_hz"]) > 1e-6 * rate:
+        raise ModelError(f"{path}: recorded at {rate:g} Hz, the model was trained at {tr['rate_hz']:g} Hz")
+    orientation = cfg.mechanism.orientation if cfg is not None else "y"
+    X, w = features(acc, counts, rate, cpr, orientation=orientation)
+    ans = model.identify(X)
+    lo, hi = tr["crank_hz_range"]
+    warnings = []
+    if not (lo * 0.97 <= w.crank_hz <= hi * 1.03):
+        warnings.append(f"crank rate {w.crank_hz:.3f} Hz is outside the training range {lo:.3f}-{hi:.3f} Hz: "
+                        "the answer is an extrapolation")
+    if cfg is not None and cfg.mechanism.orientation not in tr.get("orientations", []):
+        warnings.append(f"orientation {cfg.mechanism.orientation} was not in the training data")
+    ans.update({
+        "recording": str(path),
+        "warnings": warnings,
+        "evidence": {"windows": len(w.windows), "revolutions": round(w.revolutions, 2),
+                     "crank_hz": w.crank_hz, "motor_rpm_if_belt_3_97": w.crank_hz * 60 * 3.97,
+                     "steady_s": (w.steady[1] - w.steady[0]) / rate, "features": len(model.feature_names),
+                     "feature_version": model.feature_version,
+                     "model": {k: tr[k] for k in ("dataset", "identity_sha256", "engine", "crank_hz_range")}},
+        "seconds": time.perf_counter() - t0,
+    })
+    if math.isfinite(ans["seconds"]):
+        ans["seconds"] = round(ans["seconds"], 4)
+    return ans
