@@ -131,3 +131,28 @@ def test_killed_run_leaves_no_file(tmp_path, sig, rc):
     assert proc.returncode == rc, err
     assert list(tmp_path.iterdir()) == []
     assert err.strip().splitlines()[-1] in ("twin: terminated", "twin: interrupted")
+
+
+def test_set_with_a_table_sets_its_fields_only(capsys, tmp_path):
+    from twin.cli import build_parser, config_from_args
+
+    args = build_parser().parse_args(["simulate", "--duration", "0.3", "--set", "simulation={timestep_s=5e-6}"])
+    cfg = config_from_args(args)
+    assert cfg.simulation.timestep_s == 5e-6 and cfg.simulation.duration_s == 0.3  # the rest kept
+    rc = main(["export-mjcf", "--out", str(tmp_path / "m.xml"), "--set", 'simulation={engine="reference"}'])
+    assert rc == 2 and "--set simulation.engine: does not apply" in capsys.readouterr().err
+    assert main(["simulate", "--config", "", "--no-out"]) == 2
+    assert "--config: is empty" in capsys.readouterr().err
+
+
+def test_a_trace_config_without_duration_runs_for_the_trace(tmp_path):
+    import numpy as np
+
+    from twin.config import load_config
+
+    np.savez(tmp_path / "tr.npz", t=np.linspace(0, 0.75, 751), angle=np.linspace(0, 1, 751))
+    (tmp_path / "c.toml").write_text(f'[drive]\nprogram = "trace"\ntrace_file = "{tmp_path / "tr.npz"}"\n')
+    assert load_config(tmp_path / "c.toml").simulation.duration_s == pytest.approx(0.75)
+    (tmp_path / "d.toml").write_text(f'[drive]\nprogram = "trace"\ntrace_file = "{tmp_path / "tr.npz"}"\n'
+                                     "[simulation]\nduration_s = 0.5\n")
+    assert load_config(tmp_path / "d.toml").simulation.duration_s == 0.5

@@ -18,8 +18,7 @@ import numpy as np
 import pytest
 
 from twin.cli import main
-from twin.identify.features import (ANGLE_SAMPLES, CRANK_RADIUS_M, IdentifyError, feature_names, features,
-                                    steady_windows)
+from twin.identify.features import CRANK_RADIUS_M, IdentifyError, feature_names, features, steady_windows
 
 ROOT = Path(__file__).resolve().parent.parent
 REC = ROOT / "recordings"
@@ -88,11 +87,20 @@ def test_order_amplitudes_and_impact_counts_are_those_put_in():
     assert f2["AC4_hp_max_norm"] > 10 * f["AC4_hp_max_norm"] and X.shape[1] == len(names)
 
 
-def test_features_do_not_depend_on_speed_for_the_rigid_body_part():
-    f = [dict(zip(feature_names(), features(*_synthetic(crank_hz=hz, seconds=3.5)[:2], RATE, CPR)[0][0]))
-         for hz in (1.5, 3.0)]
+def test_features_normalized_by_r_omega2_do_not_depend_on_speed():
+    """Content that scales with r ω² (the rigid-body motion, and here a 2 kHz tone too) gives the
+    same normalized features at 1.5 and 3 Hz: orders, RMS, band energies in dB re (r ω²)²."""
+    f = []
+    for hz in (1.5, 3.0):
+        acc, counts, a_ref = _synthetic(crank_hz=hz, seconds=3.5)
+        t = np.arange(len(counts)) / RATE
+        acc["AC4"] = acc["AC4"] + (t > 0.3) * 0.3 * a_ref * np.sin(2 * math.pi * 2000 * t)
+        f.append(dict(zip(feature_names(), features(acc, counts, RATE, CPR)[0][0])))
     assert f[0]["AC4_order1"] == pytest.approx(f[1]["AC4_order1"], rel=5e-3)
-    assert ANGLE_SAMPLES == 512
+    assert f[0]["AC4_hp_rms_norm"] == pytest.approx(f[1]["AC4_hp_rms_norm"], rel=1e-2)
+    assert f[0]["AC4_band1200_2500"] == pytest.approx(f[1]["AC4_band1200_2500"], abs=0.2)  # dB
+    # and the band is the tone's energy: (0.3 rω²)²/2 over (rω²)², i.e. 10 log10(0.045) dB
+    assert f[1]["AC4_band1200_2500"] == pytest.approx(10 * math.log10(0.3**2 / 2), abs=0.3)
 
 
 # --------------------------------------------------------- a model on small datasets
@@ -205,3 +213,13 @@ def test_the_shipped_model_identifies_the_sample_recordings(rec, fault, c_mm, tm
     if c_mm:
         lo, hi = a["clearance_c_interval_mm"]
         assert lo <= c_mm <= hi
+
+
+def test_the_size_target_is_half_the_catalogue_gap_there():
+    from twin.identify.evaluate import half_gap_mm
+
+    # catalogue 0.02, 0.05, 0.07, 0.10, 0.50, 1.00 mm: half the nearer neighbour's gap
+    assert [round(half_gap_mm(c), 6) for c in (0.02, 0.05, 0.07, 0.1, 0.5, 1.0)] == \
+        [0.015, 0.01, 0.01, 0.015, 0.2, 0.25]
+    assert half_gap_mm(0.08) == pytest.approx(0.015)  # between 0.07 and 0.1
+    assert half_gap_mm(0.3) == pytest.approx(0.2)  # between 0.1 and 0.5

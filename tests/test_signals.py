@@ -257,15 +257,13 @@ def test_estimate_lag_ignores_a_signal_free_channel():
     assert est.ci[0] <= 0 <= est.ci[1] and est.ci[1] - est.ci[0] < 100
 
 
-def test_estimate_lag_edge_cases_and_replay_wrapper():
-    from twin.replay import estimate_lag as replay_lag
-
+def test_estimate_lag_edge_cases():
     a = _accel_like(5000)
     est = estimate_lag([a], [a], 0, RATE)
     assert est.lag == 0 and not est.well_defined and "max_lag = 0" in est.note
     const = estimate_lag([np.ones(5000)], [a], 100, RATE)
     assert const.lag == 0 and not const.correlated and math.isnan(const.n_eff[0])
-    assert replay_lag([a[:4000]], [a[37:4037]], 100) == 37  # rec[i + 37] = sim[i]; no rate: no low-pass
+    assert estimate_lag([a[:4000]], [a[37:4037]], 100).lag == 37  # rec[i + 37] = sim[i]; no rate: no low-pass
     with pytest.raises(SignalError, match="same number"):
         estimate_lag([a], [a, a], 10)
     with pytest.raises(SignalError, match="one length"):

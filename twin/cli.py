@@ -20,7 +20,7 @@ import threading
 import tomllib
 from typing import TYPE_CHECKING, Any, Sequence
 
-from twin.errors import ConfigError, Terminated, TwinError
+from twin.errors import ConfigError, Terminated, TwinError, raise_terminated
 
 if TYPE_CHECKING:
     from twin.config import BenchConfig
@@ -121,6 +121,12 @@ def _parse_value(key: str, text: str) -> Any:
         return text  # bare strings: --set mechanism.orientation=x
 
 
+def _flatten(key: str, value: Any) -> list[tuple[str, Any]]:
+    if isinstance(value, dict) and value:
+        return [kv for k, v in value.items() for kv in _flatten(f"{key}.{k}", v)]
+    return [(key, value)]
+
+
 def _opt(args: argparse.Namespace, name: str) -> Any:
     return getattr(args, name, None)
 
@@ -129,9 +135,9 @@ def config_from_args(args: argparse.Namespace) -> BenchConfig:
     """Configuration from ``--config``/``--test`` plus the override options the command offers."""
     from twin.config import ALL_CHANNEL_GROUPS, BenchConfig, load_config, preset, with_overrides
 
-    if _opt(args, "config") and _opt(args, "test") is not None:
+    if _opt(args, "config") is not None and _opt(args, "test") is not None:
         raise ConfigError("--test", "cannot be combined with --config (put 'test = N' in the file)")
-    if _opt(args, "config"):
+    if _opt(args, "config") is not None:
         cfg = load_config(args.config)
     elif _opt(args, "test") is not None:
         cfg = preset(args.test)
@@ -177,11 +183,14 @@ def config_from_args(args: argparse.Namespace) -> BenchConfig:
         key, text = (x.strip() for x in item.split("=", 1))
         if not key:
             raise ConfigError("--set", f"expects KEY=VALUE with a dotted key, got {item!r}")
-        for r in refused:
-            if key == r or (r.endswith(".") and key.startswith(r)):
-                raise ConfigError(f"--set {key}", f"does not apply to this command (it sets {r.rstrip('.')} itself "
-                                                  "or does not use it)")
-        ov[key] = _parse_value(key, text)
+        value = _parse_value(key, text)
+        # a table (--set simulation={engine="reference"}) sets its fields, not the whole section
+        for k, v in _flatten(key, value):
+            for r in refused:
+                if k == r or (r.endswith(".") and k.startswith(r)):
+                    raise ConfigError(f"--set {k}", f"does not apply to this command (it sets {r.rstrip('.')} "
+                                                    "itself or does not use it)")
+            ov[k] = v
     return with_overrides(cfg, ov) if ov else cfg
 
 
@@ -194,10 +203,6 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _raise_terminated(signum, frame):  # noqa: ARG001 - signal handler signature
-    raise Terminated()
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     try:
         parser = build_parser()
@@ -207,7 +212,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     previous = None
     if threading.current_thread() is threading.main_thread():
-        previous = signal.signal(signal.SIGTERM, _raise_terminated)
+        previous = signal.signal(signal.SIGTERM, raise_terminated)
     try:
         return int(args.func(args) or 0)
     except TwinError as err:

@@ -958,6 +958,8 @@ def load_config(path: str | Path) -> BenchConfig:
     A file with ``drive.program = "trace"`` and no duration (or 0) gets the trace's length: the
     loader reads the trace, the configuration never does.
     """
+    if not str(path):
+        raise ConfigError("--config", "is empty; give a TOML configuration file")
     p = Path(path)
     try:
         raw = p.read_bytes()
@@ -980,8 +982,10 @@ def load_config(path: str | Path) -> BenchConfig:
         base = preset(test).to_dict()
     merged = _deep_merge(base or BenchConfig().to_dict(), data)
     drive, sim = merged.get("drive"), merged.get("simulation")
+    own_sim = data.get("simulation") if isinstance(data.get("simulation"), Mapping) else {}
+    no_duration = own_sim.get("duration_s", 0) == 0  # the file gives none, or 0
     if (isinstance(drive, Mapping) and isinstance(sim, Mapping) and drive.get("program") == "trace"
-            and sim.get("duration_s", 1) == 0 and isinstance(drive.get("trace_file"), str) and drive["trace_file"]):
+            and no_duration and isinstance(drive.get("trace_file"), str) and drive["trace_file"]):
         from twin.drive import trace_duration  # local import: drive imports config
 
         merged["simulation"] = {**sim, "duration_s": trace_duration(drive["trace_file"])}

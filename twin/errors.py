@@ -43,3 +43,8 @@ class EngineUnavailableError(TwinError):
 class Terminated(KeyboardInterrupt):
     """SIGTERM, raised in the main thread like Ctrl-C so that every writer's clean-up runs
     (temporary files removed, nothing half-written left under the final name)."""
+
+
+def raise_terminated(signum, frame):  # noqa: ARG001 - signal handler signature
+    """SIGTERM handler: raise :class:`Terminated` in the main thread."""
+    raise Terminated()

@@ -205,6 +205,13 @@ class RunWriter:
         """
         if self._done:
             raise TwinError(f"{self.path}: close after close or abort")
+        try:
+            return self._finish(meta, summary, extra_metadata)
+        except OSError as err:
+            self.abort()
+            raise TwinError(f"{self.path}: cannot write ({err.strerror or err})") from None
+
+    def _finish(self, meta, summary, extra_metadata) -> Path:
         if self._w is None:
             self._open()  # a run with no chunks: a valid file with metadata only
         if self._pending is not None and self._pending.n:
@@ -220,13 +227,9 @@ class RunWriter:
             "meta": json.dumps(meta or {}, sort_keys=True, default=json_default)})
         if summary is not None:
             self._w.add_metadata("twin.summary", {"json": json.dumps(summary, sort_keys=True, default=json_default)})
-        try:
-            self._w.finish()
-            self._fh.close()
-            os.replace(self.tmp, self.path)
-        except OSError as err:
-            self.abort()
-            raise TwinError(f"{self.path}: cannot write ({err.strerror})") from None
+        self._w.finish()
+        self._fh.close()
+        os.replace(self.tmp, self.path)
         self._done = True
         return self.path
 

@@ -117,16 +117,6 @@ def _window_indices(n: int, rate: float, window_s: tuple[float, float] | None,
     return i0, i1
 
 
-def estimate_lag(rec: list[np.ndarray], sim: list[np.ndarray], max_lag: int, rate_hz: float | None = None,
-                 lowpass_hz: float = 500.0) -> int:
-    """Lag k (samples, |k| ≤ max_lag) to apply: ``rec[i + k]`` pairs with ``sim[i]``; k > 0: the
-    recorded signals are late. Thin wrapper of :func:`twin.signals.estimate_lag` (maximum
-    likelihood with a confidence interval; 0 where the data cannot tell a shift)."""
-    from twin.signals import estimate_lag as _estimate
-
-    return _estimate(rec, sim, max_lag, rate_hz, lowpass_hz).lag
-
-
 def _harmonic_amplitudes(f: np.ndarray, amp: np.ndarray, freqs: np.ndarray) -> list[float]:
     df = f[1] - f[0]
     out = []
@@ -184,7 +174,7 @@ def replay(recording: str | Path, out_dir: str | Path,
     ``configure`` maps the recording's bench configuration to the one to simulate (CLI
     overrides); None keeps it.
     """
-    from twin.util import check_output_dir, remove_stale_temps, replace_dir, temp_path
+    from twin.util import check_output_dir, replace_dir, temp_path
 
     wall0 = time.perf_counter()
     final = check_output_dir(out_dir, need_parent=False)
@@ -206,7 +196,6 @@ def replay(recording: str | Path, out_dir: str | Path,
     # everything is written into a temporary folder beside the target, renamed into place at the
     # end: an existing folder is replaced whole or left as it was (error, Ctrl-C, SIGTERM)
     final.parent.mkdir(parents=True, exist_ok=True)
-    remove_stale_temps(final)
     tmp = temp_path(final)
     tmp.mkdir()
     try:

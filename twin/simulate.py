@@ -30,7 +30,7 @@ import numpy as np
 
 from twin.channels import channel_specs, encoder_from_bench
 from twin.config import BenchConfig
-from twin.errors import SimulationError, Terminated
+from twin.errors import SimulationError, raise_terminated
 from twin.run import Channel, Run
 
 #: engine name -> "module:class" (imported on demand: the reference engine pulls in numba)
@@ -190,15 +190,11 @@ def _sigterm_interrupts() -> Iterator[None]:
             signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL:
         yield
         return
-    previous = signal.signal(signal.SIGTERM, _raise_terminated)
+    previous = signal.signal(signal.SIGTERM, raise_terminated)
     try:
         yield
     finally:
         signal.signal(signal.SIGTERM, previous)
-
-
-def _raise_terminated(signum, frame):  # noqa: ARG001 - signal handler signature
-    raise Terminated()
 
 
 def simulate(cfg: BenchConfig, sinks: Iterable[Sink] = (), progress: bool = False,

@@ -13,6 +13,7 @@ import json
 import os
 import re
 import shutil
+import socket
 from pathlib import Path
 from typing import Any, Iterable
 
@@ -20,7 +21,10 @@ import numpy as np
 
 from twin.errors import TwinError
 
-_TMP_RE = re.compile(r"^\.(?P<name>.+)\.(?P<pid>\d+)\.tmp(?P<ext>\.[A-Za-z0-9]+)?$")
+_TMP_RE = re.compile(r"^\.(?P<name>.+)\.(?:(?P<host>[A-Za-z0-9_]+)-)?(?P<pid>\d+)\.tmp(?P<ext>\.[A-Za-z0-9]+)?$")
+#: this machine, in temporary names: on a shared file system (a Dask cluster) only the host that
+#: wrote a temporary file can tell whether its process still runs
+_HOST = re.sub(r"[^A-Za-z0-9_]", "_", socket.gethostname())[:40] or "host"
 
 
 def json_default(o: Any) -> Any:
@@ -34,13 +38,22 @@ def json_default(o: Any) -> Any:
     raise TypeError(f"not JSON serializable: {type(o).__name__}")
 
 
+def resolve_workers(n: int | None, flag: str = "--workers") -> int:
+    """Worker processes: ``n``, or the machine's cores when None; one line naming ``flag`` when
+    out of [1, 1024]."""
+    w = n if n is not None else (os.cpu_count() or 1)
+    if isinstance(w, bool) or not isinstance(w, int) or not 1 <= w <= 1024:
+        raise TwinError(f"{flag}: must be an integer in [1, 1024], got {w!r}")
+    return w
+
+
 # ------------------------------------------------------------------ temporary files
 def temp_path(target: str | Path, keep_suffix: bool = False) -> Path:
     """Temporary name of this process for ``target``: ``.NAME.PID.tmp`` beside it
     (``keep_suffix``: ``.NAME.PID.tmp.SUFFIX``, for writers that check the extension)."""
     p = Path(target)
     ext = p.suffix if keep_suffix else ""
-    return p.with_name(f".{p.name}.{os.getpid()}.tmp{ext}")
+    return p.with_name(f".{p.name}.{_HOST}-{os.getpid()}.tmp{ext}")
 
 
 def _alive(pid: int) -> bool:
@@ -70,8 +83,8 @@ def remove_stale_temps(target: str | Path) -> list[Path]:
         return removed
     for e in entries:
         m = _TMP_RE.match(e.name)
-        if not m or m["name"] != p.name or _alive(int(m["pid"])):
-            continue
+        if not m or m["name"] != p.name or (m["host"] or _HOST) != _HOST or _alive(int(m["pid"])):
+            continue  # not ours, written on another machine, or its process still runs
         try:
             if e.is_dir() and not e.is_symlink():
                 shutil.rmtree(e)
@@ -91,7 +104,7 @@ def _why(err: OSError) -> str:
 def _probe_dir_writable(directory: Path, flag: str, target: Path) -> None:
     """Create and remove a file in ``directory``: the only reliable writability test
     (``os.access`` says yes to root on read-only or virtual file systems such as /proc)."""
-    probe = directory / f".{target.name}.{os.getpid()}.tmp.probe"
+    probe = directory / f".{target.name}.{_HOST}-{os.getpid()}.tmp.probe"
     try:
         fd = os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
     except OSError as err:
@@ -184,18 +197,28 @@ def replace_dir(tmp_dir: Path, target: Path) -> Path:
     """Move a completed temporary folder into place as ``target``: an existing ``target`` is
     first renamed aside and deleted only after the new one is in place, so at no time is
     ``target`` a mix of the old and the new contents."""
-    old = None
-    if target.exists():
-        old = target.with_name(f".{target.name}.{os.getpid()}.tmp.old")
-        if old.exists():
-            shutil.rmtree(old)
-        os.replace(target, old)
+    import signal
+    import threading
+
+    old = target.with_name(f".{target.name}.{_HOST}-{os.getpid()}.tmp.old") if target.exists() else None
+    if old is not None and old.exists():
+        shutil.rmtree(old)
+    # Ctrl-C or SIGTERM between the two renames would leave no target: hold them until both are done
+    masked = threading.current_thread() is threading.main_thread() and hasattr(signal, "pthread_sigmask")
+    if masked:
+        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
     try:
-        os.replace(tmp_dir, target)
-    except BaseException:
         if old is not None:
-            os.replace(old, target)
-        raise
+            os.replace(target, old)
+        try:
+            os.replace(tmp_dir, target)
+        except BaseException:
+            if old is not None:
+                os.replace(old, target)
+            raise
+    finally:
+        if masked:
+            signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM})
     if old is not None:
         shutil.rmtree(old, ignore_errors=True)
     return target

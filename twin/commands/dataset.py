@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 import time
 
 from twin.errors import TwinError
+from twin.util import resolve_workers
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -49,13 +49,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     v.set_defaults(func=_verify)
 
 
-def _workers(n: int | None) -> int:
-    w = n if n is not None else (os.cpu_count() or 1)
-    if not 1 <= w <= 1024:
-        raise TwinError(f"--workers: must lie in [1, 1024], got {w}")
-    return w
-
-
 def _generate(args: argparse.Namespace) -> int:
     from twin.dataset.generate import generate
     from twin.dataset.reader import describe
@@ -65,7 +58,7 @@ def _generate(args: argparse.Namespace) -> int:
         raise TwinError(f"--limit: must be >= 0, got {args.limit}")
     spec = load_spec(args.spec)
     t = time.perf_counter()
-    info = generate(spec, args.out, workers=_workers(args.workers), scheduler=args.scheduler, limit=args.limit,
+    info = generate(spec, args.out, workers=resolve_workers(args.workers), scheduler=args.scheduler, limit=args.limit,
                     progress=not args.no_progress and sys.stderr.isatty())
     g = info["generation"]
     print(f"{args.out}: {g['runs_this_call']} runs simulated ({g['failed_this_call']} failed) on {g['workers']} "
@@ -78,9 +71,11 @@ def _plan(args: argparse.Namespace) -> int:
     from twin.dataset.design import plan
     from twin.dataset.spec import load_spec
 
+    if args.show < 0:
+        raise TwinError(f"--show: must be >= 0 (0 = all), got {args.show}")
+    workers = resolve_workers(args.workers)
     spec = load_spec(args.spec)
     runs = plan(spec)
-    workers = _workers(args.workers)
     sim = sum(r.config.duration_s for r in runs)
     names = list(dict.fromkeys(k for r in runs for k in r.factors))
     print(f"{spec.name}: {len(runs)} runs ({spec.design} design, {len(runs) // spec.repeats} points x "

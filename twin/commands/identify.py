@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
 from pathlib import Path
 
 from twin.errors import TwinError
+from twin.util import resolve_workers
 
 #: the model that ships with the package (analysis/identify/train_default.py makes it)
 DEFAULT_MODEL = "identify_default.joblib"
@@ -50,13 +50,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     c.set_defaults(func=_clearance)
 
 
-def _workers(n: int | None) -> int:
-    w = n if n is not None else (os.cpu_count() or 1)
-    if not 1 <= w <= 1024:
-        raise TwinError(f"--workers: must lie in [1, 1024], got {w}")
-    return w
-
-
 def _splits(text: str) -> tuple[str, ...]:
     s = tuple(x.strip() for x in text.split(","))
     bad = [x for x in s if x not in ("train", "val", "test")]
@@ -70,7 +63,7 @@ def _train(args: argparse.Namespace) -> int:
     from twin.util import check_output_file
 
     out = check_output_file(args.out, "--out", ".joblib")
-    model, info = train(args.dataset, _splits(args.splits), _workers(args.workers))
+    model, info = train(args.dataset, _splits(args.splits), resolve_workers(args.workers))
     model.save(out)
     print(f"{out}: trained on {info['runs']} runs ({info['windows']} windows) of dataset {info['dataset']} "
           f"({info['engine']}); classes {info['classes']}; crank {info['crank_hz_range'][0]:.2f}-"
@@ -87,7 +80,7 @@ def _evaluate(args: argparse.Namespace) -> int:
 
     out = check_output_dir(args.out, "--out")
     model = ClearanceModel.load(args.model)
-    r = evaluate(model, args.dataset, _splits(args.splits), _workers(args.workers))
+    r = evaluate(model, args.dataset, _splits(args.splits), resolve_workers(args.workers))
     files = write_report(r, out)
     print(f"{r['runs']} runs of {r['dataset']} ({r['engine']}): accuracy {r['accuracy'] * 100:.1f} %, recall "
           + ", ".join(f"{c} {v * 100:.0f} %" for c, v in r["recall"].items() if v is not None))

@@ -60,14 +60,13 @@ def run(args: argparse.Namespace) -> int:
     import math
 
     from twin.replay import ReplayOptions, replay
-    from twin.util import check_output_dir
 
     rec = Path(args.recording)
     if rec.suffix != ".mcap":
         raise TwinError(f"{rec}: a recording is an .mcap file; convert DAQ exports with 'twin import'")
     if not rec.is_file():
         raise TwinError(f"{rec}: no such file")
-    out = check_output_dir(args.out if args.out else f"replay_{rec.stem}", "--out")
+    out = Path(args.out if args.out else f"replay_{rec.stem}")  # replay() checks it before any work
     for name in ("max_lag", "dtw_window", "dtw_max"):
         v = getattr(args, name)
         if not (math.isfinite(v) and 0 <= v <= 10):

@@ -30,11 +30,13 @@ from typing import Any
 import numpy as np
 
 from twin.config import BenchConfig, load_config, preset, with_overrides
-from twin.dataset.factors import NAMED, check_value, labels, random_profile, resolve
+from twin.dataset.factors import NAMED, check_value, controlled, labels, random_profile, resolve
 from twin.dataset.spec import SPLITS, DatasetSpec, FactorSpec, SpecError
 from twin.errors import ConfigError
 
 
+#: most runs a dataset may plan
+MAX_RUNS = 1_000_000
 @dataclass(frozen=True)
 class RunPlan:
     """One run of a dataset (everything a worker needs, and every label).
@@ -68,6 +70,11 @@ def base_config(spec: DatasetSpec) -> BenchConfig:
     and the output rate applied."""
     cfg = load_config(spec.base_config) if spec.base_config else (preset(spec.base_test) if spec.base_test
                                                                    else BenchConfig())
+    for key in spec.base_set:
+        c = controlled(key)
+        if c is not None:
+            raise SpecError(f"base.set.{key}", f"{c} is decided by the spec itself (base.engine, base.duration_s, "
+                                               "base.program, the outputs and the run seeds); set it there")
     ov = dict(spec.base_set)
     ov["simulation.engine"] = spec.engine
     ov["sensors.output_rate_hz"] = spec.outputs.rate_hz
@@ -122,7 +129,12 @@ def design_points(spec: DatasetSpec) -> list[dict[str, Any]]:
         return [dict(p) for p in spec.points]
     if spec.design == "grid":
         names = [f.name for f in spec.factors]
-        return [dict(zip(names, combo)) for combo in itertools.product(*(_levels(f) for f in spec.factors))]
+        levels = [_levels(f) for f in spec.factors]
+        n = math.prod(len(v) for v in levels) * spec.repeats
+        if n > MAX_RUNS:
+            raise SpecError("design", f"has {n} runs ({' x '.join(str(len(v)) for v in levels)} levels x "
+                                      f"{spec.repeats} repeats); at most {MAX_RUNS}")
+        return [dict(zip(names, combo)) for combo in itertools.product(*levels)]
     u = _unit_points(spec, len(spec.factors))
     return [{f.name: _map(f, float(row[k])) for k, f in enumerate(spec.factors)} for row in u]
 
@@ -176,8 +188,8 @@ def plan(spec: DatasetSpec) -> list[RunPlan]:
     if not points:
         raise SpecError("design", "has zero runs (a factor without values, or runs = 0)")
     n = len(points) * spec.repeats
-    if n > 1_000_000:
-        raise SpecError("design", f"has {n} runs; at most 1000000")
+    if n > MAX_RUNS:
+        raise SpecError("design", f"has {n} runs; at most {MAX_RUNS}")
     seeds = [int(s.generate_state(1, np.uint64)[0]) for s in np.random.SeedSequence(spec.seed).spawn(n)]
     runs: list[RunPlan] = []
     for p, values in enumerate(points):

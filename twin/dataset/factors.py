@@ -63,7 +63,8 @@ def _clearance(joint: str):
 
 
 def _fault(v, ov, rng, base):  # noqa: ARG001
-    # sizes: those of the clearance factors when varied (applied after), else 0.1 mm
+    # applied after every other factor (twin.dataset.design.resolve_config): a faulty joint keeps the
+    # size a clearance factor gave it, else 0.1 mm; a healthy joint gets 0 whatever it was given
     for j in "BC":
         key = f"joints.clearance_{j.lower()}_mm"
         if j in v:
@@ -98,7 +99,7 @@ def _mount_offset(v, ov, rng, base):  # noqa: ARG001
     ov["sensors.accelerometers"] = mounts
 
 
-#: the named factors, in the order they are applied (fault before the clearance sizes)
+#: the named factors, in the order they are applied (``fault`` is applied last, after the sizes)
 NAMED: dict[str, Factor] = {f.name: f for f in (
     Factor("fault", "joints with a clearance: none, B, C or BC (size: clearance_b_mm/_c_mm, else 0.1 mm)",
            FAULTS, None, _fault),
@@ -125,11 +126,30 @@ NAMED: dict[str, Factor] = {f.name: f for f in (
 )}
 
 
+#: configuration fields the spec's base, outputs and run seeds decide: a factor or ``base.set`` on
+#: them is refused (it would be overwritten)
+CONTROLLED = ("simulation.duration_s", "simulation.engine", "sensors.output_rate_hz", "sensors.channels",
+              "instrumentation.daq_rate_hz", "instrumentation.seed", "drive.program", "drive.steps_s",
+              "drive.steps_rpm", "name")
+
+
+def controlled(key: str) -> str | None:
+    """The controlled field ``key`` is or holds (a section), or None."""
+    for c in CONTROLLED:
+        if key == c or c.startswith(key + "."):
+            return c
+    return None
+
+
 def resolve(name: str, engine: str) -> Factor:
     """The factor called ``name``: a named one, or a dotted configuration path."""
     if name in NAMED:
         f = NAMED[name]
     elif "." in name:
+        c = controlled(name)
+        if c is not None:
+            raise SpecError(f"factors.{name}", f"{c} is decided by the spec itself (base.engine, base.duration_s, "
+                                               "base.program or the program factor, the outputs, the run seeds)")
         section = name.split(".", 1)[0]
         engines = ("mujoco",) if section == "mujoco" else ("mujoco", "reference")
         f = Factor(name, f"configuration field {name}", None, None, _set(name), engines)

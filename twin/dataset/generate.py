@@ -22,8 +22,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import shutil
 import sys
 import time
 from dataclasses import dataclass
@@ -82,11 +80,11 @@ def dataset_columns(runs: list[RunPlan], spec: DatasetSpec) -> list[Any]:
     return [c for c in every if c.name in present]
 
 
-def prepare(spec: DatasetSpec, out_dir: str | Path, create: bool = True) -> Prepared:
+def prepare(spec: DatasetSpec, out_dir: str | Path) -> Prepared:
     """Plan the spec and read what ``out_dir`` already holds (refusing another dataset)."""
     runs = plan(spec)
     ident = identity(spec)
-    out = check_output_dir(out_dir, "--out", need_parent=False) if create else Path(out_dir)
+    out = check_output_dir(out_dir, "--out", need_parent=False)
     info_path = out / "info.json"
     if out.exists() and any(out.iterdir()):
         if not info_path.is_file():
@@ -137,43 +135,87 @@ def task_of(p: Prepared, r: RunPlan) -> dict[str, Any]:
 
 
 # ---------------------------------------------------------------------- executors
-def _local(workers: int) -> Callable[[list[dict]], Iterator[dict]]:
+def _crashed(task: dict, why: str) -> dict:
+    """The result of a run whose worker process died (a segmentation fault, the OOM killer)."""
+    return {"run_id": task["run_id"], "index": task["index"], "status": "failed",
+            "reason": f"the worker process died while simulating it ({why})", "wall_s": 0.0}
+
+
+def _local(workers: int, fn: Callable[[dict], dict] | None = None) -> Callable[[list[dict]], Iterator[dict]]:
+    """Executor on a local process pool; ``fn`` (default :func:`twin.dataset.worker.run_one`) must
+    be importable by the spawned workers."""
     def run(tasks: list[dict]) -> Iterator[dict]:
         import multiprocessing as mp
         from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+        from concurrent.futures.process import BrokenProcessPool
 
-        from twin.dataset.worker import run_one, watch_parent
+        from twin.dataset.worker import run_one as default_fn, watch_parent
 
-        ex = ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("spawn"), initializer=watch_parent)
-        try:
-            # keep at most 2 tasks per worker queued: an interrupt loses little queued work
-            it = iter(tasks)
-            pending = set()
-            for t in it:
-                pending.add(ex.submit(run_one, t))
-                if len(pending) >= 2 * workers:
-                    break
-            while pending:
-                finished, pending = wait(pending, return_when=FIRST_COMPLETED)
-                for f in finished:
-                    yield f.result()
-                    nxt = next(it, None)
-                    if nxt is not None:
-                        pending.add(ex.submit(run_one, nxt))
-        finally:
-            for proc in list(getattr(ex, "_processes", {}).values()):
-                if proc.is_alive() and sys.exc_info()[0] is not None:
+        run_one = fn or default_fn
+
+        def pool(n: int) -> ProcessPoolExecutor:
+            return ProcessPoolExecutor(max_workers=n, mp_context=mp.get_context("spawn"), initializer=watch_parent)
+
+        def close(ex: ProcessPoolExecutor, interrupted: bool) -> None:
+            for proc in list((getattr(ex, "_processes", None) or {}).values()):
+                if proc.is_alive() and interrupted:
                     proc.terminate()  # interrupted: do not wait for the running simulations
             ex.shutdown(wait=True, cancel_futures=True)
+
+        queue = list(tasks)[::-1]  # pop() from the end: design order
+        ex = pool(workers)
+        try:
+            pending: dict = {}
+            while queue or pending:
+                while queue and len(pending) < 2 * workers:  # at most 2 queued per worker
+                    t = queue.pop()
+                    pending[ex.submit(run_one, t)] = t
+                finished, _ = wait(set(pending), return_when=FIRST_COMPLETED)
+                broken = []
+                for f in finished:
+                    t = pending.pop(f)
+                    try:
+                        yield f.result()
+                    except BrokenProcessPool:
+                        broken.append(t)
+                if broken:
+                    # a worker died: every run in flight fails with it. Run each alone in a fresh
+                    # process; the one that kills its process again is recorded as failed.
+                    broken += list(pending.values())
+                    close(ex, interrupted=True)
+                    pending = {}
+                    for t in broken:
+                        solo = pool(1)
+                        try:
+                            yield solo.submit(run_one, t).result()
+                        except BrokenProcessPool as err:
+                            yield _crashed(t, str(err) or "BrokenProcessPool")
+                        finally:
+                            close(solo, interrupted=False)
+                    ex = pool(workers)
+        finally:
+            close(ex, interrupted=sys.exc_info()[0] is not None)
     return run
 
 
+def _dask_client(address: str):
+    try:
+        from distributed import Client
+    except ImportError:  # pragma: no cover - a dependency of the package
+        raise TwinError("--scheduler: Dask distributed is not installed (pip install distributed)") from None
+    try:
+        return Client(address, timeout="20s")
+    except (OSError, TimeoutError) as err:
+        raise TwinError(f"--scheduler: cannot reach a Dask scheduler at {address} ({err})") from None
+
+
 def _dask(address: str, workers: int) -> Callable[[list[dict]], Iterator[dict]]:
+    if address != "local":
+        _dask_client(address).close()  # reachable now, before anything is written
+
     def run(tasks: list[dict]) -> Iterator[dict]:
-        try:
-            from distributed import Client, LocalCluster, as_completed
-        except ImportError:  # pragma: no cover - a dependency of the package
-            raise TwinError("--scheduler: Dask distributed is not installed (pip install distributed)") from None
+        from distributed import Client, LocalCluster, as_completed
+
         from twin.dataset.worker import run_one
 
         cluster = None
@@ -183,14 +225,14 @@ def _dask(address: str, workers: int) -> Callable[[list[dict]], Iterator[dict]]:
                                        dashboard_address=None, silence_logs=40)
                 client = Client(cluster)
             else:
-                try:
-                    client = Client(address, timeout="20s")
-                except (OSError, TimeoutError) as err:
-                    raise TwinError(f"--scheduler: cannot reach a Dask scheduler at {address} ({err})") from None
+                client = _dask_client(address)
             try:
-                futures = [client.submit(run_one, t, key=f"twin-run-{t['run_id']}", pure=False) for t in tasks]
+                futures = {client.submit(run_one, t, key=f"twin-run-{t['run_id']}", pure=False): t for t in tasks}
                 for f in as_completed(futures):
-                    yield f.result()
+                    try:
+                        yield f.result()
+                    except Exception as err:  # noqa: BLE001 - KilledWorker and the like: the run, recorded
+                        yield _crashed(futures[f], f"{type(err).__name__}: {err}".splitlines()[0][:300])
             finally:
                 client.close()
         finally:
@@ -211,21 +253,22 @@ def executor(scheduler: str | None, workers: int) -> Callable[[list[dict]], Iter
 def generate(spec: DatasetSpec, out_dir: str | Path, workers: int | None = None, scheduler: str | None = None,
              limit: int | None = None, progress: bool = True) -> dict[str, Any]:
     """Generate (or finish) the dataset of ``spec`` in ``out_dir``; returns the info dict."""
-    workers = workers or os.cpu_count() or 1
-    if workers < 1 or workers > 1024:
-        raise TwinError(f"--workers: must lie in [1, 1024], got {workers}")
+    from twin.util import resolve_workers
+
+    workers = resolve_workers(workers)
     if limit is not None and limit < 0:
         raise TwinError(f"--limit: must be >= 0, got {limit}")
     run_tasks = executor(scheduler, workers)  # checks the scheduler before anything is written
     p = prepare(spec, out_dir)
     out = p.out
-    (out / "data").mkdir(parents=True, exist_ok=True)
+    out.mkdir(parents=True, exist_ok=True)
+    _write_info(p, complete=False)  # first: a folder with info.json is this dataset's, whatever happens next
+    (out / "data").mkdir(exist_ok=True)
     (out / "results").mkdir(exist_ok=True)
     for d in (out / "data", out / "results"):
         for f in d.iterdir():
             if ".tmp" in f.name:
                 remove_stale_temps(d / _target_of(f.name))
-    _write_info(p, complete=False)
     todo = p.pending[:limit] if limit is not None else p.pending
     t_start = time.perf_counter()
     sim_total = sum(r.config.duration_s for r in todo)
@@ -379,6 +422,3 @@ def _write_info(p: Prepared, complete: bool) -> dict[str, Any]:
     atomic_write_json(p.out / "info.json", info)
     return info
 
-
-def remove_dataset(out: Path) -> None:  # pragma: no cover - a helper for scripts
-    shutil.rmtree(out)

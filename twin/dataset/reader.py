@@ -51,7 +51,10 @@ class Dataset:
         except (OSError, ValueError) as err:
             raise DatasetError(f"{runs}: unreadable ({err})") from None
         stats = self.path / "stats.json"
-        self.stats: dict[str, dict[str, float]] = json.loads(stats.read_text())["channels"] if stats.is_file() else {}
+        try:
+            self.stats: dict[str, dict[str, float]] = json.loads(stats.read_text())["channels"] if stats.is_file() else {}
+        except (OSError, ValueError, KeyError, TypeError) as err:
+            raise DatasetError(f"{stats}: unreadable ({type(err).__name__}: {err}); run generate again to rewrite it") from None
         self.channels = {c["name"]: c for c in self.info["channels"]}
         self.rate_hz = float(self.info["channels"][0]["rate_hz"]) if self.info["channels"] else 0.0
 

@@ -133,6 +133,7 @@ def run_one(task: dict[str, Any]) -> dict[str, Any]:
             reason += " | " + traceback.format_exc(limit=2).replace("\n", " ")[-300:]
         out.update(status="failed", reason=reason[:500])
     out["wall_s"] = time.perf_counter() - t0
+    # the worker process's peak so far (it runs many runs): an upper bound of this run's
     out["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     return out
 

@@ -22,10 +22,21 @@ from twin.identify.model import CLASSES, ClearanceModel, dataset_features
 
 
 def half_gap_mm(c: float) -> float:
-    """Half the gap between ``c`` and its nearest neighbour in the catalogue (the size target)."""
+    """The size target at ``c``: half the gap between neighbouring catalogue values there. A
+    catalogue value: half the gap to its nearer neighbour; a value between two catalogue values:
+    half the gap between those two; outside the catalogue: half the gap of the nearest end."""
     cat = sorted(CATALOGUE_DIAMETRAL_MM)
-    gaps = [abs(c - x) for x in cat if abs(x - c) > 1e-9]
-    return 0.5 * min(gaps) if gaps else float("inf")
+    i = min(range(len(cat)), key=lambda k: abs(cat[k] - c))
+    if abs(cat[i] - c) <= 1e-9:
+        gaps = [cat[k + 1] - cat[k] for k in (i - 1, i) if 0 <= k < len(cat) - 1]
+        return 0.5 * min(gaps)
+    if c < cat[0]:
+        return 0.5 * (cat[1] - cat[0])
+    if c > cat[-1]:
+        return 0.5 * (cat[-1] - cat[-2])
+    lo = max(x for x in cat if x < c)
+    hi = min(x for x in cat if x > c)
+    return 0.5 * (hi - lo)
 
 
 def evaluate(model: ClearanceModel, dataset_dir: str | Path, splits: tuple[str, ...], workers: int = 1

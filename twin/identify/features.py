@@ -44,7 +44,7 @@ import numpy as np
 
 from twin.errors import TwinError
 
-FEATURE_VERSION = "twin-identify-features/4"
+FEATURE_VERSION = "twin-identify-features/5"
 SENSORS = ("AC1", "AC2", "AC3", "AC4", "AC5", "AC6")
 #: whole crank revolutions per analysis window
 REVS_PER_WINDOW = 2
@@ -193,10 +193,9 @@ def window_features(acc: dict[str, np.ndarray], counts: np.ndarray, rate_hz: flo
     n = stop - start
     revs = abs(c[-1] - c[0])
     crank_hz = revs * rate_hz / n
-    # spread of the rate within the window: rate of each half
     omega = 2 * math.pi * crank_hz
     a_ref = CRANK_RADIUS_M * omega * omega  # rigid-body acceleration scale [m/s²]
-    db_ref = 20.0 * math.log10(max(a_ref, 1e-6))
+    db_ref = 20.0 * math.log10(max(a_ref, 1e-6))  # 10 log10 of (r ω²)²
     out = [crank_hz] + [1.0 if orientation == o else 0.0 for o in ORIENTATIONS]
     hp_rms_of: dict[str, float] = {}
     ratio_band_of: dict[str, float] = {}
@@ -223,7 +222,7 @@ def window_features(acc: dict[str, np.ndarray], counts: np.ndarray, rate_hz: flo
         for blo, bhi in BANDS_HZ:
             sel = (f >= blo) & (f < bhi)
             e = float(np.sum(p[sel]) * df) if np.any(sel) else 0.0
-            out.append(10.0 * math.log10(e + 1e-12) - 2 * db_ref)
+            out.append(10.0 * math.log10(e + 1e-12) - db_ref)  # energy over (r ω²)²
         hp = sosfiltfilt(hp_sos, x)
         hp_rms = float(np.sqrt(np.mean(hp * hp)))
         hp_rms_of[s] = hp_rms

@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from twin.errors import TwinError
-from twin.identify.features import FEATURE_VERSION, IdentifyError, feature_names, features
+from twin.identify.features import FEATURE_VERSION, REVS_PER_WINDOW, IdentifyError, feature_names, features
 
 CLASSES = ("none", "B", "C", "BC")
 QUANTILES = (0.05, 0.5, 0.95)
@@ -117,7 +117,7 @@ def run_features(path: str, skip_s: float, counts_per_rev: float, orientation: s
     return X, w.crank_hz
 
 
-def dataset_features(ds, splits: tuple[str, ...], workers: int = 1, progress: bool = False
+def dataset_features(ds, splits: tuple[str, ...], workers: int = 1
                      ) -> tuple[np.ndarray, list[dict[str, Any]], list[int], list[dict[str, Any]]]:
     """Features of every ok run of ``splits``: (X [windows, features], run rows, window -> row index,
     runs left out with their reason)."""
@@ -152,12 +152,12 @@ def dataset_features(ds, splits: tuple[str, ...], workers: int = 1, progress: bo
         kept.append(r)
         X.append(Xr)
     if not X:
-        raise ModelError(f"{ds.path}: no run has {2} whole steady crank revolutions to identify")
+        raise ModelError(f"{ds.path}: no run has {REVS_PER_WINDOW} steady crank revolutions to identify")
     return np.concatenate(X), kept, owner, skipped
 
 
 def train(dataset_dir: str | Path, splits: tuple[str, ...] = ("train", "val"), workers: int = 1,
-          progress: bool = False, seed: int = 0) -> tuple[ClearanceModel, dict[str, Any]]:
+          seed: int = 0) -> tuple[ClearanceModel, dict[str, Any]]:
     """Train on the ok runs of ``splits`` of a dataset (see module docstring)."""
     from sklearn.ensemble import HistGradientBoostingClassifier, HistGradientBoostingRegressor
 
@@ -165,7 +165,7 @@ def train(dataset_dir: str | Path, splits: tuple[str, ...] = ("train", "val"), w
 
     t0 = time.perf_counter()
     ds = open_dataset(dataset_dir)
-    X, rows, owner, skipped = dataset_features(ds, splits, workers, progress)
+    X, rows, owner, skipped = dataset_features(ds, splits, workers)
     y = np.array([rows[i]["fault"] for i in owner])
     t_feat = time.perf_counter() - t0
     # leaves of at least 20 windows (scikit-learn's default) on datasets of a thousand windows and
