@@ -93,8 +93,9 @@ class Profile:
             v = getattr(self, key)
             if not (len(v) == 2 and all(_num(x) for x in v) and v[0] <= v[1] and abs(v[0]) <= lim and abs(v[1]) <= lim):
                 raise SpecError(f"base.profile.{key}", f"must be [low, high] with low <= high within ±{lim:g}, got {v!r}")
-        if self.hold_s[0] <= 0:
-            raise SpecError("base.profile.hold_s", f"must be > 0 s, got {list(self.hold_s)!r}")
+        if self.hold_s[0] < 0.01:
+            raise SpecError("base.profile.hold_s", f"must be >= 0.01 s (a step every 10 ms at most), "
+                                                   f"got {list(self.hold_s)!r}")
         if not (_num(self.stop_probability) and 0 <= self.stop_probability <= 1):
             raise SpecError("base.profile.stop_probability", f"must lie in [0, 1], got {self.stop_probability!r}")
 
