@@ -24,6 +24,28 @@ from twin.kinematics import initial_pose, rot2
 from twin.mujoco_engine.builder import build
 
 _STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
+_clock: tuple[Any, int] | None = None  # (the mjcb_time global, MuJoCo's own clock as first seen here)
+
+
+def stage_timers_off() -> None:
+    """Switch MuJoCo's stage timers off for this process (the twin never reads ``mjData.timer``).
+
+    MuJoCo 4.0 starts with the global ``mjcb_time`` set to a clock of its own, read about 25
+    times a step: 0.6-0.7 µs of a 3-5 µs step on this machine (``analysis/profile_stages.py``).
+    Timers never change a result. Only MuJoCo's own clock is cleared (the value first seen here);
+    one installed since, e.g. through ``mujoco.set_mjcb_time`` or a profiler, is kept.
+    """
+    global _clock
+    if _clock is None:
+        import ctypes
+
+        from twin.mujoco_engine.collider import _library_path
+
+        slot = ctypes.c_void_p.in_dll(ctypes.CDLL(_library_path()), "mjcb_time")
+        _clock = (slot, slot.value or 0)
+    slot, default = _clock
+    if slot.value and slot.value == default and mujoco.get_mjcb_time() is None:
+        slot.value = None
 
 
 class MujocoEngine:
@@ -35,6 +57,7 @@ class MujocoEngine:
     def __init__(self, cfg: BenchConfig):
         self.cfg = cfg
         t0 = time.perf_counter()
+        stage_timers_off()
         self.spec, self.model, self.info = build(cfg)
         self.data = mujoco.MjData(self.model)
         self.meta: dict[str, Any] = {
