@@ -204,6 +204,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    import os
+
+    # no twin command renders through MuJoCo: skip its OpenGL set-up at import (about 30 ms of
+    # every start, analysis/bench_startup.py); a value set by the user is kept
+    os.environ.setdefault("MUJOCO_GL", "disable")
     try:
         parser = build_parser()
         args = parser.parse_args(argv)

@@ -99,6 +99,80 @@ class Collector:
         self._chunks = []
 
 
+class ThreadedSink:
+    """Runs another sink's ``write`` calls on a background thread, so that its encoding,
+    compression and file writes overlap the engine's stepping (both engines release the GIL while
+    they step: ``mujoco.rollout`` and the reference engine's compiled loop).
+
+    The inner sink sees exactly the calls it would see without the thread, in the same order, so
+    what it writes is the same bytes. ``write`` hands the chunk over and returns (a bounded queue:
+    at most ``depth`` chunks wait, so memory stays bounded; the chunk loop never reuses a chunk's
+    arrays). An error raised by the inner ``write`` is raised again in the caller's thread by the
+    next ``write`` or by ``close``. ``close`` waits for the queued writes, then calls the inner
+    ``close`` in the caller's thread; ``abort`` drops the chunks still waiting, waits for the write
+    in progress and aborts the inner sink (so an interrupted run leaves nothing behind, as without
+    the thread).
+    """
+
+    _END = object()
+
+    def __init__(self, inner: Sink, depth: int = 2) -> None:
+        import queue
+
+        self.inner = inner
+        self._queue: queue.Queue = queue.Queue(maxsize=max(1, int(depth)))
+        self._error: BaseException | None = None
+        self._stop = False
+        self._thread: threading.Thread | None = None
+
+    def _work(self) -> None:
+        while True:
+            chunk = self._queue.get()
+            if chunk is self._END:
+                return
+            if self._error is None and not self._stop:  # after an error: drain, so put() never blocks
+                try:
+                    self.inner.write(chunk)
+                except BaseException as err:  # noqa: BLE001 - handed to the caller's thread
+                    self._error = err
+            del chunk
+
+    def _join(self) -> None:
+        if self._thread is not None:
+            self._queue.put(self._END)
+            self._thread.join()
+            self._thread = None
+
+    def write(self, chunk: Run) -> None:
+        if self._error is not None:
+            raise self._error
+        if self._thread is None:
+            self._thread = threading.Thread(target=self._work, name="twin-sink-writer", daemon=True)
+            self._thread.start()
+        self._queue.put(chunk)
+
+    def close(self, meta: dict[str, Any], summary: dict[str, Any]) -> Any:
+        self._join()
+        if self._error is not None:
+            raise self._error
+        return self.inner.close(meta, summary)
+
+    def abort(self) -> None:
+        import queue
+
+        self._stop = True
+        while True:  # drop what waits (never block here: abort runs on errors and interrupts)
+            try:
+                self._queue.get_nowait()
+            except queue.Empty:
+                break
+        if self._thread is not None:
+            self._queue.put(self._END)  # there is room now; the write in progress ends first
+            self._thread.join()
+            self._thread = None
+        self.inner.abort()
+
+
 @dataclass
 class Outcome:
     """What :func:`simulate` returns: the run's metadata and summary (the data went to the sinks)."""

@@ -25,7 +25,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from twin.mcapfile import RunWriter
-    from twin.simulate import simulate
+    from twin.simulate import ThreadedSink, simulate
     from twin.summary import SummaryJsonWriter
     from twin.util import check_output_file
 
@@ -43,7 +43,7 @@ def run(args: argparse.Namespace) -> int:
         check_free_space(cfg, out)
     sinks = []
     if out is not None:
-        sinks.append(RunWriter(out, cfg))
+        sinks.append(ThreadedSink(RunWriter(out, cfg)))  # encoding and compression overlap the stepping
     if rrd is not None:
         sinks.append(_rerun_writer(rrd, cfg))
     if js is not None:

@@ -104,7 +104,7 @@ def run_one(task: dict[str, Any]) -> dict[str, Any]:
     ``instrumented``."""
     from twin.config import config_from_toml
     from twin.dataset.storage import ColumnSpec, ParquetRunWriter, WriteError, file_sha256
-    from twin.simulate import simulate
+    from twin.simulate import ThreadedSink, simulate
 
     t0 = time.perf_counter()
     rid = task["run_id"]
@@ -114,7 +114,8 @@ def run_one(task: dict[str, Any]) -> dict[str, Any]:
         cfg = config_from_toml(task["config_toml"])
         columns = [ColumnSpec(*c) for c in task["columns"]]
         writer = ParquetRunWriter(path, columns, rid, {"name": cfg.name, "config_toml": cfg.to_toml()})
-        sink = _Instrument(cfg, columns, writer, tuple(task["instrumented"]))
+        # the sensor chain and the Parquet writer run on a thread, overlapping the stepping
+        sink = ThreadedSink(_Instrument(cfg, columns, writer, tuple(task["instrumented"])))
         outcome = simulate(cfg, [sink])
         warnings = outcome.meta.get("warnings") or {}
         if warnings:

@@ -123,7 +123,12 @@ class MujocoEngine:
             raise SimulationError(self._divergence_message(d.time, t_start, t_end))
         self._k += nstep
         self.meta["warnings"] = self.warnings()
-        return self._channels(sd[0, ::stride])
+        sens = sd[0, ::stride]
+        if sens.shape[0] == 1 or sens.shape[1] == 1:
+            # a column would be contiguous, so the chunk's channels would be views of the buffer
+            # the next chunk overwrites (one sensor value per step, or a one-sample chunk)
+            sens = sens.copy()
+        return self._channels(sens)
 
     def warnings(self) -> dict[str, int]:
         """MuJoCo warnings raised so far in this run (``mjData.warning``): {name: count}, nonzero only."""

@@ -1,0 +1,129 @@
+"""What writing the output costs, as a share of a run's wall time, for both engines (issue 16, item 4).
+
+For Table 4 test 12 (B+C, all channels of the default groups, 100 kHz) over ``--duration``
+simulated seconds, :func:`twin.simulate.simulate` runs in this process, interleaved, best of
+``--repeats``, with:
+
+* ``none``: no sink (engine build, stepping, the chunk loop and the summary);
+* ``mcap``: the MCAP run file writer (:class:`twin.mcapfile.RunWriter`) called in the chunk loop;
+* ``mcap, thread``: the same writer behind :class:`twin.simulate.ThreadedSink` (what
+  ``twin simulate`` does);
+* ``dataset``: what a dataset worker writes (``twin/dataset/worker.py``: the default outputs,
+  truth groups accel, encoder, joints plus every instrumented channel: the streaming sensor chain
+  and calibration, then :class:`twin.dataset.storage.ParquetRunWriter`), in the loop;
+* ``dataset, thread``: the same behind :class:`~twin.simulate.ThreadedSink` (what the worker does).
+
+Reported per engine and output: the wall time of the whole ``simulate`` call, the engine's
+stepping time (``meta["wall_s"]``, which grows when a writer thread competes for the core), what
+the output adds to the wall time (wall − wall of ``none``) and its share of the wall time; for
+the in-loop variants also the time inside the sink's calls, for the dataset split between the
+sensor chain and the Parquet writer. Files go to a temporary folder and are deleted.
+
+Run: ``python analysis/bench_output.py [--duration S (4)] [--repeats R] [--engines mujoco,reference]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+
+from twin.config import preset
+from twin.simulate import ThreadedSink, simulate
+
+
+class Timed:
+    """Sink wrapper adding up the time spent in ``write`` and ``close``."""
+
+    def __init__(self, inner) -> None:
+        self.inner, self.s = inner, 0.0
+
+    def write(self, chunk) -> None:
+        t0 = time.perf_counter()
+        self.inner.write(chunk)
+        self.s += time.perf_counter() - t0
+
+    def close(self, meta, summary):
+        t0 = time.perf_counter()
+        out = self.inner.close(meta, summary)
+        self.s += time.perf_counter() - t0
+        return out
+
+    def abort(self) -> None:
+        self.inner.abort()
+
+
+def make_sinks(kind: str, cfg, folder: Path) -> tuple[list, dict[str, Timed]]:
+    """The sinks of a variant and the timers to read after the run."""
+    if kind == "none":
+        return [], {}
+    if kind.endswith(", thread"):
+        sinks, _ = make_sinks(kind.split(",")[0], cfg, folder)
+        return [ThreadedSink(sinks[0])], {}
+    if kind == "mcap":
+        from twin.mcapfile import RunWriter
+
+        t = Timed(RunWriter(folder / "run.mcap", cfg))
+        return [t], {"sink": t}
+    from twin.dataset.storage import ParquetRunWriter
+    from twin.dataset.worker import _INSTRUMENTED, _Instrument, column_specs
+
+    inst = tuple(_INSTRUMENTED)
+    cols = column_specs(cfg, ("accel", "encoder", "joints"), inst, "auto")
+    parquet = Timed(ParquetRunWriter(folder / "run.parquet", cols, "bench", {"name": cfg.name,
+                                                                             "config_toml": cfg.to_toml()}))
+    outer = Timed(_Instrument(cfg, cols, parquet, inst))
+    return [outer], {"sink": outer, "parquet": parquet}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--duration", type=float, default=4.0)
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--engines", default="mujoco,reference")
+    args = ap.parse_args()
+    engines = args.engines.split(",")
+    kinds = ("none", "mcap", "mcap, thread", "dataset", "dataset, thread")
+    cfgs = {e: preset(12).replace(**{"simulation.engine": e, "simulation.duration_s": args.duration})
+            for e in engines}
+    best: dict[tuple[str, str], dict[str, float]] = {}
+    with tempfile.TemporaryDirectory(prefix="twin_bench_output_") as tmp:
+        folder = Path(tmp)
+        for e in engines:  # warm-up: numba cache load, first-run costs
+            simulate(cfgs[e].replace(**{"simulation.duration_s": 0.02}), make_sinks("dataset", cfgs[e], folder)[0])
+        for _ in range(args.repeats):
+            for e in engines:
+                for k in kinds:
+                    sinks, timers = make_sinks(k, cfgs[e], folder)
+                    t0 = time.perf_counter()
+                    out = simulate(cfgs[e], sinks)
+                    wall = time.perf_counter() - t0
+                    rec = {"wall": wall, "engine": out.meta["wall_s"], **{n: t.s for n, t in timers.items()}}
+                    if wall < best.get((e, k), {"wall": math.inf})["wall"]:
+                        best[(e, k)] = rec
+                    for f in folder.iterdir():
+                        f.unlink()
+    commit = subprocess.run(["git", "describe", "--always", "--dirty"], capture_output=True, text=True,
+                            cwd=Path(__file__).resolve().parent).stdout.strip()
+    print(f"test 12, {args.duration:g} s simulated at 100 kHz output, best of {args.repeats} (interleaved), "
+          f"commit {commit or '?'}")
+    print()
+    print("| engine | output | wall [s] | engine stepping [s] | added wall [s] | share of wall | "
+          "in the sink's calls [s] | of which sensor chain [s] | of which Parquet [s] |")
+    print("|---|---|---:|---:|---:|---:|---:|---:|---:|")
+    for e in engines:
+        for k in kinds:
+            r = best[(e, k)]
+            added = r["wall"] - best[(e, "none")]["wall"]
+            sink = f"{r['sink']:.3f}" if "sink" in r else ""
+            chain = f"{r['sink'] - r['parquet']:.3f}" if "parquet" in r else ""
+            pq = f"{r['parquet']:.3f}" if "parquet" in r else ""
+            print(f"| {e} | {k} | {r['wall']:.3f} | {r['engine']:.3f} | {added:.3f} | {added / r['wall']:.1%} | "
+                  f"{sink} | {chain} | {pq} |")
+
+
+if __name__ == "__main__":
+    main()
