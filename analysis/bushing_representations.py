@@ -17,10 +17,12 @@ input (h = 1e-5 s, all sensors), and prints side by side:
 
 Representations (each built by the twin's builder from ``mujoco.bushing`` and
 ``mujoco.friction``, i.e. exactly what a scene with that setting runs; the bore carries the
-calibrated contact law, whose terms are one pair each, the others a one-term law):
+reference's contact law applied by the native module, one pair per joint, the others MuJoCo's
+soft first-guess contact):
 
-1. ``bore``: the native pin-in-bore collider (exact circle) with a frictionless
-   solref/solimp contact and the native regularized Coulomb friction (the twin's choice);
+1. ``bore``: the native pin-in-bore collider (exact circle), one frictionless contact whose
+   force is the reference's law (native module), and the native regularized Coulomb friction
+   (the twin's choice);
 2. ``bore+cone``: the same collider with MuJoCo's elliptic friction cone (condim 3, μ = 0.05)
    instead of the native friction;
 3. ``ring N``: N boxes whose inner faces form a regular N-gon tangent to the bore, one explicit

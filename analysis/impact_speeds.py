@@ -1,8 +1,9 @@
 """The impact speeds that occur on the bench, measured from reference-engine runs.
 
-The contact calibration (``twin/calibrate.py``, ``SPEEDS``) must cover the normal impact
-speeds the pins actually reach (issue 4: "measure that range from reference runs; at least
-1 mm/s to 0.5 m/s"). This script runs the reference engine (R-matrix, Lankarani–Nikravesh,
+The check of the twin's contact law against the reference's single impacts
+(``twin/calibrate.py``, ``SPEEDS``; before issue 15 the range of the retired contact calibration)
+must cover the normal impact speeds the pins actually reach (issue 4: "measure that range from
+reference runs; at least 1 mm/s to 0.5 m/s"). This script runs the reference engine (R-matrix, Lankarani–Nikravesh,
 h = 1e-5 s) over
 
 * Table 4 tests 4–12 (0.1 mm at B and/or C, 250/500/750 motor rpm, y up), 3 s each with
@@ -16,7 +17,7 @@ normal approach speed d|e|/dt over the step before the onset — the speed the r
 for that contact event (onsets in the first 2 ms, where a loaded start settles, are left
 out). It prints, per joint, the number of contact events and of impacts
 (onsets after at least ``twin.summary.MIN_FREE_S`` of separation), the 1st/5th/50th/95th/99th
-percentiles and extremes of the impact speed, and the share inside the calibration's range.
+percentiles and extremes of the impact speed, and the share inside the checked range.
 With ``--png FILE`` it also writes a histogram.
 
 Run: ``python analysis/impact_speeds.py [--png impact_speeds.png]`` (about a minute on one
@@ -81,7 +82,7 @@ def main() -> None:
             speeds[j].append(v)
             free[j].append(f)
     lo, hi = min(SPEEDS), max(SPEEDS)
-    print(f"calibration range (twin.calibrate.SPEEDS): {lo * 1e3:g} mm/s to {hi * 1e3:g} mm/s")
+    print(f"checked range (twin.calibrate.SPEEDS): {lo * 1e3:g} mm/s to {hi * 1e3:g} mm/s")
     print("| joint | contact events | impacts | v at impacts [mm/s]: min / p1 / p5 / median / p95 / p99 / max "
           "| impacts below / in / above range | all events: min / max [mm/s] |")
     print("|---|---:|---:|---|---|---|")
@@ -103,7 +104,7 @@ def main() -> None:
         bins = np.geomspace(1e-5, 2.0, 60)
         for j, v in hist.items():
             ax.hist(np.clip(v, bins[0], None), bins=bins, histtype="step", label=f"{j} ({v.size} impacts)")
-        ax.axvspan(lo, hi, color="0.9", zorder=0, label="calibration range")
+        ax.axvspan(lo, hi, color="0.9", zorder=0, label="checked range")
         ax.set(xscale="log", xlabel="normal impact speed [m/s]", ylabel="impacts",
                title="Impact speeds in reference runs (tests 4-12, catalogue x orientation, protocol)")
         ax.legend(fontsize=8)

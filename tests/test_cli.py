@@ -101,7 +101,7 @@ def test_simulate_writes_run_and_summary(capsys, tmp_path):
 
 def test_export_mjcf(capsys, tmp_path):
     rc, out, _ = _run(capsys, "export-mjcf", "--test", "9", "--out", str(tmp_path / "m.xml"))
-    assert rc == 0 and (tmp_path / "m.xml").read_text().count("<pair") == 2  # C: two-term contact law
+    assert rc == 0 and (tmp_path / "m.xml").read_text().count("<pair") == 1  # B: one pair (the native law)
     rc, _, err = _run(capsys, "export-mjcf", "--test", "9", "--out", str(tmp_path / "m.txt"))
     assert rc == 2 and "must end in .xml" in err
 

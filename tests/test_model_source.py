@@ -17,9 +17,9 @@ What the builder changes in the default configuration's model on top of the base
   (``mjDSBL_CONTACT``; the base model's geoms never collide anyway);
 * a clearance variant (``joints.clearance_b_mm``/``clearance_c_mm`` > 0; the default is test 6,
   C at 0.1 mm): the bushing's bore radius R_j + c (and its visual ring), one contact pair
-  pin/bushing per term of the calibrated contact law (solref/solimp from
-  ``twin/data/contact_calibration.json``), the bushing's impact-speed damping fields
-  (``damping_coef``, ``exponent``, ``speed_floor``, ``slot``) and ``nuserdata`` slots; at C it
+  pin/bushing (its solref/solimp the placeholder of the native law), the bushing's contact-law
+  fields (``law``, ``stiffness``, ``exponent``, ``damping``, ``speed_floor``, ``slot``) and
+  ``nuserdata`` slots; at C it
   deletes the ``joint_C`` connect, at B it adds the planar slides ``ecc_B_x``/``ecc_B_y``;
 * the optional "energy" channel group: energy sensors and ``mjENBL_ENERGY``; the "ring" and
   "tendon" bushing representations: their boxes/tendon instead of the bore pair.
@@ -159,7 +159,8 @@ def test_the_default_clearance_variant_changes_only_joint_c(base):
     user = N.read_bore_userdata(bush.user)
     assert {k: user[k] for k in ("marker", "mu0", "v0", "v1")} == {
         k: v for k, v in N.read_bore_userdata(base.geom(N.bushing("C")).user).items() if k in ("marker", "mu0", "v0", "v1")}
-    assert user["damping_coef"] > 0 and user["slot"] == 0 and m.nuserdata == 1
+    assert user["law"] == N.BORE_LAWS["hysteresis"] and user["stiffness"] > 0 and user["slot"] == 0
+    assert m.nuserdata == 1
 
 
 def test_config_defaults_are_the_parsed_xml():
@@ -265,8 +266,8 @@ def test_parser_reports_a_missing_file_or_an_unreadable_value(tmp_path):
         model_xml.read_defaults(_edited(tmp_path, 'mass="5.72"', 'mass="5.7x2"'))
     with pytest.raises(ModelError, match="kp"):
         model_xml.read_defaults(_edited(tmp_path, 'kp="1.7e5" ', ""))
-    with pytest.raises(ModelError, match="nuser_geom=9"):
-        model_xml.read_defaults(_edited(tmp_path, 'nuser_geom="8"', 'nuser_geom="9"'))
+    with pytest.raises(ModelError, match="nuser_geom=11"):
+        model_xml.read_defaults(_edited(tmp_path, 'nuser_geom="10"', 'nuser_geom="11"'))
     with pytest.raises(ModelError, match="gravity"):
         model_xml.read_defaults(_edited(tmp_path, 'gravity="0 -9.81 0"', 'gravity="0 -9.81 1"'))
     with pytest.raises(ModelError, match="rod length"):  # the same number written twice must agree
@@ -311,6 +312,6 @@ def test_collider_refuses_a_different_layout(monkeypatch):
 
 
 def test_builder_checks_nuser_geom(tmp_path, monkeypatch):
-    monkeypatch.setattr(N, "BASE_XML", _edited(tmp_path, 'nuser_geom="8"', 'nuser_geom="9"'))
-    with pytest.raises(ModelError, match="nuser_geom = 9"):
+    monkeypatch.setattr(N, "BASE_XML", _edited(tmp_path, 'nuser_geom="10"', 'nuser_geom="11"'))
+    with pytest.raises(ModelError, match="nuser_geom = 11"):
         build(IDEAL)

@@ -42,7 +42,6 @@ def test_every_python_name_resolves_in_the_compiled_models():
     _resolve(ideal, "equality", N.JOINT_C_CONNECT)
     for jt in ("B", "C"):
         _resolve(both, "pair", N.pair(jt))
-        _resolve(both, "pair", N.pair(jt, 1))  # second term of the calibrated law
         for s in (N.sensor_ecc(jt), N.sensor_contact(jt), N.sensor_friction(jt)):
             _resolve(both, "sensor", s)
     for j in (N.ECC_B_X, N.ECC_B_Y):
@@ -55,8 +54,8 @@ def test_every_python_name_resolves_in_the_compiled_models():
     assert energy.opt.enableflags & mujoco.mjtEnableBit.mjENBL_ENERGY
 
 
-# pairs: one per clearance joint and term of its calibrated contact law (two terms)
-@pytest.mark.parametrize("test_id, nv, npair, neq", [(3, 1 + 2, 0, 1), (6, 3, 2, 0), (9, 5, 2, 1), (12, 5, 4, 0)])
+# pairs: one per clearance joint (the native contact law)
+@pytest.mark.parametrize("test_id, nv, npair, neq", [(3, 1 + 2, 0, 1), (6, 3, 1, 0), (9, 5, 1, 1), (12, 5, 2, 0)])
 def test_each_scene_holds_only_what_it_needs(test_id, nv, npair, neq):
     m = build(preset(test_id))[1]
     assert (m.nv, m.npair, m.neq) == (nv, npair, neq)
@@ -75,11 +74,11 @@ def test_channel_groups_select_sensors():
     assert list(run.channels) == ["AC1", "AC2", "AC3", "AC4", "AC5", "AC6", "encoder_angle"]
 
 
-@pytest.mark.parametrize("damping", ["fixed", "impact-speed"])
-def test_same_config_gives_identical_output_whatever_the_chunking(damping):
-    # impact-speed damping keeps each contact event's impact speed in mjData.userdata: it must
+@pytest.mark.parametrize("source", ["law", "first-guess"])
+def test_same_config_gives_identical_output_whatever_the_chunking(source):
+    # the native contact law keeps each contact event's impact speed in mjData.userdata: it must
     # carry over chunk boundaries like the rest of the state
-    cfg = short(preset(12), 0.1, **{"mujoco.contact_damping": damping})
+    cfg = short(preset(12), 0.1, **{"mujoco.contact_source": source})
     a = simulate_run(cfg)
     b = simulate_run(cfg)
     c = simulate_run(cfg.replace(**{"simulation.chunk_s": 0.013}))

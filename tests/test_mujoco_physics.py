@@ -56,16 +56,15 @@ def test_clearance_eccentricity_bounded_by_radial_clearance():
         c = cfg.joints.radial_m(j)
         ecc = np.hypot(run[f"ecc_{j}_x"], run[f"ecc_{j}_y"])
         assert ecc.max() > 0.99 * c          # the journal does reach the bushing
-        # and penetrates it by a few percent of c: the calibrated contact, like the reference's
-        # Hertzian law, lets the pin sink 2.6 um into the 50 um clearance at C under ~650 N
-        # (measured: twin 2.58 um, reference 2.65 um on this run)
+        # and penetrates it by a few percent of c: the reference's Hertzian law, which the twin
+        # applies, lets the pin sink ~2.6 um into the 50 um clearance at C under ~650 N
         assert ecc.max() < 1.08 * c
         assert np.max(run[f"pen_{j}"]) == pytest.approx(max(ecc.max() - c, 0), abs=1e-12)
         assert run[f"fn_{j}"].max() > 0
 
 
 def test_bore_collider_is_an_exact_circle():
-    cfg = preset(6).replace(**{"mujoco.contact_source": "first-guess"})  # one pair: one contact
+    cfg = preset(6)
     _, model, _ = build(cfg)
     model.pair_margin[:] = 1e-3
     d = mujoco.MjData(model)
@@ -89,11 +88,10 @@ def test_bore_collider_is_an_exact_circle():
         assert np.allclose(con[0].frame[:3], sign * np.array([math.cos(alpha), math.sin(alpha), 0]), atol=1e-9)
 
 
-def test_contact_force_is_the_linear_law_and_friction_is_regularized_coulomb():
-    # the first guess is one linear term with a flat impedance: f = k δ + c δ̇ exactly (with the
-    # fixed damping; the impact-speed term is tested on its own below)
-    cfg = short(preset(12), 0.2, **{"drive.ramp_s": 0.02, "mujoco.contact_source": "first-guess",
-                                    "mujoco.contact_damping": "fixed"})
+def test_soft_first_guess_is_the_linear_law_and_friction_is_regularized_coulomb():
+    # MuJoCo's own soft contact, the first guess: one linear term with a flat impedance,
+    # f = k δ + c δ̇ exactly (the native law is tested below)
+    cfg = short(preset(12), 0.2, **{"drive.ramp_s": 0.02, "mujoco.contact_source": "first-guess"})
     eng = MujocoEngine(cfg)
     m, d = eng.model, eng.data
     eng.reset()
@@ -131,7 +129,7 @@ def test_contact_force_is_the_linear_law_and_friction_is_regularized_coulomb():
 def test_first_guess_contact_reproduces_reference_restitution():
     from twin.impact import hysteresis_restitution, impact_linear
 
-    cfg = preset(12).replace(**{"mujoco.contact_source": "first-guess", "mujoco.contact_damping": "fixed"})
+    cfg = preset(12).replace(**{"mujoco.contact_source": "first-guess"})
     eng = MujocoEngine(cfg)
     for j, s in eng.info.contacts.items():
         assert s.source == "first-guess"
@@ -176,89 +174,190 @@ def test_loaded_start_is_at_rest(engine, orientation):
         assert np.max(np.linalg.norm(e - e[0], axis=1)) < 0.05 * c, (j, np.max(np.linalg.norm(e - e[0], axis=1)) / c)
 
 
-def test_impact_speed_damping_adds_the_lankarani_nikravesh_term():
-    """``mujoco.contact_damping = "impact-speed"``: the native module adds χK δⁿ δ̇ / v_imp to
-    the contact force (v_imp stored when the event starts, floored, the ratio δ̇/v_imp clamped
-    at −1 while separating) and forgets v_imp when the pin leaves the wall."""
-    from twin.calibrate import ContactLaw, probe_model
-    from twin.mujoco_engine.builder import CALIBRATION_FILE
-    import json
+def _law_force(cfg, law, delta, rate, v_imp):
+    """The law's force before the contact's max(·, 0) (the native module applies max(·, 0) to the
+    whole θ-blended force, decided by the solver); where positive, the reference engine's own law
+    function (twin.reference.contact) gives the same value."""
+    from twin.impact import DAMPING_FACTOR
+    from twin.reference.contact import LAW_CODES, normal_force
+
+    if cfg.contact.law == "linear":
+        raw = law.stiffness * delta + law.damping * rate
+    else:
+        chi = DAMPING_FACTOR[cfg.contact.law](cfg.contact.restitution)
+        raw = law.stiffness * delta ** cfg.contact.exponent * (1 + chi * max(rate / v_imp, -1.0))
+    ref = normal_force(LAW_CODES[cfg.contact.law], delta, rate, v_imp, law.stiffness, law.exponent,
+                       cfg.contact.restitution, law.damping)
+    assert ref == pytest.approx(max(raw, 0.0), rel=1e-12, abs=1e-12)
+    return raw
+
+
+def _theta(c, h, a_diag):
+    """The native module's θ of the damping (trapezoidal up to c h = 2 m̂)."""
+    ch = c * h
+    return 1 - 1 / (a_diag * ch) if ch * a_diag > 2 else 0.5
+
+
+@pytest.mark.parametrize("law", ["lankarani-nikravesh", "hunt-crossley", "flores", "linear"])
+def test_contact_force_in_the_mechanism_is_the_reference_law(law):
+    """Test 12 (B and C), stepped by MuJoCo: at every step with contact the solver's normal force
+    is the reference law at the step's state plus the θ-part of its damping taken at the step's
+    end, f = F(δ, δ̇) + θ c h δ̈ (F from the reference engine's own law functions, c = ∂F/∂δ̇;
+    where θ c h is below MuJoCo's own 1/R0 = 1e-4 m̂ of the pair, δ̈/R0 instead), the stored
+    impact speed is the approach speed of the contact event (floored), and the friction on the
+    pin is the regularized Coulomb law on F."""
+    cfg = short(preset(12), 0.25, **{"drive.ramp_s": 0.02, "contact.law": law})
+    eng = MujocoEngine(cfg)
+    m, d = eng.model, eng.data
+    eng.reset()
+    ref = DriveReference(cfg)
+    h = cfg.simulation.timestep_s
+    sens = eng._sensor_slices
+    slot = {j: int(N.read_bore_userdata(m.geom_user[m.geom(N.bushing(j)).id])["slot"]) for j in "BC"}
+    prev_in = {"B": True, "C": True}  # the loaded start begins in contact
+    checked, events, mu, errs = 0, 0, [], []
+    for _ in range(20_000):
+        th, om = ref(np.array([d.time]))
+        d.ctrl[:] = [th[0], om[0]]
+        mujoco.mj_step(m, d)  # efc_* and userdata: the state the step started from
+        seen = set()
+        for ci in range(d.ncon):
+            con = d.contact[ci]
+            j = m.geom(con.geom[1]).name[-1]
+            seen.add(j)
+            a = con.efc_address
+            law_j = eng.info.contacts[j].law
+            delta, rate = -d.efc_pos[a], -d.efc_vel[a]
+            v_imp = d.userdata[slot[j]]
+            if not prev_in[j]:  # a new contact event stores its approach speed
+                assert v_imp == pytest.approx(max(rate, cfg.contact.impact_speed_floor_mps), rel=1e-9)
+                events += 1
+            F = _law_force(cfg, law_j, delta, rate, v_imp)
+            if law_j.law == "linear":
+                c = law_j.damping
+            else:
+                c = 0.0 if rate < -v_imp else law_j.damping * law_j.stiffness * delta ** law_j.exponent / v_imp
+            J = d.efc_J[a * m.nv:(a + 1) * m.nv]
+            acc = -float(J @ d.qacc)  # δ̈
+            # the row's regularizer: 1/(θ c h), or MuJoCo's own R0 of the pair's impedance 1e-4
+            r0 = d.efc_diagA[a] * (1 - 1e-4) / 1e-4
+            gamma = _theta(c, h, d.efc_diagA[a]) * c * h
+            r = 1 / gamma if gamma * r0 > 1 else r0
+            assert d.efc_R[a] == pytest.approx(r, rel=1e-9)
+            expected = max(F + acc / r, 0.0)
+            if expected > 1.0:
+                errs.append(d.efc_force[a] / expected - 1)
+                checked += 1
+            # friction: regularized Coulomb on the law's force at the step's state
+            jp, jb = np.zeros((3, m.nv)), np.zeros((3, m.nv))
+            mujoco.mj_jac(m, d, jp, None, con.pos, m.geom_bodyid[con.geom[0]])
+            mujoco.mj_jac(m, d, jb, None, con.pos, m.geom_bodyid[con.geom[1]])
+            # the state moved on: d.qvel is the step's end; the friction sensor is from its start,
+            # so compare magnitudes only where sliding is fast (|v_t| well above v1 either way)
+            vt = ((jp - jb) @ d.qvel) @ np.cross([0, 0, 1], con.frame[:3])
+            ft = d.sensordata[sens[N.sensor_friction(j)].start]
+            if abs(vt) > 20 * cfg.contact.v1_mps and F > 1.0:
+                mu.append(abs(ft) / F)
+        for j in "BC":
+            prev_in[j] = j in seen
+    assert checked > 1000 and events > 0
+    errs = np.abs(errs)
+    assert errs.max() < 1e-9, errs.max()
+    assert len(mu) > 200 and np.median(mu) == pytest.approx(cfg.contact.mu0, rel=1e-6)
+
+
+def test_native_law_event_state_in_the_probe():
+    """The stored impact speed: taken when the contact event starts (its approach speed, or the
+    floor), kept while it lasts, forgotten when the pin leaves the wall, left in mjData.userdata
+    by rollout (it is not part of mjSTATE_FULLPHYSICS: the engine's data object carries it across
+    chunks); δ̇/v_imp clamped at −1 while separating."""
+    from mujoco import rollout
+
+    from twin.calibrate import probe_model
+
     cfg = BenchConfig().replace(**{"joints.clearance_c_mm": 0.1})
     c = cfg.joints.radial_m("C")
-    law = ContactLaw.from_json(json.loads(CALIBRATION_FILE.read_text())["entries"]["C:0.1"])
-    coef, n, floor = 2.0e10, 1.5, 1e-3
-    on = probe_model(cfg, "C", 1.3, law, (coef, n, floor))
-    off = probe_model(cfg, "C", 1.3, law)
+    model = probe_model(cfg, "C", 1.3)
+    law = build(cfg)[2].contacts["C"].law
+    floor = cfg.contact.impact_speed_floor_mps
 
-    def force(model, delta, ddelta, v_imp=0.0):
+    def forward(delta, rate, v_imp=0.0):
         d = mujoco.MjData(model)
-        d.qpos[0], d.qvel[0] = c + delta, ddelta   # the probe's slide axis points into the wall
-        if model.nuserdata:
-            d.userdata[0] = v_imp
+        d.qpos[0], d.qvel[0] = c + delta, rate   # the probe's slide axis points into the wall
+        d.userdata[0] = v_imp
         mujoco.mj_forward(model, d)
-        return float(np.sum(d.efc_force[:d.nefc])), d
+        return d
 
     delta = 2e-6
-    for ddelta, v_imp, ratio in [(0.01, 0.02, 0.5), (-0.005, 0.02, -0.25), (-0.05, 0.02, -1.0)]:
-        f_on, d = force(on, delta, ddelta, v_imp)
-        f_off, _ = force(off, delta, ddelta)
+    for rate, v_imp in [(0.01, 0.02), (-0.005, 0.02), (-0.05, 0.02)]:
+        d = forward(delta, rate, v_imp)
         assert d.userdata[0] == v_imp                       # an event under way keeps its speed
-        assert f_on - f_off == pytest.approx(coef * delta ** n * ratio, rel=0.03), (ddelta, ratio)
-    # a new event stores its approach speed, or the floor
-    assert force(on, delta, 0.004)[1].userdata[0] == pytest.approx(0.004)
-    assert force(on, delta, 0.0002)[1].userdata[0] == pytest.approx(floor)
-    # out of contact: no event
-    assert force(on, -1e-6, 0.01, 0.02)[1].userdata[0] == 0.0
-    # the stored speed is not part of mjSTATE_FULLPHYSICS: it lives in the MjData the engine
-    # keeps across its rollout chunks, and rollout must leave it there
-    from mujoco import rollout
-    _, d = force(on, delta, 0.001, 0.02)
+        F = law.force(delta, rate, v_imp)                   # clamped at δ̇/v_imp = −1 for the last
+        cdamp = 0.0 if rate < -v_imp else law.damping * law.stiffness * delta ** 1.5 / v_imp
+        acc = float(d.qacc[0])                              # δ̈ (the probe's axis is +δ)
+        gamma = _theta(cdamp, model.opt.timestep, d.efc_diagA[0]) * cdamp * model.opt.timestep
+        r0 = d.efc_diagA[0] * (1 - 1e-4) / 1e-4                        # the pair's own R
+        r = 1 / gamma if gamma * r0 > 1 else r0                         # the θ-damping's, if larger
+        assert d.efc_force[0] == pytest.approx(F + acc / r, rel=1e-9)
+    assert law.force(delta, -0.05, 0.02) == pytest.approx(law.stiffness * delta ** 1.5 * (1 - law.damping))
+    assert forward(delta, 0.004).userdata[0] == pytest.approx(0.004)   # a new event stores its speed
+    assert forward(delta, 0.0002).userdata[0] == pytest.approx(floor)  # or the floor
+    assert forward(-1e-6, 0.01, 0.02).userdata[0] == 0.0               # out of contact: no event
+    d = forward(delta, 0.001, 0.02)
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
-    state = np.empty(mujoco.mj_stateSize(on, spec))
-    mujoco.mj_getState(on, d, state, spec)
-    rollout.rollout(on, d, state[None], nstep=3)
+    state = np.empty(mujoco.mj_stateSize(model, spec))
+    mujoco.mj_getState(model, d, state, spec)
+    rollout.rollout(model, d, state[None], nstep=3)
     assert d.userdata[0] == 0.02
 
 
 @pytest.mark.parametrize("bushing, friction, native", [("bore", "native", True), ("bore", "cone", True),
                                                       ("ring", "cone", False), ("tendon", "native", False)])
-def test_impact_speed_damping_is_set_where_the_bore_applies_it(bushing, friction, native):
-    """The default "impact-speed" damping: the bore bushing carries the native term (χK, n,
-    floor, a userdata slot) and its pairs keep 1 % of their damping; ring and tendon bushings,
-    which the native module does not see, keep their whole fixed damping."""
-    from twin.impact import DAMPING_FACTOR
+def test_native_law_is_set_where_the_bore_applies_it(bushing, friction, native):
+    """The default contact: the bore bushing carries the reference law (K of Eq. 18, n, χ(e), the
+    floor, a userdata slot) in its user data; ring and tendon bushings, which the native module
+    does not serve, keep MuJoCo's soft first-guess contact (law 0, no slot)."""
     from twin.config import ln_stiffness
-    from twin.mujoco_engine.builder import IMPACT_SPEED_RESIDUAL_DAMPING
+    from twin.impact import DAMPING_FACTOR
+
     cfg = preset(6).replace(**{"mujoco.bushing": bushing, "mujoco.friction": friction})
-    fixed = cfg.replace(**{"mujoco.contact_damping": "fixed"})
     _, m, info = build(cfg)
-    _, _, info_fixed = build(fixed)
     user = N.read_bore_userdata(m.geom_user[m.geom(N.bushing("C")).id])
     K = ln_stiffness(cfg.joints, cfg.materials, "C")
     if native:
         chi = DAMPING_FACTOR["lankarani-nikravesh"](cfg.contact.restitution)
-        assert user["damping_coef"] == pytest.approx(chi * K) and user["exponent"] == 1.5
+        assert user["law"] == N.BORE_LAWS["hysteresis"] and user["stiffness"] == pytest.approx(K)
+        assert user["exponent"] == 1.5 and user["damping"] == pytest.approx(chi)
         assert user["speed_floor"] == 1e-3 and 0 <= user["slot"] < m.nuserdata
-        for t, tf in zip(info.contacts["C"].terms, info_fixed.contacts["C"].terms):
-            assert t.damping_ns_per_m == pytest.approx(tf.damping_ns_per_m * IMPACT_SPEED_RESIDUAL_DAMPING)
-        # the stress studies' damping factor perturbs the native term too
-        m2 = build(cfg.replace(**{"mujoco.contact_damping_scale": 1.3}))[1]
-        assert N.read_bore_userdata(m2.geom_user[m2.geom(N.bushing("C")).id])["damping_coef"] == \
-            pytest.approx(1.3 * chi * K)
+        assert info.contacts["C"].source == "law" and m.npair == 1
+        # the stress studies' factors perturb the law
+        m2 = build(cfg.replace(**{"mujoco.contact_damping_scale": 1.3, "mujoco.contact_stiffness_scale": 0.8}))[1]
+        u2 = N.read_bore_userdata(m2.geom_user[m2.geom(N.bushing("C")).id])
+        assert u2["damping"] == pytest.approx(1.3 * chi) and u2["stiffness"] == pytest.approx(0.8 * K)
     else:
-        assert user["damping_coef"] == 0 and m.nuserdata == 0
-        assert info.contacts["C"].terms == info_fixed.contacts["C"].terms
+        assert user["law"] == 0 and m.nuserdata == 0
+        assert info.contacts["C"].source == "first-guess" and info.contacts["C"].law is None
 
 
-def test_impact_speed_damping_follows_the_configured_hysteresis_law():
-    from twin.impact import DAMPING_FACTOR
+@pytest.mark.parametrize("law", ["hunt-crossley", "flores", "linear"])
+def test_native_law_follows_the_configured_reference_law(law):
+    """Every law of the reference: the same K, n and damping in the twin's user data (the linear
+    law's k and c are the reference engine's own, resolved at the drive's initial pose)."""
     from twin.config import ln_stiffness
-    for law, native in (("hunt-crossley", True), ("linear", False)):
-        cfg = preset(6).replace(**{"contact.law": law})
-        m = build(cfg)[1]
-        coef = N.read_bore_userdata(m.geom_user[m.geom(N.bushing("C")).id])["damping_coef"]
-        if native:
-            K = ln_stiffness(cfg.joints, cfg.materials, "C")
-            assert coef == pytest.approx(DAMPING_FACTOR[law](cfg.contact.restitution) * K)
-        else:  # a linear law has no impact-speed damping to carry over
-            assert coef == 0 and m.nuserdata == 0
+    from twin.impact import DAMPING_FACTOR
+    from twin.reference.engine import ReferenceEngine
+
+    cfg = preset(12).replace(**{"contact.law": law})
+    m = build(cfg)[1]
+    refe = ReferenceEngine(cfg)
+    refe.reset()
+    for j in "BC":
+        user = N.read_bore_userdata(m.geom_user[m.geom(N.bushing(j)).id])
+        if law == "linear":
+            assert user["law"] == N.BORE_LAWS["linear"] and user["exponent"] == 1.0
+            assert user["stiffness"] == pytest.approx(refe.contacts[j].stiffness, rel=1e-12)
+            assert user["damping"] == pytest.approx(refe.contacts[j].damping_ns_per_m, rel=1e-12)
+        else:
+            assert user["law"] == N.BORE_LAWS["hysteresis"]
+            assert user["stiffness"] == pytest.approx(ln_stiffness(cfg.joints, cfg.materials, j))
+            assert user["damping"] == pytest.approx(DAMPING_FACTOR[law](cfg.contact.restitution))

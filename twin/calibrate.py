@@ -1,158 +1,81 @@
-"""Calibration of the twin's pin/bushing contact against the reference contact law.
+"""Check of the twin's pin/bushing contact against the reference law's closed forms (issue 15).
 
-MuJoCo's contact is a soft constraint, not a Hertzian force law. For one contact row with a
-direct solref (−k Â, −c Â) and an impedance d(δ) = dwidth · u(δ) from solimp, MuJoCo's
-force is, up to the small difference between the row's true inverse inertia A and its
-estimate Â (negligible while d ≪ 1):
+Since issue 15 the MuJoCo twin's contact force at a clearance joint *is* the reference's law
+(:class:`twin.mujoco_engine.builder.NativeLaw`, applied by ``_bore.c``): nothing is fitted any
+more. The calibration table of issue 4 (a two-pair solref/solimp law fitted to LN single impacts)
+and its fit are retired. What remains here checks the law as MuJoCo actually integrates it, in a
+probe with the real bore collider and native module, against closed forms:
 
-    f = k u(δ)² δ + c u(δ) δ̇,    u = d / dwidth ∈ (0, 1],
+1. Static penetration: a pin of mass m pressed into the bore by a constant load F settles at
+   δ = (F/K)^(1/n) (hysteresis laws; F/k for the linear law). Tolerance 1 %.
+2. Free single impacts of a mass m_eff at speeds v log-spaced over 1 mm/s–0.5 m/s
+   (:data:`SPEEDS`; bench impacts measured on reference runs span 0.4–201 mm/s,
+   ``analysis/impact_speeds.py``): restitution −δ̇(separation)/v, peak force and contact
+   duration against the reference's single-impact solution (ODE at tight tolerance,
+   :mod:`twin.impact`). Tolerances (issue 15): restitution ±0.02, peak force 5 %, duration 10 %.
+3. Preloaded impacts: the same with a constant load pressing the pin into the wall; the
+   reference captures slow impacts (the mass never leaves the wall) and the twin must capture
+   the same ones.
 
-a spring-damper whose stiffness rises with penetration along the solimp sigmoid. With
-u ∝ δ^(1/4) it would be exactly a Hertzian δ^1.5 spring whose damping ratio, hence
-restitution, does not depend on the impact speed — what the reference's Lankarani–Nikravesh
-law (S003 Eq. 17–18) gives. The sigmoid can only approximate δ^(1/4) over a range, so the
-parameters are fitted:
-
-Method.
-1. Reference: single impacts of the LN law (K from Eq. 18 for the joint's clearance, n, e of
-   the configuration) of a mass m_eff at speeds v log-spaced over the bench's range
-   (``SPEEDS``: 1 mm/s to 0.5 m/s unless a measured range is given), solved as an ODE at
-   tight tolerance (:mod:`twin.impact`): restitution, peak force, contact duration.
-2. Twin: the same impacts simulated by MuJoCo itself: a probe model with the real bore
-   collider, a pin of mass m_eff on a slide joint, the twin's timestep and integrator, all
-   speeds as one batched ``mujoco.rollout``.
-3. Law: the sum of ``N_TERMS`` = 2 such terms, one MuJoCo pair each on the same two geoms
-   (6 parameters per term: k, c and the solimp shape d0/dwidth, width, power, midpoint;
-   dwidth fixed at ``DWIDTH`` so that d stays ≪ 1). One term cannot meet the tolerances
-   over 1 mm/s..0.5 m/s (best minimax scaled error found by differential evolution: 1.51);
-   two terms can (0.97 for the seed case).
-4. Fit, minimax of the tolerance-scaled errors (restitution ±0.02, peak force ±10 %,
-   duration ±20 %; ≤ 1 meets them): a global fit (scipy differential evolution, seed 2,
-   ~10 min) of the seed case :data:`SEED_CASE`; every joint/clearance then starts from the
-   seed law carried by similarity (:func:`similar_law`: exact in continuous time for a
-   Hertzian reference) and is refined by Nelder–Mead where its error exceeds 0.95.
-5. Effective mass m_eff of each joint: 1/(J M⁻¹ Jᵀ) of the contact normal over a crank turn
-   and all normal directions in the twin's own model (:func:`effective_masses`); the fit
-   uses the median and the table reports the errors at the minimum and 95th percentile.
-   Limitation (measured): no fixed law reproduces LN's restitution independently of both
-   speed and mass (LN scales its damping by the impact speed, which MuJoCo cannot know); at
-   B, whose effective mass spans 0.82–2.84 kg, the restitution is off by up to 0.09 at the
-   extremes (C: 1.16–1.47 kg, ≤ 0.03). A joint minimax over three masses reached only 3.9.
-
-Use by the default twin. With ``mujoco.contact_damping = "impact-speed"`` (the default, chosen
-by ``twin study accuracy``) the table's stiffness and impedance shape make the elastic force,
-the pairs keep 1 % of the fitted damping, and the hysteresis damping is the reference's own
-LN term added by the native module (``_bore.c``): free single impacts then return 0.72–0.81 of
-the approach speed instead of LN's 0.70 (``analysis/preloaded_impacts.py``: the elastic law is
-not exactly Hertzian), while the mechanism-level errors against the reference fall (README).
-``mujoco.contact_damping = "fixed"`` gives the law exactly as fitted here.
-
-The table (``twin/data/contact_calibration.json``) stores per joint and catalogue clearance
-the physical k [N/m], c [N s/m] and the solimp; the builder converts them to solref with the
-model's Â, so they stay valid when masses change.
+The probe is a pin of mass m_eff on a slide joint inside the joint's bore: one DOF along the
+contact normal, the twin's timestep and integrator, the builder's own contact setting
+(:func:`twin.mujoco_engine.builder.contact_setting`). The effective masses a clearance joint sees
+over a crank turn come from the twin's model (:func:`effective_masses`, equal to the reference
+engine's reduced mass matrix). ``twin calibrate contact`` runs the whole check for every joint
+and catalogue clearance at the smallest, median and largest effective mass.
 """
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass
 from typing import Iterable
 
 import mujoco
 import numpy as np
-from mujoco import rollout
 
 from twin.config import CATALOGUE_DIAMETRAL_MM, BenchConfig, ln_stiffness, with_overrides
-from twin.impact import ImpactResult, impact_hysteresis
+from twin.impact import ImpactResult, impact_hysteresis, impact_linear
 from twin.mujoco_engine.collider import ensure_installed
-from twin.names import BORE_USERDATA_FIELDS, bore_userdata
+from twin.names import BORE_USERDATA_FIELDS, bore_userdata, replace_bore_userdata
 
-#: impact speeds of the calibration [m/s] (issue: at least 1 mm/s to 0.5 m/s). Measured on reference
-#: runs (``analysis/impact_speeds.py``, analysis/results/impact_speeds): bench impacts span
+#: impact speeds of the check [m/s] (issue 15: 1 mm/s to 0.5 m/s). Measured on reference runs
+#: (``analysis/impact_speeds.py``, analysis/results/impact_speeds): bench impacts span
 #: 0.4-201 mm/s, 97.7 % (C) and 100 % (B) of them inside this range
 SPEEDS = tuple(np.geomspace(1e-3, 0.5, 10))
-#: impedance at saturation: small, so that the force law stays local (A ≈ Â)
-DWIDTH = 0.01
-#: longest probe simulation [steps] before a law is declared too soft
-MAX_PROBE_STEPS = 20_000
-#: tolerances of the issue: restitution (absolute), peak force and duration (relative)
-TOL_E, TOL_F, TOL_T = 0.02, 0.10, 0.20
-
-
-@dataclass(frozen=True)
-class ContactTerm:
-    """One term of the twin's contact law: f_i = k u(δ)² δ + c u(δ) δ̇ (one MuJoCo pair).
-
-    Attributes:
-        stiffness_n_per_m: k [N/m] (stiffness at full impedance).
-        damping_ns_per_m: c [N s/m].
-        solimp: MuJoCo solimp (d0, dwidth, width [m], midpoint, power).
-    """
-
-    stiffness_n_per_m: float
-    damping_ns_per_m: float
-    solimp: tuple[float, float, float, float, float]
-
-    def to_json(self) -> dict:
-        return {"stiffness_n_per_m": self.stiffness_n_per_m, "damping_ns_per_m": self.damping_ns_per_m,
-                "solimp": list(self.solimp)}
-
-
-@dataclass(frozen=True)
-class ContactLaw:
-    """The twin's contact law: the sum of its terms (pairs on the same two geoms)."""
-
-    terms: tuple[ContactTerm, ...]
-
-    def to_json(self) -> dict:
-        return {"terms": [t.to_json() for t in self.terms]}
-
-    @staticmethod
-    def from_json(entry: dict) -> "ContactLaw":
-        return ContactLaw(tuple(ContactTerm(t["stiffness_n_per_m"], t["damping_ns_per_m"], tuple(t["solimp"]))
-                                for t in entry["terms"]))
-
-    def scaled(self, length: float, force: float) -> "ContactLaw":
-        """The similar law whose impacts are ``length``× deeper and ``force``× stronger at equal speed.
-
-        Penetrations and widths scale by ``length``, forces by ``force``: k by force/length and
-        c by force (speeds are unchanged). Used to carry a fit to another stiffness or mass.
-        """
-        out = []
-        for t in self.terms:
-            d0, dw, w, mid, p = t.solimp
-            out.append(ContactTerm(t.stiffness_n_per_m * force / length, t.damping_ns_per_m * force,
-                                   (d0, dw, w * length, mid, p)))
-        return ContactLaw(tuple(out))
+#: tolerances of issue 15: restitution (absolute), peak force and duration (relative), static
+#: penetration (relative)
+TOL_E, TOL_F, TOL_T, TOL_STATIC = 0.02, 0.05, 0.10, 0.01
+#: horizon of a probe impact: no separation by then = captured [s]
+T_MAX_S = 5e-3
+#: static loads of the check [N] (a resting pin: the bench's static pin loads are 10-60 N)
+STATIC_LOADS_N = (1.0, 10.0, 100.0, 1000.0)
+#: preloads and speeds of the capture check (``analysis/preloaded_impacts.py``'s grid)
+PRELOADS_N = (10.0, 30.0, 100.0)
+PRELOAD_SPEEDS = (0.002, 0.005, 0.008, 0.014, 0.03, 0.1)
 
 
 # ----------------------------------------------------------------------- probe model
-def probe_model(cfg: BenchConfig, joint: str, m_eff: float, law: ContactLaw,
-                impact_damping: tuple[float, float, float] | None = None) -> mujoco.MjModel:
-    """1-DOF impact probe: a pin of mass m_eff on a slide joint inside the joint's bore.
+def probe_model(cfg: BenchConfig, joint: str, m_eff: float, preload_n: float = 0.0) -> mujoco.MjModel:
+    """1-DOF probe: a pin of mass ``m_eff`` on a slide joint (axis +x, into the wall at +x)
+    inside ``joint``'s bore, with the twin's contact setting for ``cfg`` (native law or soft
+    contact, exactly as the builder resolves it), frictionless; ``preload_n`` presses the pin
+    into the wall (gravity along +x)."""
+    from twin.mujoco_engine.builder import FLAT_SOLIMP, contact_setting, native_law_applies
 
-    ``impact_damping`` = (coef, n, floor) switches on the native impact-speed damping of
-    ``_bore.c`` (coef δⁿ δ̇ / v_imp, as ``mujoco.contact_damping = "impact-speed"``).
-    """
     ensure_installed()
     rj, ri = cfg.joints.pin_radius_m, cfg.joints.bushing_radius_m(joint)
     half = cfg.joints.bushing_length_m / 2
     spec = mujoco.MjSpec()
     spec.compiler.autolimits = True
     spec.nuser_geom = len(BORE_USERDATA_FIELDS)
-    damping = {}
-    if impact_damping is not None:
-        spec.nuserdata = 1
-        coef, n, floor = map(float, impact_damping)
-        damping = {"damping_coef": coef, "exponent": n, "speed_floor": floor, "slot": 0}
+    spec.nuserdata = 1
     spec.option.timestep = cfg.simulation.timestep_s
     spec.option.integrator = getattr(mujoco.mjtIntegrator, f"mjINT_{cfg.mujoco.integrator.upper()}")
-    spec.option.gravity = [0, 0, 0]
-    spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_EULERDAMP
+    spec.option.gravity = [preload_n / m_eff, 0, 0]
+    spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_EULERDAMP | mujoco.mjtDisableBit.mjDSBL_ISLAND
     bore = spec.worldbody.add_geom(name="bore", type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[ri, half, 0],
-                                   contype=0, conaffinity=0,
-                                   userdata=bore_userdata(mu0=0.0, v0=1.0, v1=2.0, **damping))  # frictionless
+                                   contype=0, conaffinity=0, userdata=bore_userdata(mu0=0.0, v0=1.0, v1=2.0))
     body = spec.worldbody.add_body(name="pin_body")
     body.add_joint(name="x", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1, 0, 0])
     body.explicitinertial = True
@@ -160,75 +83,76 @@ def probe_model(cfg: BenchConfig, joint: str, m_eff: float, law: ContactLaw,
     body.inertia = [1e-4, 1e-4, 1e-4]
     pin = body.add_geom(name="pin", type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[rj, half, 0],
                         contype=0, conaffinity=0, mass=0)
-    for i in range(len(law.terms)):
-        spec.add_pair(name=f"p{i}", geomname1=pin.name, geomname2=bore.name, condim=1)
-    # net force of all pin/bore contacts (the terms act at the same point)
+    pair = spec.add_pair(name="p", geomname1=pin.name, geomname2=bore.name, condim=1, solimp=list(FLAT_SOLIMP))
     spec.add_sensor(name="f", type=mujoco.mjtSensor.mjSENS_CONTACT, objtype=mujoco.mjtObj.mjOBJ_GEOM,
-                    objname="pin", reftype=mujoco.mjtObj.mjOBJ_GEOM, refname="bore", intprm=[3, 3, 1])
-    model = spec.compile()
-    a_hat = float(model.body_invweight0[1, 0])
-    for i, t in enumerate(law.terms):
-        model.pair_solref[i] = [-t.stiffness_n_per_m * a_hat, -t.damping_ns_per_m * a_hat]
-        model.pair_solimp[i] = t.solimp
-    return model
+                    objname="pin", reftype=mujoco.mjtObj.mjOBJ_GEOM, refname="bore", intprm=[3, 0, 1])
+    a_hat = float(spec.compile().body_invweight0[1, 0])
+    native = native_law_applies(cfg) and cfg.mujoco.bushing == "bore"
+    setting = contact_setting(cfg, joint, a_hat, native=native)
+    pair.solref, pair.solimp = list(setting.solref), list(setting.solimp)
+    if setting.law is not None:
+        bore.userdata = replace_bore_userdata(list(bore.userdata), **setting.law.userdata(0))
+    return spec.compile()
 
 
-def twin_impacts(cfg: BenchConfig, joint: str, m_eff: float, law: ContactLaw,
-                 speeds: Iterable[float] = SPEEDS) -> list[ImpactResult]:
-    """Single impacts of the twin's contact, simulated by MuJoCo (batched rollout)."""
-    speeds = np.asarray(list(speeds), float)
-    model = probe_model(cfg, joint, m_eff, law)
-    h = model.opt.timestep
-    c = cfg.joints.radial_m(joint)
-    # contact lasts a few δmax/v (δmax of the reference's Hertzian impact); grow if needed
-    K = ln_stiffness(cfg.joints, cfg.materials, joint)
-    t_max = max(10 * ((5 * m_eff * v * v / (4 * K)) ** 0.4) / v for v in speeds) + 4 * h
-    nstep = int(math.ceil(t_max / h)) + 4
-    nstate = mujoco.mj_stateSize(model, mujoco.mjtState.mjSTATE_FULLPHYSICS)
-    init = np.zeros((len(speeds), nstate))
-    # state layout: time, qpos, qvel, ...; start half a step before touching
-    init[:, 1] = c - speeds * h * 0.5
-    init[:, 2] = speeds
-    data = mujoco.MjData(model)
-    while True:
-        state, sens = rollout.rollout(model, data, init, nstep=nstep)
-        # netforce slot [found, fx, fy, fz] in the global frame: the impact is along x
-        sens = np.stack([sens[:, :, 0], np.hypot(sens[:, :, 1], sens[:, :, 2])], axis=2)
-        if sens[:, -2:, 1].max() <= 0 and (state[:, -1, 1] <= c).all():
-            break
-        if nstep > MAX_PROBE_STEPS:
-            raise RuntimeError(f"probe impacts did not end within {nstep} steps (contact too soft)")
-        nstep *= 4
+def twin_impacts(cfg: BenchConfig, joint: str, m_eff: float, speeds: Iterable[float] = SPEEDS,
+                 preload_n: float = 0.0) -> list[ImpactResult]:
+    """Single impacts of the twin's contact at ``speeds`` [m/s], simulated by MuJoCo.
+
+    The pin starts half a step before touching at speed v; the impact ends when the pin is back
+    at δ = 0 (duration interpolated between steps; restitution −δ̇/v there); no separation
+    within :data:`T_MAX_S` = captured (restitution 0, infinite duration).
+    """
+    from mujoco import rollout
+
+    model = probe_model(cfg, joint, m_eff, preload_n)
+    h, c = model.opt.timestep, cfg.joints.radial_m(joint)
+    nstep = int(math.ceil(T_MAX_S / h))
     out = []
-    for i, v in enumerate(speeds):
-        x, xd, f = state[i, :, 1], state[i, :, 2], sens[i, :, 1]
-        delta = x - c
-        inside = np.flatnonzero(f > 0)
-        if inside.size == 0:
-            raise RuntimeError(f"probe at {v:g} m/s never touched")
-        last = inside[-1]
-        if last >= nstep - 2:
-            raise RuntimeError(f"probe impact at {v:g} m/s did not end within {nstep} steps")
-        # duration: from δ = 0 on the way in to δ = 0 (or force = 0) on the way out, interpolated
-        t = np.arange(nstep) * h + h  # state[k] is after step k
-        k_in = np.flatnonzero(delta > 0)[0]
-        t_in = t[k_in - 1] + h * (0 - delta[k_in - 1]) / (delta[k_in] - delta[k_in - 1]) if k_in > 0 else t[0]
-        sep = np.flatnonzero((np.arange(nstep) > k_in) & ((delta <= 0) | (f <= 0)))[0]
-        if delta[sep] <= 0:
-            t_out = t[sep - 1] + h * delta[sep - 1] / (delta[sep - 1] - delta[sep])
-        else:
-            t_out = t[sep]
-        out.append(ImpactResult(restitution=-xd[sep] / v, peak_force_n=float(f.max()),
-                                duration_s=float(t_out - t_in), max_penetration_m=float(delta.max())))
+    for v in speeds:
+        v = float(v)
+        data = mujoco.MjData(model)  # fresh data: the stored impact speed starts at 0
+        nstate = mujoco.mj_stateSize(model, mujoco.mjtState.mjSTATE_FULLPHYSICS)
+        init = np.zeros((1, nstate))
+        init[0, 1], init[0, 2] = c - v * h * 0.5, v   # state layout: time, qpos, qvel
+        state, sens = rollout.rollout(model, data, init, nstep=nstep)
+        x, xd, f = state[0, :, 1], state[0, :, 2], sens[0, :, 1]
+        delta = np.concatenate([[init[0, 1] - c], x - c])       # before step k and after it
+        t = np.arange(nstep + 1) * h
+        k_in = int(np.flatnonzero(delta > 0)[0])
+        t_in = t[k_in - 1] + h * (0 - delta[k_in - 1]) / (delta[k_in] - delta[k_in - 1])
+        out_idx = np.flatnonzero((np.arange(nstep + 1) > k_in) & (delta <= 0))
+        peak = float(f.max())
+        if out_idx.size == 0:
+            out.append(ImpactResult(0.0, peak, math.inf, float(delta.max())))
+            continue
+        k = int(out_idx[0])
+        t_out = t[k - 1] + h * delta[k - 1] / (delta[k - 1] - delta[k])
+        out.append(ImpactResult(restitution=-float(xd[k - 1]) / v, peak_force_n=peak,
+                                duration_s=float(t_out - t_in), max_penetration_m=float(delta[:k].max())))
     return out
 
 
-def reference_impacts(cfg: BenchConfig, joint: str, m_eff: float,
-                      speeds: Iterable[float] = SPEEDS) -> list[ImpactResult]:
-    """Single impacts of the reference law (ODE at tight tolerance)."""
-    K = cfg.contact.stiffness or ln_stiffness(cfg.joints, cfg.materials, joint)
-    law = "lankarani-nikravesh" if cfg.contact.law == "lankarani-nikravesh" else cfg.contact.law
-    return [impact_hysteresis(law, K, cfg.contact.exponent, cfg.contact.restitution, m_eff, float(v))
+def reference_law(cfg: BenchConfig, joint: str) -> tuple[str, float, float]:
+    """(law, K or k, c of the linear law) of the reference engine for ``joint``."""
+    ct = cfg.contact
+    if ct.law == "linear":
+        from twin.mujoco_engine.builder import _reference_linear_law
+
+        k, c = _reference_linear_law(cfg)[joint]
+        return ct.law, k, c
+    return ct.law, (ct.stiffness or ln_stiffness(cfg.joints, cfg.materials, joint)) * ct.stiffness_scale, 0.0
+
+
+def reference_impacts(cfg: BenchConfig, joint: str, m_eff: float, speeds: Iterable[float] = SPEEDS,
+                      preload_n: float = 0.0) -> list[ImpactResult]:
+    """Single impacts of the reference law (ODE at tight tolerance, :mod:`twin.impact`)."""
+    law, K, c = reference_law(cfg, joint)
+    if law == "linear":
+        if preload_n:
+            raise ValueError("preloaded impacts are solved for the hysteresis laws only")
+        return [impact_linear(K, c, m_eff, float(v)) for v in speeds]
+    return [impact_hysteresis(law, K, cfg.contact.exponent, cfg.contact.restitution, m_eff, float(v), preload_n)
             for v in speeds]
 
 
@@ -237,6 +161,28 @@ def impact_errors(twin: list[ImpactResult], ref: list[ImpactResult]) -> np.ndarr
     return np.array([[(a.restitution - b.restitution) / TOL_E,
                       (a.peak_force_n / b.peak_force_n - 1) / TOL_F,
                       (a.duration_s / b.duration_s - 1) / TOL_T] for a, b in zip(twin, ref)])
+
+
+def static_penetration(cfg: BenchConfig, joint: str, m_eff: float, load_n: float,
+                       settle_s: float = 0.05) -> tuple[float, float]:
+    """(twin, closed form) penetration [m] of a pin pressed into the bore by ``load_n``.
+
+    The probe starts at rest at half the closed-form penetration and settles for ``settle_s``;
+    closed form: δ = (F/K)^(1/n) (linear law: F/k).
+    """
+    from mujoco import rollout
+
+    law, K, _c = reference_law(cfg, joint)
+    n = 1.0 if law == "linear" else cfg.contact.exponent
+    closed = (load_n / K) ** (1.0 / n)
+    model = probe_model(cfg, joint, m_eff, load_n)
+    c = cfg.joints.radial_m(joint)
+    data = mujoco.MjData(model)
+    init = np.zeros((1, mujoco.mj_stateSize(model, mujoco.mjtState.mjSTATE_FULLPHYSICS)))
+    init[0, 1] = c + 0.5 * closed
+    nstep = int(round(settle_s / model.opt.timestep))
+    state, _ = rollout.rollout(model, data, init, nstep=nstep)
+    return float(state[0, -1, 1] - c), closed
 
 
 # ------------------------------------------------------------------- effective masses
@@ -265,152 +211,73 @@ def effective_masses(cfg: BenchConfig, joint: str, n_theta: int = 24, n_dir: int
     return np.array(out)
 
 
-# ------------------------------------------------------------------------------ fit
-#: terms of the fitted law (one term cannot meet the tolerances: minimax scaled error 1.51)
-N_TERMS = 2
-#: the case fitted globally; the others start from it by similarity
-SEED_CASE = ("C", 0.1)
-
-
-def _law_from_x(x: np.ndarray) -> ContactLaw:
-    terms = []
-    for log_k, log_c, u0, log_w, power, mid in np.asarray(x, float).reshape(-1, 6):
-        terms.append(ContactTerm(float(np.exp(log_k)), float(np.exp(log_c)),
-                                 (float(max(u0 * DWIDTH, 1.01e-4)), DWIDTH, float(np.exp(log_w)), float(mid),
-                                  float(power))))
-    return ContactLaw(tuple(terms))
-
-
-def _x_from_law(law: ContactLaw) -> np.ndarray:
-    return np.concatenate([[math.log(t.stiffness_n_per_m), math.log(t.damping_ns_per_m), t.solimp[0] / DWIDTH,
-                            math.log(t.solimp[2]), t.solimp[4], t.solimp[3]] for t in law.terms])
-
-
-def _bounds(ref: list[ImpactResult], K: float, m_eff: float) -> tuple[np.ndarray, np.ndarray]:
-    """Search box of one term around the Hertz secant stiffness at the deepest impact."""
-    dmax = max(r.max_penetration_m for r in ref)
-    k0 = K * math.sqrt(dmax)
-    c0 = 2 * 0.12 * math.sqrt(k0 * m_eff)
-    lo = [math.log(k0) - 5, math.log(c0) - 6, 0.011, math.log(dmax) - 6, 1.0, 0.01]
-    hi = [math.log(k0) + 3, math.log(c0) + 3, 1.0, math.log(dmax) + 2, 6.0, 0.99]
-    return np.array(lo * N_TERMS), np.array(hi * N_TERMS)
-
-
-def _objective(cfg: BenchConfig, joint: str, m_eff: float, ref: list[ImpactResult], speeds):
-    def f(x) -> float:
-        try:
-            tw = twin_impacts(cfg, joint, m_eff, _law_from_x(x), speeds)
-        except RuntimeError:
-            return 1e3
-        return float(np.max(np.abs(impact_errors(tw, ref))))
-    return f
-
-
-def fit_global(cfg: BenchConfig, joint: str, m_eff: float, speeds=SPEEDS, seed: int = 2,
-               maxiter: int = 120) -> tuple[ContactLaw, np.ndarray]:
-    """Global minimax fit (differential evolution) of one joint/clearance: the seed case.
-
-    Objective: the largest tolerance-scaled error over all speeds and the three quantities.
-    About 10 minutes on one core (~14,000 probe evaluations).
-    """
-    from scipy.optimize import differential_evolution
-
-    ref = reference_impacts(cfg, joint, m_eff, speeds)
-    K = cfg.contact.stiffness or ln_stiffness(cfg.joints, cfg.materials, joint)
-    lo, hi = _bounds(ref, K, m_eff)
-    res = differential_evolution(_objective(cfg, joint, m_eff, ref, speeds), list(zip(lo, hi)), maxiter=maxiter,
-                                 popsize=10, seed=seed, polish=True, tol=1e-8, updating="deferred")
-    law = _law_from_x(res.x)
-    return law, impact_errors(twin_impacts(cfg, joint, m_eff, law, speeds), ref)
-
-
-def similar_law(law: ContactLaw, k_from: float, m_from: float, k_to: float, m_to: float) -> ContactLaw:
-    """Carry a law fitted for Hertz stiffness ``k_from`` and mass ``m_from`` to another pair.
-
-    A Hertzian impact at a given speed has δmax ∝ (m/K)^0.4 and F ∝ K δmax^1.5; scaling the
-    twin's law by the same length and force ratios (:meth:`ContactLaw.scaled`) reproduces the
-    fitted impacts exactly in continuous time (the time step does not scale: refine after).
-    """
-    length = ((m_to / m_from) * (k_from / k_to)) ** 0.4
-    force = (k_to / k_from) * length ** 1.5
-    return law.scaled(length, force)
-
-
-def refine(cfg: BenchConfig, joint: str, m_eff: float, law: ContactLaw, speeds=SPEEDS,
-           maxfev: int = 300) -> tuple[ContactLaw, np.ndarray]:
-    """Local minimax refinement (Nelder–Mead) of a law, e.g. one carried by :func:`similar_law`."""
-    from scipy.optimize import minimize
-
-    ref = reference_impacts(cfg, joint, m_eff, speeds)
-    f = _objective(cfg, joint, m_eff, ref, speeds)
-    x0 = _x_from_law(law)
-    best = (f(x0), x0)
-    if best[0] > 0.95:  # refine only where the carried law is near or over the tolerance
-        res = minimize(f, x0, method="Nelder-Mead",
-                       options={"maxfev": maxfev, "xatol": 1e-4, "fatol": 1e-4, "adaptive": True})
-        if res.fun < best[0]:
-            best = (res.fun, res.x)
-    law = _law_from_x(best[1])
-    return law, impact_errors(twin_impacts(cfg, joint, m_eff, law, speeds), ref)
-
-
-def _joint_case(cfg: BenchConfig, joint: str, clearance_mm: float) -> BenchConfig:
+# ------------------------------------------------------------------------ the check
+def joint_case(cfg: BenchConfig, joint: str, clearance_mm: float) -> BenchConfig:
+    """``cfg`` with ``clearance_mm`` (diametral) at both joints (the joint's K and masses)."""
     return with_overrides(cfg, {f"joints.clearance_{joint.lower()}_mm": clearance_mm,
                                 f"joints.clearance_{'c' if joint == 'B' else 'b'}_mm": clearance_mm})
 
 
-def calibration_table(cfg: BenchConfig, clearances=CATALOGUE_DIAMETRAL_MM, joints=("B", "C"),
-                      speeds=SPEEDS, seed_law: ContactLaw | None = None, progress: bool = True,
-                      log=print) -> dict:
-    """Fit every joint/clearance (method: module docstring); the JSON structure the builder reads.
+@dataclass(frozen=True)
+class CaseResult:
+    """Check of one joint and clearance (worst over speeds and masses)."""
 
-    ``seed_law`` skips the global fit of :data:`SEED_CASE` (e.g. the seed of a committed table).
-    """
+    key: str
+    m_eff_kg: tuple[float, float, float]
+    max_scaled_error: tuple[float, float, float]   # [restitution, peak force, duration] / tolerance
+    static_error: float                            # worst |δ/δ_closed − 1| over STATIC_LOADS_N
+    capture_agrees: bool                           # same captured impacts as the reference
+    capture_worst_de: float                        # worst |Δe| of the uncaptured preloaded impacts
+
+    @property
+    def ok(self) -> bool:
+        return max(self.max_scaled_error) <= 1.0 and self.static_error <= TOL_STATIC and self.capture_agrees
+
+    def to_json(self) -> dict:
+        return {"m_eff_kg": {"min": self.m_eff_kg[0], "median": self.m_eff_kg[1], "max": self.m_eff_kg[2]},
+                "max_scaled_error": {"restitution": self.max_scaled_error[0], "peak_force": self.max_scaled_error[1],
+                                     "duration": self.max_scaled_error[2]},
+                "static_error": self.static_error, "capture_agrees": self.capture_agrees,
+                "capture_worst_de": self.capture_worst_de, "ok": self.ok}
+
+
+def check_case(cfg: BenchConfig, joint: str, clearance_mm: float, speeds=SPEEDS) -> CaseResult:
+    """Static, free-impact and preloaded-impact checks of one joint and clearance."""
+    c = joint_case(cfg, joint, clearance_mm)
+    masses = effective_masses(c, joint, n_theta=12, n_dir=12)
+    ms = (float(masses.min()), float(np.median(masses)), float(masses.max()))
+    err = np.zeros(3)
+    for m in ms:
+        e = np.abs(impact_errors(twin_impacts(c, joint, m, speeds), reference_impacts(c, joint, m, speeds)))
+        err = np.maximum(err, e.max(axis=0))
+    static = max(abs(tw / cl - 1) for tw, cl in (static_penetration(c, joint, ms[1], f) for f in STATIC_LOADS_N))
+    agrees, worst = True, 0.0
+    if c.contact.law != "linear":
+        for p in PRELOADS_N:
+            for a, b in zip(twin_impacts(c, joint, ms[1], PRELOAD_SPEEDS, p),
+                            reference_impacts(c, joint, ms[1], PRELOAD_SPEEDS, p)):
+                agrees &= (a.restitution == 0) == (b.restitution == 0)
+                if b.restitution > 0:
+                    worst = max(worst, abs(a.restitution - b.restitution))
+    return CaseResult(f"{joint}:{clearance_mm:g}", ms, tuple(float(x) for x in err), float(static), bool(agrees),
+                      float(worst))
+
+
+def contact_check(cfg: BenchConfig, joints=("B", "C"), clearances=CATALOGUE_DIAMETRAL_MM, speeds=SPEEDS,
+                  progress: bool = True) -> dict:
+    """:func:`check_case` for every joint and catalogue clearance; the JSON report."""
     from tqdm import tqdm
 
-    sj, scl = SEED_CASE
-    seed_cfg = _joint_case(cfg, sj, scl)
-    seed_m = float(np.median(effective_masses(seed_cfg, sj)))
-    seed_k = cfg.contact.stiffness or ln_stiffness(seed_cfg.joints, seed_cfg.materials, sj)
-    if seed_law is None:
-        log(f"global fit of the seed case {sj} {scl:g} mm (m_eff {seed_m:.3f} kg): differential evolution, ~10 min")
-        seed_law, err = fit_global(seed_cfg, sj, seed_m, speeds)
-        log(f"  seed minimax scaled error {np.abs(err).max():.3f}")
-    entries, report = {}, {}
-    jobs = [(j, cl) for j in joints for cl in clearances]
-    for j, cl in tqdm(jobs, disable=not progress, desc="contact calibration"):
-        c = _joint_case(cfg, j, cl)
-        masses = effective_masses(c, j)
-        m_med = float(np.median(masses))
-        K = cfg.contact.stiffness or ln_stiffness(c.joints, c.materials, j)
-        law, err = refine(c, j, m_med, similar_law(seed_law, seed_k, seed_m, K, m_med), speeds)
-        ext = {}
-        for label, mm in (("min", float(masses.min())), ("p95", float(np.percentile(masses, 95)))):
-            ext[label] = np.abs(impact_errors(twin_impacts(c, j, mm, law, speeds),
-                                              reference_impacts(c, j, mm, speeds))).max(axis=0).tolist()
-        key = f"{j}:{cl:g}"
-        entries[key] = law.to_json()
-        report[key] = {"m_eff_kg": {"min": float(masses.min()), "median": m_med,
-                                    "p95": float(np.percentile(masses, 95))},
-                       "max_scaled_error_median_mass": np.abs(err).max(axis=0).tolist(),
-                       "max_scaled_error_min_mass": ext["min"], "max_scaled_error_p95_mass": ext["p95"]}
-        log(f"  {key}: max scaled error [e, F, T] at median mass {np.round(np.abs(err).max(axis=0), 3).tolist()}")
+    jobs = [(j, cl) for j in joints for cl in clearances if cl > 0]
+    cases = [check_case(cfg, j, cl, speeds) for j, cl in tqdm(jobs, disable=not progress, desc="contact check")]
     return {
-        "method": "twin/calibrate.py (module docstring): LN single impacts vs MuJoCo probe impacts; "
-                  "global minimax fit of the seed case, similarity transfer + Nelder-Mead for every case",
-        "reference": {"restitution": cfg.contact.restitution, "exponent": cfg.contact.exponent,
-                      "pin_diameter_m": cfg.joints.pin_diameter_m, "mu0": cfg.contact.mu0, "law": cfg.contact.law},
+        "method": "twin/calibrate.py (module docstring): the twin's native contact law in a MuJoCo probe "
+                  "(real bore collider and native module) against the reference law's closed forms",
+        "law": cfg.contact.law,
         "timestep_s": cfg.simulation.timestep_s,
         "integrator": cfg.mujoco.integrator,
         "speeds_mps": [float(v) for v in speeds],
-        "seed": {"case": f"{sj}:{scl:g}", "m_eff_kg": seed_m, "hertz_stiffness": seed_k, "law": seed_law.to_json()},
-        "scaled_error_columns": ["restitution/0.02", "peak_force/10%", "duration/20%"],
-        "entries": entries,
-        "report": report,
+        "tolerances": {"restitution": TOL_E, "peak_force": TOL_F, "duration": TOL_T, "static": TOL_STATIC},
+        "cases": {r.key: r.to_json() for r in cases},
+        "ok": all(r.ok for r in cases),
     }
-
-
-def save_table(table: dict, path) -> None:
-    from twin.util import atomic_write_text
-
-    atomic_write_text(path, json.dumps(table, indent=1) + "\n")

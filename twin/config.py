@@ -284,8 +284,8 @@ class Contact:
         stiffness: contact stiffness K [N/m^n]; 0 = computed from the pin/bushing geometry
             and materials with Eq. 18.
         stiffness_scale: factor on the normal law's stiffness in both engines [-] (K of the
-            hysteresis laws, k of the linear law; in the MuJoCo twin the calibrated pairs'
-            stiffness and the impact-speed damping's χK): the uncertainty of Eq. 18's K for
+            hysteresis laws, k of the linear law, the same law in the MuJoCo twin's native
+            contact and its soft first guess): the uncertainty of Eq. 18's K for
             sensitivity studies and datasets. 1 = as computed.
         mu0: dynamic friction coefficient μ0 [-]. Default: mjcf/bench.xml (source S003
             Eq. 19–20; bushing geom user data, field ``mu0`` of twin.names.BORE_USERDATA_FIELDS).
@@ -363,9 +363,10 @@ class MujocoSettings:
         solver: constraint solver ("Newton", "CG", "PGS").
         iterations: maximum solver iterations.
         tolerance: solver tolerance (0 disables the early exit).
-        contact_solref: pin/bushing ``solref`` (2 numbers); empty = use the calibration
-            table ``twin/data/contact_calibration.json`` (see ``twin calibrate contact``).
-        contact_solimp: pin/bushing ``solimp`` (5 numbers); empty = calibration table.
+        contact_solref: pin/bushing ``solref`` (2 numbers): raw MuJoCo values of a soft contact
+            that replaces the native law when given with ``contact_solimp``; empty = the
+            ``contact_source``.
+        contact_solimp: pin/bushing ``solimp`` (5 numbers); empty = the ``contact_source``.
         equality_solref: ``solref`` of the loop-closure ``connect`` at an ideal joint C.
             Default: mjcf/bench.xml (the ``joint_C`` connect), as is equality_solimp.
         equality_solimp: ``solimp`` of that connect.
@@ -379,22 +380,20 @@ class MujocoSettings:
         friction: clearance-joint friction: "native" (the reference's regularized Coulomb law
             as a passive force, default; bore only) or "cone" (MuJoCo's elliptic friction
             cone, μ0; bore or ring). A tendon bushing is frictionless whatever this says.
-        contact_source: "calibration" (the calibration table, first guess where it has no entry)
-            or "first-guess" (ignore the table); ``contact_solref``/``solimp`` override both.
-        contact_stiffness_scale: factor on the resolved law's stiffness (every term) [-];
-            1 = as calibrated. For sensitivity and stress studies.
-        contact_damping_scale: factor on the resolved law's damping (every term, and the native
-            impact-speed term) [-].
-        contact_damping: "impact-speed" (the default): the reference's Lankarani–Nikravesh
-            hysteresis damping χ K δⁿ δ̇ / v_imp (S003 Eq. 17–18, v_imp stored at the start of
-            each contact event) added inside the soft constraint by the native module
-            (``_bore.c``), the pairs keeping ``IMPACT_SPEED_RESIDUAL_DAMPING`` of their
-            calibrated damping; chosen by ``twin study accuracy`` (README, issue 4). "fixed":
-            the pairs' calibrated solref damping alone (the calibration's single-impact law).
-            Applies to the bore bushing with a hysteresis law (``contact.law`` LN, Hunt–Crossley or
-            Flores, whose χ it takes); ring and tendon bushings and the linear law keep the fixed
-            damping.
-        impact_damping_gain: factor on χ K of that damping [-] (1 = the reference's law).
+        contact_source: "law" (default): the bore bushing's contact force is the reference's
+            own law (``contact.law``: Lankarani–Nikravesh K δⁿ (1 + χ δ̇/v_imp) with its stored
+            impact speed and floor, Hunt–Crossley, Flores or linear; same K, n, e), applied
+            exactly by the native module (``_bore.c``, issue 15); ring and tendon bushings,
+            which the module does not serve, take the first guess. "first-guess": MuJoCo's own
+            soft contact, the linear spring-damper with the LN law's duration and restitution
+            at 0.1 m/s (``builder.first_guess_contact``). ``contact_solref``/``solimp`` override
+            both. (Stored configurations with the retired "calibration" read as "law", and their
+            retired ``contact_damping`` is dropped.)
+        contact_stiffness_scale: factor on the twin's contact stiffness (the law's K, or the
+            soft contact's k) [-]; 1 = the reference's. For sensitivity and stress studies.
+        contact_damping_scale: factor on the twin's contact damping (the law's χ or linear c,
+            or the soft contact's c) [-].
+        impact_damping_gain: factor on χ of a hysteresis law [-] (1 = the reference's law).
     """
 
     integrator: str = _XML.integrator
@@ -409,10 +408,9 @@ class MujocoSettings:
     bushing: str = "bore"
     ring_boxes: int = 48
     friction: str = "native"
-    contact_source: str = "calibration"
+    contact_source: str = "law"
     contact_stiffness_scale: float = 1.0
     contact_damping_scale: float = 1.0
-    contact_damping: str = "impact-speed"
     impact_damping_gain: float = 1.0
 
     def __post_init__(self) -> None:
@@ -424,8 +422,7 @@ class MujocoSettings:
         _check(isinstance(self.ring_boxes, int) and 8 <= self.ring_boxes <= 512, "ring_boxes",
                f"must be an integer in [8, 512], got {self.ring_boxes!r}")
         _choice(self.friction, "friction", ("native", "cone"))
-        _choice(self.contact_source, "contact_source", ("calibration", "first-guess"))
-        _choice(self.contact_damping, "contact_damping", ("fixed", "impact-speed"))
+        _choice(self.contact_source, "contact_source", ("law", "first-guess"))
         _check(isinstance(self.impact_damping_gain, (int, float)) and 0.1 <= self.impact_damping_gain <= 10,
                "impact_damping_gain", f"must lie in [0.1, 10], got {self.impact_damping_gain!r}")
         _check(self.bushing == "bore" or self.friction == "cone" or self.bushing == "tendon", "friction",
@@ -437,7 +434,7 @@ class MujocoSettings:
                "tolerance", f"must lie in [0, 1), got {self.tolerance!r}")
         for name, n in (("contact_solref", 2), ("contact_solimp", 5)):
             v = getattr(self, name)
-            _check(len(v) in (0, n), name, f"must hold {n} numbers or be empty (calibration), got {list(v)!r}")
+            _check(len(v) in (0, n), name, f"must hold {n} numbers or be empty (contact_source), got {list(v)!r}")
         for name, n in (("equality_solref", 2), ("equality_solimp", 5), ("guide_solreffriction", 2)):
             v = getattr(self, name)
             _check(len(v) == n, name, f"must hold {n} numbers, got {list(v)!r}")
@@ -1003,7 +1000,9 @@ def config_from_toml(text: str) -> BenchConfig:
     """Parse a configuration from TOML text (e.g. the copy stored in a run file).
 
     Files written by earlier versions are migrated: ``mujoco.impact_speed_floor_mps`` is now
-    ``contact.impact_speed_floor_mps`` (one floor for both engines).
+    ``contact.impact_speed_floor_mps`` (one floor for both engines); ``mujoco.contact_source =
+    "calibration"`` (the retired calibration table) reads as "law" and the retired
+    ``mujoco.contact_damping`` is dropped (the native law carries its own damping, issue 15).
     """
     try:
         data = tomllib.loads(text)
@@ -1012,6 +1011,10 @@ def config_from_toml(text: str) -> BenchConfig:
     mj = data.get("mujoco")
     if isinstance(mj, dict) and "impact_speed_floor_mps" in mj:
         data.setdefault("contact", {}).setdefault("impact_speed_floor_mps", mj.pop("impact_speed_floor_mps"))
+    if isinstance(mj, dict):
+        mj.pop("contact_damping", None)
+        if mj.get("contact_source") == "calibration":
+            mj["contact_source"] = "law"
     return from_dict(BenchConfig, data)
 
 

@@ -1,7 +1,8 @@
 """Single-impact analysis of contact force laws (1-DOF, mass m hitting at speed v).
 
-Used for the MuJoCo contact's first guess (builder), the calibration against the reference
-law (``twin calibrate contact``) and tests. The penetration δ obeys m δ̈ = −f(δ, δ̇),
+Used for the MuJoCo soft contact's first guess (builder), the reference's linear law, the
+check of the twin's native contact law against the reference (``twin calibrate contact``,
+:mod:`twin.calibrate`) and tests. The penetration δ obeys m δ̈ = −f(δ, δ̇),
 δ(0) = 0, δ̇(0) = v; the contact ends when δ returns to 0 or the force would pull (a
 contact cannot adhere). Results: restitution e = −δ̇_end / v, peak force, duration.
 
@@ -21,8 +22,6 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
-from scipy.integrate import solve_ivp
-from scipy.optimize import brentq
 
 #: damping factor χ(e) of each hysteresis law: f = K δ^n (1 + χ δ̇/v⁻)
 DAMPING_FACTOR = {
@@ -50,6 +49,8 @@ class ImpactResult:
 
 
 def _integrate(force, m: float, v: float, t_scale: float, preload_n: float = 0.0) -> ImpactResult:
+    from scipy.integrate import solve_ivp  # imported here: importing twin.impact stays light
+
     def rhs(_t, y):
         return [y[1], (preload_n - max(force(y[0], y[1]), 0.0)) / m if y[0] > 0 else 0.0]
 
@@ -106,6 +107,8 @@ def hysteresis_restitution(law: str, e: float, n: float = 1.5) -> float:
 def linear_damping_ratio(restitution: float) -> float:
     """Damping ratio ζ = c / (2 sqrt(k m)) of a unilateral linear contact with the given
     restitution (scale-free; ζ ≈ 0.358 for 0.40)."""
+    from scipy.optimize import brentq
+
     def f(zeta):
         return impact_linear(1.0, 2 * zeta, 1.0, 1.0).restitution - restitution
 

@@ -106,20 +106,27 @@ BORE_MAGIC = 7301.0
 #: * ``marker``: :data:`BORE_MAGIC` makes the native collider treat the geom as a hollow bore;
 #: * ``mu0``, ``v0``, ``v1``: regularized Coulomb friction (S003 Eq. 19-20; μ0 [-], v0, v1 [m/s]),
 #:   applied as a passive force; mu0 = 0 switches it off;
-#: * ``damping_coef``, ``exponent``, ``speed_floor``, ``slot``: impact-speed damping
-#:   coef δⁿ δ̇ / v_imp (coef = χ K [N/mⁿ], 0 = off; n [-]; floor of v_imp [m/s]; index of the
-#:   ``mjData.userdata`` slot that keeps v_imp, -1 = none).
-BORE_USERDATA_FIELDS: tuple[str, ...] = ("marker", "mu0", "v0", "v1", "damping_coef", "exponent", "speed_floor", "slot")
-#: values of the optional fields when not given (damping off, no slot)
-_BORE_USERDATA_OPTIONAL = {"marker": BORE_MAGIC, "damping_coef": 0.0, "exponent": 0.0, "speed_floor": 0.0,
-                           "slot": -1.0}
+#: * ``law``: the contact's normal force: 0 = MuJoCo's own solref/solimp soft constraint,
+#:   1 = hysteresis law K δⁿ (1 + χ max(δ̇/v_imp, −1)) (Lankarani–Nikravesh, Hunt–Crossley,
+#:   Flores), 2 = linear law K δ + c δ̇, applied exactly by the native module (:data:`BORE_LAWS`);
+#: * ``stiffness`` K [N/mⁿ] (linear law: [N/m]), ``exponent`` n [-], ``damping`` χ [-]
+#:   (linear law: c [N s/m]);
+#: * ``speed_floor``: floor of the stored impact speed v_imp [m/s]; ``slot``: index of the
+#:   ``mjData.userdata`` slot that keeps v_imp of the contact event under way (-1 = none).
+BORE_USERDATA_FIELDS: tuple[str, ...] = ("marker", "mu0", "v0", "v1", "law", "stiffness", "exponent", "damping",
+                                         "speed_floor", "slot")
+#: codes of the ``law`` field
+BORE_LAWS: dict[str, int] = {"soft": 0, "hysteresis": 1, "linear": 2}
+#: values of the optional fields when not given (MuJoCo's soft contact, no slot)
+_BORE_USERDATA_OPTIONAL = {"marker": BORE_MAGIC, "law": 0.0, "stiffness": 0.0, "exponent": 0.0, "damping": 0.0,
+                           "speed_floor": 0.0, "slot": -1.0}
 
 
 def bore_userdata(**fields: float) -> list[float]:
     """User data vector of a bushing bore from its named fields (:data:`BORE_USERDATA_FIELDS`).
 
     ``mu0``, ``v0`` and ``v1`` are required; ``marker`` defaults to :data:`BORE_MAGIC`, the
-    damping fields to off and ``slot`` to -1. Unknown names raise ``KeyError``.
+    law fields to MuJoCo's soft contact (law 0) and ``slot`` to -1. Unknown names raise ``KeyError``.
     """
     unknown = set(fields) - set(BORE_USERDATA_FIELDS)
     if unknown:

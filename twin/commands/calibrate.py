@@ -1,7 +1,12 @@
-"""``twin calibrate contact``: fit the MuJoCo pin/bushing contact to the reference law.
+"""``twin calibrate contact``: check the twin's contact law against the reference's closed forms.
 
-Method: :mod:`twin.calibrate` (module docstring). Writes the table the builder reads by
-default (``twin/data/contact_calibration.json``) or ``--out FILE``; the write is atomic.
+Since issue 15 nothing is fitted: the MuJoCo twin applies the reference's contact law itself
+(native module ``_bore.c``), and the calibration table of issue 4 is retired. The command keeps
+the acceptance check of that law as MuJoCo integrates it, for every joint and catalogue
+clearance at the smallest, median and largest effective mass (method: :mod:`twin.calibrate`):
+static penetration (1 %), free single impacts over 1 mm/s-0.5 m/s (restitution ±0.02, peak
+force 5 %, duration 10 %) and the capture of preloaded slow impacts. Writes a JSON report;
+exit status 1 when a case misses a tolerance.
 """
 
 from __future__ import annotations
@@ -10,21 +15,21 @@ import argparse
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("calibrate", help="calibrate the twin against the reference (contact)",
-                       description="Calibrations of the MuJoCo twin against the reference engine.")
+    p = sub.add_parser("calibrate", help="check the twin against the reference (contact law)",
+                       description="Checks of the MuJoCo twin against the reference engine's closed forms.")
     what = p.add_subparsers(dest="what", metavar="WHAT", parser_class=type(p))
     what.required = True
     c = what.add_parser(
-        "contact", help="fit solref/solimp of every joint and catalogue clearance to LN single impacts",
-        description="Single impacts of the reference Lankarani-Nikravesh law vs the twin's contact (MuJoCo "
-                    "probe with the real bore collider), 1 mm/s to 0.5 m/s, median effective mass of each "
-                    "joint; tolerances restitution +-0.02, peak force 10 %, duration 20 %. A global fit of "
-                    "one seed case (~10 min) is carried to every other case by similarity and refined locally.")
+        "contact", help="check the twin's contact law against the reference's single-impact solutions",
+        description="The twin's native contact law in a MuJoCo probe (real bore collider and native module) "
+                    "against the reference law: static penetration (F/K)^(1/n) within 1 %, free single impacts "
+                    "1 mm/s to 0.5 m/s at the smallest, median and largest effective mass (restitution +-0.02, "
+                    "peak force 5 %, duration 10 %), capture of preloaded slow impacts. Nothing is fitted (issue "
+                    "15). Exit status 1 when a case misses a tolerance.")
     c.add_argument("--config", metavar="FILE", help="TOML configuration (contact law, materials, timestep)")
-    c.add_argument("--out", metavar="FILE", help="table to write (default: the builder's table in the package)")
-    c.add_argument("--seed-from", metavar="TABLE",
-                   help="reuse the seed law of an existing table instead of the global fit")
-    c.add_argument("--joints", default="B,C", help="joints to fit (default B,C)")
+    c.add_argument("--out", metavar="FILE", default="contact_check.json",
+                   help="JSON report to write (default contact_check.json)")
+    c.add_argument("--joints", default="B,C", help="joints to check (default B,C)")
     c.add_argument("--no-progress", action="store_true", help="no progress bar")
     c.set_defaults(func=_run_contact)
 
@@ -34,28 +39,26 @@ def _run_contact(args: argparse.Namespace) -> int:
     import sys
     from pathlib import Path
 
-    from twin.calibrate import ContactLaw, calibration_table, save_table
+    from twin.calibrate import contact_check
     from twin.config import BenchConfig, load_config
-    from twin.errors import ConfigError, TwinError
-    from twin.mujoco_engine.builder import CALIBRATION_FILE
+    from twin.errors import ConfigError
+    from twin.util import atomic_write_text, check_output_file
 
     joints = tuple(j.strip().upper() for j in args.joints.split(",") if j.strip())
     if not joints or any(j not in ("B", "C") for j in joints):
         raise ConfigError("--joints", f"must be a comma list of B, C; got {args.joints!r}")
-    out = Path(args.out) if args.out else CALIBRATION_FILE
-    if not out.parent.is_dir():
-        raise TwinError(f"--out: directory {out.parent} does not exist")
-    seed = None
-    if args.seed_from:
-        try:
-            seed = ContactLaw.from_json(json.loads(Path(args.seed_from).read_text())["seed"]["law"])
-        except (OSError, ValueError, KeyError, TypeError) as err:
-            raise TwinError(f"--seed-from: cannot read a seed law from {args.seed_from}: {err}") from None
+    out = Path(args.out)
+    check_output_file(out, "--out", ".json")
     cfg = load_config(args.config) if args.config else BenchConfig()
-    table = calibration_table(cfg, joints=joints, seed_law=seed,
-                              progress=not args.no_progress and sys.stderr.isatty())
-    save_table(table, out)
-    worst = max(max(r["max_scaled_error_median_mass"]) for r in table["report"].values())
-    print(f"wrote {out}: {len(table['entries'])} entries, worst scaled error at the median mass {worst:.3f} "
-          f"(<= 1 meets the tolerances)")
-    return 0
+    report = contact_check(cfg, joints=joints, progress=not args.no_progress and sys.stderr.isatty())
+    atomic_write_text(out, json.dumps(report, indent=1) + "\n")
+    print("| case | m_eff min/median/max [kg] | restitution/0.02 | peak force/5 % | duration/10 % | static | capture |")
+    print("|---|---|---:|---:|---:|---:|---|")
+    for key, r in report["cases"].items():
+        m, e = r["m_eff_kg"], r["max_scaled_error"]
+        print(f"| {key} | {m['min']:.2f}/{m['median']:.2f}/{m['max']:.2f} | {e['restitution']:.2f} | "
+              f"{e['peak_force']:.2f} | {e['duration']:.2f} | {100 * r['static_error']:.3f} % | "
+              f"{'same' if r['capture_agrees'] else 'DIFFERS'} |")
+    print(f"wrote {out}: {'every case within the tolerances' if report['ok'] else 'some case misses a tolerance'} "
+          f"(scaled errors <= 1 meet them)")
+    return 0 if report["ok"] else 1

@@ -1,59 +1,96 @@
 /*
- * Native "pin inside a bore" collider for the twin's clearance joints.
+ * Native "pin inside a bore" contact for the twin's clearance joints: collider, contact law,
+ * regularized Coulomb friction.
  *
- * MuJoCo has no concave primitive, so a bushing (a hollow cylinder) cannot be a geom. Its
- * documented extension point is the global collision table mjCOLLISIONFUNC[type1][type2]
- * (MuJoCo docs, programming/simulation "Collision detection"). This module installs a
- * function for the cylinder-cylinder pair: when exactly one of the two geoms is marked as a
- * bore (geom user data field marker == BORE_MAGIC), the pair is treated as a pin of radius R_j inside a bore
- * of radius R_i (both taken from geom_size[0]) with parallel axes (the bore's z axis):
+ * Collider. MuJoCo has no concave primitive, so a bushing (a hollow cylinder) cannot be a geom.
+ * Its documented extension point is the global collision table mjCOLLISIONFUNC[type1][type2]
+ * (MuJoCo docs, programming/simulation "Collision detection"). This module installs a function
+ * for the cylinder-cylinder pair: when exactly one of the two geoms is marked as a bore (geom
+ * user data field marker == BORE_MAGIC), the pair is treated as a pin of radius R_j inside a
+ * bore of radius R_i (both taken from geom_size[0]) with parallel axes (the bore's z axis):
  *
  *   e    = pin centre - bore centre, projected on the plane normal to the bore axis
- *   dist = (R_i - R_j) - |e|            (> 0: gap; < 0: penetration)
+ *   dist = (R_i - R_j) - |e|            (> 0: gap; < 0: penetration delta = -dist)
  *   n    = e / |e|                       (from the bore centre towards the contact)
  *
- * One contact at the midpoint between the two surfaces along n, normal pointing from
- * geom1 to geom2 (MuJoCo's convention), first tangent = axis x normal (in the plane of
- * motion). The geometry is an exact circle: no faceting error, whatever the clearance.
- * Every other cylinder-cylinder pair is passed to the function that was in the table before
- * (MuJoCo's own), so unmarked models behave as usual. The collider is stateless and
- * thread-safe (it works under mujoco.rollout with several threads).
+ * One contact at the midpoint between the two surfaces along n, normal pointing from geom1 to
+ * geom2 (MuJoCo's convention), first tangent = axis x normal (in the plane of motion). The
+ * geometry is an exact circle: no faceting error, whatever the clearance. Every other
+ * cylinder-cylinder pair is passed to the function that was in the table before (MuJoCo's
+ * own), so unmarked models behave as usual. The collider is stateless and thread-safe.
+ *
+ * Contact law (user[BORE_LAW] > 0). The force of the contact's normal row is the reference
+ * engine's law, not MuJoCo's solref/solimp spring: with delta the penetration, delta' its rate
+ * (> 0 approaching), v_imp the approach speed stored when the contact event starts (floored at
+ * user[BORE_SPEED_FLOOR], kept in d->userdata[user[BORE_SLOT]]; 0 = no event):
+ *
+ *   law 1, hysteresis (Lankarani-Nikravesh, Hunt-Crossley, Flores; S003 Eq. 17):
+ *       F = K delta^n (1 + chi max(delta'/v_imp, -1)),  K = user[STIFFNESS], n = user[EXPONENT],
+ *       chi = user[DAMPING];
+ *   law 2, linear: F = K delta + c delta',  c = user[DAMPING].
+ *
+ * How the solver is made to apply it. For an active contact row MuJoCo's primal solvers
+ * (Newton, CG) return the force f = D (aref - J qacc) = (aref - a)/R, a = J qacc the row's
+ * constrained acceleration, R = efc_R = 1/efc_D its regularizer, and aref = -B efc_vel -
+ * K I (efc_pos - efc_margin) its reference acceleration, with (K, B, I) = efc_KBIP (MuJoCo
+ * docs, computation: "the force relation R f = aref - a"; engine_core_constraint.c,
+ * mj_constraintUpdate: force = -D (J qacc - aref) while J qacc < aref, 0 otherwise). Rows, R and
+ * KBIP are built in the position stage; mjcb_passive runs in the velocity stage before
+ * mj_referenceConstraint computes aref from KBIP. Here, in mjcb_passive, the row gets
+ *
+ *   R = 1 / gamma,  gamma = theta c h,   B = R c,   K = R F_e / (I delta)
+ *
+ * (F_e = K delta^n, c = chi F_e / v_imp: the elastic part and the damping coefficient of the
+ * law; h the timestep), so that aref = R (F_e + c delta') = R F(delta, delta') and
+ *
+ *   f = F(delta, delta') - gamma a = F_e + c [(1 - theta) delta' + theta delta'_end],
+ *
+ * because with MuJoCo's Euler update the row's end-of-step penetration rate is delta'_end =
+ * delta' - h a. The elastic term is explicit (evaluated at the step's start: with the
+ * semi-implicit Euler update of positions this is the reference engine's symplectic Euler,
+ * which keeps the elastic energy of an impact), the damping is the theta-method: trapezoidal
+ * (theta = 1/2, second order) while c h / m_hat <= 2, and theta = 1 - m_hat/(c h) beyond, the
+ * smallest theta whose velocity decay is monotonic (m_hat = 1/efc_diagA, the row's mass
+ * estimate), so the large damping of a resting contact (v_imp at its floor) needs no step limit.
+ * Where gamma is smaller than MuJoCo's own 1/R (start of contact: c -> 0), R is kept and the
+ * residual -a/R is 1e-4 of the row's inertial force (the pair's impedance 1e-4). In the clamped
+ * branch (delta'/v_imp < -1) the force is K delta^n (1 - chi), without a rate term. A pulling
+ * law force makes aref < 0 and the solver leaves the row inactive: f = max(F, 0), decided
+ * implicitly. In equilibrium (a = 0, delta' = 0) f = K delta^n exactly. R is also written into
+ * iefc_R/iefc_D (islands) and into the diagonal of efc_AR (dual solvers: PGS, noslip). With an
+ * elliptic friction cone (condim 3) every row of the contact is scaled by the same factor, which
+ * keeps MuJoCo's regularized friction coefficient. Pyramidal cones are left to solref/solimp.
+ * Assumes one mjcb_passive call per step (mj_step, mj_forward: the Euler and implicit
+ * integrators; RK4 calls it per stage, and its end-of-step rate is not delta' - h a).
  *
  * Friction. The pair is a frictionless (condim 1) MuJoCo contact: MuJoCo's soft elliptic cone
  * adds mu * (would-be sticking force) to the normal force while sliding, which inflated the
  * normal force by a median 23 % and up to 27x on the bench (measured, see the builder's
- * docstring). Friction is applied instead as a passive force (mjcb_passive), exactly the
- * reference's regularized Coulomb law (S003 Eq. 19-20):
+ * docstring). Friction is applied instead as a passive force, exactly the reference's
+ * regularized Coulomb law (S003 Eq. 19-20):
  *
  *   f_T = mu(v_r) f_N,  mu = 0 below v0, mu0 (v_r - v0)/(v1 - v0) between, mu0 above v1,
  *
  * opposing the tangential relative velocity v_r of the contact points on the pin and on the
- * bore (rotations included). f_N is the contact's soft-constraint force predicted from its
- * own row, f_N = aref / (A_hat + R) with aref = -B vel - K I pos (MuJoCo's reference
- * acceleration, impedance I): exactly k d + c d' for a flat, tiny impedance. The bore geom's
- * user data carry the law: fields BORE_MU0, BORE_V0, BORE_V1 (enum bore_user). A user sensor (mjcb_sensor,
- * objtype geom = the bore) reports the friction force on the pin along t = axis x n, where
- * n points from the bore centre towards the pin.
- *
- * Impact-speed damping (optional: user[BORE_DAMPING_COEF] > 0, nuser_geom >= BORE_NUSER). The reference's
- * Lankarani-Nikravesh law damps with chi K d^n d'/v_imp, v_imp the approach speed stored at
- * the start of the contact event (S003 Eq. 17), which a fixed solref cannot express. Here,
- * in mjcb_passive (after MuJoCo has built the constraint rows, before it computes their
- * reference accelerations), the damping B of the bore's first contact row is raised by
- *
- *   B_x = coef d^n / v_imp * (A_hat + R),   coef = user[BORE_DAMPING_COEF], n = user[BORE_EXPONENT],
- *
- * which adds coef d^n d'/v_imp to that row's force and lets the solver treat it implicitly
- * (no explicit-damping step limit). v_imp = max(approach speed, user[BORE_SPEED_FLOOR]) is taken when the
- * bore has a contact and had none at the previous call, and kept in d->userdata[user[BORE_SLOT]]
- * (0 = no event; mj_resetData clears it). As in the reference, the ratio d'/v_imp is kept
- * above -1 while separating. Assumes one mjcb_passive call per constraint build (mj_step,
- * mj_forward; not mj_forwardSkip from the velocity stage).
+ * bore (rotations included). f_N is the law's force at the step's state, F(delta, delta')
+ * (aref/R of the row), as in the reference engine; for a solref/solimp row (law 0) it is the
+ * soft constraint's prediction aref/(A_hat + R) (exactly k delta + c delta' for a flat, tiny
+ * impedance). Fields BORE_MU0, BORE_V0, BORE_V1. A user sensor (mjcb_sensor, objtype geom = the
+ * bore) reports the friction force on the pin along t = axis x n, n from the bore centre
+ * towards the pin.
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
 #include <math.h>
 #include <mujoco/mujoco.h>
+
+#ifndef BORE_MODULE
+#define BORE_MODULE _bore
+#endif
+#define BORE_STR2(x) #x
+#define BORE_STR(x) BORE_STR2(x)
+#define BORE_CAT2(a, b) a##b
+#define BORE_CAT(a, b) BORE_CAT2(a, b)
 
 #define BORE_MAGIC 7301.0
 
@@ -66,27 +103,30 @@ enum bore_user {
   BORE_MU0,              /* regularized Coulomb friction: mu0 [-] (0 = off) */
   BORE_V0,               /* v0 [m/s]: mu = 0 below */
   BORE_V1,               /* v1 [m/s]: mu = mu0 above */
-  BORE_DAMPING_COEF,     /* impact-speed damping coef = chi K [N/m^n] (0 = off) */
-  BORE_EXPONENT,         /* its exponent n [-] */
+  BORE_LAW,              /* contact law: 0 = MuJoCo's solref/solimp, 1 = hysteresis, 2 = linear */
+  BORE_STIFFNESS,        /* K [N/m^n] (linear law: [N/m]) */
+  BORE_EXPONENT,         /* n [-] (linear law: 1) */
+  BORE_DAMPING,          /* hysteresis: chi [-]; linear: c [N s/m] */
   BORE_SPEED_FLOOR,      /* floor of the stored impact speed [m/s] */
   BORE_SLOT,             /* d->userdata index that keeps v_imp (-1 = none) */
   BORE_NUSER             /* number of fields */
 };
 static const char* const bore_user_names[] = {
-  "marker", "mu0", "v0", "v1", "damping_coef", "exponent", "speed_floor", "slot"
+  "marker", "mu0", "v0", "v1", "law", "stiffness", "exponent", "damping", "speed_floor", "slot"
 };
 _Static_assert(sizeof(bore_user_names) / sizeof(bore_user_names[0]) == BORE_NUSER,
                "bore_user_names must name every field of enum bore_user");
+
+enum bore_law { LAW_SOFT = 0, LAW_HYSTERESIS = 1, LAW_LINEAR = 2 };
 
 static mjfCollision g_previous = NULL;
 static mjfGeneric g_prev_passive = NULL;
 static mjfSensor g_prev_sensor = NULL;
 typedef void (*applyFT_t)(const mjModel*, mjData*, const mjtNum*, const mjtNum*, const mjtNum*, int, mjtNum*);
 static applyFT_t g_applyFT = NULL;
-static int g_installed = 0;
 
 static int is_bore(const mjModel* m, int g) {
-  return m->nuser_geom > BORE_MARKER && m->geom_user[g * m->nuser_geom + BORE_MARKER] == BORE_MAGIC;
+  return m->nuser_geom >= BORE_NUSER && m->geom_user[g * m->nuser_geom + BORE_MARKER] == BORE_MAGIC;
 }
 
 static int collide_pin_bore(const mjModel* m, mjData* d, mjPreContact* con,
@@ -150,22 +190,141 @@ static mjtNum contact_velocity(const mjModel* m, const mjData* d, const mjContac
   return n12[0] * (vb[0] - va[0]) + n12[1] * (vb[1] - va[1]) + n12[2] * (vb[2] - va[2]);
 }
 
+/* the bore geom of contact con (or -1 if it is not a pin/bore contact with a constraint row) */
+static int contact_bore(const mjModel* m, const mjContact* con) {
+  const int g1 = con->geom[0], g2 = con->geom[1];
+  if (g1 < 0 || g2 < 0 || con->exclude || con->efc_address < 0) return -1;
+  const int b1 = is_bore(m, g1), b2 = is_bore(m, g2);
+  if (b1 == b2) return -1;
+  return b1 ? g1 : g2;
+}
+
+/* whether the law is applied to this row (frictionless or elliptic contact rows) */
+static int law_row(const mjModel* m, const mjData* d, int gb, int row) {
+  const int law = (int)m->geom_user[gb * m->nuser_geom + BORE_LAW];
+  const int type = d->efc_type[row];
+  return (law == LAW_HYSTERESIS || law == LAW_LINEAR) &&
+         (type == mjCNSTR_CONTACT_FRICTIONLESS || type == mjCNSTR_CONTACT_ELLIPTIC);
+}
+
+/* replace the regularizer of efc row `row` by R (and D = 1/R) wherever the solver reads it */
+static void set_regularizer(const mjModel* m, mjData* d, int row, mjtNum R) {
+  const mjtNum dR = R - d->efc_R[row];
+  d->efc_R[row] = R;
+  d->efc_D[row] = 1 / R;
+  if (d->nisland > 0 && d->map_efc2iefc) {          /* islands: the solver reads iefc_R/iefc_D */
+    const int i = d->map_efc2iefc[row];
+    if (i >= 0) {
+      d->iefc_R[i] = R;
+      d->iefc_D[i] = 1 / R;
+    }
+  }
+  /* dual solvers read R from the diagonal of efc_AR = A + R (mj_projectConstraint) */
+  if ((m->opt.solver == mjSOL_PGS || m->opt.noslip_iterations > 0) && d->efc_AR && d->nA > 0) {
+    const int nefc = d->nefc;
+    if (d->nA == nefc * nefc) {
+      d->efc_AR[row * (nefc + 1)] += dR;
+    } else if (d->efc_AR_rownnz && d->efc_AR_rowadr && d->efc_AR_colind) {
+      const int adr = d->efc_AR_rowadr[row];
+      for (int k = 0; k < d->efc_AR_rownnz[row]; k++) {
+        if (d->efc_AR_colind[adr + k] == row) {
+          d->efc_AR[adr + k] += dR;
+          break;
+        }
+      }
+    }
+  }
+}
+
+/* the contact law (module docstring) on the normal row of each bore's contact; keeps v_imp */
+static void contact_law(const mjModel* m, mjData* d) {
+  const int nu = m->nuser_geom;
+  if (nu < BORE_NUSER) return;
+  for (int gb = 0; gb < m->ngeom; gb++) {
+    const mjtNum* user = m->geom_user + gb * nu;
+    if (user[BORE_MARKER] != BORE_MAGIC) continue;
+    const int law = (int)user[BORE_LAW];
+    if (law != LAW_HYSTERESIS && law != LAW_LINEAR) continue;
+    const int slot = (int)user[BORE_SLOT];
+    const int has_slot = slot >= 0 && slot < m->nuserdata;
+    int icon = -1;
+    for (int i = 0; i < d->ncon; i++) {
+      if (contact_bore(m, d->contact + i) == gb) {
+        icon = i;
+        break;
+      }
+    }
+    if (icon < 0) {                               /* no contact: the event is over */
+      if (has_slot) d->userdata[slot] = 0;
+      continue;
+    }
+    const mjContact* con = d->contact + icon;
+    const int row = con->efc_address;
+    if (!law_row(m, d, gb, row)) continue;
+    mjtNum va[3], vb[3];
+    const mjtNum rate = -contact_velocity(m, d, con, va, vb);  /* delta' (> 0 approaching) */
+    mjtNum vimp = user[BORE_SPEED_FLOOR];
+    if (has_slot) {
+      if (!(d->userdata[slot] > 0)) d->userdata[slot] = fmax(rate, user[BORE_SPEED_FLOOR]);
+      vimp = d->userdata[slot];
+    }
+    mjtNum* kbip = d->efc_KBIP + 4 * row;
+    const mjtNum delta = -(d->efc_pos[row] - d->efc_margin[row]);
+    if (!(delta > 0) || !(vimp > 0)) {            /* touching, not penetrating: no force */
+      kbip[0] = 0;
+      kbip[1] = 0;
+      continue;
+    }
+    const mjtNum K = user[BORE_STIFFNESS];
+    mjtNum fe, c;                                 /* elastic force, damping coefficient */
+    if (law == LAW_HYSTERESIS) {
+      const mjtNum n = user[BORE_EXPONENT];
+      const mjtNum chi = user[BORE_DAMPING];
+      const mjtNum dn = n == 1.5 ? delta * sqrt(delta) : pow(delta, n);
+      fe = K * dn;
+      c = chi * fe / vimp;
+      if (rate < -vimp) {                         /* clamp delta'/v_imp at -1: no rate term */
+        fe *= 1 - chi;
+        c = 0;
+      }
+    } else {
+      fe = K * delta;
+      c = user[BORE_DAMPING];
+    }
+    const mjtNum h = m->opt.timestep;
+    const mjtNum mhat = d->efc_diagA[row] > 0 ? 1 / d->efc_diagA[row] : 0;
+    const mjtNum ch = c * h;
+    const mjtNum theta = ch > 2 * mhat ? 1 - mhat / ch : 0.5;
+    const mjtNum gamma = theta * ch;
+    const mjtNum R0 = d->efc_R[row];
+    const mjtNum R = gamma * R0 > 1 ? 1 / gamma : R0;
+    if (R != R0) {
+      const int dim = d->efc_type[row] == mjCNSTR_CONTACT_ELLIPTIC ? con->dim : 1;
+      set_regularizer(m, d, row, R);
+      for (int j = 1; j < dim; j++) {             /* elliptic cone: same factor, same mu */
+        set_regularizer(m, d, row + j, d->efc_R[row + j] * (R / R0));
+      }
+    }
+    const mjtNum imp = kbip[2] > 0 ? kbip[2] : 1;
+    kbip[0] = R * fe / (imp * delta);
+    kbip[1] = R * c;
+  }
+}
+
 typedef struct {
   int pin_body, bore_body;
   mjtNum t[3];   /* in-plane tangent axis x n (n: bore centre -> pin) */
-  mjtNum fn;     /* predicted normal force [N] */
+  mjtNum fn;     /* normal force of the law (or predicted by the soft constraint) [N] */
   mjtNum ft;     /* friction force on the pin along t [N] */
 } friction_t;
 
 /* friction of contact icon if it is an active pin/bore contact; returns 0 otherwise */
 static int bore_friction(const mjModel* m, const mjData* d, int icon, friction_t* out) {
   const mjContact* con = d->contact + icon;
-  const int g1 = con->geom[0], g2 = con->geom[1];
-  if (g1 < 0 || g2 < 0) return 0;
-  const int b1 = is_bore(m, g1), b2 = is_bore(m, g2);
-  if (b1 == b2 || con->exclude || con->efc_address < 0) return 0;
-  const int gb = b1 ? g1 : g2, gp = b1 ? g2 : g1;
-  if (m->nuser_geom <= BORE_V1) return 0;
+  const int gb = contact_bore(m, con);
+  if (gb < 0) return 0;
+  const int b1 = con->geom[0] == gb;
+  const int gp = b1 ? con->geom[1] : con->geom[0];
   const mjtNum* user = m->geom_user + gb * m->nuser_geom;
   const mjtNum mu0 = user[BORE_MU0], v0 = user[BORE_V0], v1 = user[BORE_V1];
   const int row = con->efc_address;
@@ -173,8 +332,10 @@ static int bore_friction(const mjModel* m, const mjData* d, int icon, friction_t
   mjtNum va[3], vb[3];
   const mjtNum vel = contact_velocity(m, d, con, va, vb);
   const mjtNum* n12 = con->frame;               /* from geom1 to geom2 */
+  /* the row's reference acceleration (mj_referenceConstraint's formula, own velocity) */
   const mjtNum aref = -kbip[1] * vel - kbip[0] * kbip[2] * (d->efc_pos[row] - d->efc_margin[row]);
-  const mjtNum fn = aref / (d->efc_diagA[row] + d->efc_R[row]);
+  const mjtNum fn = law_row(m, d, gb, row) ? aref / d->efc_R[row]
+                                           : aref / (d->efc_diagA[row] + d->efc_R[row]);
   out->pin_body = m->geom_bodyid[gp];
   out->bore_body = m->geom_bodyid[gb];
   out->fn = fn > 0 ? fn : 0;
@@ -197,44 +358,11 @@ static int bore_friction(const mjModel* m, const mjData* d, int icon, friction_t
   return 1;
 }
 
-static void impact_speed_damping(const mjModel* m, mjData* d) {
-  const int nu = m->nuser_geom;
-  if (nu < BORE_NUSER) return;
-  for (int gb = 0; gb < m->ngeom; gb++) {
-    const mjtNum* user = m->geom_user + gb * nu;
-    if (user[BORE_MARKER] != BORE_MAGIC || !(user[BORE_DAMPING_COEF] > 0)) continue;
-    const int slot = (int)user[BORE_SLOT];
-    if (slot < 0 || slot >= m->nuserdata) continue;
-    int icon = -1;
-    for (int i = 0; i < d->ncon; i++) {
-      const mjContact* con = d->contact + i;
-      if ((con->geom[0] == gb || con->geom[1] == gb) && !con->exclude && con->efc_address >= 0) {
-        icon = i;
-        break;
-      }
-    }
-    if (icon < 0) {
-      d->userdata[slot] = 0;
-      continue;
-    }
-    const int row = d->contact[icon].efc_address;
-    mjtNum va[3], vb[3];
-    const mjtNum vel = contact_velocity(m, d, d->contact + icon, va, vb);
-    if (!(d->userdata[slot] > 0)) d->userdata[slot] = fmax(-vel, user[BORE_SPEED_FLOOR]);
-    const mjtNum vimp = d->userdata[slot];
-    const mjtNum pen = -(d->efc_pos[row] - d->efc_margin[row]);
-    if (!(pen > 0)) continue;
-    mjtNum b = user[BORE_DAMPING_COEF] * pow(pen, user[BORE_EXPONENT]) / vimp * (d->efc_diagA[row] + d->efc_R[row]);
-    const mjtNum ratio = -vel / vimp;           /* d'/v_imp */
-    if (ratio < -1) b /= -ratio;                /* clamp: force as at d'/v_imp = -1 */
-    d->efc_KBIP[4 * row + 1] += b;
-  }
-}
-
-static void passive_friction(const mjModel* m, mjData* d) {
+static void passive_bore(const mjModel* m, mjData* d) {
   if (g_prev_passive) g_prev_passive(m, d);
-  impact_speed_damping(m, d);
-  if (!g_applyFT || m->nuser_geom <= BORE_V1) return;
+  if (m->nuser_geom < BORE_NUSER) return;
+  contact_law(m, d);
+  if (!g_applyFT) return;
   for (int i = 0; i < d->ncon; i++) {
     friction_t f;
     if (!bore_friction(m, d, i, &f) || f.ft == 0) continue;
@@ -247,12 +375,12 @@ static void passive_friction(const mjModel* m, mjData* d) {
 
 static void sensor_friction(const mjModel* m, mjData* d, int stage) {
   if (g_prev_sensor) g_prev_sensor(m, d, stage);
-  if (stage != mjSTAGE_VEL || m->nuser_geom <= BORE_V1) return;
+  if (stage != mjSTAGE_VEL || m->nuser_geom < BORE_NUSER) return;
   for (int s = 0; s < m->nsensor; s++) {
     if (m->sensor_type[s] != mjSENS_USER || m->sensor_objtype[s] != mjOBJ_GEOM) continue;
     const int gb = m->sensor_objid[s];
     if (gb < 0 || !is_bore(m, gb)) continue;
-    mjtNum value = 0;  /* summed over the bore's contacts (one per term of the contact law) */
+    mjtNum value = 0;  /* summed over the bore's contacts */
     for (int i = 0; i < d->ncon; i++) {
       if (d->contact[i].geom[0] != gb && d->contact[i].geom[1] != gb) continue;
       friction_t f;
@@ -281,9 +409,9 @@ static PyObject* py_install(PyObject* self, PyObject* args) {
     table[mjGEOM_CYLINDER][mjGEOM_CYLINDER] = collide_pin_bore;
     changed = 1;
   }
-  if (*passive != passive_friction) {
+  if (*passive != passive_bore) {
     g_prev_passive = *passive;
-    *passive = passive_friction;
+    *passive = passive_bore;
     changed = 1;
   }
   if (*sensor != sensor_friction) {
@@ -291,7 +419,6 @@ static PyObject* py_install(PyObject* self, PyObject* args) {
     *sensor = sensor_friction;
     changed = 1;
   }
-  g_installed = 1;
   if (changed) Py_RETURN_TRUE;
   Py_RETURN_FALSE;
 }
@@ -326,6 +453,6 @@ static PyMethodDef methods[] = {
   {NULL, NULL, 0, NULL}
 };
 
-static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_bore", NULL, -1, methods};
+static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, BORE_STR(BORE_MODULE), NULL, -1, methods};
 
-PyMODINIT_FUNC PyInit__bore(void) { return PyModule_Create(&module); }
+PyMODINIT_FUNC BORE_CAT(PyInit_, BORE_MODULE)(void) { return PyModule_Create(&module); }

@@ -9,34 +9,39 @@ What the builder does to the base model:
 * an ideal joint B is a hinge in the kinematic tree (exact); an ideal joint C is the
   loop-closure ``connect`` of the base model (stiff soft constraint);
 * a clearance joint replaces that by two slide joints (B: rod eye relative to the crank pin)
-  or drops the connect (C), and adds an explicit frictionless ``<pair>`` pin/bushing whose
-  contact is computed by the native bore collider (exact circle) and governed by
-  solref/solimp; the reference's regularized Coulomb friction (μ0, v0, v1 of the ``contact``
-  section, stored in the bushing geom's user data) is applied by the native module as a
-  passive force. Why not MuJoCo's own friction cone: with soft contacts the elliptic cone
-  adds μ × (the would-be sticking force) to the normal force while sliding; on test 12 that
-  inflated the normal force by a median 23 % (up to 27×) over the k δ + c δ̇ law, and making
-  the friction rows softer turned Coulomb friction into viscous friction
-  (``analysis/friction_cone.py`` measures both);
+  or drops the connect (C), and adds one explicit frictionless ``<pair>`` pin/bushing whose
+  contact is computed by the native bore collider (exact circle). Its normal force is the
+  reference's own contact law (``contact.law``: Lankarani–Nikravesh by default, Hunt–Crossley,
+  Flores or linear, with the reference's K, n, e, impact-speed damping and floor), written
+  into the bushing geom's user data and applied exactly by the native module, which sets the
+  contact row's soft-constraint parameters every step (``_bore.c``: elastic term explicit as
+  in the reference's symplectic Euler, damping by the θ-method, so no step limit); the pair's
+  own solref/solimp are only the placeholder a plain MuJoCo would use. The reference's
+  regularized Coulomb friction (μ0, v0, v1 of the ``contact`` section, also in the user data)
+  is applied by the native module as a passive force. Why not MuJoCo's own friction cone: with
+  soft contacts the elliptic cone adds μ × (the would-be sticking force) to the normal force
+  while sliding; on test 12 that inflated the normal force by a median 23 % (up to 27×) over
+  the k δ + c δ̇ law, and making the friction rows softer turned Coulomb friction into viscous
+  friction (``analysis/friction_cone.py`` measures both);
 * sensors: only those the configuration's channel groups need (the optional "energy" group
   adds ``e_kinetic``/``e_potential`` sensors and the slider's velocity, and switches on
   MuJoCo's energy computation, ``mjENBL_ENERGY``);
 * the crank PID gains.
 
-Contact parameters of a clearance joint, in order of precedence:
-``mujoco.contact_solref``/``contact_solimp`` of the configuration (raw MuJoCo values); the
-calibration table ``twin/data/contact_calibration.json`` (written by ``twin calibrate
-contact``); the documented first guess :func:`first_guess_contact`.
+Contact of a clearance joint (:func:`contact_setting`): with the bore bushing and
+``mujoco.contact_source = "law"`` (default) the native module applies the configured reference
+law (:class:`NativeLaw`); ``mujoco.contact_solref``/``contact_solimp`` (raw MuJoCo values) or
+``contact_source = "first-guess"`` give MuJoCo's own soft contact instead (the documented linear
+first guess :func:`first_guess_contact`), which the ring and tendon bushings always use. The
+calibration table of issue 4 (a fitted two-pair solref/solimp law) is retired: the law is now
+exact by construction (issue 15).
 """
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass, field
 from functools import lru_cache
-from importlib import resources
-from pathlib import Path
 
 import mujoco
 import numpy as np
@@ -47,20 +52,14 @@ from twin.errors import ConfigError, ModelError
 from twin.impact import DAMPING_FACTOR
 from twin.mujoco_engine.collider import ensure_installed
 
-#: the contact calibration table, package data of twin (``twin/data``)
-CALIBRATION_FILE = Path(str(resources.files("twin").joinpath("data", "contact_calibration.json")))
-
 #: flat, tiny impedance: the contact force is then exactly k δ + c δ̇ with a direct solref
-#: (−k Â, −c Â), Â the row's inverse-inertia estimate (ENGINEERING_NOTES, re-measured in tests)
+#: (−k Â, −c Â), Â the row's inverse-inertia estimate (ENGINEERING_NOTES, re-measured in tests).
+#: Also the pair's impedance under the native law: its regularizer R = Â (1 − d)/d is the largest
+#: the native module keeps (the residual −a/R it leaves is 1e-4 of the row's inertial force)
 FLAT_SOLIMP = (1e-4, 1e-4, 1e-3, 0.5, 2.0)
-#: impact speed at which the first guess matches the reference law [m/s]. PLACEHOLDER until
-#: the calibration (impact speeds on the bench: 0.4-201 mm/s, ``analysis/impact_speeds.py``).
+#: impact speed at which the first guess matches the reference law [m/s] (impact speeds on the
+#: bench: 0.4-201 mm/s, ``analysis/impact_speeds.py``); the reference's linear law uses the same
 FIRST_GUESS_SPEED = 0.1
-#: with ``mujoco.contact_damping = "impact-speed"`` the pairs keep this fraction of their
-#: calibrated damping (the native Lankarani–Nikravesh term replaces the rest); 1 % keeps the
-#: soft constraint's own damping from vanishing. Not tuned: the value measured by ``twin study
-#: accuracy`` (analysis/results/accuracy, variant "mujoco default")
-IMPACT_SPEED_RESIDUAL_DAMPING = 0.01
 #: frictionless MuJoCo contact; friction is the native passive force (see module docstring)
 _CONDIM = 1
 
@@ -98,23 +97,79 @@ class ContactTerm:
 
 
 @dataclass(frozen=True)
+class NativeLaw:
+    """The reference's contact law of one clearance joint as the native module applies it.
+
+    Force on the pin along the normal, δ the penetration, δ̇ its rate (> 0 approaching), v_imp
+    the approach speed stored when the contact event starts (floored at ``speed_floor_mps``):
+
+    * hysteresis laws (LN, Hunt–Crossley, Flores): F = K δⁿ (1 + χ max(δ̇/v_imp, −1)),
+      ``damping`` = χ(e) of the law (:data:`twin.impact.DAMPING_FACTOR`);
+    * linear law: F = k δ + c δ̇, ``damping`` = c [N s/m].
+
+    The same numbers as the reference engine (:mod:`twin.reference.contact`), times the twin's
+    perturbation factors ``mujoco.contact_stiffness_scale`` (K), ``contact_damping_scale``
+    (χ or c) and ``impact_damping_gain`` (χ).
+
+    Attributes:
+        law: ``contact.law``.
+        stiffness: K [N/mⁿ] (linear: k [N/m]).
+        exponent: n [-] (linear: 1).
+        damping: χ [-] (linear: c [N s/m]).
+        speed_floor_mps: floor of v_imp [m/s] (``contact.impact_speed_floor_mps``).
+    """
+
+    law: str
+    stiffness: float
+    exponent: float
+    damping: float
+    speed_floor_mps: float
+
+    @property
+    def code(self) -> int:
+        """The ``law`` field of the bore user data (:data:`twin.names.BORE_LAWS`)."""
+        return N.BORE_LAWS["linear" if self.law == "linear" else "hysteresis"]
+
+    def userdata(self, slot: int) -> dict[str, float]:
+        """The bore user data fields of the law (``slot``: the ``mjData.userdata`` index of v_imp)."""
+        return {"law": float(self.code), "stiffness": self.stiffness, "exponent": self.exponent,
+                "damping": self.damping, "speed_floor": self.speed_floor_mps, "slot": float(slot)}
+
+    def force(self, delta: float, rate: float, v_imp: float) -> float:
+        """The law's force [N] (what the native module applies; ≥ 0)."""
+        if delta <= 0:
+            return 0.0
+        if self.law == "linear":
+            f = self.stiffness * delta + self.damping * rate
+        else:
+            f = self.stiffness * delta ** self.exponent * (1.0 + self.damping * max(rate / v_imp, -1.0))
+        return max(f, 0.0)
+
+    def to_json(self) -> dict:
+        return {"law": self.law, "stiffness": self.stiffness, "exponent": self.exponent, "damping": self.damping,
+                "speed_floor_mps": self.speed_floor_mps}
+
+
+@dataclass(frozen=True)
 class ContactSetting:
     """MuJoCo parameters of one pin/bushing contact and where they came from.
 
-    The contact force is the sum of the terms' forces, one pair each on the same two geoms
-    (the calibration uses two: see :mod:`twin.calibrate`).
-
     Attributes:
-        terms: the pairs' parameters (at least one).
+        terms: the MuJoCo pair's parameters (one pair per joint; a tuple for the engine's
+            contact sensor layout).
         friction: μ0 of the native regularized Coulomb friction [-].
-        source: "config", "calibration" or "first-guess".
+        source: "law" (the native reference law; the pair's solref/solimp are its placeholder),
+            "first-guess" (MuJoCo's soft contact, linear first guess) or "config" (the
+            configuration's raw solref/solimp).
+        law: the native law (source "law"), else None.
     """
 
     terms: tuple[ContactTerm, ...]
     friction: float
     source: str
+    law: NativeLaw | None = None
 
-    # the first term's values (the whole law when it has one term)
+    # the pair's values
     @property
     def solref(self) -> tuple[float, float]:
         return self.terms[0].solref
@@ -133,6 +188,7 @@ class ContactSetting:
 
     def to_json(self) -> dict:
         return {"source": self.source, "friction": self.friction,
+                "law": None if self.law is None else self.law.to_json(),
                 "terms": [{"solref": list(t.solref), "solimp": [float(v) for v in t.solimp],
                            "stiffness_n_per_m": t.stiffness_n_per_m, "damping_ns_per_m": t.damping_ns_per_m}
                           for t in self.terms]}
@@ -156,74 +212,89 @@ def _first_guess_kc(K: float, n: float, e: float, m_eff: float) -> tuple[float, 
 
 
 def first_guess_contact(cfg: BenchConfig, joint: str, m_eff: float) -> tuple[float, float]:
-    """First guess (k [N/m], c [N s/m]) of a linear contact for ``joint``.
+    """First guess (k [N/m], c [N s/m]) of a linear MuJoCo soft contact for ``joint``.
 
     Method: the reference's Lankarani–Nikravesh law (K from S003 Eq. 18, n, e of the
     configuration) is replaced by the unilateral linear spring-damper that has the same
     contact duration and the same restitution for an impact of the effective mass ``m_eff``
-    at :data:`FIRST_GUESS_SPEED`. The calibration (``twin calibrate contact``) supersedes it.
+    at :data:`FIRST_GUESS_SPEED`. Used by the ring and tendon bushings, by
+    ``mujoco.contact_source = "first-guess"``, and as the placeholder solref of the native law's
+    pair (what a plain MuJoCo without the native module simulates).
     """
     K = cfg.contact.stiffness or ln_stiffness(cfg.joints, cfg.materials, joint)
     return _first_guess_kc(float(K), float(cfg.contact.exponent), float(cfg.contact.restitution), float(m_eff))
 
 
-def load_calibration(path: Path = CALIBRATION_FILE) -> dict:
-    """The calibration table (empty if none has been committed yet)."""
-    if not path.is_file():
-        return {}
-    return json.loads(path.read_text())
-
-
-def _calibration_entry(table: dict, cfg: BenchConfig, joint: str) -> dict | None:
-    key = f"{joint}:{cfg.joints.diametral_mm(joint):g}"
-    entry = table.get("entries", {}).get(key)
-    if entry is None:
-        return None
-    # a calibration holds for the reference parameters it was fitted to
-    ref = table.get("reference", {})
-    same = all(math.isclose(ref.get(k, float("nan")), v, rel_tol=1e-9) for k, v in (
-        ("restitution", cfg.contact.restitution), ("exponent", cfg.contact.exponent),
-        ("pin_diameter_m", cfg.joints.pin_diameter_m), ("mu0", cfg.contact.mu0)))
-    return entry if same and cfg.contact.stiffness == 0 else None
-
-
-def contact_setting(cfg: BenchConfig, joint: str, a_hat: float, multi_term: bool = True) -> ContactSetting:
-    """Resolve the pair parameters of a clearance joint (see module docstring).
-
-    ``multi_term`` is False for representations that take one pair per contact (ring of
-    boxes, tendon limit): a multi-term calibration entry then falls back to the first guess.
-    ``mujoco.contact_stiffness_scale``/``contact_damping_scale`` multiply the result.
-    """
-    s = _resolve_contact(cfg, joint, a_hat, multi_term)
-    ks, cs = cfg.mujoco.contact_stiffness_scale * cfg.contact.stiffness_scale, cfg.mujoco.contact_damping_scale
-    if impact_speed_damping(cfg):
-        cs *= IMPACT_SPEED_RESIDUAL_DAMPING
-    if ks == 1.0 and cs == 1.0:
-        return s
-    terms = []
-    for t in s.terms:
-        if t.solref[0] >= 0:
-            raise ConfigError("mujoco.contact_stiffness_scale",
-                              "needs a direct (negative) contact_solref; scale only physical stiffness/damping")
-        terms.append(ContactTerm((t.solref[0] * ks, t.solref[1] * cs), t.solimp,
-                                 None if t.stiffness_n_per_m is None else t.stiffness_n_per_m * ks,
-                                 None if t.damping_ns_per_m is None else t.damping_ns_per_m * cs))
-    return ContactSetting(tuple(terms), s.friction, s.source)
-
-
-def _resolve_contact(cfg: BenchConfig, joint: str, a_hat: float, multi_term: bool) -> ContactSetting:
-    mu = cfg.contact.mu0
+def native_law_applies(cfg: BenchConfig) -> bool:
+    """Whether the clearance joints take the native reference law: bore bushing,
+    ``mujoco.contact_source = "law"``, no raw ``contact_solref``/``contact_solimp``, and a
+    clearance joint to apply it to."""
     ms = cfg.mujoco
+    return (ms.bushing == "bore" and ms.contact_source == "law" and not (ms.contact_solref and ms.contact_solimp)
+            and bool(cfg.joints.clearance_joints))
+
+
+def impact_speed_coefficient(cfg: BenchConfig, joint: str) -> float:
+    """χ K of the native impact-speed damping of ``joint`` [N/mⁿ] (hysteresis laws): χ(e) of
+    the configured law (LN by default, Hunt–Crossley or Flores) and K of S003 Eq. 18 times
+    ``contact.stiffness_scale`` and ``mujoco.contact_stiffness_scale``, times
+    ``impact_damping_gain`` and ``contact_damping_scale``."""
+    law = native_law(cfg, joint)
+    return law.damping * law.stiffness
+
+
+_LINEAR_LAWS: dict[str, dict[str, tuple[float, float]]] = {}
+
+
+def _reference_linear_law(cfg: BenchConfig) -> dict[str, tuple[float, float]]:
+    """{joint: (k, c)} of the reference engine's linear law for ``cfg``: the reference resolves
+    them at the drive's initial pose (c from the effective mass along the initial contact
+    normal, :func:`twin.reference.model.contact_parameters`); the twin takes the same numbers."""
+    from twin.drive import DriveReference
+    from twin.reference import model as M
+    from twin.reference.engine import engine_params
+
+    key = cfg.digest()
+    if key not in _LINEAR_LAWS:
+        P = engine_params(cfg)
+        theta0 = float(DriveReference(cfg)(np.array([0.0]))[0][0])
+        contacts = M.contact_parameters(cfg, P, M.initial_state(cfg, theta0))
+        _LINEAR_LAWS[key] = {j: (float(c.stiffness), float(c.damping_ns_per_m)) for j, c in contacts.items()}
+    return _LINEAR_LAWS[key]
+
+
+def native_law(cfg: BenchConfig, joint: str) -> NativeLaw:
+    """The reference's contact law of ``joint`` as the native module applies it (:class:`NativeLaw`)."""
+    ct, ms = cfg.contact, cfg.mujoco
+    if ct.law == "linear":
+        k, c = _reference_linear_law(cfg)[joint]
+        return NativeLaw(ct.law, k * ms.contact_stiffness_scale, 1.0, c * ms.contact_damping_scale,
+                         ct.impact_speed_floor_mps)
+    K = (ct.stiffness or ln_stiffness(cfg.joints, cfg.materials, joint)) * ct.stiffness_scale
+    chi = DAMPING_FACTOR[ct.law](ct.restitution)
+    return NativeLaw(ct.law, K * ms.contact_stiffness_scale, float(ct.exponent),
+                     chi * ms.impact_damping_gain * ms.contact_damping_scale, ct.impact_speed_floor_mps)
+
+
+def contact_setting(cfg: BenchConfig, joint: str, a_hat: float, native: bool = True) -> ContactSetting:
+    """Resolve the contact of a clearance joint (see module docstring).
+
+    ``native`` is False for representations the native module does not serve (ring of boxes,
+    tendon limit): they take MuJoCo's soft contact. The pair's solref/solimp: the configuration's
+    raw values, else the first guess (k, c) as a direct solref (−k Â, −c Â) with a flat tiny
+    impedance, k and c times ``contact.stiffness_scale`` × ``mujoco.contact_stiffness_scale`` and
+    ``mujoco.contact_damping_scale``. With the native law they are only its placeholder.
+    """
+    mu, ms = cfg.contact.mu0, cfg.mujoco
     if ms.contact_solref and ms.contact_solimp:
         return ContactSetting((ContactTerm(tuple(ms.contact_solref), tuple(ms.contact_solimp)),), mu, "config")
-    entry = _calibration_entry(load_calibration(), cfg, joint) if ms.contact_source == "calibration" else None
-    if entry is not None and (multi_term or len(entry["terms"]) == 1):
-        terms = tuple(ContactTerm((-t["stiffness_n_per_m"] * a_hat, -t["damping_ns_per_m"] * a_hat),
-                                  tuple(t["solimp"]), t["stiffness_n_per_m"], t["damping_ns_per_m"])
-                      for t in entry["terms"])
-        return ContactSetting(terms, mu, "calibration")
     k, c = first_guess_contact(cfg, joint, 1.0 / a_hat)
-    return ContactSetting((ContactTerm((-k * a_hat, -c * a_hat), FLAT_SOLIMP, k, c),), mu, "first-guess")
+    k *= ms.contact_stiffness_scale * cfg.contact.stiffness_scale
+    c *= ms.contact_damping_scale
+    term = ContactTerm((-k * a_hat, -c * a_hat), FLAT_SOLIMP, k, c)
+    if native and ms.contact_source == "law":
+        return ContactSetting((term,), mu, "law", native_law(cfg, joint))
+    return ContactSetting((term,), mu, "first-guess")
 
 
 # --------------------------------------------------------------------------- builder
@@ -290,7 +361,8 @@ def build_spec(cfg: BenchConfig) -> mujoco.MjSpec:
     block.size = [b.slider.length_m / 2, block.size[1], block.size[2]]
 
     # pins, bushings (user data: bore marker and friction law, layout N.BORE_USERDATA_FIELDS)
-    # and their visual rings; the impact-speed damping is off unless build() switches it on
+    # and their visual rings; the contact law is MuJoCo's solref/solimp unless build() writes
+    # the native law
     friction_law = N.bore_userdata(mu0=cfg.contact.mu0, v0=cfg.contact.v0_mps, v1=cfg.contact.v1_mps)
     for jt in ("B", "C"):
         spec.geom(N.pin(jt)).size = [rj, half_len, 0]
@@ -388,8 +460,9 @@ def build(cfg: BenchConfig) -> tuple[mujoco.MjSpec, mujoco.MjModel, BuildInfo]:
 
     The bushing representation (``mujoco.bushing``) and the friction model
     (``mujoco.friction``) are applied here: "bore" keeps the base model's pair; "ring"
-    replaces it by one pair per box; "tendon" by a distance-limited tendon. Their contact
-    parameters are the same physical law (k, c, solimp), converted with each row's Â.
+    replaces it by one pair per box; "tendon" by a distance-limited tendon. The bore takes the
+    native reference law (:func:`native_law_applies`); the others MuJoCo's soft contact with the
+    first guess's (k, c, solimp), converted with each row's Â.
     """
     ensure_installed()
     ms = cfg.mujoco
@@ -435,13 +508,16 @@ def build(cfg: BenchConfig) -> tuple[mujoco.MjSpec, mujoco.MjModel, BuildInfo]:
             if spec.sensor(N.sensor_friction(jt)) is not None:
                 spec.delete(spec.sensor(N.sensor_friction(jt)))
     model = _compile(spec, cfg)
-    for jt in cfg.joints.clearance_joints:
+    native = native_law_applies(cfg)
+    if native:
+        spec.nuserdata = len(cfg.joints.clearance_joints)  # one slot per joint: v_imp of its contact event
+    for slot, jt in enumerate(cfg.joints.clearance_joints):
         if ms.bushing == "tendon":
             a_hat = float(model.tendon_invweight0[model.tendon(N.pair(jt)).id])
         else:
             a_hat = float(model.body_invweight0[model.geom_bodyid[model.geom(N.pin(jt)).id], 0] +
                           model.body_invweight0[model.geom_bodyid[model.geom(N.bushing(jt)).id], 0])
-        setting = contact_setting(cfg, jt, a_hat, multi_term=ms.bushing == "bore")
+        setting = contact_setting(cfg, jt, a_hat, native=native)
         if ms.bushing == "tendon":
             t = spec.tendon(N.pair(jt))
             t.solref_limit, t.solimp_limit = list(setting.solref), list(setting.solimp)
@@ -450,53 +526,17 @@ def build(cfg: BenchConfig) -> tuple[mujoco.MjSpec, mujoco.MjModel, BuildInfo]:
                 p = spec.pair(f"{N.pair(jt)}_{k}")
                 p.solref, p.solimp = list(setting.solref), list(setting.solimp)
         else:
-            base = spec.pair(N.pair(jt))
-            for i, term in enumerate(setting.terms):
-                p = base if i == 0 else spec.add_pair(name=N.pair(jt, i), geomname1=N.pin(jt),
-                                                      geomname2=N.bushing(jt), condim=base.condim,
-                                                      friction=list(base.friction))
-                p.solref, p.solimp = list(term.solref), list(term.solimp)
+            p = spec.pair(N.pair(jt))
+            p.solref, p.solimp = list(setting.solref), list(setting.solimp)
             if spec.sensor(N.sensor_contact(jt)) is not None:
-                # one slot per term; the engine sums their normal (and friction-cone) forces
-                spec.sensor(N.sensor_contact(jt)).intprm = [3, 0, len(setting.terms)]
+                spec.sensor(N.sensor_contact(jt)).intprm = [3, 0, 1]  # [found, force], one slot
+            if setting.law is not None:
+                bush = spec.geom(N.bushing(jt))
+                bush.userdata = N.replace_bore_userdata(list(bush.userdata), **setting.law.userdata(slot))
         info.contacts[jt] = setting
         info.a_hat[jt] = a_hat
-    if impact_speed_damping(cfg):
-        _set_impact_speed_damping(spec, cfg)
     info.sensors = [x.name for x in spec.sensors]
     return spec, _compile(spec, cfg), info
-
-
-def impact_speed_damping(cfg: BenchConfig) -> bool:
-    """Whether the scene's bushings take the native impact-speed damping (bore bushing with
-    ``mujoco.contact_damping = "impact-speed"``, a hysteresis contact law of the reference, i.e.
-    one whose damping is χ K δⁿ δ̇ / v_imp, and a clearance joint to apply it to)."""
-    ms = cfg.mujoco
-    return (ms.contact_damping == "impact-speed" and ms.bushing == "bore" and cfg.contact.law in DAMPING_FACTOR
-            and bool(cfg.joints.clearance_joints))
-
-
-def impact_speed_coefficient(cfg: BenchConfig, joint: str) -> float:
-    """χ K of the native impact-speed damping of ``joint`` [N/mⁿ]: χ(e) of the configured
-    hysteresis law (LN by default, Hunt–Crossley or Flores) and K of S003 Eq. 18 times
-    ``contact.stiffness_scale``, times ``impact_damping_gain`` and ``contact_damping_scale`` (which
-    perturbs all of the law's damping)."""
-    ms, ct = cfg.mujoco, cfg.contact
-    K = (ct.stiffness or ln_stiffness(cfg.joints, cfg.materials, joint)) * ct.stiffness_scale
-    return ms.impact_damping_gain * ms.contact_damping_scale * DAMPING_FACTOR[ct.law](ct.restitution) * K
-
-
-def _set_impact_speed_damping(spec: mujoco.MjSpec, cfg: BenchConfig) -> None:
-    """Switch on the native impact-speed damping of each clearance bushing (``_bore.c``): the
-    coefficient, exponent n, speed floor, and one ``userdata`` slot per joint for the stored
-    impact speed."""
-    joints = cfg.joints.clearance_joints
-    spec.nuserdata = len(joints)
-    for slot, jt in enumerate(joints):
-        bush = spec.geom(N.bushing(jt))
-        bush.userdata = N.replace_bore_userdata(
-            list(bush.userdata), damping_coef=impact_speed_coefficient(cfg, jt), exponent=cfg.contact.exponent,
-            speed_floor=cfg.contact.impact_speed_floor_mps, slot=slot)
 
 
 def build_model(cfg: BenchConfig) -> mujoco.MjModel:
@@ -508,11 +548,11 @@ def export_xml(cfg: BenchConfig) -> str:
     """MJCF text of the configuration's compiled variant (opens in MuJoCo's viewer)."""
     spec, _model, info = build(cfg)
     head = (f"<!-- twin export of '{cfg.name}' (config digest {cfg.digest()}).\n"
-            f"     Clearance joints: {', '.join(cfg.joints.clearance_joints) or 'none'}; contact parameters: "
-            + "; ".join(f"{jt}: {len(s.terms)} pair(s) ({s.source})" for jt, s in info.contacts.items())
-            + ".\n     Bushing geoms (user=\"7301 ...\") need the twin's native bore collider and friction "
-              "(twin/mujoco_engine/_bore.c):\n     a plain MuJoCo viewer shows and simulates ideal variants "
-              "faithfully; simulate clearance variants with 'twin simulate'. -->\n")
+            f"     Clearance joints: {', '.join(cfg.joints.clearance_joints) or 'none'}; contact: "
+            + "; ".join(f"{jt}: {s.law.law if s.law else s.source}" for jt, s in info.contacts.items())
+            + ".\n     Bushing geoms (user=\"7301 ...\") need the twin's native bore collider, contact law and "
+              "friction (twin/mujoco_engine/_bore.c):\n     a plain MuJoCo viewer shows and simulates ideal "
+              "variants faithfully; simulate clearance variants with 'twin simulate'. -->\n")
     xml = spec.to_xml()
     i = xml.find("<mujoco")
     return xml[:i] + head + xml[i:]
