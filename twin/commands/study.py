@@ -37,12 +37,16 @@ def register_formulations(studies: argparse._SubParsersAction) -> None:
         "formulations", help="S003 §4.1: R-matrix versus penalty formulation",
         description="S003 §4.1: the ideal mechanism released at rest at θ = π/3 under gravity (−y), no drive, "
                     "no friction, integrated with symplectic Euler by the R-matrix and by the penalty formulation "
-                    "(several α, ζ, ω) at h = 1e-4 s and 1e-3 s. Writes formulations.md, formulations.json and PNG "
-                    "plots of crank speed, mechanical energy and ‖Φ‖.")
+                    "(several α, ζ, ω) at h = 1e-4 s and 1e-3 s, then a work-precision comparison of θ(T) "
+                    "(R-matrix with symplectic Euler and explicit midpoint, the MuJoCo twin with Euler and RK4, "
+                    "Exudyn's generalized-α when installed). Writes formulations.md, formulations.json and PNG "
+                    "plots of crank speed, mechanical energy, ‖Φ‖ and work-precision.")
     p.add_argument("--out", metavar="DIR", required=True, help="output directory (created if missing)")
     p.add_argument("--config", metavar="FILE",
                    help="TOML configuration for the bodies and d_off (joints are made ideal, y up)")
     p.add_argument("--duration", type=float, default=5.0, metavar="S", help="simulated time [s] (default 5)")
+    p.add_argument("--no-work-precision", action="store_true",
+                   help="skip the work-precision comparison (R-matrix Euler/midpoint, MuJoCo Euler/RK4, Exudyn)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=_run_formulations)
 
@@ -61,12 +65,21 @@ def _run_formulations(args: argparse.Namespace) -> int:
 
     from twin.reference.formulations import run_study
 
-    data = run_study(out, cfg, args.duration, progress=not args.no_progress and sys.stderr.isatty())
+    data = run_study(out, cfg, args.duration, progress=not args.no_progress and sys.stderr.isatty(),
+                     work_precision_methods={} if args.no_work_precision else None)
     print(f"wrote {out / 'formulations.md'}, {out / 'formulations.json'}, "
           + ", ".join(str(out / f) for f in data["figures"]))
     for r in data["rows"]:
         print(f"  {r['case']:38s} dE {r['final_energy_error_J'] * 1e3:10.3f} mJ  max|Phi| {r['max_phi']:9.2e}  "
               f"{'DIVERGED at %.3f s' % r['t_end_s'] if r['diverged'] else 'ok':22s} wall {r['wall_s']:.3f} s")
+    if data["work_precision"]:
+        print(f"work-precision, theta({args.duration:g} s) error against the exact solution"
+              + ("" if data["exudyn"] else " (Exudyn not installed: skipped)") + ":")
+    for r in data["work_precision"]:
+        err = r["theta_error_rad"]
+        print(f"  {r['method']:30s} h {r['timestep_s']:<7g} {r['us_per_step']:7.2f} us/step "
+              f"{r['s_per_sim_s']:8.4f} s/sim s  error {'failed' if err is None else format(err, '.2e'):>9s}"
+              f"{'  P' if r['front'] else ''}")
     return 0
 
 

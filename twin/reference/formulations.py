@@ -11,6 +11,15 @@ coordinate θ (Lagrange: J(θ) θ̈ + ½ J'(θ) θ̇² + V'(θ) = 0, closed-form
 kinematics, scipy DOP853 at rtol 1e-12) and reports each run's largest crank-speed error
 against it: the energy alone does not show a formulation that is wrong but conservative.
 
+Work–precision (issue 16, item 5): the same free motion integrated by the R-matrix with
+symplectic Euler and with the explicit midpoint rule (``ReferenceOptions.integrator``), by the
+MuJoCo twin (its compiled model of the same mechanism: ideal joints, actuation disabled) with
+Euler and RK4, and by Exudyn (generalized-α, its default spectral radius 0.9; three rigid 2-D
+bodies, three revolute joints and the slider's guide; optional: skipped when ``exudyn`` is not
+installed), each at several steps: µs per step, seconds per simulated second and the error of
+θ(T) against the minimal-coordinate solution. A run is on the front when no other is at most as
+costly per simulated second and at most as wrong, one of them strictly.
+
 Entry point: :func:`run_study` (``twin study formulations --out DIR``).
 """
 
@@ -100,8 +109,8 @@ def study_config(cfg: BenchConfig | None = None) -> BenchConfig:
                           "mechanism.guide_friction_n": 0.0})
 
 
-def _params(cfg: BenchConfig, h: float) -> np.ndarray:
-    P = M.build_params(cfg, drive=False, guide_friction=False, joint_friction=False)
+def _params(cfg: BenchConfig, h: float, integrator: str = "euler") -> np.ndarray:
+    P = M.build_params(cfg, drive=False, guide_friction=False, joint_friction=False, integrator=integrator)
     P[M.P_H] = h
     return P
 
@@ -187,6 +196,227 @@ class MinimalModel:
         sol = solve_ivp(self.rhs, (0.0, float(t[-1])), [theta0, 0.0], method="DOP853", t_eval=t,
                         rtol=1e-12, atol=1e-12)
         return sol.y[0], sol.y[1]
+
+
+# ---------------------------------------------------------------- work–precision
+#: methods of the work–precision comparison and the steps each is run at [s]
+WORK_PRECISION: dict[str, tuple[float, ...]] = {
+    "R-matrix, symplectic Euler": (1e-3, 1e-4, 1e-5),
+    "R-matrix, explicit midpoint": (2e-3, 1e-3, 5e-4, 1e-4, 1e-5),
+    "MuJoCo twin, Euler": (1e-4, 1e-5),
+    "MuJoCo twin, RK4": (1e-3, 5e-4, 1e-4, 1e-5),  # the configuration allows h <= 1e-3 s
+    "Exudyn, generalized-α": (1e-3, 1e-4, 1e-5),
+}
+
+
+def _time_best(fn, repeats: int = 2) -> tuple[float, float]:
+    """(θ at the end, wall seconds) of ``fn()``, best of ``repeats`` when a run takes under 1 s."""
+    theta, wall = fn()
+    for _ in range(repeats - 1):
+        if wall >= 1.0:
+            break
+        theta, w = fn()
+        wall = min(wall, w)
+    return theta, wall
+
+
+def _rmatrix_theta(cfg: BenchConfig, h: float, duration_s: float, integrator: str) -> tuple[float, float]:
+    P = _params(cfg, h, integrator)
+    st0 = M.initial_state(cfg, THETA0)
+    n = int(round(duration_s / h))
+    z = np.zeros(n)
+    out = np.empty((1, M.N_OUT))
+    M.run_steps(P, st0.copy(), z[:1], z[:1], 1, out, False)  # compiled or loaded before the clock
+
+    def once():
+        st = st0.copy()
+        t0 = time.perf_counter()
+        status, _ = M.run_steps(P, st, z, z, n, out, False)
+        wall = time.perf_counter() - t0
+        return (float(st[M.S_Q + 7]) if status == M.OK else float("nan")), wall
+
+    return _time_best(once)
+
+
+def _mujoco_theta(cfg: BenchConfig, h: float, duration_s: float, integrator: str) -> tuple[float, float]:
+    import mujoco
+    from mujoco import rollout
+
+    from twin import names as N
+    from twin.mujoco_engine.engine import MujocoEngine
+
+    c = cfg.replace(**{"mujoco.integrator": integrator, "simulation.timestep_s": h,
+                       "simulation.duration_s": duration_s, "sensors.channels": ["encoder"],
+                       "sensors.output_rate_hz": min(1e5, 1.0 / h)})
+    eng = MujocoEngine(c)
+    m, d = eng.model, eng.data
+    m.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_ACTUATION  # no drive: free motion
+    kind = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    state = np.empty((1, mujoco.mj_stateSize(m, kind)))
+    adr = m.jnt_qposadr[m.joint(N.CRANK_HINGE).id]
+    n = int(round(duration_s / h))
+
+    def once():
+        eng.reset(THETA0)
+        done = 0
+        t0 = time.perf_counter()
+        while done < n:  # no per-step output: the data object carries the state
+            k = min(100_000, n - done)
+            mujoco.mj_getState(m, d, state[0], kind)
+            rollout.rollout(m, d, state, nstep=k)
+            done += k
+        wall = time.perf_counter() - t0
+        th = float(d.qpos[adr])
+        return (th if np.isfinite(d.qpos).all() else float("nan")), wall
+
+    return _time_best(once)
+
+
+def exudyn_available() -> bool:
+    """Whether the optional Exudyn package can be imported."""
+    try:
+        import exudyn  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def _exudyn_theta(cfg: BenchConfig, h: float, duration_s: float) -> tuple[float, float]:
+    """The §4.1 mechanism in Exudyn: crank and rod as rigid 2-D bodies (mass, inertia about the
+    centre of mass), the slider a mass point held on the guide by a coordinate constraint,
+    revolute joints at A, B and C, gravity on every body; generalized-α (Exudyn's default
+    spectral radius 0.9; ρ∞ = 1 stopped on step-size reduction near the end of the run)."""
+    import exudyn as exu
+    from exudyn.itemInterface import (CoordinateConstraint, LoadMassProportional, MarkerBodyMass,
+                                      MarkerBodyPosition, MarkerNodeCoordinate, NodePoint2D, NodePointGround,
+                                      NodeRigidBody2D, ObjectGround, ObjectJointRevolute2D, ObjectMassPoint2D,
+                                      ObjectRigidBody2D)
+
+    b = cfg.bodies
+    r, l, d_off = b.crank.length_m, b.rod.length_m, cfg.mechanism.d_off_m
+    g = cfg.mechanism.gravity_vector
+    th0 = THETA0
+    phi = math.asin((d_off - r * math.sin(th0)) / l)
+    B = np.array([r * math.cos(th0), r * math.sin(th0)])
+    C = B + l * np.array([math.cos(phi), math.sin(phi)])
+    xg1, xg2 = b.crank.x_g_m, b.rod.x_g_m
+    G2 = B + xg2 * np.array([math.cos(phi), math.sin(phi)])
+    sc = exu.SystemContainer()
+    mbs = sc.AddSystem()
+    ground = mbs.AddObject(ObjectGround(referencePosition=[0, 0, 0]))
+    nc = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[xg1 * math.cos(th0), xg1 * math.sin(th0), th0]))
+    crank = mbs.AddObject(ObjectRigidBody2D(mass=b.crank.mass_kg, inertia=b.crank.inertia_kgm2, nodeNumber=nc))
+    nr = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[G2[0], G2[1], phi]))
+    rod = mbs.AddObject(ObjectRigidBody2D(mass=b.rod.mass_kg, inertia=b.rod.inertia_kgm2, nodeNumber=nr))
+    ns = mbs.AddNode(NodePoint2D(referenceCoordinates=[C[0], d_off]))
+    slider = mbs.AddObject(ObjectMassPoint2D(mass=b.slider.mass_kg, nodeNumber=ns))
+
+    def pos(body, x):
+        return mbs.AddMarker(MarkerBodyPosition(bodyNumber=body, localPosition=[x, 0, 0]))
+
+    mbs.AddObject(ObjectJointRevolute2D(markerNumbers=[pos(ground, 0.0), pos(crank, -xg1)]))
+    mbs.AddObject(ObjectJointRevolute2D(markerNumbers=[pos(crank, r - xg1), pos(rod, -xg2)]))
+    mbs.AddObject(ObjectJointRevolute2D(markerNumbers=[pos(rod, l - xg2), pos(slider, 0.0)]))
+    ng = mbs.AddNode(NodePointGround(referenceCoordinates=[0, d_off, 0]))
+    mbs.AddObject(CoordinateConstraint(markerNumbers=[
+        mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ng, coordinate=1)),
+        mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ns, coordinate=1))]))
+    for body in (crank, rod, slider):
+        mbs.AddLoad(LoadMassProportional(markerNumber=mbs.AddMarker(MarkerBodyMass(bodyNumber=body)),
+                                         loadVector=[g[0], g[1], 0]))
+    mbs.Assemble()
+    st = exu.SimulationSettings()
+    st.timeIntegration.numberOfSteps = int(round(duration_s / h))
+    st.timeIntegration.endTime = duration_s
+    st.timeIntegration.verboseMode = 0
+    st.timeIntegration.generalizedAlpha.spectralRadius = 0.9
+    st.solution.file.write = False
+    st.linearSolver.solverType = exu.LinearSolverType.EXUdense
+    t0 = time.perf_counter()
+    try:
+        exu.SolveDynamic(mbs, st)
+    except Exception:  # noqa: BLE001 - a failed run is reported as such
+        return float("nan"), time.perf_counter() - t0
+    wall = time.perf_counter() - t0
+    return float(np.ravel(mbs.GetNodeOutput(nc, exu.OutputVariableType.Rotation))[-1]), wall
+
+
+def work_precision(cfg: BenchConfig, duration_s: float, theta_exact: float,
+                   methods: dict[str, tuple[float, ...]] | None = None, progress=None) -> list[dict]:
+    """Rows of the work–precision comparison (module docstring); ``progress`` is called with each
+    finished row. Exudyn rows are left out when it is not installed."""
+    cfg = study_config(cfg)
+    methods = WORK_PRECISION if methods is None else methods
+    rows = []
+    for method, steps in methods.items():
+        if method.startswith("Exudyn") and not exudyn_available():
+            continue
+        for h in steps:
+            if method.startswith("R-matrix"):
+                th, wall = _rmatrix_theta(cfg, h, duration_s, "euler" if "Euler" in method else "midpoint")
+            elif method.startswith("MuJoCo"):
+                th, wall = _mujoco_theta(cfg, h, duration_s, method.rsplit(", ", 1)[1])
+            else:
+                th, wall = _exudyn_theta(cfg, h, duration_s)
+            n = int(round(duration_s / h))
+            err = abs(th - theta_exact)
+            rows.append({"method": method, "timestep_s": h, "steps": n, "wall_s": wall,
+                         "us_per_step": wall / n * 1e6, "s_per_sim_s": wall / duration_s,
+                         "theta_error_rad": err if math.isfinite(err) else None})
+            if progress is not None:
+                progress(rows[-1])
+    for r in rows:
+        e, c = r["theta_error_rad"], r["s_per_sim_s"]
+        r["front"] = e is not None and not any(
+            o is not r and o["theta_error_rad"] is not None and o["s_per_sim_s"] <= c and o["theta_error_rad"] <= e
+            and (o["s_per_sim_s"] < c or o["theta_error_rad"] < e) for o in rows)
+    return rows
+
+
+def work_precision_markdown(rows: list[dict], duration_s: float, exudyn: bool) -> str:
+    lines = [f"## Work–precision: θ({duration_s:g} s) against the exact solution (issue 16, item 5)", "",
+             "Same release as above (no drive, no friction). Cost measured in this process, one run after another "
+             "(best of 2 for runs under 1 s); it moves with the machine's load, the ratios less. Front: no other run "
+             "is at most as costly per simulated second and at most as wrong.", "",
+             "| method | h [s] | µs / step | s / simulated s | \\|θ − θ_exact\\| [rad] | front |",
+             "|---|---:|---:|---:|---:|:-:|"]
+    for r in rows:
+        lines.append(f"| {r['method']} | {r['timestep_s']:g} | {r['us_per_step']:.2f} | {r['s_per_sim_s']:.4f} | "
+                     f"{_fmt(r['theta_error_rad'], '.2e')} | {'P' if r['front'] else ''} |")
+    if not exudyn:
+        lines += ["", "Exudyn is not installed here: its rows are skipped (`pip install exudyn` adds them)."]
+    return "\n".join(lines) + "\n"
+
+
+def _work_precision_plot(rows: list[dict], out: Path) -> Path:
+    import io
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(8, 5.5))
+    for method in dict.fromkeys(r["method"] for r in rows):
+        sel = [r for r in rows if r["method"] == method and r["theta_error_rad"] is not None]
+        if not sel:
+            continue
+        ax.loglog([r["s_per_sim_s"] for r in sel], [max(r["theta_error_rad"], 1e-16) for r in sel], "o-", label=method)
+        for r in sel:
+            ax.annotate(f"{r['timestep_s']:g}", (r["s_per_sim_s"], max(r["theta_error_rad"], 1e-16)), fontsize=7,
+                        textcoords="offset points", xytext=(4, 3))
+    front = sorted((r for r in rows if r["front"]), key=lambda r: r["s_per_sim_s"])
+    if front:
+        ax.loglog([r["s_per_sim_s"] for r in front], [r["theta_error_rad"] for r in front], "k:", lw=1, label="front")
+    ax.set(xlabel="wall seconds per simulated second", ylabel="|θ(T) − θ_exact(T)| [rad]",
+           title="S003 §4.1 free motion: work–precision (labels: h [s])")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110)
+    plt.close(fig)
+    return atomic_write_bytes(out / "work_precision.png", buf.getvalue())
 
 
 # ------------------------------------------------------------------------- report
@@ -336,9 +566,11 @@ def _plots(results: list[CaseResult], ref_t: np.ndarray, ref_w: np.ndarray, out:
 
 
 def run_study(out_dir: str | Path, cfg: BenchConfig | None = None, duration_s: float = 5.0,
-              cases: tuple[Case, ...] = DEFAULT_CASES, progress: bool = True) -> dict:
-    """Run every case, write ``formulations.md``, ``formulations.json`` and PNG plots into
-    ``out_dir`` (created if needed); returns the JSON content."""
+              cases: tuple[Case, ...] = DEFAULT_CASES, progress: bool = True,
+              work_precision_methods: dict[str, tuple[float, ...]] | None = None) -> dict:
+    """Run every case and the work–precision comparison (``work_precision_methods``: default
+    :data:`WORK_PRECISION`, ``{}`` for none), write ``formulations.md``, ``formulations.json`` and
+    PNG plots into ``out_dir`` (created if needed); returns the JSON content."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     cfg = study_config(cfg)
@@ -358,13 +590,20 @@ def run_study(out_dir: str | Path, cfg: BenchConfig | None = None, duration_s: f
     rows = [_row(r, ref_t, ref_w, tmax) for r in results]
     table = markdown_table(rows, duration_s, tmax)
     pngs = _plots(results, ref_t, ref_w, out)
+    wp = work_precision(cfg, duration_s, float(th[-1]), work_precision_methods)
+    exudyn = exudyn_available()
+    if wp:
+        pngs.append(_work_precision_plot(wp, out))
     text = ("# S003 §4.1: R-matrix versus penalty formulation\n\n"
             f"Ideal mechanism released at rest at θ = π/3, gravity 9.81 m/s² along −y, {duration_s:g} s, symplectic "
             "Euler, no drive torque, no friction. Bodies: S003 Table 1. "
             f"T_max = {tmax * 1e3:.1f} mJ (largest kinetic energy of the exact motion).\n\n"
-            + table + "\n" + _notes(rows) + "\nFigures: " + ", ".join(p.name for p in pngs) + "\n")
+            + table + "\n" + _notes(rows) + "\n"
+            + (work_precision_markdown(wp, duration_s, exudyn) + "\n" if wp else "")
+            + "Figures: " + ", ".join(p.name for p in pngs) + "\n")
     atomic_write_text(out / "formulations.md", text)
     data = {"duration_s": duration_s, "theta0_rad": THETA0, "t_max_J": tmax, "rows": rows,
+            "theta_exact_end_rad": float(th[-1]), "work_precision": wp, "exudyn": exudyn,
             "figures": [p.name for p in pngs]}
     atomic_write_json(out / "formulations.json", data)
     return data

@@ -86,7 +86,15 @@ z ← z + h ż (velocity first: the printed Eq. 21 shows ẏ_k in the position u
 be explicit Euler; the symplectic variant, as in MuJoCo's Euler, uses the new velocity). The
 dependent coordinates follow q̈ = R z̈ + Ṙż the same way, then are projected with z held:
 Newton–Raphson on A(q) Δq = −[Φ(q); 0] (z rows of the right-hand side zero), then
-q̇ ← R(q) ż. ‖Φ‖ and ‖Φ̇‖ therefore stay at round-off.
+q̇ ← R(q) ż. ‖Φ‖ and ‖Φ̇‖ therefore stay at round-off. Opt-in alternative
+(``P[P_INTEGRATOR]``, :data:`INTEGRATORS`): the explicit midpoint rule, second order: the state
+at t + h/2 by an Euler half step, projected the same way, the accelerations there, then
+q ← q + h q̇_mid, q̇ ← q̇ + h q̈_mid and the projection (two force and acceleration evaluations per
+step). The drive reference at the midpoint is θ_ref + h/2 ω_ref (ω_ref averaged over the step),
+the PID integral is that of the step start and contact events advance at step starts only, so it
+is second order for smooth motion (``twin study formulations`` measures it). Through hard
+impacts explicit midpoint is not stable at the bench's steps: the engine refuses it for scenes
+with a clearance joint (:class:`twin.reference.engine.ReferenceOptions`).
 
 Drive: MuJoCo's native ``<pid>`` law: τ_k = kp (θ_ref − θ) + kv (ω_ref − ω) + ki I_k, then
 I_{k+1} = clamp(I_k + h (θ_ref − θ_k), ±imax) (imax = 0: no clamp).
@@ -118,7 +126,11 @@ P_MU0, P_V0, P_V1, P_FGUIDE = 29, 30, 31, 32
 P_KP, P_KV, P_KI, P_IMAX, P_H = 33, 34, 35, 36, 37
 P_NEWTON_TOL, P_NEWTON_MAXIT = 38, 39
 P_SENS = 40            # 6 sensors × (body 0 rod / 1 slider, x, y, axis 0 +x 1 −x 2 +y 3 −y)
-N_PARAMS = P_SENS + 24
+P_INTEGRATOR = P_SENS + 24  # 0 symplectic Euler (default), 1 explicit midpoint (INTEGRATORS)
+N_PARAMS = P_INTEGRATOR + 1
+
+#: integrators of :func:`run_steps` by name -> code in ``P[P_INTEGRATOR]``
+INTEGRATORS = {"euler": 0, "midpoint": 1}
 
 # --------------------------------------------------------------------- state layout
 S_Q, S_QD = 0, 8       # q[0:8], q̇[8:16]
@@ -599,7 +611,7 @@ def _outputs(P, q, qd, qdd, tau, jb, jc, row):
                 row[base + k] = 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)  # no GIL while stepping: a sink's writer thread runs meanwhile
 def run_steps(P, st, theta_ref, omega_ref, stride, out, want_out):
     """Integrate ``len(theta_ref)`` steps from state ``st`` (updated in place).
 
@@ -633,6 +645,13 @@ def run_steps(P, st, theta_ref, omega_ref, stride, out, want_out):
     bb = np.empty(8)
     s, c = math.sin(q[7]), math.cos(q[7])
     n = theta_ref.shape[0]
+    midpoint = P[P_INTEGRATOR] == 1.0
+    qm = np.empty(8)        # midpoint stage (explicit midpoint only)
+    qdm = np.empty(8)
+    cm_b = np.empty(2)
+    cm_c = np.empty(2)
+    jm_b = np.zeros(5)
+    jm_c = np.zeros(5)
     status = OK
     k = 0
     while k < n:
@@ -644,15 +663,41 @@ def run_steps(P, st, theta_ref, omega_ref, stride, out, want_out):
             break
         if want_out and k % stride == 0:
             _outputs(P, q, qd, qdd, tau, jb, jc, out[k // stride])
+        if midpoint:
+            # explicit midpoint (second order): the state at t + h/2 (projected), the accelerations
+            # there (PID integral of the step start, contact events advanced at step starts only),
+            # then the whole step with the midpoint's rates
+            for i in range(8):
+                qm[i] = q[i] + 0.5 * h * qd[i]
+                qdm[i] = qd[i] + 0.5 * h * qdd[i]
+            sm, cm = math.sin(qm[7]), math.cos(qm[7])
+            if project(P, qm, qdm, sm, cm, res, dq, bb) < 0:
+                status = NEWTON_FAILED
+                k += 1
+                break
+            # drive reference at t + h/2 (second order: θ_ref + h/2 ω_ref, ω_ref averaged)
+            om_ref = 0.5 * (omega_ref[k] + omega_ref[k + 1]) if k + 1 < n else omega_ref[k]
+            taum = kp * (theta_ref[k] + 0.5 * h * omega_ref[k] - qm[7]) + kv * (om_ref - qdm[7]) + ki * integ
+            cm_b[0], cm_b[1] = cst_b[0], cst_b[1]
+            cm_c[0], cm_c[1] = cst_c[0], cst_c[1]
+            generalized_forces(P, qm, qdm, taum, cm_b, cm_c, Q, jm_b, jm_c)
+            if not accelerations(P, qm, qdm, sm, cm, Q, rows, nz, Rt, S, Mb, rhs, tmp, qdd):
+                status = NOT_FINITE
+                break
         integ += h * err
         if imax > 0.0:
             if integ > imax:
                 integ = imax
             elif integ < -imax:
                 integ = -imax
-        for i in range(8):
-            qd[i] += h * qdd[i]
-            q[i] += h * qd[i]
+        if midpoint:
+            for i in range(8):
+                q[i] += h * qdm[i]
+                qd[i] += h * qdd[i]
+        else:
+            for i in range(8):
+                qd[i] += h * qdd[i]
+                q[i] += h * qd[i]
         s, c = math.sin(q[7]), math.cos(q[7])
         if project(P, q, qd, s, c, res, dq, bb) < 0:
             status = NEWTON_FAILED
@@ -702,12 +747,13 @@ def free_motion(P, st, nsteps, every, th_d, en, phi, phid):
 # ----------------------------------------------------------------- Python helpers
 def build_params(cfg: BenchConfig, *, min_impact_speed_mps: float = 1e-3, newton_tol_m: float = 1e-10,
                  newton_max_iter: int = 20, drive: bool = True, guide_friction: bool = True,
-                 joint_friction: bool = True) -> np.ndarray:
+                 joint_friction: bool = True, integrator: str = "euler") -> np.ndarray:
     """Parameter vector of a configuration (layout ``P_*``).
 
     ``drive=False`` zeroes the PID gains (free motion), ``guide_friction``/``joint_friction``
     False switch those forces off (§4.1 study). The linear law's stiffness and damping are
-    resolved here (see :func:`contact_parameters`).
+    resolved here (see :func:`contact_parameters`). ``integrator``: "euler" (symplectic Euler,
+    S003 Eq. 21, the default) or "midpoint" (explicit midpoint, second order; see :func:`run_steps`).
     """
     b, j, mech, con = cfg.bodies, cfg.joints, cfg.mechanism, cfg.contact
     P = np.zeros(N_PARAMS)
@@ -739,6 +785,7 @@ def build_params(cfg: BenchConfig, *, min_impact_speed_mps: float = 1e-3, newton
         P[P_KP], P[P_KV], P[P_KI], P[P_IMAX] = cfg.pid.kp, cfg.pid.kv, cfg.pid.ki, cfg.pid.imax
     P[P_H] = cfg.simulation.timestep_s
     P[P_NEWTON_TOL], P[P_NEWTON_MAXIT] = newton_tol_m, newton_max_iter
+    P[P_INTEGRATOR] = INTEGRATORS[integrator]
     for i, name in enumerate(ACCELEROMETERS):
         mnt = cfg.sensors.accelerometers[name]
         base = P_SENS + 4 * i
