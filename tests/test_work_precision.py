@@ -81,3 +81,10 @@ def test_work_precision_rows_and_front(tmp_path):
     assert json.loads((tmp_path / "formulations.json").read_text())["work_precision"] == rows
     assert "Work–precision" in (tmp_path / "formulations.md").read_text()
     assert (tmp_path / "work_precision.png").stat().st_size > 10_000
+
+
+def test_exudyn_rows_are_skipped_cleanly_when_it_is_not_installed(monkeypatch):
+    monkeypatch.setattr(F, "exudyn_available", lambda: False)
+    rows = F.work_precision(None, 0.05, 0.0, {"Exudyn, generalized-α": (1e-3,), "R-matrix, explicit midpoint": (1e-3,)})
+    assert [r["method"] for r in rows] == ["R-matrix, explicit midpoint"]
+    assert "not installed" in F.work_precision_markdown(rows, 0.05, exudyn=False)
