@@ -21,6 +21,11 @@ What the builder changes in the default configuration's model on top of the base
   fields (``law``, ``stiffness``, ``exponent``, ``damping``, ``speed_floor``, ``slot``) and
   ``nuserdata`` slots; at C it
   deletes the ``joint_C`` connect, at B it adds the planar slides ``ecc_B_x``/``ecc_B_y``;
+* every scene with the default ``mujoco.guide_friction = "native"``: the slider guide's dry
+  friction moves from the slide joint's ``frictionloss`` (MuJoCo's friction constraint, what a
+  plain MuJoCo simulates from the file) into its user data (``nuser_jnt``,
+  ``twin.names.GUIDE_USERDATA_FIELDS``), the reference's regularized law applied by the native
+  module; the force itself is the file's;
 * the optional "energy" channel group: energy sensors and ``mjENBL_ENERGY``; the "ring" and
   "tendon" bushing representations: their boxes/tendon instead of the bore pair.
 """
@@ -95,6 +100,14 @@ def _assert_same(a: dict, b: dict, what: str, atol: float = 0.0) -> None:
         assert a[k].shape == b[k].shape and np.allclose(a[k], b[k], rtol=0, atol=atol), (what, k, a[k], b[k])
 
 
+def _dry_friction(model: mujoco.MjModel, joint: str) -> float:
+    """A joint's dry friction force: MuJoCo's frictionloss, or the native guide friction's force
+    (``mujoco.guide_friction = "native"``: joint user data, twin.names.GUIDE_USERDATA_FIELDS)."""
+    j = model.joint(joint)
+    native = model.nuser_jnt and j.user[0] == N.GUIDE_MAGIC
+    return float(model.dof_frictionloss[j.dofadr[0]] + (j.user[1] if native else 0.0))
+
+
 def _compare(base: mujoco.MjModel, m: mujoco.MjModel, skip_geoms: tuple[str, ...] = (),
              equality: bool = True) -> None:
     """Every physical number of ``base`` and ``m``, matched by name (order-independent)."""
@@ -107,9 +120,16 @@ def _compare(base: mujoco.MjModel, m: mujoco.MjModel, skip_geoms: tuple[str, ...
     for attr in ("type", "axis", "pos", "solref", "solimp", "range", "limited"):
         _assert_same(_by_name(base, "joint", joints, attr), _by_name(m, "joint", joints, attr), f"joint {attr}")
     # per dof (one per joint here); a joint's solreffriction/solimpfriction are its dof's solref/solimp
-    for attr in ("frictionloss", "damping", "armature", "solref", "solimp"):
+    for attr in ("damping", "armature", "solref", "solimp"):
         _assert_same({n: np.array(getattr(base, f"dof_{attr}")[base.joint(n).dofadr[0]]) for n in joints},
                      {n: np.array(getattr(m, f"dof_{attr}")[m.joint(n).dofadr[0]]) for n in joints}, f"dof {attr}")
+    # dry friction: the file's frictionloss, which the builder moves into the native guide friction
+    _assert_same({n: np.array(_dry_friction(base, n)) for n in joints}, {n: np.array(_dry_friction(m, n)) for n in joints},
+                 "dof dry friction (frictionloss or native guide friction)")
+    if m.nuser_jnt:
+        assert m.nuser_jnt == len(N.GUIDE_USERDATA_FIELDS)
+        guide = m.joint(N.SLIDER_SLIDE)
+        assert m.dof_frictionloss[guide.dofadr[0]] == 0 and guide.user[0] == N.GUIDE_MAGIC
     geoms = [g for g in _names(base, "geom", base.ngeom) if g not in skip_geoms]
     physical = [N.pin("B"), N.pin("C"), N.bushing("B"), N.bushing("C")]
     for attr in ("size", "pos", "quat", "user", "type", "contype", "conaffinity", "group"):
@@ -236,7 +256,7 @@ def test_a_changed_config_value_reaches_the_compiled_model():
     assert m.body(N.SLIDER).inertia[2] == 0.003
     assert m.geom(N.pin("B")).size[0] == 0.012
     dof = m.joint(N.SLIDER_SLIDE).dofadr[0]
-    assert m.dof_frictionloss[dof] == 3.0 and tuple(m.dof_solref[dof]) == (4e-5, 1.0)
+    assert _dry_friction(m, N.SLIDER_SLIDE) == 3.0 and tuple(m.dof_solref[dof]) == (4e-5, 1.0)
     assert tuple(m.opt.gravity) == (-cfg.mechanism.gravity_mps2, 0.0, 0.0)
     assert tuple(m.equality(N.JOINT_C_CONNECT).solref) == (3e-5, 1.0)
     assert m.opt.iterations == 30 and m.opt.timestep == 5e-6

@@ -361,3 +361,31 @@ def test_native_law_follows_the_configured_reference_law(law):
             assert user["law"] == N.BORE_LAWS["hysteresis"]
             assert user["stiffness"] == pytest.approx(ln_stiffness(cfg.joints, cfg.materials, j))
             assert user["damping"] == pytest.approx(DAMPING_FACTOR[law](cfg.contact.restitution))
+
+
+def test_guide_friction_is_the_reference_regularized_law():
+    """``mujoco.guide_friction = "native"`` (default): the slider guide's friction is the reference
+    engine's, F ramp(|v|; v0, v1) against the slider's velocity, a passive force of the native
+    module (test 3, ideal joints: the guide is the only passive force on the slider's dof), through
+    the slider's reversals; "frictionloss" restores MuJoCo's friction constraint."""
+    from twin.reference.contact import ramp
+
+    cfg = short(preset(3), 0.4, **{"drive.ramp_s": 0.05})
+    eng = MujocoEngine(cfg)
+    m, d = eng.model, eng.data
+    eng.reset()
+    ref = DriveReference(cfg)
+    dof = m.joint(N.SLIDER_SLIDE).dofadr[0]
+    assert m.dof_frictionloss[dof] == 0
+    F, v0, v1 = cfg.mechanism.guide_friction_n, cfg.contact.v0_mps, cfg.contact.v1_mps
+    seen = {"slow": 0, "ramp": 0, "full": 0}
+    for _ in range(40_000):
+        th, om = ref(np.array([d.time]))
+        d.ctrl[:] = [th[0], om[0]]
+        v = float(d.qvel[dof])
+        mujoco.mj_step(m, d)  # qfrc_passive: the state the step started from
+        assert d.qfrc_passive[dof] == pytest.approx(-F * ramp(v, v0, v1) * np.sign(v), abs=1e-12)
+        seen["slow" if abs(v) <= v0 else "ramp" if abs(v) < v1 else "full"] += 1
+    assert min(seen.values()) > 0, seen  # reversals crossed
+    m2 = build(cfg.replace(**{"mujoco.guide_friction": "frictionloss"}))[1]
+    assert m2.dof_frictionloss[m2.joint(N.SLIDER_SLIDE).dofadr[0]] == F and m2.nuser_jnt == 0

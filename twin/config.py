@@ -372,6 +372,13 @@ class MujocoSettings:
         equality_solimp: ``solimp`` of that connect.
         guide_solreffriction: ``solreffriction`` of the guide's dry friction (frictionloss).
             Default: mjcf/bench.xml (the slide joint).
+        guide_friction: the slider guide's friction (``mechanism.guide_friction_n``): "native"
+            (default): the reference engine's law, F ramp(|v|) against the slider's velocity
+            with the ramp of ``contact.v0_mps``/``v1_mps``, a passive force of the native module
+            (issue 15: MuJoCo's frictionloss constraint holds the slider at its reversals where
+            the reference's friction vanishes, and shifted the 0.5-5 kHz band energy of the
+            250 rpm tests by 4-6 dB); "frictionloss": MuJoCo's dry-friction constraint
+            (``frictionloss`` with ``guide_solreffriction``), the base model's.
         bushing: representation of a bushing bore: "bore" (native pin-in-bore collider, exact
             circle; the default, chosen by ``analysis/bushing_representations.py``), "ring"
             (``ring_boxes`` boxes whose faces form a regular polygon tangent to the bore) or
@@ -405,6 +412,7 @@ class MujocoSettings:
     equality_solref: tuple[float, ...] = _XML.equality_solref
     equality_solimp: tuple[float, ...] = _XML.equality_solimp
     guide_solreffriction: tuple[float, ...] = _XML.guide_solreffriction
+    guide_friction: str = "native"
     bushing: str = "bore"
     ring_boxes: int = 48
     friction: str = "native"
@@ -423,6 +431,7 @@ class MujocoSettings:
                f"must be an integer in [8, 512], got {self.ring_boxes!r}")
         _choice(self.friction, "friction", ("native", "cone"))
         _choice(self.contact_source, "contact_source", ("law", "first-guess"))
+        _choice(self.guide_friction, "guide_friction", ("native", "frictionloss"))
         _check(isinstance(self.impact_damping_gain, (int, float)) and 0.1 <= self.impact_damping_gain <= 10,
                "impact_damping_gain", f"must lie in [0.1, 10], got {self.impact_damping_gain!r}")
         _check(self.bushing == "bore" or self.friction == "cone" or self.bushing == "tendon", "friction",

@@ -122,6 +122,21 @@ _BORE_USERDATA_OPTIONAL = {"marker": BORE_MAGIC, "law": 0.0, "stiffness": 0.0, "
                            "speed_floor": 0.0, "slot": -1.0}
 
 
+#: marker of a guide joint in its user data's "marker" field (must match GUIDE_MAGIC in _bore.c)
+GUIDE_MAGIC = 7302.0
+
+#: Layout of a guide joint's user data (``nuser_jnt`` = its length), read by index by the native
+#: module (its ``enum guide_user``): ``marker`` (:data:`GUIDE_MAGIC`: the joint gets the
+#: reference's regularized Coulomb friction as a passive force), ``force`` F [N], ``v0``, ``v1``
+#: [m/s] (no friction below v0, a linear ramp to F at v1).
+GUIDE_USERDATA_FIELDS: tuple[str, ...] = ("marker", "force", "v0", "v1")
+
+
+def guide_userdata(force: float, v0: float, v1: float) -> list[float]:
+    """User data vector of a guide joint (:data:`GUIDE_USERDATA_FIELDS`)."""
+    return [GUIDE_MAGIC, float(force), float(v0), float(v1)]
+
+
 def bore_userdata(**fields: float) -> list[float]:
     """User data vector of a bushing bore from its named fields (:data:`BORE_USERDATA_FIELDS`).
 

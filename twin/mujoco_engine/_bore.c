@@ -58,8 +58,10 @@
  * law force makes aref < 0 and the solver leaves the row inactive: f = max(F, 0), decided
  * implicitly. In equilibrium (a = 0, delta' = 0) f = K delta^n exactly. R is also written into
  * iefc_R/iefc_D (islands) and into the diagonal of efc_AR (dual solvers: PGS, noslip). With an
- * elliptic friction cone (condim 3) every row of the contact is scaled by the same factor, which
- * keeps MuJoCo's regularized friction coefficient. Pyramidal cones are left to solref/solimp.
+ * elliptic friction cone (condim 3) the friction rows keep MuJoCo's regularizer and the
+ * regularized cone's coefficient mu = friction sqrt(R_t/R) follows the new R (as MuJoCo sets it);
+ * while sliding, MuJoCo's soft cone then adds to the normal force (the reason for the native
+ * friction). Pyramidal cones are left to solref/solimp.
  * Assumes one mjcb_passive call per step (mj_step, mj_forward: the Euler and implicit
  * integrators; RK4 calls it per stage, and its end-of-step rate is not delta' - h a).
  *
@@ -118,6 +120,23 @@ _Static_assert(sizeof(bore_user_names) / sizeof(bore_user_names[0]) == BORE_NUSE
                "bore_user_names must name every field of enum bore_user");
 
 enum bore_law { LAW_SOFT = 0, LAW_HYSTERESIS = 1, LAW_LINEAR = 2 };
+
+/* Layout of a guide joint's user data (m->jnt_user row, nuser_jnt >= GUIDE_NUSER): the one
+ * definition is twin/names.py GUIDE_USERDATA_FIELDS. A slide or hinge joint marked with
+ * GUIDE_MAGIC gets the reference's regularized Coulomb friction as a passive force on its dof:
+ * f = -F ramp(|v|) sign(v), ramp = 0 below v0, (|v| - v0)/(v1 - v0) between, 1 above v1 (the
+ * reference engine's slider guide, twin/reference/model.py; S003 Eq. 20's regularization). */
+#define GUIDE_MAGIC 7302.0
+enum guide_user {
+  GUIDE_MARKER = 0,      /* GUIDE_MAGIC marks the joint */
+  GUIDE_FORCE,           /* friction force F [N] (hinge: [N m]) */
+  GUIDE_V0,              /* v0 [m/s]: no friction below */
+  GUIDE_V1,              /* v1 [m/s]: full friction above */
+  GUIDE_NUSER
+};
+static const char* const guide_user_names[] = {"marker", "force", "v0", "v1"};
+_Static_assert(sizeof(guide_user_names) / sizeof(guide_user_names[0]) == GUIDE_NUSER,
+               "guide_user_names must name every field of enum guide_user");
 
 static mjfCollision g_previous = NULL;
 static mjfGeneric g_prev_passive = NULL;
@@ -299,10 +318,14 @@ static void contact_law(const mjModel* m, mjData* d) {
     const mjtNum R0 = d->efc_R[row];
     const mjtNum R = gamma * R0 > 1 ? 1 / gamma : R0;
     if (R != R0) {
-      const int dim = d->efc_type[row] == mjCNSTR_CONTACT_ELLIPTIC ? con->dim : 1;
       set_regularizer(m, d, row, R);
-      for (int j = 1; j < dim; j++) {             /* elliptic cone: same factor, same mu */
-        set_regularizer(m, d, row + j, d->efc_R[row + j] * (R / R0));
+      if (d->efc_type[row] == mjCNSTR_CONTACT_ELLIPTIC) {
+        /* elliptic cone: the friction rows' regularizer and damping scale with the normal
+         * row's (MuJoCo's regularized cone coefficient stays; their viscous force B v / R too) */
+        for (int j = 1; j < con->dim; j++) {
+          set_regularizer(m, d, row + j, d->efc_R[row + j] * (R / R0));
+          d->efc_KBIP[4 * (row + j) + 1] *= R / R0;
+        }
       }
     }
     const mjtNum imp = kbip[2] > 0 ? kbip[2] : 1;
@@ -358,8 +381,27 @@ static int bore_friction(const mjModel* m, const mjData* d, int icon, friction_t
   return 1;
 }
 
+/* regularized Coulomb friction of the joints marked as guides (GUIDE_MAGIC) */
+static void guide_friction(const mjModel* m, mjData* d) {
+  const int nu = m->nuser_jnt;
+  if (nu < GUIDE_NUSER) return;
+  for (int j = 0; j < m->njnt; j++) {
+    const mjtNum* user = m->jnt_user + j * nu;
+    if (user[GUIDE_MARKER] != GUIDE_MAGIC) continue;
+    if (m->jnt_type[j] != mjJNT_SLIDE && m->jnt_type[j] != mjJNT_HINGE) continue;
+    const int dof = m->jnt_dofadr[j];
+    const mjtNum v = d->qvel[dof], s = fabs(v), v0 = user[GUIDE_V0], v1 = user[GUIDE_V1];
+    mjtNum r = 0;
+    if (s >= v1) r = 1;
+    else if (s > v0) r = (s - v0) / (v1 - v0);
+    if (v > 0) d->qfrc_passive[dof] -= user[GUIDE_FORCE] * r;
+    else if (v < 0) d->qfrc_passive[dof] += user[GUIDE_FORCE] * r;
+  }
+}
+
 static void passive_bore(const mjModel* m, mjData* d) {
   if (g_prev_passive) g_prev_passive(m, d);
+  guide_friction(m, d);
   if (m->nuser_geom < BORE_NUSER) return;
   contact_law(m, d);
   if (!g_applyFT) return;
@@ -445,11 +487,31 @@ static PyObject* py_userdata_fields(PyObject* self, PyObject* args) {
   return out;
 }
 
+static PyObject* py_guide_fields(PyObject* self, PyObject* args) {
+  PyObject* out = PyTuple_New(GUIDE_NUSER);
+  if (!out) return NULL;
+  for (int i = 0; i < GUIDE_NUSER; i++) {
+    PyObject* name = PyUnicode_FromString(guide_user_names[i]);
+    if (!name) {
+      Py_DECREF(out);
+      return NULL;
+    }
+    PyTuple_SET_ITEM(out, i, name);
+  }
+  return out;
+}
+
+static PyObject* py_guide_magic(PyObject* self, PyObject* args) {
+  return PyFloat_FromDouble(GUIDE_MAGIC);
+}
+
 static PyMethodDef methods[] = {
   {"install", py_install, METH_VARARGS, "install(table, passive, sensor, applyFT): addresses of mjCOLLISIONFUNC, mjcb_passive, mjcb_sensor and the function mj_applyFT."},
   {"header_version", py_header_version, METH_NOARGS, "mjVERSION_HEADER the module was compiled against."},
   {"bore_magic", py_bore_magic, METH_NOARGS, "geom user data marker value that marks a bore."},
   {"userdata_fields", py_userdata_fields, METH_NOARGS, "names of the bore geom's user data fields, in order (enum bore_user)."},
+  {"guide_fields", py_guide_fields, METH_NOARGS, "names of a guide joint's user data fields, in order (enum guide_user)."},
+  {"guide_magic", py_guide_magic, METH_NOARGS, "joint user data marker value that marks a guide."},
   {NULL, NULL, 0, NULL}
 };
 

@@ -353,8 +353,15 @@ def build_spec(cfg: BenchConfig) -> mujoco.MjSpec:
     # slider (frame at Cs on the guide line; C' is d_off above it)
     slider = spec.body(N.SLIDER)
     _set_inertial(slider, b.slider.mass_kg, (b.slider.x_g_m, mech.d_off_m, 0), b.slider.inertia_kgm2)
-    spec.joint(N.SLIDER_SLIDE).frictionloss = mech.guide_friction_n
-    spec.joint(N.SLIDER_SLIDE).solref_friction = list(cfg.mujoco.guide_solreffriction)
+    guide = spec.joint(N.SLIDER_SLIDE)
+    guide.solref_friction = list(cfg.mujoco.guide_solreffriction)
+    if cfg.mujoco.guide_friction == "native":
+        # the reference's regularized Coulomb guide friction, a passive force of the native module
+        guide.frictionloss = 0.0
+        spec.nuser_jnt = len(N.GUIDE_USERDATA_FIELDS)
+        guide.userdata = N.guide_userdata(mech.guide_friction_n, cfg.contact.v0_mps, cfg.contact.v1_mps)
+    else:
+        guide.frictionloss = mech.guide_friction_n
     for obj in (spec.geom(N.pin("C")), spec.site(N.pin("C"))):
         obj.pos = [0, mech.d_off_m, 0]
     block = spec.geom(N.SLIDER_BLOCK)

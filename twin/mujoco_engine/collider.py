@@ -56,6 +56,11 @@ def ensure_installed() -> None:
         raise EngineUnavailableError(
             f"the bushing collider reads the bore user data as {fields} but twin.names.BORE_USERDATA_FIELDS "
             f"is {N.BORE_USERDATA_FIELDS}; rebuild the extension ('pip install -e .') after changing either")
+    guide = (tuple(_bore.guide_fields()), _bore.guide_magic()) if hasattr(_bore, "guide_fields") else None
+    if guide != (N.GUIDE_USERDATA_FIELDS, N.GUIDE_MAGIC):
+        raise EngineUnavailableError(
+            f"the native module reads the guide joint's user data as {guide} but twin.names has "
+            f"{(N.GUIDE_USERDATA_FIELDS, N.GUIDE_MAGIC)}; rebuild the extension ('pip install -e .')")
     lib = ctypes.CDLL(_library_path())
     table = ctypes.addressof(ctypes.c_void_p.in_dll(lib, "mjCOLLISIONFUNC"))
     passive = ctypes.addressof(ctypes.c_void_p.in_dll(lib, "mjcb_passive"))

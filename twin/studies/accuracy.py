@@ -121,6 +121,7 @@ def variants(quick: bool = False) -> list[Variant]:
         Variant("mujoco PGS", m, "solver", {"mujoco.solver": "PGS"}),
         Variant("mujoco first-guess contact", m, "contact", {"mujoco.contact_source": "first-guess"}),
         Variant("mujoco impact-speed damping x2", m, "contact", {"mujoco.impact_damping_gain": 2.0}),
+        Variant("mujoco frictionloss guide", m, "contact", {"mujoco.guide_friction": "frictionloss"}),
         Variant("mujoco friction cone", m, "bushing", {"mujoco.friction": "cone"}),
         Variant("mujoco ring48 (cone)", m, "bushing", {"mujoco.bushing": "ring", "mujoco.friction": "cone"}),
         Variant("mujoco tendon (frictionless)", m, "bushing", {"mujoco.bushing": "tendon"}),
