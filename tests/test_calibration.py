@@ -130,3 +130,28 @@ def test_calibration_table_is_retired():
     from importlib import resources
 
     assert not resources.files("twin").joinpath("data", "contact_calibration.json").is_file()
+
+
+def test_stored_scale_free_constants_are_the_ode_solution():
+    """The default law's (τ, e_eff, ζ, g) stored in twin.impact (so that the default build needs no
+    ODE solver) equal a fresh solution; the first guess from them equals the direct impact match."""
+    from twin.impact import SCALE_FREE, impact_hysteresis, impact_linear, linear_equivalent, scale_free_constants
+
+    for (law, n, e), stored in SCALE_FREE.items():
+        np.testing.assert_allclose(stored, scale_free_constants(law, n, e, solve=True), rtol=1e-8)
+    K, m, v = 1.335e11, 1.3, 0.1
+    k, c = linear_equivalent(K, 1.5, 0.4, m, v)
+    ref, lin = impact_hysteresis("lankarani-nikravesh", K, 1.5, 0.4, m, v), impact_linear(k, c, m, v)
+    assert lin.duration_s == pytest.approx(ref.duration_s, rel=1e-6)
+    assert lin.restitution == pytest.approx(ref.restitution, abs=1e-6)
+
+
+def test_default_build_needs_no_ode_solver():
+    """Building the default twin imports neither scipy.integrate nor the reference engine."""
+    import subprocess
+    import sys
+
+    code = ("import sys\nfrom twin.config import BenchConfig\nfrom twin.mujoco_engine.builder import build\n"
+            "build(BenchConfig())\nprint(sorted(m for m in ('scipy.integrate', 'twin.reference.model') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
+    assert out == "[]", out

@@ -115,14 +115,41 @@ def linear_damping_ratio(restitution: float) -> float:
     return brentq(f, 1e-6, 0.99, xtol=1e-10)
 
 
+#: Scale-free constants of a hysteresis law's free impact and of its linear equivalent, by
+#: (law, n, e): (τ, e_eff, ζ, g): the impact lasts τ δmax/v (δmax = ((n+1) m v²/(2K))^(1/(n+1)))
+#: and returns e_eff; the unilateral linear contact with restitution e_eff has damping ratio ζ
+#: and lasts g sqrt(m/k). The hysteresis laws are exactly scale-free (δ = δmax x, t = δmax/v s
+#: removes K, m and v), so these four numbers give :func:`linear_equivalent` for every K, m, v.
+#: :func:`scale_free_constants` solves them (ODE); the default law's are stored here so that the
+#: twin's default build needs no ODE solver (``tests/test_calibration.py`` re-solves them).
+SCALE_FREE: dict[tuple[str, float, float], tuple[float, float, float, float]] = {
+    ("lankarani-nikravesh", 1.5, 0.4): (3.0846904191803572, 0.701634728074198, 0.12135586862914068,
+                                       3.1625734358695716),
+}
+
+
+def scale_free_constants(law: str, n: float, e: float, solve: bool = False) -> tuple[float, float, float, float]:
+    """(τ, e_eff, ζ, g) of :data:`SCALE_FREE` for (law, n, e), solved once per process where not
+    stored (``solve``: always solve)."""
+    key = (law, float(n), float(e))
+    if solve or key not in SCALE_FREE:
+        r = impact_hysteresis(law, 1.0, n, e, 1.0, 1.0)
+        dmax = ((n + 1) / 2) ** (1 / (n + 1))
+        zeta = linear_damping_ratio(r.restitution)
+        consts = (r.duration_s / dmax, r.restitution, zeta, impact_linear(1.0, 2 * zeta, 1.0, 1.0).duration_s)
+        if solve:
+            return consts
+        SCALE_FREE[key] = consts
+    return SCALE_FREE[key]
+
+
 def linear_equivalent(K: float, n: float, e: float, m: float, v: float,
                       law: str = "lankarani-nikravesh") -> tuple[float, float]:
     """(k [N/m], c [N s/m]) of a linear contact matching a hysteresis law's impact at speed v:
-    same contact duration and the same restitution."""
-    target = impact_hysteresis(law, K, n, e, m, v)
-    # unilateral linear contact: duration = g(ζ) sqrt(m/k); match duration and restitution
-    zeta = linear_damping_ratio(target.restitution)
-    unit = impact_linear(1.0, 2 * zeta, 1.0, 1.0)  # k = m = 1: duration g(ζ)
-    k = m * (unit.duration_s / target.duration_s) ** 2
+    same contact duration and the same restitution (:func:`scale_free_constants`)."""
+    tau, _e_eff, zeta, g = scale_free_constants(law, n, e)
+    duration = tau * hertz_duration(K, n, m, v)
+    # unilateral linear contact: duration = g sqrt(m/k); match duration and restitution
+    k = m * (g / duration) ** 2
     c = 2 * zeta * math.sqrt(k * m)
     return k, c
