@@ -284,6 +284,20 @@ def test_a_folder_of_another_dataset_is_refused(tiny, tmp_path, capsys):
     assert sorted(p.name for p in junk.iterdir()) == ["notes.txt"]
 
 
+def test_runs_of_another_twin_version_are_not_mixed_in(tmp_path, capsys):
+    out = tmp_path / "half"
+    assert main(["dataset", "generate", str(TINY), "--out", str(out), "--workers", "1", "--limit", "2",
+                 "--no-progress"]) == 0
+    info = json.loads((out / "info.json").read_text())
+    info["versions"]["twin"] = "0.0.1"  # as if the finished runs came from an older physics
+    (out / "info.json").write_text(json.dumps(info))
+    before = {p: p.stat().st_mtime_ns for p in out.rglob("*")}
+    rc = main(["dataset", "generate", str(TINY), "--out", str(out), "--workers", "1", "--no-progress"])
+    err = capsys.readouterr().err
+    assert rc == 2 and err.count("\n") == 1 and "twin '0.0.1'" in err and "another folder" in err
+    assert {p: p.stat().st_mtime_ns for p in out.rglob("*")} == before
+
+
 def test_verify_finds_a_changed_file(tiny, tmp_path, capsys):
     import shutil
 

@@ -103,7 +103,26 @@ def prepare(spec: DatasetSpec, out_dir: str | Path) -> Prepared:
                                f"differs in {', '.join(diff)}); use another folder")
     columns = dataset_columns(runs, spec)
     done = _read_done(out, {r.run_id for r in runs}) if out.exists() else {}
+    if done and len(done) < len(runs):
+        _check_same_code(info_path)
     return Prepared(spec, out, runs, columns, done, ident)
+
+
+def _check_same_code(info_path: Path) -> None:
+    """Refuse to add runs to a dataset whose finished runs another twin or MuJoCo made: the same
+    spec simulated by other physics (e.g. before a contact-law change) must not be mixed in one
+    dataset. A complete dataset is only read, so it is never refused."""
+    import mujoco
+
+    try:
+        versions = json.loads(info_path.read_text()).get("versions", {})
+    except (OSError, ValueError):
+        return  # info.json is rewritten by this generation; its runs' files were checked already
+    ours = {"twin": __version__, "mujoco": mujoco.__version__}
+    differ = [f"{k} {versions.get(k)!r} (now {v!r})" for k, v in ours.items() if versions.get(k) != v]
+    if differ:
+        raise DatasetError(f"--out: {info_path.parent} was started by {', '.join(differ)}; its runs would mix two "
+                           "versions of the physics: use another folder")
 
 
 def _read_done(out: Path, ids: set[str]) -> dict[str, dict[str, Any]]:
