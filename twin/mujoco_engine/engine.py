@@ -5,6 +5,16 @@ sequence holds the drive reference [θ_ref, ω_ref] for every step, sensor data 
 every step (computed at the state before the step, i.e. at t_k = k h) and are decimated to
 the output rate. The data object carries the state (and the solver warmstart) from one chunk
 to the next, so chunking does not change the result.
+
+Per-scene state. A scene's state is more than ``mujoco.rollout`` takes (``mjSTATE_FULLPHYSICS``):
+the solver warmstart (passed to it separately) and the native contact law's stored impact speed
+of each clearance joint (``mjData.userdata``, one slot per joint, see ``_bore.c``), which the
+rollout neither sets nor resets. Each engine has its own model and data object, so scenes on
+separate engines (on threads: :func:`twin.simulate.simulate_many`) share nothing; :meth:`reset`
+clears the impact speeds with the rest of the data, and :meth:`snapshot` / :meth:`restore` move
+the whole state (``mjSTATE_INTEGRATION``: physics, controls, warmstart, user data) and the step
+count, so a run continued from a snapshot, in this engine or another of the same
+configuration, gives the same bits as the uninterrupted run.
 """
 
 from __future__ import annotations
@@ -24,6 +34,8 @@ from twin.kinematics import initial_pose, rot2
 from twin.mujoco_engine.builder import build
 
 _STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
+#: everything a step reads besides the model: physics, controls, warmstart and user data (v_imp)
+_SCENE_STATE = mujoco.mjtState.mjSTATE_INTEGRATION
 _clock: tuple[Any, int] | None = None  # (the mjcb_time global, MuJoCo's own clock as first seen here)
 
 
@@ -90,6 +102,7 @@ class MujocoEngine:
 
             theta0 = float(DriveReference(cfg)(np.array([0.0]))[0][0])
         mujoco.mj_resetData(m, d)
+        d.userdata[:] = 0.0  # no contact event under way (mj_resetData clears it too; the rollout never does)
         pose = initial_pose(cfg, theta0)
         d.qpos[m.jnt_qposadr[m.joint(N.CRANK_HINGE).id]] = pose.theta
         d.qpos[m.jnt_qposadr[m.joint(N.ROD_HINGE).id]] = pose.phi - pose.theta
@@ -101,6 +114,23 @@ class MujocoEngine:
         d.qpos[m.jnt_qposadr[m.joint(N.SLIDER_SLIDE).id]] = pose.slider_x
         mujoco.mj_forward(m, d)
         self._k = 0
+
+    def snapshot(self) -> tuple[int, np.ndarray]:
+        """The scene's whole state: (integration steps since reset, ``mjSTATE_INTEGRATION`` vector
+        including the warmstart and the stored impact speeds in ``mjData.userdata``)."""
+        state = np.empty(mujoco.mj_stateSize(self.model, _SCENE_STATE))
+        mujoco.mj_getState(self.model, self.data, state, _SCENE_STATE)
+        return self._k, state
+
+    def restore(self, snap: tuple[int, np.ndarray]) -> None:
+        """Continue from :meth:`snapshot` of an engine of the same configuration (this one or another)."""
+        k, state = snap
+        if len(state) != mujoco.mj_stateSize(self.model, _SCENE_STATE):
+            raise ValueError(f"{self.cfg.name}: the snapshot is of a model with another state size")
+        # no mj_forward: the next rollout recomputes everything from this state (a forward pass
+        # would also run the contact law's callback, which updates the stored impact speeds)
+        mujoco.mj_setState(self.model, self.data, np.ascontiguousarray(state, dtype=np.float64), _SCENE_STATE)
+        self._k = int(k)
 
     # -------------------------------------------------------------------- stepping
     def advance(self, theta_ref: np.ndarray, omega_ref: np.ndarray, stride: int) -> dict[str, np.ndarray]:
