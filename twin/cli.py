@@ -80,6 +80,9 @@ def add_config_args(p: argparse.ArgumentParser, options: Sequence[str] = ALL_CON
         g.add_argument("--config", metavar="FILE", help="TOML configuration (partial files override the defaults)")
     if "test" in has:
         g.add_argument("--test", type=int, metavar="ID", help="Table 4 test preset, 1..12")
+        g.add_argument("--preset", metavar="NAME",
+                       help="another paper's mechanism (issue 18): s001 (S001's rig, 0.5 mm radial clearance at C, "
+                            "0 -> 300 rpm in 0.2 s)")
     if "clearance_b" in has:
         g.add_argument("--clearance-b", type=float, metavar="MM",
                        help="diametral clearance at B [mm], 0 = ball bearing")
@@ -137,10 +140,18 @@ def config_from_args(args: argparse.Namespace) -> BenchConfig:
 
     if _opt(args, "config") is not None and _opt(args, "test") is not None:
         raise ConfigError("--test", "cannot be combined with --config (put 'test = N' in the file)")
+    if _opt(args, "config") is not None and _opt(args, "preset") is not None:
+        raise ConfigError("--preset", "cannot be combined with --config (put 'preset = \"NAME\"' in the file)")
+    if _opt(args, "test") is not None and _opt(args, "preset") is not None:
+        raise ConfigError("--preset", "cannot be combined with --test: give one starting point")
     if _opt(args, "config") is not None:
         cfg = load_config(args.config)
     elif _opt(args, "test") is not None:
         cfg = preset(args.test)
+    elif _opt(args, "preset") is not None:
+        from twin.config import named_preset
+
+        cfg = named_preset(args.preset)
     else:
         cfg = BenchConfig()
     ov: dict[str, Any] = {}

@@ -293,6 +293,20 @@ class Contact:
             mjcf/bench.xml (source S003 Eq. 19–20; user data field ``v0``).
         v1_mps: velocity above which μ = μ0 [m/s]. Default: mjcf/bench.xml (source S003
             Eq. 19–20; user data field ``v1``).
+        friction_law: clearance-joint friction law of both engines: "regularized-coulomb"
+            (S003 Eq. 19–20: μ = 0 below ``v0_mps``, a linear ramp to ``mu0`` at ``v1_mps``; the
+            bench's) or "adams" (the Adams/COSMOS contact friction of S001 Table II, MSC Adams
+            "Contact Friction Force Calculation": with s the slip speed, μ = STEP(s, −v_s, −μ_s,
+            v_s, μ_s) below the stiction transition velocity v_s = ``v_static_mps`` (an odd cubic
+            through 0), STEP(s, v_s, μ_s, v_d, μ_d) up to the friction transition velocity
+            v_d = ``v_kinetic_mps`` and μ_d = ``mu0`` above; STEP is the cubic
+            h0 + (h1 − h0) Δ²(3 − 2Δ)). The slider guide keeps the ramp of ``v0_mps``/``v1_mps``.
+        mu_static: static coefficient μ_s of the "adams" law [-] (S001 Table II: 0.08; unused by
+            the regularized Coulomb law).
+        v_static_mps: stiction transition velocity v_s of the "adams" law [m/s] (S001 Table II:
+            "static friction vel." 0.0001 m/s).
+        v_kinetic_mps: friction transition velocity v_d of the "adams" law [m/s] (S001 Table II:
+            "kinetic friction vel." 0.01016 m/s); must exceed v_static_mps.
         impact_speed_floor_mps: floor of the stored impact speed δ̇⁻ of the hysteresis laws
             [m/s], used by both engines (the reference's LN damping and the MuJoCo twin's native
             impact-speed damping). A contact event that starts with δ̇ below it (resting or
@@ -316,8 +330,13 @@ class Contact:
     v0_mps: float = _XML.v0_mps
     v1_mps: float = _XML.v1_mps
     impact_speed_floor_mps: float = 1e-3
+    friction_law: str = "regularized-coulomb"
+    mu_static: float = 0.08
+    v_static_mps: float = 1e-4
+    v_kinetic_mps: float = 0.01016
 
     LAWS: typing.ClassVar[tuple[str, ...]] = ("lankarani-nikravesh", "hunt-crossley", "flores", "linear")
+    FRICTION_LAWS: typing.ClassVar[tuple[str, ...]] = ("regularized-coulomb", "adams")
 
     def __post_init__(self) -> None:
         _choice(self.law, "law", self.LAWS)
@@ -336,6 +355,13 @@ class Contact:
         _check(self.v1_mps > self.v0_mps, "v1_mps", f"must exceed v0_mps ({self.v0_mps}), got {self.v1_mps!r}")
         _check(isinstance(self.impact_speed_floor_mps, (int, float)) and 1e-6 <= self.impact_speed_floor_mps <= 1,
                "impact_speed_floor_mps", f"must lie in [1e-6, 1] m/s, got {self.impact_speed_floor_mps!r}")
+        _choice(self.friction_law, "friction_law", self.FRICTION_LAWS)
+        _check(isinstance(self.mu_static, (int, float)) and 0 <= self.mu_static <= 1,
+               "mu_static", f"must lie in [0, 1], got {self.mu_static!r}")
+        _positive(self.v_static_mps, "v_static_mps", "m/s")
+        _positive(self.v_kinetic_mps, "v_kinetic_mps", "m/s")
+        _check(self.v_kinetic_mps > self.v_static_mps, "v_kinetic_mps",
+               f"must exceed v_static_mps ({self.v_static_mps}), got {self.v_kinetic_mps!r}")
 
 
 def ln_stiffness(joints: Joints, materials: Materials, joint: str) -> float:
@@ -463,6 +489,9 @@ class Drive:
         belt_ratio: motor:crank speed ratio of the V-belt [-] (S003 §2.2.2: 3.97).
         ramp_s: duration of each speed change (smooth cosine ramp of the speed) [s].
             PLACEHOLDER: the motor controller's acceleration is not given; 0.5 s.
+        ramp_shape: shape of each speed change: "cosine" (smooth, the bench's placeholder) or
+            "linear" (constant acceleration over ``ramp_s``: the inverter's set acceleration
+            time of S001 §VI.B.1, "increase the motor speed linearly").
         protocol_rpm: the three motor speeds of the protocol [rpm].
         protocol_hold_s: time at each protocol speed [s] (10 s).
         protocol_stop_s: stops before, between and after the speeds [s] (2 s).
@@ -484,6 +513,7 @@ class Drive:
     motor_rpm: float = 750.0
     belt_ratio: float = 3.97
     ramp_s: float = 0.5
+    ramp_shape: str = "cosine"
     protocol_rpm: tuple[float, ...] = (250.0, 500.0, 750.0)
     protocol_hold_s: float = 10.0
     protocol_stop_s: float = 2.0
@@ -501,6 +531,7 @@ class Drive:
         _positive(self.belt_ratio, "belt_ratio", "-")
         _check(isinstance(self.ramp_s, (int, float)) and 0 <= self.ramp_s <= 10,
                "ramp_s", f"must lie in [0, 10] s, got {self.ramp_s!r}")
+        _choice(self.ramp_shape, "ramp_shape", ("cosine", "linear"))
         _check(len(self.protocol_rpm) >= 1 and all(abs(r) <= 1000 for r in self.protocol_rpm),
                "protocol_rpm", f"must hold 1+ speeds within ±1000 rpm, got {list(self.protocol_rpm)!r}")
         _check(self.protocol_hold_s > self.ramp_s, "protocol_hold_s",
@@ -983,9 +1014,13 @@ def load_config(path: str | Path) -> BenchConfig:
     except tomllib.TOMLDecodeError as err:
         raise ConfigError("--config", f"{p} is not valid TOML: {err}") from None
     base: dict[str, Any] = {}
+    if "test" in data and "preset" in data:
+        raise ConfigError("preset", "cannot be combined with test = N: give one starting point")
     if "test" in data:  # a config may start from a Table 4 preset: test = 6
         test = data.pop("test")
         base = preset(test).to_dict()
+    if "preset" in data:  # or from a paper's mechanism: preset = "s001"
+        base = named_preset(data.pop("preset"), "preset").to_dict()
     merged = _deep_merge(base or BenchConfig().to_dict(), data)
     drive, sim = merged.get("drive"), merged.get("simulation")
     own_sim = data.get("simulation") if isinstance(data.get("simulation"), Mapping) else {}
@@ -1070,3 +1105,80 @@ def preset(test_id: int) -> BenchConfig:
 
 
 DEFAULT_CONFIG = BenchConfig()
+
+
+# ------------------------------------------------------------- other mechanisms (issue 18)
+def _s001() -> BenchConfig:
+    """The slider–crank rig of S001 (``../shared/seeds/001_…``, Megahed & Haroun's CAD/ADAMS
+    model and experiment), 0.5 mm radial clearance at the rod–slider joint C.
+
+    Taken from the paper:
+
+    * Table I: crank 0.08 m, 2.37 kg, 0.01201 kg m²; rod 0.32 m, 0.72 kg, 0.0006926 kg m²;
+      slider 2.28 kg. (The rod's inertia is 1/9 of a uniform bar's m l²/12 = 0.00614 kg m²;
+      taken as printed.)
+    * Table II: bearing (bushing bore) diameter 15.00 mm; clearance 0.5 mm, read as the
+      radial clearance c (Eq. 2, δ = e − c, and Fig. 11: in contact mode the journal centre
+      lies on the 0.5 mm circle), so 1.0 mm diametral here and a 14.0 mm pin; stainless
+      steel E = 207 GPa, brass E = 97 GPa, ν = 0.3 (one Poisson's ratio printed, used for
+      both); restitution 0.55 (found by the paper's iterations, Table IV); Adams/COSMOS
+      friction μ_s = 0.08, μ_k = 0.05, static (stiction) transition velocity 1e-4 m/s,
+      kinetic (friction) transition velocity 0.01016 m/s; the normal force is the
+      Lankarani–Nikravesh law with n = 1.5 and K from the geometry and materials (S001
+      Eq. 4–5, the twin's Eq. 18), here 3.1e10 N/m^1.5.
+    * §V.A: crank 300 rpm counter-clockwise, reached from standstill in 0.2 s (§VI.B.1: the
+      inverter raises the speed linearly over a set acceleration time), the slider fully
+      extended along x at the start (θ = 0), journal and bearing concentric; vertical plane
+      (Fig. 15/16), zero offset (§VI.A.1).
+    * §VI.A.3: one slider accelerometer sampled at 5 kHz (AC6 here, along the guide).
+
+    PLACEHOLDERs (the paper does not give them): the crank's centre of mass (a disc turning
+    about its centre: x_G = 0); the rod's centre of mass (mid-length, 0.16 m); the slider's
+    length, centre of mass and inertia (the bench's; the slider only translates); the bushing
+    length (the bench's 20 mm); the densities (visual only: 7850 and 8500 kg/m³); the guide
+    friction (a ball sleeve on "very smooth guides": 0 N); the transmission (the crank speed
+    is given directly: belt ratio 1, "motor" rpm = crank rpm); the speed control (the
+    inverter's vector control is modelled as the bench's crank PID tracking the ramp; the
+    paper's CosmosMotion "motor" prescribes the crank motion); the rod accelerometers
+    (S001 has none; AC3/AC4 moved to 0.27 m to lie on the shorter rod); the accelerometer
+    (Kyowa AS-100HA, 100 g rated capacity, behind a PCD-300A interface: modelled as an
+    ADXL1001 of the sensor chain, ±100 g, with the chain's 5 kHz DAQ); the run length
+    (0.6 s: Fig. 15/16 span about 0.5 s).
+    """
+    base = BenchConfig()
+    mounts = dict(base.sensors.accelerometers)
+    for name in ("AC3", "AC4"):
+        mounts[name] = dataclasses.replace(mounts[name], position_m=(0.27, 0.0))
+    return dataclasses.replace(
+        base,
+        name="s001",
+        bodies=Bodies(crank=BodyParams(2.37, 0.08, 0.0, 0.01201),
+                      rod=BodyParams(0.72, 0.32, 0.16, 0.0006926),
+                      slider=dataclasses.replace(base.bodies.slider, mass_kg=2.28, x_g_m=0.0)),
+        materials=Materials(pin=Material(207e9, 0.30, 7850.0), bushing=Material(97e9, 0.30, 8500.0)),
+        joints=dataclasses.replace(base.joints, clearance_b_mm=0.0, clearance_c_mm=1.0, pin_diameter_m=0.014,
+                                   initial_eccentricity="centred"),
+        mechanism=dataclasses.replace(base.mechanism, orientation="y", d_off_m=0.0, guide_friction_n=0.0,
+                                      crank_direction=1),
+        contact=dataclasses.replace(base.contact, law="lankarani-nikravesh", restitution=0.55, exponent=1.5,
+                                    mu0=0.05, friction_law="adams", mu_static=0.08, v_static_mps=1e-4,
+                                    v_kinetic_mps=0.01016),
+        drive=dataclasses.replace(base.drive, program="constant", motor_rpm=300.0, belt_ratio=1.0, ramp_s=0.2,
+                                  ramp_shape="linear", initial_encoder_angle_rad=math.pi / 2),
+        sensors=dataclasses.replace(base.sensors, accelerometers=mounts, output_rate_hz=5000.0),
+        simulation=dataclasses.replace(base.simulation, duration_s=0.6),
+        instrumentation=dataclasses.replace(base.instrumentation, daq_rate_hz=5000.0,
+                                            models={**base.instrumentation.models, "AC6": "ADXL1001"}),
+    )
+
+
+#: Named presets of the other mechanisms of the seed papers (issue 18): name -> builder.
+NAMED_PRESETS: dict[str, typing.Callable[[], BenchConfig]] = {"s001": _s001}
+
+
+def named_preset(name: str, field_name: str = "--preset") -> BenchConfig:
+    """Configuration of a paper's mechanism (``--preset NAME``, ``preset = "NAME"`` in TOML):
+    ``s001`` (S001's rig; see :func:`_s001`)."""
+    if not isinstance(name, str) or name.lower() not in NAMED_PRESETS:
+        raise ConfigError(field_name, f"must be one of {', '.join(NAMED_PRESETS)}, got {name!r}")
+    return NAMED_PRESETS[name.lower()]()

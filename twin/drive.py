@@ -99,12 +99,17 @@ def trace_duration(path: str | Path) -> float:
     return float(t[-1] - t[0])
 
 
-def _ramp(tau: np.ndarray, T: float) -> tuple[np.ndarray, np.ndarray]:
-    """Cosine ramp s(τ) from 0 to 1 over T and its integral ∫0^τ s; τ clipped to [0, ∞)."""
+def _ramp(tau: np.ndarray, T: float, shape: str = "cosine") -> tuple[np.ndarray, np.ndarray]:
+    """Ramp s(τ) from 0 to 1 over T and its integral ∫0^τ s; τ clipped to [0, ∞).
+
+    ``shape`` "cosine": s = (1 − cos(π τ/T))/2 (continuous acceleration); "linear": s = τ/T
+    (constant acceleration, ``drive.ramp_shape``)."""
     tau = np.maximum(tau, 0.0)
     if T <= 0:
         return (tau > 0).astype(float), tau
     tc = np.minimum(tau, T)
+    if shape == "linear":
+        return tc / T, 0.5 * tc * tc / T + (tau - tc)
     s = 0.5 * (1.0 - np.cos(np.pi * tc / T))
     integral = 0.5 * (tc - T / np.pi * np.sin(np.pi * tc / T)) + (tau - tc)
     return s, integral
@@ -139,7 +144,7 @@ class DriveReference:
         prev = 0.0
         for t_ev, rpm in self.events:
             target = rpm / d.belt_ratio * RPM_TO_RAD_S
-            s, integ = _ramp(t - t_ev, d.ramp_s)
+            s, integ = _ramp(t - t_ev, d.ramp_s, d.ramp_shape)
             omega += (target - prev) * s
             angle += (target - prev) * integ
             prev = target

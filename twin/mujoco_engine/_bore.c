@@ -77,7 +77,8 @@
  * bore (rotations included). f_N is the law's force at the step's state, F(delta, delta')
  * (aref/R of the row), as in the reference engine; for a solref/solimp row (law 0) it is the
  * soft constraint's prediction aref/(A_hat + R) (exactly k delta + c delta' for a flat, tiny
- * impedance). Fields BORE_MU0, BORE_V0, BORE_V1. A user sensor (mjcb_sensor, objtype geom = the
+ * impedance). Fields BORE_MU0, BORE_V0, BORE_V1; with BORE_FRICTION = 1 the same fields hold the
+ * Adams/COSMOS law of S001 (mu_d, v_s, v_d) and BORE_MUS its mu_s. A user sensor (mjcb_sensor, objtype geom = the
  * bore) reports the friction force on the pin along t = axis x n, n from the bore centre
  * towards the pin.
  */
@@ -111,10 +112,13 @@ enum bore_user {
   BORE_DAMPING,          /* hysteresis: chi [-]; linear: c [N s/m] */
   BORE_SPEED_FLOOR,      /* floor of the stored impact speed [m/s] */
   BORE_SLOT,             /* d->userdata index that keeps v_imp (-1 = none) */
+  BORE_FRICTION,         /* friction law: 0 = regularized Coulomb (mu0, v0, v1), 1 = Adams/COSMOS */
+  BORE_MUS,              /* Adams/COSMOS: static coefficient mu_s [-] (mu_d = mu0, v_s = v0, v_d = v1) */
   BORE_NUSER             /* number of fields */
 };
 static const char* const bore_user_names[] = {
-  "marker", "mu0", "v0", "v1", "law", "stiffness", "exponent", "damping", "speed_floor", "slot"
+  "marker", "mu0", "v0", "v1", "law", "stiffness", "exponent", "damping", "speed_floor", "slot",
+  "friction", "mus"
 };
 _Static_assert(sizeof(bore_user_names) / sizeof(bore_user_names[0]) == BORE_NUSER,
                "bore_user_names must name every field of enum bore_user");
@@ -341,6 +345,14 @@ typedef struct {
   mjtNum ft;     /* friction force on the pin along t [N] */
 } friction_t;
 
+/* Adams' cubic STEP: h0 for x <= x0, h1 for x >= x1, h0 + (h1 - h0) D^2 (3 - 2 D) between */
+static mjtNum step3(mjtNum x, mjtNum x0, mjtNum h0, mjtNum x1, mjtNum h1) {
+  if (x <= x0) return h0;
+  if (x >= x1) return h1;
+  const mjtNum dd = (x - x0) / (x1 - x0);
+  return h0 + (h1 - h0) * dd * dd * (3.0 - 2.0 * dd);
+}
+
 /* friction of contact icon if it is an active pin/bore contact; returns 0 otherwise */
 static int bore_friction(const mjModel* m, const mjData* d, int icon, friction_t* out) {
   const mjContact* con = d->contact + icon;
@@ -375,7 +387,13 @@ static int bore_friction(const mjModel* m, const mjData* d, int icon, friction_t
                     (vpin[2] - vbore[2]) * out->t[2];
   const mjtNum s = fabs(vt);
   mjtNum mu = 0;
-  if (s >= v1) mu = mu0;
+  if (user[BORE_FRICTION] == 1) {
+    /* Adams/COSMOS (S001 Table II): odd cubic STEP through 0 up to v_s = v0, STEP from mu_s to
+     * mu_d = mu0 up to v_d = v1, mu_d above (twin.reference.contact.adams_mu) */
+    const mjtNum mus = user[BORE_MUS];
+    if (s < v0) mu = step3(s, -v0, -mus, v0, mus);
+    else mu = step3(s, v0, mus, v1, mu0);
+  } else if (s >= v1) mu = mu0;
   else if (s > v0) mu = mu0 * (s - v0) / (v1 - v0);
   out->ft = vt > 0 ? -mu * out->fn : (vt < 0 ? mu * out->fn : 0.0);
   return 1;

@@ -370,7 +370,12 @@ def build_spec(cfg: BenchConfig) -> mujoco.MjSpec:
     # pins, bushings (user data: bore marker and friction law, layout N.BORE_USERDATA_FIELDS)
     # and their visual rings; the contact law is MuJoCo's solref/solimp unless build() writes
     # the native law
-    friction_law = N.bore_userdata(mu0=cfg.contact.mu0, v0=cfg.contact.v0_mps, v1=cfg.contact.v1_mps)
+    con = cfg.contact
+    if con.friction_law == "adams":  # Adams/COSMOS: mu_d = mu0, v_s, v_d in v0, v1 (N.BORE_USERDATA_FIELDS)
+        friction_law = N.bore_userdata(mu0=con.mu0, v0=con.v_static_mps, v1=con.v_kinetic_mps,
+                                       friction=N.BORE_FRICTION_LAWS["adams"], mus=con.mu_static)
+    else:
+        friction_law = N.bore_userdata(mu0=con.mu0, v0=con.v0_mps, v1=con.v1_mps)
     for jt in ("B", "C"):
         spec.geom(N.pin(jt)).size = [rj, half_len, 0]
         spec.geom(N.bushing(jt)).size = [j.bushing_radius_m(jt), half_len, 0]
@@ -511,7 +516,7 @@ def build(cfg: BenchConfig) -> tuple[mujoco.MjSpec, mujoco.MjModel, BuildInfo]:
             p.friction = [cfg.contact.mu0, cfg.contact.mu0, 0, 0, 0]
         if ms.bushing != "bore" or ms.friction == "cone":
             bush = spec.geom(N.bushing(jt))
-            bush.userdata = N.replace_bore_userdata(list(bush.userdata), mu0=0.0)  # native friction off
+            bush.userdata = N.replace_bore_userdata(list(bush.userdata), mu0=0.0, mus=0.0)  # native friction off
             if spec.sensor(N.sensor_friction(jt)) is not None:
                 spec.delete(spec.sensor(N.sensor_friction(jt)))
     model = _compile(spec, cfg)

@@ -25,6 +25,12 @@ Friction (S003 Eq. 19–20): f_T = μ(v) f_N with μ = 0 for v ≤ v0, a linear 
 v0 and v1 and μ0 above v1, v the magnitude of the tangential relative velocity of the contact
 points; the force opposes that velocity. :func:`ramp` is the ramp alone (μ/μ0); the slider
 guide friction uses the same ramp (see :mod:`twin.reference.model`).
+
+Adams/COSMOS friction (S001 Table II; MSC Adams "Contact Friction Force Calculation",
+``contact.friction_law = "adams"``): with s = |v| the slip speed, μ(s) = STEP(s, −v_s, −μ_s, v_s,
+μ_s) for s < v_s (an odd cubic through μ(0) = 0), STEP(s, v_s, μ_s, v_d, μ_d) for v_s ≤ s < v_d and
+μ_d above v_d, STEP(x, x0, h0, x1, h1) = h0 + (h1 − h0) Δ²(3 − 2Δ), Δ = (x − x0)/(x1 − x0)
+(:func:`adams_mu`, :func:`adams_friction_force`).
 """
 
 from __future__ import annotations
@@ -116,6 +122,41 @@ def friction_force(v_t, f_n, mu0, v0, v1):
     other body) along t; the result opposes it: −μ(|v_t|) f_N sign(v_t).
     """
     mu = mu0 * ramp(v_t, v0, v1)
+    if v_t > 0.0:
+        return -mu * f_n
+    if v_t < 0.0:
+        return mu * f_n
+    return 0.0
+
+
+#: friction law name (``cfg.contact.friction_law``) -> code used inside the compiled loop
+FRICTION_CODES: dict[str, int] = {"regularized-coulomb": 0, "adams": 1}
+
+
+@njit(cache=True)
+def step3(x, x0, h0, x1, h1):
+    """Adams' cubic STEP: h0 for x ≤ x0, h1 for x ≥ x1, h0 + (h1 − h0) Δ²(3 − 2Δ) between."""
+    if x <= x0:
+        return h0
+    if x >= x1:
+        return h1
+    d = (x - x0) / (x1 - x0)
+    return h0 + (h1 - h0) * d * d * (3.0 - 2.0 * d)
+
+
+@njit(cache=True)
+def adams_mu(speed, mus, mud, vs, vd):
+    """Friction coefficient of the Adams/COSMOS contact friction at slip speed |speed| [-]."""
+    s = abs(speed)
+    if s < vs:
+        return step3(s, -vs, -mus, vs, mus)
+    return step3(s, vs, mus, vd, mud)
+
+
+@njit(cache=True)
+def adams_friction_force(v_t, f_n, mus, mud, vs, vd):
+    """Adams/COSMOS friction force along the tangent t [N]: −μ(|v_t|) f_N sign(v_t)."""
+    mu = adams_mu(v_t, mus, mud, vs, vd)
     if v_t > 0.0:
         return -mu * f_n
     if v_t < 0.0:

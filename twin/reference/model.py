@@ -113,7 +113,7 @@ from numba import njit
 
 from twin.config import ACCELEROMETERS, BenchConfig, ln_stiffness
 from twin.kinematics import initial_pose
-from twin.reference.contact import LAW_CODES, friction_force, normal_force, ramp
+from twin.reference.contact import FRICTION_CODES, LAW_CODES, adams_friction_force, friction_force, normal_force, ramp
 
 # ----------------------------------------------------------------- parameter layout
 P_R, P_L, P_DOFF, P_GX, P_GY = 0, 1, 2, 3, 4
@@ -127,7 +127,10 @@ P_KP, P_KV, P_KI, P_IMAX, P_H = 33, 34, 35, 36, 37
 P_NEWTON_TOL, P_NEWTON_MAXIT = 38, 39
 P_SENS = 40            # 6 sensors × (body 0 rod / 1 slider, x, y, axis 0 +x 1 −x 2 +y 3 −y)
 P_INTEGRATOR = P_SENS + 24  # 0 symplectic Euler (default), 1 explicit midpoint (INTEGRATORS)
-N_PARAMS = P_INTEGRATOR + 1
+# clearance-joint friction law (twin.reference.contact.FRICTION_CODES: 0 regularized Coulomb with
+# P_MU0, P_V0, P_V1; 1 Adams/COSMOS with μ_d = P_MU0, μ_s, v_s, v_d)
+P_FRIC_LAW, P_MUS, P_VS, P_VD = P_INTEGRATOR + 1, P_INTEGRATOR + 2, P_INTEGRATOR + 3, P_INTEGRATOR + 4
+N_PARAMS = P_VD + 1
 
 #: integrators of :func:`run_steps` by name -> code in ``P[P_INTEGRATOR]``
 INTEGRATORS = {"euler": 0, "midpoint": 1}
@@ -351,7 +354,12 @@ def _joint(P, q, qd, joint, cst, Q, jout):
     vt = edx * tx + edy * ty - w2 * Rb
     if joint == 0:
         vt += qd[7] * Rp
-    ft = friction_force(vt, fn, P[P_MU0], P[P_V0], P[P_V1]) if fn > 0.0 else 0.0
+    if fn <= 0.0:
+        ft = 0.0
+    elif P[P_FRIC_LAW] > 0.5:
+        ft = adams_friction_force(vt, fn, P[P_MUS], P[P_MU0], P[P_VS], P[P_VD])
+    else:
+        ft = friction_force(vt, fn, P[P_MU0], P[P_V0], P[P_V1])
     jout[3] = fn
     jout[4] = ft
     if fn == 0.0:
@@ -780,6 +788,9 @@ def build_params(cfg: BenchConfig, *, min_impact_speed_mps: float = 1e-3, newton
     P[P_VMIN] = min_impact_speed_mps
     P[P_MU0] = con.mu0 if joint_friction else 0.0
     P[P_V0], P[P_V1] = con.v0_mps, con.v1_mps
+    P[P_FRIC_LAW] = FRICTION_CODES[con.friction_law]
+    P[P_MUS] = con.mu_static if joint_friction else 0.0
+    P[P_VS], P[P_VD] = con.v_static_mps, con.v_kinetic_mps
     P[P_FGUIDE] = mech.guide_friction_n if guide_friction else 0.0
     if drive:
         P[P_KP], P[P_KV], P[P_KI], P[P_IMAX] = cfg.pid.kp, cfg.pid.kv, cfg.pid.ki, cfg.pid.imax

@@ -1,0 +1,172 @@
+"""S001's rig (issue 18): the preset, the Adams/COSMOS friction and the linear ramp in both
+engines, and the ideal run's slider-acceleration peaks against the closed form rω²(1 ± r/L)."""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+import pytest
+
+from twin import names as N
+from twin.cli import build_parser, config_from_args
+from twin.config import BenchConfig, config_from_toml, ln_stiffness, load_config, named_preset
+from twin.drive import DriveReference
+from twin.errors import ConfigError
+from twin.simulate import simulate_run
+
+
+def _adams_mu(v, mus, mud, vs, vd):
+    """MSC Adams' contact friction coefficient, written from its documentation (independent
+    of twin.reference.contact): step(v, −vs, μs, vs, −μs) of the force direction inside ±vs,
+    −step(|v|, vs, μs, vd, μd) sign(v) beyond; returned as a magnitude."""
+    def step(x, x0, h0, x1, h1):
+        d = np.clip((x - x0) / (x1 - x0), 0.0, 1.0)
+        return h0 + (h1 - h0) * d * d * (3 - 2 * d)
+    v = np.abs(np.asarray(v, dtype=float))
+    return np.where(v < vs, -step(v, -vs, mus, vs, -mus), step(v, vs, mus, vd, mud))
+
+
+# ---------------------------------------------------------------------------- preset
+def test_s001_preset_holds_the_papers_numbers():
+    c = named_preset("s001")
+    assert (c.bodies.crank.length_m, c.bodies.crank.mass_kg, c.bodies.crank.inertia_kgm2) == (0.08, 2.37, 0.01201)
+    assert (c.bodies.rod.length_m, c.bodies.rod.mass_kg, c.bodies.rod.inertia_kgm2) == (0.32, 0.72, 0.0006926)
+    assert c.bodies.slider.mass_kg == 2.28
+    assert c.joints.radial_m("C") == pytest.approx(0.5e-3) and c.joints.clearance_b_mm == 0
+    assert 2 * c.joints.bushing_radius_m("C") == pytest.approx(0.015)          # bearing diameter 15 mm
+    assert (c.materials.pin.youngs_modulus_pa, c.materials.bushing.youngs_modulus_pa) == (207e9, 97e9)
+    con = c.contact
+    assert (con.friction_law, con.mu_static, con.mu0, con.v_static_mps, con.v_kinetic_mps) == \
+        ("adams", 0.08, 0.05, 1e-4, 0.01016)
+    assert con.restitution == 0.55 and con.law == "lankarani-nikravesh"
+    # K of S001 Eq. 4-5 = the twin's Eq. 18 with h = (1 - nu^2)/E, written out here
+    h = (1 - 0.3**2) / 207e9 + (1 - 0.3**2) / 97e9
+    assert ln_stiffness(c.joints, c.materials, "C") == pytest.approx(4 / (3 * h) * math.sqrt(7.5e-3 * 7e-3 / 0.5e-3))
+    assert c.drive.crank_rad_s == pytest.approx(300 * 2 * math.pi / 60)
+    assert (c.drive.ramp_s, c.drive.ramp_shape, c.mechanism.orientation) == (0.2, "linear", "y")
+    assert c.output_rate_hz == 5000 and c.instrumentation.daq_rate_hz == 5000
+    assert config_from_toml(c.to_toml()) == c
+
+
+def test_s001_preset_from_cli_and_toml(tmp_path):
+    p = build_parser()
+    cfg = config_from_args(p.parse_args(["simulate", "--preset", "s001", "--engine", "reference"]))
+    assert cfg.name == "s001" and cfg.simulation.engine == "reference" and cfg.bodies.crank.length_m == 0.08
+    with pytest.raises(ConfigError, match="--preset"):
+        config_from_args(p.parse_args(["simulate", "--preset", "s001", "--test", "3"]))
+    with pytest.raises(ConfigError, match="s001"):
+        config_from_args(p.parse_args(["simulate", "--preset", "s999"]))
+    f = tmp_path / "c.toml"
+    f.write_text('preset = "s001"\n[contact]\nrestitution = 0.4\n')
+    c = load_config(f)
+    assert c.contact.restitution == 0.4 and c.contact.friction_law == "adams" and c.bodies.rod.length_m == 0.32
+    # the bench's defaults are untouched by the new fields
+    b = BenchConfig()
+    assert b.contact.friction_law == "regularized-coulomb" and b.drive.ramp_shape == "cosine"
+
+
+def test_linear_ramp_reference():
+    cfg = named_preset("s001")
+    w = cfg.drive.crank_rad_s
+    ref = DriveReference(cfg)
+    t = np.array([0.0, 0.05, 0.1, 0.2, 0.3])
+    th, om = ref(t)
+    np.testing.assert_allclose(om, [0, w / 4, w / 2, w, w], rtol=1e-12)
+    np.testing.assert_allclose(th - th[0], [0, w * 0.05**2 / 0.4, w * 0.1**2 / 0.4, w * 0.1, w * 0.2], rtol=1e-12)
+    assert th[0] == pytest.approx(0.0, abs=1e-12)             # slider fully extended: θ = 0
+
+
+# ------------------------------------------------------------------------- friction
+def test_adams_friction_law_of_the_reference():
+    from twin.reference.contact import adams_friction_force, adams_mu
+
+    mus, mud, vs, vd = 0.08, 0.05, 1e-4, 0.01016
+    v = np.concatenate([np.linspace(0, 2e-4, 201), np.geomspace(2e-4, 0.1, 200)])
+    mu = np.array([adams_mu(x, mus, mud, vs, vd) for x in v])
+    np.testing.assert_allclose(mu, _adams_mu(v, mus, mud, vs, vd), atol=1e-15)
+    assert adams_mu(0.0, mus, mud, vs, vd) == 0 and adams_mu(vs, mus, mud, vs, vd) == pytest.approx(mus)
+    assert adams_mu(vd, mus, mud, vs, vd) == pytest.approx(mud) and adams_mu(1.0, mus, mud, vs, vd) == mud
+    assert adams_friction_force(0.01, 100.0, mus, mud, vs, vd) == pytest.approx(-100 * _adams_mu(0.01, mus, mud, vs, vd))
+    assert adams_friction_force(-1.0, 100.0, mus, mud, vs, vd) == pytest.approx(5.0)
+
+
+def test_adams_friction_of_the_native_module():
+    """The MuJoCo twin's native friction on the S001 journal is μ(v_t) f_N of the Adams law, with v_t
+    the contact points' slip measured here from MuJoCo's Jacobians."""
+    from twin.mujoco_engine.engine import MujocoEngine
+
+    cfg = named_preset("s001").replace(**{"simulation.duration_s": 0.4, "sensors.output_rate_hz": 100000.0})
+    eng = MujocoEngine(cfg)
+    m, d = eng.model, eng.data
+    eng.reset()
+    ref = DriveReference(cfg)
+    con_cfg = cfg.contact
+    K = ln_stiffness(cfg.joints, cfg.materials, "C")
+    sens = eng._sensor_slices
+    got, want = [], []
+    for _ in range(40000):
+        th, om = ref(np.array([d.time]))
+        d.ctrl[:] = [th[0], om[0]]
+        mujoco.mj_step(m, d)
+        mujoco.mj_forward(m, d)  # the sensor and the contact at the same state
+        for ci in range(d.ncon):
+            con = d.contact[ci]
+            a = con.efc_address
+            if a < 0 or d.efc_force[a] < 1.0:
+                continue
+            g0 = m.geom(con.geom[0]).name
+            pin_first = g0 == N.pin("C")
+            gp, gb = (con.geom[0], con.geom[1]) if pin_first else (con.geom[1], con.geom[0])
+            jp, jb = np.zeros((3, m.nv)), np.zeros((3, m.nv))
+            mujoco.mj_jac(m, d, jp, None, con.pos, m.geom_bodyid[gp])
+            mujoco.mj_jac(m, d, jb, None, con.pos, m.geom_bodyid[gb])
+            n_bp = (1.0 if pin_first else -1.0) * con.frame[:3]  # bore centre -> pin side
+            vt = ((jp - jb) @ d.qvel) @ np.cross([0, 0, 1], n_bp)
+            ft = d.sensordata[sens[N.sensor_friction("C")].start]
+            # the law's normal force at this state (Lankarani-Nikravesh with the stored impact speed)
+            delta, ddelta = -(d.efc_pos[a] - d.efc_margin[a]), -d.efc_vel[a]
+            ratio = max(ddelta / d.userdata[0], -1.0)
+            fn = K * delta**1.5 * (1 + 0.75 * (1 - con_cfg.restitution**2) * ratio)
+            if fn > 1.0:
+                got.append(ft / fn)
+                want.append(-np.sign(vt) * _adams_mu(vt, con_cfg.mu_static, con_cfg.mu0,
+                                                     con_cfg.v_static_mps, con_cfg.v_kinetic_mps))
+    got, want = np.array(got), np.array(want)
+    assert got.size > 500
+    np.testing.assert_allclose(got, want, atol=1e-4)
+    mid = (np.abs(want) > 0.051) & (np.abs(want) < 0.079)      # on the STEP between μ_s and μ_k
+    assert mid.sum() >= 5
+
+
+# --------------------------------------------------------------------- closed form
+@pytest.mark.parametrize("engine", ["mujoco", "reference"])
+def test_ideal_slider_acceleration_peaks_equal_the_closed_form(engine):
+    """Issue 18: the ideal S001 run's slider-acceleration peaks at 300 rpm are rω²(1 ± r/L)
+    (98.7 and 59.2 m/s²) within 0.5 %. The accelerometer along the guide (AC6, 5 kHz) after the
+    0.2 s ramp; a constant ω makes θ = 0 and π (sampled at 1000 points a turn) the extremes."""
+    cfg = named_preset("s001").replace(**{"joints.clearance_c_mm": 0.0, "simulation.engine": engine})
+    run = simulate_run(cfg)
+    r, L = cfg.bodies.crank.length_m, cfg.bodies.rod.length_m
+    w = 300 * 2 * math.pi / 60
+    steady = run.time >= 0.3
+    a = run["AC6"][steady].astype(float)
+    lo, hi = -r * w * w * (1 + r / L), r * w * w * (1 - r / L)
+    assert lo == pytest.approx(-98.70, abs=0.01) and hi == pytest.approx(59.22, abs=0.01)
+    assert a.min() == pytest.approx(lo, rel=5e-3)
+    assert a.max() == pytest.approx(hi, rel=5e-3)
+
+
+def test_adams_friction_of_the_reference_run():
+    """The reference engine's journal friction on S001: |f_T| ≤ μ_s f_N, μ_k while sliding fast and
+    values on the STEP between (which the regularized Coulomb law, capped at μ0 = μ_k, never gives)."""
+    cfg = named_preset("s001").replace(**{"simulation.engine": "reference", "simulation.duration_s": 0.4,
+                                          "sensors.output_rate_hz": 100000.0})
+    run = simulate_run(cfg)
+    fn, ft = run["fn_C"].astype(float), run["ft_C"].astype(float)
+    on = fn > 1.0
+    mu = np.abs(ft[on]) / fn[on]
+    assert on.sum() > 500 and mu.max() <= 0.08 * (1 + 1e-5)
+    assert np.mean(np.isclose(mu, 0.05, rtol=1e-4)) > 0.3
+    assert np.sum((mu > 0.0505) & (mu < 0.0795)) >= 5
