@@ -239,6 +239,34 @@ def test_same_spec_gives_the_same_bytes_with_one_worker_and_with_dask(tiny, tmp_
     assert got == ref and verify(one) == []
 
 
+def test_worker_processes_give_the_same_bytes_as_threads(tiny, tmp_path, capsys):
+    from twin.dataset.generate import default_scheduler
+
+    # the fixture ran on the default executor: 2 workers are threads of the driver, more are processes
+    assert default_scheduler(2) == "threads" and default_scheduler(3) == "processes"
+    ref = {f.name: _sha(f) for f in (tiny / "data").glob("*.parquet")}
+    out = tmp_path / "processes"
+    assert main(["dataset", "generate", str(TINY), "--out", str(out), "--workers", "2", "--scheduler", "processes",
+                 "--no-progress"]) == 0
+    assert "8 runs simulated (0 failed) on 2 worker processes" in capsys.readouterr().out
+    got = {f.name: _sha(f) for f in (out / "data").glob("*.parquet")}
+    assert got == ref and verify(out) == []
+
+
+def test_a_driver_that_stops_interrupts_its_threads_runs(tmp_path):
+    from twin.dataset.generate import _threads, prepare, task_of
+
+    p = prepare(load_spec(TINY), tmp_path / "stopped")
+    (p.out / "data").mkdir(parents=True)
+    runs = _threads(2)([task_of(p, r) for r in p.runs])
+    assert next(runs)["status"] == "ok"
+    runs.close()  # the driver stops (an error, Ctrl-C): the run in flight ends at its next chunk
+    files = list((p.out / "data").iterdir())
+    assert not [f for f in files if ".tmp" in f.name] and 1 <= len(files) <= 2
+    for f in files:
+        assert pq.read_table(f).num_rows == 30_000
+
+
 def test_killed_generation_resumes_with_the_missing_runs_only(tiny, tmp_path, capsys):
     out = tmp_path / "killed"
     proc = subprocess.Popen([sys.executable, "-m", "twin.cli", "dataset", "generate", str(TINY), "--out", str(out),
@@ -459,7 +487,8 @@ def test_workers_of_a_killed_driver_do_not_outlive_it(tmp_path):
     (Linux: the processes are found through /proc)."""
     out = tmp_path / "orphans"
     proc = subprocess.Popen([sys.executable, "-m", "twin.cli", "dataset", "generate", str(TINY), "--out", str(out),
-                             "--workers", "2", "--no-progress"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                             "--workers", "2", "--scheduler", "processes", "--no-progress"],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     deadline = time.monotonic() + 120
     kids: set[int] = set()
     while not kids:  # the spawned workers of this driver

@@ -25,9 +25,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     g.add_argument("spec", metavar="SPEC.toml")
     g.add_argument("--out", metavar="DIR", required=True, help="dataset folder (new, empty, or this spec's)")
     g.add_argument("--workers", type=int, metavar="N", help="worker processes (default: the number of cores)")
-    g.add_argument("--scheduler", metavar="local|ADDRESS",
-                   help="run on Dask distributed: 'local' starts a LocalCluster of --workers processes, "
-                        "tcp://HOST:8786 uses a running cluster (workers must see --out)")
+    g.add_argument("--scheduler", metavar="processes|threads|local|ADDRESS",
+                   help="'processes': --workers worker processes; 'threads': --workers threads of this process "
+                        "(default: threads up to 2 workers, processes beyond; the same files either way); Dask "
+                        "distributed: 'local' starts a LocalCluster of --workers processes, tcp://HOST:8786 uses "
+                        "a running cluster (workers must see --out)")
     g.add_argument("--limit", type=int, metavar="K", help="simulate at most K of the missing runs this time")
     g.add_argument("--no-progress", action="store_true", help="no progress bar")
     g.set_defaults(func=_generate)
@@ -61,8 +63,9 @@ def _generate(args: argparse.Namespace) -> int:
     info = generate(spec, args.out, workers=resolve_workers(args.workers), scheduler=args.scheduler, limit=args.limit,
                     progress=not args.no_progress and sys.stderr.isatty())
     g = info["generation"]
+    on = {"processes": "worker processes", "threads": "threads"}.get(g["scheduler"], f"{g['scheduler']} workers")
     print(f"{args.out}: {g['runs_this_call']} runs simulated ({g['failed_this_call']} failed) on {g['workers']} "
-          f"{g['scheduler']} workers in {time.perf_counter() - t:.1f} s")
+          f"{on} in {time.perf_counter() - t:.1f} s")
     print(describe(args.out))
     return 0
 

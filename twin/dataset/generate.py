@@ -11,10 +11,17 @@ its data file exists with the recorded size (the checksum is checked by ``twin d
 verify``). Everything else is run again; temporary files of killed processes are removed. A
 ``DIR`` whose ``info.json`` holds a different spec is refused before anything is written.
 
-Executors: ``--workers N`` local processes (``concurrent.futures.ProcessPoolExecutor``, spawn
-start method: every worker imports MuJoCo itself), or Dask distributed (``--scheduler local``
-starts a ``LocalCluster`` of N single-threaded worker processes; ``--scheduler tcp://HOST:PORT``
-submits to a running cluster whose workers see ``DIR`` on a shared file system). Workers call
+Executors: ``--workers N`` local processes (``--scheduler processes``:
+``concurrent.futures.ProcessPoolExecutor``, spawn start method: every worker imports MuJoCo
+itself), N threads of the driver process (``--scheduler threads``: one engine per run, stepping
+without the GIL; the same bytes), or Dask distributed (``--scheduler local`` starts a
+``LocalCluster`` of N single-threaded worker processes; ``--scheduler tcp://HOST:PORT`` submits to
+a running cluster whose workers see ``DIR`` on a shared file system). Without ``--scheduler``
+(:func:`default_scheduler`): threads up to :data:`THREADS_UP_TO` workers, processes beyond
+(``analysis/bench_threads.py``, 2 cores: threads save the worker processes' start-up and step as
+fast as processes; beyond that the Python of a run outside the engine, which holds the GIL, bounds
+how far threads scale). Processes keep a crashing run (a segmentation fault) to its own worker;
+on threads it ends the driver, and the same command resumes. Workers call
 :func:`twin.dataset.worker.run_one` and return small dicts, never arrays.
 """
 
@@ -217,6 +224,38 @@ def _local(workers: int, fn: Callable[[dict], dict] | None = None) -> Callable[[
     return run
 
 
+def _threads(workers: int, fn: Callable[..., dict] | None = None) -> Callable[[list[dict]], Iterator[dict]]:
+    """Executor on ``workers`` threads of this process (:func:`twin.simulate.simulate_many`'s way:
+    one engine, model and data object per run; the engines release the GIL while they step, so the
+    files are the bytes a worker process writes). A run whose thread crashes the process takes the
+    driver with it (the finished runs are kept; the same command resumes). When the driver stops
+    (an error, Ctrl-C), the runs in flight are aborted at their next chunk and leave no file."""
+    def run(tasks: list[dict]) -> Iterator[dict]:
+        import threading
+        from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
+
+        from twin.dataset.worker import run_one as default_fn
+
+        run_one = fn or default_fn
+        stop = threading.Event()
+        queue = list(tasks)[::-1]  # pop() from the end: design order
+        ex = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="twin-run")
+        try:
+            pending: dict = {}
+            while queue or pending:
+                while queue and len(pending) < workers:
+                    t = queue.pop()
+                    pending[ex.submit(run_one, t, stop)] = t
+                finished, _ = wait(set(pending), return_when=FIRST_COMPLETED)
+                for f in finished:
+                    pending.pop(f)
+                    yield f.result()
+        finally:
+            stop.set()
+            ex.shutdown(wait=True, cancel_futures=True)
+    return run
+
+
 def _dask_client(address: str):
     try:
         from distributed import Client
@@ -260,11 +299,24 @@ def _dask(address: str, workers: int) -> Callable[[list[dict]], Iterator[dict]]:
     return run
 
 
+#: the default executor runs up to this many workers on threads, more on processes
+THREADS_UP_TO = 2
+
+
+def default_scheduler(workers: int) -> str:
+    """The executor of ``--scheduler`` left out: 'threads' up to :data:`THREADS_UP_TO` workers,
+    'processes' beyond (see the module docstring)."""
+    return "threads" if workers <= THREADS_UP_TO else "processes"
+
+
 def executor(scheduler: str | None, workers: int) -> Callable[[list[dict]], Iterator[dict]]:
-    if scheduler is None:
+    scheduler = scheduler or default_scheduler(workers)
+    if scheduler == "processes":
         return _local(workers)
+    if scheduler == "threads":
+        return _threads(workers)
     if scheduler != "local" and not scheduler.startswith(("tcp://", "tls://", "ucx://", "inproc://")):
-        raise TwinError(f"--scheduler: must be 'local' or a Dask scheduler address like tcp://HOST:8786, got {scheduler!r}")
+        raise TwinError(f"--scheduler: must be 'processes', 'threads', 'local' or a Dask scheduler address like tcp://HOST:8786, got {scheduler!r}")
     return _dask(scheduler, workers)
 
 
@@ -309,7 +361,7 @@ def generate(spec: DatasetSpec, out_dir: str | Path, workers: int | None = None,
     info = finish(p)
     info["generation"] = {"runs_this_call": len(todo), "failed_this_call": failed,
                           "wall_s": time.perf_counter() - t_start, "workers": workers,
-                          "scheduler": scheduler or "processes"}
+                          "scheduler": scheduler or default_scheduler(workers)}
     return info
 
 

@@ -98,10 +98,11 @@ class _Instrument:
         self.inner.abort()
 
 
-def run_one(task: dict[str, Any]) -> dict[str, Any]:
+def run_one(task: dict[str, Any], stop: Any = None) -> dict[str, Any]:
     """Simulate one run of a dataset (see module docstring). ``task`` keys: ``run_id``, ``index``,
     ``config_toml``, ``data_dir``, ``columns`` (fields of :class:`~twin.dataset.storage.ColumnSpec`),
-    ``instrumented``."""
+    ``instrumented``. ``stop``: a :class:`threading.Event` of a driver that runs runs on threads;
+    once set, the run is interrupted at its next chunk (KeyboardInterrupt: its file is removed)."""
     from twin.config import config_from_toml
     from twin.dataset.storage import ColumnSpec, ParquetRunWriter, WriteError, file_sha256
     from twin.simulate import ThreadedSink, simulate
@@ -116,7 +117,7 @@ def run_one(task: dict[str, Any]) -> dict[str, Any]:
         writer = ParquetRunWriter(path, columns, rid, {"name": cfg.name, "config_toml": cfg.to_toml()})
         # the sensor chain and the Parquet writer run on a thread, overlapping the stepping
         sink = ThreadedSink(_Instrument(cfg, columns, writer, tuple(task["instrumented"])))
-        outcome = simulate(cfg, [sink])
+        outcome = simulate(cfg, [_Stop(stop), sink] if stop is not None else [sink])
         warnings = outcome.meta.get("warnings") or {}
         if warnings:
             path.unlink(missing_ok=True)
@@ -141,6 +142,23 @@ def run_one(task: dict[str, Any]) -> dict[str, Any]:
 
 class _Failed(Exception):
     pass
+
+
+class _Stop:
+    """First sink of a run on a driver's thread: interrupts the run once the driver stops."""
+
+    def __init__(self, event: Any) -> None:
+        self.event = event
+
+    def write(self, chunk: Run) -> None:
+        if self.event.is_set():
+            raise KeyboardInterrupt("the dataset driver stopped")
+
+    def close(self, meta: dict[str, Any], summary: dict[str, Any]) -> None:
+        return None
+
+    def abort(self) -> None:
+        pass
 
 
 def watch_parent(poll_s: float = 0.5, grace_s: float = 5.0) -> None:
