@@ -49,6 +49,28 @@ def register(sub: argparse._SubParsersAction) -> None:
     c.add_argument("--json", metavar="OUT.json", help="also write the answer as JSON")
     c.set_defaults(func=_clearance)
 
+    r = ids.add_parser("restitution", help="sweep the restitution until the simulated slider acceleration matches "
+                                           "a recording (S001's procedure)",
+                       description="Simulate the recording's configuration with a coarse-to-fine sweep of "
+                                   "contact.restitution and keep the value whose calibrated accelerometer signal "
+                                   "(sensor chain and calibration on both sides) is closest (RMS) to the recording's "
+                                   "(twin.identify.restitution).")
+    r.add_argument("recording", metavar="REC.mcap")
+    r.add_argument("--sensor", default="AC6", help="accelerometer compared (default AC6, the slider along the guide)")
+    r.add_argument("--start", type=float, default=0.0, metavar="S", help="window start [s] (default 0)")
+    r.add_argument("--stop", type=float, default=0.0, metavar="S", help="window end [s] (default 0 = the end)")
+    r.add_argument("--engine", choices=("mujoco", "reference"), help="engine of the candidates (default: the "
+                                                                      "recording's configuration's)")
+    r.add_argument("--grid", metavar="E,E,...", help="coarse grid of e (default 0.15,0.20,...,0.95)")
+    r.add_argument("--fine-step", type=float, default=0.01, metavar="DE",
+                   help="step of the fine grid around the coarse best (default 0.01; 0 = coarse only)")
+    r.add_argument("--lowpass", type=float, default=200.0, metavar="HZ",
+                   help="low-pass of the coarse and fine stages' mismatch [Hz] (default 200; 0 = full band)")
+    r.add_argument("--max-lag", type=float, default=0.0, metavar="S",
+                   help="search a constant time shift up to this many seconds (default 0: none)")
+    r.add_argument("--json", metavar="OUT.json", help="also write the answer and every candidate as JSON")
+    r.set_defaults(func=_restitution)
+
 
 def _splits(text: str) -> tuple[str, ...]:
     s = tuple(x.strip() for x in text.split(","))
@@ -120,4 +142,33 @@ def _clearance(args: argparse.Namespace) -> int:
         print(f"  WARNING: {w}", file=sys.stderr)
     if js is not None:
         atomic_write_json(js, json.loads(json.dumps(a, default=float)))
+    return 0
+
+
+def _restitution(args: argparse.Namespace) -> int:
+    from twin.identify.restitution import COARSE_GRID, SweepOptions, sweep_restitution
+    from twin.util import atomic_write_json, check_output_file
+
+    rec = Path(args.recording)
+    if rec.suffix != ".mcap":
+        raise TwinError(f"{rec}: a recording is an .mcap file; convert DAQ exports with 'twin import'")
+    js = check_output_file(args.json, "--json", ".json") if args.json else None
+    grid = COARSE_GRID
+    if args.grid:
+        try:
+            grid = tuple(float(x) for x in args.grid.split(","))
+        except ValueError:
+            raise TwinError(f"--grid: comma-separated restitution values in (0, 1], got {args.grid!r}") from None
+    opts = SweepOptions(sensor=args.sensor, start_s=args.start, stop_s=args.stop, coarse=grid,
+                        fine_step=args.fine_step, engine=args.engine or "", max_lag_s=args.max_lag,
+                        lowpass_hz=args.lowpass)
+    res = sweep_restitution(rec, opts)
+    print(f"{rec}: restitution e = {res.restitution:.3f} ({res.sensor}, RMS mismatch {res.mismatch_mps2:.2f} m/s^2 of "
+          f"{res.recorded_rms_mps2:.1f} m/s^2 recorded, window {res.window_s[0]:.3f}-{res.window_s[1]:.3f} s; "
+          f"{res.simulations} {res.engine} runs in {res.seconds:.1f} s)")
+    for n in res.notes:
+        print(f"  {n}")
+    if js is not None:
+        atomic_write_json(js, res.to_dict())
+        print(f"  wrote {js}")
     return 0

@@ -1,0 +1,285 @@
+"""Restitution from a recording (``twin identify restitution REC``): S001's procedure as a tool.
+
+S001 (§VI.B.2, Table IV) found its coefficient of restitution by running the simulation again
+and again with a different damping and comparing the slider acceleration with the measured one
+until they agreed (0.55 after seven trials). Here:
+
+1. the recording is read through the project's recording path (:func:`twin.recording.read_recording`:
+   validation, the bench configuration stored with it) and its accelerometer is calibrated with
+   the recording's own static calibration (:func:`twin.instrument.calibration.measured_accel`);
+2. a candidate e sets ``contact.restitution`` of the recording's configuration (the contact law's
+   damping χ(e); every other field as recorded) and the twin simulates the recording's length at
+   its sample rate, driven by the configuration's drive program (S001 ran its simulation with the
+   experiment's 0.2 s ramp; the rig has no encoder);
+3. the simulated accelerometer goes through the same sensor chain without noise and is calibrated
+   the same way (:func:`twin.instrument.apply_chain`, :func:`~twin.instrument.simulated_calibration`),
+   so the two sides differ only by the physics and the recording's noise;
+4. the mismatch of a candidate is the RMS difference of the two calibrated slider accelerations
+   over the window (after an optional constant time shift, estimated once from the motion's low
+   frequencies with :func:`twin.signals.estimate_lag`, S001 reports 0.01 s between its
+   experiment and simulation);
+5. coarse to fine: the impact spikes last about one 5 kHz sample, so the sampled spikes change at
+   random with sub-sample shifts of an impact and the full-band mismatch is a needle at the answer
+   among spurious dips; low-passed at ``lowpass_hz`` it is a basin some 0.05 wide. A coarse grid
+   and a grid of ``fine_step`` over ±``fine_half_width`` around its best are scored low-passed, a
+   grid of ``fine_step``/5 over ±2 ``fine_step`` around that over the full band; the answer is
+   the last stage's best.
+
+:func:`synthetic_recording` makes the recordings of the recovery check: a run of the configuration at
+a known e, white noise added to the accelerometer's truth, through the sensor chain.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+
+from twin.config import ACCELEROMETERS, BenchConfig
+from twin.errors import ConfigError, RecordingError
+
+#: default coarse grid of the restitution coefficient [-]
+COARSE_GRID: tuple[float, ...] = tuple(round(0.15 + 0.05 * k, 2) for k in range(17))  # 0.15 .. 0.95
+#: default step of the fine grid [-] and its half width in coarse steps
+FINE_STEP = 0.01
+FINE_HALF_WIDTH = 0.05
+
+
+@dataclass(frozen=True)
+class SweepOptions:
+    """Settings of a restitution sweep.
+
+    Attributes:
+        sensor: accelerometer compared (S001's slider accelerometer is AC6 of the preset).
+        start_s: start of the compared window, from the recording's first sample [s].
+        stop_s: end of the window [s]; 0 = the recording's end.
+        coarse: coarse grid of e [-], each in (0, 1].
+        fine_step: step of the fine grid around the best coarse value [-]; 0 = no fine grid.
+        fine_half_width: half width of the fine grid [-].
+        engine: engine of the candidates ("" = the recording's configuration's).
+        max_lag_s: largest time shift searched between recording and simulation [s]; 0 = none.
+        lowpass_hz: low-pass of the coarse and first fine stage's mismatch [Hz] (0 = full band).
+    """
+
+    sensor: str = "AC6"
+    start_s: float = 0.0
+    stop_s: float = 0.0
+    coarse: tuple[float, ...] = COARSE_GRID
+    fine_step: float = FINE_STEP
+    fine_half_width: float = FINE_HALF_WIDTH
+    engine: str = ""
+    max_lag_s: float = 0.0
+    lowpass_hz: float = 200.0
+
+    def __post_init__(self) -> None:
+        if self.sensor not in ACCELEROMETERS:
+            raise ConfigError("--sensor", f"must be one of {', '.join(ACCELEROMETERS)}, got {self.sensor!r}")
+        if not (math.isfinite(self.start_s) and self.start_s >= 0):
+            raise ConfigError("--start", f"must be a time >= 0 s, got {self.start_s!r}")
+        if not (math.isfinite(self.stop_s) and (self.stop_s == 0 or self.stop_s > self.start_s)):
+            raise ConfigError("--stop", f"must be 0 (the end) or a time > --start ({self.start_s} s), got {self.stop_s!r}")
+        if len(self.coarse) < 2 or not all(isinstance(e, (int, float)) and 0 < e <= 1 for e in self.coarse):
+            raise ConfigError("--grid", f"must hold 2+ restitution values in (0, 1], got {list(self.coarse)!r}")
+        if not (0 <= self.fine_step < 0.5 and 0 <= self.fine_half_width < 0.5):
+            raise ConfigError("--fine-step", f"must lie in [0, 0.5), got {self.fine_step!r}")
+        if self.engine not in ("", "mujoco", "reference"):
+            raise ConfigError("--engine", f"must be mujoco or reference, got {self.engine!r}")
+        if not (math.isfinite(self.lowpass_hz) and self.lowpass_hz >= 0):
+            raise ConfigError("--lowpass", f"must be a frequency >= 0 Hz (0 = full band), got {self.lowpass_hz!r}")
+        if not (math.isfinite(self.max_lag_s) and 0 <= self.max_lag_s <= 0.5):
+            raise ConfigError("--max-lag", f"must lie in [0, 0.5] s, got {self.max_lag_s!r}")
+
+
+@dataclass
+class SweepResult:
+    """Outcome of a sweep: the best e, every candidate's mismatch, and what was compared."""
+
+    restitution: float
+    mismatch_mps2: float
+    candidates: list[tuple[float, float]]           # (e, RMS mismatch [m/s^2]) in evaluation order
+    lag_s: float
+    sensor: str
+    window_s: tuple[float, float]
+    engine: str
+    recording: str
+    rate_hz: float
+    recorded_rms_mps2: float
+    seconds: float
+    simulations: int
+    notes: list[str] = field(default_factory=list)
+
+    def to_dict(self) -> dict[str, Any]:
+        d = dataclasses.asdict(self)
+        d["candidates"] = [{"restitution": e, "rms_mismatch_mps2": m} for e, m in sorted(self.candidates)]
+        return d
+
+
+# ------------------------------------------------------------------------ recording
+def recorded_acceleration(path: str | Path, sensor: str = "AC6") -> tuple[np.ndarray, BenchConfig, float]:
+    """Calibrated acceleration of ``sensor`` in a bench recording [m/s²], the recording's
+    configuration and its sample rate [Hz]."""
+    from twin.instrument.calibration import measured_accel
+    from twin.recording import read_recording
+
+    rec, info, _ = read_recording(path)
+    if f"volt_{sensor}" not in rec:
+        raise RecordingError(f"{path}: no channel volt_{sensor}")
+    meas = measured_accel(rec, info.calibration)
+    return np.asarray(meas[f"meas_{sensor}"], dtype=np.float64), rec.config, rec.rate_hz
+
+
+def _candidate_config(cfg: BenchConfig, e: float, n: int, rate_hz: float, engine: str) -> BenchConfig:
+    ov: dict[str, Any] = {"contact.restitution": float(e), "simulation.duration_s": n / rate_hz,
+                          "sensors.output_rate_hz": float(rate_hz), "sensors.channels": ["accel", "encoder"],
+                          "instrumentation.noise": False}
+    if engine:
+        ov["simulation.engine"] = engine
+    return cfg.replace(**ov)
+
+
+def simulated_acceleration(cfg: BenchConfig, e: float, n: int, rate_hz: float, sensor: str = "AC6",
+                           engine: str = "") -> np.ndarray:
+    """The twin's calibrated ``sensor`` acceleration [m/s²] (sensor chain without noise, simulated
+    static calibration) for restitution ``e``: ``n`` samples at ``rate_hz``."""
+    from twin.instrument import apply_chain, measured_accel, simulated_calibration
+    from twin.simulate import simulate_run
+
+    c = _candidate_config(cfg, e, n, rate_hz, engine)
+    sim = simulate_run(c)
+    daq = apply_chain(sim, c, command=False)
+    meas = measured_accel(daq, simulated_calibration(c))
+    a = np.asarray(meas[f"meas_{sensor}"], dtype=np.float64)
+    if a.size != n:
+        raise RecordingError(f"internal: simulated {a.size} samples for a {n}-sample recording")
+    return a
+
+
+def _lowpass(f_hz: float, rate_hz: float):
+    """Zero-phase 4th-order Butterworth low-pass at ``f_hz`` (None for 0 or at/above Nyquist)."""
+    if not f_hz or f_hz >= 0.5 * rate_hz:
+        return None
+    from scipy.signal import butter, sosfiltfilt
+
+    sos = butter(4, f_hz, fs=rate_hz, output="sos")
+    return lambda x: sosfiltfilt(sos, np.asarray(x, dtype=np.float64))
+
+
+def rms_mismatch(rec: np.ndarray, sim: np.ndarray, i0: int, i1: int, lag: int = 0) -> float:
+    """RMS of rec[i + lag] − sim[i] over i in [i0, i1) (clipped to the overlap) [m/s²]."""
+    j0, j1 = max(i0, -lag, 0), min(i1, rec.size - lag, sim.size)
+    d = rec[j0 + lag:j1 + lag] - sim[j0:j1]
+    return float(np.sqrt(np.mean(d * d)))
+
+
+def sweep_restitution(path: str | Path, opts: SweepOptions = SweepOptions(), progress=None) -> SweepResult:
+    """Sweep the restitution until the simulated ``opts.sensor`` matches the recording (module doc)."""
+    wall0 = time.perf_counter()
+    rec, cfg, rate = recorded_acceleration(path, opts.sensor)
+    if cfg.contact.law == "linear" or not cfg.joints.clearance_joints:
+        raise ConfigError("contact.law", "the recording's configuration needs a clearance joint and a hysteresis "
+                                         f"law (restitution sets its damping); got law {cfg.contact.law!r}, "
+                                         f"clearance joints {list(cfg.joints.clearance_joints) or 'none'}")
+    n = rec.size
+    i0 = int(round(opts.start_s * rate))
+    i1 = n if opts.stop_s == 0 else min(n, int(round(opts.stop_s * rate)))
+    if i1 - i0 < 10:
+        raise ConfigError("--start", f"the window holds {max(i1 - i0, 0)} samples of the {n / rate:.3f} s recording; "
+                                     "it needs at least 10")
+    engine = opts.engine or cfg.simulation.engine
+    cache: dict[float, float] = {}
+    sims: dict[float, np.ndarray] = {}
+    notes: list[str] = []
+    lag = 0
+
+    def evaluate(e: float) -> float:
+        e = round(float(e), 6)
+        if e not in cache:
+            sims[e] = simulated_acceleration(cfg, e, n, rate, opts.sensor, engine)
+            cache[e] = rms_mismatch(rec, sims[e], i0, i1, lag)
+            if progress:
+                progress(e, cache[e])
+        return cache[e]
+
+
+    coarse = sorted(set(float(e) for e in opts.coarse))
+    if opts.max_lag_s > 0:  # one shift for every candidate, from the motion (low-passed) of the middle one
+        from twin.signals import estimate_lag
+
+        mid = coarse[len(coarse) // 2]
+        sim_mid = simulated_acceleration(cfg, mid, n, rate, opts.sensor, engine)
+        est = estimate_lag([rec[i0:i1]], [sim_mid[i0:i1]], int(round(opts.max_lag_s * rate)), rate,
+                           lowpass_hz=min(50.0, 0.2 * rate))
+        lag = int(est.lag)
+        notes.append(f"time shift {lag / rate * 1e3:+.1f} ms (recording late), from e = {mid:g}")
+    # coarse to fine: the slider's impact spikes last about one 5 kHz sample, so the sampled
+    # spikes (and the full-band mismatch) change at random with sub-sample shifts of an impact:
+    # over the full band the mismatch is a needle at the answer among spurious dips. Low-passed
+    # (``lowpass_hz``) it is a basin some 0.05 wide. The coarse grid and the first fine grid are
+    # scored low-passed, the finest grid (fine_step/5 over ±2 fine_step) over the full band.
+    lp = _lowpass(opts.lowpass_hz, rate)
+    rec_lp = lp(rec) if lp else rec
+    sims_lp: dict[float, np.ndarray] = {}
+
+    def score(e: float, low: bool) -> float:
+        key = round(float(e), 6)
+        evaluate(key)
+        if not low or lp is None:
+            return cache[key]
+        if key not in sims_lp:
+            sims_lp[key] = lp(sims[key])
+        return rms_mismatch(rec_lp, sims_lp[key], i0, i1, lag)
+
+    stages: list[tuple[Any, bool]] = [(coarse, True)]
+    if opts.fine_step > 0:
+        stages += [(opts.fine_step, True), (opts.fine_step / 5, False)]
+    best = None
+    for grid, low in stages:
+        if isinstance(grid, float):  # a finer grid around the previous stage's best
+            half = opts.fine_half_width if grid == opts.fine_step else 2 * opts.fine_step
+            k = int(round(half / grid))
+            grid = [round(best + i * grid, 6) for i in range(-k, k + 1) if 0 < round(best + i * grid, 6) <= 1]
+        scores = {e: score(e, low) for e in grid}
+        best = min(scores, key=scores.get)
+        notes.append(f"{len(grid)} values {min(grid):g}-{max(grid):g}, "
+                     f"{'low-passed at %g Hz' % opts.lowpass_hz if low and lp else 'full band'}: best e = {best:g} "
+                     f"({scores[best]:.2f} m/s^2)")
+    e_hat, m_hat = float(best), cache[round(float(best), 6)]
+    xs = sorted(cache)
+    i = xs.index(round(float(best), 6))
+    if i in (0, len(xs) - 1):
+        notes.append(f"best value {best:g} at the edge of the grid: the answer may lie outside it")
+    return SweepResult(restitution=float(e_hat), mismatch_mps2=float(m_hat), candidates=list(cache.items()),
+                       lag_s=lag / rate, sensor=opts.sensor, window_s=(i0 / rate, i1 / rate), engine=engine,
+                       recording=str(path), rate_hz=float(rate), recorded_rms_mps2=float(np.sqrt(np.mean(rec[i0:i1] ** 2))),
+                       seconds=time.perf_counter() - wall0, simulations=len(cache) + (1 if opts.max_lag_s > 0 else 0),
+                       notes=notes)
+
+
+# ------------------------------------------------------------------------ synthetic
+def synthetic_recording(cfg: BenchConfig, path: str | Path, restitution: float, noise_mps2: float = 5.0,
+                        seed: int = 0, sensor: str = "AC6") -> Path:
+    """Write a synthetic bench recording of ``cfg`` at a known restitution: the twin's run (engine of
+    ``cfg``), white Gaussian noise of ``noise_mps2`` RMS [m/s²] added to ``sensor``'s truth, then the
+    sensor chain of ``cfg.instrumentation`` (its own datasheet noise too, seed ``seed``) and the
+    simulated static calibration (:func:`twin.recording.synthetic_recording`)."""
+    from twin.recording import synthetic_recording as make, write_recording
+    from twin.run import Channel
+    from twin.simulate import simulate_run
+
+    c = cfg.replace(**{"contact.restitution": float(restitution), "instrumentation.seed": int(seed),
+                       "sensors.output_rate_hz": cfg.instrumentation.daq_rate_hz})
+    truth = simulate_run(c)
+    rng = np.random.default_rng(seed)
+    a = np.asarray(truth[sensor], dtype=np.float64) + rng.normal(0.0, noise_mps2, truth.n)
+    ch = truth.channels[sensor]
+    truth = truth.with_channels([Channel(sensor, ch.unit, ch.group, a.astype(ch.data.dtype))])
+    daq, info = make(truth, c, notes=f"synthetic: restitution {restitution:g}, {noise_mps2:g} m/s^2 RMS white "
+                                     f"noise on {sensor}, engine {c.simulation.engine}",
+                     extra={"restitution": float(restitution), "noise_mps2": float(noise_mps2), "sensor": sensor},
+                     created_by="twin.identify.restitution")
+    return write_recording(path, daq, info)
