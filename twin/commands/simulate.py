@@ -24,7 +24,6 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from twin.mcapfile import RunWriter
     from twin.simulate import ThreadedSink, simulate
     from twin.summary import SummaryJsonWriter
     from twin.util import check_output_file
@@ -43,6 +42,8 @@ def run(args: argparse.Namespace) -> int:
         check_free_space(cfg, out)
     sinks = []
     if out is not None:
+        from twin.mcapfile import RunWriter  # the MCAP library only for a run that writes one
+
         sinks.append(ThreadedSink(RunWriter(out, cfg)))  # encoding and compression overlap the stepping
     if rrd is not None:
         sinks.append(_rerun_writer(rrd, cfg))
