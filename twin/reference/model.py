@@ -126,11 +126,11 @@ P_MU0, P_V0, P_V1, P_FGUIDE = 29, 30, 31, 32
 P_KP, P_KV, P_KI, P_IMAX, P_H = 33, 34, 35, 36, 37
 P_NEWTON_TOL, P_NEWTON_MAXIT = 38, 39
 P_SENS = 40            # 6 sensors × (body 0 rod / 1 slider, x, y, axis 0 +x 1 −x 2 +y 3 −y)
-P_INTEGRATOR = P_SENS + 24  # 0 symplectic Euler (default), 1 explicit midpoint (INTEGRATORS)
 # clearance-joint friction law (twin.reference.contact.FRICTION_CODES: 0 regularized Coulomb with
 # P_MU0, P_V0, P_V1; 1 Adams/COSMOS with μ_d = P_MU0, μ_s, v_s, v_d)
-P_FRIC_LAW, P_MUS, P_VS, P_VD = P_INTEGRATOR + 1, P_INTEGRATOR + 2, P_INTEGRATOR + 3, P_INTEGRATOR + 4
-N_PARAMS = P_VD + 1
+P_FRIC_LAW, P_MUS, P_VS, P_VD = P_SENS + 24, P_SENS + 25, P_SENS + 26, P_SENS + 27
+P_INTEGRATOR = P_VD + 1  # 0 symplectic Euler (default), 1 explicit midpoint (INTEGRATORS); the last entry
+N_PARAMS = P_INTEGRATOR + 1
 
 #: integrators of :func:`run_steps` by name -> code in ``P[P_INTEGRATOR]``
 INTEGRATORS = {"euler": 0, "midpoint": 1}
