@@ -20,7 +20,8 @@ until they agreed (0.55 after seven trials). Here:
    experiment and simulation);
 5. coarse to fine: the impact spikes last about one 5 kHz sample, so the sampled spikes change at
    random with sub-sample shifts of an impact and the full-band mismatch is a needle at the answer
-   among spurious dips; low-passed at ``lowpass_hz`` it is a basin some 0.05 wide. A coarse grid
+   among spurious dips; low-passed at ``lowpass_hz`` the minimum is wider (a few hundredths on S001),
+   though still with dips elsewhere (``analysis/results/s001``). A coarse grid
    and a grid of ``fine_step`` over ±``fine_half_width`` around its best are scored low-passed, a
    grid of ``fine_step``/5 over ±2 ``fine_step`` around that over the full band; the answer is
    the last stage's best.
@@ -219,7 +220,7 @@ def sweep_restitution(path: str | Path, opts: SweepOptions = SweepOptions(), pro
     # coarse to fine: the slider's impact spikes last about one 5 kHz sample, so the sampled
     # spikes (and the full-band mismatch) change at random with sub-sample shifts of an impact:
     # over the full band the mismatch is a needle at the answer among spurious dips. Low-passed
-    # (``lowpass_hz``) it is a basin some 0.05 wide. The coarse grid and the first fine grid are
+    # (``lowpass_hz``) the minimum is wider, still rugged. The coarse grid and the first fine grid are
     # scored low-passed, the finest grid (fine_step/5 over ±2 fine_step) over the full band.
     lp = _lowpass(opts.lowpass_hz, rate)
     rec_lp = lp(rec) if lp else rec
