@@ -19,8 +19,8 @@ side mean anything), on the B+C scene (Table 4 test 12, 750 rpm; ``--duration`` 
 * **outside the engine**: the CPU time of one scene and of one dataset run (alone) outside
   ``mujoco.rollout`` (process CPU time minus the rollout's thread CPU time), as a share of the
   run's CPU time: the Python of the chunk loop, the sinks, the sensor chain and the Parquet writer.
-  Most of it holds the GIL (pyarrow's compression and hashing release it), so it bounds how many
-  threads one process can keep busy: about 1 / share.
+  Much of it holds the GIL (pyarrow's compression, hashing and large numpy operations release it),
+  so it bounds how many threads one process can keep busy: 1 / share if all of it held the GIL.
 
 Throughput ratio = 2 x wall(one alone) / wall(two together) (2.0: two cores fully used; the issue's
 target is >= 1.8). CPU ratio = CPU seconds of one run alone / CPU seconds per run of two together
