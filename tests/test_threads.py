@@ -53,6 +53,16 @@ def test_scenes_on_threads_equal_serial_runs(serial):
         _bits_equal(run, keep.run)
 
 
+def test_reference_engine_scenes_on_threads_equal_serial_runs():
+    # its compiled loop releases the GIL too; a dataset of the reference engine runs on threads alike
+    cfgs = [short(preset(t), 0.05, **{"simulation.engine": "reference"}) for t in SCENES]
+    runs = [simulate_run(c) for c in cfgs]
+    keeps = [Collector() for _ in cfgs]
+    simulate_many(cfgs, [[k] for k in keeps])
+    for run, keep in zip(runs, keeps):
+        _bits_equal(run, keep.run)
+
+
 def test_an_error_in_one_scene_is_raised_after_the_others_end(serial):
     cfgs, runs = serial
 
