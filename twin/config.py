@@ -287,7 +287,8 @@ class Contact:
             hysteresis laws, k of the linear law, the same law in the MuJoCo twin's native
             contact and its soft first guess): the uncertainty of Eq. 18's K for
             sensitivity studies and datasets. 1 = as computed.
-        mu0: dynamic friction coefficient μ0 [-]. Default: mjcf/bench.xml (source S003
+        mu0: dynamic friction coefficient μ0 [-] (μ_k of the "adams" friction law). Default:
+            mjcf/bench.xml (source S003
             Eq. 19–20; bushing geom user data, field ``mu0`` of twin.names.BORE_USERDATA_FIELDS).
         v0_mps: friction regularization velocity below which μ = 0 [m/s]. Default:
             mjcf/bench.xml (source S003 Eq. 19–20; user data field ``v0``).
