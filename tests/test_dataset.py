@@ -326,6 +326,19 @@ def test_runs_of_another_twin_version_are_not_mixed_in(tmp_path, capsys):
     assert {p: p.stat().st_mtime_ns for p in out.rglob("*")} == before
 
 
+def test_runs_the_spec_no_longer_plans_are_not_mixed_in(tmp_path, capsys):
+    out = tmp_path / "half"
+    assert main(["dataset", "generate", str(TINY), "--out", str(out), "--workers", "1", "--limit", "1",
+                 "--no-progress"]) == 0
+    res = next((out / "results").glob("*.json"))
+    res.rename(res.with_name("0123456789abcdef.json"))  # as if the configuration of that run had changed
+    before = {p: p.stat().st_mtime_ns for p in out.rglob("*")}
+    rc = main(["dataset", "generate", str(TINY), "--out", str(out), "--workers", "1", "--no-progress"])
+    err = capsys.readouterr().err
+    assert rc == 2 and err.count("\n") == 1 and "1 runs that this spec no longer plans" in err
+    assert {p: p.stat().st_mtime_ns for p in out.rglob("*")} == before
+
+
 def test_verify_finds_a_changed_file(tiny, tmp_path, capsys):
     import shutil
 

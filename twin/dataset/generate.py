@@ -110,8 +110,16 @@ def prepare(spec: DatasetSpec, out_dir: str | Path) -> Prepared:
                                f"differs in {', '.join(diff)}); use another folder")
     columns = dataset_columns(runs, spec)
     done = _read_done(out, {r.run_id for r in runs}) if out.exists() else {}
-    if done and len(done) < len(runs):
-        _check_same_code(info_path)
+    if len(done) < len(runs) and (out / "results").is_dir():
+        ids = {r.run_id for r in runs}
+        stale = [q.stem for q in (out / "results").glob("*.json") if q.stem not in ids]
+        if done or stale:
+            _check_same_code(info_path)
+        if stale:
+            # same spec, other run ids: each run's configuration changed (new fields or defaults of a
+            # newer twin); adding the new runs beside the old ones would leave files no manifest names
+            raise DatasetError(f"--out: {out} holds {len(stale)} runs that this spec no longer plans (their "
+                               "configurations differ, e.g. made by another twin version); use another folder")
     return Prepared(spec, out, runs, columns, done, ident)
 
 
