@@ -241,3 +241,69 @@ def test_clearance_run_agrees_between_engines():
     for run in runs.values():
         ecc = np.hypot(run["ecc_C_x"].astype(float), run["ecc_C_y"].astype(float))
         assert np.mean(ecc[run.time > 0.2] >= 0.5e-3 - 1e-6) > 0.9
+
+
+# ------------------------------------------------------------------- ADAMS IMPACT law
+def _impact_force(delta, rate, K, n, c_max, d_max):
+    """ADAMS' IMPACT function written from S001 Eq. 3 and 9 (independent of the engines)."""
+    x = min(max(delta / d_max, 0.0), 1.0)
+    return max(K * delta**n + c_max * x * x * (3 - 2 * x) * rate, 0.0) if delta > 0 else 0.0
+
+
+def test_adams_impact_law_of_the_reference():
+    from twin.reference.contact import LAW_CODES, adams_impact, normal_force
+
+    K, n, cmax, dmax = 3.1e10, 1.5, 27960.0, 1e-5
+    for delta in (-1e-7, 0.0, 2e-6, 5e-6, 1e-5, 2e-5):
+        for rate in (-0.2, -0.01, 0.0, 0.05):
+            want = _impact_force(delta, rate, K, n, cmax, dmax)
+            assert adams_impact(delta, rate, K, n, cmax, dmax) == pytest.approx(want, rel=1e-12, abs=1e-12)
+            assert normal_force(LAW_CODES["adams-impact"], delta, rate, 0.1, K, n, 0.5, cmax, dmax) == \
+                pytest.approx(want, rel=1e-12, abs=1e-12)
+
+
+def test_adams_impact_law_of_the_native_module():
+    """The solver's force on the probe's bore contact is the IMPACT force plus the native module's
+    θ-damping term θ c h δ̈ with c = STEP(δ; d_max) c_max (README, contact law), for penetrations
+    below, at and beyond d_max."""
+    from twin.calibrate import probe_model
+    from twin.mujoco_engine.builder import build
+
+    cfg = named_preset("s001").replace(**{"contact.law": "adams-impact"})
+    law = build(cfg)[2].contacts["C"].law
+    assert law.law == "adams-impact" and law.damping == 27960.0 and law.d_max_m == 1e-5
+    c = cfg.joints.radial_m("C")
+    model = probe_model(cfg, "C", 1.3)
+    K = ln_stiffness(cfg.joints, cfg.materials, "C")
+    for delta in (2e-6, 1e-5, 1.5e-5):
+        for rate in (0.05, -0.02):
+            d = mujoco.MjData(model)
+            d.qpos[0], d.qvel[0] = c + delta, rate
+            mujoco.mj_forward(model, d)
+            F = _impact_force(delta, rate, K, 1.5, 27960.0, 1e-5)
+            x = min(delta / 1e-5, 1.0)
+            cd = 27960.0 * x * x * (3 - 2 * x)
+            h, a_diag = model.opt.timestep, d.efc_diagA[0]
+            theta = 1 - 1 / (a_diag * cd * h) if cd * h * a_diag > 2 else 0.5
+            gamma = theta * cd * h
+            r0 = a_diag * (1 - 1e-4) / 1e-4
+            r = 1 / gamma if gamma * r0 > 1 else r0
+            assert d.efc_force[0] == pytest.approx(F + float(d.qacc[0]) / r, rel=1e-9)
+
+
+def test_adams_impact_run_agrees_between_engines():
+    """S001 with the paper's own contact (ADAMS IMPACT, c_max 27 960 N s/m, d_max 10 µm) in both
+    engines: the same impact bursts within 1 ms and penetrations of about d_max."""
+    def first_onsets(run):
+        pen = np.asarray(run["pen_C"], float)
+        t = run.time[np.flatnonzero((pen[1:] > 0) & (pen[:-1] == 0)) + 1]
+        return t[np.r_[True, np.diff(t) > 0.02]]
+
+    runs = {eng: simulate_run(named_preset("s001").replace(**{
+        "simulation.engine": eng, "contact.law": "adams-impact", "sensors.output_rate_hz": 100000.0}))
+        for eng in ("mujoco", "reference")}
+    fm, fr = first_onsets(runs["mujoco"]), first_onsets(runs["reference"])
+    assert len(fm) == len(fr) >= 5
+    np.testing.assert_allclose(fm, fr, atol=1e-3)
+    for run in runs.values():
+        assert 0.5e-5 < run["pen_C"].max() < 2e-5

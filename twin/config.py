@@ -277,8 +277,11 @@ class Contact:
     """Clearance-joint contact and friction of the reference model (S003 §3, Eq. 17–20).
 
     Attributes:
-        law: normal force law of the reference engine ("lankarani-nikravesh",
-            "hunt-crossley", "flores" or "linear").
+        law: normal force law of both engines ("lankarani-nikravesh", "hunt-crossley",
+            "flores", "linear" or "adams-impact"). "adams-impact" is ADAMS' IMPACT function as
+            S001 (§II, Eq. 3 and 9) and S004 use it: F = K δⁿ + STEP(δ, 0, 0, d_max, c_max) δ̇
+            (STEP the cubic h0 + (h1 − h0) Δ²(3 − 2Δ)), K and n as for the other laws,
+            ``impact_c_max_nspm`` and ``impact_d_max_m``; ``restitution`` is not used by it.
         restitution: coefficient of restitution e [-] (S003: 0.4, tuned against the bench).
         exponent: force exponent n [-] (S003: 1.5).
         stiffness: contact stiffness K [N/m^n]; 0 = computed from the pin/bushing geometry
@@ -294,6 +297,10 @@ class Contact:
             mjcf/bench.xml (source S003 Eq. 19–20; user data field ``v0``).
         v1_mps: velocity above which μ = μ0 [m/s]. Default: mjcf/bench.xml (source S003
             Eq. 19–20; user data field ``v1``).
+        impact_c_max_nspm: maximum damping c_max of the "adams-impact" law [N s/m] (S001 Table IV:
+            27 960 N s/m, the value of its e = 0.55).
+        impact_d_max_m: penetration at which the "adams-impact" damping reaches c_max [m]
+            (S001 Table II: 1e-5 m, CosmosMotion's recommended value).
         friction_law: clearance-joint friction law of both engines: "regularized-coulomb"
             (S003 Eq. 19–20: μ = 0 below ``v0_mps``, a linear ramp to ``mu0`` at ``v1_mps``; the
             bench's) or "adams" (the Adams/COSMOS contact friction of S001 Table II, MSC Adams
@@ -331,12 +338,15 @@ class Contact:
     v0_mps: float = _XML.v0_mps
     v1_mps: float = _XML.v1_mps
     impact_speed_floor_mps: float = 1e-3
+    impact_c_max_nspm: float = 27960.0
+    impact_d_max_m: float = 1e-5
     friction_law: str = "regularized-coulomb"
     mu_static: float = 0.08
     v_static_mps: float = 1e-4
     v_kinetic_mps: float = 0.01016
 
-    LAWS: typing.ClassVar[tuple[str, ...]] = ("lankarani-nikravesh", "hunt-crossley", "flores", "linear")
+    LAWS: typing.ClassVar[tuple[str, ...]] = ("lankarani-nikravesh", "hunt-crossley", "flores", "linear",
+                                              "adams-impact")
     FRICTION_LAWS: typing.ClassVar[tuple[str, ...]] = ("regularized-coulomb", "adams")
 
     def __post_init__(self) -> None:
@@ -356,6 +366,10 @@ class Contact:
         _check(self.v1_mps > self.v0_mps, "v1_mps", f"must exceed v0_mps ({self.v0_mps}), got {self.v1_mps!r}")
         _check(isinstance(self.impact_speed_floor_mps, (int, float)) and 1e-6 <= self.impact_speed_floor_mps <= 1,
                "impact_speed_floor_mps", f"must lie in [1e-6, 1] m/s, got {self.impact_speed_floor_mps!r}")
+        _check(isinstance(self.impact_c_max_nspm, (int, float)) and math.isfinite(self.impact_c_max_nspm)
+               and self.impact_c_max_nspm >= 0, "impact_c_max_nspm",
+               f"must be a finite number >= 0 [N s/m], got {self.impact_c_max_nspm!r}")
+        _positive(self.impact_d_max_m, "impact_d_max_m", "m")
         _choice(self.friction_law, "friction_law", self.FRICTION_LAWS)
         _check(isinstance(self.mu_static, (int, float)) and 0 <= self.mu_static <= 1,
                "mu_static", f"must lie in [0, 1], got {self.mu_static!r}")

@@ -106,7 +106,7 @@ enum bore_user {
   BORE_MU0,              /* regularized Coulomb friction: mu0 [-] (0 = off) */
   BORE_V0,               /* v0 [m/s]: mu = 0 below */
   BORE_V1,               /* v1 [m/s]: mu = mu0 above */
-  BORE_LAW,              /* contact law: 0 = MuJoCo's solref/solimp, 1 = hysteresis, 2 = linear */
+  BORE_LAW,              /* contact law: 0 = MuJoCo's solref/solimp, 1 = hysteresis, 2 = linear, 3 = ADAMS IMPACT */
   BORE_STIFFNESS,        /* K [N/m^n] (linear law: [N/m]) */
   BORE_EXPONENT,         /* n [-] (linear law: 1) */
   BORE_DAMPING,          /* hysteresis: chi [-]; linear: c [N s/m] */
@@ -114,16 +114,25 @@ enum bore_user {
   BORE_SLOT,             /* d->userdata index that keeps v_imp (-1 = none) */
   BORE_FRICTION,         /* friction law: 0 = regularized Coulomb (mu0, v0, v1), 1 = Adams/COSMOS */
   BORE_MUS,              /* Adams/COSMOS: static coefficient mu_s [-] (mu_d = mu0, v_s = v0, v_d = v1) */
+  BORE_DMAX,             /* ADAMS IMPACT law: penetration of full damping d_max [m] */
   BORE_NUSER             /* number of fields */
 };
 static const char* const bore_user_names[] = {
   "marker", "mu0", "v0", "v1", "law", "stiffness", "exponent", "damping", "speed_floor", "slot",
-  "friction", "mus"
+  "friction", "mus", "dmax"
 };
 _Static_assert(sizeof(bore_user_names) / sizeof(bore_user_names[0]) == BORE_NUSER,
                "bore_user_names must name every field of enum bore_user");
 
-enum bore_law { LAW_SOFT = 0, LAW_HYSTERESIS = 1, LAW_LINEAR = 2 };
+enum bore_law { LAW_SOFT = 0, LAW_HYSTERESIS = 1, LAW_LINEAR = 2, LAW_IMPACT = 3 };
+
+/* Adams' cubic STEP: h0 for x <= x0, h1 for x >= x1, h0 + (h1 - h0) D^2 (3 - 2 D) between */
+static mjtNum step3(mjtNum x, mjtNum x0, mjtNum h0, mjtNum x1, mjtNum h1) {
+  if (x <= x0) return h0;
+  if (x >= x1) return h1;
+  const mjtNum dd = (x - x0) / (x1 - x0);
+  return h0 + (h1 - h0) * dd * dd * (3.0 - 2.0 * dd);
+}
 
 /* Layout of a guide joint's user data (m->jnt_user row, nuser_jnt >= GUIDE_NUSER): the one
  * definition is twin/names.py GUIDE_USERDATA_FIELDS. A slide or hinge joint marked with
@@ -226,7 +235,7 @@ static int contact_bore(const mjModel* m, const mjContact* con) {
 static int law_row(const mjModel* m, const mjData* d, int gb, int row) {
   const int law = (int)m->geom_user[gb * m->nuser_geom + BORE_LAW];
   const int type = d->efc_type[row];
-  return (law == LAW_HYSTERESIS || law == LAW_LINEAR) &&
+  return (law == LAW_HYSTERESIS || law == LAW_LINEAR || law == LAW_IMPACT) &&
          (type == mjCNSTR_CONTACT_FRICTIONLESS || type == mjCNSTR_CONTACT_ELLIPTIC);
 }
 
@@ -267,7 +276,7 @@ static void contact_law(const mjModel* m, mjData* d) {
     const mjtNum* user = m->geom_user + gb * nu;
     if (user[BORE_MARKER] != BORE_MAGIC) continue;
     const int law = (int)user[BORE_LAW];
-    if (law != LAW_HYSTERESIS && law != LAW_LINEAR) continue;
+    if (law != LAW_HYSTERESIS && law != LAW_LINEAR && law != LAW_IMPACT) continue;
     const int slot = (int)user[BORE_SLOT];
     const int has_slot = slot >= 0 && slot < m->nuserdata;
     int icon = -1;
@@ -310,6 +319,10 @@ static void contact_law(const mjModel* m, mjData* d) {
         fe *= 1 - chi;
         c = 0;
       }
+    } else if (law == LAW_IMPACT) {             /* ADAMS IMPACT: K delta^n + STEP(delta; d_max) c_max delta' */
+      const mjtNum n = user[BORE_EXPONENT];
+      fe = K * (n == 1.5 ? delta * sqrt(delta) : pow(delta, n));
+      c = step3(delta, 0, 0, user[BORE_DMAX], user[BORE_DAMPING]);
     } else {
       fe = K * delta;
       c = user[BORE_DAMPING];
@@ -344,14 +357,6 @@ typedef struct {
   mjtNum fn;     /* normal force of the law (or predicted by the soft constraint) [N] */
   mjtNum ft;     /* friction force on the pin along t [N] */
 } friction_t;
-
-/* Adams' cubic STEP: h0 for x <= x0, h1 for x >= x1, h0 + (h1 - h0) D^2 (3 - 2 D) between */
-static mjtNum step3(mjtNum x, mjtNum x0, mjtNum h0, mjtNum x1, mjtNum h1) {
-  if (x <= x0) return h0;
-  if (x >= x1) return h1;
-  const mjtNum dd = (x - x0) / (x1 - x0);
-  return h0 + (h1 - h0) * dd * dd * (3.0 - 2.0 * dd);
-}
 
 /* friction of contact icon if it is an active pin/bore contact; returns 0 otherwise */
 static int bore_friction(const mjModel* m, const mjData* d, int icon, friction_t* out) {

@@ -105,7 +105,9 @@ class NativeLaw:
 
     * hysteresis laws (LN, Hunt–Crossley, Flores): F = K δⁿ (1 + χ max(δ̇/v_imp, −1)),
       ``damping`` = χ(e) of the law (:data:`twin.impact.DAMPING_FACTOR`);
-    * linear law: F = k δ + c δ̇, ``damping`` = c [N s/m].
+    * linear law: F = k δ + c δ̇, ``damping`` = c [N s/m];
+    * ADAMS IMPACT (``adams-impact``, S001/S004): F = K δⁿ + STEP(δ, 0, 0, d_max, c_max) δ̇,
+      ``damping`` = c_max [N s/m], ``d_max_m`` = d_max.
 
     The same numbers as the reference engine (:mod:`twin.reference.contact`), times the twin's
     perturbation factors ``mujoco.contact_stiffness_scale`` (K), ``contact_damping_scale``
@@ -117,6 +119,7 @@ class NativeLaw:
         exponent: n [-] (linear: 1).
         damping: χ [-] (linear: c [N s/m]).
         speed_floor_mps: floor of v_imp [m/s] (``contact.impact_speed_floor_mps``).
+        d_max_m: penetration of full damping of the ADAMS IMPACT law [m] (0 for the others).
     """
 
     law: str
@@ -124,16 +127,27 @@ class NativeLaw:
     exponent: float
     damping: float
     speed_floor_mps: float
+    d_max_m: float = 0.0
 
     @property
     def code(self) -> int:
         """The ``law`` field of the bore user data (:data:`twin.names.BORE_LAWS`)."""
-        return N.BORE_LAWS["linear" if self.law == "linear" else "hysteresis"]
+        return N.BORE_LAWS[{"linear": "linear", "adams-impact": "impact"}.get(self.law, "hysteresis")]
 
     def userdata(self, slot: int) -> dict[str, float]:
         """The bore user data fields of the law (``slot``: the ``mjData.userdata`` index of v_imp)."""
         return {"law": float(self.code), "stiffness": self.stiffness, "exponent": self.exponent,
-                "damping": self.damping, "speed_floor": self.speed_floor_mps, "slot": float(slot)}
+                "damping": self.damping, "speed_floor": self.speed_floor_mps, "slot": float(slot),
+                "dmax": self.d_max_m}
+
+    def damping_coefficient(self, delta: float, v_imp: float = 1.0) -> float:
+        """The law's damping coefficient c at penetration δ [N s/m] (hysteresis: χ K δⁿ/v_imp)."""
+        if self.law == "linear":
+            return self.damping
+        if self.law == "adams-impact":
+            x = min(max(delta / self.d_max_m, 0.0), 1.0)
+            return self.damping * x * x * (3.0 - 2.0 * x)
+        return self.damping * self.stiffness * max(delta, 0.0) ** self.exponent / v_imp
 
     def force(self, delta: float, rate: float, v_imp: float) -> float:
         """The law's force [N] (what the native module applies; ≥ 0)."""
@@ -141,13 +155,18 @@ class NativeLaw:
             return 0.0
         if self.law == "linear":
             f = self.stiffness * delta + self.damping * rate
+        elif self.law == "adams-impact":
+            f = self.stiffness * delta ** self.exponent + self.damping_coefficient(delta) * rate
         else:
             f = self.stiffness * delta ** self.exponent * (1.0 + self.damping * max(rate / v_imp, -1.0))
         return max(f, 0.0)
 
     def to_json(self) -> dict:
-        return {"law": self.law, "stiffness": self.stiffness, "exponent": self.exponent, "damping": self.damping,
-                "speed_floor_mps": self.speed_floor_mps}
+        out = {"law": self.law, "stiffness": self.stiffness, "exponent": self.exponent, "damping": self.damping,
+               "speed_floor_mps": self.speed_floor_mps}
+        if self.law == "adams-impact":
+            out["d_max_m"] = self.d_max_m
+        return out
 
 
 @dataclass(frozen=True)
@@ -271,6 +290,10 @@ def native_law(cfg: BenchConfig, joint: str) -> NativeLaw:
         return NativeLaw(ct.law, k * ms.contact_stiffness_scale, 1.0, c * ms.contact_damping_scale,
                          ct.impact_speed_floor_mps)
     K = (ct.stiffness or ln_stiffness(cfg.joints, cfg.materials, joint)) * ct.stiffness_scale
+    if ct.law == "adams-impact":
+        return NativeLaw(ct.law, K * ms.contact_stiffness_scale, float(ct.exponent),
+                         ct.impact_c_max_nspm * ms.contact_damping_scale, ct.impact_speed_floor_mps,
+                         ct.impact_d_max_m)
     chi = DAMPING_FACTOR[ct.law](ct.restitution)
     return NativeLaw(ct.law, K * ms.contact_stiffness_scale, float(ct.exponent),
                      chi * ms.impact_damping_gain * ms.contact_damping_scale, ct.impact_speed_floor_mps)

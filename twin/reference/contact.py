@@ -17,6 +17,7 @@ Laws (S003 Eq. 17 and the forms of :mod:`twin.impact`):
 * Hunt–Crossley:        f = K δ^n [1 + 3(1 − e)/2 · δ̇/δ̇⁻]
 * Flores et al.:        f = K δ^n [1 + 8(1 − e)/(5e) · δ̇/δ̇⁻]
 * linear:               f = K δ + c_lin δ̇
+* ADAMS IMPACT (S001, S004): f = K δ^n + STEP(δ, 0, 0, d_max, c_max) δ̇ (c_max in ``c_lin``)
 
 In the hysteresis laws the ratio δ̇/δ̇⁻ is kept above −1 during separation (S003 §3: no
 artificial sticking). Every law returns max(f, 0): a contact pushes, never pulls.
@@ -45,6 +46,7 @@ LAW_CODES: dict[str, int] = {
     "hunt-crossley": 1,
     "flores": 2,
     "linear": 3,
+    "adams-impact": 4,
 }
 
 
@@ -92,8 +94,26 @@ def linear(delta, delta_dot, v_impact, K, n, e, c_lin):
 
 
 @njit(cache=True)
-def normal_force(code, delta, delta_dot, v_impact, K, n, e, c_lin):
-    """Normal force of the law with ``code`` (:data:`LAW_CODES`) [N]."""
+def adams_impact(delta, delta_dot, K, n, c_max, d_max):
+    """ADAMS' IMPACT force (S001 Eq. 3 and 9, S004): K δⁿ + STEP(δ, 0, 0, d_max, c_max) δ̇ [N]; 0 if
+    δ ≤ 0; never pulls."""
+    if delta <= 0.0:
+        return 0.0
+    dn = delta * math.sqrt(delta) if n == 1.5 else delta ** n
+    c = c_max
+    if delta < d_max:
+        x = delta / d_max
+        c = c_max * x * x * (3.0 - 2.0 * x)
+    f = K * dn + c * delta_dot
+    return f if f > 0.0 else 0.0
+
+
+@njit(cache=True)
+def normal_force(code, delta, delta_dot, v_impact, K, n, e, c_lin, d_max=1e-5):
+    """Normal force of the law with ``code`` (:data:`LAW_CODES`) [N]; ``c_lin`` is the linear law's c
+    or the IMPACT law's c_max, ``d_max`` the IMPACT law's penetration of full damping."""
+    if code == 4:
+        return adams_impact(delta, delta_dot, K, n, c_lin, d_max)
     if code == 0:
         return lankarani_nikravesh(delta, delta_dot, v_impact, K, n, e, c_lin)
     if code == 1:

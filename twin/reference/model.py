@@ -129,7 +129,8 @@ P_SENS = 40            # 6 sensors × (body 0 rod / 1 slider, x, y, axis 0 +x 1 
 # clearance-joint friction law (twin.reference.contact.FRICTION_CODES: 0 regularized Coulomb with
 # P_MU0, P_V0, P_V1; 1 Adams/COSMOS with μ_d = P_MU0, μ_s, v_s, v_d)
 P_FRIC_LAW, P_MUS, P_VS, P_VD = P_SENS + 24, P_SENS + 25, P_SENS + 26, P_SENS + 27
-P_INTEGRATOR = P_VD + 1  # 0 symplectic Euler (default), 1 explicit midpoint (INTEGRATORS); the last entry
+P_DMAX = P_VD + 1       # penetration of full damping of the ADAMS IMPACT law (its c_max in P_CLIN_B/C)
+P_INTEGRATOR = P_DMAX + 1  # 0 symplectic Euler (default), 1 explicit midpoint (INTEGRATORS); the last entry
 N_PARAMS = P_INTEGRATOR + 1
 
 #: integrators of :func:`run_steps` by name -> code in ``P[P_INTEGRATOR]``
@@ -166,7 +167,8 @@ class JointContact:
         radial_clearance_m: c [m].
         stiffness: K of the law [N/m^n] (linear law: [N/m]).
         exponent: n [-].
-        damping_ns_per_m: damping of the linear law [N s/m] (None for the hysteresis laws).
+        damping_ns_per_m: damping of the linear law, c_max of the ADAMS IMPACT law [N s/m] (None for the
+            hysteresis laws).
         effective_mass_kg: mass seen along the initial contact normal (reduced mass matrix) [kg].
     """
 
@@ -340,7 +342,7 @@ def _joint(P, q, qd, joint, cst, Q, jout):
         if cst[0] < 0.5:  # start of a contact event: store the impact speed
             cst[0] = 1.0
             cst[1] = ddelta if ddelta > P[P_VMIN] else P[P_VMIN]
-        fn = normal_force(int(P[P_LAW]), delta, ddelta, cst[1], K, P[P_N], P[P_E], clin)
+        fn = normal_force(int(P[P_LAW]), delta, ddelta, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX])
         jout[2] = delta
     else:
         cst[0] = 0.0
@@ -788,6 +790,7 @@ def build_params(cfg: BenchConfig, *, min_impact_speed_mps: float = 1e-3, newton
     P[P_VMIN] = min_impact_speed_mps
     P[P_MU0] = con.mu0 if joint_friction else 0.0
     P[P_V0], P[P_V1] = con.v0_mps, con.v1_mps
+    P[P_DMAX] = con.impact_d_max_m
     P[P_FRIC_LAW] = FRICTION_CODES[con.friction_law]
     P[P_MUS] = con.mu_static if joint_friction else 0.0
     P[P_VS], P[P_VD] = con.v_static_mps, con.v_kinetic_mps
@@ -841,6 +844,10 @@ def contact_parameters(cfg: BenchConfig, P: np.ndarray, st: np.ndarray) -> dict[
             c = 2.0 * linear_damping_ratio(con.restitution) * math.sqrt(k * m_eff)
             P[kidx], P[cidx] = k, c
             out[jt] = JointContact(cfg.joints.radial_m(jt), float(k), 1.0, float(c), m_eff)
+        elif con.law == "adams-impact":  # K δⁿ + STEP(δ; d_max) c_max δ̇: c_max in the linear law's slot
+            K_ln *= con.stiffness_scale
+            P[kidx], P[cidx] = K_ln, con.impact_c_max_nspm
+            out[jt] = JointContact(cfg.joints.radial_m(jt), float(K_ln), con.exponent, con.impact_c_max_nspm, m_eff)
         else:
             K_ln *= con.stiffness_scale
             P[kidx] = K_ln
