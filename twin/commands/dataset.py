@@ -24,7 +24,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                                   "with the same command).")
     g.add_argument("spec", metavar="SPEC.toml")
     g.add_argument("--out", metavar="DIR", required=True, help="dataset folder (new, empty, or this spec's)")
-    g.add_argument("--workers", type=int, metavar="N", help="worker processes (default: the number of cores)")
+    g.add_argument("--workers", type=int, metavar="N",
+                   help="runs at a time, on threads or worker processes (default: the number of cores)")
     g.add_argument("--scheduler", metavar="processes|threads|local|ADDRESS",
                    help="'processes': --workers worker processes; 'threads': --workers threads of this process "
                         "(default: threads up to 2 workers, processes beyond; the same files either way); Dask "
