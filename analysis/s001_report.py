@@ -8,7 +8,8 @@ two shared cores; ``--quick`` leaves out the off-grid and cross-engine recoverie
 
 Everything is simulated from ``--preset s001`` (``twin.config._s001``: the paper's Table I-II,
 0 -> 300 rpm in 0.2 s, vertical plane) in both engines: the ideal run with joint C ideal, the
-clearance run with 0.5 mm radial clearance at C and e = 0.55. Force, orbit and the unsampled
+clearance run with 0.5 mm radial clearance at C and e = 0.55, and the same with the paper's own
+contact law (ADAMS IMPACT, c_max 27 960 N s/m, d_max 10 µm). Force, orbit and the unsampled
 acceleration at 100 kHz; the slider accelerometer also at the paper's 5 kHz.
 """
 
@@ -91,10 +92,10 @@ def main() -> int:
     runs = {}
     t0 = time.perf_counter()
     for eng in ENGINES:
-        for kind, clr in (("ideal", 0.0), ("clearance", 1.0)):
+        for kind, ov in (("ideal", {"joints.clearance_c_mm": 0.0}), ("clearance", {}),
+                         ("impact", {"contact.law": "adams-impact"})):   # the paper's own law and c_max
             for rate in (5000.0, 100000.0):
-                cfg = base.replace(**{"simulation.engine": eng, "joints.clearance_c_mm": clr,
-                                      "sensors.output_rate_hz": rate})
+                cfg = base.replace(**{"simulation.engine": eng, "sensors.output_rate_hz": rate, **ov})
                 runs[eng, kind, rate] = simulate_run(cfg)
     res["simulation_wall_s"] = time.perf_counter() - t0
 
@@ -133,10 +134,10 @@ def main() -> int:
     plt.close(fig)
 
     # ------------------------------------------------------------ clearance: figures 8-11, 16
-    res["clearance"] = {}
-    for eng in ENGINES:
-        hi = runs[eng, "clearance", 100000.0]
-        lo = runs[eng, "clearance", 5000.0]
+    res["clearance"], res["impact"] = {}, {}
+    for eng, kind in [(e, k) for k in ("clearance", "impact") for e in ENGINES]:
+        hi = runs[eng, kind, 100000.0]
+        lo = runs[eng, kind, 5000.0]
         rate = hi.rate_hz
         idx, spd = impacts(hi, rate)
         bs = bursts(idx, rate)
@@ -160,7 +161,7 @@ def main() -> int:
                                "ideal_slider_speed_mps": float(v_slider[first])})
         steady = hi.time >= 0.2
         in_contact = (ecc >= c - 1e-6)
-        res["clearance"][eng] = {
+        res[kind][eng] = {
             "impacts": int(idx.size), "bursts": burst_rows,
             "max_contact_force_N": float(fn.max()), "max_penetration_um": float(pen.max() * 1e6),
             "max_eccentricity_um": float(ecc.max() * 1e6),
@@ -177,7 +178,7 @@ def main() -> int:
         # S001 Eq. 10-11: the c_max that e = 0.55 gives with this run's mean impact speed
         if spd.size:
             mu = 3 * K * (1 - 0.55 ** 2) / (4 * np.mean(spd))
-            res["clearance"][eng]["c_max_eq11_Ns_per_m"] = float(mu * (1e-5) ** 1.5)
+            res[kind][eng]["c_max_eq11_Ns_per_m"] = float(mu * (1e-5) ** 1.5)
 
     fig, axs = plt.subplots(2, 1, figsize=(10, 6.5), sharex=True)
     for ax, eng in zip(axs, ENGINES):
@@ -191,6 +192,22 @@ def main() -> int:
     axs[-1].set_xlabel("time [s]")
     fig.tight_layout()
     fig.savefig(out / "clearance_acceleration.png", dpi=120)
+    plt.close(fig)
+
+    fig, axs = plt.subplots(2, 1, figsize=(10, 6.5), sharex=True)
+    for eng, ls in zip(ENGINES, ("-", "--")):
+        for kind, col in (("clearance", "C0"), ("impact", "C3")):
+            lab = "LN, e = 0.55" if kind == "clearance" else "ADAMS IMPACT, c_max 27 960 N s/m"
+            axs[0].plot(runs[eng, kind, 5000.0].time, runs[eng, kind, 5000.0]["AC6"], ls, color=col, lw=0.8,
+                        label=f"{eng}: {lab}")
+            axs[1].plot(runs[eng, kind, 100000.0].time, runs[eng, kind, 100000.0]["fn_C"], ls, color=col, lw=0.7,
+                        label=f"{eng}: {lab}")
+    axs[0].set(ylabel="slider acc., 5 kHz [m/s²]", title="Lankarani–Nikravesh (e = 0.55) against the paper's ADAMS IMPACT law")
+    axs[1].set(ylabel="contact force at C [N]", xlabel="time [s]")
+    for ax in axs:
+        ax.legend(fontsize=7, loc="lower left")
+    fig.tight_layout()
+    fig.savefig(out / "impact_law.png", dpi=120)
     plt.close(fig)
 
     fig, ax = plt.subplots(figsize=(10, 3.8))
@@ -297,7 +314,7 @@ def main() -> int:
     for eng in ENGINES:
         g = res["ideal"][eng]
         lines.append(f"| {eng} | {g['min_mps2']:.2f} | {g['min_error_pct']:+.3f} % | {g['max_mps2']:.2f} | {g['max_error_pct']:+.3f} % |")
-    lines += ["", "| quantity | mujoco | reference |", "|---|---|---|"]
+    lines += ["", "| quantity | LN mujoco | LN reference | IMPACT mujoco | IMPACT reference |", "|---|---|---|---|---|"]
     keys = [("impacts", "impacts (0.6 s)", "{:d}"), ("max_contact_force_N", "max contact force [N]", "{:.0f}"),
             ("max_penetration_um", "max penetration [µm]", "{:.1f}"), ("max_eccentricity_um", "max eccentricity [µm]", "{:.1f}"),
             ("share_in_contact_after_0.2s", "share of time on the circle after 0.2 s", "{:.2f}"),
@@ -307,7 +324,8 @@ def main() -> int:
             ("burst_first_is_largest_share", "bursts whose first impact is the largest", "{:.2f}"),
             ("c_max_eq11_Ns_per_m", "c_max of Eq. 10-11 at e = 0.55 [N s/m]", "{:.0f}")]
     for k, label, fmt in keys:
-        lines.append(f"| {label} | " + " | ".join(fmt.format(res["clearance"][e][k]) for e in ENGINES) + " |")
+        lines.append(f"| {label} | " + " | ".join(fmt.format(res[kd][e][k]) for kd in ("clearance", "impact")
+                                                  for e in ENGINES) + " |")
     for eng in ENGINES:
         lines += ["", f"Bursts ({eng}): t [s], crank angle [deg], impacts, first impact speed [m/s], max force [N], "
                       "ideal slider acceleration and speed at the onset", "",
