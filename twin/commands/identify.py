@@ -61,9 +61,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     r.add_argument("--stop", type=float, default=0.0, metavar="S", help="window end [s] (default 0 = the end)")
     r.add_argument("--engine", choices=("mujoco", "reference"), help="engine of the candidates (default: the "
                                                                       "recording's configuration's)")
-    r.add_argument("--grid", metavar="E,E,...", help="coarse grid of e (default 0.15,0.20,...,0.95)")
-    r.add_argument("--fine-step", type=float, default=0.01, metavar="DE",
-                   help="step of the fine grid around the coarse best (default 0.01; 0 = coarse only)")
+    r.add_argument("--parameter", choices=("restitution", "c_max"), default="restitution",
+                   help="what to sweep: restitution (hysteresis laws, default) or c_max (the damping of the "
+                        "adams-impact law, S001 Table IV)")
+    r.add_argument("--grid", metavar="V,V,...", help="coarse grid (default e 0.15,0.20,...,0.95; c_max "
+                                                       "5000,7500,...,50000 N s/m)")
+    r.add_argument("--fine-step", type=float, default=-1.0, metavar="DV",
+                   help="step of the fine grid around the coarse best (default e 0.01, c_max 500 N s/m; "
+                        "0 = coarse only)")
     r.add_argument("--lowpass", type=float, default=200.0, metavar="HZ",
                    help="low-pass of the coarse and fine stages' mismatch [Hz] (default 200; 0 = full band)")
     r.add_argument("--max-lag", type=float, default=0.0, metavar="S",
@@ -146,24 +151,26 @@ def _clearance(args: argparse.Namespace) -> int:
 
 
 def _restitution(args: argparse.Namespace) -> int:
-    from twin.identify.restitution import COARSE_GRID, SweepOptions, sweep_restitution
+    from twin.identify.restitution import SweepOptions, sweep_restitution
     from twin.util import atomic_write_json, check_output_file
 
     rec = Path(args.recording)
     if rec.suffix != ".mcap":
         raise TwinError(f"{rec}: a recording is an .mcap file; convert DAQ exports with 'twin import'")
     js = check_output_file(args.json, "--json", ".json") if args.json else None
-    grid = COARSE_GRID
+    grid: tuple[float, ...] = ()
     if args.grid:
         try:
             grid = tuple(float(x) for x in args.grid.split(","))
         except ValueError:
-            raise TwinError(f"--grid: comma-separated restitution values in (0, 1], got {args.grid!r}") from None
+            raise TwinError(f"--grid: comma-separated {args.parameter} values, got {args.grid!r}") from None
     opts = SweepOptions(sensor=args.sensor, start_s=args.start, stop_s=args.stop, coarse=grid,
                         fine_step=args.fine_step, engine=args.engine or "", max_lag_s=args.max_lag,
-                        lowpass_hz=args.lowpass)
+                        lowpass_hz=args.lowpass, parameter=args.parameter)
     res = sweep_restitution(rec, opts)
-    print(f"{rec}: restitution e = {res.restitution:.3f} ({res.sensor}, RMS mismatch {res.mismatch_mps2:.2f} m/s^2 of "
+    found = (f"restitution e = {res.value:.3f}" if res.parameter == "restitution"
+             else f"c_max = {res.value:.0f} N s/m")
+    print(f"{rec}: {found} ({res.sensor}, RMS mismatch {res.mismatch_mps2:.2f} m/s^2 of "
           f"{res.recorded_rms_mps2:.1f} m/s^2 recorded, window {res.window_s[0]:.3f}-{res.window_s[1]:.3f} s; "
           f"{res.simulations} {res.engine} runs in {res.seconds:.1f} s)")
     for n in res.notes:

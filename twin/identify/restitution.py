@@ -49,6 +49,14 @@ COARSE_GRID: tuple[float, ...] = tuple(round(0.15 + 0.05 * k, 2) for k in range(
 #: default step of the fine grid [-] and its half width in coarse steps
 FINE_STEP = 0.01
 FINE_HALF_WIDTH = 0.05
+#: default coarse grid of the IMPACT law's c_max [N s/m] (S001 Table IV: 25 000-28 000)
+C_MAX_GRID: tuple[float, ...] = tuple(5000.0 + 2500.0 * k for k in range(19))  # 5 000 .. 50 000
+#: parameters a sweep can vary: name -> (configuration field, default coarse grid, default fine step,
+#: allowed range (lo, hi], law the recording's configuration must use, unit)
+PARAMETERS: dict[str, tuple[str, tuple[float, ...], float, tuple[float, float], str, str]] = {
+    "restitution": ("contact.restitution", COARSE_GRID, FINE_STEP, (0.0, 1.0), "hysteresis", "-"),
+    "c_max": ("contact.impact_c_max_nspm", C_MAX_GRID, 500.0, (0.0, 1e7), "adams-impact", "N s/m"),
+}
 
 
 @dataclass(frozen=True)
@@ -59,9 +67,13 @@ class SweepOptions:
         sensor: accelerometer compared (S001's slider accelerometer is AC6 of the preset).
         start_s: start of the compared window, from the recording's first sample [s].
         stop_s: end of the window [s]; 0 = the recording's end.
-        coarse: coarse grid of e [-], each in (0, 1].
-        fine_step: step of the fine grid around the best coarse value [-]; 0 = no fine grid.
-        fine_half_width: half width of the fine grid [-].
+        parameter: what the sweep varies: "restitution" (``contact.restitution``, the damping of the
+            hysteresis laws) or "c_max" (``contact.impact_c_max_nspm``, the damping of the ADAMS
+            IMPACT law, S001's Table IV procedure) (:data:`PARAMETERS`).
+        coarse: coarse grid of the parameter (empty = its default: e 0.15-0.95, c_max 5 000-50 000 N s/m).
+        fine_step: step of the fine grid around the best coarse value (< 0 = the parameter's default,
+            0.01 for e, 500 N s/m for c_max; 0 = no fine grid).
+        fine_half_width: half width of the fine grid (0 = 5 fine steps).
         engine: engine of the candidates ("" = the recording's configuration's).
         max_lag_s: largest time shift searched between recording and simulation [s]; 0 = none.
         lowpass_hz: low-pass of the coarse and first fine stage's mismatch [Hz] (0 = full band).
@@ -70,9 +82,10 @@ class SweepOptions:
     sensor: str = "AC6"
     start_s: float = 0.0
     stop_s: float = 0.0
-    coarse: tuple[float, ...] = COARSE_GRID
-    fine_step: float = FINE_STEP
-    fine_half_width: float = FINE_HALF_WIDTH
+    coarse: tuple[float, ...] = ()
+    fine_step: float = -1.0
+    fine_half_width: float = 0.0
+    parameter: str = "restitution"
     engine: str = ""
     max_lag_s: float = 0.0
     lowpass_hz: float = 200.0
@@ -84,10 +97,21 @@ class SweepOptions:
             raise ConfigError("--start", f"must be a time >= 0 s, got {self.start_s!r}")
         if not (math.isfinite(self.stop_s) and (self.stop_s == 0 or self.stop_s > self.start_s)):
             raise ConfigError("--stop", f"must be 0 (the end) or a time > --start ({self.start_s} s), got {self.stop_s!r}")
-        if len(self.coarse) < 2 or not all(isinstance(e, (int, float)) and 0 < e <= 1 for e in self.coarse):
-            raise ConfigError("--grid", f"must hold 2+ restitution values in (0, 1], got {list(self.coarse)!r}")
-        if not (0 <= self.fine_step < 0.5 and 0 <= self.fine_half_width < 0.5):
-            raise ConfigError("--fine-step", f"must lie in [0, 0.5), got {self.fine_step!r}")
+        if self.parameter not in PARAMETERS:
+            raise ConfigError("--parameter", f"must be one of {', '.join(PARAMETERS)}, got {self.parameter!r}")
+        _, grid, step, (lo, hi), _, unit = PARAMETERS[self.parameter]
+        if not self.coarse:
+            object.__setattr__(self, "coarse", grid)
+        if self.fine_step < 0:
+            object.__setattr__(self, "fine_step", step)
+        if self.fine_half_width == 0:
+            object.__setattr__(self, "fine_half_width", 5 * self.fine_step)
+        if len(self.coarse) < 2 or not all(isinstance(e, (int, float)) and lo < e <= hi for e in self.coarse):
+            raise ConfigError("--grid", f"must hold 2+ {self.parameter} values in ({lo:g}, {hi:g}] {unit}, "
+                                        f"got {list(self.coarse)!r}")
+        if not (math.isfinite(self.fine_step) and 0 <= self.fine_step < (hi - lo) / 2
+                and 0 <= self.fine_half_width < (hi - lo) / 2):
+            raise ConfigError("--fine-step", f"must lie in [0, {(hi - lo) / 2:g}) {unit}, got {self.fine_step!r}")
         if self.engine not in ("", "mujoco", "reference"):
             raise ConfigError("--engine", f"must be mujoco or reference, got {self.engine!r}")
         if not (math.isfinite(self.lowpass_hz) and self.lowpass_hz >= 0):
@@ -98,9 +122,9 @@ class SweepOptions:
 
 @dataclass
 class SweepResult:
-    """Outcome of a sweep: the best e, every candidate's mismatch, and what was compared."""
+    """Outcome of a sweep: the best value, every candidate's mismatch, and what was compared."""
 
-    restitution: float
+    value: float
     mismatch_mps2: float
     candidates: list[tuple[float, float]]           # (e, RMS mismatch [m/s^2]) in evaluation order
     lag_s: float
@@ -113,10 +137,17 @@ class SweepResult:
     seconds: float
     simulations: int
     notes: list[str] = field(default_factory=list)
+    parameter: str = "restitution"
+
+    @property
+    def restitution(self) -> float | None:
+        """The restitution found (a restitution sweep), else None."""
+        return self.value if self.parameter == "restitution" else None
 
     def to_dict(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
-        d["candidates"] = [{"restitution": e, "rms_mismatch_mps2": m} for e, m in sorted(self.candidates)]
+        d[self.parameter] = self.value
+        d["candidates"] = [{self.parameter: e, "rms_mismatch_mps2": m} for e, m in sorted(self.candidates)]
         return d
 
 
@@ -134,8 +165,9 @@ def recorded_acceleration(path: str | Path, sensor: str = "AC6") -> tuple[np.nda
     return np.asarray(meas[f"meas_{sensor}"], dtype=np.float64), rec.config, rec.rate_hz
 
 
-def _candidate_config(cfg: BenchConfig, e: float, n: int, rate_hz: float, engine: str) -> BenchConfig:
-    ov: dict[str, Any] = {"contact.restitution": float(e), "simulation.duration_s": n / rate_hz,
+def _candidate_config(cfg: BenchConfig, e: float, n: int, rate_hz: float, engine: str,
+                      parameter: str = "restitution") -> BenchConfig:
+    ov: dict[str, Any] = {PARAMETERS[parameter][0]: float(e), "simulation.duration_s": n / rate_hz,
                           "sensors.output_rate_hz": float(rate_hz), "sensors.channels": ["accel", "encoder"],
                           "instrumentation.noise": False}
     if engine:
@@ -144,13 +176,13 @@ def _candidate_config(cfg: BenchConfig, e: float, n: int, rate_hz: float, engine
 
 
 def simulated_acceleration(cfg: BenchConfig, e: float, n: int, rate_hz: float, sensor: str = "AC6",
-                           engine: str = "") -> np.ndarray:
+                           engine: str = "", parameter: str = "restitution") -> np.ndarray:
     """The twin's calibrated ``sensor`` acceleration [m/s²] (sensor chain without noise, simulated
     static calibration) for restitution ``e``: ``n`` samples at ``rate_hz``."""
     from twin.instrument import apply_chain, measured_accel, simulated_calibration
     from twin.simulate import simulate_run
 
-    c = _candidate_config(cfg, e, n, rate_hz, engine)
+    c = _candidate_config(cfg, e, n, rate_hz, engine, parameter)
     sim = simulate_run(c)
     daq = apply_chain(sim, c, command=False)
     meas = measured_accel(daq, simulated_calibration(c))
@@ -181,10 +213,14 @@ def sweep_restitution(path: str | Path, opts: SweepOptions = SweepOptions(), pro
     """Sweep the restitution until the simulated ``opts.sensor`` matches the recording (module doc)."""
     wall0 = time.perf_counter()
     rec, cfg, rate = recorded_acceleration(path, opts.sensor)
-    if cfg.contact.law == "linear" or not cfg.joints.clearance_joints:
-        raise ConfigError("contact.law", "the recording's configuration needs a clearance joint and a hysteresis "
-                                         f"law (restitution sets its damping); got law {cfg.contact.law!r}, "
-                                         f"clearance joints {list(cfg.joints.clearance_joints) or 'none'}")
+    key, _, _, (lo, hi), law, _ = PARAMETERS[opts.parameter]
+    law_ok = cfg.contact.law == law if law == "adams-impact" else cfg.contact.law not in ("linear", "adams-impact")
+    if not law_ok or not cfg.joints.clearance_joints:
+        want = "the adams-impact law" if law == "adams-impact" else "a hysteresis law (restitution sets its damping)"
+        raise ConfigError("contact.law", f"a {opts.parameter} sweep needs a clearance joint and {want} in the "
+                                         f"recording's configuration; got law {cfg.contact.law!r}, clearance joints "
+                                         f"{list(cfg.joints.clearance_joints) or 'none'} (--set contact.law=... in "
+                                         "'twin import' records it)")
     n = rec.size
     i0 = int(round(opts.start_s * rate))
     i1 = n if opts.stop_s == 0 else min(n, int(round(opts.stop_s * rate)))
@@ -200,7 +236,7 @@ def sweep_restitution(path: str | Path, opts: SweepOptions = SweepOptions(), pro
     def evaluate(e: float) -> float:
         e = round(float(e), 6)
         if e not in cache:
-            sims[e] = simulated_acceleration(cfg, e, n, rate, opts.sensor, engine)
+            sims[e] = simulated_acceleration(cfg, e, n, rate, opts.sensor, engine, opts.parameter)
             cache[e] = rms_mismatch(rec, sims[e], i0, i1, lag)
             if progress:
                 progress(e, cache[e])
@@ -212,7 +248,7 @@ def sweep_restitution(path: str | Path, opts: SweepOptions = SweepOptions(), pro
         from twin.signals import estimate_lag
 
         mid = coarse[len(coarse) // 2]
-        sim_mid = simulated_acceleration(cfg, mid, n, rate, opts.sensor, engine)
+        sim_mid = simulated_acceleration(cfg, mid, n, rate, opts.sensor, engine, opts.parameter)
         est = estimate_lag([rec[i0:i1]], [sim_mid[i0:i1]], int(round(opts.max_lag_s * rate)), rate,
                            lowpass_hz=min(50.0, 0.2 * rate))
         lag = int(est.lag)
@@ -243,44 +279,45 @@ def sweep_restitution(path: str | Path, opts: SweepOptions = SweepOptions(), pro
         if isinstance(grid, float):  # a finer grid around the previous stage's best
             half = opts.fine_half_width if grid == opts.fine_step else 2 * opts.fine_step
             k = int(round(half / grid))
-            grid = [round(best + i * grid, 6) for i in range(-k, k + 1) if 0 < round(best + i * grid, 6) <= 1]
+            grid = [round(best + i * grid, 6) for i in range(-k, k + 1) if lo < round(best + i * grid, 6) <= hi]
         scores = {e: score(e, low) for e in grid}
         best = min(scores, key=scores.get)
         notes.append(f"{len(grid)} values {min(grid):g}-{max(grid):g}, "
-                     f"{'low-passed at %g Hz' % opts.lowpass_hz if low and lp else 'full band'}: best e = {best:g} "
+                     f"{'low-passed at %g Hz' % opts.lowpass_hz if low and lp else 'full band'}: best {opts.parameter} = {best:g} "
                      f"({scores[best]:.2f} m/s^2)")
     e_hat, m_hat = float(best), cache[round(float(best), 6)]
     xs = sorted(cache)
     i = xs.index(round(float(best), 6))
     if i in (0, len(xs) - 1):
         notes.append(f"best value {best:g} at the edge of the grid: the answer may lie outside it")
-    return SweepResult(restitution=float(e_hat), mismatch_mps2=float(m_hat), candidates=list(cache.items()),
+    return SweepResult(value=float(e_hat), mismatch_mps2=float(m_hat), candidates=list(cache.items()),
                        lag_s=lag / rate, sensor=opts.sensor, window_s=(i0 / rate, i1 / rate), engine=engine,
                        recording=str(path), rate_hz=float(rate), recorded_rms_mps2=float(np.sqrt(np.mean(rec[i0:i1] ** 2))),
                        seconds=time.perf_counter() - wall0, simulations=len(cache) + (1 if opts.max_lag_s > 0 else 0),
-                       notes=notes)
+                       notes=notes, parameter=opts.parameter)
 
 
 # ------------------------------------------------------------------------ synthetic
-def synthetic_recording(cfg: BenchConfig, path: str | Path, restitution: float, noise_mps2: float = 5.0,
-                        seed: int = 0, sensor: str = "AC6") -> Path:
-    """Write a synthetic bench recording of ``cfg`` at a known restitution: the twin's run (engine of
-    ``cfg``), white Gaussian noise of ``noise_mps2`` RMS [m/s²] added to ``sensor``'s truth, then the
-    sensor chain of ``cfg.instrumentation`` (its own datasheet noise too, seed ``seed``) and the
-    simulated static calibration (:func:`twin.recording.synthetic_recording`)."""
+def synthetic_recording(cfg: BenchConfig, path: str | Path, value: float, noise_mps2: float = 5.0,
+                        seed: int = 0, sensor: str = "AC6", parameter: str = "restitution") -> Path:
+    """Write a synthetic bench recording of ``cfg`` at a known ``parameter`` value (restitution, or the
+    IMPACT law's c_max): the twin's run (engine of ``cfg``), white Gaussian noise of ``noise_mps2`` RMS
+    [m/s²] added to ``sensor``'s truth, then the sensor chain of ``cfg.instrumentation`` (its own
+    datasheet noise too, seed ``seed``) and the simulated static calibration
+    (:func:`twin.recording.synthetic_recording`)."""
     from twin.recording import synthetic_recording as make, write_recording
     from twin.run import Channel
     from twin.simulate import simulate_run
 
-    c = cfg.replace(**{"contact.restitution": float(restitution), "instrumentation.seed": int(seed),
+    c = cfg.replace(**{PARAMETERS[parameter][0]: float(value), "instrumentation.seed": int(seed),
                        "sensors.output_rate_hz": cfg.instrumentation.daq_rate_hz})
     truth = simulate_run(c)
     rng = np.random.default_rng(seed)
     a = np.asarray(truth[sensor], dtype=np.float64) + rng.normal(0.0, noise_mps2, truth.n)
     ch = truth.channels[sensor]
     truth = truth.with_channels([Channel(sensor, ch.unit, ch.group, a.astype(ch.data.dtype))])
-    daq, info = make(truth, c, notes=f"synthetic: restitution {restitution:g}, {noise_mps2:g} m/s^2 RMS white "
+    daq, info = make(truth, c, notes=f"synthetic: {parameter} {value:g}, {noise_mps2:g} m/s^2 RMS white "
                                      f"noise on {sensor}, engine {c.simulation.engine}",
-                     extra={"restitution": float(restitution), "noise_mps2": float(noise_mps2), "sensor": sensor},
+                     extra={parameter: float(value), "noise_mps2": float(noise_mps2), "sensor": sensor},
                      created_by="twin.identify.restitution")
     return write_recording(path, daq, info)
