@@ -13,7 +13,7 @@ resumes):
    recall, size errors by clearance and speed, interval coverage, plots) and the answers on the
    sample recordings in ``recordings/`` (``samples.json``).
 
-Run: ``python analysis/identify/train_default.py [--work DIR] [--workers N]`` (about 12 min on two
+Run: ``python analysis/identify/train_default.py [--work DIR] [--workers N]`` (15-20 min on two
 cores, most of it the MuJoCo training data). The datasets stay in ``--work`` (default
 ``../identify_work`` beside the checkout; about 3 GB), not in the repository.
 """
@@ -63,7 +63,7 @@ def main() -> None:
     samples = {}
     for rec in sorted((ROOT / "recordings").glob("*.mcap")):
         out = REPORT / f".{rec.stem}.json"
-        r = subprocess.run([sys.executable, "-m", "twin.cli", "identify", "clearance", str(rec), "--json", str(out)],
+        r = subprocess.run([sys.executable, "-m", "twin.cli", "identify", "clearance", str(rec.relative_to(ROOT)), "--json", str(out)],
                            cwd=ROOT, capture_output=True, text=True)
         if r.returncode == 0:
             a = json.loads(out.read_text())

@@ -3,10 +3,17 @@
 * **Fault location**: scikit-learn's ``HistGradientBoostingClassifier`` (none, B, C, BC) on the
   window features (:mod:`twin.identify.features`), classes weighted to balance; a recording's
   class probabilities are the mean over its windows.
-* **Clearance size**: per joint, three ``HistGradientBoostingRegressor`` with the quantile loss
-  (5 %, 50 %, 95 %) on log10 of the diametral clearance, trained on the windows of the runs
-  where that joint has a clearance; a recording's size and 90 % interval are the medians over its
-  windows of the three quantiles. A joint the classifier finds healthy reports 0 (ball bearing).
+* **Clearance size**: per joint, a ``HistGradientBoostingRegressor`` with the quantile loss at
+  50 % (the median) on log10 of the diametral clearance, trained on the windows of the runs where
+  that joint has a clearance; a recording's size is the median over its windows.
+* **Interval**: split-conformal (CV+-like) at the level of recordings. The training runs with a
+  clearance at the joint are split into ``CONFORMAL_FOLDS`` groups; each group's runs are answered
+  by a regressor fitted on the other groups; a run's score is |log10(answer) − log10(truth)|; the
+  ⌈(n + 1)·0.9⌉-th smallest score w gives every answer the interval [size·10^−w, size·10^w], which
+  holds the truth in at least 90 % of recordings like the training runs (exchangeability). Model
+  format 1 took the 5 % and 95 % quantile regressors instead: their window medians stayed at the
+  catalogue's ends (0.02–0.5 mm for almost every answer), covering the truth while saying nothing.
+  A joint the classifier finds healthy reports 0 (ball bearing).
 * The model is saved (joblib) with its feature definition (version and names), what it was
   trained on (dataset name, identity digest, rate, speed range, clearances and orientations seen)
   and the library versions; loading checks the feature version, and identifying checks the
@@ -31,8 +38,9 @@ from twin.errors import TwinError
 from twin.identify.features import FEATURE_VERSION, REVS_PER_WINDOW, IdentifyError, feature_names, features
 
 CLASSES = ("none", "B", "C", "BC")
-QUANTILES = (0.05, 0.5, 0.95)
-MODEL_FORMAT = "twin-identify-model/1"
+COVERAGE = 0.90  # nominal coverage of the reported intervals
+CONFORMAL_FOLDS = 5
+MODEL_FORMAT = "twin-identify-model/2"
 
 
 class ModelError(TwinError):
@@ -44,7 +52,8 @@ class ClearanceModel:
     """A trained identification model (see module docstring)."""
 
     classifier: Any
-    size: dict[str, dict[float, Any]]
+    size: dict[str, Any]  # per joint, the median regressor of log10 clearance [log10 mm]
+    interval_log10: dict[str, float]  # per joint, the conformal half width w [log10]
     feature_version: str = FEATURE_VERSION
     feature_names: list[str] = field(default_factory=feature_names)
     trained_on: dict[str, Any] = field(default_factory=dict)
@@ -77,7 +86,9 @@ class ClearanceModel:
         except Exception as err:  # noqa: BLE001 - any unpickling problem is one line
             raise ModelError(f"{p}: not a readable identification model ({type(err).__name__}: {err})") from None
         if not isinstance(m, ClearanceModel) or getattr(m, "format", None) != MODEL_FORMAT:
-            raise ModelError(f"{p}: not a {MODEL_FORMAT} model")
+            fmt = getattr(m, "format", None)
+            raise ModelError(f"{p}: not a {MODEL_FORMAT} model" + (f" (it is {fmt}; retrain it with 'twin identify "
+                                                                   "train')" if isinstance(fmt, str) else ""))
         if m.feature_version != FEATURE_VERSION or m.feature_names != feature_names():
             raise ModelError(f"{p}: made for features {m.feature_version!r}, this twin computes {FEATURE_VERSION!r}; "
                              "retrain it with 'twin identify train'")
@@ -92,13 +103,30 @@ class ClearanceModel:
         fault = max(p, key=p.get)
         out: dict[str, Any] = {"fault": fault, "probabilities": p}
         for j in ("B", "C"):
-            q = {qq: float(np.median(10 ** self.size[j][qq].predict(X))) for qq in QUANTILES}
-            lo, mid, hi = sorted(q.values())
+            mid = size_answer(self.size[j], X)
+            w = self.interval_log10[j]
+            lo, hi = (float(f"{mid * 10 ** sign:.12g}") for sign in (-w, w))
             has = j in fault
             out[f"clearance_{j.lower()}_mm"] = mid if has else 0.0
             out[f"clearance_{j.lower()}_interval_mm"] = [lo, hi] if has else [0.0, 0.0]
             out[f"clearance_{j.lower()}_if_faulty_mm"] = {"median": mid, "interval_90": [lo, hi]}
         return out
+
+
+def size_answer(reg: Any, X: np.ndarray) -> float:
+    """A recording's clearance [mm]: the median over its windows of the regressor's answers
+    (log10), to 12 significant digits (10 ** log10(0.02) is 0.020000000000000004, which would put
+    a trained value just outside an interval that ends on it)."""
+    return float(f"{10 ** float(np.median(reg.predict(X))):.12g}")
+
+
+def conformal_half_width(scores: np.ndarray, coverage: float = COVERAGE) -> float:
+    """Split-conformal half width from the runs' out-of-fold scores: the ceil((n + 1) coverage)-th
+    smallest (the largest where n is too small for that rank) [log10]."""
+    s = np.sort(np.asarray(scores, float))
+    if s.size == 0:
+        raise ModelError("no out-of-fold scores to calibrate the intervals")
+    return float(s[min(int(math.ceil((s.size + 1) * coverage)), s.size) - 1])
 
 
 # ------------------------------------------------------------------ training data
@@ -175,21 +203,37 @@ def train(dataset_dir: str | Path, splits: tuple[str, ...] = ("train", "val"), w
                                          min_samples_leaf=leaf, class_weight="balanced",
                                          early_stopping=len(X) >= 500, validation_fraction=0.15, random_state=seed)
     clf.fit(X, y)
-    size: dict[str, dict[float, Any]] = {}
+    size: dict[str, Any] = {}
+    half_width: dict[str, float] = {}
+    owner_a = np.asarray(owner)
     for j in ("B", "C"):
         key = f"clearance_{j.lower()}_mm"
-        sel = np.array([rows[i][key] > 0 for i in owner])
+        truth = np.array([rows[i][key] for i in owner], float)
+        sel = truth > 0
         if sel.sum() < 10:
             raise ModelError(f"{dataset_dir}: fewer than 10 windows with a clearance at {j}: cannot learn its size")
-        target = np.log10(np.array([rows[i][key] for i in owner])[sel])
-        size[j] = {}
-        for q in QUANTILES:
-            reg = HistGradientBoostingRegressor(loss="quantile", quantile=q, max_iter=300, learning_rate=0.08,
+
+        def fit(use: np.ndarray) -> Any:
+            reg = HistGradientBoostingRegressor(loss="quantile", quantile=0.5, max_iter=300, learning_rate=0.08,
                                                 max_leaf_nodes=15, l2_regularization=1.0,
-                                                min_samples_leaf=int(min(20, max(3, int(sel.sum()) // 48))),
+                                                min_samples_leaf=int(min(20, max(3, int(use.sum()) // 48))),
                                                 random_state=seed)
-            reg.fit(X[sel], target)
-            size[j][q] = reg
+            return reg.fit(X[use], np.log10(truth[use]))
+
+        size[j] = fit(sel)
+        # out-of-fold scores of whole runs (see module docstring)
+        runs_j = np.random.default_rng(seed).permutation(np.unique(owner_a[sel]))
+        fold = np.full(len(rows), -1)
+        fold[runs_j] = np.arange(len(runs_j)) % CONFORMAL_FOLDS
+        scores = []
+        for k in range(CONFORMAL_FOLDS):
+            held = sel & (fold[owner_a] == k)
+            if not held.any() or (sel & ~held).sum() < 10:
+                continue
+            reg = fit(sel & ~held)
+            for r in np.unique(owner_a[held]):
+                scores.append(abs(math.log10(size_answer(reg, X[owner_a == r])) - math.log10(rows[int(r)][key])))
+        half_width[j] = conformal_half_width(np.array(scores))
     import sklearn
 
     from twin import __version__
@@ -207,9 +251,11 @@ def train(dataset_dir: str | Path, splits: tuple[str, ...] = ("train", "val"), w
         "orientations": sorted({r["orientation"] for r in rows}),
         "classes": {c: int(np.sum(y == c)) for c in CLASSES},
         "versions": {"twin": __version__, "sklearn": sklearn.__version__, "numpy": np.__version__},
+        "interval": {"method": "split-conformal, out of fold", "folds": CONFORMAL_FOLDS, "coverage": COVERAGE,
+                     "half_width_log10": half_width},
         "feature_seconds": t_feat, "fit_seconds": time.perf_counter() - t0 - t_feat,
     }
-    return ClearanceModel(clf, size, trained_on=trained_on), trained_on
+    return ClearanceModel(clf, size, half_width, trained_on=trained_on), trained_on
 
 
 # ----------------------------------------------------------------- a recording
