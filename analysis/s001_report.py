@@ -258,7 +258,6 @@ def main() -> int:
         cases += [("mujoco", "mujoco", e) for e in (0.553, 0.437, 0.712)]
         cases += [("reference", "mujoco", 0.55), ("mujoco", "reference", 0.55)]
     rec_rows = []
-    landscape = None
     for rec_eng, sweep_eng, e in cases:
         p = tmp / f"rec_{rec_eng}_{e}.mcap"
         if not p.exists():
@@ -269,8 +268,6 @@ def main() -> int:
                          "e_found": s.restitution, "error": s.restitution - e, "rms_mismatch_mps2": s.mismatch_mps2,
                          "simulations": s.simulations, "seconds": s.seconds, "notes": s.notes})
         print(f"recovery {rec_eng}->{sweep_eng} e={e}: {s.restitution:.3f} ({s.seconds:.0f} s)", flush=True)
-        if (rec_eng, sweep_eng, e) == ("mujoco", "mujoco", 0.55):
-            landscape = sorted(s.candidates)
     # S001's own procedure: the IMPACT law's c_max (Table IV), recordings with the paper's 27 960 N s/m
     cmax_rows = []
     for eng in ENGINES:

@@ -48,7 +48,7 @@ import numpy as np
 
 from twin import names as N
 from twin.config import BenchConfig, ln_stiffness
-from twin.errors import ConfigError, ModelError
+from twin.errors import ModelError
 from twin.impact import DAMPING_FACTOR
 from twin.mujoco_engine.collider import ensure_installed
 
