@@ -1189,13 +1189,73 @@ def _s001() -> BenchConfig:
     )
 
 
+def _s000() -> BenchConfig:
+    """The slider–crank of S000 (``../shared/seeds/000_…``, Zhang, Xu, Flores & Lankarani's Kriging/DOE
+    study, MSC.ADAMS), a radial clearance at the rod–slider joint C (the "piston pin"), crank at 5000 rpm.
+
+    S000's mechanism tables are not in the text available here. What S000 itself gives or implies:
+
+    * the clearance joint is the piston pin (rod–slider joint C, abstract and Fig. 3b);
+    * Example 1 runs the crank at a constant 5000 rpm (§5.1), clearances are radial (Tables 3 and 5);
+    * the slider mass 0.14 kg: Tables 4 and 6 list a "contact force" equal to 0.136–0.14 × the slider
+      acceleration, the slider's mass when the force on the slider is the joint's;
+    * Table 4's smallest clearance (0.05 mm) gives 2.0e4 m/s², the ideal slider's peak r ω² (1 + r/L)
+      = 1.94e4 m/s² for r = 0.05 m, L = 0.12 m at 5000 rpm: consistent with the crank and rod below.
+
+    PLACEHOLDERs: everything else is the widely used slider–crank benchmark of Flores et al. (e.g.
+    P. Flores, J. Ambrósio, J.C.P. Claro, H.M. Lankarani, C.S. Koshy, "A study on dynamics of
+    mechanical systems including joints with clearance and lubrication", Mech. Mach. Theory 41 (2006)
+    247–261, doi:10.1016/j.mechmachtheory.2005.10.002; Flores is S000's co-author), whose tables
+    could not be read in this project (the public copies found hold only their first page): crank
+    0.05 m, 0.30 kg, 1.0e-4 kg m²; rod 0.12 m, 0.21 kg, 2.5e-4 kg m²; slider 0.14 kg; journal
+    (pin) radius 10 mm, bushing length 40 mm; steel E = 207 GPa, ν = 0.3 for pin and bushing;
+    restitution 0.9 (Lankarani–Nikravesh law here; S000 used ADAMS' contact, whose damping it
+    does not print); friction 0.03 (the bench's regularized Coulomb law with its transition
+    velocities; S000: "a Coulomb-type friction ... kinetic coefficient ... constant"). Also
+    PLACEHOLDERs: the centres of mass (mid-length of crank and rod, at C for the slider); the
+    slider's length (the bench's 0.05 m) and inertia (1e-4 kg m², it only translates); a horizontal
+    guide through A (d_off = 0), gravity along −y, no guide friction; the radial clearance 0.5 mm of
+    the Flores benchmark (1.0 mm diametral here) and K from Eq. 18 (S000's studies set K directly,
+    ``contact.stiffness``); the run: the crank from rest at θ = 0, a 0.02 s ramp, 0.06 s in all
+    (the last 0.036 s, three turns, are the steady state), h = 1e-6 s (S000's ADAMS reported every
+    1e-6 s) with 100 kHz output. The drive: the crank PID on a 1:0.2 "belt" (S000 prescribes the
+    crank speed; the PID's motor command range stops at 1000 rpm).
+    """
+    base = BenchConfig()
+    mounts = dict(base.sensors.accelerometers)
+    for name in ("AC3", "AC4"):  # on the 0.12 m rod
+        mounts[name] = dataclasses.replace(mounts[name], position_m=(0.10, 0.0))
+    for name in ("AC1", "AC2"):
+        mounts[name] = dataclasses.replace(mounts[name], position_m=(0.02, 0.0))
+    steel = Material(207e9, 0.30, 7850.0)
+    return dataclasses.replace(
+        base,
+        name="s000",
+        bodies=Bodies(crank=BodyParams(0.30, 0.05, 0.025, 1.0e-4),
+                      rod=BodyParams(0.21, 0.12, 0.06, 2.5e-4),
+                      slider=BodyParams(0.14, base.bodies.slider.length_m, 0.0, 1.0e-4)),
+        materials=Materials(pin=steel, bushing=steel),
+        joints=dataclasses.replace(base.joints, clearance_b_mm=0.0, clearance_c_mm=1.0, allow_noncatalogue=True,
+                                   pin_diameter_m=0.020, bushing_length_m=0.040, initial_eccentricity="centred"),
+        mechanism=dataclasses.replace(base.mechanism, orientation="y", d_off_m=0.0, guide_friction_n=0.0,
+                                      crank_direction=1),
+        contact=dataclasses.replace(base.contact, law="lankarani-nikravesh", restitution=0.9, exponent=1.5,
+                                    stiffness=0.0, mu0=0.03),
+        drive=dataclasses.replace(base.drive, program="constant", motor_rpm=1000.0, belt_ratio=0.2, ramp_s=0.02,
+                                  ramp_shape="cosine", initial_encoder_angle_rad=math.pi / 2),
+        sensors=dataclasses.replace(base.sensors, accelerometers=mounts),
+        simulation=dataclasses.replace(base.simulation, duration_s=0.06, timestep_s=1e-6, chunk_s=0.02),
+        instrumentation=dataclasses.replace(base.instrumentation, response="off"),
+    )
+
+
 #: Named presets of the other mechanisms of the seed papers (issue 18): name -> builder.
-NAMED_PRESETS: dict[str, typing.Callable[[], BenchConfig]] = {"s001": _s001}
+NAMED_PRESETS: dict[str, typing.Callable[[], BenchConfig]] = {"s001": _s001, "s000": _s000}
 
 
 def named_preset(name: str, field_name: str = "--preset") -> BenchConfig:
     """Configuration of a paper's mechanism (``--preset NAME``, ``preset = "NAME"`` in TOML):
-    ``s001`` (S001's rig; see :func:`_s001`)."""
+    ``s001`` (S001's rig; see :func:`_s001`), ``s000`` (S000's Flores slider–crank; :func:`_s000`)."""
     if not isinstance(name, str) or name.lower() not in NAMED_PRESETS:
         raise ConfigError(field_name, f"must be one of {', '.join(NAMED_PRESETS)}, got {name!r}")
     return NAMED_PRESETS[name.lower()]()
