@@ -18,6 +18,7 @@ STUDIES: list[str] = [
     "twin.commands.study:register_formulations",
     "twin.commands.study:register_accuracy",
     "twin.studies.stability:register",
+    "twin.studies.doe:register",
 ]
 
 

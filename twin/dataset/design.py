@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from twin.config import BenchConfig, load_config, preset, with_overrides
+from twin.config import BenchConfig, load_config, named_preset, preset, with_overrides
 from twin.dataset.factors import NAMED, check_value, controlled, labels, random_profile, resolve
 from twin.dataset.spec import SPLITS, DatasetSpec, FactorSpec, SpecError
 from twin.errors import ConfigError
@@ -66,10 +66,14 @@ class RunPlan:
 
 
 def base_config(spec: DatasetSpec) -> BenchConfig:
-    """The spec's base configuration (preset or file) with ``base.set``, the engine, the duration
+    """The spec's base configuration (Table 4 preset, named preset or file) with ``base.set``, the engine, the duration
     and the output rate applied."""
-    cfg = load_config(spec.base_config) if spec.base_config else (preset(spec.base_test) if spec.base_test
-                                                                   else BenchConfig())
+    if spec.base_config:
+        cfg = load_config(spec.base_config)
+    elif spec.base_preset:
+        cfg = named_preset(spec.base_preset, "base.preset")
+    else:
+        cfg = preset(spec.base_test) if spec.base_test else BenchConfig()
     for key in spec.base_set:
         c = controlled(key)
         if c is not None:

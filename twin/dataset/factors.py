@@ -62,6 +62,17 @@ def _clearance(joint: str):
     return apply
 
 
+def _radial_clearance(joint: str):
+    def apply(v, ov, rng, base):  # noqa: ARG001
+        ov[f"joints.clearance_{joint.lower()}_mm"] = 2.0 * float(v)  # the configuration holds diametral sizes
+        ov["joints.allow_noncatalogue"] = True
+    return apply
+
+
+def _crank_rpm(v, ov, rng, base):  # noqa: ARG001
+    ov["drive.motor_rpm"] = float(v) * base.drive.belt_ratio  # motor speed = crank speed x motor:crank ratio
+
+
 def _fault(v, ov, rng, base):  # noqa: ARG001
     # applied after every other factor (twin.dataset.design.resolve_config): a faulty joint keeps the
     # size a clearance factor gave it, else 0.1 mm; a healthy joint gets 0 whatever it was given
@@ -106,6 +117,12 @@ NAMED: dict[str, Factor] = {f.name: f for f in (
     Factor("clearance_b_mm", "diametral clearance at B [mm], 0 = ball bearing; any value in [0, 1] "
            "(non-catalogue values allowed)", None, (0.0, 1.0), _clearance("B")),
     Factor("clearance_c_mm", "diametral clearance at C [mm], as clearance_b_mm", None, (0.0, 1.0), _clearance("C")),
+    Factor("radial_clearance_b_mm", "radial clearance at B [mm] (half the diametral clearance_b_mm; S000's "
+           "tables are radial)", None, (0.0, 2.5), _radial_clearance("B")),
+    Factor("radial_clearance_c_mm", "radial clearance at C [mm], as radial_clearance_b_mm", None, (0.0, 2.5),
+           _radial_clearance("C")),
+    Factor("crank_rpm", "crank speed of the constant program [rpm]: the motor speed is this times the base's "
+           "drive.belt_ratio", None, (-5000.0, 5000.0), _crank_rpm),
     Factor("orientation", "bench axis that points up", ("x", "y", "z"), None, _set("mechanism.orientation")),
     Factor("program", "speed program: constant (motor_rpm), protocol (S003 §4.3), random-profile (base.profile)",
            ("constant", "protocol", "random-profile"), None, _program),

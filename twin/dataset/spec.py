@@ -8,7 +8,8 @@ A spec is a TOML file (examples in ``analysis/datasets/``; every key is document
     seed = 7                 # root of every random draw (numpy SeedSequence)
 
     [base]
-    test = 6                 # a Table 4 preset, or: config = "bench.toml" (relative to the spec)
+    test = 6                 # a Table 4 preset, or: config = "bench.toml" (relative to the spec),
+                             # or: preset = "s000" (a paper's mechanism, twin.config.NAMED_PRESETS)
     engine = "mujoco"        # mujoco | reference
     duration_s = 0.5         # simulated time of every run (0 = the protocol's length)
     program = "constant"     # constant | protocol | random-profile (the default speed program)
@@ -151,12 +152,15 @@ class DatasetSpec:
     outputs: Outputs
     splits: Splits
     source: str = ""  # the file it came from (not part of its identity)
+    base_preset: str | None = None  # a named preset (base.preset = "s000"); part of the identity when set
 
     def canonical(self) -> dict[str, Any]:
         """The spec as plain data, the identity of a dataset (stored in info.json; a DIR holding
         a different one is refused)."""
         d = asdict(self)
         d.pop("source")
+        if d["base_preset"] is None:  # specs without one keep the identity they had before the key existed
+            d.pop("base_preset")
         return json.loads(json.dumps(d, sort_keys=True, default=list))
 
 
@@ -224,10 +228,16 @@ def parse_spec(data: Mapping[str, Any], source: str = "") -> DatasetSpec:
     if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**63:
         raise SpecError("dataset.seed", f"must be an integer in [0, 2**63), got {seed!r}")
 
-    base = _table(data, "base", ("test", "config", "engine", "duration_s", "program", "set", "profile"))
-    test, config = base.get("test"), base.get("config")
-    if test is not None and config is not None:
-        raise SpecError("base", "give test or config, not both")
+    base = _table(data, "base", ("test", "config", "preset", "engine", "duration_s", "program", "set", "profile"))
+    test, config, base_preset = base.get("test"), base.get("config"), base.get("preset")
+    if sum(v is not None for v in (test, config, base_preset)) > 1:
+        raise SpecError("base", "give one of test, config or preset, not several")
+    if base_preset is not None:
+        from twin.config import NAMED_PRESETS
+
+        if not (isinstance(base_preset, str) and base_preset.lower() in NAMED_PRESETS):
+            raise SpecError("base.preset", f"must be one of {', '.join(NAMED_PRESETS)}, got {base_preset!r}")
+        base_preset = base_preset.lower()
     if test is not None and (isinstance(test, bool) or not isinstance(test, int) or not 1 <= test <= 12):
         raise SpecError("base.test", f"must be a Table 4 test id 1..12, got {test!r}")
     if config is not None and not (isinstance(config, str) and config):
@@ -322,7 +332,7 @@ def parse_spec(data: Mapping[str, Any], source: str = "") -> DatasetSpec:
                        duration_s=float(duration), program=program, base_set=dict(base_set), profile=profile,
                        design=kind, runs=runs, repeats=repeats, factors=factors,
                        points=tuple(dict(p) for p in points), outputs=outputs,
-                       splits=Splits(tuple(float(x) for x in fr), holdout), source=source)
+                       splits=Splits(tuple(float(x) for x in fr), holdout), source=source, base_preset=base_preset)
 
 
 def load_spec(path: str | Path) -> DatasetSpec:
