@@ -15,7 +15,8 @@ the same with the twin:
   ``max_power`` max |crank torque × crank speed| [W], ``max_crank_torque`` max |crank torque| [N m].
 * **Kriging** (:class:`Kriging`): scikit-learn's ``GaussianProcessRegressor``, a constant times an
   anisotropic Matérn 5/2 kernel (one length scale per factor) on the factors mapped to the unit cube
-  (a factor with ``scale = "log"`` in log space), responses normalised, no noise term: the model
+  (a factor with ``scale = "log"`` in log space), responses normalised (``doe.transform = "log"``:
+  their logarithm), no noise term: the model
   interpolates its training points (a jitter of 1e-10 on the normalised diagonal). Hyperparameters
   by maximum likelihood (10 restarts, seeded). **Leave-one-out**: each point is predicted by the
   model built on the other n − 1 with the same hyperparameters (refit, :meth:`Kriging.loo`); the RMS
@@ -59,7 +60,7 @@ RESPONSES: dict[str, tuple[str, str]] = {
 }
 #: channel groups the responses need
 NEEDED_GROUPS = ("accel", "crank", "joints", "drive")
-_DOE_KEYS = ("responses", "settle_s", "goal", "holdout", "plot", "verify_optimum", "seed")
+_DOE_KEYS = ("responses", "settle_s", "goal", "transform", "holdout", "plot", "verify_optimum", "seed")
 
 
 @dataclass(frozen=True)
@@ -76,6 +77,7 @@ class DoeSpec:
     plot_slices: Mapping[str, tuple[float, ...]] = field(default_factory=dict)
     verify_optimum: bool = True
     seed: int = 0
+    transform: str = "none"
 
     @property
     def factors(self) -> tuple[FactorSpec, ...]:
@@ -134,6 +136,9 @@ def parse_doe(data: Mapping[str, Any], source: str = "") -> DoeSpec:
     goal = raw.get("goal", "min")
     if goal not in ("min", "max"):
         raise SpecError("doe.goal", f"must be one of min, max; got {goal!r}")
+    transform = raw.get("transform", "none")
+    if transform not in ("none", "log"):
+        raise SpecError("doe.transform", f"must be one of none, log; got {transform!r}")
     hold = raw.get("holdout", [])
     if not (isinstance(hold, list) and all(isinstance(p, Mapping) for p in hold)):
         raise SpecError("doe.holdout", "must be [[doe.holdout]] tables, one value per factor")
@@ -173,7 +178,7 @@ def parse_doe(data: Mapping[str, Any], source: str = "") -> DoeSpec:
     if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**32:
         raise SpecError("doe.seed", f"must be an integer in [0, 2**32), got {seed!r}")
     return DoeSpec(spec, tuple(responses), float(settle), goal, tuple(dict(p) for p in hold), px, py or "", sl,
-                   verify, seed)
+                   verify, seed, transform)
 
 
 def _check_point(factors: Sequence[FactorSpec], p: Mapping[str, Any], key: str) -> None:
@@ -239,10 +244,12 @@ class Kriging:
     Matérn 5/2 kernel, normalised responses, interpolating (see the module docstring).
 
     ``fit(u, y)``; ``predict(u)`` -> mean; ``predict(u, return_std=True)``; ``loo()`` -> the
-    leave-one-out predictions at the training points."""
+    leave-one-out predictions at the training points. ``log=True`` models log(y) (responses > 0 that
+    span decades, e.g. over crank speeds 50-5000 rpm): predictions are exp of the model's mean (the
+    median), standard deviations exp(mean)·σ (first order)."""
 
-    def __init__(self, seed: int = 0, restarts: int = 10, nu: float = 2.5, jitter: float = 1e-10):
-        self.seed, self.restarts, self.nu, self.jitter = seed, restarts, nu, jitter
+    def __init__(self, seed: int = 0, restarts: int = 10, nu: float = 2.5, jitter: float = 1e-10, log: bool = False):
+        self.seed, self.restarts, self.nu, self.jitter, self.log = seed, restarts, nu, jitter, log
         self.gp = None
 
     def _gp(self, kernel, optimize: bool):
@@ -257,7 +264,12 @@ class Kriging:
         from sklearn.gaussian_process.kernels import ConstantKernel, Matern
 
         u = np.atleast_2d(np.asarray(u, float))
-        self.u, self.y = u, np.asarray(y, float)
+        y = np.asarray(y, float)
+        if self.log and np.any(y <= 0):
+            from twin.errors import TwinError
+
+            raise TwinError("doe.transform: log needs responses > 0")
+        self.u, self.y = u, (np.log(y) if self.log else y)
         d = u.shape[1]
         kernel = ConstantKernel(1.0, (1e-3, 1e3)) * Matern(length_scale=np.full(d, 0.5), length_scale_bounds=(1e-2, 1e2),
                                                            nu=self.nu)
@@ -279,7 +291,13 @@ class Kriging:
         return np.atleast_1d(self.gp.kernel_.k2.length_scale)
 
     def predict(self, u: np.ndarray, return_std: bool = False):
-        return self.gp.predict(np.atleast_2d(np.asarray(u, float)), return_std=return_std)
+        res = self.gp.predict(np.atleast_2d(np.asarray(u, float)), return_std=return_std)
+        if not self.log:
+            return res
+        if return_std:
+            m = np.exp(res[0])
+            return m, m * res[1]
+        return np.exp(res)
 
     def loo(self) -> np.ndarray:
         """Leave-one-out predictions: point i predicted by the model built on the other points with
@@ -290,7 +308,7 @@ class Kriging:
             keep = np.arange(n) != i
             gp = self._gp(self.gp.kernel_, False).fit(self.u[keep], self.y[keep])
             out[i] = gp.predict(self.u[i:i + 1])[0]
-        return out
+        return np.exp(out) if self.log else out
 
 
 def loo_closed_form(kernel_matrix: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -411,7 +429,7 @@ def run_study(doe: DoeSpec, out: Path, workers: int | None = None, progress: boo
         result["lhs_strata_ok"] = bool(is_latin_hypercube(U))
     for rname in doe.responses:
         y = np.array([r["responses"][rname] for r in train])
-        k = Kriging(seed=doe.seed).fit(U, y)
+        k = Kriging(seed=doe.seed, log=doe.transform == "log").fit(U, y)
         models[rname] = k
         loo = k.loo()
         opt = optimize(lambda u, k=k: k.predict(u)[0], d, doe.goal, doe.seed)
@@ -489,7 +507,7 @@ def report_md(doe: DoeSpec, res: dict[str, Any]) -> str:
          + ", ".join(f"`{f.name}` [{f.range[0]:g}, {f.range[1]:g}]{' (log)' if f.scale == 'log' else ''}"
                      for f in doe.factors)
          + f"; engine {doe.dataset.engine}, {doe.dataset.duration_s:g} s per run, responses over t >= "
-         f"{doe.settle_s:g} s.", ""]
+         f"{doe.settle_s:g} s; surrogate of {'log(response)' if doe.transform == 'log' else 'the response'}.", ""]
     if "lhs_strata_ok" in res:
         L += [f"Latin hypercube (one point per stratum of every factor): {res['lhs_strata_ok']}.", ""]
     L += ["## Points", "", "| # | " + " | ".join(names) + " | " + " | ".join(
