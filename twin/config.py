@@ -522,6 +522,24 @@ class Drive:
             0 = no filtering (interpolating spline through the raw samples).
         steps_s: times of the motor command steps of the "steps" program [s].
         steps_rpm: motor speed commanded at each of those times [rpm] (0 = stop).
+        mode: how the crank follows the program: "pid" (the bench's crank PID tracks the
+            reference angle and rate: a finite drive stiffness, S003 §4.3) or "prescribed" (an
+            infinitely stiff drive: the crank angle *is* the program, θ(t) = θ_ref(t), as the
+            papers that impose the crank motion assume, S001's CosmosMotion motor, S004's
+            constant 30 rad/s, S000's 5000 rpm). Reference engine: the crank angle is a driving
+            constraint of the R-matrix model (θ and θ̇ set from the program every step, the
+            other coordinates from the reduced equations with θ̈ = α_ref; the drive torque is
+            the θ row's residual). MuJoCo twin: the crank turns as an infinitely heavy
+            flywheel, armature A ≈ 1e9 × the crank-side inertia, driven by a dead-beat law
+            A [(θ_ref(t + h) − θ)/h² − θ̇/h] that lands the next step on the program
+            (integrator Euler only); the drive torque channel is that torque minus A θ̈.
+            A program whose speed jumps after t = 0 (ramp_s = 0 with "steps"/"protocol") is
+            refused; ramp_s = 0 with "constant" starts the mechanism at full speed at t = 0
+            (consistent velocities of every body). The PID gains are not used.
+        crank_rpm: crank speed of the constant program given directly [rpm], bypassing the
+            motor and the belt (the papers give crank speeds; S000 runs 50–5000 rpm);
+            0 = ``motor_rpm`` / ``belt_ratio`` (the bench). When nonzero, ``motor_rpm`` is not
+            used and the motor command channel reads crank_rpm × belt_ratio. |crank_rpm| ≤ 6000.
     """
 
     program: str = "constant"
@@ -537,9 +555,24 @@ class Drive:
     trace_filter_hz: float = 100.0
     steps_s: tuple[float, ...] = ()
     steps_rpm: tuple[float, ...] = ()
+    mode: str = "pid"
+    crank_rpm: float = 0.0
+
+    MODES: typing.ClassVar[tuple[str, ...]] = ("pid", "prescribed")
 
     def __post_init__(self) -> None:
         _choice(self.program, "program", PROGRAMS)
+        _choice(self.mode, "mode", self.MODES)
+        _check(isinstance(self.crank_rpm, (int, float)) and math.isfinite(self.crank_rpm)
+               and abs(self.crank_rpm) <= 6000, "crank_rpm",
+               f"must lie in [-6000, 6000] rpm (0 = motor_rpm / belt_ratio), got {self.crank_rpm!r}")
+        if self.crank_rpm != 0:
+            _check(self.program == "constant", "crank_rpm",
+                   f"sets the speed of the constant program only; got program = {self.program!r} (use 0)")
+        if self.mode == "prescribed" and self.program in ("steps", "protocol"):
+            _check(self.ramp_s > 0, "ramp_s",
+                   "must be > 0 for a prescribed drive whose speed changes after t = 0 (a speed jump is an "
+                   f"infinite crank acceleration), got {self.ramp_s!r}")
         _check(isinstance(self.motor_rpm, (int, float)) and math.isfinite(self.motor_rpm)
                and abs(self.motor_rpm) <= 1000, "motor_rpm",
                f"must lie in [-1000, 1000] rpm (±10 V command range), got {self.motor_rpm!r}")
@@ -571,7 +604,9 @@ class Drive:
 
     @property
     def crank_rad_s(self) -> float:
-        """Crank speed of the constant program [rad/s] (motor rpm / belt ratio)."""
+        """Crank speed of the constant program [rad/s] (``crank_rpm``, or motor rpm / belt ratio)."""
+        if self.crank_rpm != 0:
+            return self.crank_rpm * 2.0 * math.pi / 60.0
         return self.motor_rpm / self.belt_ratio * 2.0 * math.pi / 60.0
 
     @property
@@ -876,6 +911,15 @@ class BenchConfig:
             raise ConfigError("simulation.duration_s",
                               f"must hold at least one output sample (>= {1.0 / sen.output_rate_hz:g} s at "
                               f"{sen.output_rate_hz:g} Hz), got {sim.duration_s!r}")
+        if self.drive.mode == "prescribed" and sim.engine == "mujoco":
+            if self.mujoco.integrator != "Euler":
+                raise ConfigError("mujoco.integrator",
+                                  "must be \"Euler\" for drive.mode = \"prescribed\" (the dead-beat drive lands each "
+                                  f"step on the program with Euler's update), got {self.mujoco.integrator!r}")
+            if "energy" in sen.channels:
+                raise ConfigError("sensors.channels",
+                                  "the optional group 'energy' is not available with drive.mode = \"prescribed\" in "
+                                  "the MuJoCo engine (its kinetic energy would hold the drive's infinite flywheel)")
         for group, engines in ENGINE_ONLY_GROUPS.items():
             if group in sen.channels and sim.engine not in engines:
                 raise ConfigError("sensors.channels",

@@ -31,7 +31,8 @@ def command_events(cfg: BenchConfig) -> list[tuple[float, float]]:
     """(time [s], motor command [rpm]) steps of a synthetic program, starting at rest."""
     d = cfg.drive
     if d.program == "constant":
-        return [(0.0, d.motor_rpm)]
+        # drive.crank_rpm gives the crank speed directly: its motor equivalent through the belt
+        return [(0.0, d.crank_rpm * d.belt_ratio if d.crank_rpm != 0 else d.motor_rpm)]
     if d.program == "steps":
         return [(float(t), float(r)) for t, r in zip(d.steps_s, d.steps_rpm)]
     if d.program == "protocol":
@@ -115,6 +116,17 @@ def _ramp(tau: np.ndarray, T: float, shape: str = "cosine") -> tuple[np.ndarray,
     return s, integral
 
 
+def _ramp_rate(tau: np.ndarray, T: float, shape: str = "cosine") -> np.ndarray:
+    """ds/dτ of :func:`_ramp` [1/s] (0 outside the ramp; a ramp of T = 0 is a jump: 0 here)."""
+    tau = np.asarray(tau, dtype=np.float64)
+    if T <= 0:
+        return np.zeros_like(tau)
+    inside = (tau > 0) & (tau < T)
+    if shape == "linear":
+        return np.where(inside, 1.0 / T, 0.0)
+    return np.where(inside, 0.5 * np.pi / T * np.sin(np.pi * np.clip(tau, 0.0, T) / T), 0.0)
+
+
 def _extrapolate(x: np.ndarray, n: int) -> np.ndarray:
     """``n`` samples continuing ``x`` (uniformly sampled) by its least-squares quadratic."""
     k = np.arange(x.size, dtype=np.float64) - (x.size - 1)
@@ -194,6 +206,39 @@ class DriveReference:
             return spline(tc), dspline(tc)
         omega, angle = self._speed_terms(t)
         return self.theta0 + self.direction * angle, self.direction * omega
+
+    def acceleration(self, t: np.ndarray) -> np.ndarray:
+        """Reference crank acceleration α_ref(t) = dω_ref/dt [rad/s²] (the prescribed drive's
+        feed-forward; a ramp of ``ramp_s = 0`` contributes nothing: its jump is at t = 0 only)."""
+        t = np.asarray(t, dtype=np.float64)
+        if self._trace is not None:
+            spline, _ = self._trace
+            d2 = spline.derivative(2)
+            inside = (t >= 0.0) & (t <= self.trace_duration_s)
+            return np.where(inside, d2(np.clip(t, 0.0, self.trace_duration_s)), 0.0)
+        d = self.cfg.drive
+        alpha = np.zeros_like(t)
+        prev = 0.0
+        for t_ev, rpm in self.events:
+            target = rpm / d.belt_ratio * RPM_TO_RAD_S
+            alpha += (target - prev) * _ramp_rate(t - t_ev, d.ramp_s, d.ramp_shape)
+            prev = target
+        return self.direction * alpha
+
+    def start_rate(self) -> float:
+        """Crank rate the mechanism starts with at t = 0 [rad/s]. PID drive: 0 (at rest; the
+        PID spins it up). Prescribed drive: the program's rate at t = 0, the right-hand limit
+        for a speed jump at t = 0 (``ramp_s = 0``), so that such a run is at constant speed from
+        its first step (every body's velocity consistent with it); a trace's rate at its start."""
+        d = self.cfg.drive
+        if d.mode != "prescribed":
+            return 0.0
+        if self._trace is not None:
+            return float(self(np.zeros(1))[1][0])
+        if d.ramp_s > 0:
+            return float(self(np.zeros(1))[1][0])
+        at0 = [rpm for t_ev, rpm in self.events if t_ev == 0.0]  # the last command at t = 0 holds
+        return self.direction * (at0[-1] if at0 else 0.0) / d.belt_ratio * RPM_TO_RAD_S
 
     def command_rpm(self, t: np.ndarray) -> np.ndarray:
         """Motor speed command [rpm] (the DAQ's analog output, ±10 V ↔ ±1000 rpm)."""

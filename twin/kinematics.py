@@ -25,6 +25,29 @@ def slider_position(theta: np.ndarray, r: float, l: float, d_off: float = 0.0) -
     return r * np.cos(theta) + np.sqrt(l**2 - (d_off - r * np.sin(theta)) ** 2)
 
 
+def slider_kinematics(theta: np.ndarray, omega: np.ndarray, alpha: np.ndarray, r: float, l: float,
+                      d_off: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Slider position, velocity and acceleration of the ideal mechanism [m, m/s, m/s²] for crank
+    angle θ, rate ω and acceleration α (closed form, exact derivatives of :func:`slider_position`).
+
+    With u = d_off − r sin θ and S = sqrt(l² − u²): x = r cos θ + S,
+    u̇ = −r ω cos θ, ü = r ω² sin θ − r α cos θ, Ṡ = −u u̇/S, S̈ = −(u̇² + u ü)/S − u² u̇²/S³,
+    ẋ = −r ω sin θ + Ṡ, ẍ = −r ω² cos θ − r α sin θ + S̈. For d_off = 0 and α = 0 the
+    acceleration peaks are −r ω² (1 + r/l) at θ = 0 and r ω² (1 − r/l) at θ = π (r/l < 1/4).
+    """
+    th = np.asarray(theta, dtype=float)
+    w = np.asarray(omega, dtype=float)
+    a = np.asarray(alpha, dtype=float)
+    s, c = np.sin(th), np.cos(th)
+    u = d_off - r * s
+    ud = -r * w * c
+    udd = r * w * w * s - r * a * c
+    S = np.sqrt(l * l - u * u)
+    Sd = -u * ud / S
+    Sdd = -(ud * ud + u * udd) / S - (u * ud) ** 2 / S ** 3
+    return r * c + S, -r * w * s + Sd, -r * w * w * c - r * a * s + Sdd
+
+
 def rod_angle(theta: np.ndarray, r: float, l: float, d_off: float = 0.0) -> np.ndarray:
     """Rod angle φ from +x of the ideal mechanism [rad]: sin φ = (d_off − r sin θ)/l."""
     return np.arcsin((d_off - r * np.sin(np.asarray(theta, dtype=float))) / l)
@@ -119,3 +142,14 @@ def initial_pose(cfg: BenchConfig, theta: float) -> Pose:
     c_bush = b_bush + l * np.array([np.cos(phi), np.sin(phi)])
     c_pin = c_bush + e_c
     return Pose(float(theta), phi, e_b, e_c, b_pin, b_bush, c_bush, c_pin, float(c_pin[0]))
+
+
+def pose_rates(cfg: BenchConfig, pose: Pose, omega: float) -> tuple[float, float]:
+    """Rod angular rate φ̇ [rad/s] and slider velocity ẋ [m/s] of ``pose`` with the crank turning
+    at ω and the eccentricities fixed in the bench frame (ė = 0), from the relations of
+    :func:`initial_pose`: sin φ = (d_off − e_Cy − B'_y)/l, with Ḃ' = Ḃ = r ω (−sin θ, cos θ):
+    φ̇ = −Ḃ'_y/(l cos φ), ẋ = Ḃ'_x − l φ̇ sin φ."""
+    l = cfg.bodies.rod.length_m
+    bd = cfg.bodies.crank.length_m * omega * np.array([-np.sin(pose.theta), np.cos(pose.theta)])
+    phid = -bd[1] / (l * np.cos(pose.phi))
+    return float(phid), float(bd[0] - l * phid * np.sin(pose.phi))

@@ -75,6 +75,9 @@ SENSOR_CRANK_ANGLE = "crank_angle"
 SENSOR_CRANK_SPEED = "crank_speed"
 SENSOR_SLIDER_POSITION = "slider_position"
 SENSOR_CRANK_TORQUE = "crank_torque"
+# sensor added by the builder for a prescribed drive (drive.mode = "prescribed"): the crank's
+# angular acceleration, to take the flywheel's share A θ̈ out of the drive torque
+SENSOR_CRANK_ANGACC = "crank_angacc"
 # sensors added by the builder for the optional "energy" channel group
 SENSOR_ENERGY_KINETIC = "energy_kinetic"
 SENSOR_ENERGY_POTENTIAL = "energy_potential"

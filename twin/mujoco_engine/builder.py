@@ -457,7 +457,49 @@ def build_spec(cfg: BenchConfig) -> mujoco.MjSpec:
     act.gainprm[0] = cfg.pid.ki
     act.biasprm[1], act.biasprm[2] = -cfg.pid.kp, -cfg.pid.kv
     act.dynprm[0] = cfg.pid.imax
+    if cfg.drive.mode == "prescribed":
+        _prescribed_drive(spec, cfg)
     return spec
+
+
+#: the prescribed drive's flywheel: armature = this × the crank-side inertia (:func:`prescribed_armature`)
+PRESCRIBED_ARMATURE_FACTOR = 1e9
+
+
+def prescribed_armature(cfg: BenchConfig) -> float:
+    """Armature A of the crank hinge for a prescribed drive [kg m²]: 1e9 × the inertia the crank
+    drives, I_A(crank) + (m_rod + m_slider) r² (an upper bound of the crank-side inertia of the
+    other bodies). The crank's own response to the mechanism's load torque τ is then τ/A; with
+    the dead-beat law the angle error it leaves after one step, h² τ/A, is far below the round-off
+    of θ (1e-16 rad for the bench at 750 rpm, S004 at 30 rad/s and 5000 rpm)."""
+    b = cfg.bodies
+    ia = b.crank.inertia_kgm2 + b.crank.mass_kg * b.crank.x_g_m ** 2
+    return PRESCRIBED_ARMATURE_FACTOR * (ia + (b.rod.mass_kg + b.slider.mass_kg) * b.crank.length_m ** 2)
+
+
+def _prescribed_drive(spec: mujoco.MjSpec, cfg: BenchConfig) -> None:
+    """The prescribed (infinitely stiff) crank drive (``drive.mode = "prescribed"``).
+
+    MuJoCo has no rheonomic constraint (its equality constraints are soft, and their data are
+    not inputs of ``mujoco.rollout``), so the crank is made an infinitely heavy flywheel: armature
+    A (:func:`prescribed_armature`), so that the mechanism's loads cannot move it and every
+    constraint and contact sees it as a body of prescribed motion, driven by the native ``<pid>``
+    actuator turned into a dead-beat law: kp = A/h², kv = A/h, ki = 0, with the control
+    [θ_ref(t + h), 0]: τ = A [(θ_ref(t + h) − θ)/h² − θ̇/h], so that Euler's update
+    θ̇ ← θ̇ + h θ̈, θ ← θ + h θ̇ lands on θ_ref(t + h) (to h² (τ_load − I θ̈)/A and round-off).
+    The drive torque the mechanism receives is τ − A θ̈ (``crank_torque``; θ̈ from a
+    ``frameangacc`` sensor of the crank). The solver's tolerance scale (``stat.meaninertia``, the
+    mean of M's diagonal) is set back to the mechanism's own in :func:`_compile`."""
+    A = prescribed_armature(cfg)
+    h = cfg.simulation.timestep_s
+    spec.joint(N.CRANK_HINGE).armature = A
+    act = spec.actuator(N.CRANK_PID)
+    act.gainprm[0] = 0.0
+    act.biasprm[1], act.biasprm[2] = -A / h ** 2, -A / h
+    act.dyntype = mujoco.mjtDyn.mjDYN_NONE  # no integral state (MuJoCo refuses a stateful pid with ki = 0)
+    if "drive" in cfg.sensors.channels:
+        spec.add_sensor(name=N.SENSOR_CRANK_ANGACC, type=mujoco.mjtSensor.mjSENS_FRAMEANGACC,
+                        objtype=mujoco.mjtObj.mjOBJ_BODY, objname=N.CRANK)
 
 
 def _compile(spec: mujoco.MjSpec, cfg: BenchConfig) -> mujoco.MjModel:
@@ -465,6 +507,10 @@ def _compile(spec: mujoco.MjSpec, cfg: BenchConfig) -> mujoco.MjModel:
         model = spec.compile()
     except Exception as err:
         raise ModelError(f"MuJoCo could not compile the model of {cfg.name}: {err}") from None
+    if cfg.drive.mode == "prescribed":
+        # the solver scales its tolerance by 1/meaninertia (mean of M's diagonal at qpos0): the
+        # flywheel's armature would make every improvement look negligible
+        model.stat.meaninertia -= prescribed_armature(cfg) / model.nv
     if model.nuser_geom != len(N.BORE_USERDATA_FIELDS):  # _bore.c reads the user data by this layout
         raise ModelError(f"the model of {cfg.name} has nuser_geom = {model.nuser_geom}, the bore user data layout "
                          f"{len(N.BORE_USERDATA_FIELDS)} fields {N.BORE_USERDATA_FIELDS} (twin.names); "

@@ -91,6 +91,15 @@ class MujocoEngine:
         self._nstate = mujoco.mj_stateSize(self.model, _STATE)
         self._sens = np.empty((1, 0, self.model.nsensordata))
         self._k = 0  # integration steps taken since reset
+        self._drive = None
+        if cfg.drive.mode == "prescribed":
+            from twin.drive import DriveReference
+            from twin.mujoco_engine.builder import prescribed_armature
+
+            self._drive = DriveReference(cfg)
+            self._armature = prescribed_armature(cfg)
+            self.meta["drive"] = (f"prescribed: crank armature {self._armature:.6g} kg m^2, dead-beat law "
+                                  "A [(theta_ref(t + h) - theta)/h^2 - omega/h]")
 
     # -------------------------------------------------------------- initial state
     def reset(self, theta0: float | None = None) -> None:
@@ -112,6 +121,21 @@ class MujocoEngine:
             d.qpos[m.jnt_qposadr[m.joint(N.ECC_B_X).id]] = rel[0]
             d.qpos[m.jnt_qposadr[m.joint(N.ECC_B_Y).id]] = rel[1]
         d.qpos[m.jnt_qposadr[m.joint(N.SLIDER_SLIDE).id]] = pose.slider_x
+        omega = self._drive.start_rate() if self._drive is not None else 0.0
+        if omega != 0.0:
+            # a prescribed drive at speed from t = 0: every velocity consistent with it (ė = 0)
+            from twin.kinematics import pose_rates
+
+            phid, xd = pose_rates(cfg, pose, omega)
+            d.qvel[m.jnt_dofadr[m.joint(N.CRANK_HINGE).id]] = omega
+            d.qvel[m.jnt_dofadr[m.joint(N.ROD_HINGE).id]] = phid - omega
+            if cfg.joints.diametral_mm("B") > 0:
+                # rel = R(θ)ᵀ (B' − B) = −R(θ)ᵀ e_B with e_B fixed: d/dt = −ω (dR/dθ)ᵀ e_B
+                s_, c_ = math.sin(pose.theta), math.cos(pose.theta)
+                e = pose.e_b
+                d.qvel[m.jnt_dofadr[m.joint(N.ECC_B_X).id]] = -omega * (-s_ * e[0] + c_ * e[1])
+                d.qvel[m.jnt_dofadr[m.joint(N.ECC_B_Y).id]] = -omega * (-c_ * e[0] - s_ * e[1])
+            d.qvel[m.jnt_dofadr[m.joint(N.SLIDER_SLIDE).id]] = xd
         mujoco.mj_forward(m, d)
         self._k = 0
 
@@ -144,7 +168,12 @@ class MujocoEngine:
         state0 = np.empty((1, self._nstate))
         mujoco.mj_getState(m, d, state0[0], _STATE)
         warm = d.qacc_warmstart.copy()[None]
-        ctrl = np.stack([theta_ref, omega_ref], axis=-1)[None]
+        if self._drive is not None:
+            # dead-beat prescribed drive: the control of step k is the program at t_{k+1} (and rate 0)
+            nxt, _ = self._drive((self._k + 1 + np.arange(nstep)) * h)
+            ctrl = np.stack([nxt, np.zeros(nstep)], axis=-1)[None]
+        else:
+            ctrl = np.stack([theta_ref, omega_ref], axis=-1)[None]
         # no per-step state output: the data object ends holding the final state
         rollout.rollout(m, d, state0, ctrl, nstep=nstep, initial_warmstart=warm, sensordata=sd)
         t_start, t_end = self._k * h, (self._k + nstep) * h
@@ -221,5 +250,9 @@ class MujocoEngine:
             out["energy_potential"] = col(N.SENSOR_ENERGY_POTENTIAL)
             out["slider_speed"] = col(N.SENSOR_SLIDER_SPEED)
         if "drive" in groups:
-            out["crank_torque"] = col(N.SENSOR_CRANK_TORQUE)
+            if self._drive is not None:
+                # the torque the mechanism receives: the actuator's minus the flywheel's share A θ̈
+                out["crank_torque"] = col(N.SENSOR_CRANK_TORQUE) - self._armature * col(N.SENSOR_CRANK_ANGACC, 2)
+            else:
+                out["crank_torque"] = col(N.SENSOR_CRANK_TORQUE)
         return out

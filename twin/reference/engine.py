@@ -82,6 +82,10 @@ class ReferenceEngine:
     def __init__(self, cfg: BenchConfig, options: ReferenceOptions | None = None):
         self.cfg = cfg
         self.options = options or ReferenceOptions()
+        if self.options.integrator == "midpoint" and cfg.drive.mode == "prescribed":
+            raise ConfigError("reference.integrator",
+                              "the explicit midpoint integrator is not available with drive.mode = \"prescribed\" "
+                              "(use \"euler\")")
         if self.options.integrator == "midpoint" and cfg.joints.clearance_joints:
             raise ConfigError("reference.integrator",
                               "the explicit midpoint integrator is for scenes without clearance joints: it is not "
@@ -89,7 +93,7 @@ class ReferenceEngine:
         t0 = time.perf_counter()
         self.P = engine_params(cfg, self.options)
         self.build_s = time.perf_counter() - t0
-        self.load_s = warm_up()
+        self.load_s = warm_up() + (warm_up_prescribed() if cfg.drive.mode == "prescribed" else 0.0)
         self.meta: dict[str, Any] = {
             "engine": self.name,
             "engine_version": f"twin-reference {ENGINE_VERSION} (twin {twin_version}, numba {_numba_version()})",
@@ -108,17 +112,25 @@ class ReferenceEngine:
         self._st: np.ndarray | None = None
         self._buf = np.empty((0, M.N_OUT))
         self._k = 0
+        self._drive = None
+        if cfg.drive.mode == "prescribed":
+            from twin.drive import DriveReference
+
+            self._drive = DriveReference(cfg)
+            self.meta["drive"] = "prescribed: the crank angle is a driving constraint theta = theta_ref(t)"
 
     def reset(self, theta0: float | None = None) -> None:
-        """Mechanism at rest at crank bench angle ``theta0`` [rad] (None: the drive program's
-        initial angle), eccentricities as configured; resolves the contact parameters (the
-        linear law's damping uses the effective mass at this pose)."""
+        """Mechanism at crank bench angle ``theta0`` [rad] (None: the drive program's initial
+        angle), eccentricities as configured, at rest (or, with a prescribed drive, turning at the
+        program's start rate, :meth:`twin.drive.DriveReference.start_rate`); resolves the contact
+        parameters (the linear law's damping uses the effective mass at this pose)."""
         if theta0 is None:
             from twin.drive import DriveReference
 
             theta0 = float(DriveReference(self.cfg)(np.array([0.0]))[0][0])
+        omega0 = self._drive.start_rate() if self._drive is not None else 0.0
         try:
-            self.state0 = M.initial_state(self.cfg, theta0)
+            self.state0 = M.initial_state(self.cfg, theta0, omega0, self.P)
         except ValueError as err:
             raise ConfigError("bodies", str(err)) from None
         self.contacts = M.contact_parameters(self.cfg, self.P, self.state0)
@@ -136,8 +148,16 @@ class ReferenceEngine:
         n_out = -(-nstep // stride)
         if self._buf.shape[0] < n_out:
             self._buf = np.empty((n_out, M.N_OUT))
-        status, steps = M.run_steps(self.P, self._st, np.ascontiguousarray(theta_ref, dtype=np.float64),
-                                    np.ascontiguousarray(omega_ref, dtype=np.float64), stride, self._buf, True)
+        if self._drive is not None:
+            # the program at t_k .. t_{k+n} (the driving constraint's next value) and its acceleration
+            t = (self._k + np.arange(nstep + 1)) * h
+            th, om = self._drive(t)
+            al = self._drive.acceleration(t[:-1])
+            status, steps = M.run_prescribed(self.P, self._st, np.ascontiguousarray(th), np.ascontiguousarray(om),
+                                             np.ascontiguousarray(al), stride, self._buf, True)
+        else:
+            status, steps = M.run_steps(self.P, self._st, np.ascontiguousarray(theta_ref, dtype=np.float64),
+                                        np.ascontiguousarray(omega_ref, dtype=np.float64), stride, self._buf, True)
         if status != M.OK:
             why = "the position projection did not converge" if status == M.NEWTON_FAILED \
                 else "NaN or Inf in the state"
@@ -185,6 +205,23 @@ def warm_up() -> float:
     M.run_steps(P, st, z, z, 1, np.empty((1, M.N_OUT)), True)
     _WARM = True
     return time.perf_counter() - t0
+
+
+def warm_up_prescribed() -> float:
+    """The same for the prescribed drive's loop (:func:`twin.reference.model.run_prescribed`)."""
+    global _WARM_PRESCRIBED
+    if _WARM_PRESCRIBED:
+        return 0.0
+    t0 = time.perf_counter()
+    P = M.build_params(BenchConfig())
+    st = M.initial_state(BenchConfig(), 0.0)
+    z1 = np.zeros(1)
+    M.run_prescribed(P, st, z1, z1, np.zeros(0), 1, np.empty((1, M.N_OUT)), True)
+    _WARM_PRESCRIBED = True
+    return time.perf_counter() - t0
+
+
+_WARM_PRESCRIBED = False
 
 
 _WARM = False

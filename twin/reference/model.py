@@ -130,7 +130,8 @@ P_SENS = 40            # 6 sensors × (body 0 rod / 1 slider, x, y, axis 0 +x 1 
 # P_MU0, P_V0, P_V1; 1 Adams/COSMOS with μ_d = P_MU0, μ_s, v_s, v_d)
 P_FRIC_LAW, P_MUS, P_VS, P_VD = P_SENS + 24, P_SENS + 25, P_SENS + 26, P_SENS + 27
 P_DMAX = P_VD + 1       # penetration of full damping of the ADAMS IMPACT law (its c_max in P_CLIN_B/C)
-P_INTEGRATOR = P_DMAX + 1  # 0 symplectic Euler (default), 1 explicit midpoint (INTEGRATORS); the last entry
+P_PRESCRIBED = P_DMAX + 1  # 1: prescribed crank (drive.mode = "prescribed", driving constraint θ = θ_ref(t))
+P_INTEGRATOR = P_PRESCRIBED + 1  # 0 symplectic Euler (default), 1 explicit midpoint (INTEGRATORS); the last entry
 N_PARAMS = P_INTEGRATOR + 1
 
 #: integrators of :func:`run_steps` by name -> code in ``P[P_INTEGRATOR]``
@@ -513,6 +514,65 @@ def accelerations(P, q, qd, s, c, Q, rows, nz, Rt, S, Mb, rhs, tmp, qdd):
 
 
 @njit(cache=True)
+def accelerations_prescribed(P, q, qd, s, c, Q, rows, nz, Rt, S, Mb, rhs, tmp, qdd, alpha, tau):
+    """The same with the crank angle a driving constraint (θ̈ = ``alpha`` given, Q[7] = 0):
+    the rows of the other independent coordinates w (the eccentricities) give
+    (RᵀMR)_ww ẅ = [Rᵀ(Q − MṘż)]_w − (RᵀMR)_wθ α, and the θ row the drive torque
+    τ = (RᵀMR)_θθ α + (RᵀMR)_θw ẅ − [Rᵀ(Q − MṘż)]_θ (the Lagrange multiplier of θ − θ_ref(t) = 0),
+    written to ``tau[0]``. Returns False if (RᵀMR)_ww is not SPD."""
+    # the assembly of ``accelerations`` with a singular-proof solve of the w block only
+    b = tmp[nz]
+    mr = tmp[nz + 1]
+    for j in range(nz):
+        for i in range(8):
+            b[i] = 0.0
+        b[rows[j]] = 1.0
+        solve_aug(q, s, c, b, Rt[j])
+        mass_times(P, Rt[j], tmp[j])
+    quadratic_terms(q, qd, s, c, b)
+    solve_aug(q, s, c, b, S)
+    mass_times(P, S, mr)
+    for i in range(8):
+        b[i] = Q[i] - mr[i]
+    for j in range(nz):
+        acc = 0.0
+        for k in range(8):
+            acc += Rt[j, k] * b[k]
+        rhs[j] = acc
+    for j in range(nz):
+        for i in range(j, nz):
+            acc = 0.0
+            for k in range(8):
+                acc += Rt[i, k] * tmp[j, k]
+            Mb[i, j] = acc
+            Mb[j, i] = acc
+    m = nz - 1
+    zdd = np.empty(5)
+    zdd[0] = alpha
+    if m > 0:
+        W = np.empty((m, m))
+        rw = np.empty(m)
+        for i in range(m):
+            rw[i] = rhs[i + 1] - Mb[i + 1, 0] * alpha
+            for j in range(m):
+                W[i, j] = Mb[i + 1, j + 1]
+        if not _cholesky_solve(W, rw, m):
+            return False
+        for i in range(m):
+            zdd[i + 1] = rw[i]
+    t = -rhs[0]
+    for j in range(nz):
+        t += Mb[0, j] * zdd[j]
+    tau[0] = t
+    for i in range(8):
+        acc = S[i]
+        for j in range(nz):
+            acc += Rt[j, i] * zdd[j]
+        qdd[i] = acc
+    return True
+
+
+@njit(cache=True)
 def project(P, q, qd, s, c, res, dq, b):
     """Position then velocity projection with the independent coordinates held.
 
@@ -630,6 +690,25 @@ def run_steps(P, st, theta_ref, omega_ref, stride, out, want_out):
     (if ``want_out``). Returns (status, steps done); status ``OK``, ``NEWTON_FAILED`` or
     ``NOT_FINITE``.
     """
+    return _integrate(P, st, theta_ref, omega_ref, np.empty(0), False, stride, out, want_out)
+
+
+@njit(cache=True, nogil=True)
+def run_prescribed(P, st, theta_ref, omega_ref, alpha_ref, stride, out, want_out):
+    """Integrate ``len(alpha_ref)`` steps with the crank angle prescribed (``drive.mode =
+    "prescribed"``): the driving constraint θ − θ_ref(t) = 0. ``theta_ref``, ``omega_ref`` hold
+    the program at t_0 … t_n (n + 1 values), ``alpha_ref`` its acceleration at t_0 … t_{n−1}.
+    Step k solves the reduced equations with θ̈ = alpha_ref[k] (:func:`accelerations_prescribed`;
+    the drive torque is written to the torque column), advances the other independent
+    coordinates by symplectic Euler, sets θ, θ̇ to theta_ref[k + 1], omega_ref[k + 1] and projects
+    (Newton on the constraints with z held, q̇ = R ż): the crank angle equals the program at every
+    step to round-off, whatever the loads. Same returns as :func:`run_steps`."""
+    return _integrate(P, st, theta_ref, omega_ref, alpha_ref, True, stride, out, want_out)
+
+
+@njit(cache=True, nogil=True)
+def _integrate(P, st, theta_ref, omega_ref, alpha_ref, prescribed, stride, out, want_out):
+    """The stepping loop of :func:`run_steps` (PID drive) and :func:`run_prescribed`."""
     h = P[P_H]
     kp, kv, ki, imax = P[P_KP], P[P_KV], P[P_KI], P[P_IMAX]
     q = st[S_Q:S_Q + 8].copy()
@@ -654,8 +733,9 @@ def run_steps(P, st, theta_ref, omega_ref, stride, out, want_out):
     dq = np.empty(8)
     bb = np.empty(8)
     s, c = math.sin(q[7]), math.cos(q[7])
-    n = theta_ref.shape[0]
-    midpoint = P[P_INTEGRATOR] == 1.0
+    n = alpha_ref.shape[0] if prescribed else theta_ref.shape[0]
+    tau_p = np.zeros(1)
+    midpoint = P[P_INTEGRATOR] == 1.0 and not prescribed
     qm = np.empty(8)        # midpoint stage (explicit midpoint only)
     qdm = np.empty(8)
     cm_b = np.empty(2)
@@ -666,11 +746,19 @@ def run_steps(P, st, theta_ref, omega_ref, stride, out, want_out):
     k = 0
     while k < n:
         err = theta_ref[k] - q[7]
-        tau = kp * err + kv * (omega_ref[k] - qd[7]) + ki * integ
-        generalized_forces(P, q, qd, tau, cst_b, cst_c, Q, jb, jc)
-        if not accelerations(P, q, qd, s, c, Q, rows, nz, Rt, S, Mb, rhs, tmp, qdd):
-            status = NOT_FINITE
-            break
+        if prescribed:
+            generalized_forces(P, q, qd, 0.0, cst_b, cst_c, Q, jb, jc)
+            if not accelerations_prescribed(P, q, qd, s, c, Q, rows, nz, Rt, S, Mb, rhs, tmp, qdd,
+                                            alpha_ref[k], tau_p):
+                status = NOT_FINITE
+                break
+            tau = tau_p[0]
+        else:
+            tau = kp * err + kv * (omega_ref[k] - qd[7]) + ki * integ
+            generalized_forces(P, q, qd, tau, cst_b, cst_c, Q, jb, jc)
+            if not accelerations(P, q, qd, s, c, Q, rows, nz, Rt, S, Mb, rhs, tmp, qdd):
+                status = NOT_FINITE
+                break
         if want_out and k % stride == 0:
             _outputs(P, q, qd, qdd, tau, jb, jc, out[k // stride])
         if midpoint:
@@ -708,6 +796,9 @@ def run_steps(P, st, theta_ref, omega_ref, stride, out, want_out):
             for i in range(8):
                 qd[i] += h * qdd[i]
                 q[i] += h * qd[i]
+        if prescribed:  # the driving constraint: θ and θ̇ are the program's at t_{k+1}
+            q[7] = theta_ref[k + 1]
+            qd[7] = omega_ref[k + 1]
         s, c = math.sin(q[7]), math.cos(q[7])
         if project(P, q, qd, s, c, res, dq, bb) < 0:
             status = NEWTON_FAILED
@@ -800,6 +891,7 @@ def build_params(cfg: BenchConfig, *, min_impact_speed_mps: float = 1e-3, newton
     P[P_H] = cfg.simulation.timestep_s
     P[P_NEWTON_TOL], P[P_NEWTON_MAXIT] = newton_tol_m, newton_max_iter
     P[P_INTEGRATOR] = INTEGRATORS[integrator]
+    P[P_PRESCRIBED] = 1.0 if cfg.drive.mode == "prescribed" else 0.0
     for i, name in enumerate(ACCELEROMETERS):
         mnt = cfg.sensors.accelerometers[name]
         base = P_SENS + 4 * i
@@ -855,11 +947,21 @@ def contact_parameters(cfg: BenchConfig, P: np.ndarray, st: np.ndarray) -> dict[
     return out
 
 
-def initial_state(cfg: BenchConfig, theta: float) -> np.ndarray:
-    """State vector (layout ``S_*``) at rest at crank angle θ with the configured initial
-    eccentricities (:func:`twin.kinematics.initial_pose`), PID integral 0, no contact event."""
+def initial_state(cfg: BenchConfig, theta: float, omega: float = 0.0, P: np.ndarray | None = None) -> np.ndarray:
+    """State vector (layout ``S_*``) at crank angle θ with the configured initial
+    eccentricities (:func:`twin.kinematics.initial_pose`), PID integral 0, no contact event;
+    at rest, or turning at crank rate ``omega`` [rad/s] (needs ``P``) with the eccentricities
+    fixed in the bench frame (ė = 0) and every other velocity from the constraints (q̇ = R ż)."""
     pose = initial_pose(cfg, theta)
     st = np.zeros(N_STATE)
     st[S_Q:S_Q + 8] = [pose.b_pin[0], pose.b_pin[1], pose.b_bush[0], pose.b_bush[1],
                        pose.c_bush[0], pose.c_bush[1], pose.c_pin[0], pose.theta]
+    if omega != 0.0:
+        if P is None:
+            raise ValueError("initial_state: a turning start needs the parameter vector P")
+        q, qd = st[S_Q:S_Q + 8].copy(), np.zeros(8)
+        qd[7] = omega
+        if project(P, q, qd, math.sin(q[7]), math.cos(q[7]), np.empty(8), np.empty(8), np.empty(8)) < 0:
+            raise ValueError("the initial pose does not satisfy the constraints")
+        st[S_Q:S_Q + 8], st[S_QD:S_QD + 8] = q, qd
     return st
