@@ -169,9 +169,9 @@ def test_sobol_indices_of_a_known_function():
 # -------------------------------------------------------------------------- preset
 @pytest.mark.parametrize("engine", ["reference", "mujoco"])
 def test_s000_ideal_slider_acceleration_equals_the_closed_form(engine):
-    """The ideal S000 mechanism at 5000 rpm: the slider's peak acceleration is r ω² (1 + r/L) =
-    1.94e4 m/s² (S000 Table 4's 0.05 mm point: 2.0e4). The PID holds the crank speed within
-    ±0.5 % (ω² within ±1 %); the test allows 2 %."""
+    """The ideal S000 mechanism at 5000 rpm, crank speed prescribed: the slider's peak acceleration
+    is r ω² (1 + r/L) = 1.94e4 m/s² (S000 Table 4's 0.05 mm point: 2.0e4) within 0.5 % (as S001's
+    test), and the crank speed is the program's."""
     from twin.simulate import simulate_run
 
     cfg = named_preset("s000").replace(**{"joints.clearance_c_mm": 0.0, "simulation.engine": engine})
@@ -182,9 +182,9 @@ def test_s000_ideal_slider_acceleration_equals_the_closed_form(engine):
     a = run["AC6"][steady].astype(float)
     peak = r * w * w * (1 + r / L)
     assert peak == pytest.approx(1.942e4, rel=1e-3)
-    assert np.abs(a).max() == pytest.approx(peak, rel=0.02)
+    assert np.abs(a).max() == pytest.approx(peak, rel=5e-3)
     speed = run["crank_speed"][steady]
-    assert np.max(np.abs(speed / w - 1)) < 0.005
+    assert np.max(np.abs(speed / w - 1)) < 1e-9
 
 
 # ----------------------------------------------------------------------- bad specs

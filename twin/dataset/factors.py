@@ -70,7 +70,7 @@ def _radial_clearance(joint: str):
 
 
 def _crank_rpm(v, ov, rng, base):  # noqa: ARG001
-    ov["drive.motor_rpm"] = float(v) * base.drive.belt_ratio  # motor speed = crank speed x motor:crank ratio
+    ov["drive.crank_rpm"] = float(v)
 
 
 def _fault(v, ov, rng, base):  # noqa: ARG001
@@ -121,8 +121,8 @@ NAMED: dict[str, Factor] = {f.name: f for f in (
            "tables are radial)", None, (0.0, 2.5), _radial_clearance("B")),
     Factor("radial_clearance_c_mm", "radial clearance at C [mm], as radial_clearance_b_mm", None, (0.0, 2.5),
            _radial_clearance("C")),
-    Factor("crank_rpm", "crank speed of the constant program [rpm]: the motor speed is this times the base's "
-           "drive.belt_ratio", None, (-5000.0, 5000.0), _crank_rpm),
+    Factor("crank_rpm", "crank speed of the constant program given directly [rpm] (drive.crank_rpm; the motor "
+           "and belt bypassed)", None, (-6000.0, 6000.0), _crank_rpm),
     Factor("orientation", "bench axis that points up", ("x", "y", "z"), None, _set("mechanism.orientation")),
     Factor("program", "speed program: constant (motor_rpm), protocol (S003 §4.3), random-profile (base.profile)",
            ("constant", "protocol", "random-profile"), None, _program),

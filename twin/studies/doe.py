@@ -591,11 +591,12 @@ def _plot(doe: DoeSpec, k: Kriging, rname: str, X: np.ndarray, res: dict[str, An
             cs = ax.contourf(xx[:, ix].reshape(gx.shape), xx[:, iy].reshape(gx.shape), m, levels=20,
                              cmap="viridis", vmin=min(vmin, m.min()), vmax=max(vmax, m.max()))
             fig.colorbar(cs, ax=ax, label=f"{rname} [{unit}]")
-            ax.scatter(X[:, ix], X[:, iy], c="w", edgecolors="k", s=30, label="design points")
+            ax.scatter(X[:, ix], X[:, iy], c="w", edgecolors="k", s=30,
+                       label="design points" + (" (all " + ", ".join(names[j] for j in others) + ")" if others else ""))
             for c in res["checks"]:
                 mk = "s" if c["kind"] == "holdout" else "*"
                 ax.scatter([c["factors"][names[ix]]], [c["factors"][names[iy]]], marker=mk, c="r", s=80,
-                           edgecolors="k", label=c["kind"])
+                           edgecolors="k", label=c["kind"], clip_on=False, zorder=5)
             for f, axis in ((doe.factors[ix], "x"), (doe.factors[iy], "y")):
                 if f.scale == "log":
                     getattr(ax, f"set_{axis}scale")("log")
