@@ -576,7 +576,7 @@ def _plot(doe: DoeSpec, k: Kriging, rname: str, X: np.ndarray, res: dict[str, An
                 vals = (float(from_unit(doe.factors, np.full((1, d), 0.5))[0, j]),)
             slices = [{**s, j: v} for s in slices for v in vals]
         n = len(slices)
-        fig, axes = plt.subplots(1, n, figsize=(5.2 * n, 4.4), squeeze=False)
+        fig, axes = plt.subplots(1, n, figsize=(max(5.2 * n, 6.4), 4.6), squeeze=False)
         g = np.linspace(0, 1, 81)
         gx, gy = np.meshgrid(g, g)
         ys = [p["responses"][rname] for p in res["points"]]
@@ -607,7 +607,7 @@ def _plot(doe: DoeSpec, k: Kriging, rname: str, X: np.ndarray, res: dict[str, An
             h, lab = ax.get_legend_handles_labels()
             uniq = dict(zip(lab, h))
             ax.legend(uniq.values(), uniq.keys(), fontsize=7, loc="best")
-        fig.suptitle(f"Kriging surrogate of {rname} ({desc})", fontsize=10)
+        fig.suptitle(f"Kriging surrogate of {rname}", fontsize=10)
     fig.tight_layout()
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=110)
