@@ -253,3 +253,23 @@ def test_doe_study_end_to_end(tmp_path, capsys):
         assert s["train_fit_max_rel"] < 1e-6
         assert len(s["loo"]) == 6
     assert "wrote" in capsys.readouterr().out
+
+
+def test_s000_preset_from_cli_and_toml(tmp_path, capsys):
+    """--preset s000 on the command line (both engines, a run file written) and preset = "s000" in TOML; the
+    values S000 itself fixes: slider 0.14 kg, clearance at C only, 5000 rpm prescribed."""
+    from twin.cli import build_parser, config_from_args
+    from twin.config import load_config
+
+    cfg = config_from_args(build_parser().parse_args(["simulate", "--preset", "s000", "--engine", "mujoco"]))
+    assert cfg.name == "s000" and cfg.bodies.slider.mass_kg == 0.14
+    assert cfg.joints.clearance_b_mm == 0 and cfg.joints.radial_m("C") == pytest.approx(0.5e-3)
+    assert cfg.drive.mode == "prescribed" and cfg.drive.crank_rad_s == pytest.approx(5000 * 2 * math.pi / 60)
+    f = tmp_path / "c.toml"
+    f.write_text('preset = "s000"\n[contact]\nstiffness = 1e10\n')
+    assert load_config(f).contact.stiffness == 1e10 and load_config(f).bodies.rod.length_m == 0.12
+    for engine in ("reference", "mujoco"):
+        out = tmp_path / f"{engine}.mcap"
+        assert main(["simulate", "--preset", "s000", "--engine", engine, "--duration", "0.004", "--out", str(out)]) == 0
+        assert out.stat().st_size > 0
+    capsys.readouterr()
