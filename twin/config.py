@@ -1297,13 +1297,74 @@ def _s000() -> BenchConfig:
     )
 
 
+#: S004's steel: E, ν, ρ (the paper says "steel"; PLACEHOLDER: 207 GPa, 0.3, 7850 kg/m³)
+_S004_STEEL = Material(207e9, 0.30, 7850.0)
+
+
+def _s004_bar(length: float, width: float, thickness: float) -> BodyParams:
+    """A uniform steel bar of S004 with its joints at its ends: mass ρ L w t, centre of mass at
+    mid-length, I_G = m (L² + w²)/12 about the crank axis (w in the plane of motion)."""
+    m = _S004_STEEL.density_kgm3 * length * width * thickness
+    return BodyParams(m, length, length / 2, m * (length ** 2 + width ** 2) / 12)
+
+
+def _s004() -> BenchConfig:
+    """The large slider–crank of S004 (``../shared/seeds/004_…``, Xiao, Song & Zhang 2019: the
+    clearance at the crank–rod joint B as a virtual massless rod, and an ADAMS model with IMPACT
+    contact), 0.5 mm clearance at B.
+
+    Taken from the paper (§3): crank a steel bar 1000 × 100 × 50 mm, rod a steel bar
+    2000 × 100 × 50 mm, slider a 500 mm steel cube; the crank turns at a constant 30 rad/s
+    (prescribed: ``drive.mode = "prescribed"``, ``drive.crank_rpm`` = 286.48, ``ramp_s = 0``);
+    clearance 0, 0.25 or 0.5 mm at B (read as the radial clearance c, the length of the
+    virtual rod of §2.1 and the journal's free eccentricity: 0.5 mm here, 1.0 mm diametral);
+    ADAMS IMPACT contact (Eq. 7–9) with d = 0.01 mm; gravity in the plane (Eq. 4: the
+    potential energies of crank and rod, y vertical).
+
+    PLACEHOLDERs (not in the paper): the steel (E 207 GPa, ν 0.3, ρ 7850 kg/m³: masses 39.25,
+    78.5 and 981.25 kg); the joints at the bars' ends (crank length 1.0 m, rod 2.0 m) with the
+    100 mm side in the plane of motion (I_G = m (L² + w²)/12: 3.30 and 26.23 kg m²; the
+    paper's Eq. 3 uses the slender bar's m L²/3 about the end); the slider's centre of mass at
+    C (a cube on its pin; it only translates); the pin diameter (50 mm, half the bar width) and
+    the bushing length (50 mm, the bar thickness); the IMPACT stiffness k (the paper gives no
+    number: K of Eq. 18 for the steel pin in its steel bore, 1.7e11 N/m^1.5 at 0.5 mm), its
+    exponent (1.5, Hertz), and c_max (1e4 N s/m: ADAMS' default contact damping, 10 N s/mm);
+    the friction (none: the paper names none; μ = 0 at B, no guide friction); the guide line
+    through A (d_off = 0); the start (θ = 0, crank along the guide, journal centred, as ADAMS
+    starts concentric parts; the mechanism at speed from t = 0); the run length (1 s, 4.8 turns:
+    the paper plots one turn); MuJoCo's integrator Euler (the prescribed drive needs it); the
+    accelerometers (S004 has none: the bench's mounts, AC6 the slider's acceleration along the
+    guide).
+    """
+    base = BenchConfig()
+    m_s = _S004_STEEL.density_kgm3 * 0.5 ** 3
+    return dataclasses.replace(
+        base,
+        name="s004",
+        bodies=Bodies(crank=_s004_bar(1.0, 0.1, 0.05), rod=_s004_bar(2.0, 0.1, 0.05),
+                      slider=BodyParams(m_s, 0.5, 0.0, m_s * (0.5 ** 2 + 0.5 ** 2) / 12)),
+        materials=Materials(pin=_S004_STEEL, bushing=_S004_STEEL),
+        joints=dataclasses.replace(base.joints, clearance_b_mm=1.0, clearance_c_mm=0.0, pin_diameter_m=0.05,
+                                   bushing_length_m=0.05, initial_eccentricity="centred"),
+        mechanism=dataclasses.replace(base.mechanism, orientation="y", d_off_m=0.0, guide_friction_n=0.0,
+                                      crank_direction=1),
+        contact=dataclasses.replace(base.contact, law="adams-impact", exponent=1.5, stiffness=0.0,
+                                    impact_c_max_nspm=1e4, impact_d_max_m=1e-5, mu0=0.0, mu_static=0.0),
+        drive=dataclasses.replace(base.drive, program="constant", mode="prescribed",
+                                  crank_rpm=30.0 * 60.0 / (2.0 * math.pi), ramp_s=0.0,
+                                  initial_encoder_angle_rad=math.pi / 2),
+        mujoco=dataclasses.replace(base.mujoco, integrator="Euler"),
+        simulation=dataclasses.replace(base.simulation, duration_s=1.0),
+    )
+
+
 #: Named presets of the other mechanisms of the seed papers (issue 18): name -> builder.
-NAMED_PRESETS: dict[str, typing.Callable[[], BenchConfig]] = {"s001": _s001, "s000": _s000}
+NAMED_PRESETS: dict[str, typing.Callable[[], BenchConfig]] = {"s001": _s001, "s000": _s000, "s004": _s004}
 
 
 def named_preset(name: str, field_name: str = "--preset") -> BenchConfig:
     """Configuration of a paper's mechanism (``--preset NAME``, ``preset = "NAME"`` in TOML):
-    ``s001`` (S001's rig; see :func:`_s001`), ``s000`` (S000's Flores slider–crank; :func:`_s000`)."""
+    ``s001`` (S001's rig; see :func:`_s001`), ``s000`` (S000's Flores slider–crank; :func:`_s000`), ``s004`` (S004's large mechanism; :func:`_s004`)."""
     if not isinstance(name, str) or name.lower() not in NAMED_PRESETS:
         raise ConfigError(field_name, f"must be one of {', '.join(NAMED_PRESETS)}, got {name!r}")
     return NAMED_PRESETS[name.lower()]()
