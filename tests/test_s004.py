@@ -107,3 +107,22 @@ def test_phases_classify_contact_events():
     assert p["separation_fraction"] == pytest.approx(1 - 5050 / 10000)
     assert p["impact_fraction"] == pytest.approx(50 / 10000)
     assert p["contact_fraction"] == pytest.approx(5000 / 10000)
+
+
+def test_s004_preset_from_cli_toml_and_rerun(tmp_path, capsys):
+    """--preset s004 on the command line in both engines (run file and rerun recording written) and
+    preset = "s004" in TOML."""
+    from twin.cli import main
+    from twin.config import load_config
+
+    f = tmp_path / "c.toml"
+    f.write_text('preset = "s004"\n[joints]\nclearance_b_mm = 0.5\n')
+    cfg = load_config(f)
+    assert cfg.joints.radial_m("B") == pytest.approx(0.25e-3) and cfg.bodies.slider.mass_kg == pytest.approx(981.25)
+    for engine in ("reference", "mujoco"):
+        out = tmp_path / f"{engine}.mcap"
+        rrd = tmp_path / f"{engine}.rrd"
+        assert main(["simulate", "--preset", "s004", "--engine", engine, "--duration", "0.01", "--out", str(out),
+                     "--rerun", str(rrd)]) == 0
+        assert out.stat().st_size > 0 and rrd.stat().st_size > 0
+    capsys.readouterr()
