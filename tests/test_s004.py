@@ -126,3 +126,21 @@ def test_s004_preset_from_cli_toml_and_rerun(tmp_path, capsys):
                      "--rerun", str(rrd)]) == 0
         assert out.stat().st_size > 0 and rrd.stat().st_size > 0
     capsys.readouterr()
+
+
+def test_study_command_writes_its_files_and_refuses_other_mechanisms(tmp_path, capsys):
+    from twin.cli import main
+
+    out = tmp_path / "cc"
+    assert main(["study", "continuous-contact", "--out", str(out), "--duration", "0.02"]) == 0
+    import json
+
+    s = json.loads((out / "continuous_contact.json").read_text())
+    assert s["clearance_radial_m"] == pytest.approx(5e-4) and s["valid_until_s"] == pytest.approx(0.02)
+    assert s["ft_max_abs_n"] < 1e-6 * s["fn_max_n"]
+    assert {p.name for p in out.iterdir()} == {"continuous_contact.json", "continuous_contact.npz",
+                                               "continuous_contact.png"}
+    # S001 has its clearance at C: refused in one line, nothing written
+    bad = tmp_path / "bad"
+    assert main(["study", "continuous-contact", "--out", str(bad), "--preset", "s001"]) == 2
+    assert "joints.clearance_b_mm" in capsys.readouterr().err and not bad.exists()

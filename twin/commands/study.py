@@ -19,6 +19,7 @@ STUDIES: list[str] = [
     "twin.commands.study:register_accuracy",
     "twin.studies.stability:register",
     "twin.studies.doe:register",
+    "twin.studies.s004:register",
 ]
 
 

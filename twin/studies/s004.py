@@ -226,3 +226,128 @@ def phases(fn: np.ndarray, rate_hz: float, impact_max_s: float = 2e-3) -> dict[s
         contact_peak_n=float(peaks[~impact].max()) if (~impact).any() else 0.0,
         starts=starts, stops=stops, is_impact=impact,
     )
+
+
+# ------------------------------------------------------------------------ twin study
+def run_free(cfg: BenchConfig, duration_s: float, rate_hz: float = 1e5) -> dict:
+    """The model alone for ``cfg`` (clearance at B, the crank prescribed at a constant speed, y up),
+    from the quasi-static start at the program's initial angle, for ``duration_s``: its time series,
+    the crank angle up to which it is valid (f_N ≥ 0 from the start) and its deviation from the ideal
+    slider motion up to there."""
+    from twin.drive import DriveReference
+    from twin.kinematics import slider_kinematics
+
+    check_config(cfg)
+    model = ContinuousContact(Mechanism.from_config(cfg))
+    ref = DriveReference(cfg)
+    th0, w = float(ref(np.zeros(1))[0][0]), ref.start_rate()
+    t = np.arange(int(round(duration_s * rate_hz)) + 1) / rate_hz
+    psi0, dpsi0 = model.quasi_static_start(th0, w)
+    sim = model.simulate(t, lambda tt: th0 + w * np.asarray(tt, float), lambda tt: w + 0 * np.asarray(tt, float),
+                         lambda tt: 0 * np.asarray(tt, float), psi0, dpsi0, rtol=1e-9, atol=1e-12)
+    m = model.m
+    xi, vi, ai = slider_kinematics(th0 + w * t, w, 0.0, m.r, m.l, m.d_off)
+    bad = np.flatnonzero(sim["fn"] < 0)
+    valid = int(bad[0]) if len(bad) else len(t)
+    sl = slice(0, max(valid, 1))
+    summary = dict(clearance_radial_m=m.c, crank_rad_s=w, duration_s=duration_s, psi0_rad=psi0, psi_rate0_rad_s=dpsi0,
+                   valid_until_s=float(t[sl][-1]), valid_until_crank_deg=float(np.degrees(w * t[sl][-1])),
+                   dx_max_m=float(np.max(np.abs(sim["x"][sl] - xi[sl]))),
+                   dv_max_mps=float(np.max(np.abs(sim["v"][sl] - vi[sl]))),
+                   da_max_mps2=float(np.max(np.abs(sim["a"][sl] - ai[sl]))),
+                   fn_max_n=float(sim["fn"].max()), fn_min_n=float(sim["fn"].min()),
+                   ft_max_abs_n=float(np.max(np.abs(sim["ft"]))))
+    series = dict(t=t, theta=th0 + w * t, psi=sim["psi"], x=sim["x"], v=sim["v"], a=sim["a"], fn=sim["fn"],
+                  x_ideal=xi, v_ideal=vi, a_ideal=ai)
+    return dict(summary=summary, series=series)
+
+
+def check_config(cfg: BenchConfig) -> None:
+    """The model's assumptions, as one-line errors naming the field: a clearance at B only, a crank
+    prescribed at constant speed from t = 0, gravity along −y."""
+    from twin.errors import ConfigError
+
+    if cfg.joints.diametral_mm("B") <= 0:
+        raise ConfigError("joints.clearance_b_mm", "must be > 0: the continuous-contact model is a clearance at B")
+    if cfg.joints.diametral_mm("C") > 0:
+        raise ConfigError("joints.clearance_c_mm", "must be 0: the continuous-contact model has its clearance at B only")
+    d = cfg.drive
+    if d.mode != "prescribed" or d.program != "constant" or d.ramp_s != 0:
+        raise ConfigError("drive.mode", "the continuous-contact model needs the crank prescribed at constant speed from "
+                                        "t = 0 (drive.mode = \"prescribed\", program = \"constant\", ramp_s = 0)")
+    if cfg.mechanism.orientation != "y":
+        raise ConfigError("mechanism.orientation", f"must be \"y\" for the continuous-contact model, got "
+                                                   f"{cfg.mechanism.orientation!r}")
+
+
+def register(studies) -> None:
+    """Add ``twin study continuous-contact`` to the ``twin study`` group."""
+    p = studies.add_parser(
+        "continuous-contact", help="S004's continuous-contact model (clearance at B as a massless virtual rod)",
+        description="S004 §2.1: the clearance at the crank-rod joint B as a massless rod of length c, the crank "
+                    "prescribed, one degree of freedom from Lagrange's equations (twin/studies/s004.py). Runs it "
+                    "from the quasi-static start (the journal where the ideal pin force pushes it) and writes "
+                    "continuous_contact.json (the crank angle up to which the journal stays on the wall, f_N >= 0, "
+                    "and the slider's deviation from the ideal motion up to there), continuous_contact.npz (time "
+                    "series) and continuous_contact.png. The comparison with the contact model is "
+                    "analysis/s004_report.py.")
+    p.add_argument("--preset", default="s004", metavar="NAME", help="mechanism (default s004)")
+    p.add_argument("--config", metavar="FILE", help="TOML configuration instead of a preset")
+    p.add_argument("--clearance-b", type=float, metavar="MM", help="diametral clearance at B [mm] (S004: 0.5, 1.0)")
+    p.add_argument("--duration", type=float, default=2 * math.pi / 30.0, metavar="S",
+                   help="simulated time [s] (default one turn at 30 rad/s)")
+    p.add_argument("--out", metavar="DIR", required=True, help="output directory (created if missing)")
+    p.set_defaults(func=_run)
+
+
+def _run(args) -> int:
+    import json
+
+    from twin.config import load_config, named_preset
+    from twin.errors import ConfigError
+    from twin.util import atomic_write_bytes, atomic_write_json, check_output_dir, json_default
+
+    if not (isinstance(args.duration, float) and math.isfinite(args.duration) and 0 < args.duration <= 10):
+        raise ConfigError("--duration", f"must lie in (0, 10] s, got {args.duration!r}")
+    cfg = load_config(args.config) if args.config else named_preset(args.preset)
+    if args.clearance_b is not None:
+        cfg = cfg.replace(**{"joints.clearance_b_mm": args.clearance_b, "joints.allow_noncatalogue": True})
+    check_config(cfg)
+    out = check_output_dir(args.out)
+    out.mkdir(exist_ok=True)
+    res = run_free(cfg, args.duration)
+    atomic_write_json(out / "continuous_contact.json", json.loads(json.dumps(res["summary"], default=json_default)))
+    import io
+
+    buf = io.BytesIO()
+    np.savez_compressed(buf, **res["series"])
+    atomic_write_bytes(out / "continuous_contact.npz", buf.getvalue())
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    s = res["series"]
+    fig, ax = plt.subplots(3, 1, figsize=(8, 8), sharex=True)
+    deg = np.degrees(s["theta"] - s["theta"][0])
+    ax[0].plot(deg, np.degrees(s["psi"]))
+    ax[0].set_ylabel("virtual rod angle ψ [deg]")
+    ax[1].plot(deg, s["a"], label="continuous-contact model")
+    ax[1].plot(deg, s["a_ideal"], "--", label="ideal joint")
+    ax[1].set_ylabel("slider acceleration [m/s²]")
+    ax[1].legend()
+    ax[2].plot(deg, s["fn"] / 1e3)
+    ax[2].axhline(0.0, color="k", lw=0.5)
+    ax[2].set_ylabel("contact force f_N [kN]")
+    ax[2].set_xlabel("crank angle from the start [deg]")
+    fig.suptitle(f"{cfg.name}: continuous-contact model, c = {1e3 * cfg.joints.radial_m('B'):g} mm "
+                 f"(valid while f_N >= 0: up to {res['summary']['valid_until_crank_deg']:.1f} deg)")
+    fig.tight_layout()
+    png = io.BytesIO()
+    fig.savefig(png, format="png", dpi=110)
+    plt.close(fig)
+    atomic_write_bytes(out / "continuous_contact.png", png.getvalue())
+    sm = res["summary"]
+    print(f"continuous-contact model, c = {1e3 * sm['clearance_radial_m']:g} mm: journal on the wall up to "
+          f"{sm['valid_until_crank_deg']:.1f} deg; deviation from the ideal slider until then: "
+          f"x {1e3 * sm['dx_max_m']:.3f} mm, v {sm['dv_max_mps']:.3f} m/s, a {sm['da_max_mps2']:.0f} m/s^2; wrote {out}")
+    return 0
