@@ -59,6 +59,24 @@ def test_designs_cover_their_ranges_and_counts():
             assert sorted(np.floor(u * 64).astype(int)) == list(range(64))
 
 
+def test_an_excluded_band_is_never_drawn_and_the_design_keeps_its_strata():
+    f = {"clearance_c_mm": {"range": [0.02, 1.0], "scale": "log", "exclude": [0.06, 0.085]}}
+    s = parse_spec(_spec(factors=f, design={"kind": "lhs", "runs": 60}))
+    c = np.array([p["clearance_c_mm"] for p in design_points(s)])
+    assert c.min() >= 0.02 and c.max() <= 1.0 and not np.any((c > 0.06) & (c < 0.085))
+    # the two parts laid end to end in log: one point per stratum of their joint length
+    lg, a, b = np.log(c), math.log(0.06), math.log(0.085)
+    u = np.where(lg <= a, lg - math.log(0.02), lg - (b - a) - math.log(0.02))
+    u /= math.log(1.0 / 0.02) - (b - a)
+    assert sorted(np.floor(u * 60 + 1e-9).astype(int)) == list(range(60))
+    g = parse_spec(_spec(factors={"motor_rpm": {"range": [200, 800], "levels": 5, "exclude": [400, 600]}}))
+    assert [p["motor_rpm"] for p in design_points(g)] == pytest.approx([200, 300, 400, 700, 800])
+    # a spec without the key keeps its identity (the key did not exist when older datasets were made)
+    assert "exclude" not in json.dumps(parse_spec(_spec(factors={"motor_rpm": [250.0]})).canonical())
+    with pytest.raises(SpecError, match=r"factors.motor_rpm.exclude: must be \[a, b\] with 200 < a < b < 800"):
+        parse_spec(_spec(factors={"motor_rpm": {"range": [200, 800], "levels": 5, "exclude": [100, 600]}}))
+
+
 def test_runs_are_labelled_seeded_and_identified_by_configuration():
     s = load_spec(TINY)
     runs = plan(s)

@@ -113,6 +113,12 @@ def _map(f: FactorSpec, u: float) -> Any:
     if f.values is not None:
         return f.values[min(int(u * len(f.values)), len(f.values) - 1)]
     lo, hi = f.range
+    if f.exclude is not None:
+        # u over the two parts [lo, a] and [b, hi] laid end to end (in log where the scale is log)
+        fw, bw = (math.log, math.exp) if f.scale == "log" else (float, float)
+        L, A, B, H = (fw(x) for x in (lo, f.exclude[0], f.exclude[1], hi))
+        v = L + u * ((A - L) + (H - B))
+        return float(bw(v if v <= A else v + (B - A)))
     if f.scale == "log":
         return float(math.exp(math.log(lo) + u * (math.log(hi) - math.log(lo))))
     return float(lo + u * (hi - lo))
@@ -121,6 +127,8 @@ def _map(f: FactorSpec, u: float) -> Any:
 def _levels(f: FactorSpec) -> tuple[Any, ...]:
     if f.values is not None:
         return f.values
+    if f.exclude is not None:
+        return tuple(_map(f, float(u)) for u in np.linspace(0.0, 1.0, f.levels))
     lo, hi = f.range
     if f.scale == "log":
         return tuple(float(x) for x in np.geomspace(lo, hi, f.levels))

@@ -25,10 +25,12 @@ A spec is a TOML file (examples in ``analysis/datasets/``; every key is document
     runs = 8                 # design points of lhs, sobol, random
     repeats = 1              # every point is run this many times with different seeds
 
-    [factors]                # factor = list of values | { range = [lo, hi], scale, levels }
+    [factors]                # factor = list of values | { range = [lo, hi], scale, levels, exclude }
     fault = ["none", "B", "C", "BC"]
     clearance_c_mm = [0.1]
     motor_rpm = { range = [250, 750], levels = 3 }
+    # exclude = [a, b]: a band inside the range that is never drawn (the range is mapped onto the
+    # two parts, so a design keeps its stratification): e.g. a value held out for a test set
 
     [outputs]
     truth = ["accel", "encoder", "joints"]   # engine channel groups stored
@@ -104,13 +106,14 @@ class Profile:
 @dataclass(frozen=True)
 class FactorSpec:
     """One varied factor: explicit ``values``, or a ``range`` [lo, hi] (``scale`` linear or log;
-    ``levels`` points for a grid)."""
+    ``levels`` points for a grid; ``exclude`` an open band (a, b) inside it that is never drawn)."""
 
     name: str
     values: tuple[Any, ...] | None = None
     range: tuple[float, float] | None = None
     scale: str = "linear"
     levels: int | None = None
+    exclude: tuple[float, float] | None = None
 
     @property
     def discrete(self) -> bool:
@@ -161,6 +164,9 @@ class DatasetSpec:
         d.pop("source")
         if d["base_preset"] is None:  # specs without one keep the identity they had before the key existed
             d.pop("base_preset")
+        for f in d["factors"]:  # likewise factors without an excluded band
+            if f.get("exclude") is None:
+                f.pop("exclude", None)
         return json.loads(json.dumps(d, sort_keys=True, default=list))
 
 
@@ -192,11 +198,11 @@ def _factor(name: str, raw: Any) -> FactorSpec:
     if not isinstance(raw, Mapping):
         raise SpecError(key, f"must be a list of values or a table {{ range = [lo, hi] }}, got {raw!r}")
     for k in raw:
-        if k not in ("values", "range", "scale", "levels"):
-            raise SpecError(f"{key}.{k}", "unknown key; allowed: values, range, scale, levels")
+        if k not in ("values", "range", "scale", "levels", "exclude"):
+            raise SpecError(f"{key}.{k}", "unknown key; allowed: values, range, scale, levels, exclude")
     if "values" in raw:
         if set(raw) - {"values"}:
-            raise SpecError(key, "give either values or range (with scale, levels), not both")
+            raise SpecError(key, "give either values or range (with scale, levels, exclude), not both")
         return _factor(name, raw["values"])
     rng = raw.get("range")
     if not (isinstance(rng, list) and len(rng) == 2 and all(_num(x) for x in rng)):
@@ -212,7 +218,13 @@ def _factor(name: str, raw: Any) -> FactorSpec:
     levels = raw.get("levels")
     if levels is not None and (isinstance(levels, bool) or not isinstance(levels, int) or not 2 <= levels <= 1000):
         raise SpecError(f"{key}.levels", f"must be an integer in [2, 1000], got {levels!r}")
-    return FactorSpec(name, range=(lo, hi), scale=scale, levels=levels)
+    exclude = raw.get("exclude")
+    if exclude is not None:
+        if not (isinstance(exclude, list) and len(exclude) == 2 and all(_num(x) for x in exclude)
+                and lo < float(exclude[0]) < float(exclude[1]) < hi):
+            raise SpecError(f"{key}.exclude", f"must be [a, b] with {lo:g} < a < b < {hi:g}, got {exclude!r}")
+        exclude = (float(exclude[0]), float(exclude[1]))
+    return FactorSpec(name, range=(lo, hi), scale=scale, levels=levels, exclude=exclude)
 
 
 def parse_spec(data: Mapping[str, Any], source: str = "") -> DatasetSpec:
