@@ -142,3 +142,27 @@ def test_cli_exit_status(capsys, tmp_path):
     out, _ = capsys.readouterr()
     assert rc == 0 and out.startswith("stability PASS: 2/2 scenes passed, 0 diverged")
     assert (tmp_path / "o" / "stability.json").is_file()
+
+
+def test_the_reference_re_run_deflects_under_the_twins_perturbed_stiffness(monkeypatch):
+    """A scene over the limit is compared with the reference engine under the same law: the twin's
+    stiffness factor becomes the reference's contact.stiffness_scale (else a softer twin contact
+    would be judged against the unperturbed law)."""
+    import twin.simulate
+
+    seen = []
+
+    class FakeRun:
+        def __getitem__(self, k):
+            return np.array([1e-6])
+
+    def fake_simulate_run(cfg):
+        seen.append(cfg)
+        return FakeRun()
+
+    monkeypatch.setattr(twin.simulate, "simulate_run", fake_simulate_run)
+    cfg = preset(6).replace(**{"mujoco.contact_stiffness_scale": 0.81, "contact.stiffness_scale": 1.1})
+    out = S.reference_check(cfg)
+    (ref,) = seen
+    assert ref.simulation.engine == "reference" and ref.contact.stiffness_scale == pytest.approx(0.81 * 1.1)
+    assert out["pen_over_c"]["C"] == pytest.approx(1e-6 / cfg.joints.radial_m("C"))

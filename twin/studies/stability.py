@@ -50,7 +50,7 @@ Metrics per scene (:func:`scene_metrics`):
 
 A scene *passes* when it did not diverge and pen/c ≤ PEN_LIMIT at each clearance joint; the
 study's exit status is 0 when all pass. ``energy_created`` is reported, not a failure. A scene
-over PEN_LIMIT is re-run by the reference engine (R-matrix, Lankarani–Nikravesh, h = 1e-5 s;
+over PEN_LIMIT is re-run by the reference engine (R-matrix, Lankarani–Nikravesh, h = 1e-5 s, with the twin's stiffness factor;
 ``metrics["reference"]``): where the twin's pen/c is within REFERENCE_AGREEMENT (1.25) times
 the reference's (``agrees``), the penetration is the contact law's own deflection (at the 0.02 mm catalogue clearance, c = 10 µm, a 1.5 kN impact
 already deflects 2.5 µm), not a numerical failure of the twin; the scene still fails.
@@ -296,11 +296,16 @@ def run_scene(scene: dict[str, Any], trace_dir: Path) -> dict[str, Any]:
 
 def reference_check(cfg: BenchConfig) -> dict[str, Any]:
     """pen/c of the reference engine (Lankarani–Nikravesh, h = REFERENCE_TIMESTEP_S) on the same
-    scene: tells a physical exceedance of PEN_LIMIT (the reference agrees) from a numerical one."""
+    scene: tells a physical exceedance of PEN_LIMIT (the reference agrees) from a numerical one.
+    The twin's stiffness perturbation (``mujoco.contact_stiffness_scale``) is carried over as the
+    reference's ``contact.stiffness_scale``, so both engines deflect under the same law; the twin's
+    damping factor has no counterpart there (the reference's damping follows from the restitution)."""
     from twin.simulate import simulate_run
 
     ref_cfg = cfg.replace(**{"simulation.engine": "reference", "simulation.timestep_s": REFERENCE_TIMESTEP_S,
-                             "sensors.channels": ["crank", "joints", "drive"]})
+                             "sensors.channels": ["crank", "joints", "drive"],
+                             "contact.stiffness_scale": cfg.contact.stiffness_scale
+                             * cfg.mujoco.contact_stiffness_scale})
     try:
         run = simulate_run(ref_cfg)
     except TwinError as err:
