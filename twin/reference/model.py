@@ -473,10 +473,9 @@ def reduced_mass(P, q):
 
 
 @njit(cache=True)
-def accelerations(P, q, qd, s, c, Q, rows, nz, Rt, S, Mb, rhs, tmp, qdd):
-    """q̈ = R z̈ + Ṙż from Rᵀ M R z̈ = Rᵀ (Q − M Ṙż); returns False if Rᵀ M R is not SPD.
-
-    ``Rt`` holds Rᵀ (r × 8, rows contiguous); ``tmp`` is (r + 2) × 8 scratch (M R rows, b)."""
+def _assemble(P, q, qd, s, c, Q, rows, nz, Rt, S, Mb, rhs, tmp):
+    """Rᵀ (r × 8) into ``Rt``, Ṙż into ``S``, Rᵀ M R into ``Mb`` and Rᵀ (Q − M Ṙż) into ``rhs``
+    (``tmp``: (r + 2) × 8 scratch, its first r rows left holding M R)."""
     b = tmp[nz]
     mr = tmp[nz + 1]
     for j in range(nz):
@@ -487,7 +486,6 @@ def accelerations(P, q, qd, s, c, Q, rows, nz, Rt, S, Mb, rhs, tmp, qdd):
         mass_times(P, Rt[j], tmp[j])
     quadratic_terms(q, qd, s, c, b)
     solve_aug(q, s, c, b, S)
-    # rhs = Rᵀ (Q − M S)
     mass_times(P, S, mr)
     for i in range(8):
         b[i] = Q[i] - mr[i]
@@ -503,6 +501,14 @@ def accelerations(P, q, qd, s, c, Q, rows, nz, Rt, S, Mb, rhs, tmp, qdd):
                 acc += Rt[i, k] * tmp[j, k]
             Mb[i, j] = acc
             Mb[j, i] = acc
+
+
+@njit(cache=True)
+def accelerations(P, q, qd, s, c, Q, rows, nz, Rt, S, Mb, rhs, tmp, qdd):
+    """q̈ = R z̈ + Ṙż from Rᵀ M R z̈ = Rᵀ (Q − M Ṙż); returns False if Rᵀ M R is not SPD.
+
+    ``Rt`` holds Rᵀ (r × 8, rows contiguous); ``tmp`` is (r + 2) × 8 scratch (M R rows, b)."""
+    _assemble(P, q, qd, s, c, Q, rows, nz, Rt, S, Mb, rhs, tmp)
     if not _cholesky_solve(Mb, rhs, nz):
         return False
     for i in range(8):
@@ -520,32 +526,8 @@ def accelerations_prescribed(P, q, qd, s, c, Q, rows, nz, Rt, S, Mb, rhs, tmp, q
     (RᵀMR)_ww ẅ = [Rᵀ(Q − MṘż)]_w − (RᵀMR)_wθ α, and the θ row the drive torque
     τ = (RᵀMR)_θθ α + (RᵀMR)_θw ẅ − [Rᵀ(Q − MṘż)]_θ (the Lagrange multiplier of θ − θ_ref(t) = 0),
     written to ``tau[0]``. Returns False if (RᵀMR)_ww is not SPD."""
-    # the assembly of ``accelerations`` with a singular-proof solve of the w block only
-    b = tmp[nz]
-    mr = tmp[nz + 1]
-    for j in range(nz):
-        for i in range(8):
-            b[i] = 0.0
-        b[rows[j]] = 1.0
-        solve_aug(q, s, c, b, Rt[j])
-        mass_times(P, Rt[j], tmp[j])
-    quadratic_terms(q, qd, s, c, b)
-    solve_aug(q, s, c, b, S)
-    mass_times(P, S, mr)
-    for i in range(8):
-        b[i] = Q[i] - mr[i]
-    for j in range(nz):
-        acc = 0.0
-        for k in range(8):
-            acc += Rt[j, k] * b[k]
-        rhs[j] = acc
-    for j in range(nz):
-        for i in range(j, nz):
-            acc = 0.0
-            for k in range(8):
-                acc += Rt[i, k] * tmp[j, k]
-            Mb[i, j] = acc
-            Mb[j, i] = acc
+    # the assembly of ``accelerations``, then a singular-proof solve of the w block only
+    _assemble(P, q, qd, s, c, Q, rows, nz, Rt, S, Mb, rhs, tmp)
     m = nz - 1
     zdd = np.empty(5)
     zdd[0] = alpha
