@@ -347,11 +347,10 @@ def parse_spec(data: Mapping[str, Any], source: str = "") -> DatasetSpec:
                        splits=Splits(tuple(float(x) for x in fr), holdout), source=source, base_preset=base_preset)
 
 
-def load_spec(path: str | Path) -> DatasetSpec:
-    """Read and validate a spec file (one-line errors naming the file or key)."""
-    p = Path(path)
+def read_spec_toml(p: Path, what: str = "a dataset spec") -> dict[str, Any]:
+    """The TOML of a spec file, or a one-line :class:`SpecError` naming the file."""
     if p.suffix != ".toml":
-        raise SpecError(str(p), "a dataset spec is a .toml file")
+        raise SpecError(str(p), f"{what} is a .toml file")
     try:
         text = p.read_bytes().decode("utf-8")
     except IsADirectoryError:
@@ -364,7 +363,13 @@ def load_spec(path: str | Path) -> DatasetSpec:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise SpecError(str(p), f"is not valid TOML: {err}") from None
-    spec = parse_spec(data, source=str(p))
+    return data
+
+
+def load_spec(path: str | Path) -> DatasetSpec:
+    """Read and validate a spec file (one-line errors naming the file or key)."""
+    p = Path(path)
+    spec = parse_spec(read_spec_toml(p), source=str(p))
     if spec.base_config is not None:
         cfg_path = Path(spec.base_config)
         if not cfg_path.is_absolute():

@@ -42,14 +42,13 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
-from twin.dataset.spec import DatasetSpec, FactorSpec, SpecError, parse_spec
+from twin.dataset.spec import DatasetSpec, FactorSpec, SpecError, parse_spec, read_spec_toml
 
 #: response name -> (unit, description)
 RESPONSES: dict[str, tuple[str, str]] = {
@@ -113,9 +112,9 @@ def parse_doe(data: Mapping[str, Any], source: str = "") -> DoeSpec:
     if not spec.factors:
         raise SpecError("factors", "a DOE needs at least one factor with a range")
     for f in spec.factors:
-        if f.range is None or f.levels is not None:
+        if f.range is None or f.levels is not None or f.exclude is not None:
             raise SpecError(f"factors.{f.name}", "must be a continuous range { range = [lo, hi] } (scale linear or "
-                                                 "log, no levels) for the surrogate")
+                                                 "log, no levels, no exclude) for the surrogate")
     if spec.design == "list":
         names = {f.name for f in spec.factors}
         for i, p in enumerate(spec.points):
@@ -192,21 +191,7 @@ def _check_point(factors: Sequence[FactorSpec], p: Mapping[str, Any], key: str) 
 def load_doe(path: str | Path) -> DoeSpec:
     """Read a DOE spec file (one-line :class:`SpecError` naming the file or key)."""
     p = Path(path)
-    if p.suffix != ".toml":
-        raise SpecError(str(p), "a DOE spec is a .toml file")
-    try:
-        text = p.read_bytes().decode("utf-8")
-    except IsADirectoryError:
-        raise SpecError(str(p), "is a directory, not a spec file") from None
-    except OSError as err:
-        raise SpecError(str(p), f"cannot read ({err.strerror})") from None
-    except UnicodeDecodeError:
-        raise SpecError(str(p), "is not UTF-8 text (TOML)") from None
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as err:
-        raise SpecError(str(p), f"is not valid TOML: {err}") from None
-    doe = parse_doe(data, str(p))
+    doe = parse_doe(read_spec_toml(p, "a DOE spec"), str(p))
     if doe.dataset.base_config is not None and not Path(doe.dataset.base_config).is_absolute():
         doe = dataclasses.replace(doe, dataset=dataclasses.replace(
             doe.dataset, base_config=str(p.parent / doe.dataset.base_config)))
