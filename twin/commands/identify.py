@@ -119,14 +119,21 @@ def _evaluate(args: argparse.Namespace) -> int:
     return 0
 
 
-def _clearance(args: argparse.Namespace) -> int:
-    from twin.identify.model import ClearanceModel, identify_recording
-    from twin.util import atomic_write_json, check_output_file
+def _recording_and_json(args: argparse.Namespace) -> tuple[Path, Path | None]:
+    """The recording argument (an .mcap file) and the checked --json output, before any work."""
+    from twin.util import check_output_file
 
     rec = Path(args.recording)
     if rec.suffix != ".mcap":
         raise TwinError(f"{rec}: a recording is an .mcap file; convert DAQ exports with 'twin import'")
-    js = check_output_file(args.json, "--json", ".json") if args.json else None
+    return rec, check_output_file(args.json, "--json", ".json") if args.json else None
+
+
+def _clearance(args: argparse.Namespace) -> int:
+    from twin.identify.model import ClearanceModel, identify_recording
+    from twin.util import atomic_write_json
+
+    rec, js = _recording_and_json(args)
     path = Path(args.model) if args.model else default_model_path()
     if not args.model and not path.is_file():
         raise TwinError(f"no default model in this installation ({path}); give --model MODEL.joblib")
@@ -152,12 +159,9 @@ def _clearance(args: argparse.Namespace) -> int:
 
 def _restitution(args: argparse.Namespace) -> int:
     from twin.identify.restitution import SweepOptions, sweep_restitution
-    from twin.util import atomic_write_json, check_output_file
+    from twin.util import atomic_write_json
 
-    rec = Path(args.recording)
-    if rec.suffix != ".mcap":
-        raise TwinError(f"{rec}: a recording is an .mcap file; convert DAQ exports with 'twin import'")
-    js = check_output_file(args.json, "--json", ".json") if args.json else None
+    rec, js = _recording_and_json(args)
     grid: tuple[float, ...] = ()
     if args.grid:
         try:

@@ -8,9 +8,22 @@
 * :mod:`twin.dataset.reader`: ``open(DIR)``, windows for training, ``verify``, ``describe``.
 
 The layout is documented in ``twin/dataset/FORMAT.md``.
+
+The names below are loaded on first use (PEP 562), so importing one submodule (a study reading a
+spec, the CLI registering its commands) does not import the reader and the driver with it.
 """
 
-from twin.dataset.reader import Dataset, describe, open, verify  # noqa: A004 - twin.dataset.open(DIR)
-from twin.dataset.spec import DatasetSpec, SpecError, load_spec
+from __future__ import annotations
 
-__all__ = ["Dataset", "DatasetSpec", "SpecError", "describe", "load_spec", "open", "verify"]
+import importlib
+from typing import Any
+
+_LAZY = {"Dataset": "reader", "describe": "reader", "open": "reader", "verify": "reader",
+         "DatasetSpec": "spec", "SpecError": "spec", "load_spec": "spec"}
+__all__ = sorted(_LAZY)
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        return getattr(importlib.import_module(f"twin.dataset.{_LAZY[name]}"), name)
+    raise AttributeError(f"module 'twin.dataset' has no attribute {name!r}")
