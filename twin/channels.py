@@ -13,7 +13,8 @@ Conventions (bench frame of :mod:`twin.config`):
 * ``crank_angle`` / ``crank_speed``: bench angle θ from +x, unwrapped [rad], and dθ/dt [rad/s].
 * ``slider_position``: x of the slider reference point Cs on the guide [m].
 * ``ecc_J_x``, ``ecc_J_y``: eccentricity of joint J = pin centre − bushing centre, in the
-  rod frame (x from B towards C) [m]; ``pen_J``: penetration max(0, |e| − c) [m];
+  rod frame (x from B towards C) at B and C, in the bench frame at A (its bushing is the frame's
+  bore, e = crank journal − bore centre) [m]; ``pen_J``: penetration max(0, |e| − c) [m];
   ``fn_J``: normal contact force magnitude [N]; ``ft_J``: friction force on the pin
   along the in-plane tangent ẑ × n (n = e/|e|) [N].
 * ``theta_ref`` / ``omega_ref``: the drive's reference bench angle [rad] and rate [rad/s];
@@ -30,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from twin.config import ACCELEROMETERS, ALL_CHANNEL_GROUPS, BenchConfig
+from twin.config import ACCELEROMETERS, ALL_CHANNEL_GROUPS, JOINTS, BenchConfig
 
 
 @dataclass(frozen=True)
@@ -46,9 +47,10 @@ class ChannelSpec:
 
 def _joint_specs(joint: str) -> list[ChannelSpec]:
     g = f"joint_{joint}"
+    frame = "bench" if joint == "A" else "rod"
     return [
-        ChannelSpec(f"ecc_{joint}_x", "m", g, "float64", f"eccentricity at {joint}, rod x"),
-        ChannelSpec(f"ecc_{joint}_y", "m", g, "float64", f"eccentricity at {joint}, rod y"),
+        ChannelSpec(f"ecc_{joint}_x", "m", g, "float64", f"eccentricity at {joint}, {frame} x"),
+        ChannelSpec(f"ecc_{joint}_y", "m", g, "float64", f"eccentricity at {joint}, {frame} y"),
         ChannelSpec(f"pen_{joint}", "m", g, "float64", f"penetration at {joint}"),
         ChannelSpec(f"fn_{joint}", "N", g, "float32", f"normal contact force at {joint}"),
         ChannelSpec(f"ft_{joint}", "N", g, "float32", f"friction force on the pin at {joint}"),
@@ -100,7 +102,7 @@ def spec_by_name(name: str) -> ChannelSpec | None:
         for s in specs:
             if s.name == name:
                 return s
-    for j in ("B", "C"):
+    for j in JOINTS:
         for s in _joint_specs(j):
             if s.name == name:
                 return s

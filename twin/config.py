@@ -47,8 +47,9 @@ _XML = model_xml.defaults()
 CATALOGUE_DIAMETRAL_MM: tuple[float, ...] = (0.02, 0.05, 0.07, 0.10, 0.50, 1.00)
 #: Bench axes that can be vertical (S003 §2.2.3).
 ORIENTATIONS: tuple[str, ...] = ("x", "y", "z")
-#: Clearance joints of the bench.
-JOINTS: tuple[str, ...] = ("B", "C")
+#: Joints that can take a clearance, in order: the ground–crank pivot A (a ball bearing on the S003
+#: bench; a clearance there for the general mechanism of the seeds), crank–rod B, rod–slider C.
+JOINTS: tuple[str, ...] = ("A", "B", "C")
 #: Engines that speak this configuration.
 ENGINES: tuple[str, ...] = ("mujoco", "reference")
 #: Drive programs.
@@ -154,27 +155,63 @@ class Material:
 
 @dataclass(frozen=True)
 class Materials:
-    """Pin and bushing materials (S003 Table 2): F125 steel pins, RG10 bronze bushings."""
+    """Pin and bushing materials (S003 Table 2): F125 steel pins, RG10 bronze bushings.
+
+    Attributes:
+        pin: material of every pin (journal) [-].
+        bushing: material of every bushing [-].
+        pins: per-joint pin material where a joint differs from ``pin``, keyed by joint
+            ("A", "B", "C"), e.g. ``[materials.pins.B]`` in TOML (S004: steel pins throughout;
+            a general mechanism may fit different pins). Empty: every joint takes ``pin``.
+        bushings: per-joint bushing material where a joint differs from ``bushing``.
+    """
 
     pin: Material = Material(210e9, 0.30, 7850.0)
     bushing: Material = Material(90e9, 0.34, 8700.0)
+    pins: Mapping[str, Material] = field(default_factory=dict)
+    bushings: Mapping[str, Material] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        for name in ("pins", "bushings"):
+            for key, value in getattr(self, name).items():
+                _choice(key, f"{name}.{key}", JOINTS)
+                _check(isinstance(value, Material), f"{name}.{key}", f"must be a Material table, got {value!r}")
+
+    def pin_of(self, joint: str) -> Material:
+        """Pin material of ``joint`` ("A", "B" or "C")."""
+        _choice(joint, "joint", JOINTS)
+        return self.pins.get(joint, self.pin)
+
+    def bushing_of(self, joint: str) -> Material:
+        """Bushing material of ``joint`` ("A", "B" or "C")."""
+        _choice(joint, "joint", JOINTS)
+        return self.bushings.get(joint, self.bushing)
 
 
 # --------------------------------------------------------------------------- joints
 @dataclass(frozen=True)
 class Joints:
-    """Revolute joints B (crank–rod) and C (rod–slider).
+    """Revolute joints A (ground–crank pivot), B (crank–rod) and C (rod–slider).
 
     Attributes:
         clearance_b_mm: diametral clearance at B [mm]; 0 = deep-groove ball bearing (ideal
             joint, S003 §2.2.1 case A), otherwise a catalogue value.
         clearance_c_mm: diametral clearance at C [mm], same rules.
+        clearance_a_mm: diametral clearance at the ground–crank pivot A [mm], same rules. The
+            S003 bench carries its crank shaft in ball bearings (0, the default); the general
+            mechanism of the seeds may have a clearance there too (issue 18). At A the pin is
+            the crank's journal and the bushing the frame's bore, so e_A = crank journal −
+            frame bore centre.
         allow_noncatalogue: accept clearances outside the catalogue (0.02–1.00 mm values).
-        pin_diameter_m: journal (pin) diameter [m]. PLACEHOLDER: not given by S003.
-            Default: mjcf/bench.xml (pin class size, BENCH.md's documented placeholder,
+        pin_diameter_m: journal (pin) diameter of every joint [m]. PLACEHOLDER: not given by
+            S003. Default: mjcf/bench.xml (pin class size, BENCH.md's documented placeholder,
             consistent with its K ≈ 1.3e11).
-        bushing_length_m: axial length of the bushing [m]. PLACEHOLDER: not given.
+        bushing_length_m: axial length of every bushing [m]. PLACEHOLDER: not given.
             Default: mjcf/bench.xml (pin/bushing class half length × 2).
+        pin_diameters_m: per-joint pin diameter where a joint differs from ``pin_diameter_m``
+            [m], keyed by joint ("A", "B", "C"), e.g. ``[joints.pin_diameters_m] B = 0.015``.
+        bushing_lengths_m: per-joint bushing length where a joint differs from
+            ``bushing_length_m`` [m], keyed by joint.
         initial_eccentricity: ``"loaded"`` starts each journal touching the bushing on the side
             its static load pushes it to (no artificial drop at t = 0); ``"centred"`` starts
             it at the bushing centre.
@@ -182,13 +219,16 @@ class Joints:
 
     clearance_b_mm: float = 0.0
     clearance_c_mm: float = 0.0
+    clearance_a_mm: float = 0.0
     allow_noncatalogue: bool = False
     pin_diameter_m: float = _XML.pin_diameter_m
     bushing_length_m: float = _XML.bushing_length_m
+    pin_diameters_m: Mapping[str, float] = field(default_factory=dict)
+    bushing_lengths_m: Mapping[str, float] = field(default_factory=dict)
     initial_eccentricity: str = "loaded"
 
     def __post_init__(self) -> None:
-        for name in ("clearance_b_mm", "clearance_c_mm"):
+        for name in ("clearance_a_mm", "clearance_b_mm", "clearance_c_mm"):
             value = getattr(self, name)
             _check(isinstance(value, (int, float)) and math.isfinite(value) and value >= 0,
                    name, f"must be 0 (ball bearing) or a diametral clearance > 0 [mm], got {value!r}")
@@ -201,29 +241,50 @@ class Joints:
                 _check(value < 5.0, name, f"must be < 5 mm even off-catalogue, got {value!r}")
         _positive(self.pin_diameter_m, "pin_diameter_m", "m")
         _positive(self.bushing_length_m, "bushing_length_m", "m")
+        for name in ("pin_diameters_m", "bushing_lengths_m"):
+            for key, value in getattr(self, name).items():
+                _choice(key, f"{name}.{key}", JOINTS)
+                _positive(value, f"{name}.{key}", "m")
+        for jt in JOINTS:
+            _check(self.pin_diameter(jt) < 0.5, "pin_diameters_m" if jt in self.pin_diameters_m else "pin_diameter_m",
+                   f"must be < 0.5 m, got {self.pin_diameter(jt)!r} at joint {jt}")
         _choice(self.initial_eccentricity, "initial_eccentricity", ("loaded", "centred"))
 
     def diametral_mm(self, joint: str) -> float:
-        """Diametral clearance of ``joint`` ("B" or "C") [mm]."""
+        """Diametral clearance of ``joint`` ("A", "B" or "C") [mm]."""
         _choice(joint, "joint", JOINTS)
-        return self.clearance_b_mm if joint == "B" else self.clearance_c_mm
+        return {"A": self.clearance_a_mm, "B": self.clearance_b_mm, "C": self.clearance_c_mm}[joint]
 
     def radial_m(self, joint: str) -> float:
         """Radial clearance c = (bushing radius − pin radius) of ``joint`` [m]."""
         return self.diametral_mm(joint) * 1e-3 / 2.0
 
+    def pin_diameter(self, joint: str) -> float:
+        """Pin diameter of ``joint`` [m] (``pin_diameters_m`` or the shared ``pin_diameter_m``)."""
+        _choice(joint, "joint", JOINTS)
+        return float(self.pin_diameters_m.get(joint, self.pin_diameter_m))
+
+    def pin_radius(self, joint: str) -> float:
+        """Pin radius R_j of ``joint`` [m]."""
+        return self.pin_diameter(joint) / 2.0
+
+    def bushing_length(self, joint: str) -> float:
+        """Axial bushing length of ``joint`` [m] (``bushing_lengths_m`` or ``bushing_length_m``)."""
+        _choice(joint, "joint", JOINTS)
+        return float(self.bushing_lengths_m.get(joint, self.bushing_length_m))
+
     @property
     def pin_radius_m(self) -> float:
-        """Pin radius R_j [m]."""
+        """Shared pin radius [m] (``pin_diameter_m`` / 2; a joint's own: :meth:`pin_radius`)."""
         return self.pin_diameter_m / 2.0
 
     def bushing_radius_m(self, joint: str) -> float:
-        """Bushing bore radius R_i = R_j + c [m]."""
-        return self.pin_radius_m + self.radial_m(joint)
+        """Bushing bore radius R_i = R_j + c of ``joint`` [m]."""
+        return self.pin_radius(joint) + self.radial_m(joint)
 
     @property
     def clearance_joints(self) -> tuple[str, ...]:
-        """Joints fitted with a bushing, in order ("B", "C")."""
+        """Joints fitted with a bushing, in order ("A", "B", "C")."""
         return tuple(j for j in JOINTS if self.diametral_mm(j) > 0)
 
 
@@ -387,8 +448,8 @@ def ln_stiffness(joints: Joints, materials: Materials, joint: str) -> float:
     c = joints.radial_m(joint)
     if c <= 0:
         raise ConfigError(f"joints.clearance_{joint.lower()}_mm", "is 0: no contact at an ideal joint")
-    ri, rj = joints.bushing_radius_m(joint), joints.pin_radius_m
-    h = materials.pin.compliance_h + materials.bushing.compliance_h
+    ri, rj = joints.bushing_radius_m(joint), joints.pin_radius(joint)
+    h = materials.pin_of(joint).compliance_h + materials.bushing_of(joint).compliance_h
     return 4.0 / (3.0 * h) * math.sqrt(ri * rj / (ri - rj))
 
 

@@ -9,7 +9,7 @@ and the bushing centre differ by the eccentricity e = pin − bushing; pins sit 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -71,6 +71,9 @@ class Pose:
         b_pin: crank pin centre B [m]; ``b_bush``: rod eye centre B' = B − e_b [m].
         c_bush: rod eye centre C [m]; ``c_pin``: slider pin C' = C + e_c [m].
         slider_x: slider position along the guide (x of C') [m].
+        e_a: eccentricity at the ground pivot A, crank journal − frame bore centre (the bench
+            origin), bench frame [m] (zeros if ideal): the crank journal centre is at e_a and
+            ``b_pin`` = e_a + r (cos θ, sin θ).
     """
 
     theta: float
@@ -82,6 +85,7 @@ class Pose:
     c_bush: np.ndarray
     c_pin: np.ndarray
     slider_x: float
+    e_a: np.ndarray = field(default_factory=lambda: np.zeros(2))
 
 
 def static_pin_forces(cfg: BenchConfig, theta: float) -> tuple[np.ndarray, np.ndarray]:
@@ -116,13 +120,20 @@ def loaded_eccentricity(cfg: BenchConfig, joint: str, theta: float = 0.0) -> np.
     weight pulls both rod eyes down onto their pins (e = +c ŷ at B and C); with x vertical (the
     guide vertical) the rod carries the slider's weight, so the slider pin rests on the lower
     side of the C eye (e ≈ −c x̂) while the crank pin carries rod and slider (e ≈ +c x̂ at B).
+    At the ground pivot A the frame's bore carries the crank's weight and the load of pin B: the
+    force on the crank journal is −(m_crank g + F_B), so with y vertical e_A ≈ −c ŷ (the journal
+    rests on the bottom of the bore).
     Zero if gravity is normal to the plane (z vertical), for ``"centred"`` and for ideal joints.
     """
     c = cfg.joints.radial_m(joint)
     if c == 0 or cfg.joints.initial_eccentricity == "centred":
         return np.zeros(2)
     f_b, f_c = static_pin_forces(cfg, theta)
-    f = f_b if joint == "B" else f_c
+    if joint == "A":  # the frame holds the crank: its weight and the rod's load on pin B
+        crank_g = cfg.bodies.crank.mass_kg * np.asarray(cfg.mechanism.gravity_vector[:2], dtype=float)
+        f = -(crank_g + f_b)
+    else:
+        f = f_b if joint == "B" else f_c
     fn = float(np.linalg.norm(f))
     if fn < 1e-12:
         return np.zeros(2)
@@ -133,7 +144,8 @@ def initial_pose(cfg: BenchConfig, theta: float) -> Pose:
     """Pose at crank angle θ with the configured initial eccentricities, at rest."""
     r, l = cfg.bodies.crank.length_m, cfg.bodies.rod.length_m
     e_b, e_c = loaded_eccentricity(cfg, "B", theta), loaded_eccentricity(cfg, "C", theta)
-    b_pin = r * np.array([np.cos(theta), np.sin(theta)])
+    e_a = loaded_eccentricity(cfg, "A", theta)
+    b_pin = e_a + r * np.array([np.cos(theta), np.sin(theta)])
     b_bush = b_pin - e_b
     s = (cfg.mechanism.d_off_m - e_c[1] - b_bush[1]) / l
     if abs(s) >= 1:
@@ -141,7 +153,7 @@ def initial_pose(cfg: BenchConfig, theta: float) -> Pose:
     phi = float(np.arcsin(s))
     c_bush = b_bush + l * np.array([np.cos(phi), np.sin(phi)])
     c_pin = c_bush + e_c
-    return Pose(float(theta), phi, e_b, e_c, b_pin, b_bush, c_bush, c_pin, float(c_pin[0]))
+    return Pose(float(theta), phi, e_b, e_c, b_pin, b_bush, c_bush, c_pin, float(c_pin[0]), e_a)
 
 
 def pose_rates(cfg: BenchConfig, pose: Pose, omega: float) -> tuple[float, float]:

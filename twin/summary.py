@@ -153,6 +153,8 @@ class SummaryAccumulator:
             "samples": n,
         }
         for j in JOINTS:
+            if j == "A" and j not in self._joints and not (cfg and cfg.joints.diametral_mm("A") > 0):
+                continue  # the ground pivot is a ball bearing unless configured otherwise: no entry
             js: dict[str, Any] = {"clearance_mm": cfg.joints.diametral_mm(j) if cfg else None}
             if j in self._joints:
                 st = self._joints[j]
