@@ -82,7 +82,9 @@ def _rerun_writer(path: Path, cfg):
 def _print_summary(s: dict, out: Path | None) -> None:
     print(f"{s['name']}: {s['engine']} {s['duration_s']:.3f} s simulated in {s['wall_s']:.2f} s "
           f"(real-time factor {s['real_time_factor']:.2f}, {s['steps']} steps of {s['timestep_s']:g} s)")
-    for j in ("B", "C"):
+    for j in ("A", "B", "C"):
+        if j not in s:
+            continue  # the ground pivot A has an entry only with a clearance
         js = s[j]
         if "impacts" in js:
             print(f"  joint {j}: {js['clearance_mm']:g} mm, max eccentricity {js['max_eccentricity_m']*1e6:.1f} um, "

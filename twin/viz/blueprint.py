@@ -12,7 +12,7 @@ from __future__ import annotations
 import rerun as rr
 import rerun.blueprint as rrb
 
-from twin.config import ACCELEROMETERS, BenchConfig
+from twin.config import ACCELEROMETERS, JOINTS, BenchConfig
 from twin.run import Channel
 from twin.viz.options import ViewOptions
 from twin.viz.scene import nice_magnification
@@ -89,10 +89,10 @@ def default_blueprint(cfg: BenchConfig, groups: dict[str, list[str]], channels: 
         if p:
             accel_views.append(_series(a, p, window=win))
     speed = paths("crank_speed", "omega_ref")
-    force = paths(*[f"fn_{j}" for j in ("B", "C")])
-    pen = paths(*[f"pen_{j}" for j in ("B", "C")])
-    friction = paths(*[f"ft_{j}" for j in ("B", "C")])
-    ecc = paths(*[f"ecc_{j}_{k}" for j in ("B", "C") for k in ("x", "y")])
+    force = paths(*[f"fn_{j}" for j in JOINTS])
+    pen = paths(*[f"pen_{j}" for j in JOINTS])
+    friction = paths(*[f"ft_{j}" for j in JOINTS])
+    ecc = paths(*[f"ecc_{j}_{k}" for j in JOINTS for k in ("x", "y")])
     encoder = paths("encoder_angle", "rec_encoder_angle") or paths("encoder_counts", "sim_encoder_counts")
     motor = paths("motor_command", "sim_motor_command")
     torque = paths("crank_torque")
@@ -113,7 +113,7 @@ def default_blueprint(cfg: BenchConfig, groups: dict[str, list[str]], channels: 
     if drive:
         tabs.append(rrb.Grid(*drive, grid_columns=2, name="Drive & encoder"))
     contact = [_series(n, p, window=win) for n, p in (("contact force", force), ("friction force", friction),
-                                                       ("penetration", pen), ("eccentricity (rod frame)", ecc)) if p]
+                                                       ("penetration", pen), ("eccentricity (rod frame; A: bench frame)" if "ecc_A_x" in channels else "eccentricity (rod frame)", ecc)) if p]
     if contact:
         tabs.append(rrb.Grid(*contact, grid_columns=2, name="Contact"))
     if fft_window is not None and fft_names:

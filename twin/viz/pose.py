@@ -6,12 +6,14 @@ eccentricities ``ecc_J_x/y`` = pin − bushing centre in the ROD frame (conventi
 :mod:`twin.channels` and :mod:`twin.kinematics`). This module turns them into the planar
 pose of every body, consistently with :func:`twin.kinematics.initial_pose`:
 
-* B = r (cos θ, sin θ) is the crank pin; the rod eye (bushing) centre is B' = B − R(φ) e_B;
+* B = e_A + r (cos θ, sin θ) is the crank pin (e_A: eccentricity of the crank journal in the
+  frame's bore at a clearance ground pivot A, bench frame; zero at an ideal A); the rod eye
+  (bushing) centre is B' = B − R(φ) e_B;
 * the other rod eye is C = B' + l (cos φ, sin φ); the slider pin is C' = C + R(φ) e_C;
 * C' lies d_off above the guide line y = 0: its y equation fixes the rod angle φ.
 
 With eccentricities expressed in the rod frame, that y equation reads
-``(l + e_Cx − e_Bx) sin φ + (e_Cy − e_By) cos φ = d_off − r sin θ``, i.e. a sin φ + b cos φ = s,
+``(l + e_Cx − e_Bx) sin φ + (e_Cy − e_By) cos φ = d_off − r sin θ − e_Ay``, i.e. a sin φ + b cos φ = s,
 whose root on the slider's branch (cos φ > 0) is φ = asin(s / hypot(a, b)) − atan2(b, a): exact,
 no iteration. Without eccentricities it reduces to :func:`twin.kinematics.rod_angle`. The x
 equation is then redundant; :attr:`Poses.slider_x` is the reconstructed x of C', which a
@@ -43,6 +45,8 @@ class Poses:
         theta: crank bench angle θ [rad].
         phi: rod angle φ from +x [rad].
         e_b, e_c: eccentricities at B and C in the rod frame, shape (n, 2) [m] (zeros if ideal).
+        e_a: eccentricity at A (crank journal − frame bore), bench frame, shape (n, 2) [m]
+            (zeros if ideal): the translation of the crank's frame.
         b_pin: crank pin centre B, shape (n, 2) [m].
         b_bush: rod eye centre B' (rod frame origin), shape (n, 2) [m].
         c_pin: slider pin centre C', shape (n, 2) [m].
@@ -57,6 +61,7 @@ class Poses:
     b_bush: np.ndarray
     c_pin: np.ndarray
     slider_x: np.ndarray
+    e_a: np.ndarray
 
 
 def crank_angle(run: Run, idx: np.ndarray | slice = slice(None)) -> np.ndarray | None:
@@ -81,7 +86,8 @@ def crank_angle(run: Run, idx: np.ndarray | slice = slice(None)) -> np.ndarray |
 
 
 def eccentricity(run: Run, joint: str, idx: np.ndarray | slice = slice(None)) -> np.ndarray | None:
-    """Eccentricity of ``joint`` in the rod frame, shape (n, 2) [m], or None if not recorded."""
+    """Eccentricity of ``joint`` (B, C: rod frame; A: bench frame), shape (n, 2) [m], or None if
+    not recorded."""
     kx, ky = f"ecc_{joint}_x", f"ecc_{joint}_y"
     if kx in run and ky in run:
         return np.stack([np.asarray(run[kx][idx], dtype=float), np.asarray(run[ky][idx], dtype=float)], axis=1)
@@ -89,10 +95,12 @@ def eccentricity(run: Run, joint: str, idx: np.ndarray | slice = slice(None)) ->
 
 
 def rod_angle(theta: np.ndarray, r: float, l: float, d_off: float,
-              e_b: np.ndarray | None = None, e_c: np.ndarray | None = None) -> np.ndarray:
-    """Rod angle φ [rad] closing the loop for crank angle θ and rod-frame eccentricities.
+              e_b: np.ndarray | None = None, e_c: np.ndarray | None = None,
+              e_a: np.ndarray | None = None) -> np.ndarray:
+    """Rod angle φ [rad] closing the loop for crank angle θ and the eccentricities (B, C in the
+    rod frame, A in the bench frame).
 
-    Solves (l + e_Cx − e_Bx) sin φ + (e_Cy − e_By) cos φ = d_off − r sin θ on the slider's
+    Solves (l + e_Cx − e_Bx) sin φ + (e_Cy − e_By) cos φ = d_off − r sin θ − e_Ay on the slider's
     branch (see the module docstring). Raises :class:`RecordingError` where the rod cannot
     reach the guide (|s| > hypot(a, b)), which only corrupt data can cause.
     """
@@ -102,7 +110,7 @@ def rod_angle(theta: np.ndarray, r: float, l: float, d_off: float,
     zc = np.zeros((n, 2)) if e_c is None else e_c
     a = l + zc[:, 0] - zb[:, 0]
     b = zc[:, 1] - zb[:, 1]
-    s = d_off - r * np.sin(theta)
+    s = d_off - r * np.sin(theta) - (0.0 if e_a is None else e_a[:, 1])
     rho = np.hypot(a, b)
     q = s / rho
     if np.any(np.abs(q) > 1.0) or not np.all(np.isfinite(q)):
@@ -128,13 +136,13 @@ def poses(run: Run, idx: np.ndarray | slice = slice(None), cfg: BenchConfig | No
         return None
     r, l, d_off = cfg.bodies.crank.length_m, cfg.bodies.rod.length_m, cfg.mechanism.d_off_m
     n = theta.shape[0]
-    e_b = eccentricity(run, "B", idx)
-    e_c = eccentricity(run, "C", idx)
+    e_a, e_b, e_c = (eccentricity(run, j, idx) for j in ("A", "B", "C"))
+    e_a = np.zeros((n, 2)) if e_a is None else e_a
     e_b = np.zeros((n, 2)) if e_b is None else e_b
     e_c = np.zeros((n, 2)) if e_c is None else e_c
-    phi = rod_angle(theta, r, l, d_off, e_b, e_c)
-    b_pin = r * np.stack([np.cos(theta), np.sin(theta)], axis=1)
+    phi = rod_angle(theta, r, l, d_off, e_b, e_c, e_a)
+    b_pin = e_a + r * np.stack([np.cos(theta), np.sin(theta)], axis=1)
     b_bush = b_pin - _rot(phi, e_b)
     c_bush = b_bush + l * np.stack([np.cos(phi), np.sin(phi)], axis=1)
     c_pin = c_bush + _rot(phi, e_c)
-    return Poses(theta, phi, e_b, e_c, b_pin, b_bush, c_pin, c_pin[:, 0].copy())
+    return Poses(theta, phi, e_b, e_c, b_pin, b_bush, c_pin, c_pin[:, 0].copy(), e_a)

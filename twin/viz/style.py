@@ -2,16 +2,17 @@
 
 from __future__ import annotations
 
-from twin.config import ACCELEROMETERS
+from twin.config import ACCELEROMETERS, JOINTS
 from twin.run import Channel
 
 SIM_COLOUR = (31, 119, 180)
 MEAS_COLOUR = (255, 127, 14)
 REF_COLOUR = (160, 160, 160)
 CHAIN_COLOUR = (148, 103, 189)
-JOINT_COLOUR = {"B": (44, 160, 44), "C": (214, 39, 40)}
+JOINT_COLOUR = {"A": (148, 103, 189), "B": (44, 160, 44), "C": (214, 39, 40)}
 COLOUR_NAMES = {SIM_COLOUR: "blue", MEAS_COLOUR: "orange", REF_COLOUR: "grey", CHAIN_COLOUR: "purple",
-                JOINT_COLOUR["B"]: "green", JOINT_COLOUR["C"]: "red"}
+                JOINT_COLOUR["A"]: "violet", JOINT_COLOUR["B"]: "green",
+                JOINT_COLOUR["C"]: "red"}
 
 
 def unit_text(unit: str) -> str:
@@ -53,8 +54,8 @@ def series_colour(ch: Channel) -> tuple[int, int, int]:
 _SHORT = {"crank_speed": "crank", "omega_ref": "reference", "crank_angle": "crank", "theta_ref": "reference",
           "encoder_angle": "sim", "rec_encoder_angle": "rec", "encoder_counts": "rec",
           "sim_encoder_counts": "sim+chain", "motor_command": "rec", "sim_motor_command": "sim+chain",
-          **{f"{q}_{j}": j for q in ("fn", "ft", "pen") for j in ("B", "C")},
-          **{f"ecc_{j}_{k}": f"{j} {k}" for j in ("B", "C") for k in ("x", "y")}}
+          **{f"{q}_{j}": j for q in ("fn", "ft", "pen") for j in JOINTS},
+          **{f"ecc_{j}_{k}": f"{j} {k}" for j in JOINTS for k in ("x", "y")}}
 _WORDS = {"simulated": "sim", "simulated+chain": "sim+chain", "recorded": "rec"}
 
 

@@ -15,9 +15,10 @@ Entity paths (see :mod:`twin.viz.scene` for ``/bench``):
   their series with ``visible_series`` overrides;
 * ``/bench/crank``, ``/bench/rod``, ``/bench/slider``: body poses (``Transform3D``) at
   ``pose_rate_hz``; ``/bench/rod/orbit_J/journal``: magnified journal centre;
-  ``/bench/rod/contact_J``: contact force on the pin, peak of each pose window;
+  ``/bench/rod/contact_J``: contact force on the pin, peak of each pose window (for a clearance
+  at the ground pivot A both under ``/bench/frame``, whose frame A's eccentricity is given in);
 * ``/orbit/J/clearance`` and ``/orbit/J/journal``: the journal-centre orbit in the rod frame
-  in micrometres at ``orbit_rate_hz`` (red while in contact);
+  (A: bench frame) in micrometres at ``orbit_rate_hz`` (red while in contact);
 * ``/fft/<ACi>/sim``, ``/fft/<ACi>/meas`` (recorded ``meas_ACi``) and ``/fft/<ACi>/sim_chain``
   (a replay's ``sim_meas_ACi``): amplitude spectra of the FFT window (static);
 * ``/config``: the configuration, run metadata and summary as a markdown document.
@@ -38,7 +39,7 @@ from typing import Any
 import numpy as np
 import rerun as rr
 
-from twin.config import ACCELEROMETERS, BenchConfig
+from twin.config import ACCELEROMETERS, JOINTS, BenchConfig
 from twin.errors import TwinError
 from twin.util import remove_stale_temps, temp_path
 from twin.run import Channel, Run
@@ -142,7 +143,7 @@ class RerunWriter:
         self._orbit_stride = so
         self._pose_stride = so * max(1, int(round(rate / self.opts.pose_rate_hz / so)))
         self._has_pose = any(a in chunk for a in _ANGLE_SOURCES)
-        self._joints = tuple(j for j in ("B", "C") if f"ecc_{j}_x" in chunk and f"ecc_{j}_y" in chunk)
+        self._joints = tuple(j for j in JOINTS if f"ecc_{j}_x" in chunk and f"ecc_{j}_y" in chunk)
         fft_names = [n for a in ACCELEROMETERS for n in (a, f"sim_meas_{a}", f"meas_{a}") if n in chunk]
         if fft_names:
             w = self.opts.fft_window_s or default_window(self.cfg, self.t_start, self.t_end)
@@ -273,7 +274,7 @@ class RerunWriter:
         z = np.zeros(K)
         half = lambda a: np.stack([np.zeros(K), np.zeros(K), np.sin(a / 2), np.cos(a / 2)], axis=1)  # noqa: E731
         rec.send_columns("/bench/crank", indexes=[tcol], columns=rr.Transform3D.columns(
-            translation=np.zeros((K, 3)), quaternion=half(p.theta)))
+            translation=np.stack([p.e_a[:, 0], p.e_a[:, 1], z], axis=1), quaternion=half(p.theta)))
         rec.send_columns("/bench/rod", indexes=[tcol], columns=rr.Transform3D.columns(
             translation=np.stack([p.b_bush[:, 0], p.b_bush[:, 1], z], axis=1), quaternion=half(p.phi)))
         rec.send_columns("/bench/slider", indexes=[tcol], columns=rr.Transform3D.columns(
@@ -282,14 +283,15 @@ class RerunWriter:
         assert sc is not None
         for j in self._joints:
             cx, cy = sc.joint_centres[j]
-            e = p.e_b if j == "B" else p.e_c
+            e = {"A": p.e_a, "B": p.e_b, "C": p.e_c}[j]
+            parent = scene.joint_parent(j)
             m = sc.magnification[j]
             pen = self._buf.get(f"pen_{j}")
             fn = self._buf.get(f"fn_{j}")
             inc = (pen[local] > 0) if pen is not None else (fn[local] > 0) if fn is not None else np.zeros(K, bool)
             pos = np.stack([cx + m * e[:, 0], cy + m * e[:, 1], np.full(K, sc.front_z)], axis=1)
             colours = np.where(inc[:, None], np.array(scene.C_CONTACT), np.array(scene.C_ORBIT)).astype(np.uint8)
-            rec.send_columns(f"/bench/rod/orbit_{j}/journal", indexes=[tcol], columns=rr.Points3D.columns(
+            rec.send_columns(f"{parent}/orbit_{j}/journal", indexes=[tcol], columns=rr.Points3D.columns(
                 positions=pos, colors=colours, radii=np.full(K, 0.006, dtype=np.float32)))
             if fn is None:
                 continue
@@ -305,14 +307,14 @@ class RerunWriter:
             norm = np.hypot(ex, ey)
             on = (f_pk > 0) & (norm > 0)
             nx, ny = np.where(on, ex / np.where(norm > 0, norm, 1), 0), np.where(on, ey / np.where(norm > 0, norm, 1), 0)
-            ri = self.cfg.joints.pin_radius_m + sc.radial[j]
+            ri = self.cfg.joints.bushing_radius_m(j)
             s = self.opts.force_scale_m_per_n
             fx, fy = -f_pk * nx - ftv * ny, -f_pk * ny + ftv * nx  # force on the pin: -fn n + ft (z × n)
             org = np.stack([cx + ri * nx, cy + ri * ny, np.full(K, sc.front_z)], axis=1)[on]
             vec = np.stack([s * fx, s * fy, np.zeros(K)], axis=1)[on]
             labels = [f"{f:.0f} N" for f in f_pk[on]]
             lengths = on.astype(np.int32)
-            rec.send_columns(f"/bench/rod/contact_{j}", indexes=[tcol], columns=rr.Arrows3D.columns(
+            rec.send_columns(f"{parent}/contact_{j}", indexes=[tcol], columns=rr.Arrows3D.columns(
                 origins=org, vectors=vec, labels=labels, colors=np.tile(np.array(scene.C_CONTACT, np.uint8),
                                                                         (int(on.sum()), 1)),
                 radii=np.full(int(on.sum()), 0.002, dtype=np.float32)).partition(lengths))
