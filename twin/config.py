@@ -347,6 +347,8 @@ class Contact:
         exponent: force exponent n [-] (S003: 1.5).
         stiffness: contact stiffness K [N/m^n]; 0 = computed from the pin/bushing geometry
             and materials with Eq. 18.
+        stiffnesses: per-joint K [N/m^n] where a joint's differs from ``stiffness``, keyed by
+            joint ("A", "B", "C"); 0 = that joint's Eq. 18. Empty: every joint takes ``stiffness``.
         stiffness_scale: factor on the normal law's stiffness in both engines [-] (K of the
             hysteresis laws, k of the linear law, the same law in the MuJoCo twin's native
             contact and its soft first guess): the uncertainty of Eq. 18's K for
@@ -394,6 +396,7 @@ class Contact:
     restitution: float = 0.4
     exponent: float = 1.5
     stiffness: float = 0.0
+    stiffnesses: Mapping[str, float] = field(default_factory=dict)
     stiffness_scale: float = 1.0
     mu0: float = _XML.mu0
     v0_mps: float = _XML.v0_mps
@@ -418,6 +421,10 @@ class Contact:
                "exponent", f"must lie in [1, 3], got {self.exponent!r}")
         _check(isinstance(self.stiffness, (int, float)) and math.isfinite(self.stiffness)
                and self.stiffness >= 0, "stiffness", f"must be >= 0 (0 = from Eq. 18), got {self.stiffness!r}")
+        for key, value in self.stiffnesses.items():
+            _choice(key, f"stiffnesses.{key}", JOINTS)
+            _check(isinstance(value, (int, float)) and math.isfinite(value) and value >= 0, f"stiffnesses.{key}",
+                   f"must be >= 0 (0 = from Eq. 18), got {value!r}")
         _check(isinstance(self.stiffness_scale, (int, float)) and 0.1 <= self.stiffness_scale <= 10,
                "stiffness_scale", f"must lie in [0.1, 10], got {self.stiffness_scale!r}")
         _check(isinstance(self.mu0, (int, float)) and 0 <= self.mu0 <= 1,
@@ -438,6 +445,20 @@ class Contact:
         _positive(self.v_kinetic_mps, "v_kinetic_mps", "m/s")
         _check(self.v_kinetic_mps > self.v_static_mps, "v_kinetic_mps",
                f"must exceed v_static_mps ({self.v_static_mps}), got {self.v_kinetic_mps!r}")
+
+
+    def stiffness_of(self, joint: str) -> float:
+        """K given for ``joint`` [N/m^n] (``stiffnesses`` or the shared ``stiffness``); 0 = from
+        Eq. 18 (:func:`joint_stiffness` resolves it)."""
+        _choice(joint, "joint", JOINTS)
+        return float(self.stiffnesses.get(joint, self.stiffness))
+
+
+def joint_stiffness(cfg: "BenchConfig", joint: str) -> float:
+    """K of ``joint``'s hysteresis law before ``stiffness_scale`` [N/m^n]: the configured one
+    (:meth:`Contact.stiffness_of`) or S003 Eq. 18 from the joint's own pin, bushing and
+    materials (:func:`ln_stiffness`). Both engines resolve K here."""
+    return cfg.contact.stiffness_of(joint) or ln_stiffness(cfg.joints, cfg.materials, joint)
 
 
 def ln_stiffness(joints: Joints, materials: Materials, joint: str) -> float:
