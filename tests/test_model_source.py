@@ -20,7 +20,8 @@ What the builder changes in the default configuration's model on top of the base
   pin/bushing (its solref/solimp the placeholder of the native law), the bushing's contact-law
   fields (``law``, ``stiffness``, ``exponent``, ``damping``, ``speed_floor``, ``slot``) and
   ``nuserdata`` slots; at C it
-  deletes the ``joint_C`` connect, at B it adds the planar slides ``ecc_B_x``/``ecc_B_y``;
+  deletes the ``joint_C`` connect, at B it adds the planar slides ``ecc_B_x``/``ecc_B_y``, at A
+  (``joints.clearance_a_mm``) ``ecc_A_x``/``ecc_A_y`` before the crank hinge;
 * every scene with the default ``mujoco.guide_friction = "native"``: the slider guide's dry
   friction moves from the slide joint's ``frictionloss`` (MuJoCo's friction constraint, what a
   plain MuJoCo simulates from the file) into its user data (``nuser_jnt``,
@@ -165,7 +166,7 @@ def test_the_base_xml_is_the_builders_ideal_default_model(base, ideal):
     # what the builder changed: contact off, the clearance-joint sensors removed
     assert ideal.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_CONTACT
     assert set(_names(base, "sensor", base.nsensor)) - set(_names(ideal, "sensor", ideal.nsensor)) == {
-        n for jt in ("B", "C") for n in (N.sensor_ecc(jt), N.sensor_contact(jt), N.sensor_friction(jt))}
+        n for jt in ("A", "B", "C") for n in (N.sensor_ecc(jt), N.sensor_contact(jt), N.sensor_friction(jt))}
 
 
 def test_the_default_clearance_variant_changes_only_joint_c(base):

@@ -251,6 +251,7 @@ def read_defaults(path: Path) -> ModelDefaults:
     # geometry: lengths and the pin/bushing
     pin_b, pin_c = r.named("geom", N.pin("B")), r.named("geom", N.pin("C"))
     bush_b, bush_c = r.named("geom", N.bushing("B")), r.named("geom", N.bushing("C"))
+    pin_a, bush_a = r.named("geom", N.pin("A")), r.named("geom", N.bushing("A"))  # crank journal, frame bore
     rod_body = r.named("body", N.ROD)
     crank_len = _same(r, r.numbers(pin_b, "pos", 3)[0],
                       [(r.named("site", N.pin("B")), r.numbers(r.named("site", N.pin("B")), "pos", 3)[0]),
@@ -261,7 +262,7 @@ def read_defaults(path: Path) -> ModelDefaults:
                     "the rod length (x of bushing C)")
     slider_len = 2 * r.numbers(r.named("geom", N.SLIDER_BLOCK), "size", 3)[0]
     pin_r, half = r.numbers(pin_b, "size", 2)
-    for g in (pin_c, bush_b, bush_c):  # the base model is ideal: bore radius = pin radius
+    for g in (pin_a, bush_a, pin_c, bush_b, bush_c):  # the base model is ideal: bore radius = pin radius
         _same(r, pin_r, [(g, r.numbers(g, "size", 2)[0])], "the pin radius")
         _same(r, half, [(g, r.numbers(g, "size", 2)[1])], "the pin/bushing half length")
 
@@ -285,7 +286,7 @@ def read_defaults(path: Path) -> ModelDefaults:
         raise ModelError(f"{r.where(size)}: nuser_geom={nuser} but the bore user data layout has "
                          f"{len(N.BORE_USERDATA_FIELDS)} fields {N.BORE_USERDATA_FIELDS} (twin.names)")
     user = r.numbers(bush_b, "user", nuser)
-    _same(r, 0.0, [(bush_c, max(abs(a - b) for a, b in zip(user, r.numbers(bush_c, "user", nuser))))],
+    _same(r, 0.0, [(g, max(abs(a - b) for a, b in zip(user, r.numbers(g, "user", nuser)))) for g in (bush_a, bush_c)],
           "the bushing user data (difference to bushing B)")
     fields = N.read_bore_userdata(user)
     if fields["marker"] != N.BORE_MAGIC:

@@ -30,6 +30,10 @@ BODIES = (CRANK, ROD, SLIDER)
 CRANK_HINGE = "crank_hinge"
 ROD_HINGE = "rod_hinge"
 SLIDER_SLIDE = "slider_slide"
+#: slide joints added at a clearance joint A (crank journal relative to the frame's bore, bench
+#: frame; before ``crank_hinge``, so that the hinge angle stays the absolute crank angle)
+ECC_A_X = "ecc_A_x"
+ECC_A_Y = "ecc_A_y"
 #: slide joints added at a clearance joint B (rod eye relative to the crank pin, crank frame)
 ECC_B_X = "ecc_B_x"
 ECC_B_Y = "ecc_B_y"
@@ -42,12 +46,14 @@ GUIDE_RAIL = "guide_rail"
 
 
 def pin(joint: str) -> str:
-    """Pin geom and site of clearance joint ``joint`` ("B" on the crank, "C" on the slider)."""
+    """Pin geom and site of clearance joint ``joint`` ("A": the crank's journal, on the crank at
+    its origin; "B" on the crank; "C" on the slider)."""
     return f"pin_{joint}"
 
 
 def bushing(joint: str) -> str:
-    """Bushing geom and site of ``joint`` (rod eye)."""
+    """Bushing geom and site of ``joint`` (B, C: rod eye; A: the frame's bore, on the world body
+    at the bench origin)."""
     return f"bushing_{joint}"
 
 
@@ -85,7 +91,7 @@ SENSOR_SLIDER_SPEED = "slider_speed"
 
 
 def sensor_ecc(joint: str) -> str:
-    """framepos sensor: pin centre in the bushing frame (added by the builder)."""
+    """framepos sensor: pin centre in the bushing frame (rod frame at B and C, bench frame at A)."""
     return f"ecc_{joint}"
 
 

@@ -18,6 +18,11 @@
  * geometry is an exact circle: no faceting error, whatever the clearance. Every other
  * cylinder-cylinder pair is passed to the function that was in the table before (MuJoCo's
  * own), so unmarked models behave as usual. The collider is stateless and thread-safe.
+ * Nothing assumes which bodies carry the two geoms: at the ground pivot A the bore sits on the
+ * world body (body 0: zero velocity, no dofs, so mj_applyFT gives the friction's reaction
+ * nothing to act on) and the pin's body (the crank) has two slides before its hinge; velocities
+ * come from cvel (every dof of the body's chain), so the journal's slip on the frame is
+ * omega x (contact point - journal centre) plus the journal's own motion.
  *
  * Contact law (user[BORE_LAW] > 0). The force of the contact's normal row is the reference
  * engine's law, not MuJoCo's solref/solimp spring: with delta the penetration, delta' its rate

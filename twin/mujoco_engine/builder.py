@@ -4,14 +4,17 @@ What the builder does to the base model:
 
 * options: timestep, integrator, solver, gravity from the orientation; contact detection is
   switched off entirely when no joint has a clearance;
-* bodies: masses, centres of mass and inertias (Table 1), lengths, d_off, pin and bushing
-  radii, accelerometer mounting sites;
-* an ideal joint B is a hinge in the kinematic tree (exact); an ideal joint C is the
+* bodies: masses, centres of mass and inertias (Table 1), lengths, d_off, each joint's own pin
+  radius, bore radius and bushing length (``joints.pin_radius(j)``, ``bushing_radius_m(j)``,
+  ``bushing_length(j)``), accelerometer mounting sites;
+* ideal joints A and B are hinges in the kinematic tree (exact); an ideal joint C is the
   loop-closure ``connect`` of the base model (stiff soft constraint);
-* a clearance joint replaces that by two slide joints (B: rod eye relative to the crank pin)
-  or drops the connect (C), and adds one explicit frictionless ``<pair>`` pin/bushing whose
-  contact is computed by the native bore collider (exact circle). Its normal force is the
-  reference's own contact law (``contact.law``: Lankarani–Nikravesh by default, Hunt–Crossley,
+* a clearance joint adds two slide joints (A: the crank journal relative to the frame's bore,
+  bench frame, before the crank hinge, so that ``crank_hinge`` stays the absolute crank angle;
+  B: rod eye relative to the crank pin, crank frame) or drops the connect (C), and adds one
+  explicit frictionless ``<pair>`` pin/bushing (at A: ``pin_A`` on the crank, ``bushing_A`` on
+  the world body) whose contact is computed by the native bore collider (exact circle). Its
+  normal force is the reference's own contact law (``contact.law``: Lankarani–Nikravesh by default, Hunt–Crossley,
   Flores or linear, with the reference's K, n, e, impact-speed damping and floor), written
   into the bushing geom's user data and applied exactly by the native module, which sets the
   contact row's soft-constraint parameters every step (``_bore.c``: elastic term explicit as
@@ -47,7 +50,7 @@ import mujoco
 import numpy as np
 
 from twin import names as N
-from twin.config import BenchConfig, ln_stiffness
+from twin.config import JOINTS, BenchConfig, joint_stiffness
 from twin.errors import ModelError
 from twin.impact import DAMPING_FACTOR
 from twin.mujoco_engine.collider import ensure_installed
@@ -240,7 +243,7 @@ def first_guess_contact(cfg: BenchConfig, joint: str, m_eff: float) -> tuple[flo
     ``mujoco.contact_source = "first-guess"``, and as the placeholder solref of the native law's
     pair (what a plain MuJoCo without the native module simulates).
     """
-    K = cfg.contact.stiffness or ln_stiffness(cfg.joints, cfg.materials, joint)
+    K = joint_stiffness(cfg, joint)
     return _first_guess_kc(float(K), float(cfg.contact.exponent), float(cfg.contact.restitution), float(m_eff))
 
 
@@ -289,7 +292,7 @@ def native_law(cfg: BenchConfig, joint: str) -> NativeLaw:
         k, c = _reference_linear_law(cfg)[joint]
         return NativeLaw(ct.law, k * ms.contact_stiffness_scale, 1.0, c * ms.contact_damping_scale,
                          ct.impact_speed_floor_mps)
-    K = (ct.stiffness or ln_stiffness(cfg.joints, cfg.materials, joint)) * ct.stiffness_scale
+    K = joint_stiffness(cfg, joint) * ct.stiffness_scale
     if ct.law == "adams-impact":
         return NativeLaw(ct.law, K * ms.contact_stiffness_scale, float(ct.exponent),
                          ct.impact_c_max_nspm * ms.contact_damping_scale, ct.impact_speed_floor_mps,
@@ -339,7 +342,6 @@ def build_spec(cfg: BenchConfig) -> mujoco.MjSpec:
     spec.modelname = f"slider_crank_bench_{cfg.name}"
     b, j, mech = cfg.bodies, cfg.joints, cfg.mechanism
     r, l = b.crank.length_m, b.rod.length_m
-    rj, half_len = j.pin_radius_m, j.bushing_length_m / 2
 
     # options
     opt = spec.option
@@ -399,8 +401,9 @@ def build_spec(cfg: BenchConfig) -> mujoco.MjSpec:
                                        friction=N.BORE_FRICTION_LAWS["adams"], mus=con.mu_static)
     else:
         friction_law = N.bore_userdata(mu0=con.mu0, v0=con.v0_mps, v1=con.v1_mps)
-    for jt in ("B", "C"):
-        spec.geom(N.pin(jt)).size = [rj, half_len, 0]
+    for jt in JOINTS:  # each joint's own pin radius and bushing length
+        half_len = j.bushing_length(jt) / 2
+        spec.geom(N.pin(jt)).size = [j.pin_radius(jt), half_len, 0]
         spec.geom(N.bushing(jt)).size = [j.bushing_radius_m(jt), half_len, 0]
         spec.geom(N.bushing(jt)).userdata = friction_law
         spec.geom(N.bushing_ring(jt)).size = [j.bushing_radius_m(jt) + 0.006, half_len * 1.05, 0]
@@ -418,6 +421,14 @@ def build_spec(cfg: BenchConfig) -> mujoco.MjSpec:
             spec.delete(site)
             new.name = name
 
+    # clearance joint A: crank journal free in the plane of the frame's bore. The slides come
+    # before the hinge (re-added last), so the crank frame is translate(e_A) rotate(θ) and the
+    # hinge angle stays the absolute crank angle the PID, the encoder and crank_angle read
+    if j.diametral_mm("A") > 0:
+        spec.delete(spec.joint(N.CRANK_HINGE))
+        crank.add_joint(name=N.ECC_A_X, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1, 0, 0])
+        crank.add_joint(name=N.ECC_A_Y, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 1, 0])
+        crank.add_joint(name=N.CRANK_HINGE, type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1])
     # clearance joint B: rod eye free in the plane relative to the crank pin
     if j.diametral_mm("B") > 0:
         spec.delete(spec.joint(N.ROD_HINGE))
@@ -519,7 +530,8 @@ def _compile(spec: mujoco.MjSpec, cfg: BenchConfig) -> mujoco.MjModel:
 
 
 def _ring(spec: mujoco.MjSpec, cfg: BenchConfig, jt: str) -> list[str]:
-    """Replace the bore of ``jt`` by ``mujoco.ring_boxes`` boxes; returns the box names."""
+    """Replace the bore of ``jt`` by ``mujoco.ring_boxes`` boxes on the bushing's body (the rod;
+    the world body at A); returns the box names."""
     n = cfg.mujoco.ring_boxes
     bush = spec.geom(N.bushing(jt))
     centre = np.array(bush.pos)
@@ -528,8 +540,8 @@ def _ring(spec: mujoco.MjSpec, cfg: BenchConfig, jt: str) -> list[str]:
     names = []
     for k in range(n):
         beta = 2 * math.pi * k / n
-        g = spec.body(N.ROD).add_geom(
-            name=f"{N.bushing(jt)}_box{k}", type=mujoco.mjtGeom.mjGEOM_BOX, size=[t, half_w, cfg.joints.bushing_length_m / 2],
+        g = bush.parent.add_geom(
+            name=f"{N.bushing(jt)}_box{k}", type=mujoco.mjtGeom.mjGEOM_BOX, size=[t, half_w, cfg.joints.bushing_length(jt) / 2],
             pos=list(centre + (ri + t) * np.array([math.cos(beta), math.sin(beta), 0.0])),
             quat=[math.cos(beta / 2), 0.0, 0.0, math.sin(beta / 2)], contype=0, conaffinity=0, mass=0, group=3)
         names.append(g.name)
@@ -568,7 +580,7 @@ def build(cfg: BenchConfig) -> tuple[mujoco.MjSpec, mujoco.MjModel, BuildInfo]:
                               friction=[cfg.contact.mu0, cfg.contact.mu0, 0, 0, 0])
             if spec.sensor(N.sensor_contact(jt)) is not None:
                 sc = spec.sensor(N.sensor_contact(jt))
-                sc.reftype, sc.refname = mujoco.mjtObj.mjOBJ_BODY, N.ROD
+                sc.reftype, sc.refname = mujoco.mjtObj.mjOBJ_BODY, spec.geom(N.bushing(jt)).parent.name
                 sc.intprm = [3, 3, 1]  # found + force, reduce = netforce (global frame), one slot
         elif ms.bushing == "tendon":
             spec.delete(spec.pair(N.pair(jt)))
@@ -634,6 +646,25 @@ def export_xml(cfg: BenchConfig) -> str:
             + ".\n     Bushing geoms (user=\"7301 ...\") need the twin's native bore collider, contact law and "
               "friction (twin/mujoco_engine/_bore.c):\n     a plain MuJoCo viewer shows and simulates ideal "
               "variants faithfully; simulate clearance variants with 'twin simulate'. -->\n")
-    xml = spec.to_xml()
+    xml = _exact_geom_user(spec.to_xml(), _model)
     i = xml.find("<mujoco")
     return xml[:i] + head + xml[i:]
+
+
+def _exact_geom_user(xml: str, model: mujoco.MjModel) -> str:
+    """``xml`` with each named geom's ``user`` attribute written from the compiled model at full
+    precision. MuJoCo's XML writer (4.0) writes a vector's entries below about 1e-12 of its largest
+    as 0: a bore's friction fields (μ0 = 0.05, v0, v1) and impact-speed floor came out as 0 beside
+    its K ~ 1e11."""
+    import re
+
+    if not model.nuser_geom:
+        return xml
+    for g in range(model.ngeom):
+        name = model.geom(g).name
+        if not name:
+            continue
+        values = " ".join(repr(float(v)).removesuffix(".0") for v in model.geom_user[g])  # shortest exact
+        tag = re.compile(r'(<geom\b[^>]*?\bname="' + re.escape(name) + r'"[^>]*?\buser=")[^"]*(")')
+        xml = tag.sub(lambda mt: mt.group(1) + values + mt.group(2), xml, count=1)
+    return xml

@@ -115,6 +115,11 @@ class MujocoEngine:
         pose = initial_pose(cfg, theta0)
         d.qpos[m.jnt_qposadr[m.joint(N.CRANK_HINGE).id]] = pose.theta
         d.qpos[m.jnt_qposadr[m.joint(N.ROD_HINGE).id]] = pose.phi - pose.theta
+        if cfg.joints.diametral_mm("A") > 0:
+            # slide joints: crank journal relative to the frame's bore, bench frame (ė_A = 0 at
+            # start, so their velocities stay 0 below)
+            d.qpos[m.jnt_qposadr[m.joint(N.ECC_A_X).id]] = pose.e_a[0]
+            d.qpos[m.jnt_qposadr[m.joint(N.ECC_A_Y).id]] = pose.e_a[1]
         if cfg.joints.diametral_mm("B") > 0:
             # slide joints: bushing centre relative to the pin, in the crank frame
             rel = rot2(pose.theta).T @ (pose.b_bush - pose.b_pin)
