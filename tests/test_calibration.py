@@ -117,7 +117,7 @@ def test_effective_masses_follow_the_crank_and_match_the_reference_engine():
         mj = effective_masses(cfg, j, n_theta=4, n_dir=2)
         ref = []
         for th in np.linspace(0, 2 * np.pi, 4, endpoint=False):
-            W = np.linalg.inv(M.reduced_mass(P, M.initial_state(cfg, th)[:8]))[off:off + 2, off:off + 2]
+            W = np.linalg.inv(M.reduced_mass(P, M.initial_state(cfg, th)[:M.N_Q]))[off:off + 2, off:off + 2]
             for a in np.linspace(0, np.pi, 2, endpoint=False):
                 n = np.array([math.cos(a), math.sin(a)])
                 ref.append(1.0 / (n @ W @ n))

@@ -53,7 +53,7 @@ def _state(clear_b: float, clear_c: float, theta: float, e_b=(0.0, 0.0), e_c=(0.
     cfg = BenchConfig().replace(**{"joints.clearance_b_mm": clear_b, "joints.clearance_c_mm": clear_c,
                                    "joints.initial_eccentricity": "centred", "mechanism.d_off_m": d_off})
     P = M.build_params(cfg)
-    q = M.initial_state(cfg, theta)[:8].copy()
+    q = M.initial_state(cfg, theta)[:M.N_Q].copy()
     if clear_b:
         q[2:4] = q[0:2] - np.asarray(e_b)
     if clear_c:
@@ -61,8 +61,8 @@ def _state(clear_b: float, clear_c: float, theta: float, e_b=(0.0, 0.0), e_c=(0.
     q = _project(P, q)
     if clear_c:
         q[6] = q[4] + e_c[0]
-    R, S = np.zeros((8, 5)), np.zeros(8)
-    nz = M.r_matrix(P, q, np.zeros(8), R, S)
+    R, S = np.zeros((M.N_Q, M.N_Z)), np.zeros(M.N_Q)
+    nz = M.r_matrix(P, q, np.zeros(M.N_Q), R, S)
     zd = np.random.default_rng(1).normal(size=nz) * np.array([10.0, 0.05, -0.03, 0.02, 0.04])[:nz]
     qd = R[:, :nz] @ zd
     return P, q, qd, zd, nz
@@ -70,14 +70,14 @@ def _state(clear_b: float, clear_c: float, theta: float, e_b=(0.0, 0.0), e_c=(0.
 
 def _project(P, q):
     q = q.copy()
-    res, dq, b = np.zeros(8), np.zeros(8), np.zeros(8)
-    qd = np.zeros(8)
+    res, dq, b = np.zeros(M.N_Q), np.zeros(M.N_Q), np.zeros(M.N_Q)
+    qd = np.zeros(M.N_Q)
     assert M.project(P, q, qd, math.sin(q[7]), math.cos(q[7]), res, dq, b) > 0
     return q
 
 
 def _phi(P, q):
-    res = np.zeros(8)
+    res = np.zeros(M.N_Q)
     M.residual(P, q, math.sin(q[7]), math.cos(q[7]), res)
     return res
 
@@ -104,7 +104,7 @@ SCENES = [
 @pytest.mark.parametrize("scene", SCENES)
 def test_r_matrix_against_finite_differences_of_the_constraints(scene):
     P, q, qd, zd, nz = _state(*scene)
-    R, S = np.zeros((8, 5)), np.zeros(8)
+    R, S = np.zeros((M.N_Q, M.N_Z)), np.zeros(M.N_Q)
     assert M.r_matrix(P, q, qd, R, S) == nz
     R = R[:, :nz]
     eps = 1e-6
@@ -124,9 +124,9 @@ def test_r_matrix_against_finite_differences_of_the_constraints(scene):
         assert np.max(np.abs(phi_dd[constraint_rows])) < 1e-6 * max(1.0, np.abs(qd).max() ** 2)
     # and Ṙż = (dR/dt) ż, from R at q ± δ q̇
     d = 1e-6
-    Rp, Rm = np.zeros((8, 5)), np.zeros((8, 5))
-    M.r_matrix(P, q + d * qd, qd, Rp, np.zeros(8))
-    M.r_matrix(P, q - d * qd, qd, Rm, np.zeros(8))
+    Rp, Rm = np.zeros((M.N_Q, M.N_Z)), np.zeros((M.N_Q, M.N_Z))
+    M.r_matrix(P, q + d * qd, qd, Rp, np.zeros(M.N_Q))
+    M.r_matrix(P, q - d * qd, qd, Rm, np.zeros(M.N_Q))
     np.testing.assert_allclose((Rp[:, :nz] - Rm[:, :nz]) / (2 * d) @ zd, S, atol=1e-6 * max(1, np.abs(S).max()))
 
 
@@ -141,7 +141,7 @@ def _is_constraint(P, row):
 def _move_z(P, q, j, eps):
     """Configuration with independent coordinate j moved by eps (others held), projected."""
     q = q.copy()
-    rows = np.zeros(5, dtype=np.int64)
+    rows = np.zeros(M.N_Z, dtype=np.int64)
     M.independent_rows(P, rows)
     row = rows[j]
     if row == 7:
@@ -182,8 +182,9 @@ def test_constraints_stay_at_round_off_with_clearances():
         sl = slice(1000 * k, 1000 * (k + 1))
         status, _ = M.run_steps(eng.P, st, th[sl].copy(), om[sl].copy(), 1, buf, True)
         assert status == M.OK
-        assert M.constraint_norm(eng.P, st[:8]) <= 1e-12
-        assert M.velocity_constraint_norm(eng.P, st[:8], st[8:16]) <= 1e-12
+        q, qd = st[M.S_Q:M.S_Q + M.N_Q], st[M.S_QD:M.S_QD + M.N_Q]
+        assert M.constraint_norm(eng.P, q) <= 1e-12
+        assert M.velocity_constraint_norm(eng.P, q, qd) <= 1e-12
 
 
 def test_energy_drift_first_order():
@@ -253,13 +254,13 @@ def test_agrees_with_minimal_coordinate_solution(orientation, d_off):
         P = _free_params(cfg, h)
         st = M.initial_state(cfg, theta0)
         every = int(round(1e-3 / h))
-        ths, ws = [st[7]], [st[15]]
+        ths, ws = [st[7]], [st[M.S_QD + 7]]
         zero = np.zeros(every)
         for _ in range(len(t_eval) - 1):
             status, _ = M.run_steps(P, st, zero, zero, every, np.empty((1, M.N_OUT)), False)
             assert status == M.OK
             ths.append(st[7])
-            ws.append(st[15])
+            ws.append(st[M.S_QD + 7])
         errs.append((np.max(np.abs(np.array(ths) - sol.y[0])), np.max(np.abs(np.array(ws) - sol.y[1]))))
     assert np.max(np.abs(sol.y[1])) > 3          # a real swing
     th_err, w_err = errs[1]
@@ -283,7 +284,7 @@ def test_rmatrix_equals_euler_on_minimal_ode():
     z = np.zeros(n)
     assert M.run_steps(P, st, z, z, 1, np.empty((1, M.N_OUT)), False)[0] == M.OK
     assert st[7] == pytest.approx(th, abs=1e-7)
-    assert st[15] == pytest.approx(w, abs=1e-6)
+    assert st[M.S_QD + 7] == pytest.approx(w, abs=1e-6)
 
 
 # ---------------------------------------------------------------- engine protocol

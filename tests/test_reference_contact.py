@@ -64,9 +64,9 @@ def _impact(law: str, h: float, v: float = 0.1):
     st = M.initial_state(cfg, 0.0)
     st[6] += 1e-9                      # contact normal along +x
     M.contact_parameters(cfg, P, st)
-    R, S = np.zeros((8, 5)), np.zeros(8)
-    nz = M.r_matrix(P, st[:8], np.zeros(8), R, S)
-    st[8:16] = R[:, :nz] @ np.array([0.0, v, 0.0])   # ż = (θ̇, ė_Cx, ė_Cy)
+    R, S = np.zeros((M.N_Q, M.N_Z)), np.zeros(M.N_Q)
+    nz = M.r_matrix(P, st[:M.N_Q], np.zeros(M.N_Q), R, S)
+    st[M.S_QD:M.S_QD + M.N_Q] = R[:, :nz] @ np.array([0.0, v, 0.0])   # ż = (θ̇, ė_Cx, ė_Cy)
     c = cfg.joints.radial_m("C")
     n = int(round(2.5 * c / v / h))
     out = np.zeros((n, M.N_OUT))

@@ -5,6 +5,9 @@ configuration, drive, channels, chunking and metadata (:class:`twin.simulate.Eng
 the two engines compare channel by channel. The formulation is in
 :mod:`twin.reference.model`, the contact laws in :mod:`twin.reference.contact`.
 
+Clearance joints: any of A (the crank journal in the frame's bore; its eccentricity channels in
+the bench frame), B and C (rod frame), each with its own pin and bushing radii.
+
 Each chunk of ``simulation.chunk_s`` is one call of the compiled loop
 (:func:`twin.reference.model.run_steps`); the state (coordinates, velocities, PID integral,
 contact events with their stored impact speeds) carries over between chunks, so chunking does
@@ -181,7 +184,7 @@ class ReferenceEngine:
             cols["slider_position"] = out[:, M.O_SLIDER]
         if "joints" in groups:
             for jt in cfg.joints.clearance_joints:
-                base = M.O_JOINT_B if jt == "B" else M.O_JOINT_C
+                base = {"A": M.O_JOINT_A, "B": M.O_JOINT_B, "C": M.O_JOINT_C}[jt]  # A: bench frame
                 for k, name in enumerate((f"ecc_{jt}_x", f"ecc_{jt}_y", f"pen_{jt}", f"fn_{jt}", f"ft_{jt}")):
                     cols[name] = out[:, base + k]
         if "drive" in groups:

@@ -104,7 +104,8 @@ class CaseResult:
 def study_config(cfg: BenchConfig | None = None) -> BenchConfig:
     """The §4.1 mechanism: ``cfg``'s bodies and d_off with ideal joints, y up, g = 9.81 m/s²."""
     cfg = cfg or BenchConfig()
-    return cfg.replace(**{"name": "formulations", "joints.clearance_b_mm": 0.0, "joints.clearance_c_mm": 0.0,
+    return cfg.replace(**{"name": "formulations", "joints.clearance_a_mm": 0.0, "joints.clearance_b_mm": 0.0,
+                          "joints.clearance_c_mm": 0.0,
                           "mechanism.orientation": "y", "mechanism.gravity_mps2": 9.81,
                           "mechanism.guide_friction_n": 0.0})
 
@@ -132,7 +133,7 @@ def run_case(cfg: BenchConfig, case: Case, duration_s: float = 5.0, theta0: floa
         wall = time.perf_counter() - t0
         diverged = status != M.OK
     else:
-        q, qd = st[M.S_Q:M.S_Q + 8].copy(), st[M.S_QD:M.S_QD + 8].copy()
+        q, qd = st[M.S_Q:M.S_Q + M.N_Q].copy(), st[M.S_QD:M.S_QD + M.N_Q].copy()
         pp = case.penalty
         t0 = time.perf_counter()
         diverged, steps, m = penalty_run(P, q, qd, pp.alpha, pp.zeta, pp.omega, nsteps, every, *bufs)
@@ -146,7 +147,7 @@ def _warm(P: np.ndarray, st: np.ndarray, case: Case) -> None:
     if case.penalty is None:
         M.free_motion(P, st.copy(), 1, 1, *z)
     else:
-        penalty_run(P, st[:8].copy(), st[8:16].copy(), 1.0, 0.0, 0.0, 1, 1, *z)
+        penalty_run(P, st[M.S_Q:M.S_Q + M.N_Q].copy(), st[M.S_QD:M.S_QD + M.N_Q].copy(), 1.0, 0.0, 0.0, 1, 1, *z)
 
 
 # ------------------------------------------------------------ minimal coordinates

@@ -1,49 +1,62 @@
 r"""Natural-coordinate model of the bench and its R-matrix dynamics (S003 §3, Eq. 11–16).
 
-Coordinates (S003 Eq. 14), bench frame of :mod:`twin.config` (A at the origin)::
+Coordinates (S003 Eq. 14, extended by the crank journal), bench frame of :mod:`twin.config`
+(the frame's bore centre A at the origin)::
 
-    q = [x_B, y_B, x'_B, y'_B, x_C, y_C, x'_C, θ]      indices 0..7
+    q = [x_B, y_B, x'_B, y'_B, x_C, y_C, x'_C, θ, x_A, y_A]      indices 0..9   (N_Q = 10)
 
-* B = (x_B, y_B): centre of the crank pin (crank body 1, which turns about A);
+* A' = (x_A, y_A): centre of the crank's journal at the ground pivot A (crank body 1; the
+  bushing at A is the frame's bore, fixed, centred at the origin);
+* B = (x_B, y_B): centre of the crank pin (crank body 1);
 * B' = (x'_B, y'_B): centre of the rod's eye at B (rod body 2, origin of the rod frame);
 * C = (x_C, y_C): centre of the rod's eye at C (rod body 2);
 * C' = (x'_C, d_off): centre of the slider pin (slider body 3 translates on the guide
   y = 0 through A; C' is ``d_off`` above it, so only x'_C is a coordinate);
-* θ: crank bench angle from +x.
+* θ: crank bench angle from +x (direction A' → B).
 
-Pins sit on the crank (B) and on the slider (C'); bushings are the rod eyes (B', C).
+Pins sit on the crank (the journal A', the pin B) and on the slider (C'); bushings are the
+frame's bore (A) and the rod eyes (B', C). A' and θ sit at the end of q so that the indices of
+the S003 coordinates are those of the eight-coordinate model that had A fixed.
 
-Equations. Eight rows, always the same (the "augmented" set)::
+Equations. Ten rows, always the same (the "augmented" set)::
 
-    0  x_B² + y_B² − r²                  crank length            constraint
-    1  x_B sin θ − y_B cos θ             crank angle             constraint
-    2  (x_C − x'_B)² + (y_C − y'_B)² − l²  rod length            constraint
+    0  (x_B − x_A)² + (y_B − y_A)² − r²      crank length      constraint
+    1  (x_B − x_A) sin θ − (y_B − y_A) cos θ crank angle       constraint
+    2  (x_C − x'_B)² + (y_C − y'_B)² − l²    rod length        constraint
     3  x_B − x'_B        = e_Bx          pair B (Eq. 15)  constraint (= 0) or independent
     4  y_B − y'_B        = e_By          pair B (Eq. 15)  constraint (= 0) or independent
     5  x'_C − x_C        = e_Cx          pair C (Eq. 16)  constraint (= 0) or independent
     6  d_off − y_C       = e_Cy          pair C (Eq. 16)  constraint (= 0) or independent
     7  θ                                 crank angle              independent
+    8  x_A               = e_Ax          pair A           constraint (= 0) or independent
+    9  y_A               = e_Ay          pair A           constraint (= 0) or independent
 
-An ideal joint keeps its two pair rows as constraints (seven constraints, one degree of
-freedom, S003 §3). A clearance joint drops them from the constraint set and uses the same two
-expressions — the eccentricity e = pin − bushing in the bench frame, the "relative journal
-position" — as independent coordinates, next to θ; its contact is a force element. q itself
-never changes. Independent coordinates z: θ (r = 1), plus e_B and/or e_C (r = 3 or 5).
+An ideal joint keeps its two pair rows as constraints (nine constraints, one degree of
+freedom, S003 §3: A' is then held at the origin and the model is S003's). A clearance joint
+drops them from the constraint set and uses the same two expressions — the eccentricity
+e = pin − bushing in the bench frame, the "relative journal position" — as independent
+coordinates, next to θ; its contact is a force element. q itself never changes. Independent
+coordinates z, in this order: θ, then e_A, e_B, e_C of the joints that have a clearance
+(r = 1, 3, 5 or 7).
 
 Crank angle equation. S003 writes θ "as a function of x_B or y_B": x_B = r cos θ is
 singular with the crank length row where y_B = 0, y_B = r sin θ where x_B = 0, so a code
-must switch between them during a turn. Row 1 uses both at once: x_B sin θ − y_B cos θ = 0
-(B parallel to (cos θ, sin θ)). Together with row 0 the dependent crank block
-[[2x_B, 2y_B], [sin θ, −cos θ]] has determinant −2(x_B cos θ + y_B sin θ) = −2r: never
-singular over a turn, and smooth (no switching). The rod block is singular only with the rod
-perpendicular to the guide, which the bench's geometry (l > r + |d_off|) excludes.
+must switch between them during a turn. Row 1 uses both at once: with d = B − A',
+d_x sin θ − d_y cos θ = 0 (d parallel to (cos θ, sin θ)). Together with row 0 the crank block
+[[2d_x, 2d_y], [sin θ, −cos θ]] (in the unknowns Ḃ − Ȧ') has determinant
+−2(d_x cos θ + d_y sin θ) = −2r: never singular over a turn, and smooth (no switching). The rod
+block is singular only with the rod perpendicular to the guide, which the bench's geometry
+(l > r + |d_off| + the clearances) excludes.
 
-Velocity transformation (S003 Eq. 11–13). With A(q) the 8×8 Jacobian of the eight rows
-(constant rows 3–7), A q̇ = [0, 0, 0, ė_B or 0, ė_C or 0, θ̇]: the columns of
+Velocity transformation (S003 Eq. 11–13). With A(q) the 10×10 Jacobian of the ten rows
+(constant rows 3–9), A q̇ = [0, 0, 0, ė_B or 0, ė_C or 0, θ̇, ė_A or 0]: the columns of
 R = A⁻¹[0; I] belonging to the independent rows give q̇ = R ż with Φ_q R = 0, and
 differentiating once more, q̈ = R z̈ + Ṙż with Ṙż = A⁻¹[−Φ̇_q q̇; 0]. The reduced equations
-Rᵀ M R z̈ = Rᵀ (Q − M Ṙż) have r ≤ 5 unknowns. A is solved in closed form (a 2×2 block for
-the crank, one row for the rod, substitutions for the rest: about 30 flops), never inverted.
+Rᵀ M R z̈ = Rᵀ (Q − M Ṙż) have r ≤ 7 unknowns. A is solved in closed form (:func:`solve_aug`:
+Ȧ' from rows 8–9, a 2×2 block for Ḃ − Ȧ', one row for the rod, substitutions for the rest:
+about 35 flops), never inverted. With A ideal, Ȧ' = 0 exactly and every operation of the
+eight-coordinate model is repeated on the same numbers (the new terms add exact zeros), so
+runs with A ideal are bit-identical to it.
 
 Mass matrix (derivation). A planar rigid body described by two of its points i and j at
 distance L, a material point at body coordinates (ξ along i→j, η normal to it) is
@@ -57,25 +70,29 @@ which, with ḋ = ṙ_j − ṙ_i, is T = ½ [ṙ_iᵀ ṙ_jᵀ] M [ṙ_i; ṙ_j
     M_ii = m − 2 m ξ_G/L + I_i/L²,   M_ij = m ξ_G/L − I_i/L²,   M_jj = I_i/L².
 
 Exact as long as |d| = L, which the length constraints keep. For the rod (Table 1: m₂, ξ_G
-from B, I_G) i = B', j = C, L = l. The crank turns about the fixed point A (r_i = 0): only
-M_jj = I_A / r² remains, on (x_B, y_B), I_A = I_G + m₁ ξ_G². The slider translates: m₃ on x'_C
-(its y and rotation are taken by the guide). θ carries no mass (it is tied to B by rows 0–1).
+from B, I_G) i = B', j = C, L = l. For the crank (m₁, ξ_G from A, I_G) i = A', j = B, L = r:
+M_jj = I_A / r² on (x_B, y_B) with I_A = I_G + m₁ ξ_G², M_ii on (x_A, y_A) and M_ij coupling
+them (with A' fixed, Ȧ' = 0, only M_jj acts: the crank turning about A). The slider translates:
+m₃ on x'_C (its y and rotation are taken by the guide). θ carries no mass (it is tied to A' and B
+by rows 0–1).
 
 Generalized forces Q (virtual work over δq):
 
 * gravity g = (g_x, g_y) (in-plane components of ``mechanism.gravity_vector``; the normal
-  component does no work): centre of mass of the crank (ξ_G/r) B, of the rod
+  component does no work): centre of mass of the crank (1 − ξ_G/r) A' + (ξ_G/r) B, of the rod
   (1 − ξ_G/l) B' + (ξ_G/l) C, slider m₃ g_x on x'_C (the guide takes m₃ g_y);
-* drive torque τ about +z on θ (virtual work τ δθ);
-* a force F at a crank point P: torque (P × F)_z on θ; at a rod point
-  P = B' + α u + β R₉₀ u (u = C − B'): (1 − α) F − β R₉₀ᵀF on B', α F + β R₉₀ᵀF on C; on the
-  slider pin: F_x on x'_C;
+* drive torque τ about +z on θ (virtual work τ δθ: a couple on the crank);
+* a force F at a crank point P (δP = δA' + δθ ẑ × (P − A')): F on (x_A, y_A) and the torque
+  ((P − A') × F)_z on θ; at a rod point P = B' + α u + β R₉₀ u (u = C − B'):
+  (1 − α) F − β R₉₀ᵀF on B', α F + β R₉₀ᵀF on C; on the slider pin: F_x on x'_C;
 * contact at a clearance joint (:mod:`twin.reference.contact`): penetration δ = |e| − c,
   n = e/|e|, t = ẑ × n; force on the pin −f_N n + f_T t at the pin's surface point
-  (pin centre + R_pin n), the opposite on the rod at the bushing's surface point
+  (pin centre + R_pin n), the opposite on the bushing's body at the bushing's surface point
   (bushing centre + R_bushing n). f_T acts on the true tangential relative velocity of those two
-  material points: v_t = ė·t + ω₁ R_pin − ω₂ R_bushing at B (crank ω₁ = θ̇, rod ω₂), and
-  v_t = ė·t − ω₂ R_bushing at C (the slider does not rotate);
+  material points: v_t = ė·t + ω₁ R_pin,B − ω₂ R_bushing,B at B (crank ω₁ = θ̇, rod ω₂),
+  v_t = ė·t − ω₂ R_bushing,C at C (the slider does not rotate) and v_t = ė·t + ω₁ R_pin,A at A
+  (the frame does not rotate; its reaction is not modelled). Pin and bushing radii are the
+  joint's own (``joints.pin_radius(j)``, ``joints.bushing_radius_m(j)``);
 * slider guide friction (S003 §3: 2.5 N whenever the slider moves): −F_g ρ(|ẋ'_C|) sign(ẋ'_C)
   on x'_C, with ρ the same regularization ramp as the joint friction (0 below v0, linear to 1
   at v1; :func:`twin.reference.contact.ramp`). A discontinuous sign() would chatter at the
@@ -111,7 +128,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from twin.config import ACCELEROMETERS, BenchConfig, ln_stiffness
+from twin.config import ACCELEROMETERS, BenchConfig, joint_stiffness
 from twin.kinematics import initial_pose
 from twin.reference.contact import FRICTION_CODES, LAW_CODES, adams_friction_force, friction_force, normal_force, ramp
 
@@ -120,7 +137,7 @@ P_R, P_L, P_DOFF, P_GX, P_GY = 0, 1, 2, 3, 4
 P_MC, P_RA, P_RB, P_RC, P_M3 = 5, 6, 7, 8, 9
 P_M1, P_XG1, P_M2, P_XG2 = 10, 11, 12, 13
 P_CLR_B, P_CLR_C = 14, 15
-P_C_B, P_C_C, P_RPIN, P_RBUSH_B, P_RBUSH_C = 16, 17, 18, 19, 20
+P_C_B, P_C_C, P_RPIN_B, P_RBUSH_B, P_RBUSH_C = 16, 17, 18, 19, 20
 P_LAW, P_K_B, P_K_C, P_N, P_E, P_CLIN_B, P_CLIN_C, P_VMIN = 21, 22, 23, 24, 25, 26, 27, 28
 P_MU0, P_V0, P_V1, P_FGUIDE = 29, 30, 31, 32
 P_KP, P_KV, P_KI, P_IMAX, P_H = 33, 34, 35, 36, 37
@@ -131,25 +148,38 @@ P_SENS = 40            # 6 sensors × (body 0 rod / 1 slider, x, y, axis 0 +x 1 
 P_FRIC_LAW, P_MUS, P_VS, P_VD = P_SENS + 24, P_SENS + 25, P_SENS + 26, P_SENS + 27
 P_DMAX = P_VD + 1       # penetration of full damping of the ADAMS IMPACT law (its c_max in P_CLIN_B/C)
 P_PRESCRIBED = P_DMAX + 1  # 1: prescribed crank (drive.mode = "prescribed", driving constraint θ = θ_ref(t))
-P_INTEGRATOR = P_PRESCRIBED + 1  # 0 symplectic Euler (default), 1 explicit midpoint (INTEGRATORS); the last entry
+# the ground pivot A (flag, radial clearance, bore and journal radii, law constants) and the pin radius
+# at C (per-joint pins: P_RPIN_B is B's)
+P_CLR_A, P_C_A, P_RBUSH_A, P_RPIN_A, P_K_A, P_CLIN_A, P_RPIN_C = (P_PRESCRIBED + 1 + i for i in range(7))
+P_MA, P_MAB = P_RPIN_C + 1, P_RPIN_C + 2  # crank mass matrix blocks M_ii (on A') and M_ij (A'–B) [kg]
+P_INTEGRATOR = P_MAB + 1  # 0 symplectic Euler (default), 1 explicit midpoint (INTEGRATORS); the last entry
 N_PARAMS = P_INTEGRATOR + 1
 
 #: integrators of :func:`run_steps` by name -> code in ``P[P_INTEGRATOR]``
 INTEGRATORS = {"euler": 0, "midpoint": 1}
 
+#: number of coordinates q (module docstring)
+N_Q = 10
+#: most independent coordinates: θ and the eccentricities at A, B and C
+N_Z = 7
+#: joint codes of :func:`_joint`
+J_A, J_B, J_C = 0, 1, 2
+
 # --------------------------------------------------------------------- state layout
-S_Q, S_QD = 0, 8       # q[0:8], q̇[8:16]
-S_I = 16               # PID integral state [rad s]
-S_IN_B, S_VIMP_B = 17, 18  # contact event flag and stored impact speed at B
-S_IN_C, S_VIMP_C = 19, 20  # same at C
-N_STATE = 21
+S_Q, S_QD = 0, N_Q     # q[0:10], q̇[10:20]
+S_I = 2 * N_Q          # PID integral state [rad s]
+S_IN_B, S_VIMP_B = S_I + 1, S_I + 2  # contact event flag and stored impact speed at B
+S_IN_C, S_VIMP_C = S_I + 3, S_I + 4  # same at C
+S_IN_A, S_VIMP_A = S_I + 5, S_I + 6  # same at A
+N_STATE = S_I + 7
 
 # ------------------------------------------------------------------- output columns
 O_THETA, O_OMEGA, O_SLIDER = 0, 1, 2
 O_ACC = 3              # AC1..AC6: 3..8
 O_TORQUE = 9
-O_JOINT_B, O_JOINT_C = 10, 15  # ecc_x, ecc_y, pen, fn, ft
-N_OUT = 20
+O_JOINT_B, O_JOINT_C = 10, 15  # ecc_x, ecc_y (rod frame), pen, fn, ft
+O_JOINT_A = 20                 # the same at A, ecc in the bench frame
+N_OUT = 25
 
 #: integration status codes of :func:`run_steps`
 OK, NEWTON_FAILED, NOT_FINITE = 0, 1, 2
@@ -183,14 +213,19 @@ class JointContact:
 # ------------------------------------------------------------------------- kernels
 @njit(cache=True)
 def solve_aug(q, s, c, b, out):
-    """Solve A(q) v = b for v (closed form, see module docstring); s, c = sin θ, cos θ."""
-    xB, yB, xBp, yBp, xC, yC = q[0], q[1], q[2], q[3], q[4], q[5]
+    """Solve A(q) v = b for v (closed form, see module docstring); s, c = sin θ, cos θ.
+
+    Ȧ' from rows 8–9, then Ḃ − Ȧ' from the crank block (rows 0–1, determinant −2r), the rod eye
+    B' from rows 3–4, ẏ_C from row 6, ẋ_C from the rod length row 2, ẋ'_C from row 5."""
+    vxA, vyA = b[8], b[9]
+    xB, yB = q[0] - q[8], q[1] - q[9]    # B − A'
+    xBp, yBp, xC, yC = q[2], q[3], q[4], q[5]
     th_d = b[7]
     rp = xB * c + yB * s
     rhs1 = b[1] - rp * th_d
     det = -2.0 * rp
-    vxB = (-c * b[0] - 2.0 * yB * rhs1) / det
-    vyB = (2.0 * xB * rhs1 - s * b[0]) / det
+    vxB = vxA + (-c * b[0] - 2.0 * yB * rhs1) / det
+    vyB = vyA + (2.0 * xB * rhs1 - s * b[0]) / det
     vxBp = vxB - b[3]
     vyBp = vyB - b[4]
     vyC = -b[6]
@@ -205,14 +240,17 @@ def solve_aug(q, s, c, b, out):
     out[5] = vyC
     out[6] = b[5] + vxC
     out[7] = th_d
+    out[8] = vxA
+    out[9] = vyA
 
 
 @njit(cache=True)
 def residual(P, q, s, c, out):
-    """Constraint residuals of the eight rows (independent rows: 0)."""
+    """Constraint residuals of the ten rows (independent rows: 0)."""
     r, l = P[P_R], P[P_L]
-    out[0] = q[0] * q[0] + q[1] * q[1] - r * r
-    out[1] = q[0] * s - q[1] * c
+    dxB, dyB = q[0] - q[8], q[1] - q[9]
+    out[0] = dxB * dxB + dyB * dyB - r * r
+    out[1] = dxB * s - dyB * c
     dx = q[4] - q[2]
     dy = q[5] - q[3]
     out[2] = dx * dx + dy * dy - l * l
@@ -229,15 +267,21 @@ def residual(P, q, s, c, out):
         out[5] = q[6] - q[4]
         out[6] = P[P_DOFF] - q[5]
     out[7] = 0.0
+    if P[P_CLR_A] > 0.5:
+        out[8] = 0.0
+        out[9] = 0.0
+    else:                      # the journal centre on the bore centre, the origin
+        out[8] = q[8]
+        out[9] = q[9]
 
 
 @njit(cache=True)
 def constraint_norm(P, q):
     """‖Φ‖₂ of the mechanism's constraints at q."""
-    res = np.empty(8)
+    res = np.empty(N_Q)
     residual(P, q, math.sin(q[7]), math.cos(q[7]), res)
     acc = 0.0
-    for i in range(7):
+    for i in range(N_Q):       # the independent rows are 0
         acc += res[i] * res[i]
     return math.sqrt(acc)
 
@@ -246,8 +290,10 @@ def constraint_norm(P, q):
 def velocity_constraint_norm(P, q, qd):
     """‖Φ̇‖₂ = ‖Φ_q q̇‖₂ of the mechanism's constraints."""
     s, c = math.sin(q[7]), math.cos(q[7])
-    v0 = 2.0 * (q[0] * qd[0] + q[1] * qd[1])
-    v1 = s * qd[0] - c * qd[1] + (q[0] * c + q[1] * s) * qd[7]
+    dxB, dyB = q[0] - q[8], q[1] - q[9]
+    uxB, uyB = qd[0] - qd[8], qd[1] - qd[9]
+    v0 = 2.0 * (dxB * uxB + dyB * uyB)
+    v1 = s * uxB - c * uyB + (dxB * c + dyB * s) * qd[7]
     dx, dy = q[4] - q[2], q[5] - q[3]
     v2 = 2.0 * (dx * (qd[4] - qd[2]) + dy * (qd[5] - qd[3]))
     acc = v0 * v0 + v1 * v1 + v2 * v2
@@ -255,27 +301,35 @@ def velocity_constraint_norm(P, q, qd):
         acc += (qd[0] - qd[2]) ** 2 + (qd[1] - qd[3]) ** 2
     if P[P_CLR_C] < 0.5:
         acc += (qd[6] - qd[4]) ** 2 + qd[5] ** 2
+    if P[P_CLR_A] < 0.5:
+        acc += qd[8] ** 2 + qd[9] ** 2
     return math.sqrt(acc)
 
 
 @njit(cache=True)
 def quadratic_terms(q, qd, s, c, out):
-    """Right-hand side [−Φ̇_q q̇; 0] of Ṙż (rows 3–7 are linear: zero)."""
+    """Right-hand side [−Φ̇_q q̇; 0] of Ṙż (rows 3–9 are linear: zero)."""
     th_d = qd[7]
-    out[0] = -2.0 * (qd[0] * qd[0] + qd[1] * qd[1])
-    out[1] = -(2.0 * th_d * (qd[0] * c + qd[1] * s) + th_d * th_d * (q[1] * c - q[0] * s))
+    uxB, uyB = qd[0] - qd[8], qd[1] - qd[9]
+    out[0] = -2.0 * (uxB * uxB + uyB * uyB)
+    out[1] = -(2.0 * th_d * (uxB * c + uyB * s) + th_d * th_d * ((q[1] - q[9]) * c - (q[0] - q[8]) * s))
     ddx = qd[4] - qd[2]
     ddy = qd[5] - qd[3]
     out[2] = -2.0 * (ddx * ddx + ddy * ddy)
-    for i in range(3, 8):
+    for i in range(3, N_Q):
         out[i] = 0.0
 
 
 @njit(cache=True)
 def independent_rows(P, rows):
-    """Rows of the augmented set that are independent coordinates; returns their number."""
+    """Rows of the augmented set that are independent coordinates (θ, then e_A, e_B, e_C of the
+    clearance joints); returns their number."""
     rows[0] = 7
     nz = 1
+    if P[P_CLR_A] > 0.5:
+        rows[nz] = 8
+        rows[nz + 1] = 9
+        nz += 2
     if P[P_CLR_B] > 0.5:
         rows[nz] = 3
         rows[nz + 1] = 4
@@ -291,14 +345,17 @@ def independent_rows(P, rows):
 def mass_times(P, v, out):
     """out = M v (natural-coordinate mass matrix, see module docstring)."""
     mc, a, b, cc, m3 = P[P_MC], P[P_RA], P[P_RB], P[P_RC], P[P_M3]
-    out[0] = mc * v[0]
-    out[1] = mc * v[1]
+    ma, mab = P[P_MA], P[P_MAB]
+    out[0] = mc * v[0] + mab * v[8]
+    out[1] = mc * v[1] + mab * v[9]
     out[2] = a * v[2] + b * v[4]
     out[3] = a * v[3] + b * v[5]
     out[4] = b * v[2] + cc * v[4]
     out[5] = b * v[3] + cc * v[5]
     out[6] = m3 * v[6]
     out[7] = 0.0
+    out[8] = ma * v[8] + mab * v[0]
+    out[9] = ma * v[9] + mab * v[1]
 
 
 @njit(cache=True)
@@ -318,18 +375,21 @@ def _rod_force(P, q, Fx, Fy, px, py, Q):
 
 @njit(cache=True)
 def _joint(P, q, qd, joint, cst, Q, jout):
-    """Contact force element of clearance joint 0 (B) or 1 (C): adds to Q, updates the
-    contact event state cst = [in_contact, v_impact], writes jout = [ecc_x, ecc_y (bench),
+    """Contact force element of clearance joint ``J_A``, ``J_B`` or ``J_C``: adds to Q, updates
+    the contact event state cst = [in_contact, v_impact], writes jout = [ecc_x, ecc_y (bench),
     pen, fn, ft]."""
-    if joint == 0:
+    if joint == J_B:
         ex, ey = q[0] - q[2], q[1] - q[3]
         edx, edy = qd[0] - qd[2], qd[1] - qd[3]
-        c, Rb, K, clin = P[P_C_B], P[P_RBUSH_B], P[P_K_B], P[P_CLIN_B]
-    else:
+        c, Rb, Rp, K, clin = P[P_C_B], P[P_RBUSH_B], P[P_RPIN_B], P[P_K_B], P[P_CLIN_B]
+    elif joint == J_C:
         ex, ey = q[6] - q[4], P[P_DOFF] - q[5]
         edx, edy = qd[6] - qd[4], -qd[5]
-        c, Rb, K, clin = P[P_C_C], P[P_RBUSH_C], P[P_K_C], P[P_CLIN_C]
-    Rp = P[P_RPIN]
+        c, Rb, Rp, K, clin = P[P_C_C], P[P_RBUSH_C], P[P_RPIN_C], P[P_K_C], P[P_CLIN_C]
+    else:  # A: the crank journal A' in the frame's bore (centred at the origin)
+        ex, ey = q[8], q[9]
+        edx, edy = qd[8], qd[9]
+        c, Rb, Rp, K, clin = P[P_C_A], P[P_RBUSH_A], P[P_RPIN_A], P[P_K_A], P[P_CLIN_A]
     d = math.sqrt(ex * ex + ey * ey)
     if d > 0.0:
         nx, ny = ex / d, ey / d
@@ -350,13 +410,16 @@ def _joint(P, q, qd, joint, cst, Q, jout):
         fn = 0.0
         jout[2] = 0.0
     tx, ty = -ny, nx
-    # rod angular velocity
-    ux, uy = q[4] - q[2], q[5] - q[3]
-    udx, udy = qd[4] - qd[2], qd[5] - qd[3]
-    w2 = (ux * udy - uy * udx) / (ux * ux + uy * uy)
-    vt = edx * tx + edy * ty - w2 * Rb
-    if joint == 0:
-        vt += qd[7] * Rp
+    if joint == J_A:  # the frame does not rotate; the crank turns at θ̇
+        vt = edx * tx + edy * ty + qd[7] * Rp
+    else:
+        # rod angular velocity
+        ux, uy = q[4] - q[2], q[5] - q[3]
+        udx, udy = qd[4] - qd[2], qd[5] - qd[3]
+        w2 = (ux * udy - uy * udx) / (ux * ux + uy * uy)
+        vt = edx * tx + edy * ty - w2 * Rb
+        if joint == J_B:
+            vt += qd[7] * Rp
     if fn <= 0.0:
         ft = 0.0
     elif P[P_FRIC_LAW] > 0.5:
@@ -369,20 +432,31 @@ def _joint(P, q, qd, joint, cst, Q, jout):
         return
     Fx = -fn * nx + ft * tx  # on the pin
     Fy = -fn * ny + ft * ty
-    if joint == 0:
-        pcx, pcy = q[0] + Rp * nx, q[1] + Rp * ny  # crank material point: torque about A
+    if joint == J_B:
+        # crank material point P = B + R_pin n: F on A', torque ((P − A') × F)_z on θ
+        pcx, pcy = q[0] - q[8] + Rp * nx, q[1] - q[9] + Rp * ny
         Q[7] += pcx * Fy - pcy * Fx
+        Q[8] += Fx
+        Q[9] += Fy
         _rod_force(P, q, -Fx, -Fy, q[2] + Rb * nx, q[3] + Rb * ny, Q)
-    else:
+    elif joint == J_C:
         Q[6] += Fx                                 # slider pin: the guide takes F_y
         _rod_force(P, q, -Fx, -Fy, q[4] + Rb * nx, q[5] + Rb * ny, Q)
+    else:
+        # crank journal point P = A' + R_pin n: F on A', torque (R_pin n × F)_z on θ; the opposite
+        # acts on the frame (not modelled)
+        Q[7] += Rp * (nx * Fy - ny * Fx)
+        Q[8] += Fx
+        Q[9] += Fy
 
 
 @njit(cache=True)
-def generalized_forces(P, q, qd, tau, cst_b, cst_c, Q, jb, jc):
-    """Q(q, q̇, τ): gravity, drive torque, guide friction and contact elements."""
+def generalized_forces(P, q, qd, tau, cst_a, cst_b, cst_c, Q, ja, jb, jc):
+    """Q(q, q̇, τ): gravity, drive torque, guide friction and contact elements (joint J's
+    event state ``cst_j``, its output ``jj``)."""
     gx, gy = P[P_GX], P[P_GY]
     w1 = P[P_M1] * P[P_XG1] / P[P_R]
+    wa = P[P_M1] - w1          # the crank's weight share on A': m₁ (1 − ξ_G/r)
     a2 = P[P_XG2] / P[P_L]
     m2 = P[P_M2]
     Q[0] = w1 * gx
@@ -393,6 +467,8 @@ def generalized_forces(P, q, qd, tau, cst_b, cst_c, Q, jb, jc):
     Q[5] = m2 * a2 * gy
     Q[6] = P[P_M3] * gx
     Q[7] = tau
+    Q[8] = wa * gx
+    Q[9] = wa * gy
     fg = P[P_FGUIDE]
     if fg > 0.0:
         v = qd[6]
@@ -401,10 +477,12 @@ def generalized_forces(P, q, qd, tau, cst_b, cst_c, Q, jb, jc):
             Q[6] -= f
         elif v < 0.0:
             Q[6] += f
+    if P[P_CLR_A] > 0.5:
+        _joint(P, q, qd, J_A, cst_a, Q, ja)
     if P[P_CLR_B] > 0.5:
-        _joint(P, q, qd, 0, cst_b, Q, jb)
+        _joint(P, q, qd, J_B, cst_b, Q, jb)
     if P[P_CLR_C] > 0.5:
-        _joint(P, q, qd, 1, cst_c, Q, jc)
+        _joint(P, q, qd, J_C, cst_c, Q, jc)
 
 
 @njit(cache=True)
@@ -438,12 +516,12 @@ def _cholesky_solve(A, b, n):
 
 @njit(cache=True)
 def r_matrix(P, q, qd, R, S):
-    """R (8 × r, first r columns of ``R``) and Ṙż (``S``) at (q, q̇); returns r."""
+    """R (N_Q × r, first r columns of ``R``) and Ṙż (``S``) at (q, q̇); returns r."""
     s, c = math.sin(q[7]), math.cos(q[7])
-    rows = np.empty(5, dtype=np.int64)
+    rows = np.empty(N_Z, dtype=np.int64)
     nz = independent_rows(P, rows)
-    b = np.zeros(8)
-    col = np.empty(8)
+    b = np.zeros(N_Q)
+    col = np.empty(N_Q)
     for j in range(nz):
         b[:] = 0.0
         b[rows[j]] = 1.0
@@ -457,16 +535,16 @@ def r_matrix(P, q, qd, R, S):
 @njit(cache=True)
 def reduced_mass(P, q):
     """Reduced mass matrix Rᵀ M R at q (r × r)."""
-    R = np.zeros((8, 5))
-    S = np.zeros(8)
-    nz = r_matrix(P, q, np.zeros(8), R, S)
+    R = np.zeros((N_Q, N_Z))
+    S = np.zeros(N_Q)
+    nz = r_matrix(P, q, np.zeros(N_Q), R, S)
     Mb = np.zeros((nz, nz))
-    mr = np.empty(8)
+    mr = np.empty(N_Q)
     for j in range(nz):
         mass_times(P, R[:, j], mr)
         for i in range(nz):
             acc = 0.0
-            for k in range(8):
+            for k in range(N_Q):
                 acc += R[k, i] * mr[k]
             Mb[i, j] = acc
     return Mb
@@ -474,12 +552,12 @@ def reduced_mass(P, q):
 
 @njit(cache=True)
 def _assemble(P, q, qd, s, c, Q, rows, nz, Rt, S, Mb, rhs, tmp):
-    """Rᵀ (r × 8) into ``Rt``, Ṙż into ``S``, Rᵀ M R into ``Mb`` and Rᵀ (Q − M Ṙż) into ``rhs``
-    (``tmp``: (r + 2) × 8 scratch, its first r rows left holding M R)."""
+    """Rᵀ (r × N_Q) into ``Rt``, Ṙż into ``S``, Rᵀ M R into ``Mb`` and Rᵀ (Q − M Ṙż) into ``rhs``
+    (``tmp``: (r + 2) × N_Q scratch, its first r rows left holding M R)."""
     b = tmp[nz]
     mr = tmp[nz + 1]
     for j in range(nz):
-        for i in range(8):
+        for i in range(N_Q):
             b[i] = 0.0
         b[rows[j]] = 1.0
         solve_aug(q, s, c, b, Rt[j])
@@ -487,17 +565,19 @@ def _assemble(P, q, qd, s, c, Q, rows, nz, Rt, S, Mb, rhs, tmp):
     quadratic_terms(q, qd, s, c, b)
     solve_aug(q, s, c, b, S)
     mass_times(P, S, mr)
-    for i in range(8):
+    for i in range(N_Q):
         b[i] = Q[i] - mr[i]
+    # with A ideal, R's rows 8–9 are exact zeros: the products skip them (the same sums)
+    nq = N_Q if P[P_CLR_A] > 0.5 else 8
     for j in range(nz):
         acc = 0.0
-        for k in range(8):
+        for k in range(nq):
             acc += Rt[j, k] * b[k]
         rhs[j] = acc
     for j in range(nz):
         for i in range(j, nz):
             acc = 0.0
-            for k in range(8):
+            for k in range(nq):
                 acc += Rt[i, k] * tmp[j, k]
             Mb[i, j] = acc
             Mb[j, i] = acc
@@ -507,11 +587,11 @@ def _assemble(P, q, qd, s, c, Q, rows, nz, Rt, S, Mb, rhs, tmp):
 def accelerations(P, q, qd, s, c, Q, rows, nz, Rt, S, Mb, rhs, tmp, qdd):
     """q̈ = R z̈ + Ṙż from Rᵀ M R z̈ = Rᵀ (Q − M Ṙż); returns False if Rᵀ M R is not SPD.
 
-    ``Rt`` holds Rᵀ (r × 8, rows contiguous); ``tmp`` is (r + 2) × 8 scratch (M R rows, b)."""
+    ``Rt`` holds Rᵀ (r × N_Q, rows contiguous); ``tmp`` is (r + 2) × N_Q scratch (M R rows, b)."""
     _assemble(P, q, qd, s, c, Q, rows, nz, Rt, S, Mb, rhs, tmp)
     if not _cholesky_solve(Mb, rhs, nz):
         return False
-    for i in range(8):
+    for i in range(N_Q):
         acc = S[i]
         for j in range(nz):
             acc += Rt[j, i] * rhs[j]
@@ -529,7 +609,7 @@ def accelerations_prescribed(P, q, qd, s, c, Q, rows, nz, Rt, S, Mb, rhs, tmp, q
     # the assembly of ``accelerations``, then a singular-proof solve of the w block only
     _assemble(P, q, qd, s, c, Q, rows, nz, Rt, S, Mb, rhs, tmp)
     m = nz - 1
-    zdd = np.empty(5)
+    zdd = np.empty(N_Z)
     zdd[0] = alpha
     if m > 0:
         W = np.empty((m, m))
@@ -546,7 +626,7 @@ def accelerations_prescribed(P, q, qd, s, c, Q, rows, nz, Rt, S, Mb, rhs, tmp, q
     for j in range(nz):
         t += Mb[0, j] * zdd[j]
     tau[0] = t
-    for i in range(8):
+    for i in range(N_Q):
         acc = S[i]
         for j in range(nz):
             acc += Rt[j, i] * zdd[j]
@@ -567,11 +647,11 @@ def project(P, q, qd, s, c, res, dq, b):
     conv = False
     while it < maxit:
         residual(P, q, s, c, res)
-        for i in range(8):
+        for i in range(N_Q):
             res[i] = -res[i]
         solve_aug(q, s, c, res, dq)
         big = 0.0
-        for i in range(8):
+        for i in range(N_Q):
             q[i] += dq[i]
             a = abs(dq[i])
             if a > big:
@@ -583,9 +663,12 @@ def project(P, q, qd, s, c, res, dq, b):
     if not conv:
         return -1
     # velocities: ż from the integrated q̇, dependent ones re-solved
-    for i in range(8):
+    for i in range(N_Q):
         b[i] = 0.0
     b[7] = qd[7]
+    if P[P_CLR_A] > 0.5:
+        b[8] = qd[8]
+        b[9] = qd[9]
     if P[P_CLR_B] > 0.5:
         b[3] = qd[0] - qd[2]
         b[4] = qd[1] - qd[3]
@@ -593,7 +676,7 @@ def project(P, q, qd, s, c, res, dq, b):
         b[5] = qd[6] - qd[4]
         b[6] = -qd[5]
     solve_aug(q, s, c, b, dq)
-    for i in range(8):
+    for i in range(N_Q):
         qd[i] = dq[i]
     return it
 
@@ -602,23 +685,25 @@ def project(P, q, qd, s, c, res, dq, b):
 def energy(P, q, qd):
     """Mechanical energy T + V [J]: T = ½ q̇ᵀ M q̇, V = −Σ m g·r_G (zero with every centre of
     mass at A; the slider's constant guide-normal term is dropped)."""
-    mv = np.empty(8)
+    mv = np.empty(N_Q)
     mass_times(P, qd, mv)
     T = 0.0
-    for i in range(8):
+    for i in range(N_Q):
         T += 0.5 * qd[i] * mv[i]
     gx, gy = P[P_GX], P[P_GY]
     w1 = P[P_M1] * P[P_XG1] / P[P_R]
     a2 = P[P_XG2] / P[P_L]
     m2 = P[P_M2]
+    wa = P[P_M1] - w1
     V = -(w1 * (gx * q[0] + gy * q[1])
           + m2 * (gx * ((1.0 - a2) * q[2] + a2 * q[4]) + gy * ((1.0 - a2) * q[3] + a2 * q[5]))
-          + P[P_M3] * gx * q[6])
+          + P[P_M3] * gx * q[6]
+          + wa * (gx * q[8] + gy * q[9]))
     return T + V
 
 
 @njit(cache=True)
-def _outputs(P, q, qd, qdd, tau, jb, jc, row):
+def _outputs(P, q, qd, qdd, tau, ja, jb, jc, row):
     """One output sample (layout ``O_*``) from the state, its accelerations and forces."""
     row[O_THETA] = q[7]
     row[O_OMEGA] = qd[7]
@@ -661,6 +746,8 @@ def _outputs(P, q, qd, qdd, tau, jb, jc, row):
         else:
             for k in range(5):
                 row[base + k] = 0.0
+    for k in range(5):         # A: eccentricity in the bench frame (the bushing is the frame's bore)
+        row[O_JOINT_A + k] = ja[k] if P[P_CLR_A] > 0.5 else 0.0
 
 
 @njit(cache=True, nogil=True)  # no GIL while stepping: a sink's writer thread runs meanwhile
@@ -693,35 +780,40 @@ def _integrate(P, st, theta_ref, omega_ref, alpha_ref, prescribed, stride, out, 
     """The stepping loop of :func:`run_steps` (PID drive) and :func:`run_prescribed`."""
     h = P[P_H]
     kp, kv, ki, imax = P[P_KP], P[P_KV], P[P_KI], P[P_IMAX]
-    q = st[S_Q:S_Q + 8].copy()
-    qd = st[S_QD:S_QD + 8].copy()
+    q = st[S_Q:S_Q + N_Q].copy()
+    qd = st[S_QD:S_QD + N_Q].copy()
     integ = st[S_I]
+    cst_a = np.empty(2)
     cst_b = np.empty(2)
     cst_c = np.empty(2)
+    cst_a[0], cst_a[1] = st[S_IN_A], st[S_VIMP_A]
     cst_b[0], cst_b[1] = st[S_IN_B], st[S_VIMP_B]
     cst_c[0], cst_c[1] = st[S_IN_C], st[S_VIMP_C]
-    Q = np.empty(8)
+    Q = np.empty(N_Q)
+    ja = np.zeros(5)
     jb = np.zeros(5)
     jc = np.zeros(5)
-    rows = np.empty(5, dtype=np.int64)
+    rows = np.empty(N_Z, dtype=np.int64)
     nz = independent_rows(P, rows)
-    Rt = np.empty((5, 8))
-    S = np.empty(8)
-    Mb = np.empty((5, 5))
-    rhs = np.empty(5)
-    tmp = np.empty((7, 8))
-    qdd = np.empty(8)
-    res = np.empty(8)
-    dq = np.empty(8)
-    bb = np.empty(8)
+    Rt = np.empty((N_Z, N_Q))
+    S = np.empty(N_Q)
+    Mb = np.empty((N_Z, N_Z))
+    rhs = np.empty(N_Z)
+    tmp = np.empty((N_Z + 2, N_Q))
+    qdd = np.empty(N_Q)
+    res = np.empty(N_Q)
+    dq = np.empty(N_Q)
+    bb = np.empty(N_Q)
     s, c = math.sin(q[7]), math.cos(q[7])
     n = alpha_ref.shape[0] if prescribed else theta_ref.shape[0]
     tau_p = np.zeros(1)
     midpoint = P[P_INTEGRATOR] == 1.0 and not prescribed
-    qm = np.empty(8)        # midpoint stage (explicit midpoint only)
-    qdm = np.empty(8)
+    qm = np.empty(N_Q)        # midpoint stage (explicit midpoint only)
+    qdm = np.empty(N_Q)
+    cm_a = np.empty(2)
     cm_b = np.empty(2)
     cm_c = np.empty(2)
+    jm_a = np.zeros(5)
     jm_b = np.zeros(5)
     jm_c = np.zeros(5)
     status = OK
@@ -729,7 +821,7 @@ def _integrate(P, st, theta_ref, omega_ref, alpha_ref, prescribed, stride, out, 
     while k < n:
         err = theta_ref[k] - q[7]
         if prescribed:
-            generalized_forces(P, q, qd, 0.0, cst_b, cst_c, Q, jb, jc)
+            generalized_forces(P, q, qd, 0.0, cst_a, cst_b, cst_c, Q, ja, jb, jc)
             if not accelerations_prescribed(P, q, qd, s, c, Q, rows, nz, Rt, S, Mb, rhs, tmp, qdd,
                                             alpha_ref[k], tau_p):
                 status = NOT_FINITE
@@ -737,17 +829,17 @@ def _integrate(P, st, theta_ref, omega_ref, alpha_ref, prescribed, stride, out, 
             tau = tau_p[0]
         else:
             tau = kp * err + kv * (omega_ref[k] - qd[7]) + ki * integ
-            generalized_forces(P, q, qd, tau, cst_b, cst_c, Q, jb, jc)
+            generalized_forces(P, q, qd, tau, cst_a, cst_b, cst_c, Q, ja, jb, jc)
             if not accelerations(P, q, qd, s, c, Q, rows, nz, Rt, S, Mb, rhs, tmp, qdd):
                 status = NOT_FINITE
                 break
         if want_out and k % stride == 0:
-            _outputs(P, q, qd, qdd, tau, jb, jc, out[k // stride])
+            _outputs(P, q, qd, qdd, tau, ja, jb, jc, out[k // stride])
         if midpoint:
             # explicit midpoint (second order): the state at t + h/2 (projected), the accelerations
             # there (PID integral of the step start, contact events advanced at step starts only),
             # then the whole step with the midpoint's rates
-            for i in range(8):
+            for i in range(N_Q):
                 qm[i] = q[i] + 0.5 * h * qd[i]
                 qdm[i] = qd[i] + 0.5 * h * qdd[i]
             sm, cm = math.sin(qm[7]), math.cos(qm[7])
@@ -758,9 +850,10 @@ def _integrate(P, st, theta_ref, omega_ref, alpha_ref, prescribed, stride, out, 
             # drive reference at t + h/2 (second order: θ_ref + h/2 ω_ref, ω_ref averaged)
             om_ref = 0.5 * (omega_ref[k] + omega_ref[k + 1]) if k + 1 < n else omega_ref[k]
             taum = kp * (theta_ref[k] + 0.5 * h * omega_ref[k] - qm[7]) + kv * (om_ref - qdm[7]) + ki * integ
+            cm_a[0], cm_a[1] = cst_a[0], cst_a[1]
             cm_b[0], cm_b[1] = cst_b[0], cst_b[1]
             cm_c[0], cm_c[1] = cst_c[0], cst_c[1]
-            generalized_forces(P, qm, qdm, taum, cm_b, cm_c, Q, jm_b, jm_c)
+            generalized_forces(P, qm, qdm, taum, cm_a, cm_b, cm_c, Q, jm_a, jm_b, jm_c)
             if not accelerations(P, qm, qdm, sm, cm, Q, rows, nz, Rt, S, Mb, rhs, tmp, qdd):
                 status = NOT_FINITE
                 break
@@ -771,11 +864,11 @@ def _integrate(P, st, theta_ref, omega_ref, alpha_ref, prescribed, stride, out, 
             elif integ < -imax:
                 integ = -imax
         if midpoint:
-            for i in range(8):
+            for i in range(N_Q):
                 q[i] += h * qdm[i]
                 qd[i] += h * qdd[i]
         else:
-            for i in range(8):
+            for i in range(N_Q):
                 qd[i] += h * qdd[i]
                 q[i] += h * qd[i]
         if prescribed:  # the driving constraint: θ and θ̇ are the program's at t_{k+1}
@@ -787,7 +880,7 @@ def _integrate(P, st, theta_ref, omega_ref, alpha_ref, prescribed, stride, out, 
             k += 1
             break
         fin = True
-        for i in range(8):
+        for i in range(N_Q):
             if not (math.isfinite(q[i]) and math.isfinite(qd[i])):
                 fin = False
         if not fin:
@@ -795,9 +888,10 @@ def _integrate(P, st, theta_ref, omega_ref, alpha_ref, prescribed, stride, out, 
             k += 1
             break
         k += 1
-    st[S_Q:S_Q + 8] = q
-    st[S_QD:S_QD + 8] = qd
+    st[S_Q:S_Q + N_Q] = q
+    st[S_QD:S_QD + N_Q] = qd
     st[S_I] = integ
+    st[S_IN_A], st[S_VIMP_A] = cst_a[0], cst_a[1]
     st[S_IN_B], st[S_VIMP_B] = cst_b[0], cst_b[1]
     st[S_IN_C], st[S_VIMP_C] = cst_c[0], cst_c[1]
     return status, k
@@ -813,8 +907,8 @@ def free_motion(P, st, nsteps, every, th_d, en, phi, phid):
     k = 0
     status = OK
     while True:
-        q = st[S_Q:S_Q + 8]
-        qd = st[S_QD:S_QD + 8]
+        q = st[S_Q:S_Q + N_Q]
+        qd = st[S_QD:S_QD + N_Q]
         th_d[m] = qd[7]
         en[m] = energy(P, q, qd)
         phi[m] = constraint_norm(P, q)
@@ -844,8 +938,11 @@ def build_params(cfg: BenchConfig, *, min_impact_speed_mps: float = 1e-3, newton
     P[P_R], P[P_L], P[P_DOFF] = r, l, mech.d_off_m
     g = mech.gravity_vector
     P[P_GX], P[P_GY] = g[0], g[1]
-    ia = b.crank.inertia_kgm2 + b.crank.mass_kg * b.crank.x_g_m ** 2
-    P[P_MC] = ia / r ** 2
+    m1, xg1 = b.crank.mass_kg, b.crank.x_g_m
+    ia = b.crank.inertia_kgm2 + m1 * xg1 ** 2
+    P[P_MC] = ia / r ** 2                                   # M_jj of the crank (on B)
+    P[P_MA] = m1 - 2.0 * m1 * xg1 / r + ia / r ** 2         # M_ii (on A')
+    P[P_MAB] = m1 * xg1 / r - ia / r ** 2                   # M_ij
     m2, xg2 = b.rod.mass_kg, b.rod.x_g_m
     ii = b.rod.inertia_kgm2 + m2 * xg2 ** 2
     P[P_RA] = m2 - 2.0 * m2 * xg2 / l + ii / l ** 2
@@ -853,10 +950,12 @@ def build_params(cfg: BenchConfig, *, min_impact_speed_mps: float = 1e-3, newton
     P[P_RC] = ii / l ** 2
     P[P_M3] = b.slider.mass_kg
     P[P_M1], P[P_XG1], P[P_M2], P[P_XG2] = b.crank.mass_kg, b.crank.x_g_m, m2, xg2
+    P[P_CLR_A] = 1.0 if j.diametral_mm("A") > 0 else 0.0
     P[P_CLR_B] = 1.0 if j.diametral_mm("B") > 0 else 0.0
     P[P_CLR_C] = 1.0 if j.diametral_mm("C") > 0 else 0.0
-    P[P_C_B], P[P_C_C] = j.radial_m("B"), j.radial_m("C")
-    P[P_RPIN] = j.pin_radius_m
+    P[P_C_A], P[P_C_B], P[P_C_C] = j.radial_m("A"), j.radial_m("B"), j.radial_m("C")
+    P[P_RPIN_A], P[P_RPIN_B], P[P_RPIN_C] = j.pin_radius("A"), j.pin_radius("B"), j.pin_radius("C")
+    P[P_RBUSH_A] = j.bushing_radius_m("A")
     P[P_RBUSH_B], P[P_RBUSH_C] = j.bushing_radius_m("B"), j.bushing_radius_m("C")
     P[P_LAW] = LAW_CODES[con.law]
     P[P_N], P[P_E] = con.exponent, con.restitution
@@ -886,33 +985,35 @@ def build_params(cfg: BenchConfig, *, min_impact_speed_mps: float = 1e-3, newton
 def contact_parameters(cfg: BenchConfig, P: np.ndarray, st: np.ndarray) -> dict[str, JointContact]:
     """Resolve K (and the linear law's k, c) of each clearance joint into ``P`` (in place).
 
-    Hysteresis laws: K = ``contact.stiffness`` if set, else S003 Eq. 18 (:func:`ln_stiffness`),
-    exponent ``contact.exponent``. Linear law f = k δ + c δ̇: k = ``contact.stiffness`` [N/m] if
-    set, else the linear contact with the Lankarani–Nikravesh law's contact duration for an impact
+    Joints A, B, C, each with its own pin, bushing and materials. Hysteresis laws: K = the joint's
+    ``contact.stiffness_of(j)`` if set, else S003 Eq. 18 (:func:`twin.config.joint_stiffness`),
+    exponent ``contact.exponent``. Linear law f = k δ + c δ̇: k = ``contact.stiffness_of(j)`` [N/m]
+    if set, else the linear contact with the Lankarani–Nikravesh law's contact duration for an impact
     at 0.1 m/s (the MuJoCo twin's first guess, :func:`twin.impact.linear_equivalent`); c gives that
     linear contact the restitution ``contact.restitution``: c = 2 ζ(e) sqrt(k m_eff), with m_eff
-    the effective mass along the initial contact normal from the reduced mass matrix. K (or k)
-    is multiplied by ``contact.stiffness_scale``.
+    the effective mass along the initial contact normal from the reduced mass matrix (at A the
+    crank's, whose journal moves in the frame's bore). K (or k) is multiplied by ``contact.stiffness_scale``.
     """
     from twin.impact import linear_damping_ratio, linear_equivalent
 
     out: dict[str, JointContact] = {}
     con = cfg.contact
-    q = st[S_Q:S_Q + 8]
+    q = st[S_Q:S_Q + N_Q]
     Mb = reduced_mass(P, q)
     W = np.linalg.inv(Mb)
-    off = 1
-    for jt, kidx, cidx in (("B", P_K_B, P_CLIN_B), ("C", P_K_C, P_CLIN_C)):
+    off = 1                    # z = θ, then e_A, e_B, e_C of the clearance joints
+    for jt, kidx, cidx in (("A", P_K_A, P_CLIN_A), ("B", P_K_B, P_CLIN_B), ("C", P_K_C, P_CLIN_C)):
         if cfg.joints.diametral_mm(jt) <= 0:
             continue
-        e = np.array([q[0] - q[2], q[1] - q[3]]) if jt == "B" else np.array([q[6] - q[4], P[P_DOFF] - q[5]])
+        e = {"A": np.array([q[8], q[9]]), "B": np.array([q[0] - q[2], q[1] - q[3]]),
+             "C": np.array([q[6] - q[4], P[P_DOFF] - q[5]])}[jt]
         n = e / np.linalg.norm(e) if np.linalg.norm(e) > 0 else np.array([0.0, 1.0])
         w = W[off:off + 2, off:off + 2]
         m_eff = float(1.0 / (n @ w @ n))
         off += 2
-        K_ln = con.stiffness if con.stiffness > 0 else ln_stiffness(cfg.joints, cfg.materials, jt)
+        K_ln = joint_stiffness(cfg, jt)
         if con.law == "linear":
-            k = con.stiffness if con.stiffness > 0 else \
+            k = con.stiffness_of(jt) if con.stiffness_of(jt) > 0 else \
                 linear_equivalent(K_ln, con.exponent, con.restitution, m_eff, LINEAR_MATCH_SPEED)[0]
             k *= con.stiffness_scale
             c = 2.0 * linear_damping_ratio(con.restitution) * math.sqrt(k * m_eff)
@@ -936,14 +1037,14 @@ def initial_state(cfg: BenchConfig, theta: float, omega: float = 0.0, P: np.ndar
     fixed in the bench frame (ė = 0) and every other velocity from the constraints (q̇ = R ż)."""
     pose = initial_pose(cfg, theta)
     st = np.zeros(N_STATE)
-    st[S_Q:S_Q + 8] = [pose.b_pin[0], pose.b_pin[1], pose.b_bush[0], pose.b_bush[1],
-                       pose.c_bush[0], pose.c_bush[1], pose.c_pin[0], pose.theta]
+    st[S_Q:S_Q + N_Q] = [pose.b_pin[0], pose.b_pin[1], pose.b_bush[0], pose.b_bush[1],
+                         pose.c_bush[0], pose.c_bush[1], pose.c_pin[0], pose.theta, pose.e_a[0], pose.e_a[1]]
     if omega != 0.0:
         if P is None:
             raise ValueError("initial_state: a turning start needs the parameter vector P")
-        q, qd = st[S_Q:S_Q + 8].copy(), np.zeros(8)
+        q, qd = st[S_Q:S_Q + N_Q].copy(), np.zeros(N_Q)
         qd[7] = omega
-        if project(P, q, qd, math.sin(q[7]), math.cos(q[7]), np.empty(8), np.empty(8), np.empty(8)) < 0:
+        if project(P, q, qd, math.sin(q[7]), math.cos(q[7]), np.empty(N_Q), np.empty(N_Q), np.empty(N_Q)) < 0:
             raise ValueError("the initial pose does not satisfy the constraints")
-        st[S_Q:S_Q + 8], st[S_QD:S_QD + 8] = q, qd
+        st[S_Q:S_Q + N_Q], st[S_QD:S_QD + N_Q] = q, qd
     return st

@@ -1,9 +1,11 @@
 r"""Penalty formulation of the ideal mechanism (S003 Eq. 9–10), for the §4.1 comparison.
 
-Same natural coordinates, mass matrix and forces as :mod:`twin.reference.model`, all seven
+Same natural coordinates, mass matrix and forces as :mod:`twin.reference.model`, seven
 constraints of the ideal mechanism (crank length, crank angle x_B sin θ − y_B cos θ, rod
 length, B = B', C = C'), but no projection and no velocity transformation: the Lagrange
 multipliers are replaced by λ = α (Φ̈ + 2ζω Φ̇ + ω² Φ) (Eq. 9), which gives n = 8 ODEs
+(S003's eight coordinates: the crank journal A' of the model's q[8:10] stays exactly at the
+origin, A being ideal here; q and q̇ are the model's ``N_Q``-vectors)
 
     (M + α Φ_qᵀ Φ_q) q̈ = Q − α Φ_qᵀ (Φ̇_q q̇ + 2 ζ ω Φ̇ + ω² Φ)          (Eq. 10)
 
@@ -80,26 +82,27 @@ def _jacobian(P, q, J):
 
 @njit(cache=True)
 def penalty_run(P, q, qd, alpha, zeta, omega, nsteps, every, th_d, en, phi, phid):
-    """Integrate Eq. 10 from (q, q̇) for ``nsteps`` steps of P[P_H] (τ = 0, ideal joints),
-    recording θ̇, energy, ‖Φ‖, ‖Φ̇‖ before step 0 and every ``every`` steps.
+    """Integrate Eq. 10 from (q, q̇) (``N_Q``-vectors with A' = q[8:10] = 0, held) for ``nsteps``
+    steps of P[P_H] (τ = 0, ideal joints), recording θ̇, energy, ‖Φ‖, ‖Φ̇‖ before step 0 and every ``every`` steps.
 
     Returns (diverged, steps done, samples written). Diverged: non-finite state, failed
     factorization, ‖Φ‖ > 1 or |θ̇| > 1e4 rad/s (the run stops there)."""
     h = P[M.P_H]
     Mm = np.zeros((8, 8))
-    e = np.zeros(8)
-    col = np.empty(8)
+    e = np.zeros(M.N_Q)
+    col = np.empty(M.N_Q)
     for j in range(8):
         e[:] = 0.0
         e[j] = 1.0
         M.mass_times(P, e, col)
-        Mm[:, j] = col
+        Mm[:, j] = col[:8]
     J = np.empty((7, 8))
     K = np.empty((8, 8))
     rhs = np.empty(8)
     Q = np.empty(8)
-    res = np.empty(8)
-    quad = np.empty(8)
+    res = np.empty(M.N_Q)
+    quad = np.empty(M.N_Q)
+    Qf = np.empty(M.N_Q)
     lam = np.empty(7)
     cst = np.zeros(2)
     jo = np.zeros(5)
@@ -134,7 +137,9 @@ def penalty_run(P, q, qd, alpha, zeta, omega, nsteps, every, th_d, en, phi, phid
         M.quadratic_terms(q, qd, s, c, quad)        # −Φ̇_q q̇ (rows 0–2)
         for i in range(3):
             lam[i] -= quad[i]
-        M.generalized_forces(P, q, qd, 0.0, cst, cst, Q, jo, jo)
+        M.generalized_forces(P, q, qd, 0.0, cst, cst, cst, Qf, jo, jo, jo)
+        for i in range(8):
+            Q[i] = Qf[i]
         for i in range(8):
             acc = Q[i]
             for r in range(7):
