@@ -34,7 +34,7 @@ from typing import Iterable
 import mujoco
 import numpy as np
 
-from twin.config import CATALOGUE_DIAMETRAL_MM, BenchConfig, ln_stiffness, with_overrides
+from twin.config import CATALOGUE_DIAMETRAL_MM, BenchConfig, joint_stiffness, with_overrides
 from twin.impact import ImpactResult, impact_hysteresis, impact_linear
 from twin.mujoco_engine.collider import ensure_installed
 from twin.names import BORE_USERDATA_FIELDS, bore_userdata, replace_bore_userdata
@@ -64,8 +64,8 @@ def probe_model(cfg: BenchConfig, joint: str, m_eff: float, preload_n: float = 0
     from twin.mujoco_engine.builder import FLAT_SOLIMP, contact_setting, native_law_applies
 
     ensure_installed()
-    rj, ri = cfg.joints.pin_radius_m, cfg.joints.bushing_radius_m(joint)
-    half = cfg.joints.bushing_length_m / 2
+    rj, ri = cfg.joints.pin_radius(joint), cfg.joints.bushing_radius_m(joint)
+    half = cfg.joints.bushing_length(joint) / 2
     spec = mujoco.MjSpec()
     spec.compiler.autolimits = True
     spec.nuser_geom = len(BORE_USERDATA_FIELDS)
@@ -141,7 +141,7 @@ def reference_law(cfg: BenchConfig, joint: str) -> tuple[str, float, float]:
 
         k, c = _reference_linear_law(cfg)[joint]
         return ct.law, k, c
-    return ct.law, (ct.stiffness or ln_stiffness(cfg.joints, cfg.materials, joint)) * ct.stiffness_scale, 0.0
+    return ct.law, joint_stiffness(cfg, joint) * ct.stiffness_scale, 0.0
 
 
 def reference_impacts(cfg: BenchConfig, joint: str, m_eff: float, speeds: Iterable[float] = SPEEDS,

@@ -275,11 +275,9 @@ def _mujoco_theta(cfg: BenchConfig, h: float, duration_s: float, integrator: str
 
 def exudyn_available() -> bool:
     """Whether the optional Exudyn package can be imported."""
-    try:
-        import exudyn  # noqa: F401
-    except ImportError:
-        return False
-    return True
+    import importlib.util
+
+    return importlib.util.find_spec("exudyn") is not None
 
 
 def _exudyn_theta(cfg: BenchConfig, h: float, duration_s: float) -> tuple[float, float]:

@@ -110,7 +110,7 @@ def log_static_scene(rec: rr.RecordingStream, cfg: BenchConfig, orbit_radius_m: 
     r, l = cfg.bodies.crank.length_m, cfg.bodies.rod.length_m
     d_off = cfg.mechanism.d_off_m
     jt = cfg.joints
-    blen = jt.bushing_length_m
+    blen = max(jt.bushing_length(j) for j in JOINTS)  # the widest bushing sets the faces in front and behind
     half = blen / 2.0
     front = half + 0.002
     radial = {j: jt.radial_m(j) for j in JOINTS}
