@@ -640,7 +640,7 @@ def _child_write(layout_name: str, src_dir: Path, out: Path, duration: float, pr
     lay = next(x for x in layouts if x.name == layout_name)
     importlib.import_module(lay.package or "numpy")
     if isinstance(lay, McapLayout):
-        import twin.mcapfile  # noqa: F401  (imports are not the write's memory)
+        importlib.import_module("twin.mcapfile")  # imports are not the write's memory
     # warm the writer's imports on a tiny file (100 samples), so that imports and one-time set-up
     # are not counted but no buffer of the real chunk size is left in the allocators' free lists
     tiny = Source(src.rate_hz, {k: a[:100] for k, a in src.arrays.items()}, src.units, src.groups, 100, src.config)
