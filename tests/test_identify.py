@@ -197,6 +197,34 @@ def test_identify_refuses_what_it_cannot_answer(small, tmp_path, capsys):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.json", "bad.joblib", "old.joblib", "short.mcap"]
 
 
+def test_several_datasets_pool_into_one_model_and_must_agree(small, tmp_path, capsys):
+    """``twin identify train DS1 DS2`` pools the runs of both (the shipped model pools catalogue and
+    continuous clearances); datasets of another engine, sample rate or encoder resolution are
+    refused in one line naming the difference."""
+    import shutil
+
+    from twin.identify.model import ClearanceModel
+
+    d, _ = small
+    pooled = tmp_path / "pooled.joblib"
+    assert main(["identify", "train", str(d / "small-train"), str(d / "small-test"), "--out", str(pooled),
+                 "--splits", "train", "--workers", "1"]) == 0
+    tr = ClearanceModel.load(pooled).trained_on
+    assert tr["datasets"] == [{"name": "small-train", "runs": 48}, {"name": "small-test", "runs": 16}]
+    assert tr["runs"] == 64 and tr["dataset"] == "small-train+small-test"
+    other = tmp_path / "other"
+    shutil.copytree(d / "small-test", other)
+    info = json.loads((other / "info.json").read_text())
+    info["encoder_counts_per_rev"] = 4096
+    (other / "info.json").write_text(json.dumps(info))
+    capsys.readouterr()
+    assert main(["identify", "train", str(d / "small-train"), str(other), "--out", str(tmp_path / "x.joblib"),
+                 "--splits", "train", "--workers", "1"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "encoder_counts_per_rev" in err and "4096" in err
+    assert not (tmp_path / "x.joblib").exists()
+
+
 # ------------------------------------------------------------- the shipped model
 DEFAULT = ROOT / "twin" / "data" / "identify_default.joblib"
 

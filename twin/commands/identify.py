@@ -28,8 +28,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     ids = p.add_subparsers(dest="identify_command", metavar="ACTION", parser_class=type(p))
     ids.required = True
 
-    t = ids.add_parser("train", help="train a model on a dataset (train and val splits)")
-    t.add_argument("dataset", metavar="DATASET")
+    t = ids.add_parser("train", help="train a model on a dataset, or several pooled (train and val splits)")
+    t.add_argument("dataset", metavar="DATASET", nargs="+",
+                   help="dataset folder(s) of one engine, sample rate and encoder resolution; several are pooled "
+                        "(e.g. catalogue clearances beside continuous ones)")
     t.add_argument("--out", metavar="MODEL.joblib", required=True)
     t.add_argument("--splits", default="train,val", help="splits to train on (default train,val)")
     t.add_argument("--workers", type=int, metavar="N", help="processes for the features (default: the cores)")
@@ -90,7 +92,7 @@ def _train(args: argparse.Namespace) -> int:
     from twin.util import check_output_file
 
     out = check_output_file(args.out, "--out", ".joblib")
-    model, info = train(args.dataset, _splits(args.splits), resolve_workers(args.workers))
+    model, info = train(list(args.dataset), _splits(args.splits), resolve_workers(args.workers))
     model.save(out)
     print(f"{out}: trained on {info['runs']} runs ({info['windows']} windows) of dataset {info['dataset']} "
           f"({info['engine']}); classes {info['classes']}; crank {info['crank_hz_range'][0]:.2f}-"

@@ -6,6 +6,9 @@
 * **Clearance size**: per joint, a ``HistGradientBoostingRegressor`` with the quantile loss at
   50 % (the median) on log10 of the diametral clearance, trained on the windows of the runs where
   that joint has a clearance; a recording's size is the median over its windows.
+* **Training data**: one dataset or several (``train([DIR, DIR])``, ``twin identify train DS1 DS2``)
+  made by the same engine at the same sample rate and encoder resolution (e.g. datasets generated
+  in batches, or catalogue clearances beside clearances drawn between them); their runs are pooled.
 * **Interval**: split-conformal (CV+-like) at the level of recordings. The training runs with a
   clearance at the joint are split into ``CONFORMAL_FOLDS`` groups; each group's runs are answered
   by a regressor fitted on the other groups; a run's score is |log10(answer) − log10(truth)|; the
@@ -184,16 +187,44 @@ def dataset_features(ds, splits: tuple[str, ...], workers: int = 1
     return np.concatenate(X), kept, owner, skipped
 
 
-def train(dataset_dir: str | Path, splits: tuple[str, ...] = ("train", "val"), workers: int = 1,
-          seed: int = 0) -> tuple[ClearanceModel, dict[str, Any]]:
-    """Train on the ok runs of ``splits`` of a dataset (see module docstring)."""
-    from sklearn.ensemble import HistGradientBoostingClassifier, HistGradientBoostingRegressor
-
+def _pooled_features(dataset_dirs: list[str | Path], splits: tuple[str, ...], workers: int
+                     ) -> tuple[np.ndarray, list[dict[str, Any]], list[int], list[dict[str, Any]], list[Any]]:
+    """Features of several datasets pooled (runs keep their rows, with the dataset's name); the
+    datasets must agree on engine, sample rate and encoder resolution."""
     from twin.dataset import open as open_dataset
 
+    Xs, rows, owner, skipped, infos = [], [], [], [], []
+    first = None
+    for d in dataset_dirs:
+        ds = open_dataset(d)
+        key = {"engine": ds.info["identity"]["engine"], "rate_hz": ds.rate_hz,
+               "encoder_counts_per_rev": float(ds.info.get("encoder_counts_per_rev") or 32768)}
+        if first is None:
+            first = (d, key)
+        else:
+            for k, v in key.items():
+                if v != first[1][k]:
+                    raise ModelError(f"{d}: {k} is {v!r}, {first[0]} has {first[1][k]!r}: datasets pooled for one "
+                                     "model must agree on engine, sample rate and encoder resolution")
+        X, r, o, sk = dataset_features(ds, splits, workers)
+        owner += [len(rows) + i for i in o]
+        rows += [dict(x, dataset=ds.info["name"]) for x in r]
+        Xs.append(X)
+        skipped += sk
+        infos.append(ds)
+    return np.concatenate(Xs), rows, owner, skipped, infos
+
+
+def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = ("train", "val"), workers: int = 1,
+          seed: int = 0) -> tuple[ClearanceModel, dict[str, Any]]:
+    """Train on the ok runs of ``splits`` of one dataset or several pooled (see module docstring)."""
+    from sklearn.ensemble import HistGradientBoostingClassifier, HistGradientBoostingRegressor
+
+    dirs = [dataset_dir] if isinstance(dataset_dir, (str, Path)) else list(dataset_dir)
+    if not dirs:
+        raise ModelError("no dataset to train on")
     t0 = time.perf_counter()
-    ds = open_dataset(dataset_dir)
-    X, rows, owner, skipped = dataset_features(ds, splits, workers)
+    X, rows, owner, skipped, dss = _pooled_features(dirs, splits, workers)
     y = np.array([rows[i]["fault"] for i in owner])
     t_feat = time.perf_counter() - t0
     # leaves of at least 20 windows (scikit-learn's default) on datasets of a thousand windows and
@@ -211,7 +242,8 @@ def train(dataset_dir: str | Path, splits: tuple[str, ...] = ("train", "val"), w
         truth = np.array([rows[i][key] for i in owner], float)
         sel = truth > 0
         if sel.sum() < 10:
-            raise ModelError(f"{dataset_dir}: fewer than 10 windows with a clearance at {j}: cannot learn its size")
+            raise ModelError(f"{', '.join(map(str, dirs))}: fewer than 10 windows with a clearance at {j}: cannot "
+                             "learn its size")
 
         def fit(use: np.ndarray) -> Any:
             reg = HistGradientBoostingRegressor(loss="quantile", quantile=0.5, max_iter=300, learning_rate=0.08,
@@ -238,16 +270,19 @@ def train(dataset_dir: str | Path, splits: tuple[str, ...] = ("train", "val"), w
 
     from twin import __version__
 
-    info = ds.info
-    digest = hashlib.sha256(json.dumps(info["identity"], sort_keys=True).encode()).hexdigest()[:16]
+    infos = [ds.info for ds in dss]
+    ident = infos[0]["identity"] if len(infos) == 1 else [i["identity"] for i in infos]  # one dataset: as before
+    digest = hashlib.sha256(json.dumps(ident, sort_keys=True).encode()).hexdigest()[:16]
     hz = np.array([r["crank_hz"] for r in rows])
     trained_on = {
-        "dataset": info["name"], "dataset_dir": str(dataset_dir), "identity_sha256": digest,
-        "engine": info["identity"]["engine"], "rate_hz": ds.rate_hz,
-        "counts_per_rev": float(info.get("encoder_counts_per_rev") or 32768),
+        "dataset": "+".join(i["name"] for i in infos), "dataset_dir": ", ".join(map(str, dirs)),
+        "datasets": [{"name": i["name"], "runs": sum(1 for r in rows if r["dataset"] == i["name"])} for i in infos],
+        "identity_sha256": digest,
+        "engine": infos[0]["identity"]["engine"], "rate_hz": dss[0].rate_hz,
+        "counts_per_rev": float(infos[0].get("encoder_counts_per_rev") or 32768),
         "splits": list(splits), "runs": len(rows), "windows": int(len(X)), "runs_left_out": skipped,
         "crank_hz_range": [float(hz.min()), float(hz.max())],
-        "clearances_mm": {j: sorted({float(r[f"clearance_{j.lower()}_mm"]) for r in rows}) for j in ("B", "C")},
+        "clearances_mm": {j: _clearances_seen([float(r[f"clearance_{j.lower()}_mm"]) for r in rows]) for j in ("B", "C")},
         "orientations": sorted({r["orientation"] for r in rows}),
         "classes": {c: int(np.sum(y == c)) for c in CLASSES},
         "versions": {"twin": __version__, "sklearn": sklearn.__version__, "numpy": np.__version__},
@@ -256,6 +291,16 @@ def train(dataset_dir: str | Path, splits: tuple[str, ...] = ("train", "val"), w
         "feature_seconds": t_feat, "fit_seconds": time.perf_counter() - t0 - t_feat,
     }
     return ClearanceModel(clf, size, half_width, trained_on=trained_on), trained_on
+
+
+def _clearances_seen(values: list[float]) -> list[float] | dict[str, Any]:
+    """The clearances of the training runs: the list of values where there are few (a catalogue),
+    else their range and count (clearances drawn continuously) [mm]."""
+    distinct = sorted(set(values))
+    if len(distinct) <= 12:
+        return distinct
+    nonzero = [v for v in distinct if v > 0]
+    return {"min": nonzero[0], "max": nonzero[-1], "distinct": len(nonzero), "ball_bearing": 0.0 in distinct}
 
 
 # ----------------------------------------------------------------- a recording
