@@ -12,7 +12,8 @@ authority for every number it shares with the configuration.
 What the builder changes in the default configuration's model on top of the base file:
 
 * every scene: drops the sensors the configuration's channel groups do not need (and the
-  eccentricity/contact/friction sensors of ideal joints), names the model after the
+  eccentricity/contact/friction sensors of ideal joints, and the accelerometer sensors with
+  ``mujoco.accelerometers = "posthoc"``, the default; their sites stay), names the model after the
   configuration; a scene without a clearance joint switches contact detection off
   (``mjDSBL_CONTACT``; the base model's geoms never collide anyway);
 * a clearance variant (``joints.clearance_b_mm``/``clearance_c_mm`` > 0; the default is test 6,
@@ -163,10 +164,14 @@ def _compare(base: mujoco.MjModel, m: mujoco.MjModel, skip_geoms: tuple[str, ...
 
 def test_the_base_xml_is_the_builders_ideal_default_model(base, ideal):
     _compare(base, ideal)
-    # what the builder changed: contact off, the clearance-joint sensors removed
+    # what the builder changed: contact off, the clearance-joint sensors removed, the accelerometer
+    # sensors too (computed after the rollout by default, mujoco.accelerometers = "posthoc")
     assert ideal.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_CONTACT
     assert set(_names(base, "sensor", base.nsensor)) - set(_names(ideal, "sensor", ideal.nsensor)) == {
-        n for jt in ("A", "B", "C") for n in (N.sensor_ecc(jt), N.sensor_contact(jt), N.sensor_friction(jt))}
+        n for jt in ("A", "B", "C") for n in (N.sensor_ecc(jt), N.sensor_contact(jt), N.sensor_friction(jt))} | \
+        set(N.ACCEL_SENSORS)
+    with_sensors = build(IDEAL.replace(**{"mujoco.accelerometers": "sensor"}))[1]
+    assert set(N.ACCEL_SENSORS) <= set(_names(with_sensors, "sensor", with_sensors.nsensor))
 
 
 def test_the_default_clearance_variant_changes_only_joint_c(base):

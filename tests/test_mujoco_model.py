@@ -20,8 +20,10 @@ def _resolve(model: mujoco.MjModel, kind: str, name: str) -> int:
 
 
 def test_every_python_name_resolves_in_the_compiled_models():
-    ideal = build(preset(3))[1]
-    both = build(preset(12))[1]
+    # MuJoCo's accelerometer sensors (the default "posthoc" computes them without: test_posthoc_accel.py)
+    sensor = {"mujoco.accelerometers": "sensor"}
+    ideal = build(preset(3).replace(**sensor))[1]
+    both = build(preset(12).replace(**sensor))[1]
     for m in (ideal, both):
         for b in N.BODIES:
             _resolve(m, "body", b)
@@ -66,10 +68,12 @@ def test_each_scene_holds_only_what_it_needs(test_id, nv, npair, neq):
 
 
 def test_channel_groups_select_sensors():
-    full = build(preset(12))[1]
+    full = build(preset(12).replace(**{"mujoco.accelerometers": "sensor"}))[1]
+    posthoc = build(preset(12))[1]  # accelerometers from the recorded state, no sensors
     lean = build(preset(12).replace(**{"sensors.channels": ["encoder"]}))[1]
     assert lean.nsensor == 1 and lean.sensor(0).name == N.SENSOR_CRANK_ANGLE
     assert full.nsensor == 6 + 4 + 2 * 3
+    assert posthoc.nsensor == 4 + 2 * 3
     run = simulate_run(short(preset(12), 0.02, **{"sensors.channels": ["encoder", "accel"]}))
     assert list(run.channels) == ["AC1", "AC2", "AC3", "AC4", "AC5", "AC6", "encoder_angle"]
 
@@ -112,7 +116,8 @@ def test_exported_xml_compiles_to_the_same_model(tmp_path):
     xml = export_xml(cfg)
     assert "bore collider" in xml and cfg.digest() in xml
     m = mujoco.MjModel.from_xml_string(xml)
-    ref = build(cfg)[1]
+    # the export keeps MuJoCo's accelerometer sensors (a plain MuJoCo has no posthoc path)
+    ref = build(cfg.replace(**{"mujoco.accelerometers": "sensor"}))[1]
     assert (m.nq, m.nv, m.nu, m.na, m.npair, m.nsensor) == (ref.nq, ref.nv, ref.nu, ref.na, ref.npair, ref.nsensor)
     np.testing.assert_allclose(m.pair_solref, ref.pair_solref, rtol=1e-5)  # XML keeps 6 digits
     np.testing.assert_allclose(m.body_mass, ref.body_mass)

@@ -524,6 +524,17 @@ class MujocoSettings:
         contact_damping_scale: factor on the twin's contact damping (the law's χ or linear c,
             or the soft contact's c) [-].
         impact_damping_gain: factor on χ of a hysteresis law [-] (1 = the reference's law).
+        accelerometers: how the AC1..AC6 channels are computed: "posthoc" (default) from the
+            recorded state after each rollout (qacc_k = (qvel_{k+1} − qvel_k)/h, exact to
+            round-off with the Euler integrator, and the planar kinematics of the compiled chain:
+            ``twin.mujoco_engine.accel``), or "sensor": MuJoCo's ``<accelerometer>`` sensors,
+            which make every step run ``mj_rnePostConstraint``. Same readings to round-off
+            (``tests/test_posthoc_accel.py``). "posthoc" needs the Euler integrator: with another
+            integrator the run takes the sensors (``meta["accelerometers"]`` says which).
+            Measured side by side (``analysis/bench_mujoco.py --repeats 5``, all channels at
+            100 kHz, µs per step sensor → posthoc, the readings' cost included): ideal (test 3)
+            2.14 → 1.90, C only (test 6) 2.66 → 2.45, B+C (test 12) 3.34 → 3.07 (8-11 % less;
+            the engine's real-time factor 9-12 % higher); README "Where a step goes".
     """
 
     integrator: str = _XML.integrator
@@ -543,8 +554,10 @@ class MujocoSettings:
     contact_stiffness_scale: float = 1.0
     contact_damping_scale: float = 1.0
     impact_damping_gain: float = 1.0
+    accelerometers: str = "posthoc"
 
     def __post_init__(self) -> None:
+        _choice(self.accelerometers, "accelerometers", ("sensor", "posthoc"))
         for name in ("contact_stiffness_scale", "contact_damping_scale"):
             v = getattr(self, name)
             _check(isinstance(v, (int, float)) and 0.01 <= v <= 100, name, f"must lie in [0.01, 100], got {v!r}")

@@ -26,7 +26,9 @@ What the builder does to the base model:
   while sliding; on test 12 that inflated the normal force by a median 23 % (up to 27×) over
   the k δ + c δ̇ law, and making the friction rows softer turned Coulomb friction into viscous
   friction (``analysis/friction_cone.py`` measures both);
-* sensors: only those the configuration's channel groups need (the optional "energy" group
+* sensors: only those the configuration's channel groups need (the accelerometers not at all
+  with ``mujoco.accelerometers = "posthoc"``, the default: the engine computes them from the
+  recorded state, :mod:`twin.mujoco_engine.accel`; the optional "energy" group
   adds ``e_kinetic``/``e_potential`` sensors and the slider's velocity, and switches on
   MuJoCo's energy computation, ``mjENBL_ENERGY``);
 * the crank PID gains.
@@ -53,6 +55,7 @@ from twin import names as N
 from twin.config import JOINTS, BenchConfig, joint_stiffness
 from twin.errors import ModelError
 from twin.impact import DAMPING_FACTOR
+from twin.mujoco_engine.accel import posthoc_applies
 from twin.mujoco_engine.collider import ensure_installed
 
 #: flat, tiny impedance: the contact force is then exactly k δ + c δ̇ with a direct solref
@@ -452,6 +455,10 @@ def build_spec(cfg: BenchConfig) -> mujoco.MjSpec:
         if g == "joints":
             for jt in j.clearance_joints:
                 keep.update((N.sensor_ecc(jt), N.sensor_contact(jt), N.sensor_friction(jt)))
+    if posthoc_applies(cfg):
+        # accelerometers from the recorded state after the rollout (twin.mujoco_engine.accel):
+        # no sensor asks for mj_rnePostConstraint every step; their sites stay
+        keep.difference_update(N.ACCEL_SENSORS)
     for s in list(spec.sensors):
         if s.name not in keep:
             spec.delete(s)
@@ -638,8 +645,10 @@ def build_model(cfg: BenchConfig) -> mujoco.MjModel:
 
 
 def export_xml(cfg: BenchConfig) -> str:
-    """MJCF text of the configuration's compiled variant (opens in MuJoCo's viewer)."""
-    spec, _model, info = build(cfg)
+    """MJCF text of the configuration's compiled variant (opens in MuJoCo's viewer). It keeps
+    MuJoCo's accelerometer sensors whatever ``mujoco.accelerometers`` says: a plain MuJoCo has no
+    after-the-rollout path."""
+    spec, _model, info = build(cfg.replace(**{"mujoco.accelerometers": "sensor"}))
     head = (f"<!-- twin export of '{cfg.name}' (config digest {cfg.digest()}).\n"
             f"     Clearance joints: {', '.join(cfg.joints.clearance_joints) or 'none'}; contact: "
             + "; ".join(f"{jt}: {s.law.law if s.law else s.source}" for jt, s in info.contacts.items())

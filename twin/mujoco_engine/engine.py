@@ -31,6 +31,7 @@ from twin import names as N
 from twin.config import BenchConfig
 from twin.errors import SimulationError
 from twin.kinematics import initial_pose, rot2
+from twin.mujoco_engine.accel import PosthocAccelerometers, posthoc_applies
 from twin.mujoco_engine.builder import build
 
 _STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
@@ -84,12 +85,18 @@ class MujocoEngine:
             "contact": {j: s.to_json() for j, s in self.info.contacts.items()},
             "nq": int(self.model.nq), "nv": int(self.model.nv),
             "warnings": {},
+            # how AC1..AC6 are computed (mujoco.accelerometers; "sensor" where "posthoc" cannot be)
+            "accelerometers": ("posthoc" if posthoc_applies(cfg) else "sensor") if "accel" in cfg.sensors.channels
+            else None,
         }
         self._sensor_slices = {self.model.sensor(i).name: slice(int(self.model.sensor_adr[i]),
                                                                  int(self.model.sensor_adr[i] + self.model.sensor_dim[i]))
                                for i in range(self.model.nsensor)}
         self._nstate = mujoco.mj_stateSize(self.model, _STATE)
         self._sens = np.empty((1, 0, self.model.nsensordata))
+        # accelerometers from the recorded state (mujoco.accelerometers = "posthoc", Euler)
+        self._accel = PosthocAccelerometers(self.model) if posthoc_applies(cfg) else None
+        self._states = np.empty((1, 0, self._nstate))
         self._k = 0  # integration steps taken since reset
         self._drive = None
         if cfg.drive.mode == "prescribed":
@@ -170,6 +177,11 @@ class MujocoEngine:
         if self._sens.shape[1] < nstep:
             self._sens = np.empty((1, nstep, m.nsensordata))
         sd = self._sens[:, :nstep]
+        st = None
+        if self._accel is not None:
+            if self._states.shape[1] < nstep:
+                self._states = np.empty((1, nstep, self._nstate))
+            st = self._states[:, :nstep]
         state0 = np.empty((1, self._nstate))
         mujoco.mj_getState(m, d, state0[0], _STATE)
         warm = d.qacc_warmstart.copy()[None]
@@ -179,8 +191,10 @@ class MujocoEngine:
             ctrl = np.stack([nxt, np.zeros(nstep)], axis=-1)[None]
         else:
             ctrl = np.stack([theta_ref, omega_ref], axis=-1)[None]
-        # no per-step state output: the data object ends holding the final state
-        rollout.rollout(m, d, state0, ctrl, nstep=nstep, initial_warmstart=warm, sensordata=sd)
+        # per-step state output only for the posthoc accelerometers (row k: the state after step
+        # k); the data object ends holding the final state
+        rollout.rollout(m, d, state0, ctrl, nstep=nstep, initial_warmstart=warm,
+                        sensordata=sd if m.nsensordata else None, state=st)
         t_start, t_end = self._k * h, (self._k + nstep) * h
         if not math.isclose(d.time, t_end, rel_tol=0, abs_tol=h * 0.5) or \
                 not (np.all(np.isfinite(d.qpos)) and np.all(np.isfinite(d.qvel)) and np.all(np.isfinite(sd))):
@@ -192,7 +206,10 @@ class MujocoEngine:
             # a column would be contiguous, so the chunk's channels would be views of the buffer
             # the next chunk overwrites (one sensor value per step, or a one-sample chunk)
             sens = sens.copy()
-        return self._channels(sens)
+        accel = None
+        if self._accel is not None:
+            accel = self._accel(state0[0], st[0], stride, sens.shape[0])
+        return self._channels(sens, accel)
 
     def warnings(self) -> dict[str, int]:
         """MuJoCo warnings raised so far in this run (``mjData.warning``): {name: count}, nonzero only."""
@@ -206,7 +223,7 @@ class MujocoEngine:
                 f"(time reached {t_reached:.6f} s; warnings: {', '.join(warn) or 'none'}; NaN or Inf in the state "
                 "or sensors); try a smaller timestep or stiffer settings")
 
-    def _channels(self, sens: np.ndarray) -> dict[str, np.ndarray]:
+    def _channels(self, sens: np.ndarray, accel: np.ndarray | None = None) -> dict[str, np.ndarray]:
         cfg, sl = self.cfg, self._sensor_slices
         out: dict[str, np.ndarray] = {}
 
@@ -215,8 +232,9 @@ class MujocoEngine:
 
         groups = cfg.sensors.channels
         if "accel" in groups:
-            for a in N.ACCEL_SENSORS:
-                out[a] = col(a, 0)  # site x axis = sensitive axis
+            for i, a in enumerate(N.ACCEL_SENSORS):
+                # site x axis = sensitive axis; posthoc: rows of the readings computed from the state
+                out[a] = col(a, 0) if accel is None else accel[i]
         if "encoder" in groups or "crank" in groups:
             out["crank_angle"] = col(N.SENSOR_CRANK_ANGLE)
         if "crank" in groups:
