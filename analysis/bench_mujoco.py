@@ -4,17 +4,22 @@ For the ideal (Table 4 test 3), C-only (test 6) and B+C (test 12) clearance scen
 h = 1e-5 s, this script measures in one run, interleaved so that machine load hits every
 variant alike:
 
-* ``scene``: the twin's compiled model stepping inside ``mujoco.rollout`` (all sensors of the
+* ``scene``: the twin's compiled model stepping inside ``mujoco.rollout`` (all channels of the
   default channel groups, 100 kHz output), from a state at full speed (750 motor rpm), with
-  the drive reference as control input;
+  the drive reference as control input, once per accelerometer setting
+  (``mujoco.accelerometers``): "sensor" (MuJoCo's ``<accelerometer>`` sensors, which make each
+  step run ``mj_rnePostConstraint``) and "posthoc" (no accelerometer sensor; the rollout also
+  returns the state of every step and the timing includes the engine's after-the-rollout
+  kinematics of the six readings, ``twin.mujoco_engine.accel``);
 * ``floor``: the same model with constraints disabled (``mjDSBL_CONSTRAINT``: no collision,
   no contact, no loop closure, no guide friction): the lower bound of this model;
 * ``ratio`` = scene / floor (the issue's target: clearance scenes within 2x the floor);
 * ``engine RTF``: the real-time factor of the whole engine path (``twin.simulate.simulate``:
-  reference generation, rollout, channel assembly) over the same simulated time.
+  reference generation, rollout, channel assembly) over the same simulated time;
+* ``posthoc / sensor``: the step time of the posthoc setting over the sensor setting's.
 
-Each timing is the best of ``REPEATS`` rollouts of ``STEPS`` steps. Run:
-``python analysis/bench_mujoco.py [--steps N] [--repeats R]``.
+Each timing is the best of ``REPEATS`` rollouts of ``STEPS`` steps, every variant interleaved.
+Run: ``python analysis/bench_mujoco.py [--steps N] [--repeats R] [--lean]``.
 """
 
 from __future__ import annotations
@@ -35,11 +40,19 @@ from twin.simulate import run_chunks, simulate_run
 
 _STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
 SCENES = {"ideal (test 3)": 3, "C only (test 6)": 6, "B+C (test 12)": 12}
+SETTINGS = ("sensor", "posthoc")  # mujoco.accelerometers
 
 
-def prepare(test_id: int, steps: int, channels=None):
-    """Compiled model, a state at full speed and the control sequence that continues it."""
-    over = {"simulation.duration_s": 0.4, "drive.ramp_s": 0.2}
+def prepare(test_id: int, steps: int, channels=None, accelerometers: str = "sensor"):
+    """Compiled model, a state at full speed and the control sequence that continues it
+    (``analysis/profile_stages.py`` and ``profile_scenes.py`` take theirs from here; MuJoCo's
+    accelerometer sensors unless ``accelerometers = "posthoc"``)."""
+    return prepare_posthoc(test_id, steps, channels, accelerometers)[:3]
+
+
+def prepare_posthoc(test_id: int, steps: int, channels=None, accelerometers: str = "posthoc"):
+    """:func:`prepare` and the engine's after-the-rollout accelerometers (None with the sensors)."""
+    over = {"simulation.duration_s": 0.4, "drive.ramp_s": 0.2, "mujoco.accelerometers": accelerometers}
     if channels is not None:
         over["sensors.channels"] = channels
     eng = MujocoEngine(preset(test_id).replace(**over))
@@ -49,17 +62,24 @@ def prepare(test_id: int, steps: int, channels=None):
     mujoco.mj_getState(eng.model, eng.data, state, _STATE)
     t = eng.data.time + np.arange(steps) * eng.cfg.simulation.timestep_s
     th, om = DriveReference(eng.cfg)(t)
-    return eng.model, state, np.stack([th, om], -1)[None]
+    return eng.model, state, np.stack([th, om], -1)[None], eng._accel
 
 
-def step_time(model, state, ctrl, steps: int) -> float:
+def step_time(model, state, ctrl, steps: int, accel=None) -> float:
+    """µs per step of one rollout; with ``accel`` (posthoc) the rollout also returns every
+    step's state and the time includes the six readings at each (100 kHz) output sample."""
     d = mujoco.MjData(model)
     sd = np.empty((1, steps, max(model.nsensordata, 1)))
+    st = np.empty((1, steps, len(state))) if accel is not None else None
     t0 = time.perf_counter()
-    rollout.rollout(model, d, state[None], ctrl, nstep=steps, sensordata=sd if model.nsensordata else None)
+    rollout.rollout(model, d, state[None], ctrl, nstep=steps, sensordata=sd if model.nsensordata else None,
+                    state=st)
+    if accel is not None:
+        accel(state, st[0], 1, steps)
+    wall = time.perf_counter() - t0
     if abs(d.time - (state[0] + steps * model.opt.timestep)) > 0.5 * model.opt.timestep:
         raise RuntimeError("rollout stopped early (warning)")
-    return (time.perf_counter() - t0) / steps * 1e6
+    return wall / steps * 1e6
 
 
 def main() -> None:
@@ -67,40 +87,59 @@ def main() -> None:
     ap.add_argument("--steps", type=int, default=50_000)
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--lean", action="store_true", help="also time a lean channel set (accel + encoder)")
+    ap.add_argument("--rtf-repeats", type=int, default=1, help="1 s engine runs per scene and setting (best kept)")
     args = ap.parse_args()
     variants = {}
     for label, tid in SCENES.items():
-        m, s, c = prepare(tid, args.steps)
-        floor = copy.copy(m)
-        floor.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONSTRAINT
-        variants[label] = {"scene": (m, s, c), "floor": (floor, s, c)}
-        if args.lean:
-            ml, sl, cl = prepare(tid, args.steps, channels=["accel", "encoder"])
-            variants[label]["lean"] = (ml, sl, cl)
+        variants[label] = {}
+        for acc in SETTINGS:
+            m, s, c, post = prepare_posthoc(tid, args.steps, accelerometers=acc)
+            floor = copy.copy(m)
+            floor.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONSTRAINT
+            variants[label][("scene", acc)] = (m, s, c, post)
+            variants[label][("floor", acc)] = (floor, s, c, post)
+        if args.lean:  # the default setting
+            ml, sl, cl, pl = prepare_posthoc(tid, args.steps, channels=["accel", "encoder"])
+            variants[label][("lean", "posthoc")] = (ml, sl, cl, pl)
     best = {(lab, k): math.inf for lab, v in variants.items() for k in v}
     for _ in range(args.repeats):  # interleaved repeats
         for lab, v in variants.items():
-            for k, (m, s, c) in v.items():
-                best[(lab, k)] = min(best[(lab, k)], step_time(m, s, c, args.steps))
+            for k, (m, s, c, post) in v.items():
+                best[(lab, k)] = min(best[(lab, k)], step_time(m, s, c, args.steps, post))
     rtf = {}
-    for lab, tid in SCENES.items():
-        cfg = preset(tid).replace(**{"simulation.duration_s": 1.0, "drive.ramp_s": 0.2})
-        rtf[lab] = simulate_run(cfg).meta["real_time_factor"]
+    for _ in range(args.rtf_repeats):
+        for lab, tid in SCENES.items():
+            for acc in SETTINGS:
+                cfg = preset(tid).replace(**{"simulation.duration_s": 1.0, "drive.ramp_s": 0.2,
+                                             "mujoco.accelerometers": acc})
+                rtf[(lab, acc)] = max(rtf.get((lab, acc), 0.0), simulate_run(cfg).meta["real_time_factor"])
     h = 1e-5
-    print(f"MuJoCo {mujoco.__version__}, h = {h:g} s, {args.steps} steps, best of {args.repeats} (interleaved)")
-    head = "| scene | us/step | RTF | floor us/step | floor RTF | ratio scene/floor | engine RTF (1 s run) |"
+    print(f"MuJoCo {mujoco.__version__}, h = {h:g} s, {args.steps} steps, best of {args.repeats} (interleaved); "
+          f"engine RTF best of {args.rtf_repeats}")
+    head = ("| scene | accelerometers | us/step | RTF | floor us/step | floor RTF | ratio scene/floor | "
+            "engine RTF (1 s run) |")
     if args.lean:
         head += " lean us/step | lean ratio |"
     print(head)
     print("|" + "---|" * (head.count("|") - 1))
     for lab in SCENES:
-        sc, fl = best[(lab, "scene")], best[(lab, "floor")]
-        row = (f"| {lab} | {sc:.2f} | {h * 1e6 / sc:.2f} | {fl:.2f} | {h * 1e6 / fl:.2f} | {sc / fl:.2f} | "
-               f"{rtf[lab]:.2f} |")
-        if args.lean:
-            ln = best[(lab, "lean")]
-            row += f" {ln:.2f} | {ln / fl:.2f} |"
-        print(row)
+        for acc in SETTINGS:
+            sc, fl = best[(lab, ("scene", acc))], best[(lab, ("floor", acc))]
+            row = (f"| {lab} | {acc} | {sc:.2f} | {h * 1e6 / sc:.2f} | {fl:.2f} | {h * 1e6 / fl:.2f} | "
+                   f"{sc / fl:.2f} | {rtf[(lab, acc)]:.2f} |")
+            if args.lean:
+                if acc == "posthoc":
+                    ln = best[(lab, ("lean", "posthoc"))]
+                    row += f" {ln:.2f} | {ln / fl:.2f} |"
+                else:
+                    row += " | |"
+            print(row)
+    print()
+    print("| scene | posthoc / sensor us/step | posthoc / sensor engine RTF |")
+    print("|---|---|---|")
+    for lab in SCENES:
+        print(f"| {lab} | {best[(lab, ('scene', 'posthoc'))] / best[(lab, ('scene', 'sensor'))]:.3f} | "
+              f"{rtf[(lab, 'posthoc')] / rtf[(lab, 'sensor')]:.3f} |")
 
 
 if __name__ == "__main__":
