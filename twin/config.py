@@ -533,8 +533,9 @@ class MujocoSettings:
             integrator the run takes the sensors (``meta["accelerometers"]`` says which).
             Measured side by side (``analysis/bench_mujoco.py --repeats 5``, all channels at
             100 kHz, µs per step sensor → posthoc, the readings' cost included): ideal (test 3)
-            2.14 → 1.90, C only (test 6) 2.66 → 2.45, B+C (test 12) 3.34 → 3.07 (8-11 % less;
-            the engine's real-time factor 9-12 % higher); README "Where a step goes".
+            2.19 → 2.01, C only (test 6) 2.76 → 2.60, B+C (test 12) 3.50 → 3.29 (5-8 % less; a
+            whole 4 s run of test 12 spends 1.41-1.58 s in the engine instead of 1.92-2.10 s);
+            README "Where a step goes".
     """
 
     integrator: str = _XML.integrator
