@@ -578,3 +578,48 @@ def test_designs_that_would_be_overwritten_or_too_large_are_refused_at_once(text
     assert main(["dataset", "plan", str(spec), "--no-estimate"]) == 2
     err = capsys.readouterr().err
     assert fragment in err and err.count("\n") == 1 and time.perf_counter() - t < 10
+
+
+def test_a_clearance_at_the_ground_pivot_is_a_dataset_factor(tmp_path):
+    """The general mechanism's joint A as a dotted factor: its truth channels are stored for the
+    run with a clearance there and are NaN for the run without. The loaded start rests the crank
+    journal on the frame's bore, so the contact carries the frame's static load, |m_crank g + F_B|
+    (statics, twin.kinematics), while the drive's ramp has barely begun (within 5 %)."""
+    from twin.config import preset
+    from twin.drive import DriveReference
+    from twin.kinematics import static_pin_forces
+
+    spec = tmp_path / "a.toml"
+    spec.write_text(textwrap.dedent("""
+        [dataset]
+        name = "pivot-a"
+        [base]
+        test = 1
+        engine = "reference"
+        duration_s = 0.05
+        [design]
+        kind = "grid"
+        [factors]
+        "joints.clearance_a_mm" = [0.0, 0.5]
+        [outputs]
+        truth = ["encoder", "joints"]
+        instrumented = []
+        [splits]
+        train = 1.0
+        val = 0.0
+        test = 0.0
+    """))
+    out = tmp_path / "ds"
+    assert main(["dataset", "generate", str(spec), "--out", str(out), "--workers", "1", "--no-progress"]) == 0
+    rows = {r["factor_joints.clearance_a_mm"]: r for r in pq.read_table(out / "runs.parquet").to_pylist()}
+    with_a = pq.read_table(out / rows[0.5]["file"])
+    without = pq.read_table(out / rows[0.0]["file"])
+    assert with_a.schema.names == without.schema.names == ["encoder_angle", "ecc_A_x", "ecc_A_y", "pen_A", "fn_A",
+                                                            "ft_A"]
+    cfg = preset(1).replace(**{"joints.clearance_a_mm": 0.5, "simulation.duration_s": 0.05})
+    theta0 = float(DriveReference(cfg)(np.array([0.0]))[0][0])
+    f_b, _ = static_pin_forces(cfg, theta0)
+    load = np.linalg.norm(cfg.bodies.crank.mass_kg * np.asarray(cfg.mechanism.gravity_vector[:2]) + f_b)
+    fn = with_a["fn_A"].to_numpy()
+    assert np.all(fn[100:] > 0) and fn[-1] == pytest.approx(load, rel=0.05), (fn[-1], load)
+    assert np.all(np.isnan(without["fn_A"].to_numpy()))

@@ -77,8 +77,8 @@ def dataset_columns(runs: list[RunPlan], spec: DatasetSpec) -> list[Any]:
     lacks, e.g. the eccentricities of a joint without clearance, are stored as NaN there)."""
     if not runs:
         return []
-    probe = runs[0].config.replace(**{"joints.clearance_b_mm": 0.1, "joints.clearance_c_mm": 0.1,
-                                       "joints.allow_noncatalogue": True})
+    probe = runs[0].config.replace(**{"joints.clearance_a_mm": 0.1, "joints.clearance_b_mm": 0.1,
+                                       "joints.clearance_c_mm": 0.1, "joints.allow_noncatalogue": True})
     every = column_specs(probe, spec.outputs.truth, spec.outputs.instrumented, spec.outputs.dtype)
     present: set[str] = set()
     for r in runs:
