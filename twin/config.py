@@ -533,7 +533,7 @@ class MujocoSettings:
             integrator the run takes the sensors (``meta["accelerometers"]`` says which).
             Measured side by side (``analysis/bench_mujoco.py --repeats 5``, all channels at
             100 kHz, µs per step sensor → posthoc, the readings' cost included): ideal (test 3)
-            2.19 → 2.01, C only (test 6) 2.76 → 2.60, B+C (test 12) 3.50 → 3.29 (5-8 % less; a
+            2.19 → 1.95, C only (test 6) 2.75 → 2.57, B+C (test 12) 3.47 → 3.25 (6-12 % less; a
             whole 4 s run of test 12 spends 1.41-1.58 s in the engine instead of 1.92-2.10 s);
             README "Where a step goes".
     """
