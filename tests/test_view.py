@@ -515,3 +515,28 @@ def test_headless_screenshot_of_default_view(clearance_file, tmp_path):
     width, height = int.from_bytes(head[16:20], "big"), int.from_bytes(head[20:24], "big")
     assert width >= 1600 and height >= 900 and width * 9 == height * 16
     assert list(tmp_path.iterdir()) == [png]
+
+
+def test_a_clearance_at_the_ground_pivot_is_drawn_on_the_frame(tmp_path):
+    """Test 6 with 0.5 mm at A (reference engine, 0.2 s): the frame's bore, A's orbit inset and
+    contact arrow live under /bench/frame (A's eccentricity is in the bench frame), the crank's
+    transform carries the journal's offset e_A, and the rod's origin B' = e_A + r(cos θ, sin θ)
+    − R(φ)e_B (here e_B = 0) follows from it."""
+    cfg = preset(6).replace(**{"joints.clearance_a_mm": 0.5, "joints.clearance_c_mm": 0.0,
+                               "simulation.engine": "reference"})
+    run = simulate_run(short(cfg, 0.2))
+    mcap = tmp_path / "a.mcap"
+    write_run(mcap, run)
+    assert cli("view", mcap) == 0
+    rr_ = read_rrd(tmp_path / "a.rrd")
+    assert {"/bench/frame/eye_A", "/bench/frame/orbit_A", "/bench/frame/orbit_A/journal", "/bench/frame/contact_A",
+            "/bench/crank/pin_A", "/orbit/A/journal", "/orbit/A/clearance"} <= set(rr_)
+    assert not any(k.startswith("/bench/rod/orbit_") for k in rr_)  # B and C are ball bearings here
+    crank = np.array([r[0] for r in rr_["/bench/crank"]["Transform3D:translation"]])
+    e_a = np.stack([run["ecc_A_x"], run["ecc_A_y"]], axis=1)[::P]
+    np.testing.assert_allclose(crank[:, :2], e_a, atol=1e-12)
+    assert np.max(np.hypot(*e_a.T)) > 0.9 * cfg.joints.radial_m("A")  # the journal does move in the bore
+    theta = run["crank_angle"][::P]
+    rod = np.array([r[0] for r in rr_["/bench/rod"]["Transform3D:translation"]])
+    r = cfg.bodies.crank.length_m
+    np.testing.assert_allclose(rod[:, :2], e_a + r * np.stack([np.cos(theta), np.sin(theta)], axis=1), atol=1e-9)
