@@ -243,8 +243,9 @@ def test_the_shipped_model_identifies_the_sample_recordings(rec, fault, c_mm, tm
 
 @pytest.mark.skipif(not DEFAULT.is_file(), reason="no default model committed yet")
 @pytest.mark.xfail(strict=True, reason="known gap (model card, 'Size'): on the sample recordings (reference engine, "
-                   "motor model with +-3 % speed ripple, which no training run has) the size at C reads 0.31-0.47 mm "
-                   "for the true 0.1 mm; the 90 % interval of test6_synthetic, [0.11, 1.6] mm, misses it")
+                   "encoder-trace drive) the size at C reads 0.31-0.47 mm for the true 0.1 mm; the 90 % interval of "
+                   "test6_synthetic, [0.11, 1.6] mm, misses it (not because of the samples' speed ripple: "
+                   "analysis/identify/ripple_check.py)")
 def test_the_shipped_model_sizes_the_clearance_of_the_test6_sample(tmp_path):
     js = tmp_path / "a.json"
     assert main(["identify", "clearance", str(REC / "test6_synthetic.mcap"), "--json", str(js)]) == 0
