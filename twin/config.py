@@ -88,6 +88,15 @@ def _choice(value: str, name: str, allowed: tuple[str, ...]) -> None:
     _check(value in allowed, name, f"must be one of {', '.join(allowed)}; got {value!r}")
 
 
+def _joint_table(obj: Any, name: str) -> list[tuple[str, Any]]:
+    """Items of the per-joint table ``obj.<name>`` (keys checked to be joints, ConfigError
+    ``<name>.<key>`` otherwise), for the caller to check the values."""
+    items = list(getattr(obj, name).items())
+    for key, _ in items:
+        _choice(key, f"{name}.{key}", JOINTS)
+    return items
+
+
 # --------------------------------------------------------------------------- bodies
 @dataclass(frozen=True)
 class BodyParams:
@@ -173,8 +182,7 @@ class Materials:
 
     def __post_init__(self) -> None:
         for name in ("pins", "bushings"):
-            for key, value in getattr(self, name).items():
-                _choice(key, f"{name}.{key}", JOINTS)
+            for key, value in _joint_table(self, name):
                 _check(isinstance(value, Material), f"{name}.{key}", f"must be a Material table, got {value!r}")
 
     def pin_of(self, joint: str) -> Material:
@@ -242,8 +250,7 @@ class Joints:
         _positive(self.pin_diameter_m, "pin_diameter_m", "m")
         _positive(self.bushing_length_m, "bushing_length_m", "m")
         for name in ("pin_diameters_m", "bushing_lengths_m"):
-            for key, value in getattr(self, name).items():
-                _choice(key, f"{name}.{key}", JOINTS)
+            for key, value in _joint_table(self, name):
                 _positive(value, f"{name}.{key}", "m")
         for jt in JOINTS:
             _check(self.pin_diameter(jt) < 0.5, "pin_diameters_m" if jt in self.pin_diameters_m else "pin_diameter_m",
@@ -421,8 +428,7 @@ class Contact:
                "exponent", f"must lie in [1, 3], got {self.exponent!r}")
         _check(isinstance(self.stiffness, (int, float)) and math.isfinite(self.stiffness)
                and self.stiffness >= 0, "stiffness", f"must be >= 0 (0 = from Eq. 18), got {self.stiffness!r}")
-        for key, value in self.stiffnesses.items():
-            _choice(key, f"stiffnesses.{key}", JOINTS)
+        for key, value in _joint_table(self, "stiffnesses"):
             _check(isinstance(value, (int, float)) and math.isfinite(value) and value >= 0, f"stiffnesses.{key}",
                    f"must be >= 0 (0 = from Eq. 18), got {value!r}")
         _check(isinstance(self.stiffness_scale, (int, float)) and 0.1 <= self.stiffness_scale <= 10,

@@ -73,6 +73,7 @@ class MujocoEngine:
         stage_timers_off()
         self.spec, self.model, self.info = build(cfg)
         self.data = mujoco.MjData(self.model)
+        posthoc = posthoc_applies(cfg)
         self.meta: dict[str, Any] = {
             "engine": self.name,
             "engine_version": mujoco.__version__,
@@ -86,8 +87,7 @@ class MujocoEngine:
             "nq": int(self.model.nq), "nv": int(self.model.nv),
             "warnings": {},
             # how AC1..AC6 are computed (mujoco.accelerometers; "sensor" where "posthoc" cannot be)
-            "accelerometers": ("posthoc" if posthoc_applies(cfg) else "sensor") if "accel" in cfg.sensors.channels
-            else None,
+            "accelerometers": ("posthoc" if posthoc else "sensor") if "accel" in cfg.sensors.channels else None,
         }
         self._sensor_slices = {self.model.sensor(i).name: slice(int(self.model.sensor_adr[i]),
                                                                  int(self.model.sensor_adr[i] + self.model.sensor_dim[i]))
@@ -95,7 +95,7 @@ class MujocoEngine:
         self._nstate = mujoco.mj_stateSize(self.model, _STATE)
         self._sens = np.empty((1, 0, self.model.nsensordata))
         # accelerometers from the recorded state (mujoco.accelerometers = "posthoc", Euler)
-        self._accel = PosthocAccelerometers(self.model) if posthoc_applies(cfg) else None
+        self._accel = PosthocAccelerometers(self.model) if posthoc else None
         self._states = np.empty((1, 0, self._nstate))
         self._k = 0  # integration steps taken since reset
         self._drive = None

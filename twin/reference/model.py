@@ -584,6 +584,16 @@ def _assemble(P, q, qd, s, c, Q, rows, nz, Rt, S, Mb, rhs, tmp):
 
 
 @njit(cache=True)
+def _dependent_accelerations(S, Rt, zdd, nz, qdd):
+    """q̈ = Ṙż + R z̈ (``S`` = Ṙż, ``Rt`` = Rᵀ), the last step of both acceleration solves."""
+    for i in range(N_Q):
+        acc = S[i]
+        for j in range(nz):
+            acc += Rt[j, i] * zdd[j]
+        qdd[i] = acc
+
+
+@njit(cache=True)
 def accelerations(P, q, qd, s, c, Q, rows, nz, Rt, S, Mb, rhs, tmp, qdd):
     """q̈ = R z̈ + Ṙż from Rᵀ M R z̈ = Rᵀ (Q − M Ṙż); returns False if Rᵀ M R is not SPD.
 
@@ -591,11 +601,7 @@ def accelerations(P, q, qd, s, c, Q, rows, nz, Rt, S, Mb, rhs, tmp, qdd):
     _assemble(P, q, qd, s, c, Q, rows, nz, Rt, S, Mb, rhs, tmp)
     if not _cholesky_solve(Mb, rhs, nz):
         return False
-    for i in range(N_Q):
-        acc = S[i]
-        for j in range(nz):
-            acc += Rt[j, i] * rhs[j]
-        qdd[i] = acc
+    _dependent_accelerations(S, Rt, rhs, nz, qdd)
     return True
 
 
@@ -626,11 +632,7 @@ def accelerations_prescribed(P, q, qd, s, c, Q, rows, nz, Rt, S, Mb, rhs, tmp, q
     for j in range(nz):
         t += Mb[0, j] * zdd[j]
     tau[0] = t
-    for i in range(N_Q):
-        acc = S[i]
-        for j in range(nz):
-            acc += Rt[j, i] * zdd[j]
-        qdd[i] = acc
+    _dependent_accelerations(S, Rt, zdd, nz, qdd)
     return True
 
 
