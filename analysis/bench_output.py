@@ -19,7 +19,12 @@ the output adds to the wall time (wall − wall of ``none``) and its share of th
 the in-loop variants also the time inside the sink's calls, for the dataset split between the
 sensor chain and the Parquet writer. Files go to a temporary folder and are deleted.
 
-Run: ``python analysis/bench_output.py [--duration S (4)] [--repeats R] [--engines mujoco,reference]``.
+``--mcap-variants`` instead compares the MCAP writer's chunk codec and block size (LZ4 or none,
+1000 or 5000 samples per message), in the loop and on a writer thread, against no output, per
+engine, interleaved, best of ``--repeats``: the measurement behind ``twin.mcapfile``'s choice.
+
+Run: ``python analysis/bench_output.py [--duration S (4)] [--repeats R] [--engines mujoco,reference]
+[--mcap-variants]``.
 """
 
 from __future__ import annotations
@@ -79,13 +84,57 @@ def make_sinks(kind: str, cfg, folder: Path) -> tuple[list, dict[str, Timed]]:
     return [outer], {"sink": outer, "parquet": parquet}
 
 
+MCAP_VARIANTS = {"lz4, 1000": ("lz4", 1000), "lz4, 5000": ("lz4", 5000), "none, 1000": ("none", 1000),
+                 "none, 5000 (default)": ("none", 5000)}
+
+
+def mcap_variants(engines: list[str], duration: float, repeats: int) -> None:
+    """The ``--mcap-variants`` table (see the module docstring)."""
+    from twin.mcapfile import RunWriter
+
+    cfgs = {e: preset(12).replace(**{"simulation.engine": e, "simulation.duration_s": duration}) for e in engines}
+    best: dict[tuple[str, str, bool], float] = {}
+    with tempfile.TemporaryDirectory(prefix="twin_bench_output_") as tmp:
+        folder = Path(tmp)
+        for e in engines:
+            simulate(cfgs[e].replace(**{"simulation.duration_s": 0.02}))
+        for _ in range(repeats):
+            for e in engines:
+                for name, (codec, block) in [("no output", (None, 0)), *MCAP_VARIANTS.items()]:
+                    for thread in ((False,) if codec is None else (False, True)):
+                        sinks = []
+                        if codec is not None:
+                            w = RunWriter(folder / "run.mcap", cfgs[e], block=block, compression=codec)
+                            sinks = [ThreadedSink(w) if thread else w]
+                        t0 = time.perf_counter()
+                        simulate(cfgs[e], sinks)
+                        wall = time.perf_counter() - t0
+                        best[(e, name, thread)] = min(best.get((e, name, thread), math.inf), wall)
+                        for f in folder.iterdir():
+                            f.unlink()
+    print(f"test 12, {duration:g} s at 100 kHz, MCAP codec and block size, best of {repeats} (interleaved)")
+    print()
+    print("| engine | codec, samples per block | in the loop: wall [s], share | on a thread: wall [s], share |")
+    print("|---|---|---:|---:|")
+    for e in engines:
+        base = best[(e, "no output", False)]
+        print(f"| {e} | no output | {base:.3f} | |")
+        for name in MCAP_VARIANTS:
+            a, b = best[(e, name, False)], best[(e, name, True)]
+            print(f"| {e} | {name} | {a:.3f}, {(a - base) / a:.1%} | {b:.3f}, {(b - base) / b:.1%} |")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--duration", type=float, default=4.0)
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--engines", default="mujoco,reference")
+    ap.add_argument("--mcap-variants", action="store_true", help="compare MCAP codecs and block sizes instead")
     args = ap.parse_args()
     engines = args.engines.split(",")
+    if args.mcap_variants:
+        mcap_variants(engines, args.duration, args.repeats)
+        return
     kinds = ("none", "mcap", "mcap, thread", "dataset", "dataset, thread")
     cfgs = {e: preset(12).replace(**{"simulation.engine": e, "simulation.duration_s": args.duration})
             for e in engines}

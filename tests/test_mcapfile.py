@@ -13,8 +13,8 @@ from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 
 from twin.config import preset
-from twin.errors import RecordingError
-from twin.mcapfile import RunWriter, read_metadata, read_run, write_run
+from twin.errors import RecordingError, TwinError
+from twin.mcapfile import DEFAULT_BLOCK, RunWriter, read_metadata, read_run, write_run
 from twin.run import Run
 from twin.simulate import simulate_run
 from twin.summary import summarize
@@ -24,7 +24,7 @@ from conftest import short
 
 @pytest.fixture(scope="module")
 def run12() -> Run:
-    return simulate_run(short(preset(12), 0.0505))  # not a multiple of the 1000-sample block
+    return simulate_run(short(preset(12), 0.0505))  # not a multiple of the 5000-sample block
 
 
 def test_round_trip_is_bit_identical(run12, tmp_path):
@@ -61,7 +61,7 @@ def test_independent_decoders_read_the_file(run12, tmp_path):
         reader = make_reader(fh, decoder_factories=[DecoderFactory()])
         _, channel, msg, decoded = next(reader.iter_decoded_messages(topics=["/twin/joint_C"]))
         assert channel.message_encoding == "cdr" and decoded.first_index == 0 and decoded.rate_hz == 1e5
-        assert np.array_equal(np.asarray(decoded.ecc_c_x), run12["ecc_C_x"][:1000])
+        assert np.array_equal(np.asarray(decoded.ecc_c_x), run12["ecc_C_x"][:DEFAULT_BLOCK])
         assert msg.log_time == 0
     # rerun's MCAP reader (Rust), when the CLI is installed
     rerun = shutil.which("rerun") or str(Path(sys.executable).with_name("rerun"))
@@ -71,11 +71,38 @@ def test_independent_decoders_read_the_file(run12, tmp_path):
         assert "/twin/accel" in out.stdout
 
 
+@pytest.mark.parametrize("codec", ["lz4", "zstd"])
+def test_files_with_compressed_chunks_read_the_same(run12, tmp_path, codec):
+    """Files of earlier versions (LZ4 chunks in 0.3.0, zstd before, 1000-sample blocks) read bit for
+    bit like the default's uncompressed chunks of 5000-sample blocks."""
+    plain = read_run(write_run(tmp_path / "plain.mcap", run12))
+    with RunWriter(tmp_path / "old.mcap", run12.config, block=1000, compression=codec) as w:
+        w.write(run12)
+        w.close(run12.meta)
+    old = read_run(tmp_path / "old.mcap")
+    with open(tmp_path / "old.mcap", "rb") as fh:
+        summary = make_reader(fh).get_summary()
+    assert {c.compression for c in summary.chunk_indexes} == {codec}
+    for name in run12.channels:
+        assert old[name].tobytes() == plain[name].tobytes() == run12[name].tobytes(), name
+    with pytest.raises(TwinError, match="compression: must be one of none, lz4, zstd"):
+        RunWriter(tmp_path / "x.mcap", run12.config, compression="gzip")
+
+
+def test_default_chunks_are_uncompressed_blocks_of_default_size(run12, tmp_path):
+    p = write_run(tmp_path / "r.mcap", run12)
+    with open(p, "rb") as fh:
+        summary = make_reader(fh).get_summary()
+    assert {c.compression for c in summary.chunk_indexes} == {""}
+    # blocks of DEFAULT_BLOCK samples: messages per topic = ceil(n / block)
+    assert summary.statistics.message_count == len(summary.channels) * -(-run12.n // DEFAULT_BLOCK)
+
+
 def test_log_times_are_simulation_time(run12, tmp_path):
     p = write_run(tmp_path / "r.mcap", run12)
     with open(p, "rb") as fh:
         times = [m.log_time for _, _, m in make_reader(fh).iter_messages(topics=["/twin/crank"])]
-    assert times == [round(i * 1000 / run12.rate_hz * 1e9) for i in range(len(times))]
+    assert times == [round(i * DEFAULT_BLOCK / run12.rate_hz * 1e9) for i in range(len(times))]
 
 
 def test_damaged_files_give_clear_errors(run12, tmp_path):
@@ -92,7 +119,7 @@ def test_damaged_files_give_clear_errors(run12, tmp_path):
     with pytest.raises(RecordingError, match="no such file"):
         read_run(tmp_path / "missing.mcap")
     flipped = bytearray(data)
-    flipped[len(data) // 3] ^= 0xFF  # corrupt a compressed chunk: CRC or decompression fails
+    flipped[len(data) // 3] ^= 0xFF  # corrupt a chunk: its CRC no longer matches
     bad = tmp_path / "flipped.mcap"
     bad.write_bytes(bytes(flipped))
     with pytest.raises(RecordingError):

@@ -1,10 +1,10 @@
-"""Runs as MCAP files: batched array messages per channel group, LZ4 chunks.
+"""Runs as MCAP files: batched array messages per channel group, uncompressed CRC-checked chunks.
 
 Layout (documented for other tools in ``recordings/FORMAT.md``):
 
 * one topic per channel group, ``/twin/<group>`` (``/twin/accel``, ``/twin/joint_C``...),
   message encoding ``cdr``, schema encoding ``ros2msg``, schema ``twin_msgs/msg/<Group>Block``;
-* each message is a block of up to ``block`` consecutive samples (1000 = 10 ms at 100 kHz):
+* each message is a block of up to ``block`` consecutive samples (5000 = 50 ms at 100 kHz):
   ``builtin_interfaces/Time stamp`` (time of the block's first sample), ``uint64 first_index``,
   ``float64 rate_hz``, then one ``float32[]``/``float64[]`` array per channel;
 * ``log_time = publish_time = stamp`` in nanoseconds of simulation time (epoch: the run's
@@ -17,12 +17,14 @@ Layout (documented for other tools in ``recordings/FORMAT.md``):
 Writes go to a temporary file that is renamed into place on success, so an existing file is
 never left half-written.
 
-Chunk compression: LZ4 (MCAP's other standard codec; readers decompress both, and files written
-with zstd before 0.3.0 read as before). Measured on 2 s of test 12 (reference engine, 23 channels,
-100 kHz; ``analysis/bench_output.py`` for the share of a run): writing the file takes 0.046 s with
-LZ4 against 0.102 s with zstd (the MCAP library's level 3) and 0.032 s uncompressed, for 26.1,
-23.2 and 28.2 MB: sampled float signals compress little, and zstd's 11 % smaller file cost more
-than the reference engine's whole stepping time per second of simulation.
+Chunks: uncompressed, their CRCs written and checked on read (files written earlier with LZ4 or
+zstd chunks read as before: the reader decompresses every MCAP codec). Measured side by side on
+4 s of test 12 with the reference engine (23 channels at 100 kHz, 52 MB; ``python
+analysis/bench_output.py --mcap-variants --repeats 7``): writing on the run's writer thread adds
+12.5 % to the wall time with LZ4 chunks and 1000-sample blocks (0.3.0), 9.9 % with LZ4 and
+5000-sample blocks, 7.0 % uncompressed with 5000-sample blocks (8.2 % in the loop; the MuJoCo
+engine 2.6 %): LZ4 makes sampled float signals 7 % smaller (zstd 11 %, at 2.2x LZ4's write time),
+and the per-message encoding in Python scales with the number of blocks.
 """
 
 from __future__ import annotations
@@ -52,7 +54,9 @@ _UNREADABLE = (McapError, ZstdError, RuntimeError, EOFError, struct.error, Value
 
 FORMAT = "twin-run/1"
 TOPIC_PREFIX = "/twin/"
-DEFAULT_BLOCK = 1000
+DEFAULT_BLOCK = 5000
+#: chunk codecs a writer may use (the default "none": see the module docstring)
+_COMPRESSION = {"none": CompressionType.NONE, "lz4": CompressionType.LZ4, "zstd": CompressionType.ZSTD}
 _CDR_LE = b"\x00\x01\x00\x00"
 _DTYPES = {"float32": ("float32", 4), "float64": ("float64", 8)}
 
@@ -135,8 +139,12 @@ class RunWriter:
     renames it into place, :meth:`abort` deletes it. Use as a context manager to abort on error.
     """
 
-    def __init__(self, path: str | Path, config: BenchConfig | None, block: int = DEFAULT_BLOCK):
+    def __init__(self, path: str | Path, config: BenchConfig | None, block: int = DEFAULT_BLOCK,
+                 compression: str = "none"):
         self.path = Path(path)
+        if compression not in _COMPRESSION:
+            raise TwinError(f"compression: must be one of {', '.join(_COMPRESSION)}, got {compression!r}")
+        self.compression = _COMPRESSION[compression]
         if self.path.suffix != ".mcap":
             raise TwinError(f"--out: run files must end in .mcap, got {self.path.name}")
         if not self.path.parent.is_dir():
@@ -160,7 +168,7 @@ class RunWriter:
             self._fh = open(self.tmp, "wb")
         except OSError as err:
             raise TwinError(f"{self.path}: cannot write ({err.strerror})") from None
-        self._w = Writer(self._fh, compression=CompressionType.LZ4, chunk_size=4 * 1024 * 1024)
+        self._w = Writer(self._fh, compression=self.compression, chunk_size=4 * 1024 * 1024)
         self._w.start(profile="", library=f"twin {__version__}")
 
     def _register(self, run: Run) -> None:
