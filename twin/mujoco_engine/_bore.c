@@ -85,7 +85,15 @@
  * impedance). Fields BORE_MU0, BORE_V0, BORE_V1; with BORE_FRICTION = 1 the same fields hold the
  * Adams/COSMOS law of S001 (mu_d, v_s, v_d) and BORE_MUS its mu_s. A user sensor (mjcb_sensor, objtype geom = the
  * bore) reports the friction force on the pin along t = axis x n, n from the bore centre
- * towards the pin.
+ * towards the pin, summed over the bore's contacts. Declared needstage="pos" (the model's
+ * file does), the value is written by the passive callback that computes the friction, in the
+ * same forward pass: MuJoCo calls a position-stage user sensor before the velocity stage and
+ * then leaves its slot alone, while a velocity-stage user sensor makes every step run
+ * mj_subtreeVel first (0.1 us per step here, for nothing the friction needs) and would compute
+ * the friction a second time. The position-stage callback marks the mjData (thread-local), and
+ * only the passive callback of that same pass writes, so the forward passes that skip sensors
+ * (RK4's intermediate stages) leave the step's value in place. needstage="vel" still works the
+ * old way (the value computed by the sensor callback).
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -427,15 +435,31 @@ static void guide_friction(const mjModel* m, mjData* d) {
   }
 }
 
+/* the mjData whose position-stage friction sensors wait for this forward pass's friction: set
+ * by the sensor callback at mjSTAGE_POS, taken by the passive callback of the same pass (each
+ * thread runs one forward pass at a time) */
+static _Thread_local const mjData* g_sensor_pending = NULL;
+
+/* add ft to the position-stage friction sensors of bore geom gb */
+static void add_friction_sensor(const mjModel* m, mjData* d, int gb, mjtNum ft) {
+  for (int s = 0; s < m->nsensor; s++) {
+    if (m->sensor_type[s] == mjSENS_USER && m->sensor_objtype[s] == mjOBJ_GEOM && m->sensor_objid[s] == gb &&
+        m->sensor_needstage[s] == mjSTAGE_POS) d->sensordata[m->sensor_adr[s]] += ft;
+  }
+}
+
 static void passive_bore(const mjModel* m, mjData* d) {
   if (g_prev_passive) g_prev_passive(m, d);
+  const int sensors = g_sensor_pending == d;  /* this pass computes sensors (slots zeroed by MuJoCo) */
+  if (sensors) g_sensor_pending = NULL;
   guide_friction(m, d);
   if (m->nuser_geom < BORE_NUSER) return;
   contact_law(m, d);
-  if (!g_applyFT) return;
   for (int i = 0; i < d->ncon; i++) {
     friction_t f;
-    if (!bore_friction(m, d, i, &f) || f.ft == 0) continue;
+    if (!bore_friction(m, d, i, &f)) continue;
+    if (sensors) add_friction_sensor(m, d, contact_bore(m, d->contact + i), f.ft);
+    if (f.ft == 0 || !g_applyFT) continue;
     const mjtNum F[3] = {f.ft * f.t[0], f.ft * f.t[1], f.ft * f.t[2]};
     const mjtNum Fm[3] = {-F[0], -F[1], -F[2]};
     g_applyFT(m, d, F, NULL, d->contact[i].pos, f.pin_body, d->qfrc_passive);
@@ -445,9 +469,15 @@ static void passive_bore(const mjModel* m, mjData* d) {
 
 static void sensor_friction(const mjModel* m, mjData* d, int stage) {
   if (g_prev_sensor) g_prev_sensor(m, d, stage);
-  if (stage != mjSTAGE_VEL || m->nuser_geom < BORE_NUSER) return;
+  if (m->nuser_geom < BORE_NUSER) return;
+  if (stage == mjSTAGE_POS) {
+    g_sensor_pending = d;  /* the passive callback of this pass writes the values */
+    return;
+  }
+  if (stage != mjSTAGE_VEL) return;
   for (int s = 0; s < m->nsensor; s++) {
-    if (m->sensor_type[s] != mjSENS_USER || m->sensor_objtype[s] != mjOBJ_GEOM) continue;
+    if (m->sensor_type[s] != mjSENS_USER || m->sensor_objtype[s] != mjOBJ_GEOM ||
+        m->sensor_needstage[s] != mjSTAGE_VEL) continue;
     const int gb = m->sensor_objid[s];
     if (gb < 0 || !is_bore(m, gb)) continue;
     mjtNum value = 0;  /* summed over the bore's contacts */
