@@ -6,14 +6,18 @@ For the ideal (Table 4 test 3), C-only (test 6) and B+C (test 12) scenes at h = 
 ``--steps`` steps each, so that machine load hits every variant alike):
 
 * ``scene``: the twin's model as built, all sensors of the default channel groups: the true
-  cost per step (no timers);
+  cost per step (no timers). ``--accelerometers`` picks the accelerometer setting
+  (``mujoco.accelerometers``; default ``posthoc``, the twin's default, whose readings are
+  computed after the rollout and are not part of the step: ``analysis/bench_mujoco.py`` times
+  them with the rollout; ``sensor``: MuJoCo's ``<accelerometer>`` sensors);
 * ``timed``: the same rollout with MuJoCo's own stage timers on (``mjData.timer``; MuJoCo
   only times when the global ``mjcb_time`` is set, so the script installs a native clock) and
   the three native callbacks of ``twin/mujoco_engine/_bore.c`` wrapped by native timing
   shims: the bore collider (entry ``mjCOLLISIONFUNC[cylinder][cylinder]``, called in the
   narrow phase), ``mjcb_passive`` (friction and impact-speed damping, called at the end of
-  ``mj_passive`` in the velocity stage) and ``mjcb_sensor`` (friction sensor, velocity stage
-  of the sensors). Clock and shims are a few lines of C compiled here with the system C
+  ``mj_passive`` in the velocity stage; it also writes the friction sensors) and ``mjcb_sensor``
+  (position stage of the sensors since the friction sensors moved there; velocity stage
+  before). Clock and shims are a few lines of C compiled here with the system C
   compiler into a temporary folder (``_bore.c`` itself is untouched); each shim reads the
   clock before and after calling the callback it replaced. The clock is the CPU's time-stamp
   counter calibrated against ``CLOCK_MONOTONIC`` (a read costs about 11 ns here against 29 ns
@@ -205,11 +209,11 @@ def stages(d: mujoco.MjData, cbs: dict[str, tuple[float, int]], steps: int, wall
         "project constraints": t["project"],
         "position, rest (tendon, transmission)": pos_rest,
         "velocity (incl. passive)": t["velocity"],
-        "  passive callback (native)": cb["passive"],
+        "  passive callback (native; contact law, friction and its sensors)": cb["passive"],
         "actuation": t["actuation"],
         "constraint solver": t["constraint"],
         "sensors + acceleration + energy": fwd_rest,
-        "  friction sensor callback (native)": cb["sensor"],
+        "  sensor callback (native; marks the pass for the friction sensors)": cb["sensor"],
         "advance (integrator)": t["advance"],
         "step checks": t["step"] - t["forward"] - t["advance"],
         "rollout loop (outside mj_step)": wall_us - t["step"],
@@ -222,12 +226,14 @@ def main() -> None:
     ap.add_argument("--steps", type=int, default=50_000)
     ap.add_argument("--repeats", type=int, default=9)
     ap.add_argument("--json", metavar="FILE", help="also write the numbers as JSON")
+    ap.add_argument("--accelerometers", choices=("posthoc", "sensor"), default="posthoc",
+                    help="mujoco.accelerometers of the profiled models (default: the twin's default, posthoc)")
     args = ap.parse_args()
     shims = Shims()  # before any model is built: reads MuJoCo's own clock (mjcb_time) as the library set it
     mujoco_clock = shims.clock
     variants: dict[str, dict[str, tuple]] = {}
     for label, tid in SCENES.items():
-        m, s, c = prepare(tid, args.steps)
+        m, s, c = prepare(tid, args.steps, accelerometers=args.accelerometers)
         floor = copy.copy(m)
         floor.opt.disableflags |= D.mjDSBL_CONSTRAINT
         raw = copy.copy(floor)
@@ -265,7 +271,7 @@ def main() -> None:
     commit = subprocess.run(["git", "describe", "--always", "--dirty"], capture_output=True, text=True,
                             cwd=Path(__file__).resolve().parent).stdout.strip()
     print(f"MuJoCo {mujoco.__version__}, h = 1e-5 s, {args.steps} steps, best of {args.repeats} (interleaved), "
-          f"commit {commit or '?'}")
+          f"commit {commit or '?'}, accelerometers {args.accelerometers}")
     print()
     print("| µs per step | " + " | ".join(SCENES) + " |")
     print("|---|" + "---:|" * len(SCENES))
