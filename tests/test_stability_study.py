@@ -161,8 +161,37 @@ def test_the_reference_re_run_deflects_under_the_twins_perturbed_stiffness(monke
         return FakeRun()
 
     monkeypatch.setattr(twin.simulate, "simulate_run", fake_simulate_run)
-    cfg = preset(6).replace(**{"mujoco.contact_stiffness_scale": 0.81, "contact.stiffness_scale": 1.1})
+    cfg = preset(6).replace(**{"mujoco.contact_stiffness_scale": 0.81, "contact.stiffness_scale": 1.1,
+                               "mujoco.contact_damping_scale": 0.94})
     out = S.reference_check(cfg)
     (ref,) = seen
     assert ref.simulation.engine == "reference" and ref.contact.stiffness_scale == pytest.approx(0.81 * 1.1)
-    assert out["pen_over_c"]["C"] == pytest.approx(1e-6 / cfg.joints.radial_m("C"))
+    assert ref.simulation.timestep_s == S.REFERENCE_TIMESTEP_S == 1e-6
+    # the damping factor as the restitution of the same LN law: 3(1 - e'^2)/4 = 0.94 x 3(1 - e^2)/4
+    e = cfg.contact.restitution
+    assert ref.contact.restitution == pytest.approx(np.sqrt(1 - 0.94 * (1 - e ** 2)), rel=1e-12)
+    assert out["damping_carried"] and out["pen_over_c"]["C"] == pytest.approx(1e-6 / cfg.joints.radial_m("C"))
+
+
+def test_an_exceedance_is_physical_only_where_the_converged_reference_exceeds_the_limit_too():
+    met = {"joints": {"B": {"pen_over_c": 0.27}, "C": {"pen_over_c": 0.02}},
+           "reference": {"pen_over_c": {"B": 0.237, "C": 0.02}}}
+    S._mark_agreement(met)
+    assert met["reference"]["agrees"] and met["reference"]["cause"] == "numerical"
+    met["reference"]["pen_over_c"]["B"] = 0.26
+    S._mark_agreement(met)
+    assert met["reference"]["cause"] == "physical"
+
+
+def test_carried_restitution_inverts_each_hysteresis_law():
+    from twin.impact import DAMPING_FACTOR
+
+    for law, chi in DAMPING_FACTOR.items():
+        for scale in (0.7, 1.15):
+            cfg = preset(6).replace(**{"contact.law": law, "mujoco.contact_damping_scale": scale})
+            e2 = S.carried_restitution(cfg)
+            assert 0 < e2 < 1 and chi(e2) == pytest.approx(scale * chi(cfg.contact.restitution), rel=1e-9), law
+    assert S.carried_restitution(preset(6)) == pytest.approx(preset(6).contact.restitution, rel=1e-12)
+    assert S.carried_restitution(preset(6).replace(**{"contact.law": "linear"})) is None
+    # LN's χ is at most 3/4 (e -> 0): 1.3 x χ(0.4) = 0.82 is no restitution's damping
+    assert S.carried_restitution(preset(6).replace(**{"mujoco.contact_damping_scale": 1.3})) is None
