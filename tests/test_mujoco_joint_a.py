@@ -36,7 +36,7 @@ from twin.mujoco_engine.builder import build, export_xml
 from twin.mujoco_engine.engine import MujocoEngine
 from twin.simulate import simulate_run
 
-from conftest import short
+from conftest import bore_bias_acceleration, short
 
 #: one encoder count (the bench's 32768-count quadrature encoder) [rad]
 COUNT = 2 * math.pi / 32768
@@ -210,9 +210,11 @@ def test_prescribed_crank_is_the_program_while_the_journal_moves():
 # -------------------------------------------------------------------- contact law, friction
 def test_contact_law_and_friction_at_the_frame_bore_step_by_step():
     """Every step with a contact at A: the solver's normal force is the LN law at the step's
-    state plus the θ-part of its damping (as at B and C); the friction on the journal is the
-    regularized Coulomb law on the law's force against the slip of the journal's surface on the
-    still frame (MuJoCo's Jacobians: crank spin × contact radius plus the journal's own motion);
+    state plus the θ-part of its damping and, where θ > ½, c h (θ − ½) b (as at B and C; b = −J̇q̇
+    of the row, MuJoCo's mj_jacDot); the friction on the journal is the regularized Coulomb law on
+    the law's force at the step's secant rate, F − c h b/2, against the slip of the journal's
+    surface on the still frame (MuJoCo's Jacobians: crank spin × contact radius plus the
+    journal's own motion);
     and its generalized forces are the crank's only passive forces: along the slides ft t and
     about the hinge the moment of ft t at the contact point."""
     cfg = short(preset(6), 0.2, **{"joints.clearance_c_mm": 0.0, "joints.clearance_a_mm": 0.1,
@@ -253,20 +255,22 @@ def test_contact_law_and_friction_at_the_frame_bore_step_by_step():
         r0 = d.efc_diagA[a] * (1 - 1e-4) / 1e-4
         R = 1 / gamma if gamma * r0 > 1 else r0
         acc = -float(d.efc_J[a * m.nv:(a + 1) * m.nv] @ d.qacc)
+        qvel0 = d.qvel - h * d.qacc  # the step's start (semi-implicit Euler)
+        b = bore_bias_acceleration(m, d, pin, bore, qvel0) if cdamp > 0 else 0.0
         if F > 1.0:
-            errs.append(d.efc_force[a] / max(F + acc / R, 0.0) - 1)
+            errs.append(d.efc_force[a] / max(F + acc / R + cdamp * h * (theta - 0.5) * b, 0.0) - 1)
         # friction: slip of the journal's surface on the frame at the contact point
         jp, jw = np.zeros((3, m.nv)), np.zeros((3, m.nv))
         mujoco.mj_jac(m, d, jp, None, con.pos, crank)
         mujoco.mj_jac(m, d, jw, None, con.pos, 0)
         assert not jw.any()  # the frame does not move
-        qvel0 = d.qvel - h * d.qacc  # the step's start (semi-implicit Euler)
         e = d.geom_xpos[pin] - d.geom_xpos[bore]
         t = np.cross([0, 0, 1], e / np.linalg.norm(e))  # ẑ × n, n from the bore centre to the journal
         vt = float(jp @ qvel0 @ t)
         s = abs(vt)
         mu = mu0 if s >= v1 else (mu0 * (s - v0) / (v1 - v0) if s > v0 else 0.0)
-        ft = -math.copysign(mu * F, vt) if mu else 0.0
+        fn = max(F - cdamp * h * b / 2, 0.0)  # the law on the step's secant rate
+        ft = -math.copysign(mu * fn, vt) if mu else 0.0
         assert d.sensordata[fsens] == pytest.approx(ft, rel=1e-9, abs=1e-9 * (1 + F))
         arm = con.pos - d.xpos[crank]
         expected = [ft * t[0], ft * t[1], ft * (arm[0] * t[1] - arm[1] * t[0])]

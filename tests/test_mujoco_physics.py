@@ -17,7 +17,7 @@ from twin.mujoco_engine.builder import build
 from twin.mujoco_engine.engine import MujocoEngine
 from twin.simulate import simulate_run
 
-from conftest import short
+from conftest import bore_bias_acceleration, short
 
 G = 9.81
 
@@ -202,10 +202,12 @@ def _theta(c, h, a_diag):
 def test_contact_force_in_the_mechanism_is_the_reference_law(law):
     """Test 12 (B and C), stepped by MuJoCo: at every step with contact the solver's normal force
     is the reference law at the step's state plus the θ-part of its damping taken at the step's
-    end, f = F(δ, δ̇) + θ c h δ̈ (F from the reference engine's own law functions, c = ∂F/∂δ̇;
-    where θ c h is below MuJoCo's own 1/R0 = 1e-4 m̂ of the pair, δ̈/R0 instead), the stored
-    impact speed is the approach speed of the contact event (floored), and the friction on the
-    pin is the regularized Coulomb law on F."""
+    end, f = F(δ, δ̇) + θ c h δ̈ + c h (θ − ½) b (F from the reference engine's own law functions,
+    c = ∂F/∂δ̇, δ̈ = −J q̈ the row's acceleration and b = −J̇ q̇ the rest of the penetration's, by
+    MuJoCo's mj_jacDot: the law on the step's secant rate, nothing at θ = ½; where θ c h is below
+    MuJoCo's own 1/R0 = 1e-4 m̂ of the pair, δ̈/R0 instead), the stored impact speed is the
+    approach speed of the contact event (floored), and the friction on the pin is the regularized
+    Coulomb law on F(δ, δ̇ − h b/2) = F − c h b/2, the law at the step's secant rate."""
     cfg = short(preset(12), 0.25, **{"drive.ramp_s": 0.02, "contact.law": law})
     eng = MujocoEngine(cfg)
     m, d = eng.model, eng.data
@@ -241,10 +243,14 @@ def test_contact_force_in_the_mechanism_is_the_reference_law(law):
             acc = -float(J @ d.qacc)  # δ̈
             # the row's regularizer: 1/(θ c h), or MuJoCo's own R0 of the pair's impedance 1e-4
             r0 = d.efc_diagA[a] * (1 - 1e-4) / 1e-4
-            gamma = _theta(c, h, d.efc_diagA[a]) * c * h
+            theta = _theta(c, h, d.efc_diagA[a])
+            gamma = theta * c * h
             r = 1 / gamma if gamma * r0 > 1 else r0
             assert d.efc_R[a] == pytest.approx(r, rel=1e-9)
-            expected = max(F + acc / r, 0.0)
+            pin_g, bore_g = (con.geom[0], con.geom[1]) if m.geom(con.geom[1]).name == N.bushing(j) \
+                else (con.geom[1], con.geom[0])
+            b = bore_bias_acceleration(m, d, pin_g, bore_g, d.qvel - h * d.qacc) if c > 0 else 0.0
+            expected = max(F + acc / r + c * h * (theta - 0.5) * b, 0.0)
             if expected > 1.0:
                 errs.append(d.efc_force[a] / expected - 1)
                 checked += 1
@@ -256,8 +262,9 @@ def test_contact_force_in_the_mechanism_is_the_reference_law(law):
             # so compare magnitudes only where sliding is fast (|v_t| well above v1 either way)
             vt = ((jp - jb) @ d.qvel) @ np.cross([0, 0, 1], con.frame[:3])
             ft = d.sensordata[sens[N.sensor_friction(j)].start]
-            if abs(vt) > 20 * cfg.contact.v1_mps and F > 1.0:
-                mu.append(abs(ft) / F)
+            fn = F - c * h * b / 2
+            if abs(vt) > 20 * cfg.contact.v1_mps and fn > 1.0:
+                mu.append(abs(ft) / fn)
         for j in "BC":
             prev_in[j] = j in seen
     assert checked > 1000 and events > 0

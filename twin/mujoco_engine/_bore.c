@@ -70,6 +70,23 @@
  * Assumes one mjcb_passive call per step (mj_step, mj_forward: the Euler and implicit
  * integrators; RK4 calls it per stage, and its end-of-step rate is not delta' - h a).
  *
+ * Rates. The row is linear in qvel with J fixed at the step's start, and positions advance in
+ * joint coordinates, so the penetration's true acceleration is a + b with b the velocity-product
+ * part (-dJ/dt qvel, bore_bias_acceleration: n . (a_pin - a_bore) at qacc = 0 plus
+ * |e'_perp|^2/|e|, the pin sliding along the bore's curve and the bodies' rotations). Over a step
+ * the penetration changes by h s, s = delta'_end + h b / 2 (the step's secant rate), while the
+ * next step starts at delta' = delta'_end + h b: in sliding contact the rate at a step's start
+ * exceeds s by h b / 2. That is O(h), but the damping of a resting contact is huge (c = chi F_e
+ * / v_imp at the 1 mm/s floor: 1e4-1e5 N s/m), so c h b / 2 reached 10-20 % of the normal force
+ * at h = 1e-5 s on the bench (b ~ 35-70 m/s^2). The law is therefore applied on the secant
+ * rate: at the row's fixed point (every step starts at the same delta', so a = -b) the force
+ * above is F_e + c s + c h b (1/2 - theta), so aref gets R c h (theta - 1/2) b (nothing at
+ * theta = 1/2) and f = F_e + c s; the friction's normal force is the law at the step's state with the same
+ * rate, F(delta, delta' - h b / 2) = aref/R - theta c h b, the normal force the solver applies
+ * in sliding contact (before, the friction took F(delta, delta') and its mu f_N exceeded mu0
+ * times the applied normal force by up to 20 %, the cause of the twin's +10 % peak AC6 in the
+ * 0.5 mm scene of analysis/contact_table.py).
+ *
  * Friction. The pair is a frictionless (condim 1) MuJoCo contact: MuJoCo's soft elliptic cone
  * adds mu * (would-be sticking force) to the normal force while sliding, which inflated the
  * normal force by a median 23 % and up to 27x on the bench (measured, see the builder's
@@ -235,6 +252,60 @@ static mjtNum contact_velocity(const mjModel* m, const mjData* d, const mjContac
   return n12[0] * (vb[0] - va[0]) + n12[1] * (vb[1] - va[1]) + n12[2] * (vb[2] - va[2]);
 }
 
+/* velocity-product acceleration of the material point p of body b (world frame): the point's
+ * acceleration at qacc = 0 without gravity, i.e. the com-based sum of cdof_dot qvel over the
+ * body's chain converted to a point as mj_objectAcceleration does (+ omega x v_p) */
+static void point_bias_acceleration(const mjModel* m, const mjData* d, int b, const mjtNum p[3],
+                                    mjtNum acc[3]) {
+  mjtNum s[6] = {0, 0, 0, 0, 0, 0};
+  for (int bb = b; bb > 0; bb = m->body_parentid[bb]) {
+    const int adr = m->body_dofadr[bb], num = m->body_dofnum[bb];
+    for (int j = adr; j < adr + num; j++) {
+      const mjtNum* cd = d->cdof_dot + 6 * j;
+      const mjtNum qd = d->qvel[j];
+      for (int k = 0; k < 6; k++) s[k] += cd[k] * qd;
+    }
+  }
+  const mjtNum* c = d->subtree_com + 3 * m->body_rootid[b];
+  const mjtNum r[3] = {p[0] - c[0], p[1] - c[1], p[2] - c[2]};
+  const mjtNum* w = d->cvel + 6 * b;
+  mjtNum v[3];
+  point_velocity(m, d, b, p, v);
+  acc[0] = s[3] + s[1] * r[2] - s[2] * r[1] + w[1] * v[2] - w[2] * v[1];
+  acc[1] = s[4] + s[2] * r[0] - s[0] * r[2] + w[2] * v[0] - w[0] * v[2];
+  acc[2] = s[5] + s[0] * r[1] - s[1] * r[0] + w[0] * v[1] - w[1] * v[0];
+}
+
+/* velocity-product part of the penetration's acceleration of a pin/bore contact (bore geom
+ * gb): delta = |e| - (R_i - R_j), delta' = n . e', delta'' = n . e'' + |e'_perp|^2 / |e| (e the
+ * pin centre minus the bore centre in the bore's plane, n = e/|e|); returns the part of delta''
+ * that does not depend on qacc (the row's -dJ/dt qvel: MuJoCo's row acceleration J qacc omits it) */
+static mjtNum bore_bias_acceleration(const mjModel* m, const mjData* d, const mjContact* con, int gb) {
+  const int gp = con->geom[0] == gb ? con->geom[1] : con->geom[0];
+  const int bp = m->geom_bodyid[gp], bb = m->geom_bodyid[gb];
+  const mjtNum* xp = d->geom_xpos + 3 * gp;
+  const mjtNum* xb = d->geom_xpos + 3 * gb;
+  const mjtNum* R = d->geom_xmat + 9 * gb;
+  const mjtNum a[3] = {R[2], R[5], R[8]};
+  mjtNum e[3] = {xp[0] - xb[0], xp[1] - xb[1], xp[2] - xb[2]};
+  const mjtNum ea = e[0] * a[0] + e[1] * a[1] + e[2] * a[2];
+  for (int k = 0; k < 3; k++) e[k] -= ea * a[k];
+  const mjtNum ecc = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+  if (!(ecc > 1e-300)) return 0;
+  const mjtNum n[3] = {e[0] / ecc, e[1] / ecc, e[2] / ecc};
+  mjtNum vp[3], vb[3], ap[3], ab[3];
+  point_velocity(m, d, bp, xp, vp);
+  point_velocity(m, d, bb, xb, vb);
+  point_bias_acceleration(m, d, bp, xp, ap);
+  point_bias_acceleration(m, d, bb, xb, ab);
+  mjtNum ed[3] = {vp[0] - vb[0], vp[1] - vb[1], vp[2] - vb[2]};
+  const mjtNum eda = ed[0] * a[0] + ed[1] * a[1] + ed[2] * a[2];
+  for (int k = 0; k < 3; k++) ed[k] -= eda * a[k];
+  const mjtNum edn = ed[0] * n[0] + ed[1] * n[1] + ed[2] * n[2];
+  const mjtNum perp2 = ed[0] * ed[0] + ed[1] * ed[1] + ed[2] * ed[2] - edn * edn;
+  return n[0] * (ap[0] - ab[0]) + n[1] * (ap[1] - ab[1]) + n[2] * (ap[2] - ab[2]) + perp2 / ecc;
+}
+
 /* the bore geom of contact con (or -1 if it is not a pin/bore contact with a constraint row) */
 static int contact_bore(const mjModel* m, const mjContact* con) {
   const int g1 = con->geom[0], g2 = con->geom[1];
@@ -359,7 +430,9 @@ static void contact_law(const mjModel* m, mjData* d) {
       }
     }
     const mjtNum imp = kbip[2] > 0 ? kbip[2] : 1;
-    kbip[0] = R * fe / (imp * delta);
+    /* the damping on the penetration's change over the step (module docstring, "Rates") */
+    const mjtNum chord = theta != 0.5 && c > 0 ? R * ch * (theta - 0.5) * bore_bias_acceleration(m, d, con, gb) : 0;
+    kbip[0] = (R * fe + chord) / (imp * delta);
     kbip[1] = R * c;
   }
 }
@@ -387,8 +460,22 @@ static int bore_friction(const mjModel* m, const mjData* d, int icon, friction_t
   const mjtNum* n12 = con->frame;               /* from geom1 to geom2 */
   /* the row's reference acceleration (mj_referenceConstraint's formula, own velocity) */
   const mjtNum aref = -kbip[1] * vel - kbip[0] * kbip[2] * (d->efc_pos[row] - d->efc_margin[row]);
-  const mjtNum fn = law_row(m, d, gb, row) ? aref / d->efc_R[row]
-                                           : aref / (d->efc_diagA[row] + d->efc_R[row]);
+  mjtNum fn;
+  if (law_row(m, d, gb, row)) {
+    /* the law's force at the step's state, its rate taken as the penetration's change over the
+     * step (module docstring, "Rates"): aref/R - theta c h delta''_bias */
+    fn = aref / d->efc_R[row];
+    const mjtNum c = kbip[1] / d->efc_R[row];
+    if (c > 0) {
+      const mjtNum h = m->opt.timestep;
+      const mjtNum mhat = d->efc_diagA[row] > 0 ? 1 / d->efc_diagA[row] : 0;
+      const mjtNum ch = c * h;
+      const mjtNum theta = ch > 2 * mhat ? 1 - mhat / ch : 0.5;
+      fn -= theta * ch * bore_bias_acceleration(m, d, con, gb);
+    }
+  } else {
+    fn = aref / (d->efc_diagA[row] + d->efc_R[row]);
+  }
   out->pin_body = m->geom_bodyid[gp];
   out->bore_body = m->geom_bodyid[gb];
   out->fn = fn > 0 ? fn : 0;
