@@ -4,4 +4,4 @@ Start from :func:`twin.simulate.simulate` (a configuration in, a :class:`twin.ru
 out) or the ``twin`` command line (``twin --help``).
 """
 
-__version__ = "0.3.0"
+__version__ = "0.4.0"
