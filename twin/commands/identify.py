@@ -75,6 +75,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="low-pass of the coarse and fine stages' mismatch [Hz] (default 200; 0 = full band)")
     r.add_argument("--max-lag", type=float, default=0.0, metavar="S",
                    help="search a constant time shift up to this many seconds (default 0: none)")
+    r.add_argument("--starts", type=int, default=3, metavar="N",
+                   help="refine the N best local minima of the coarse grid, each on its own (default 3)")
     r.add_argument("--json", metavar="OUT.json", help="also write the answer and every candidate as JSON")
     r.set_defaults(func=_restitution)
 
@@ -172,7 +174,7 @@ def _restitution(args: argparse.Namespace) -> int:
             raise TwinError(f"--grid: comma-separated {args.parameter} values, got {args.grid!r}") from None
     opts = SweepOptions(sensor=args.sensor, start_s=args.start, stop_s=args.stop, coarse=grid,
                         fine_step=args.fine_step, engine=args.engine or "", max_lag_s=args.max_lag,
-                        lowpass_hz=args.lowpass, parameter=args.parameter)
+                        lowpass_hz=args.lowpass, parameter=args.parameter, starts=args.starts)
     res = sweep_restitution(rec, opts)
     found = (f"restitution e = {res.value:.3f}" if res.parameter == "restitution"
              else f"c_max = {res.value:.0f} N s/m")
