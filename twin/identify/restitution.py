@@ -239,20 +239,29 @@ def sweep_restitution(path: str | Path, opts: SweepOptions = SweepOptions(), pro
         raise ConfigError("--start", f"the window holds {max(i1 - i0, 0)} samples of the {n / rate:.3f} s recording; "
                                      "it needs at least 10")
     engine = opts.engine or cfg.simulation.engine
+    # each candidate's run is reduced at once to its two mismatches (full band, low-passed): no
+    # run is kept, so memory does not grow with the number of candidates
     cache: dict[float, float] = {}
-    sims: dict[float, np.ndarray] = {}
+    cache_lp: dict[float, float] = {}
     notes: list[str] = []
     lag = 0
+    # coarse to fine: the slider's impact spikes last about one 5 kHz sample, so the sampled
+    # spikes (and the full-band mismatch) change at random with sub-sample shifts of an impact:
+    # over the full band the mismatch is a needle at the answer among spurious dips. Low-passed
+    # (``lowpass_hz``) the minimum is wider, still rugged. The coarse grid and the first fine grid are
+    # scored low-passed, the finest grid (fine_step/5 over ±2 fine_step) over the full band.
+    lp = _lowpass(opts.lowpass_hz, rate)
+    rec_lp = lp(rec) if lp else rec
 
     def evaluate(e: float) -> float:
         e = round(float(e), 6)
         if e not in cache:
-            sims[e] = simulated_acceleration(cfg, e, n, rate, opts.sensor, engine, opts.parameter)
-            cache[e] = rms_mismatch(rec, sims[e], i0, i1, lag)
+            sim = simulated_acceleration(cfg, e, n, rate, opts.sensor, engine, opts.parameter)
+            cache[e] = rms_mismatch(rec, sim, i0, i1, lag)
+            cache_lp[e] = rms_mismatch(rec_lp, lp(sim), i0, i1, lag) if lp else cache[e]
             if progress:
                 progress(e, cache[e])
         return cache[e]
-
 
     coarse = sorted(set(float(e) for e in opts.coarse))
     if opts.max_lag_s > 0:  # one shift for every candidate, from the motion (low-passed) of the middle one
@@ -264,23 +273,11 @@ def sweep_restitution(path: str | Path, opts: SweepOptions = SweepOptions(), pro
                            lowpass_hz=min(50.0, 0.2 * rate))
         lag = int(est.lag)
         notes.append(f"time shift {lag / rate * 1e3:+.1f} ms (recording late), from e = {mid:g}")
-    # coarse to fine: the slider's impact spikes last about one 5 kHz sample, so the sampled
-    # spikes (and the full-band mismatch) change at random with sub-sample shifts of an impact:
-    # over the full band the mismatch is a needle at the answer among spurious dips. Low-passed
-    # (``lowpass_hz``) the minimum is wider, still rugged. The coarse grid and the first fine grid are
-    # scored low-passed, the finest grid (fine_step/5 over ±2 fine_step) over the full band.
-    lp = _lowpass(opts.lowpass_hz, rate)
-    rec_lp = lp(rec) if lp else rec
-    sims_lp: dict[float, np.ndarray] = {}
 
     def score(e: float, low: bool) -> float:
         key = round(float(e), 6)
         evaluate(key)
-        if not low or lp is None:
-            return cache[key]
-        if key not in sims_lp:
-            sims_lp[key] = lp(sims[key])
-        return rms_mismatch(rec_lp, sims_lp[key], i0, i1, lag)
+        return cache_lp[key] if low else cache[key]
 
     def band(low: bool) -> str:
         return f"low-passed at {opts.lowpass_hz:g} Hz" if low and lp else "full band"
