@@ -159,6 +159,15 @@ def test_a_model_finds_large_clearances_in_runs_it_never_saw(small, capsys):
     assert r["runs"] == 16 and r["accuracy"] == 1.0
     assert all(v == 1.0 for v in r["recall"].values())
     assert (d / "rep" / "confusion.png").stat().st_size > 0 and "Confusion matrix" in (d / "rep" / "report.md").read_text()
+    # the size at C where the sensors resolve it: the runs of the map's speeds and orientations, no other
+    from twin.identify.model import size_c_resolved
+
+    c_runs = [p for p in r["predictions"] if p["true_c_mm"] > 0]
+    res = r["by_clearance"]["C"]["resolved"]
+    want = sum(size_c_resolved(p["orientation"], p["crank_hz"]) for p in c_runs)
+    assert res["runs"] == want and res["runs_not_resolved"] == len(c_runs) - want
+    assert sum(v["runs"] for v in res["values"].values()) == want
+    assert sum(c["runs"] for v in r["by_clearance"]["C"]["by_speed"].values() for c in v.values()) == len(c_runs)
 
 
 def test_identify_refuses_what_it_cannot_answer(small, tmp_path, capsys):
@@ -261,6 +270,69 @@ def test_the_size_target_is_half_the_catalogue_gap_there():
         [0.015, 0.01, 0.01, 0.015, 0.2, 0.25]
     assert half_gap_mm(0.08) == pytest.approx(0.015)  # between 0.07 and 0.1
     assert half_gap_mm(0.3) == pytest.approx(0.2)  # between 0.1 and 0.5
+
+
+def test_size_figures_are_split_by_clearance_value_and_speed():
+    """Hand-made answers: the per-speed table holds each (value, speed) cell's own median error,
+    target and coverage, and the markdown marks the cells over the target."""
+    from twin.identify.evaluate import render_markdown, size_by_speed
+
+    def p(true_c, est, lo, hi, rpm):
+        return {"true_c_mm": true_c, "c_mm": est, "c_int": [lo, hi], "motor_rpm": rpm, "crank_hz": rpm / 3.97 / 60}
+
+    preds = [p(0.1, 0.09, 0.05, 0.2, 475.0), p(0.1, 0.12, 0.05, 0.2, 475.0), p(0.1, 0.11, 0.05, 0.2, 475.0),
+             p(0.1, 0.30, 0.15, 0.9, 325.0), p(0.07, 0.05, 0.02, 0.06, 325.0)]
+    t = size_by_speed(preds, "c")
+    assert list(t) == ["0.07", "0.1"] and list(t["0.1"]) == ["325 rpm", "475 rpm"]
+    cell = t["0.1"]["475 rpm"]
+    assert cell["runs"] == 3 and cell["median_abs_error_mm"] == pytest.approx(0.01)
+    assert cell["meets_target"] and cell["interval_coverage"] == 1.0 and cell["median_estimate_mm"] == 0.11
+    slow = t["0.1"]["325 rpm"]
+    assert slow["median_abs_error_mm"] == pytest.approx(0.2) and not slow["meets_target"]
+    assert slow["interval_coverage"] == 0.0
+    assert t["0.07"]["325 rpm"]["median_abs_error_mm"] == pytest.approx(0.02) and "475 rpm" not in t["0.07"]
+    r = {"model": "m", "dataset": "d", "runs": 5, "windows": 5, "engine": "reference", "splits": ["test"],
+         "runs_left_out": [], "accuracy": 1.0, "recall": {c: None for c in ("none", "B", "C", "BC")},
+         "confusion": {t_: {q: 0 for q in ("none", "B", "C", "BC")} for t_ in ("none", "B", "C", "BC")},
+         "by_speed": {}, "false_alarms": {"B": 0.0, "C": 0.0},
+         "by_clearance": {"C": {"values": {}, "interval_coverage": 0.6, "runs": 5, "by_speed": t}}}
+    md = render_markdown(r)
+    assert "| 0.1 | 0.015 | **0.2** (1; 0 %) | 0.01 (3; 100 %) |" in md
+    assert "| 0.07 | 0.01 | **0.02** (1; 0 %) | – |" in md
+
+
+def test_the_size_resolution_map_is_the_measured_one():
+    """SIZE_C_RESOLVED_FROM_RPM is, per vertical axis, the slowest speed of
+    ``analysis/results/identify/size_observability_speed.json`` from which every faster speed measured
+    tells 0.05 / 0.07 / 0.1 mm at C apart (LDA leave-one-out accuracy >= 0.95 through the sensor chain)."""
+    from twin.identify.model import SIZE_C_RESOLVED_FROM_RPM, size_c_resolved
+
+    d = json.loads((ROOT / "analysis" / "results" / "identify" / "size_observability_speed.json").read_text())
+    assert d["sensed"] and d["sizes_mm"] == [0.05, 0.07, 0.1]
+    found = {}
+    for o in ("x", "y", "z"):
+        sc = sorted((s["motor_rpm"], s["loo_accuracy"]) for s in d["scenes"] if s["orientation"] == o)
+        ok = [rpm for k, (rpm, _) in enumerate(sc) if all(a >= 0.95 for _, a in sc[k:])]
+        found[o] = min(ok)
+    assert found == SIZE_C_RESOLVED_FROM_RPM
+    hz = lambda rpm: rpm / 60 / 3.97  # noqa: E731
+    assert not size_c_resolved("y", hz(450)) and size_c_resolved("y", hz(475)) and size_c_resolved("x", hz(450))
+    assert not size_c_resolved("x", hz(300)) and size_c_resolved("z", hz(300)) and size_c_resolved("y", hz(700))
+
+
+def test_an_answer_at_C_where_the_size_is_not_resolved_says_so(tmp_path, monkeypatch):
+    """The test-6 sample (C, y vertical, 751 motor rpm) is resolved by the measured map; with the
+    threshold for y put over its speed the same answer carries the flag and a warning."""
+    import twin.identify.model as M
+    from twin.commands.identify import default_model_path
+
+    m = M.ClearanceModel.load(default_model_path())
+    a = M.identify_recording(m, REC / "test6_synthetic.mcap")
+    assert a["fault"] == "C" and a["clearance_c_size_resolved"] and a["warnings"] == []
+    monkeypatch.setitem(M.SIZE_C_RESOLVED_FROM_RPM, "y", 800.0)
+    b = M.identify_recording(m, REC / "test6_synthetic.mcap")
+    assert not b["clearance_c_size_resolved"] and b["clearance_c_mm"] == a["clearance_c_mm"]
+    assert len(b["warnings"]) == 1 and "not resolved at 751 motor rpm with y vertical" in b["warnings"][0]
 
 
 def test_an_interval_ending_on_a_trained_value_holds_it():

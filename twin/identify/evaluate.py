@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from twin.config import CATALOGUE_DIAMETRAL_MM
-from twin.identify.model import CLASSES, ClearanceModel, dataset_features
+from twin.identify.model import CLASSES, SIZE_C_RESOLVED_FROM_RPM, ClearanceModel, dataset_features, size_c_resolved
 
 
 def half_gap_mm(c: float) -> float:
@@ -55,6 +55,7 @@ def evaluate(model: ClearanceModel, dataset_dir: str | Path, splits: tuple[str, 
                       "b_mm": a["clearance_b_if_faulty_mm"]["median"], "b_int": a["clearance_b_if_faulty_mm"]["interval_90"],
                       "c_mm": a["clearance_c_if_faulty_mm"]["median"], "c_int": a["clearance_c_if_faulty_mm"]["interval_90"],
                       "crank_hz": r["crank_hz"], "motor_rpm": r.get("motor_rpm"), "orientation": r["orientation"],
+                      "c_resolved": size_c_resolved(r["orientation"], r["crank_hz"]),
                       "probabilities": a["probabilities"]})
     t_pred = time.perf_counter() - t0
     y = [p["true_fault"] for p in preds]
@@ -88,13 +89,56 @@ def evaluate(model: ClearanceModel, dataset_dir: str | Path, splits: tuple[str, 
                                 "median_estimate_mm": float(np.median([p[f"{j}_mm"] for p in ps]))}
         cover_all = float(np.mean([p[f"{j}_int"][0] <= p[f"true_{j}_mm"] <= p[f"{j}_int"][1] for p in faulty])) \
             if faulty else float("nan")
-        report["by_clearance"][J] = {"values": groups, "interval_coverage": cover_all, "runs": len(faulty)}
+        report["by_clearance"][J] = {"values": groups, "interval_coverage": cover_all, "runs": len(faulty),
+                                     "by_speed": size_by_speed(faulty, j)}
+    report["by_clearance"]["C"]["resolved"] = size_where_resolved(preds)
     # the healthy runs: how often a joint without clearance is called faulty, by speed
     report["false_alarms"] = {J: float(np.mean([J in p["fault"] for p in preds if p[f"true_{J.lower()}_mm"] == 0]))
                               for J in ("B", "C")}
     report["seconds"] = {"features_and_predictions": t_pred}
     report["predictions"] = preds
     return report
+
+
+def _size_cell(qs: list[dict[str, Any]], j: str, c: float) -> dict[str, Any]:
+    err = float(np.median([abs(q[f"{j}_mm"] - c) for q in qs]))
+    return {"runs": len(qs), "median_abs_error_mm": err, "target_mm": half_gap_mm(c),
+            "meets_target": bool(err <= half_gap_mm(c)),
+            "interval_coverage": float(np.mean([q[f"{j}_int"][0] <= c <= q[f"{j}_int"][1] for q in qs])),
+            "median_estimate_mm": float(np.median([q[f"{j}_mm"] for q in qs]))}
+
+
+def size_by_speed(faulty: list[dict[str, Any]], j: str) -> dict[str, dict[str, dict[str, Any]]]:
+    """Size figures of joint ``j`` ("b" or "c") per clearance value and speed: {value: {speed: {runs,
+    median_abs_error_mm, target_mm, meets_target, interval_coverage, median_estimate_mm}}}, from the
+    predictions of the runs with a clearance at ``j``."""
+    out: dict[str, dict[str, dict[str, Any]]] = {}
+    for c in sorted({p[f"true_{j}_mm"] for p in faulty}):
+        ps = [p for p in faulty if p[f"true_{j}_mm"] == c]
+        out[f"{c:g}"] = _group(ps, _speed_key, lambda qs, c=c: _size_cell(qs, j, c))
+    return out
+
+
+def size_where_resolved(preds: list[dict[str, Any]]) -> dict[str, Any]:
+    """Size figures at C per clearance value over the runs whose speed and orientation the bench's
+    sensors resolve the size at (:func:`twin.identify.model.size_c_resolved`), and how many are not."""
+    faulty = [p for p in preds if p["true_c_mm"] > 0]
+    ok = [p for p in faulty if p["c_resolved"]]
+    return {"runs": len(ok), "runs_not_resolved": len(faulty) - len(ok),
+            "values": {f"{c:g}": _size_cell([p for p in ok if p["true_c_mm"] == c], "c", c)
+                       for c in sorted({p["true_c_mm"] for p in ok})}}
+
+
+def add_size_by_speed(r: dict[str, Any]) -> dict[str, Any]:
+    """Add the per-speed size tables and the figures where the size at C is resolved to a report made
+    before they existed (from its predictions; no model is run)."""
+    for p in r["predictions"]:
+        p["c_resolved"] = size_c_resolved(p["orientation"], p["crank_hz"])
+    for J, g in r["by_clearance"].items():
+        j = J.lower()
+        g["by_speed"] = size_by_speed([p for p in r["predictions"] if p[f"true_{j}_mm"] > 0], j)
+    r["by_clearance"]["C"]["resolved"] = size_where_resolved(r["predictions"])
+    return r
 
 
 def _speed_key(p: dict[str, Any]) -> str:
@@ -142,6 +186,39 @@ def render_markdown(r: dict[str, Any]) -> str:
             lines.append(f"| {c} | {v['runs']} | {v['detected'] * 100:.0f} % | {v['median_estimate_mm']:.3g} | "
                          f"{v['median_abs_error_mm']:.3g} | {v['target_mm']:.3g} | {'yes' if v['meets_target'] else 'no'} "
                          f"| {v['interval_coverage'] * 100:.0f} % |")
+    for J, g in r["by_clearance"].items():
+        by = g.get("by_speed")
+        if not by:
+            continue
+        speeds = sorted({k for v in by.values() for k in v}, key=_num)
+        lines += ["", f"## Size at {J} by clearance value and speed", "",
+                  "Median absolute error in mm (runs; 90 % interval coverage); **bold**: over the target "
+                  "(half the catalogue gap).", "",
+                  "| clearance mm | target mm | " + " | ".join(speeds) + " |", "|---|---|" + "---|" * len(speeds)]
+        for c, v in by.items():
+            cells = []
+            for k in speeds:
+                x = v.get(k)
+                if x is None:
+                    cells.append("–")
+                    continue
+                e = f"{x['median_abs_error_mm']:.3g}"
+                cells.append(f"{e if x['meets_target'] else f'**{e}**'} ({x['runs']}; "
+                             f"{x['interval_coverage'] * 100:.0f} %)")
+            lines.append(f"| {c} | {half_gap_mm(float(c)):.3g} | " + " | ".join(cells) + " |")
+    res = r["by_clearance"].get("C", {}).get("resolved")
+    if res and res["values"]:
+        lines += ["", f"## Size at C where the bench's sensors resolve it ({res['runs']} runs; "
+                      f"{res['runs_not_resolved']} at a speed and orientation where they do not)", "",
+                  "Resolved: motor speed at or over " + ", ".join(
+                      f"{rpm:g} rpm with {o} vertical" for o, rpm in SIZE_C_RESOLVED_FROM_RPM.items())
+                  + " (the model card's size-resolution map).", "",
+                  "| clearance mm | runs | median estimate mm | median abs error mm | target mm | meets | "
+                  "interval coverage |", "|---|---|---|---|---|---|---|"]
+        for c, v in res["values"].items():
+            lines.append(f"| {c} | {v['runs']} | {v['median_estimate_mm']:.3g} | {v['median_abs_error_mm']:.3g} | "
+                         f"{v['target_mm']:.3g} | {'yes' if v['meets_target'] else 'no'} | "
+                         f"{v['interval_coverage'] * 100:.0f} % |")
     lines += ["", f"False alarms on healthy joints: B {r['false_alarms']['B'] * 100:.1f} %, "
                   f"C {r['false_alarms']['C'] * 100:.1f} %.", ""]
     for p in r.get("plots", []):

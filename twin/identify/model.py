@@ -37,10 +37,21 @@ from typing import Any
 
 import numpy as np
 
+from twin.config import Drive
 from twin.errors import TwinError
 from twin.identify.features import FEATURE_VERSION, REVS_PER_WINDOW, IdentifyError, feature_names, features
 
 CLASSES = ("none", "B", "C", "BC")
+# Size resolution at C: the lowest motor speed [rpm] (belt 1:3.97) per vertical axis at which the bench's
+# sensor chain tells 0.05, 0.07 and 0.1 mm at C apart beyond the contact parameters' uncertainty
+# (shrinkage LDA on this model's features, leave one run out, accuracy 1.00 there and at every faster
+# speed measured; 0.43-0.86 below), measured on the twin's runs by
+# ``python analysis/identify/size_observability.py --scenes x:300,...,z:475``
+# (analysis/results/identify/size_observability_speed.json; z: every speed measured, 300 rpm the slowest).
+# Below it the pin slides round the bushing (y, z) or flies chaotically (x at 300-325 rpm) and the size
+# signature is under the sensor noise (noise-free accelerations separate y at 300 rpm at 1.00).
+SIZE_C_RESOLVED_FROM_RPM = {"x": 425.0, "y": 475.0, "z": 300.0}
+BELT_RATIO = Drive.belt_ratio  # motor turns per crank turn of the bench's V-belt (S003 §2.2.2)
 COVERAGE = 0.90  # nominal coverage of the reported intervals
 CONFORMAL_FOLDS = 5
 MODEL_FORMAT = "twin-identify-model/2"
@@ -114,6 +125,13 @@ class ClearanceModel:
             out[f"clearance_{j.lower()}_interval_mm"] = [lo, hi] if has else [0.0, 0.0]
             out[f"clearance_{j.lower()}_if_faulty_mm"] = {"median": mid, "interval_90": [lo, hi]}
         return out
+
+
+def size_c_resolved(orientation: str, crank_hz: float) -> bool:
+    """Whether the bench's sensors resolve the size of a clearance at C at this crank rate [Hz] with
+    ``orientation`` vertical (:data:`SIZE_C_RESOLVED_FROM_RPM`; 2 % allowance for the measured rate)."""
+    rpm = SIZE_C_RESOLVED_FROM_RPM.get(orientation)
+    return rpm is not None and abs(crank_hz) * 60.0 * BELT_RATIO >= 0.98 * rpm
 
 
 def size_answer(reg: Any, X: np.ndarray) -> float:
@@ -339,11 +357,17 @@ def identify_recording(model: ClearanceModel, path: str | Path) -> dict[str, Any
                         "the answer is an extrapolation")
     if cfg is not None and cfg.mechanism.orientation not in tr.get("orientations", []):
         warnings.append(f"orientation {cfg.mechanism.orientation} was not in the training data")
+    ans["clearance_c_size_resolved"] = size_c_resolved(orientation, w.crank_hz)
+    if "C" in ans["fault"] and not ans["clearance_c_size_resolved"]:
+        warnings.append(f"the size at C is not resolved at {w.crank_hz * 60 * BELT_RATIO:.0f} motor rpm with "
+                        f"{orientation} vertical: the bench's sensors tell 0.05-0.1 mm at C apart from "
+                        f"{SIZE_C_RESOLVED_FROM_RPM.get(orientation, float('nan')):g} rpm on (model card); "
+                        "trust the location and the interval, not the size")
     ans.update({
         "recording": str(path),
         "warnings": warnings,
         "evidence": {"windows": len(w.windows), "revolutions": round(w.revolutions, 2),
-                     "crank_hz": w.crank_hz, "motor_rpm_if_belt_3_97": w.crank_hz * 60 * 3.97,
+                     "crank_hz": w.crank_hz, "motor_rpm_if_belt_3_97": w.crank_hz * 60 * BELT_RATIO,
                      "steady_s": (w.steady[1] - w.steady[0]) / rate, "features": len(model.feature_names),
                      "feature_version": model.feature_version,
                      "model": {k: tr[k] for k in ("dataset", "identity_sha256", "engine", "crank_hz_range")}},

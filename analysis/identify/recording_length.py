@@ -1,0 +1,98 @@
+"""How the shipped model's size answer at C depends on how many crank revolutions a recording holds
+(issue 17: the size target at C).
+
+Method. ``analysis/datasets/clearance_id_length.toml``: 72 reference-engine runs of 12 s with a
+clearance at C only (0.05, 0.07, 0.1 mm), x, y and z vertical, 325 and 475 motor rpm (development
+speeds), contact parameters, sensor offsets, mounting and noise drawn as in the development set,
+its own seed. Each run is cut into the model's windows of two steady crank revolutions
+(``twin.identify.features``; back to back from the end of the steady part). The answer from the
+last ``k`` windows — what a recording of 2k steady revolutions would give — is the model's own
+(:meth:`twin.identify.model.ClearanceModel.identify`: location from the windows' mean class
+probabilities, size the median of the windows' answers, the model's conformal 90 % interval).
+The datasets' 3 s runs hold one window at 300-325 rpm, two at 450-475 rpm and three to four at 650-750.
+
+Reported per speed, clearance value and k: runs, location answered C (or BC), median absolute
+error of the size at C against the size target (half the catalogue gap), interval coverage, and the
+median over runs of the windows' spread (max/min of their size answers). No model is fitted
+here; the set is never used for training or for choosing the model.
+
+Run: ``twin dataset generate analysis/datasets/clearance_id_length.toml --out DIR`` (72 runs, about
+4 min on two cores), then ``python analysis/identify/recording_length.py DIR [--model M]
+[--json OUT]`` (about 1 min).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+KS = (1, 2, 3, 4, 7)  # windows used, from the end of the steady part
+
+
+def main(argv: list[str] | None = None) -> int:
+    from twin.dataset import open as open_dataset
+    from twin.identify.evaluate import half_gap_mm
+    from twin.identify.model import ClearanceModel, dataset_features, size_answer
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("dataset")
+    ap.add_argument("--model", default=None, help="model file (default: the shipped one)")
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--json", default=None)
+    args = ap.parse_args(argv)
+    if args.model is None:
+        from twin.commands.identify import default_model_path
+
+        args.model = str(default_model_path())
+    model = ClearanceModel.load(args.model)
+    ds = open_dataset(args.dataset)
+    X, rows, owner, skipped = dataset_features(ds, ("train", "val", "test"), args.workers)
+    owner = np.asarray(owner)
+    w = model.interval_log10["C"]
+    per: dict[tuple[float, float, int], list[dict]] = {}
+    for i, r in enumerate(rows):
+        Xr = X[owner == i]
+        c = r["clearance_c_mm"]
+        logs = model.size["C"].predict(Xr)
+        for k in KS:
+            if k > len(Xr):
+                continue
+            a = model.identify(Xr[-k:])
+            est = size_answer(model.size["C"], Xr[-k:])
+            lo, hi = est * 10 ** -w, est * 10 ** w
+            per.setdefault((r["motor_rpm"], c, k), []).append(
+                {"located": "C" in a["fault"], "err": abs(est - c), "covered": lo <= c <= hi,
+                 "spread": float(10 ** (logs[-k:].max() - logs[-k:].min())), "orientation": r["orientation"]})
+    out = {"dataset": str(args.dataset), "model": str(args.model), "runs": len(rows), "runs_left_out": skipped,
+           "windows_per_run": {f"{rpm:g}": sorted({int((owner == i).sum()) for i, r in enumerate(rows)
+                                                   if r["motor_rpm"] == rpm})
+                               for rpm in sorted({r["motor_rpm"] for r in rows})},
+           "cells": []}
+    print(f"{len(rows)} runs ({len(skipped)} left out), windows per run by speed: {out['windows_per_run']}")
+    print()
+    print("| motor rpm | clearance C mm | windows | runs | located C | median abs error mm | target mm | meets "
+          "| interval coverage | windows' spread (max/min) |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for (rpm, c, k), v in sorted(per.items()):
+        e = float(np.median([x["err"] for x in v]))
+        cell = {"motor_rpm": rpm, "clearance_c_mm": c, "windows": k, "runs": len(v),
+                "located": float(np.mean([x["located"] for x in v])), "median_abs_error_mm": e,
+                "target_mm": half_gap_mm(c), "meets_target": e <= half_gap_mm(c),
+                "interval_coverage": float(np.mean([x["covered"] for x in v])),
+                "spread": float(np.median([x["spread"] for x in v]))}
+        out["cells"].append(cell)
+        print(f"| {rpm:g} | {c:g} | {k} | {len(v)} | {cell['located'] * 100:.0f} % | {e:.3g} | {cell['target_mm']:.3g} "
+              f"| {'yes' if cell['meets_target'] else 'no'} | {cell['interval_coverage'] * 100:.0f} % | "
+              f"{cell['spread']:.2f} |")
+    if args.json:
+        from twin.util import atomic_write_json
+
+        atomic_write_json(Path(args.json), out)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
