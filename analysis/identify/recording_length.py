@@ -8,7 +8,8 @@ its own seed. Each run is cut into the model's windows of two steady crank revol
 (``twin.identify.features``; back to back from the end of the steady part). The answer from the
 last ``k`` windows — what a recording of 2k steady revolutions would give — is the model's own
 (:meth:`twin.identify.model.ClearanceModel.identify`: location from the windows' mean class
-probabilities, size the median of the windows' answers, the model's conformal 90 % interval).
+probabilities, size the median of the windows' answers, the model's conformal 90 % interval, the
+wider one where the run is below the size-resolution map).
 The datasets' 3 s runs hold one window at 300-325 rpm, two at 450-475 rpm and three to four at 650-750.
 
 Reported per speed, clearance value and k: runs, location answered C (or BC), median absolute
@@ -35,7 +36,7 @@ KS = (1, 2, 3, 4, 7)  # windows used, from the end of the steady part
 def main(argv: list[str] | None = None) -> int:
     from twin.dataset import open as open_dataset
     from twin.identify.evaluate import half_gap_mm
-    from twin.identify.model import ClearanceModel, dataset_features, size_answer
+    from twin.identify.model import ClearanceModel, dataset_features, size_c_resolved
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("dataset")
@@ -51,7 +52,6 @@ def main(argv: list[str] | None = None) -> int:
     ds = open_dataset(args.dataset)
     X, rows, owner, skipped = dataset_features(ds, ("train", "val", "test"), args.workers)
     owner = np.asarray(owner)
-    w = model.interval_log10["C"]
     per: dict[tuple[float, float, int], list[dict]] = {}
     for i, r in enumerate(rows):
         Xr = X[owner == i]
@@ -60,9 +60,9 @@ def main(argv: list[str] | None = None) -> int:
         for k in KS:
             if k > len(Xr):
                 continue
-            a = model.identify(Xr[-k:])
-            est = size_answer(model.size["C"], Xr[-k:])
-            lo, hi = est * 10 ** -w, est * 10 ** w
+            a = model.identify(Xr[-k:], size_c_resolved(r["orientation"], r["crank_hz"]))
+            est = a["clearance_c_if_faulty_mm"]["median"]
+            lo, hi = a["clearance_c_if_faulty_mm"]["interval_90"]
             per.setdefault((r["motor_rpm"], c, k), []).append(
                 {"located": "C" in a["fault"], "err": abs(est - c), "covered": lo <= c <= hi,
                  "spread": float(10 ** (logs[-k:].max() - logs[-k:].min())), "orientation": r["orientation"]})

@@ -35,6 +35,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     t.add_argument("--out", metavar="MODEL.joblib", required=True)
     t.add_argument("--splits", default="train,val", help="splits to train on (default train,val)")
     t.add_argument("--workers", type=int, metavar="N", help="processes for the features (default: the cores)")
+    t.add_argument("--interval-folds", choices=("runs", "speed"), default="runs",
+                   help="out-of-fold groups of the 90 %% intervals' calibration: 5 random groups of runs (default) "
+                        "or one group per motor speed (answers at speeds the regressor never saw)")
     t.set_defaults(func=_train)
 
     e = ids.add_parser("evaluate", help="evaluate a model on a dataset: confusion matrix, recall, size errors")
@@ -94,7 +97,8 @@ def _train(args: argparse.Namespace) -> int:
     from twin.util import check_output_file
 
     out = check_output_file(args.out, "--out", ".joblib")
-    model, info = train(list(args.dataset), _splits(args.splits), resolve_workers(args.workers))
+    model, info = train(list(args.dataset), _splits(args.splits), resolve_workers(args.workers),
+                        interval_folds=args.interval_folds)
     model.save(out)
     print(f"{out}: trained on {info['runs']} runs ({info['windows']} windows) of dataset {info['dataset']} "
           f"({info['engine']}); classes {info['classes']}; crank {info['crank_hz_range'][0]:.2f}-"

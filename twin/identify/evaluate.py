@@ -49,7 +49,7 @@ def evaluate(model: ClearanceModel, dataset_dir: str | Path, splits: tuple[str, 
     owner = np.asarray(owner)
     preds = []
     for i, r in enumerate(rows):
-        a = model.identify(X[owner == i])
+        a = model.identify(X[owner == i], size_c_resolved(r["orientation"], r["crank_hz"]))
         preds.append({"run_id": r["run_id"], "true_fault": r["fault"], "fault": a["fault"],
                       "true_b_mm": r["clearance_b_mm"], "true_c_mm": r["clearance_c_mm"],
                       "b_mm": a["clearance_b_if_faulty_mm"]["median"], "b_int": a["clearance_b_if_faulty_mm"]["interval_90"],

@@ -13,7 +13,12 @@
   clearance at the joint are split into ``CONFORMAL_FOLDS`` groups; each group's runs are answered
   by a regressor fitted on the other groups; a run's score is |log10(answer) − log10(truth)|; the
   ⌈(n + 1)·0.9⌉-th smallest score w gives every answer the interval [size·10^−w, size·10^w], which
-  holds the truth in at least 90 % of recordings like the training runs (exchangeability). Model
+  holds the truth in at least 90 % of recordings like the training runs (exchangeability). With
+  ``interval_folds="speed"`` (``--interval-folds speed``; the shipped model) each motor speed is one
+  group, so every score is an answer at a speed its regressor never saw, as a bench recording's may
+  be. At C the scores are split (Mondrian) by the size-resolution map (:func:`size_c_resolved`)
+  where each side has ``MONDRIAN_MIN_RUNS`` runs: one half width for answers the sensors resolve,
+  a wider one ("C_unresolved") for those below the map. Model
   format 1 took the 5 % and 95 % quantile regressors instead: their window medians stayed at the
   catalogue's ends (0.02–0.5 mm for almost every answer), covering the truth while saying nothing.
   A joint the classifier finds healthy reports 0 (ball bearing).
@@ -45,15 +50,16 @@ CLASSES = ("none", "B", "C", "BC")
 # Size resolution at C: the lowest motor speed [rpm] (belt 1:3.97) per vertical axis at which the bench's
 # sensor chain tells 0.05, 0.07 and 0.1 mm at C apart beyond the contact parameters' uncertainty
 # (shrinkage LDA on this model's features, leave one run out, accuracy 1.00 there and at every faster
-# speed measured; 0.43-0.86 below), measured on the twin's runs by
-# ``python analysis/identify/size_observability.py --scenes x:300,...,z:475``
-# (analysis/results/identify/size_observability_speed.json; z: every speed measured, 300 rpm the slowest).
+# speed measured; 0.43-0.86 below), measured on the twin's runs over 250-750 rpm by
+# ``python analysis/identify/size_observability.py --scenes x:250,...,z:750`` (the model card's command;
+# analysis/results/identify/size_observability_speed.json).
 # Below it the pin slides round the bushing (y, z) or flies chaotically (x at 300-325 rpm) and the size
 # signature is under the sensor noise (noise-free accelerations separate y at 300 rpm at 1.00).
 SIZE_C_RESOLVED_FROM_RPM = {"x": 425.0, "y": 475.0, "z": 300.0}
 BELT_RATIO = Drive.belt_ratio  # motor turns per crank turn of the bench's V-belt (S003 §2.2.2)
 COVERAGE = 0.90  # nominal coverage of the reported intervals
 CONFORMAL_FOLDS = 5
+MONDRIAN_MIN_RUNS = 20  # out-of-fold runs each side needs before the interval at C is split by resolution
 MODEL_FORMAT = "twin-identify-model/2"
 
 
@@ -67,7 +73,9 @@ class ClearanceModel:
 
     classifier: Any
     size: dict[str, Any]  # per joint, the median regressor of log10 clearance [log10 mm]
-    interval_log10: dict[str, float]  # per joint, the conformal half width w [log10]
+    # per joint, the conformal half width w [log10]; "C_unresolved", where present, the half width of
+    # answers at C below the size-resolution map (SIZE_C_RESOLVED_FROM_RPM), "C" then that of the others
+    interval_log10: dict[str, float]
     feature_version: str = FEATURE_VERSION
     feature_names: list[str] = field(default_factory=feature_names)
     trained_on: dict[str, Any] = field(default_factory=dict)
@@ -109,8 +117,10 @@ class ClearanceModel:
         return m
 
     # ------------------------------------------------------------- predict
-    def identify(self, X: np.ndarray) -> dict[str, Any]:
-        """Answer for one recording from its window features [windows, features]."""
+    def identify(self, X: np.ndarray, c_resolved: bool = True) -> dict[str, Any]:
+        """Answer for one recording from its window features [windows, features]; ``c_resolved``:
+        whether its speed and orientation are on the size-resolution map at C (:func:`size_c_resolved`),
+        which picks the interval's half width at C where the model has one for each."""
         proba = self.classifier.predict_proba(X).mean(axis=0)
         classes = list(self.classifier.classes_)
         p = {c: float(proba[classes.index(c)]) if c in classes else 0.0 for c in CLASSES}
@@ -119,6 +129,8 @@ class ClearanceModel:
         for j in ("B", "C"):
             mid = size_answer(self.size[j], X)
             w = self.interval_log10[j]
+            if j == "C" and not c_resolved:
+                w = self.interval_log10.get("C_unresolved", w)
             lo, hi = (float(f"{mid * 10 ** sign:.12g}") for sign in (-w, w))
             has = j in fault
             out[f"clearance_{j.lower()}_mm"] = mid if has else 0.0
@@ -233,9 +245,37 @@ def _pooled_features(dataset_dirs: list[str | Path], splits: tuple[str, ...], wo
     return np.concatenate(Xs), rows, owner, skipped, infos
 
 
+INTERVAL_FOLDS = ("runs", "speed")
+
+
+def _conformal_folds(rows: list[dict[str, Any]], runs: np.ndarray, how: str, seed: int) -> np.ndarray:
+    """Fold of every row (−1: not in ``runs``): ``runs``, CONFORMAL_FOLDS random groups of whole runs;
+    ``speed``, one fold per motor speed (the crank rate to 0.01 Hz where a run has none), so that every
+    score is an answer at a speed the fitted regressor never saw, as a recording's may be."""
+    fold = np.full(len(rows), -1)
+    if how == "runs":
+        perm = np.random.default_rng(seed).permutation(runs)
+        fold[perm] = np.arange(len(perm)) % CONFORMAL_FOLDS
+        return fold
+
+    def key(r: dict[str, Any]) -> float:
+        rpm = r.get("motor_rpm")
+        return float(rpm) if rpm is not None and math.isfinite(float(rpm)) else round(float(r["crank_hz"]), 2)
+
+    speeds = sorted({key(rows[int(i)]) for i in runs})
+    if len(speeds) < 3:
+        raise ModelError(f"interval folds by speed need runs at 3 speeds or more, the training runs have {len(speeds)}")
+    for i in runs:
+        fold[int(i)] = speeds.index(key(rows[int(i)]))
+    return fold
+
+
 def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = ("train", "val"), workers: int = 1,
-          seed: int = 0) -> tuple[ClearanceModel, dict[str, Any]]:
-    """Train on the ok runs of ``splits`` of one dataset or several pooled (see module docstring)."""
+          seed: int = 0, interval_folds: str = "runs") -> tuple[ClearanceModel, dict[str, Any]]:
+    """Train on the ok runs of ``splits`` of one dataset or several pooled (see module docstring);
+    ``interval_folds`` groups the out-of-fold scores of the intervals (:func:`_conformal_folds`)."""
+    if interval_folds not in INTERVAL_FOLDS:
+        raise ModelError(f"interval_folds: {interval_folds!r}; allowed: {', '.join(INTERVAL_FOLDS)}")
     from sklearn.ensemble import HistGradientBoostingClassifier, HistGradientBoostingRegressor
 
     dirs = [dataset_dir] if isinstance(dataset_dir, (str, Path)) else list(dataset_dir)
@@ -254,6 +294,7 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
     clf.fit(X, y)
     size: dict[str, Any] = {}
     half_width: dict[str, float] = {}
+    n_folds: dict[str, int] = {}
     owner_a = np.asarray(owner)
     for j in ("B", "C"):
         key = f"clearance_{j.lower()}_mm"
@@ -272,18 +313,25 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
 
         size[j] = fit(sel)
         # out-of-fold scores of whole runs (see module docstring)
-        runs_j = np.random.default_rng(seed).permutation(np.unique(owner_a[sel]))
-        fold = np.full(len(rows), -1)
-        fold[runs_j] = np.arange(len(runs_j)) % CONFORMAL_FOLDS
+        fold = _conformal_folds(rows, np.unique(owner_a[sel]), interval_folds, seed)
+        n_folds[j] = int(fold.max()) + 1
         scores = []
-        for k in range(CONFORMAL_FOLDS):
+        for k in range(n_folds[j]):
             held = sel & (fold[owner_a] == k)
             if not held.any() or (sel & ~held).sum() < 10:
                 continue
             reg = fit(sel & ~held)
             for r in np.unique(owner_a[held]):
-                scores.append(abs(math.log10(size_answer(reg, X[owner_a == r])) - math.log10(rows[int(r)][key])))
-        half_width[j] = conformal_half_width(np.array(scores))
+                row = rows[int(r)]
+                scores.append((abs(math.log10(size_answer(reg, X[owner_a == r])) - math.log10(row[key])),
+                               size_c_resolved(row["orientation"], row["crank_hz"])))
+        half_width[j] = conformal_half_width(np.array([sc for sc, _ in scores]))
+        if j == "C":  # Mondrian split by the size-resolution map, where each side has enough runs
+            on = np.array([ok for _, ok in scores])
+            if on.sum() >= MONDRIAN_MIN_RUNS and (~on).sum() >= MONDRIAN_MIN_RUNS:
+                sc = np.array([x for x, _ in scores])
+                half_width["C"] = conformal_half_width(sc[on])
+                half_width["C_unresolved"] = conformal_half_width(sc[~on])
     import sklearn
 
     from twin import __version__
@@ -304,7 +352,8 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
         "orientations": sorted({r["orientation"] for r in rows}),
         "classes": {c: int(np.sum(y == c)) for c in CLASSES},
         "versions": {"twin": __version__, "sklearn": sklearn.__version__, "numpy": np.__version__},
-        "interval": {"method": "split-conformal, out of fold", "folds": CONFORMAL_FOLDS, "coverage": COVERAGE,
+        "interval": {"method": "split-conformal, out of fold", "folds_by": interval_folds, "folds": n_folds,
+                     "coverage": COVERAGE,
                      "half_width_log10": half_width},
         "feature_seconds": t_feat, "fit_seconds": time.perf_counter() - t0 - t_feat,
     }
@@ -349,7 +398,7 @@ def identify_recording(model: ClearanceModel, path: str | Path) -> dict[str, Any
         raise ModelError(f"{path}: recorded at {rate:g} Hz, the model was trained at {tr['rate_hz']:g} Hz")
     orientation = cfg.mechanism.orientation if cfg is not None else "y"
     X, w = features(acc, counts, rate, cpr, orientation=orientation)
-    ans = model.identify(X)
+    ans = model.identify(X, size_c_resolved(orientation, w.crank_hz))
     lo, hi = tr["crank_hz_range"]
     warnings = []
     if not (lo * 0.97 <= w.crank_hz <= hi * 1.03):
@@ -357,7 +406,7 @@ def identify_recording(model: ClearanceModel, path: str | Path) -> dict[str, Any
                         "the answer is an extrapolation")
     if cfg is not None and cfg.mechanism.orientation not in tr.get("orientations", []):
         warnings.append(f"orientation {cfg.mechanism.orientation} was not in the training data")
-    ans["clearance_c_size_resolved"] = size_c_resolved(orientation, w.crank_hz)
+    ans["clearance_c_size_resolved"] = size_c_resolved(orientation, w.crank_hz)  # its interval's width too
     if "C" in ans["fault"] and not ans["clearance_c_size_resolved"]:
         warnings.append(f"the size at C is not resolved at {w.crank_hz * 60 * BELT_RATIO:.0f} motor rpm with "
                         f"{orientation} vertical: the bench's sensors tell 0.05-0.1 mm at C apart from "
