@@ -3,19 +3,21 @@
 Steps (each is a plain ``twin`` command; a step whose output exists is skipped, so the script
 resumes):
 
-1. ``twin dataset generate analysis/datasets/clearance_id.toml --out WORK/clearance_id``: the
-   training data, MuJoCo twin (400 runs of 3 s);
-2. ``twin identify train WORK/clearance_id --out twin/data/identify_default.joblib`` (train and
-   val splits);
+1. ``twin dataset generate analysis/datasets/clearance_id.toml --out WORK/clearance_id`` and
+   ``... clearance_id_dense.toml --out WORK/clearance_id_dense``: the training data, MuJoCo twin
+   (400 runs of 3 s each: the catalogue at five speeds; clearances drawn continuously at 15 speeds);
+2. ``twin identify train WORK/clearance_id WORK/clearance_id_dense --interval-folds speed --out
+   twin/data/identify_default.joblib`` (train and val splits of both, pooled; the intervals
+   calibrated on answers at speeds left out);
 3. ``twin dataset generate analysis/datasets/clearance_id_test.toml --out WORK/clearance_id_test``:
    the test data, reference engine, other seeds, unseen speeds and clearance value;
 4. ``twin identify evaluate ... --out analysis/results/identify``: the report (confusion matrix,
    recall, size errors by clearance and speed, interval coverage, plots) and the answers on the
    sample recordings in ``recordings/`` (``samples.json``).
 
-Run: ``python analysis/identify/train_default.py [--work DIR] [--workers N]`` (15-20 min on two
+Run: ``python analysis/identify/train_default.py [--work DIR] [--workers N]`` (25-35 min on two
 cores, most of it the MuJoCo training data). The datasets stay in ``--work`` (default
-``../identify_work`` beside the checkout; about 3 GB), not in the repository.
+``../identify_work`` beside the checkout; about 6 GB), not in the repository.
 """
 
 from __future__ import annotations
@@ -47,13 +49,16 @@ def main() -> None:
     args = ap.parse_args()
     work = Path(args.work)
     work.mkdir(parents=True, exist_ok=True)
-    train_ds, test_ds = work / "clearance_id", work / "clearance_id_test"
+    train_ds = [work / "clearance_id", work / "clearance_id_dense"]
+    test_ds = work / "clearance_id_test"
     t = time.perf_counter()
-    twin("dataset", "generate", "analysis/datasets/clearance_id.toml", "--out", str(train_ds), "--workers", args.workers,
-         "--no-progress")
+    for d in train_ds:
+        twin("dataset", "generate", f"analysis/datasets/{d.name}.toml", "--out", str(d), "--workers", args.workers,
+             "--no-progress")
     print(f"training data: {time.perf_counter() - t:.0f} s (0 if it existed)")
     if args.retrain or not MODEL.exists():
-        twin("identify", "train", str(train_ds), "--out", str(MODEL), "--workers", args.workers)
+        twin("identify", "train", *map(str, train_ds), "--interval-folds", "speed", "--out", str(MODEL),
+             "--workers", args.workers)
     t = time.perf_counter()
     twin("dataset", "generate", "analysis/datasets/clearance_id_test.toml", "--out", str(test_ds), "--workers",
          args.workers, "--no-progress")
