@@ -398,7 +398,8 @@ def identify_recording(model: ClearanceModel, path: str | Path) -> dict[str, Any
         raise ModelError(f"{path}: recorded at {rate:g} Hz, the model was trained at {tr['rate_hz']:g} Hz")
     orientation = cfg.mechanism.orientation if cfg is not None else "y"
     X, w = features(acc, counts, rate, cpr, orientation=orientation)
-    ans = model.identify(X, size_c_resolved(orientation, w.crank_hz))
+    resolved = size_c_resolved(orientation, w.crank_hz)
+    ans = model.identify(X, resolved)
     lo, hi = tr["crank_hz_range"]
     warnings = []
     if not (lo * 0.97 <= w.crank_hz <= hi * 1.03):
@@ -406,8 +407,8 @@ def identify_recording(model: ClearanceModel, path: str | Path) -> dict[str, Any
                         "the answer is an extrapolation")
     if cfg is not None and cfg.mechanism.orientation not in tr.get("orientations", []):
         warnings.append(f"orientation {cfg.mechanism.orientation} was not in the training data")
-    ans["clearance_c_size_resolved"] = size_c_resolved(orientation, w.crank_hz)  # its interval's width too
-    if "C" in ans["fault"] and not ans["clearance_c_size_resolved"]:
+    ans["clearance_c_size_resolved"] = resolved  # which also chose the interval's width at C
+    if "C" in ans["fault"] and not resolved:
         warnings.append(f"the size at C is not resolved at {w.crank_hz * 60 * BELT_RATIO:.0f} motor rpm with "
                         f"{orientation} vertical: the bench's sensors tell 0.05-0.1 mm at C apart from "
                         f"{SIZE_C_RESOLVED_FROM_RPM.get(orientation, float('nan')):g} rpm on (model card); "
