@@ -65,13 +65,9 @@ def one_run(job: tuple) -> dict:
         "instrumentation.seed": 1000 + k, **over})
     run = simulate_run(cfg)
     if sensed:  # the bench's chain: sensor response, noise, 18-bit DAQ, encoder, static calibration
-        from twin.instrument.calibration import measured_accel
-        from twin.instrument.chain import apply_chain, simulated_calibration
+        from twin.identify.model import simulated_inputs
 
-        daq = apply_chain(run, cfg, command=False)
-        meas = measured_accel(daq, simulated_calibration(cfg))
-        acc = {f"AC{i}": np.asarray(meas[f"meas_AC{i}"], float) for i in range(1, 7)}
-        counts, cpr, rate = np.asarray(daq["encoder_counts"], float), float(cfg.instrumentation.encoder_counts_per_rev), daq.rate_hz
+        acc, counts, rate, cpr = simulated_inputs(run, cfg)
     else:
         acc = {f"AC{i}": np.asarray(run[f"AC{i}"], float) for i in range(1, 7)}
         counts, cpr, rate = np.round(np.asarray(run["crank_angle"], float) / (2 * math.pi) * CPR), CPR, run.rate_hz

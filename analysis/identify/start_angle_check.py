@@ -27,20 +27,15 @@ def one(job: tuple) -> dict:
     engine, angle, model_path = job
     from twin.config import preset
     from twin.identify.features import features
-    from twin.identify.model import ClearanceModel
-    from twin.instrument.calibration import measured_accel
-    from twin.instrument.chain import apply_chain, simulated_calibration
+    from twin.identify.model import ClearanceModel, simulated_inputs
     from twin.simulate import simulate_run
 
     cfg = preset(6).replace(**{"simulation.engine": engine, "simulation.duration_s": 5.5, "drive.ramp_s": 0.4,
                                "drive.initial_encoder_angle_rad": angle, "instrumentation.seed": 0,
                                "sensors.channels": ["accel", "encoder", "crank", "joints"]})
     run = simulate_run(cfg)
-    daq = apply_chain(run, cfg, command=False)
-    meas = measured_accel(daq, simulated_calibration(cfg))
-    acc = {f"AC{i}": np.asarray(meas[f"meas_AC{i}"], float) for i in range(1, 7)}
-    X, w = features(acc, np.asarray(daq["encoder_counts"], float), daq.rate_hz,
-                    float(cfg.instrumentation.encoder_counts_per_rev), 0.0, cfg.mechanism.orientation)
+    acc, counts, rate, cpr = simulated_inputs(run, cfg)
+    X, w = features(acc, counts, rate, cpr, 0.0, cfg.mechanism.orientation)
     m = ClearanceModel.load(model_path)
     est = 10 ** m.size["C"].predict(X)
     fn = np.asarray(run["fn_C"], float)

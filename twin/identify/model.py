@@ -389,6 +389,20 @@ def recording_inputs(path: str | Path) -> tuple[dict[str, np.ndarray], np.ndarra
     return acc, np.asarray(rec["encoder_counts"]), rec.rate_hz, cpr, cfg
 
 
+def simulated_inputs(run: Any, cfg: Any) -> tuple[dict[str, np.ndarray], np.ndarray, float, float]:
+    """What :func:`recording_inputs` reads from a recording, made from a simulated ``run`` of ``cfg``
+    (channels accel and encoder): the bench's sensor chain (``cfg.instrumentation``: sensor response,
+    noise, DAQ, encoder counts) and the static calibration it would get. Returns the calibrated
+    accelerations, encoder counts, rate and counts per turn."""
+    from twin.instrument.calibration import measured_accel
+    from twin.instrument.chain import apply_chain, simulated_calibration
+
+    daq = apply_chain(run, cfg, command=False)
+    meas = measured_accel(daq, simulated_calibration(cfg))
+    acc = {k[5:]: np.asarray(v.data, float) for k, v in meas.channels.items()}
+    return acc, np.asarray(daq["encoder_counts"], float), daq.rate_hz, float(cfg.instrumentation.encoder_counts_per_rev)
+
+
 def identify_recording(model: ClearanceModel, path: str | Path) -> dict[str, Any]:
     """The answer for a bench recording (see module docstring), with the evidence used."""
     t0 = time.perf_counter()
