@@ -234,6 +234,43 @@ def test_several_datasets_pool_into_one_model_and_must_agree(small, tmp_path, ca
     assert not (tmp_path / "x.joblib").exists()
 
 
+def test_a_location_only_dataset_leaves_the_size_regressors_as_they_were(small, tmp_path):
+    """``--location-only DS``: its runs join the location model's training, not the size regressors'
+    nor their intervals: the size answers are bit for bit those of a model trained without it."""
+    from twin.identify.model import ClearanceModel, pooled_features
+
+    d, model = small
+    both = tmp_path / "both.joblib"
+    assert main(["identify", "train", str(d / "small-train"), "--location-only", str(d / "small-test"), "--out",
+                 str(both), "--splits", "train", "--workers", "1"]) == 0
+    a, b = ClearanceModel.load(model), ClearanceModel.load(both)
+    X = pooled_features([d / "small-test"], ("train",), 1)[0]
+    for j in ("B", "C"):
+        assert np.array_equal(a.size[j].predict(X), b.size[j].predict(X))
+    assert a.interval_log10 == b.interval_log10
+    assert b.trained_on["datasets"] == [{"name": "small-train", "runs": 48},
+                                        {"name": "small-test", "runs": 16, "use": "location only"}]
+    assert b.trained_on["windows"] == a.trained_on["windows"] + len(X) == sum(b.trained_on["classes"].values())
+
+
+def test_an_evaluation_pools_datasets_and_keeps_each_ones_figures(small):
+    """``twin identify evaluate MODEL DS1 DS2`` (a test set and its extension): the pooled report holds
+    every run of both, each run answered as alone, and the location accuracy of each dataset."""
+    from twin.identify.evaluate import evaluate
+    from twin.identify.model import ClearanceModel
+
+    d, model = small
+    m = ClearanceModel.load(model)
+    one = evaluate(m, d / "small-test", ("train",))
+    both = evaluate(m, [d / "small-test", d / "small-train"], ("train",))
+    assert both["runs"] == one["runs"] + 48 and both["dataset"] == "small-test+small-train"
+    assert both["by_dataset"]["small-test"] == {"runs": one["runs"], "accuracy": one["accuracy"]}
+    key = ("run_id", "fault", "c_mm", "b_mm")
+    assert [tuple(p[k] for k in key) for p in both["predictions"] if p["dataset"] == "small-test"] == \
+        [tuple(p[k] for k in key) for p in one["predictions"]]
+    assert "by_dataset" not in one
+
+
 # ------------------------------------------------------------- the shipped model
 DEFAULT = ROOT / "twin" / "data" / "identify_default.joblib"
 
@@ -408,3 +445,26 @@ def test_the_interval_is_the_conformal_rank_of_the_out_of_fold_scores():
     assert conformal_half_width(np.array([0.3, 0.1])) == 0.3  # too few for the rank: the largest
     with pytest.raises(ModelError):
         conformal_half_width(np.array([]))
+
+
+def test_median_error_interval_matches_the_asymptotic_spread_of_a_median():
+    """The bootstrap interval of a cell's median error: holds the median, is one point for one run or
+    identical runs, and for n draws of an exponential (median ln 2, density 1/2 there) spans about
+    2 * 1.645 / (2 f sqrt(n)) = 3.29 / sqrt(n), the sample median's asymptotic 90 % interval."""
+    from twin.identify.evaluate import median_ci90
+
+    assert median_ci90([0.3]) == [0.3, 0.3] and median_ci90([0.2, 0.2, 0.2]) == [0.2, 0.2]
+    x = np.random.default_rng(5).exponential(1.0, 400)
+    lo, hi = median_ci90(x)
+    assert lo < np.median(x) < hi
+    assert hi - lo == pytest.approx(3.29 / np.sqrt(400), rel=0.3)
+    assert median_ci90(x) == [lo, hi]  # fixed seed: the report does not change between renders
+
+
+def test_markdown_flags_cells_the_runs_do_not_settle():
+    from twin.identify.evaluate import _meets
+
+    assert _meets({"meets_target": True, "target_mm": 0.01, "median_abs_error_ci90_mm": [0.002, 0.004]}) == "yes"
+    assert _meets({"meets_target": True, "target_mm": 0.01, "median_abs_error_ci90_mm": [0.006, 0.013]}) == "yes*"
+    assert _meets({"meets_target": False, "target_mm": 0.01, "median_abs_error_ci90_mm": [0.008, 0.02]}) == "no*"
+    assert _meets({"meets_target": False, "target_mm": 0.01, "median_abs_error_ci90_mm": [0.011, 0.02]}) == "no"

@@ -38,11 +38,17 @@ def register(sub: argparse._SubParsersAction) -> None:
     t.add_argument("--interval-folds", choices=("runs", "speed"), default="runs",
                    help="out-of-fold groups of the 90 %% intervals' calibration: 5 random groups of runs (default) "
                         "or one group per motor speed (answers at speeds the regressor never saw)")
+    t.add_argument("--location-only", metavar="DATASET", nargs="+", default=[],
+                   help="dataset folder(s) pooled for the fault location only, not for the size regressors "
+                        "(runs of a regime the others lack, e.g. one speed, that would tilt the sizes)")
     t.set_defaults(func=_train)
 
-    e = ids.add_parser("evaluate", help="evaluate a model on a dataset: confusion matrix, recall, size errors")
+    e = ids.add_parser("evaluate", help="evaluate a model on a dataset, or several pooled: confusion matrix, "
+                                        "recall, size errors")
     e.add_argument("model", metavar="MODEL.joblib")
-    e.add_argument("dataset", metavar="DATASET")
+    e.add_argument("dataset", metavar="DATASET", nargs="+",
+                   help="dataset folder(s) of one engine, sample rate and encoder resolution; several are pooled "
+                        "(e.g. a test set and its extension by another seed)")
     e.add_argument("--out", metavar="REPORT_DIR", required=True)
     e.add_argument("--splits", default="train,val,test", help="splits to evaluate (default: all)")
     e.add_argument("--workers", type=int, metavar="N", help="processes for the features (default: the cores)")
@@ -98,7 +104,7 @@ def _train(args: argparse.Namespace) -> int:
 
     out = check_output_file(args.out, "--out", ".joblib")
     model, info = train(list(args.dataset), _splits(args.splits), resolve_workers(args.workers),
-                        interval_folds=args.interval_folds)
+                        interval_folds=args.interval_folds, location_only=list(args.location_only))
     model.save(out)
     print(f"{out}: trained on {info['runs']} runs ({info['windows']} windows) of dataset {info['dataset']} "
           f"({info['engine']}); classes {info['classes']}; crank {info['crank_hz_range'][0]:.2f}-"
@@ -115,7 +121,7 @@ def _evaluate(args: argparse.Namespace) -> int:
 
     out = check_output_dir(args.out, "--out")
     model = ClearanceModel.load(args.model)
-    r = evaluate(model, args.dataset, _splits(args.splits), resolve_workers(args.workers))
+    r = evaluate(model, list(args.dataset), _splits(args.splits), resolve_workers(args.workers))
     files = write_report(r, out)
     print(f"{r['runs']} runs of {r['dataset']} ({r['engine']}): accuracy {r['accuracy'] * 100:.1f} %, recall "
           + ", ".join(f"{c} {v * 100:.0f} %" for c, v in r["recall"].items() if v is not None))
