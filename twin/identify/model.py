@@ -217,7 +217,7 @@ def dataset_features(ds, splits: tuple[str, ...], workers: int = 1
     return np.concatenate(X), kept, owner, skipped
 
 
-def _pooled_features(dataset_dirs: list[str | Path], splits: tuple[str, ...], workers: int
+def pooled_features(dataset_dirs: list[str | Path], splits: tuple[str, ...], workers: int
                      ) -> tuple[np.ndarray, list[dict[str, Any]], list[int], list[dict[str, Any]], list[Any]]:
     """Features of several datasets pooled (runs keep their rows, with the dataset's name); the
     datasets must agree on engine, sample rate and encoder resolution."""
@@ -271,9 +271,13 @@ def _conformal_folds(rows: list[dict[str, Any]], runs: np.ndarray, how: str, see
 
 
 def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = ("train", "val"), workers: int = 1,
-          seed: int = 0, interval_folds: str = "runs") -> tuple[ClearanceModel, dict[str, Any]]:
+          seed: int = 0, interval_folds: str = "runs", location_only: list[str | Path] = ()
+          ) -> tuple[ClearanceModel, dict[str, Any]]:
     """Train on the ok runs of ``splits`` of one dataset or several pooled (see module docstring);
-    ``interval_folds`` groups the out-of-fold scores of the intervals (:func:`_conformal_folds`)."""
+    ``interval_folds`` groups the out-of-fold scores of the intervals (:func:`_conformal_folds`);
+    the runs of the ``location_only`` datasets (pooled like the others) teach the location model
+    only, not the size regressors nor their intervals (e.g. runs at one speed in a regime the others
+    lack, which would tilt the size regressors toward that speed)."""
     if interval_folds not in INTERVAL_FOLDS:
         raise ModelError(f"interval_folds: {interval_folds!r}; allowed: {', '.join(INTERVAL_FOLDS)}")
     from sklearn.ensemble import HistGradientBoostingClassifier, HistGradientBoostingRegressor
@@ -281,9 +285,13 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
     dirs = [dataset_dir] if isinstance(dataset_dir, (str, Path)) else list(dataset_dir)
     if not dirs:
         raise ModelError("no dataset to train on")
+    n_size = len(dirs)
+    dirs += list(location_only)
     t0 = time.perf_counter()
-    X, rows, owner, skipped, dss = _pooled_features(dirs, splits, workers)
+    X, rows, owner, skipped, dss = pooled_features(dirs, splits, workers)
     y = np.array([rows[i]["fault"] for i in owner])
+    size_names = {d.info["name"] for d in dss[:n_size]}
+    for_size = np.array([rows[i]["dataset"] in size_names for i in owner])
     t_feat = time.perf_counter() - t0
     # leaves of at least 20 windows (scikit-learn's default) on datasets of a thousand windows and
     # more; smaller datasets (tests, first looks) get smaller leaves, and no early stopping below 500
@@ -299,7 +307,7 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
     for j in ("B", "C"):
         key = f"clearance_{j.lower()}_mm"
         truth = np.array([rows[i][key] for i in owner], float)
-        sel = truth > 0
+        sel = (truth > 0) & for_size
         if sel.sum() < 10:
             raise ModelError(f"{', '.join(map(str, dirs))}: fewer than 10 windows with a clearance at {j}: cannot "
                              "learn its size")
@@ -342,7 +350,8 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
     hz = np.array([r["crank_hz"] for r in rows])
     trained_on = {
         "dataset": "+".join(i["name"] for i in infos), "dataset_dir": ", ".join(map(str, dirs)),
-        "datasets": [{"name": i["name"], "runs": sum(1 for r in rows if r["dataset"] == i["name"])} for i in infos],
+        "datasets": [{"name": i["name"], "runs": sum(1 for r in rows if r["dataset"] == i["name"])}
+                     | ({} if i["name"] in size_names else {"use": "location only"}) for i in infos],
         "identity_sha256": digest,
         "engine": infos[0]["identity"]["engine"], "rate_hz": dss[0].rate_hz,
         "counts_per_rev": float(infos[0].get("encoder_counts_per_rev") or 32768),
