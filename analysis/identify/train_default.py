@@ -3,21 +3,25 @@
 Steps (each is a plain ``twin`` command; a step whose output exists is skipped, so the script
 resumes):
 
-1. ``twin dataset generate analysis/datasets/clearance_id.toml --out WORK/clearance_id`` and
-   ``... clearance_id_dense.toml --out WORK/clearance_id_dense``: the training data, MuJoCo twin
-   (400 runs of 3 s each: the catalogue at five speeds; clearances drawn continuously at 15 speeds);
-2. ``twin identify train WORK/clearance_id WORK/clearance_id_dense --interval-folds speed --out
-   twin/data/identify_default.joblib`` (train and val splits of both, pooled; the intervals
-   calibrated on answers at speeds left out);
-3. ``twin dataset generate analysis/datasets/clearance_id_test.toml --out WORK/clearance_id_test``:
-   the test data, reference engine, other seeds, unseen speeds and clearance value;
-4. ``twin identify evaluate ... --out analysis/results/identify``: the report (confusion matrix,
-   recall, size errors by clearance and speed, interval coverage, plots) and the answers on the
-   sample recordings in ``recordings/`` (``samples.json``).
+1. ``twin dataset generate analysis/datasets/clearance_id.toml --out WORK/clearance_id``, the same for
+   ``clearance_id_dense.toml`` and ``clearance_id_band.toml``: the training data, MuJoCo twin (400 runs
+   of 3 s each: the catalogue at five speeds; clearances drawn continuously at 15 speeds; and 160 runs
+   with x vertical at 312.5 rpm, the slider's free-flight speed, for the location model only);
+2. ``twin identify train WORK/clearance_id WORK/clearance_id_dense --location-only WORK/clearance_id_band
+   --interval-folds speed --out twin/data/identify_default.joblib`` (train and val splits, pooled; the
+   intervals calibrated on answers at speeds left out);
+3. ``twin dataset generate analysis/datasets/clearance_id_test.toml --out WORK/clearance_id_test`` and
+   ``clearance_id_test_b.toml``: the test data (200 + 400 runs), reference engine, other seeds, unseen
+   speeds and clearance value;
+4. ``twin identify evaluate MODEL WORK/clearance_id_test WORK/clearance_id_test_b --out
+   analysis/results/identify``: the report of the pooled test sets (confusion matrix, recall, size
+   errors by clearance and speed with bootstrap intervals, interval coverage, plots), the same for
+   the first test set alone in ``analysis/results/identify/test_a`` (the figures of the looks before
+   the extension), and the answers on the sample recordings in ``recordings/`` (``samples.json``).
 
-Run: ``python analysis/identify/train_default.py [--work DIR] [--workers N]`` (25-35 min on two
+Run: ``python analysis/identify/train_default.py [--work DIR] [--workers N]`` (30-40 min on two
 cores, most of it the MuJoCo training data). The datasets stay in ``--work`` (default
-``../identify_work`` beside the checkout; about 6 GB), not in the repository.
+``../identify_work`` beside the checkout; about 9 GB), not in the repository.
 """
 
 from __future__ import annotations
@@ -50,21 +54,25 @@ def main() -> None:
     work = Path(args.work)
     work.mkdir(parents=True, exist_ok=True)
     train_ds = [work / "clearance_id", work / "clearance_id_dense"]
-    test_ds = work / "clearance_id_test"
+    location_ds = [work / "clearance_id_band"]
+    test_ds = [work / "clearance_id_test", work / "clearance_id_test_b"]
     t = time.perf_counter()
-    for d in train_ds:
+    for d in train_ds + location_ds:
         twin("dataset", "generate", f"analysis/datasets/{d.name}.toml", "--out", str(d), "--workers", args.workers,
              "--no-progress")
     print(f"training data: {time.perf_counter() - t:.0f} s (0 if it existed)")
     if args.retrain or not MODEL.exists():
-        twin("identify", "train", *map(str, train_ds), "--interval-folds", "speed", "--out", str(MODEL),
-             "--workers", args.workers)
+        twin("identify", "train", *map(str, train_ds), "--location-only", *map(str, location_ds),
+             "--interval-folds", "speed", "--out", str(MODEL), "--workers", args.workers)
     t = time.perf_counter()
-    twin("dataset", "generate", "analysis/datasets/clearance_id_test.toml", "--out", str(test_ds), "--workers",
-         args.workers, "--no-progress")
+    for d in test_ds:
+        twin("dataset", "generate", f"analysis/datasets/{d.name}.toml", "--out", str(d), "--workers",
+             args.workers, "--no-progress")
     print(f"test data: {time.perf_counter() - t:.0f} s (0 if it existed)")
     REPORT.mkdir(parents=True, exist_ok=True)
-    twin("identify", "evaluate", str(MODEL), str(test_ds), "--out", str(REPORT), "--workers", args.workers)
+    twin("identify", "evaluate", str(MODEL), *map(str, test_ds), "--out", str(REPORT), "--workers", args.workers)
+    twin("identify", "evaluate", str(MODEL), str(test_ds[0]), "--out", str(REPORT / "test_a"), "--workers",
+         args.workers)
     samples = {}
     for rec in sorted((ROOT / "recordings").glob("*.mcap")):
         out = REPORT / f".{rec.stem}.json"
