@@ -1,7 +1,8 @@
-"""How far the size of a clearance at C shows in the identification features, against what the
-contact parameters' uncertainty does to them (issue 17: the size target at C).
+"""How far the size of a clearance at C (or B) shows in the identification features, against what the
+contact parameters' uncertainty does to them (issue 17: the size targets).
 
-Method. For each orientation and motor speed asked, the MuJoCo twin runs a C-only fault at three
+Method. For each orientation and motor speed asked, the MuJoCo twin runs a C-only fault (``--joint B``:
+B-only) at three
 neighbouring catalogue sizes (default 0.05, 0.07, 0.1 mm) with the nominal contact parameters and with
 ``--draws`` random draws of the parameters the datasets randomize (restitution 0.32-0.48, μ0
 0.04-0.06, Eq. 18's K ±20 %, the twin's contact damping ×0.5-2, impact-speed gain ×0.5-2, guide
@@ -10,7 +11,7 @@ features are ``twin.identify.features`` on the calibrated accelerations and enco
 bench's sensor chain (``twin.instrument``: sensor response, noise of its own seed per run, 18-bit DAQ,
 static calibration), as a dataset run's; with ``--truth`` on the noise-free accelerations (the encoder
 counts from the crank angle), an upper bound of what a recording can hold. Per run: the features averaged over its windows; the
-contact share (fn_C > 0) and the impacts per crank turn after the spin-up.
+contact share (fn > 0 at the joint) and the impacts per crank turn after the spin-up.
 
 Reported per scene and per pair of neighbouring sizes: how many features separate the two sizes
 by more than the draws' spread (|Δ mean| / pooled standard deviation > 2), the largest such ratio,
@@ -19,7 +20,7 @@ and the leave-one-out accuracy of a shrinkage LDA that tells the three sizes apa
 of size identification there, whatever the model.
 
 Run: ``python analysis/identify/size_observability.py [--scenes y:475,z:475,x:325] [--sizes 0.05,0.07,0.1]
-[--draws 6] [--duration 2.5] [--json FILE]`` (about 2 min for the defaults on two cores).
+[--draws 6] [--duration 2.5] [--joint C] [--json FILE]`` (about 2 min for the defaults on two cores).
 """
 
 from __future__ import annotations
@@ -57,9 +58,11 @@ def one_run(job: tuple) -> dict:
     from twin.simulate import simulate_run
     from twin.summary import count_impacts
 
-    orientation, rpm, size, k, over, duration, sensed = job
+    orientation, rpm, size, k, over, duration, sensed, joint = job
+    other = "b" if joint == "C" else "c"
     cfg = BenchConfig().replace(**{
-        "joints.clearance_b_mm": 0.0, "joints.clearance_c_mm": size, "mechanism.orientation": orientation,
+        f"joints.clearance_{other}_mm": 0.0, f"joints.clearance_{joint.lower()}_mm": size,
+        "mechanism.orientation": orientation,
         "drive.program": "constant", "drive.motor_rpm": rpm, "drive.ramp_s": 0.3,
         "simulation.duration_s": duration, "sensors.channels": ["accel", "encoder", "crank", "joints"],
         "instrumentation.seed": 1000 + k, **over})
@@ -73,7 +76,7 @@ def one_run(job: tuple) -> dict:
         counts, cpr, rate = np.round(np.asarray(run["crank_angle"], float) / (2 * math.pi) * CPR), CPR, run.rate_hz
     X, _ = features(acc, counts, rate, cpr, 0.5, orientation)
     i0 = int(0.5 * run.rate_hz)
-    fn = np.asarray(run["fn_C"], float)[i0:]
+    fn = np.asarray(run[f"fn_{joint}"], float)[i0:]
     turns = abs(float(run["crank_angle"][-1] - run["crank_angle"][i0])) / (2 * math.pi)
     return {"orientation": orientation, "rpm": rpm, "size": size, "draw": k, "x": X.mean(axis=0).tolist(),
             "contact_share": float(np.mean(fn > 0)),
@@ -105,7 +108,9 @@ def separation(rows: list[dict], sizes: list[float]) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scenes", default="y:475,z:475,x:325", help="orientation:motor_rpm, comma-separated")
-    ap.add_argument("--sizes", default="0.05,0.07,0.1", help="diametral clearances at C [mm]")
+    ap.add_argument("--sizes", default="0.05,0.07,0.1", help="diametral clearances at the joint [mm]")
+    ap.add_argument("--joint", choices=("B", "C"), default="C", help="the joint with the clearance (the other: "
+                                                                       "a ball bearing)")
     ap.add_argument("--draws", type=int, default=6)
     ap.add_argument("--duration", type=float, default=2.5)
     ap.add_argument("--workers", type=int, default=2)
@@ -116,13 +121,13 @@ def main() -> None:
     scenes = [(s.split(":")[0], float(s.split(":")[1])) for s in args.scenes.split(",")]
     sizes = [float(v) for v in args.sizes.split(",")]
     params = draws(args.draws)
-    jobs = [(o, rpm, c, k, p, args.duration, not args.truth) for o, rpm in scenes for c in sizes
+    jobs = [(o, rpm, c, k, p, args.duration, not args.truth, args.joint) for o, rpm in scenes for c in sizes
             for k, p in enumerate(params)]
     print(f"{len(jobs)} runs ({len(scenes)} scenes x {len(sizes)} sizes x {len(params)} parameter sets)",
           file=sys.stderr, flush=True)
     with ProcessPoolExecutor(args.workers) as ex:
         rows = list(ex.map(one_run, jobs))
-    out = {"sizes_mm": sizes, "draws": params, "sensed": not args.truth, "scenes": []}
+    out = {"joint": args.joint, "sizes_mm": sizes, "draws": params, "sensed": not args.truth, "scenes": []}
     print(f"accelerations: {'noise-free truth' if args.truth else 'the bench sensor chain (noise, DAQ, calibration)'}")
     print("| scene | size [mm] | contact share (min-max) | impacts per turn (min-max) |")
     print("|---|---:|---:|---:|")
