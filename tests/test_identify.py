@@ -430,7 +430,7 @@ def test_an_interval_ending_on_a_trained_value_holds_it():
     assert 10 ** math.log10(0.02) != 0.02  # the floating-point fact this test is about
     w = math.log10(0.05 / 0.02)  # the interval of an answer of 0.05 mm starts at exactly 0.02 mm
     m = ClearanceModel(Clf(), {"B": Const(math.log10(0.05)), "C": Const(math.log10(0.02))}, {"B": w, "C": 0.0})
-    a = m.identify(np.zeros((3, 4)))
+    a = m.identify(np.zeros((3, 4)), True)
     assert a["fault"] == "BC"
     assert a["clearance_b_mm"] == 0.05 and a["clearance_b_interval_mm"] == [0.02, 0.125]
     assert a["clearance_c_mm"] == 0.02 and a["clearance_c_interval_mm"] == [0.02, 0.02]

@@ -117,10 +117,11 @@ class ClearanceModel:
         return m
 
     # ------------------------------------------------------------- predict
-    def identify(self, X: np.ndarray, c_resolved: bool = True) -> dict[str, Any]:
+    def identify(self, X: np.ndarray, c_resolved: bool) -> dict[str, Any]:
         """Answer for one recording from its window features [windows, features]; ``c_resolved``:
         whether its speed and orientation are on the size-resolution map at C (:func:`size_c_resolved`),
-        which picks the interval's half width at C where the model has one for each."""
+        which picks the interval's half width at C where the model has one for each (no default: a
+        caller that forgot it would get the narrow interval below the map)."""
         proba = self.classifier.predict_proba(X).mean(axis=0)
         classes = list(self.classifier.classes_)
         p = {c: float(proba[classes.index(c)]) if c in classes else 0.0 for c in CLASSES}
