@@ -235,8 +235,8 @@ def pooled_features(dataset_dirs: list[str | Path], splits: tuple[str, ...], wor
         else:
             for k, v in key.items():
                 if v != first[1][k]:
-                    raise ModelError(f"{d}: {k} is {v!r}, {first[0]} has {first[1][k]!r}: datasets pooled for one "
-                                     "model must agree on engine, sample rate and encoder resolution")
+                    raise ModelError(f"{d}: {k} is {v!r}, {first[0]} has {first[1][k]!r}: datasets pooled together "
+                                     "must agree on engine, sample rate and encoder resolution")
         X, r, o, sk = dataset_features(ds, splits, workers)
         owner += [len(rows) + i for i in o]
         rows += [dict(x, dataset=ds.info["name"]) for x in r]
@@ -324,23 +324,22 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
         # out-of-fold scores of whole runs (see module docstring)
         fold = _conformal_folds(rows, np.unique(owner_a[sel]), interval_folds, seed)
         n_folds[j] = int(fold.max()) + 1
-        scores = []
+        scores, held_runs = [], []
         for k in range(n_folds[j]):
             held = sel & (fold[owner_a] == k)
             if not held.any() or (sel & ~held).sum() < 10:
                 continue
             reg = fit(sel & ~held)
             for r in np.unique(owner_a[held]):
-                row = rows[int(r)]
-                scores.append((abs(math.log10(size_answer(reg, X[owner_a == r])) - math.log10(row[key])),
-                               size_c_resolved(row["orientation"], row["crank_hz"])))
-        half_width[j] = conformal_half_width(np.array([sc for sc, _ in scores]))
+                scores.append(abs(math.log10(size_answer(reg, X[owner_a == r])) - math.log10(rows[int(r)][key])))
+                held_runs.append(rows[int(r)])
+        scores = np.array(scores)
+        half_width[j] = conformal_half_width(scores)
         if j == "C":  # Mondrian split by the size-resolution map, where each side has enough runs
-            on = np.array([ok for _, ok in scores])
+            on = np.array([size_c_resolved(row["orientation"], row["crank_hz"]) for row in held_runs], bool)
             if on.sum() >= MONDRIAN_MIN_RUNS and (~on).sum() >= MONDRIAN_MIN_RUNS:
-                sc = np.array([x for x, _ in scores])
-                half_width["C"] = conformal_half_width(sc[on])
-                half_width["C_unresolved"] = conformal_half_width(sc[~on])
+                half_width["C"] = conformal_half_width(scores[on])
+                half_width["C_unresolved"] = conformal_half_width(scores[~on])
     import sklearn
 
     from twin import __version__
