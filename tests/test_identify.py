@@ -159,15 +159,16 @@ def test_a_model_finds_large_clearances_in_runs_it_never_saw(small, capsys):
     assert r["runs"] == 16 and r["accuracy"] == 1.0
     assert all(v == 1.0 for v in r["recall"].values())
     assert (d / "rep" / "confusion.png").stat().st_size > 0 and "Confusion matrix" in (d / "rep" / "report.md").read_text()
-    # the size at C where the sensors resolve it: the runs of the map's speeds and orientations, no other
-    from twin.identify.model import size_c_resolved
+    # the size at each joint where the sensors resolve it: the runs of the map's speeds and orientations, no other
+    from twin.identify.model import size_resolved
 
-    c_runs = [p for p in r["predictions"] if p["true_c_mm"] > 0]
-    res = r["by_clearance"]["C"]["resolved"]
-    want = sum(size_c_resolved(p["orientation"], p["crank_hz"]) for p in c_runs)
-    assert res["runs"] == want and res["runs_not_resolved"] == len(c_runs) - want
-    assert sum(v["runs"] for v in res["values"].values()) == want
-    assert sum(c["runs"] for v in r["by_clearance"]["C"]["by_speed"].values() for c in v.values()) == len(c_runs)
+    for J in ("B", "C"):
+        j_runs = [p for p in r["predictions"] if p[f"true_{J.lower()}_mm"] > 0]
+        res = r["by_clearance"][J]["resolved"]
+        want = sum(size_resolved(J, p["orientation"], p["crank_hz"]) for p in j_runs)
+        assert res["runs"] == want and res["runs_not_resolved"] == len(j_runs) - want
+        assert sum(v["runs"] for v in res["values"].values()) == want
+        assert sum(c["runs"] for v in r["by_clearance"][J]["by_speed"].values() for c in v.values()) == len(j_runs)
 
 
 def test_identify_refuses_what_it_cannot_answer(small, tmp_path, capsys):
@@ -338,23 +339,29 @@ def test_size_figures_are_split_by_clearance_value_and_speed():
     assert "| 0.07 | 0.01 | **0.02** (1; 0 %) | – |" in md
 
 
-def test_the_size_resolution_map_is_the_measured_one():
-    """SIZE_C_RESOLVED_FROM_RPM is, per vertical axis, the slowest speed of
-    ``analysis/results/identify/size_observability_speed.json`` from which every faster speed measured
-    tells 0.05 / 0.07 / 0.1 mm at C apart (LDA leave-one-out accuracy >= 0.95 through the sensor chain)."""
-    from twin.identify.model import SIZE_C_RESOLVED_FROM_RPM, size_c_resolved
+@pytest.mark.parametrize("joint, study", [("B", "size_observability_b.json"), ("C", "size_observability_speed.json")])
+def test_the_size_resolution_map_is_the_measured_one(joint, study):
+    """SIZE_RESOLVED_FROM_RPM[joint] is, per vertical axis, the slowest speed of the committed study
+    (``analysis/results/identify/``) from which every faster speed measured tells 0.05 / 0.07 / 0.1 mm
+    at that joint apart (LDA leave-one-out accuracy >= 0.95 through the sensor chain)."""
+    from twin.identify.model import SIZE_RESOLVED_FROM_RPM, size_resolved
 
-    d = json.loads((ROOT / "analysis" / "results" / "identify" / "size_observability_speed.json").read_text())
-    assert d["sensed"] and d["sizes_mm"] == [0.05, 0.07, 0.1]
+    d = json.loads((ROOT / "analysis" / "results" / "identify" / study).read_text())
+    assert d["sensed"] and d["sizes_mm"] == [0.05, 0.07, 0.1] and d.get("joint", "C") == joint
     found = {}
     for o in ("x", "y", "z"):
         sc = sorted((s["motor_rpm"], s["loo_accuracy"]) for s in d["scenes"] if s["orientation"] == o)
         ok = [rpm for k, (rpm, _) in enumerate(sc) if all(a >= 0.95 for _, a in sc[k:])]
         found[o] = min(ok)
-    assert found == SIZE_C_RESOLVED_FROM_RPM
+    assert found == SIZE_RESOLVED_FROM_RPM[joint]
     hz = lambda rpm: rpm / 60 / 3.97  # noqa: E731
-    assert not size_c_resolved("y", hz(450)) and size_c_resolved("y", hz(475)) and size_c_resolved("x", hz(450))
-    assert not size_c_resolved("x", hz(300)) and size_c_resolved("z", hz(300)) and size_c_resolved("y", hz(700))
+    if joint == "C":
+        assert not size_resolved("C", "y", hz(450)) and size_resolved("C", "y", hz(475))
+        assert size_resolved("C", "x", hz(450)) and not size_resolved("C", "x", hz(300))
+        assert size_resolved("C", "z", hz(300)) and size_resolved("C", "y", hz(700))
+    else:  # at B only the free-flight band with x vertical (312.9 rpm, model card)
+        assert not size_resolved("B", "x", hz(325)) and not size_resolved("B", "x", hz(300))
+        assert size_resolved("B", "x", hz(375)) and size_resolved("B", "y", hz(300)) and size_resolved("B", "z", hz(250))
 
 
 def test_an_answer_at_C_where_the_size_is_not_resolved_says_so(tmp_path, monkeypatch):
@@ -366,16 +373,18 @@ def test_an_answer_at_C_where_the_size_is_not_resolved_says_so(tmp_path, monkeyp
     m = M.ClearanceModel.load(default_model_path())
     a = M.identify_recording(m, REC / "test6_synthetic.mcap")
     assert a["fault"] == "C" and a["clearance_c_size_resolved"] and a["warnings"] == []
-    monkeypatch.setitem(M.SIZE_C_RESOLVED_FROM_RPM, "y", 800.0)
+    assert a["clearance_b_size_resolved"]
+    monkeypatch.setitem(M.SIZE_RESOLVED_FROM_RPM["C"], "y", 800.0)
     b = M.identify_recording(m, REC / "test6_synthetic.mcap")
     assert not b["clearance_c_size_resolved"] and b["clearance_c_mm"] == a["clearance_c_mm"]
     assert len(b["warnings"]) == 1 and "not resolved at 751 motor rpm with y vertical" in b["warnings"][0]
 
 
-def test_interval_folds_by_speed_leave_each_speed_out_and_C_is_split_by_resolution():
+def test_interval_folds_by_speed_leave_each_speed_out_and_each_joint_is_split_by_resolution():
     """Folds by speed: one fold per motor speed (every score an answer at an unseen speed); fewer than
-    three speeds or an unknown grouping is refused. The answer's interval at C takes the unresolved
-    half width below the map, the resolved one on it, and a model without the split one width."""
+    three speeds or an unknown grouping is refused. The answer's interval at each joint takes the
+    unresolved half width below that joint's map, the resolved one on it, and a model without the
+    split one width; a resolution flag missing for a joint is refused."""
     from twin.identify.model import ClearanceModel, ModelError, _conformal_folds, train
 
     rows = [{"motor_rpm": rpm, "crank_hz": rpm / 238.2} for rpm in (250.0, 500.0, 250.0, 750.0, 500.0, 750.0)]
@@ -398,15 +407,23 @@ def test_interval_folds_by_speed_leave_each_speed_out_and_C_is_split_by_resoluti
         def predict(self, X):
             return np.full(len(X), -1.0)  # 0.1 mm
 
-    m = ClearanceModel(Clf(), {"B": Reg(), "C": Reg()}, {"B": 0.3, "C": 0.2, "C_unresolved": 0.8})
+    m = ClearanceModel(Clf(), {"B": Reg(), "C": Reg()},
+                       {"B": 0.3, "B_unresolved": 0.6, "C": 0.2, "C_unresolved": 0.8})
     X = np.zeros((2, 3))
-    on, off = m.identify(X, True), m.identify(X, False)
+    on, off = m.identify(X, {"B": True, "C": True}), m.identify(X, {"B": True, "C": False})
     assert on["fault"] == off["fault"] == "C" and on["clearance_c_mm"] == off["clearance_c_mm"] == 0.1
     assert on["clearance_c_interval_mm"] == pytest.approx([0.1 / 10 ** 0.2, 0.1 * 10 ** 0.2])
     assert off["clearance_c_interval_mm"] == pytest.approx([0.1 / 10 ** 0.8, 0.1 * 10 ** 0.8])
     assert on["clearance_b_if_faulty_mm"] == off["clearance_b_if_faulty_mm"]
+    b_off = m.identify(X, {"B": False, "C": True})["clearance_b_if_faulty_mm"]["interval_90"]
+    assert b_off == pytest.approx([0.1 / 10 ** 0.6, 0.1 * 10 ** 0.6])
+    assert on["clearance_b_if_faulty_mm"]["interval_90"] == pytest.approx([0.1 / 10 ** 0.3, 0.1 * 10 ** 0.3])
     one = ClearanceModel(Clf(), {"B": Reg(), "C": Reg()}, {"B": 0.3, "C": 0.2})
-    assert one.identify(X, False)["clearance_c_interval_mm"] == on["clearance_c_interval_mm"]
+    both_off = one.identify(X, {"B": False, "C": False})
+    assert both_off["clearance_c_interval_mm"] == on["clearance_c_interval_mm"]
+    assert both_off["clearance_b_if_faulty_mm"] == on["clearance_b_if_faulty_mm"]
+    with pytest.raises(ModelError, match="resolved.*B and C"):
+        m.identify(X, {"C": True})
 
 
 def test_an_interval_ending_on_a_trained_value_holds_it():
@@ -430,7 +447,7 @@ def test_an_interval_ending_on_a_trained_value_holds_it():
     assert 10 ** math.log10(0.02) != 0.02  # the floating-point fact this test is about
     w = math.log10(0.05 / 0.02)  # the interval of an answer of 0.05 mm starts at exactly 0.02 mm
     m = ClearanceModel(Clf(), {"B": Const(math.log10(0.05)), "C": Const(math.log10(0.02))}, {"B": w, "C": 0.0})
-    a = m.identify(np.zeros((3, 4)), True)
+    a = m.identify(np.zeros((3, 4)), {"B": True, "C": True})
     assert a["fault"] == "BC"
     assert a["clearance_b_mm"] == 0.05 and a["clearance_b_interval_mm"] == [0.02, 0.125]
     assert a["clearance_c_mm"] == 0.02 and a["clearance_c_interval_mm"] == [0.02, 0.02]

@@ -36,7 +36,7 @@ KS = (1, 2, 3, 4, 7)  # windows used, from the end of the steady part
 def main(argv: list[str] | None = None) -> int:
     from twin.dataset import open as open_dataset
     from twin.identify.evaluate import half_gap_mm
-    from twin.identify.model import ClearanceModel, dataset_features, size_c_resolved
+    from twin.identify.model import ClearanceModel, dataset_features, resolution
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("dataset")
@@ -60,7 +60,7 @@ def main(argv: list[str] | None = None) -> int:
         for k in KS:
             if k > len(Xr):
                 continue
-            a = model.identify(Xr[-k:], size_c_resolved(r["orientation"], r["crank_hz"]))
+            a = model.identify(Xr[-k:], resolution(r["orientation"], r["crank_hz"]))
             est = a["clearance_c_if_faulty_mm"]["median"]
             lo, hi = a["clearance_c_if_faulty_mm"]["interval_90"]
             per.setdefault((r["motor_rpm"], c, k), []).append(

@@ -5,19 +5,21 @@ resumes):
 
 1. ``twin dataset generate analysis/datasets/clearance_id.toml --out WORK/clearance_id``, the same for
    ``clearance_id_dense.toml`` and ``clearance_id_band.toml``: the training data, MuJoCo twin (400 runs
-   of 3 s each: the catalogue at five speeds; clearances drawn continuously at 15 speeds; and 160 runs
-   with x vertical at 312.5 rpm, the slider's free-flight speed, for the location model only);
+   of 3 s each: the catalogue at five speeds; clearances drawn continuously at 15 speeds; and 120 runs
+   with x vertical at 312.5 rpm, the slider's free-flight speed, healthy, B or C, for the location model
+   only);
 2. ``twin identify train WORK/clearance_id WORK/clearance_id_dense --location-only WORK/clearance_id_band
    --interval-folds speed --out twin/data/identify_default.joblib`` (train and val splits, pooled; the
    intervals calibrated on answers at speeds left out);
-3. ``twin dataset generate analysis/datasets/clearance_id_test.toml --out WORK/clearance_id_test`` and
-   ``clearance_id_test_b.toml``: the test data (200 + 400 runs), reference engine, other seeds, unseen
-   speeds and clearance value;
-4. ``twin identify evaluate MODEL WORK/clearance_id_test WORK/clearance_id_test_b --out
-   analysis/results/identify``: the report of the pooled test sets (confusion matrix, recall, size
-   errors by clearance and speed with bootstrap intervals, interval coverage, plots), the same for
-   the first test set alone in ``analysis/results/identify/test_a`` (the figures of the looks before
-   the extension), and the answers on the sample recordings in ``recordings/`` (``samples.json``).
+3. ``twin dataset generate analysis/datasets/clearance_id_test.toml --out WORK/clearance_id_test``,
+   ``clearance_id_test_b.toml`` and ``clearance_id_test_c.toml``: the test data (200 + 400 + 400 runs),
+   reference engine, other seeds, unseen speeds and clearance value;
+4. ``twin identify evaluate MODEL WORK/clearance_id_test WORK/clearance_id_test_b WORK/clearance_id_test_c
+   --out analysis/results/identify``: the report of the pooled test sets (confusion matrix, recall, size
+   errors by clearance and speed with bootstrap intervals, interval coverage, plots); the same for
+   the first test set alone in ``analysis/results/identify/test_a`` (the set of looks 1-7) and for the
+   second extension alone in ``analysis/results/identify/test_c`` (runs first evaluated at look 9); and
+   the answers on the sample recordings in ``recordings/`` (``samples.json``).
 
 Run: ``python analysis/identify/train_default.py [--work DIR] [--workers N]`` (30-40 min on two
 cores, most of it the MuJoCo training data). The datasets stay in ``--work`` (default
@@ -55,7 +57,7 @@ def main() -> None:
     work.mkdir(parents=True, exist_ok=True)
     train_ds = [work / "clearance_id", work / "clearance_id_dense"]
     location_ds = [work / "clearance_id_band"]
-    test_ds = [work / "clearance_id_test", work / "clearance_id_test_b"]
+    test_ds = [work / "clearance_id_test", work / "clearance_id_test_b", work / "clearance_id_test_c"]
     t = time.perf_counter()
     for d in train_ds + location_ds:
         twin("dataset", "generate", f"analysis/datasets/{d.name}.toml", "--out", str(d), "--workers", args.workers,
@@ -71,8 +73,8 @@ def main() -> None:
     print(f"test data: {time.perf_counter() - t:.0f} s (0 if it existed)")
     REPORT.mkdir(parents=True, exist_ok=True)
     twin("identify", "evaluate", str(MODEL), *map(str, test_ds), "--out", str(REPORT), "--workers", args.workers)
-    twin("identify", "evaluate", str(MODEL), str(test_ds[0]), "--out", str(REPORT / "test_a"), "--workers",
-         args.workers)
+    for d, sub in ((test_ds[0], "test_a"), (test_ds[2], "test_c")):
+        twin("identify", "evaluate", str(MODEL), str(d), "--out", str(REPORT / sub), "--workers", args.workers)
     samples = {}
     for rec in sorted((ROOT / "recordings").glob("*.mcap")):
         out = REPORT / f".{rec.stem}.json"

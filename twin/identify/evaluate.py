@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from twin.config import CATALOGUE_DIAMETRAL_MM
-from twin.identify.model import CLASSES, SIZE_C_RESOLVED_FROM_RPM, ClearanceModel, pooled_features, size_c_resolved
+from twin.identify.model import CLASSES, SIZE_RESOLVED_FROM_RPM, ClearanceModel, pooled_features, resolution
 
 
 def half_gap_mm(c: float) -> float:
@@ -50,14 +50,14 @@ def evaluate(model: ClearanceModel, dataset_dir: str | Path | list[str | Path], 
     owner = np.asarray(owner)
     preds = []
     for i, r in enumerate(rows):
-        resolved = size_c_resolved(r["orientation"], r["crank_hz"])
+        resolved = resolution(r["orientation"], r["crank_hz"])
         a = model.identify(X[owner == i], resolved)
         preds.append({"run_id": r["run_id"], "true_fault": r["fault"], "fault": a["fault"],
                       "true_b_mm": r["clearance_b_mm"], "true_c_mm": r["clearance_c_mm"],
                       "b_mm": a["clearance_b_if_faulty_mm"]["median"], "b_int": a["clearance_b_if_faulty_mm"]["interval_90"],
                       "c_mm": a["clearance_c_if_faulty_mm"]["median"], "c_int": a["clearance_c_if_faulty_mm"]["interval_90"],
                       "crank_hz": r["crank_hz"], "motor_rpm": r.get("motor_rpm"), "orientation": r["orientation"],
-                      "c_resolved": resolved, "dataset": r["dataset"],
+                      "b_resolved": resolved["B"], "c_resolved": resolved["C"], "dataset": r["dataset"],
                       "probabilities": a["probabilities"]})
     t_pred = time.perf_counter() - t0
     y = [p["true_fault"] for p in preds]
@@ -89,8 +89,7 @@ def evaluate(model: ClearanceModel, dataset_dir: str | Path | list[str | Path], 
         cover_all = float(np.mean([p[f"{j}_int"][0] <= p[f"true_{j}_mm"] <= p[f"{j}_int"][1] for p in faulty])) \
             if faulty else float("nan")
         report["by_clearance"][J] = {"values": groups, "interval_coverage": cover_all, "runs": len(faulty),
-                                     "by_speed": size_by_speed(faulty, j)}
-    report["by_clearance"]["C"]["resolved"] = size_where_resolved(preds)
+                                     "by_speed": size_by_speed(faulty, j), "resolved": size_where_resolved(preds, j)}
     # the healthy runs: how often a joint without clearance is called faulty, by speed
     report["false_alarms"] = {J: float(np.mean([J in p["fault"] for p in preds if p[f"true_{J.lower()}_mm"] == 0]))
                               for J in ("B", "C")}
@@ -134,14 +133,15 @@ def size_by_speed(faulty: list[dict[str, Any]], j: str) -> dict[str, dict[str, d
     return out
 
 
-def size_where_resolved(preds: list[dict[str, Any]]) -> dict[str, Any]:
-    """Size figures at C per clearance value over the runs whose speed and orientation the bench's
-    sensors resolve the size at (:func:`twin.identify.model.size_c_resolved`), and how many are not."""
-    faulty = [p for p in preds if p["true_c_mm"] > 0]
-    ok = [p for p in faulty if p["c_resolved"]]
+def size_where_resolved(preds: list[dict[str, Any]], j: str) -> dict[str, Any]:
+    """Size figures at joint ``j`` ("b" or "c") per clearance value over the runs whose speed and
+    orientation the bench's sensors resolve the size at (:func:`twin.identify.model.size_resolved`),
+    and how many are not."""
+    faulty = [p for p in preds if p[f"true_{j}_mm"] > 0]
+    ok = [p for p in faulty if p[f"{j}_resolved"]]
     return {"runs": len(ok), "runs_not_resolved": len(faulty) - len(ok),
-            "values": {f"{c:g}": _size_cell([p for p in ok if p["true_c_mm"] == c], "c", c)
-                       for c in sorted({p["true_c_mm"] for p in ok})}}
+            "values": {f"{c:g}": _size_cell([p for p in ok if p[f"true_{j}_mm"] == c], j, c)
+                       for c in sorted({p[f"true_{j}_mm"] for p in ok})}}
 
 
 def _speed_key(p: dict[str, Any]) -> str:
@@ -223,12 +223,14 @@ def render_markdown(r: dict[str, Any]) -> str:
                 cells.append(f"{e if x['meets_target'] else f'**{e}**'} ({x['runs']}; "
                              f"{x['interval_coverage'] * 100:.0f} %)")
             lines.append(f"| {c} | {half_gap_mm(float(c)):.3g} | " + " | ".join(cells) + " |")
-    res = r["by_clearance"].get("C", {}).get("resolved")
-    if res and res["values"]:
-        lines += ["", f"## Size at C where the bench's sensors resolve it ({res['runs']} runs; "
+    for J, g in r["by_clearance"].items():
+        res = g.get("resolved")
+        if not res or not res["values"]:
+            continue
+        lines += ["", f"## Size at {J} where the bench's sensors resolve it ({res['runs']} runs; "
                       f"{res['runs_not_resolved']} at a speed and orientation where they do not)", "",
                   "Resolved: motor speed at or over " + ", ".join(
-                      f"{rpm:g} rpm with {o} vertical" for o, rpm in SIZE_C_RESOLVED_FROM_RPM.items())
+                      f"{rpm:g} rpm with {o} vertical" for o, rpm in SIZE_RESOLVED_FROM_RPM[J].items())
                   + " (the model card's size-resolution map).", "",
                   "| clearance mm | runs | median estimate mm | median abs error mm (90 % bootstrap interval) | "
                   "target mm | meets | interval coverage |", "|---|---|---|---|---|---|---|"]

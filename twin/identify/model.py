@@ -16,9 +16,9 @@
   holds the truth in at least 90 % of recordings like the training runs (exchangeability). With
   ``interval_folds="speed"`` (``--interval-folds speed``; the shipped model) each motor speed is one
   group, so every score is an answer at a speed its regressor never saw, as a bench recording's may
-  be. At C the scores are split (Mondrian) by the size-resolution map (:func:`size_c_resolved`)
+  be. At each joint the scores are split (Mondrian) by its size-resolution map (:func:`size_resolved`)
   where each side has ``MONDRIAN_MIN_RUNS`` runs: one half width for answers the sensors resolve,
-  a wider one ("C_unresolved") for those below the map. Model
+  a wider one (``"B_unresolved"``, ``"C_unresolved"``) for those below the map. Model
   format 1 took the 5 % and 95 % quantile regressors instead: their window medians stayed at the
   catalogue's ends (0.02–0.5 mm for almost every answer), covering the truth while saying nothing.
   A joint the classifier finds healthy reports 0 (ball bearing).
@@ -47,15 +47,21 @@ from twin.errors import TwinError
 from twin.identify.features import FEATURE_VERSION, REVS_PER_WINDOW, IdentifyError, feature_names, features
 
 CLASSES = ("none", "B", "C", "BC")
-# Size resolution at C: the lowest motor speed [rpm] (belt 1:3.97) per vertical axis at which the bench's
-# sensor chain tells 0.05, 0.07 and 0.1 mm at C apart beyond the contact parameters' uncertainty
-# (shrinkage LDA on this model's features, leave one run out, accuracy 1.00 there and at every faster
-# speed measured; 0.43-0.86 below), measured on the twin's runs over 250-750 rpm by
-# ``python analysis/identify/size_observability.py --scenes x:250,...,z:750`` (the model card's command;
-# analysis/results/identify/size_observability_speed.json).
-# Below it the pin slides round the bushing (y, z) or flies chaotically (x at 300-325 rpm) and the size
-# signature is under the sensor noise (noise-free accelerations separate y at 300 rpm at 1.00).
-SIZE_C_RESOLVED_FROM_RPM = {"x": 425.0, "y": 475.0, "z": 300.0}
+# Size resolution per joint: the lowest motor speed [rpm] (belt 1:3.97) per vertical axis from which the
+# bench's sensor chain tells 0.05, 0.07 and 0.1 mm at that joint apart beyond the contact parameters'
+# uncertainty (shrinkage LDA on this model's features, leave one run out, accuracy >= 0.95 there and at
+# every faster speed measured), measured on the twin's runs over 250-750 rpm by
+# ``python analysis/identify/size_observability.py --joint J --scenes x:250,...,z:750`` (the model card's
+# command; analysis/results/identify/size_observability_b.json and size_observability_speed.json).
+# At C below it the pin slides round the bushing (y, z) or flies chaotically (x at 300-325 rpm) and the size
+# signature is under the sensor noise (noise-free accelerations separate y at 300 rpm at 1.00): 0.43-0.86
+# below the map. At B only the free-flight band with x vertical is unresolved (0.81 at 300, 0.38 at 325 rpm;
+# 0.95 at 250), so B is resolved from 375 rpm with x vertical and over the whole measured range (from 250)
+# with y or z vertical.
+SIZE_RESOLVED_FROM_RPM = {
+    "B": {"x": 375.0, "y": 250.0, "z": 250.0},
+    "C": {"x": 425.0, "y": 475.0, "z": 300.0},
+}
 BELT_RATIO = Drive.belt_ratio  # motor turns per crank turn of the bench's V-belt (S003 §2.2.2)
 COVERAGE = 0.90  # nominal coverage of the reported intervals
 CONFORMAL_FOLDS = 5
@@ -73,8 +79,9 @@ class ClearanceModel:
 
     classifier: Any
     size: dict[str, Any]  # per joint, the median regressor of log10 clearance [log10 mm]
-    # per joint, the conformal half width w [log10]; "C_unresolved", where present, the half width of
-    # answers at C below the size-resolution map (SIZE_C_RESOLVED_FROM_RPM), "C" then that of the others
+    # per joint, the conformal half width w [log10]; "B_unresolved" / "C_unresolved", where present, the
+    # half width of answers at that joint below its size-resolution map (SIZE_RESOLVED_FROM_RPM), "B" / "C"
+    # then that of the others
     interval_log10: dict[str, float]
     feature_version: str = FEATURE_VERSION
     feature_names: list[str] = field(default_factory=feature_names)
@@ -117,11 +124,13 @@ class ClearanceModel:
         return m
 
     # ------------------------------------------------------------- predict
-    def identify(self, X: np.ndarray, c_resolved: bool) -> dict[str, Any]:
-        """Answer for one recording from its window features [windows, features]; ``c_resolved``:
-        whether its speed and orientation are on the size-resolution map at C (:func:`size_c_resolved`),
-        which picks the interval's half width at C where the model has one for each (no default: a
-        caller that forgot it would get the narrow interval below the map)."""
+    def identify(self, X: np.ndarray, resolved: dict[str, bool]) -> dict[str, Any]:
+        """Answer for one recording from its window features [windows, features]; ``resolved``: per
+        joint ("B", "C"), whether its speed and orientation are on that joint's size-resolution map
+        (:func:`size_resolved`), which picks the interval's half width where the model has one for
+        each side (no default: a caller that forgot it would get the narrow interval below the map)."""
+        if set(resolved) != {"B", "C"}:
+            raise ModelError(f"resolved: {sorted(resolved)}; needs a flag for each of B and C")
         proba = self.classifier.predict_proba(X).mean(axis=0)
         classes = list(self.classifier.classes_)
         p = {c: float(proba[classes.index(c)]) if c in classes else 0.0 for c in CLASSES}
@@ -130,8 +139,8 @@ class ClearanceModel:
         for j in ("B", "C"):
             mid = size_answer(self.size[j], X)
             w = self.interval_log10[j]
-            if j == "C" and not c_resolved:
-                w = self.interval_log10.get("C_unresolved", w)
+            if not resolved[j]:
+                w = self.interval_log10.get(f"{j}_unresolved", w)
             lo, hi = (float(f"{mid * 10 ** sign:.12g}") for sign in (-w, w))
             has = j in fault
             out[f"clearance_{j.lower()}_mm"] = mid if has else 0.0
@@ -140,11 +149,17 @@ class ClearanceModel:
         return out
 
 
-def size_c_resolved(orientation: str, crank_hz: float) -> bool:
-    """Whether the bench's sensors resolve the size of a clearance at C at this crank rate [Hz] with
-    ``orientation`` vertical (:data:`SIZE_C_RESOLVED_FROM_RPM`; 2 % allowance for the measured rate)."""
-    rpm = SIZE_C_RESOLVED_FROM_RPM.get(orientation)
+def size_resolved(joint: str, orientation: str, crank_hz: float) -> bool:
+    """Whether the bench's sensors resolve the size of a clearance at ``joint`` ("B" or "C") at this
+    crank rate [Hz] with ``orientation`` vertical (:data:`SIZE_RESOLVED_FROM_RPM`; 2 % allowance for
+    the measured rate)."""
+    rpm = SIZE_RESOLVED_FROM_RPM[joint].get(orientation)
     return rpm is not None and abs(crank_hz) * 60.0 * BELT_RATIO >= 0.98 * rpm
+
+
+def resolution(orientation: str, crank_hz: float) -> dict[str, bool]:
+    """:func:`size_resolved` at both joints: {"B": bool, "C": bool}."""
+    return {j: size_resolved(j, orientation, crank_hz) for j in ("B", "C")}
 
 
 def size_answer(reg: Any, X: np.ndarray) -> float:
@@ -335,11 +350,11 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
                 held_runs.append(rows[int(r)])
         scores = np.array(scores)
         half_width[j] = conformal_half_width(scores)
-        if j == "C":  # Mondrian split by the size-resolution map, where each side has enough runs
-            on = np.array([size_c_resolved(row["orientation"], row["crank_hz"]) for row in held_runs], bool)
-            if on.sum() >= MONDRIAN_MIN_RUNS and (~on).sum() >= MONDRIAN_MIN_RUNS:
-                half_width["C"] = conformal_half_width(scores[on])
-                half_width["C_unresolved"] = conformal_half_width(scores[~on])
+        # Mondrian split by the joint's size-resolution map, where each side has enough runs
+        on = np.array([size_resolved(j, row["orientation"], row["crank_hz"]) for row in held_runs], bool)
+        if on.sum() >= MONDRIAN_MIN_RUNS and (~on).sum() >= MONDRIAN_MIN_RUNS:
+            half_width[j] = conformal_half_width(scores[on])
+            half_width[f"{j}_unresolved"] = conformal_half_width(scores[~on])
     import sklearn
 
     from twin import __version__
@@ -421,7 +436,7 @@ def identify_recording(model: ClearanceModel, path: str | Path) -> dict[str, Any
         raise ModelError(f"{path}: recorded at {rate:g} Hz, the model was trained at {tr['rate_hz']:g} Hz")
     orientation = cfg.mechanism.orientation if cfg is not None else "y"
     X, w = features(acc, counts, rate, cpr, orientation=orientation)
-    resolved = size_c_resolved(orientation, w.crank_hz)
+    resolved = resolution(orientation, w.crank_hz)
     ans = model.identify(X, resolved)
     lo, hi = tr["crank_hz_range"]
     warnings = []
@@ -430,12 +445,13 @@ def identify_recording(model: ClearanceModel, path: str | Path) -> dict[str, Any
                         "the answer is an extrapolation")
     if cfg is not None and cfg.mechanism.orientation not in tr.get("orientations", []):
         warnings.append(f"orientation {cfg.mechanism.orientation} was not in the training data")
-    ans["clearance_c_size_resolved"] = resolved  # which also chose the interval's width at C
-    if "C" in ans["fault"] and not resolved:
-        warnings.append(f"the size at C is not resolved at {w.crank_hz * 60 * BELT_RATIO:.0f} motor rpm with "
-                        f"{orientation} vertical: the bench's sensors tell 0.05-0.1 mm at C apart from "
-                        f"{SIZE_C_RESOLVED_FROM_RPM.get(orientation, float('nan')):g} rpm on (model card); "
-                        "trust the location and the interval, not the size")
+    for j in ("B", "C"):
+        ans[f"clearance_{j.lower()}_size_resolved"] = resolved[j]  # which also chose the interval's width
+        if j in ans["fault"] and not resolved[j]:
+            warnings.append(f"the size at {j} is not resolved at {w.crank_hz * 60 * BELT_RATIO:.0f} motor rpm with "
+                            f"{orientation} vertical: the bench's sensors tell 0.05-0.1 mm at {j} apart from "
+                            f"{SIZE_RESOLVED_FROM_RPM[j].get(orientation, float('nan')):g} rpm on (model card); "
+                            "trust the location and the interval, not the size")
     ans.update({
         "recording": str(path),
         "warnings": warnings,
