@@ -380,6 +380,37 @@ def test_an_answer_at_C_where_the_size_is_not_resolved_says_so(tmp_path, monkeyp
     assert len(b["warnings"]) == 1 and "not resolved at 751 motor rpm with y vertical" in b["warnings"][0]
 
 
+def test_an_answer_at_B_below_its_map_says_so_and_takes_the_wide_interval(monkeypatch):
+    """The shipped model's regressors and intervals with a classifier that answers BC, on the test-6
+    sample (y vertical, 751 motor rpm, resolved at both joints by the measured maps): with B's threshold
+    for y put over its speed, the answer at B carries the flag, one warning naming B, and the interval
+    of B's unresolved half width around the same size; C is untouched."""
+    import dataclasses
+
+    import twin.identify.model as M
+    from twin.commands.identify import default_model_path
+
+    class BC:
+        classes_ = np.array(["BC", "C", "B", "none"])
+
+        def predict_proba(self, X):
+            return np.tile([0.9, 0.05, 0.05, 0.0], (len(X), 1))
+
+    shipped = M.ClearanceModel.load(default_model_path())
+    m = dataclasses.replace(shipped, classifier=BC())
+    assert "B_unresolved" in m.interval_log10 and m.interval_log10["B_unresolved"] > m.interval_log10["B"]
+    a = M.identify_recording(m, REC / "test6_synthetic.mcap")
+    assert a["fault"] == "BC" and a["clearance_b_size_resolved"] and a["warnings"] == []
+    monkeypatch.setitem(M.SIZE_RESOLVED_FROM_RPM["B"], "y", 800.0)
+    b = M.identify_recording(m, REC / "test6_synthetic.mcap")
+    assert not b["clearance_b_size_resolved"] and b["clearance_c_size_resolved"]
+    assert len(b["warnings"]) == 1 and "size at B is not resolved at 751 motor rpm" in b["warnings"][0]
+    size, w = a["clearance_b_mm"], m.interval_log10["B_unresolved"]
+    assert b["clearance_b_mm"] == size and b["clearance_b_interval_mm"] == pytest.approx([size / 10 ** w, size * 10 ** w])
+    assert a["clearance_b_interval_mm"] == pytest.approx([size / 10 ** m.interval_log10["B"], size * 10 ** m.interval_log10["B"]])
+    assert b["clearance_c_interval_mm"] == a["clearance_c_interval_mm"]
+
+
 def test_interval_folds_by_speed_leave_each_speed_out_and_each_joint_is_split_by_resolution():
     """Folds by speed: one fold per motor speed (every score an answer at an unseen speed); fewer than
     three speeds or an unknown grouping is refused. The answer's interval at each joint takes the
