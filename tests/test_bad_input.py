@@ -308,3 +308,46 @@ def test_sigkill_leftovers_are_removed_by_the_next_run_on_the_same_target(tmp_pa
     assert len(left) == 1 and left[0].stat().st_size > 0
     assert main(["simulate", "--test", "3", "--duration", "0.01", "--no-progress", "--out", str(out)]) == 0
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run.mcap"]
+
+
+def _raise_bad_config() -> None:
+    from twin.config import BenchConfig
+
+    BenchConfig().replace(**{"joints.clearance_c_mm": 0.45})
+
+
+def test_every_twin_error_survives_a_process_boundary():
+    """Errors raised in a process-pool worker (dataset generation, the studies) are pickled back to
+    the parent: each TwinError class round-trips with its message and fields, and a ConfigError raised
+    in a spawned worker arrives as itself, naming the field (before, its two-argument constructor
+    failed to unpickle and the pool broke with no message)."""
+    import inspect
+    import multiprocessing as mp
+    import pickle
+    from concurrent.futures import ProcessPoolExecutor
+
+    import importlib
+
+    for mod in ("twin.cli", "twin.dataset.generate", "twin.dataset.spec", "twin.dataset.storage",
+                "twin.identify.features", "twin.identify.model", "twin.signals"):  # each defines a TwinError
+        importlib.import_module(mod)
+    from twin.errors import ConfigError, TwinError
+
+    def subclasses(c):
+        for s in c.__subclasses__():
+            yield s
+            yield from subclasses(s)
+
+    classes = set(subclasses(TwinError)) | {TwinError}
+    assert len(classes) >= 12
+    for cls in classes:
+        n = len([p for p in inspect.signature(cls.__init__).parameters.values()
+                 if p.name != "self" and p.default is p.empty and p.kind is p.POSITIONAL_OR_KEYWORD])
+        args = ("joints.clearance_b_mm", "must be 0 or a catalogue value")[:n] if n else ("one line",)
+        err = cls(*args)
+        back = pickle.loads(pickle.dumps(err))
+        assert type(back) is cls and str(back) == str(err) and vars(back) == vars(err), cls
+    with ProcessPoolExecutor(1, mp_context=mp.get_context("spawn")) as ex:
+        with pytest.raises(ConfigError, match=r"joints\.clearance_c_mm: .*catalogue") as info:
+            ex.submit(_raise_bad_config).result(timeout=120)
+    assert info.value.field == "joints.clearance_c_mm"

@@ -23,6 +23,12 @@ class ConfigError(TwinError, ValueError):
         self.message = message
         super().__init__(f"{field}: {message}")
 
+    def __reduce__(self):
+        # pickled with its two arguments: an error raised in a process-pool worker (dataset generation,
+        # studies) reaches the parent as itself; the default (one message argument) failed to unpickle
+        # there and broke the pool instead
+        return (type(self), (self.field, self.message))
+
 
 class ModelError(TwinError):
     """The MJCF model could not be built or compiled from a configuration."""

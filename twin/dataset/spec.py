@@ -76,7 +76,11 @@ class SpecError(TwinError):
 
     def __init__(self, key: str, message: str):
         self.key = key
+        self.message = message
         super().__init__(f"{key}: {message}")
+
+    def __reduce__(self):  # picklable with its two arguments (see ConfigError.__reduce__)
+        return (type(self), (self.key, self.message))
 
 
 def _num(v: Any) -> bool:
