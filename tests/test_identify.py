@@ -339,29 +339,41 @@ def test_size_figures_are_split_by_clearance_value_and_speed():
     assert "| 0.07 | 0.01 | **0.02** (1; 0 %) | – |" in md
 
 
-@pytest.mark.parametrize("joint, study", [("B", "size_observability_b.json"), ("C", "size_observability_speed.json")])
-def test_the_size_resolution_map_is_the_measured_one(joint, study):
-    """SIZE_RESOLVED_FROM_RPM[joint] is, per vertical axis, the slowest speed of the committed study
-    (``analysis/results/identify/``) from which every faster speed measured tells 0.05 / 0.07 / 0.1 mm
-    at that joint apart (LDA leave-one-out accuracy >= 0.95 through the sensor chain)."""
-    from twin.identify.model import SIZE_RESOLVED_FROM_RPM, size_resolved
-
+def _measured_map(study: str, joint: str) -> dict[str, float]:
+    """Per vertical axis, the slowest speed of a committed size-observability study from which every
+    faster speed measured tells 0.05 / 0.07 / 0.1 mm at ``joint`` apart (LDA leave-one-out accuracy
+    >= 0.95 through the sensor chain)."""
     d = json.loads((ROOT / "analysis" / "results" / "identify" / study).read_text())
     assert d["sensed"] and d["sizes_mm"] == [0.05, 0.07, 0.1] and d.get("joint", "C") == joint
+    assert d.get("start_angles", False) == study.endswith("_start.json")
     found = {}
     for o in ("x", "y", "z"):
         sc = sorted((s["motor_rpm"], s["loo_accuracy"]) for s in d["scenes"] if s["orientation"] == o)
         ok = [rpm for k, (rpm, _) in enumerate(sc) if all(a >= 0.95 for _, a in sc[k:])]
         found[o] = min(ok)
-    assert found == SIZE_RESOLVED_FROM_RPM[joint]
+    return found
+
+
+@pytest.mark.parametrize("joint, studies", [("B", ("size_observability_b.json", "size_observability_b_start.json")),
+                                            ("C", ("size_observability_speed.json", "size_observability_start.json"))])
+def test_the_size_resolution_map_is_the_measured_one(joint, studies):
+    """SIZE_RESOLVED_FROM_RPM[joint] is, per vertical axis, the stricter of the maps measured with every
+    run started at crank angle 0 and with the start angle drawn over a turn (``*_start.json``); at C the
+    two are the same map, at B the start angle moves y from 250 to 300 rpm."""
+    from twin.identify.model import SIZE_RESOLVED_FROM_RPM, size_resolved
+
+    at0, drawn = (_measured_map(s, joint) for s in studies)
+    assert {o: max(at0[o], drawn[o]) for o in at0} == SIZE_RESOLVED_FROM_RPM[joint]
+    assert (at0 == drawn) == (joint == "C")
     hz = lambda rpm: rpm / 60 / 3.97  # noqa: E731
     if joint == "C":
         assert not size_resolved("C", "y", hz(450)) and size_resolved("C", "y", hz(475))
         assert size_resolved("C", "x", hz(450)) and not size_resolved("C", "x", hz(300))
         assert size_resolved("C", "z", hz(300)) and size_resolved("C", "y", hz(700))
-    else:  # at B only the free-flight band with x vertical (312.9 rpm, model card)
+    else:  # at B the free-flight band with x vertical (312.9 rpm, model card), and y below 300 rpm
         assert not size_resolved("B", "x", hz(325)) and not size_resolved("B", "x", hz(300))
         assert size_resolved("B", "x", hz(375)) and size_resolved("B", "y", hz(300)) and size_resolved("B", "z", hz(250))
+        assert not size_resolved("B", "y", hz(275))
 
 
 def test_an_answer_at_C_where_the_size_is_not_resolved_says_so(tmp_path, monkeypatch):

@@ -10,8 +10,12 @@ friction 1.5-4 N: ``analysis/datasets/clearance_id.toml``), the same draws at ev
 features are ``twin.identify.features`` on the calibrated accelerations and encoder counts of the
 bench's sensor chain (``twin.instrument``: sensor response, noise of its own seed per run, 18-bit DAQ,
 static calibration), as a dataset run's; with ``--truth`` on the noise-free accelerations (the encoder
-counts from the crank angle), an upper bound of what a recording can hold. Per run: the features averaged over its windows; the
-contact share (fn > 0 at the joint) and the impacts per crank turn after the spin-up.
+counts from the crank angle), an upper bound of what a recording can hold. With ``--start-angles`` each
+draw after the nominal one also starts the crank at its own angle, drawn uniformly over a turn by a
+generator of its own (the contact and sensor draws stay those of the run without it, paired): a bench
+recording starts wherever the crank stood, and where the mechanism has more than one steady periodic
+motion the start angle picks one (model card, "The sample recordings"). Per run: the features averaged
+over its windows; the contact share (fn > 0 at the joint) and the impacts per crank turn after the spin-up.
 
 Reported per scene and per pair of neighbouring sizes: how many features separate the two sizes
 by more than the draws' spread (|Δ mean| / pooled standard deviation > 2), the largest such ratio,
@@ -20,7 +24,7 @@ and the leave-one-out accuracy of a shrinkage LDA that tells the three sizes apa
 of size identification there, whatever the model.
 
 Run: ``python analysis/identify/size_observability.py [--scenes y:475,z:475,x:325] [--sizes 0.05,0.07,0.1]
-[--draws 6] [--duration 2.5] [--joint C] [--json FILE]`` (about 2 min for the defaults on two cores).
+[--draws 6] [--duration 2.5] [--joint C] [--start-angles] [--json FILE]`` (about 2 min for the defaults on two cores).
 """
 
 from __future__ import annotations
@@ -37,17 +41,21 @@ import numpy as np
 CPR = 32768.0  # encoder counts per crank turn used to build the counts (any fine resolution)
 
 
-def draws(n: int, seed: int = 17) -> list[dict[str, float]]:
-    """The nominal parameters and ``n`` random draws over the datasets' ranges."""
+def draws(n: int, seed: int = 17, start_angles: bool = False) -> list[dict[str, float]]:
+    """The nominal parameters and ``n`` random draws over the datasets' ranges; with ``start_angles``
+    each draw also gets a start angle of the crank [rad], uniform over a turn, from a generator of its
+    own (seed + 1), so that the other draws are those without it."""
     rng = np.random.default_rng(seed)
+    angles = np.random.default_rng(seed + 1).uniform(0.0, 2 * math.pi, n)
     out = [{}]
-    for _ in range(n):
+    for i in range(n):
         out.append({"contact.restitution": float(rng.uniform(0.32, 0.48)),
                     "contact.mu0": float(rng.uniform(0.04, 0.06)),
                     "contact.stiffness_scale": float(rng.uniform(0.8, 1.2)),
                     "mujoco.contact_damping_scale": float(rng.uniform(0.5, 2.0)),
                     "mujoco.impact_damping_gain": float(rng.uniform(0.5, 2.0)),
-                    "mechanism.guide_friction_n": float(rng.uniform(1.5, 4.0))})
+                    "mechanism.guide_friction_n": float(rng.uniform(1.5, 4.0))}
+                   | ({"drive.initial_encoder_angle_rad": float(angles[i])} if start_angles else {}))
     return out
 
 
@@ -62,6 +70,7 @@ def one_run(job: tuple) -> dict:
     other = "b" if joint == "C" else "c"
     cfg = BenchConfig().replace(**{
         f"joints.clearance_{other}_mm": 0.0, f"joints.clearance_{joint.lower()}_mm": size,
+        "joints.allow_noncatalogue": True,  # --sizes may ask for values between the catalogue's
         "mechanism.orientation": orientation,
         "drive.program": "constant", "drive.motor_rpm": rpm, "drive.ramp_s": 0.3,
         "simulation.duration_s": duration, "sensors.channels": ["accel", "encoder", "crank", "joints"],
@@ -116,18 +125,21 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--truth", action="store_true",
                     help="noise-free accelerations (an upper bound) instead of the bench's sensor chain")
+    ap.add_argument("--start-angles", action="store_true",
+                    help="each draw also starts the crank at an angle drawn over a turn (the nominal run at 0)")
     ap.add_argument("--json", metavar="FILE")
     args = ap.parse_args()
     scenes = [(s.split(":")[0], float(s.split(":")[1])) for s in args.scenes.split(",")]
     sizes = [float(v) for v in args.sizes.split(",")]
-    params = draws(args.draws)
+    params = draws(args.draws, start_angles=args.start_angles)
     jobs = [(o, rpm, c, k, p, args.duration, not args.truth, args.joint) for o, rpm in scenes for c in sizes
             for k, p in enumerate(params)]
     print(f"{len(jobs)} runs ({len(scenes)} scenes x {len(sizes)} sizes x {len(params)} parameter sets)",
           file=sys.stderr, flush=True)
     with ProcessPoolExecutor(args.workers) as ex:
         rows = list(ex.map(one_run, jobs))
-    out = {"joint": args.joint, "sizes_mm": sizes, "draws": params, "sensed": not args.truth, "scenes": []}
+    out = {"joint": args.joint, "sizes_mm": sizes, "draws": params, "sensed": not args.truth,
+           "start_angles": args.start_angles, "scenes": []}
     print(f"accelerations: {'noise-free truth' if args.truth else 'the bench sensor chain (noise, DAQ, calibration)'}")
     print("| scene | size [mm] | contact share (min-max) | impacts per turn (min-max) |")
     print("|---|---:|---:|---:|")

@@ -51,15 +51,18 @@ CLASSES = ("none", "B", "C", "BC")
 # bench's sensor chain tells 0.05, 0.07 and 0.1 mm at that joint apart beyond the contact parameters'
 # uncertainty (shrinkage LDA on this model's features, leave one run out, accuracy >= 0.95 there and at
 # every faster speed measured), measured on the twin's runs over 250-750 rpm by
-# ``python analysis/identify/size_observability.py --joint J --scenes x:250,...,z:750`` (the model card's
-# command; analysis/results/identify/size_observability_b.json and size_observability_speed.json).
+# ``python analysis/identify/size_observability.py --joint J --scenes x:250,...,z:750 [--start-angles]``
+# (the model card's commands), once with every run started at crank angle 0 and once with the start angle
+# drawn over a turn (a bench recording starts wherever the crank stood); the map is the stricter of the two
+# (analysis/results/identify/size_observability_{speed,start,b,b_start}.json).
 # At C below it the pin slides round the bushing (y, z) or flies chaotically (x at 300-325 rpm) and the size
-# signature is under the sensor noise (noise-free accelerations separate y at 300 rpm at 1.00): 0.43-0.86
-# below the map. At B only the free-flight band with x vertical is unresolved (0.81 at 300, 0.38 at 325 rpm;
-# 0.95 at 250), so B is resolved from 375 rpm with x vertical and over the whole measured range (from 250)
-# with y or z vertical.
+# signature is under the sensor noise (noise-free accelerations separate y at 300 rpm at 1.00): 0.24-0.90
+# below the map, both studies the same map. At B the free-flight band with x vertical is unresolved (0.81 and
+# 0.38 at 300 and 325 rpm; 0.95 at 250 started at 0, 0.10 with the start drawn), and with y vertical at
+# 250 rpm the start angle matters (1.00 started at 0, 0.81 drawn): B is resolved from 375 rpm with x
+# vertical, 300 with y, over the whole measured range (from 250) with z.
 SIZE_RESOLVED_FROM_RPM = {
-    "B": {"x": 375.0, "y": 250.0, "z": 250.0},
+    "B": {"x": 375.0, "y": 300.0, "z": 250.0},
     "C": {"x": 425.0, "y": 475.0, "z": 300.0},
 }
 BELT_RATIO = Drive.belt_ratio  # motor turns per crank turn of the bench's V-belt (S003 §2.2.2)
