@@ -4,13 +4,14 @@ Steps (each is a plain ``twin`` command; a step whose output exists is skipped, 
 resumes):
 
 1. ``twin dataset generate analysis/datasets/clearance_id.toml --out WORK/clearance_id``, the same for
-   ``clearance_id_dense.toml`` and ``clearance_id_band.toml``: the training data, MuJoCo twin (400 runs
-   of 3 s each: the catalogue at five speeds; clearances drawn continuously at 15 speeds; and 120 runs
-   with x vertical at 312.5 rpm, the slider's free-flight speed, healthy, B or C, for the location model
-   only);
-2. ``twin identify train WORK/clearance_id WORK/clearance_id_dense --location-only WORK/clearance_id_band
-   --interval-folds speed --out twin/data/identify_default.joblib`` (train and val splits, pooled; the
-   intervals calibrated on answers at speeds left out);
+   ``clearance_id_dense.toml``, ``clearance_id_start.toml``, ``clearance_id_top.toml`` and
+   ``clearance_id_band.toml``: the training data, MuJoCo twin, runs of 3 s (400: the catalogue at five
+   speeds; 400: clearances drawn continuously at 15 speeds; 400: the same at 17 speeds to 800 rpm with the
+   crank's start angle drawn; 240: y vertical at 737.5-800 rpm, start drawn; and 120 runs with x vertical
+   at 312.5 rpm, the slider's free-flight speed, healthy, B or C, for the location model only);
+2. ``twin identify train WORK/clearance_id WORK/clearance_id_dense WORK/clearance_id_start WORK/clearance_id_top
+   --location-only WORK/clearance_id_band --interval-folds speed --out twin/data/identify_default.joblib``
+   (train and val splits, pooled; the intervals calibrated on answers at speeds left out);
 3. ``twin dataset generate analysis/datasets/clearance_id_test.toml --out WORK/clearance_id_test``,
    ``clearance_id_test_b.toml`` and ``clearance_id_test_c.toml``: the test data (200 + 400 + 400 runs),
    reference engine, other seeds, unseen speeds and clearance value;
@@ -21,9 +22,9 @@ resumes):
    second extension alone in ``analysis/results/identify/test_c`` (runs first evaluated at look 9); and
    the answers on the sample recordings in ``recordings/`` (``samples.json``).
 
-Run: ``python analysis/identify/train_default.py [--work DIR] [--workers N]`` (30-40 min on two
+Run: ``python analysis/identify/train_default.py [--work DIR] [--workers N]`` (45-55 min on two
 cores, most of it the MuJoCo training data). The datasets stay in ``--work`` (default
-``../identify_work`` beside the checkout; about 9 GB), not in the repository.
+``../identify_work`` beside the checkout; about 17 GB), not in the repository.
 """
 
 from __future__ import annotations
@@ -55,7 +56,7 @@ def main() -> None:
     args = ap.parse_args()
     work = Path(args.work)
     work.mkdir(parents=True, exist_ok=True)
-    train_ds = [work / "clearance_id", work / "clearance_id_dense"]
+    train_ds = [work / "clearance_id", work / "clearance_id_dense", work / "clearance_id_start", work / "clearance_id_top"]
     location_ds = [work / "clearance_id_band"]
     test_ds = [work / "clearance_id_test", work / "clearance_id_test_b", work / "clearance_id_test_c"]
     t = time.perf_counter()
