@@ -27,7 +27,7 @@ def one(job: tuple) -> dict:
     engine, angle, model_path = job
     from twin.config import preset
     from twin.identify.features import features
-    from twin.identify.model import ClearanceModel, simulated_inputs
+    from twin.identify.model import ClearanceModel, simulated_inputs, size_answer
     from twin.simulate import simulate_run
 
     cfg = preset(6).replace(**{"simulation.engine": engine, "simulation.duration_s": 5.5, "drive.ramp_s": 0.4,
@@ -39,7 +39,7 @@ def one(job: tuple) -> dict:
     m = ClearanceModel.load(model_path)
     est = 10 ** m.size["C"].predict(X)
     fn = np.asarray(run["fn_C"], float)
-    return {"engine": engine, "start_angle_rad": angle, "answer_mm": float(10 ** np.median(np.log10(est))),
+    return {"engine": engine, "start_angle_rad": angle, "answer_mm": size_answer(m.size["C"], X),
             "windows_mm": [round(float(e), 4) for e in est],
             "contact_share": [round(float(np.mean(fn[a:b] > 0)), 4) for a, b in w.windows]}
 

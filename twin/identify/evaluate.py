@@ -73,19 +73,15 @@ def evaluate(model: ClearanceModel, dataset_dir: str | Path | list[str | Path], 
         "targets": {"accuracy": 0.95, "recall_each_class": 0.90, "interval_coverage": 0.85},
     }
     if len(dss) > 1:
-        report["by_dataset"] = _group(preds, lambda p: p["dataset"], lambda ps: {
-            "runs": len(ps), "accuracy": float(np.mean([p["fault"] == p["true_fault"] for p in ps]))})
+        report["by_dataset"] = _group(preds, lambda p: p["dataset"], _location)
     # fault location by speed and by clearance value
-    report["by_speed"] = _group(preds, lambda p: _speed_key(p), lambda ps: {
-        "runs": len(ps), "accuracy": float(np.mean([p["fault"] == p["true_fault"] for p in ps]))})
+    report["by_speed"] = _group(preds, _speed_key, _location)
     report["by_clearance"] = {}
     for j in ("b", "c"):
         faulty = [p for p in preds if p[f"true_{j}_mm"] > 0]
         J = j.upper()
-        groups = {}
-        for c in sorted({p[f"true_{j}_mm"] for p in faulty}):
-            ps = [p for p in faulty if p[f"true_{j}_mm"] == c]
-            groups[f"{c:g}"] = {**_size_cell(ps, j, c), "detected": float(np.mean([J in p["fault"] for p in ps]))}
+        groups = {f"{c:g}": {**_size_cell(ps, j, c), "detected": float(np.mean([J in p["fault"] for p in ps]))}
+                  for c, ps in _by_value(faulty, j)}
         cover_all = float(np.mean([p[f"{j}_int"][0] <= p[f"true_{j}_mm"] <= p[f"{j}_int"][1] for p in faulty])) \
             if faulty else float("nan")
         report["by_clearance"][J] = {"values": groups, "interval_coverage": cover_all, "runs": len(faulty),
@@ -96,6 +92,11 @@ def evaluate(model: ClearanceModel, dataset_dir: str | Path | list[str | Path], 
     report["seconds"] = {"features_and_predictions": t_pred}
     report["predictions"] = preds
     return report
+
+
+def _location(ps: list[dict[str, Any]]) -> dict[str, Any]:
+    """Runs and fault-location accuracy of a group of predictions."""
+    return {"runs": len(ps), "accuracy": float(np.mean([p["fault"] == p["true_fault"] for p in ps]))}
 
 
 def median_ci90(values: np.ndarray | list[float]) -> list[float]:
@@ -126,11 +127,7 @@ def size_by_speed(faulty: list[dict[str, Any]], j: str) -> dict[str, dict[str, d
     median_abs_error_mm, median_abs_error_ci90_mm, target_mm, meets_target, interval_coverage,
     median_estimate_mm}}}, from the
     predictions of the runs with a clearance at ``j``."""
-    out: dict[str, dict[str, dict[str, Any]]] = {}
-    for c in sorted({p[f"true_{j}_mm"] for p in faulty}):
-        ps = [p for p in faulty if p[f"true_{j}_mm"] == c]
-        out[f"{c:g}"] = _group(ps, _speed_key, lambda qs, c=c: _size_cell(qs, j, c))
-    return out
+    return {f"{c:g}": _group(ps, _speed_key, lambda qs, c=c: _size_cell(qs, j, c)) for c, ps in _by_value(faulty, j)}
 
 
 def size_where_resolved(preds: list[dict[str, Any]], j: str) -> dict[str, Any]:
@@ -140,8 +137,15 @@ def size_where_resolved(preds: list[dict[str, Any]], j: str) -> dict[str, Any]:
     faulty = [p for p in preds if p[f"true_{j}_mm"] > 0]
     ok = [p for p in faulty if p[f"{j}_resolved"]]
     return {"runs": len(ok), "runs_not_resolved": len(faulty) - len(ok),
-            "values": {f"{c:g}": _size_cell([p for p in ok if p[f"true_{j}_mm"] == c], j, c)
-                       for c in sorted({p[f"true_{j}_mm"] for p in ok})}}
+            "values": {f"{c:g}": _size_cell(ps, j, c) for c, ps in _by_value(ok, j)}}
+
+
+def _by_value(preds: list[dict[str, Any]], j: str) -> list[tuple[float, list[dict[str, Any]]]]:
+    """The predictions grouped by their true clearance at joint ``j`` ("b" or "c"), in increasing order."""
+    out: dict[float, list[dict[str, Any]]] = {}
+    for p in preds:
+        out.setdefault(p[f"true_{j}_mm"], []).append(p)
+    return sorted(out.items())
 
 
 def _speed_key(p: dict[str, Any]) -> str:
