@@ -126,13 +126,16 @@ def test_anova_sums_of_squares_match_least_squares_and_add_up():
         assert rows[n]["p"] == pytest.approx(betainc(d2 / 2, d1 / 2, d2 / (d2 + d1 * f)), rel=1e-9)
 
 
-def test_interaction_of_columns_1_and_2_lives_in_columns_3_and_4():
+@pytest.mark.parametrize("cols", [(1, 2, 3, 4), (1, 5, 6, 7), (1, 8, 9, 10), (1, 11, 12, 13)])
+def test_interaction_columns_of_the_l27(cols):
+    # the interaction of columns i and j of the L27 is carried by two further columns (the standard
+    # interaction table): its SS equals the SS of those two columns taken as factors
     rng = np.random.default_rng(2)
     y = rng.normal(size=27)
-    lv = _levels((1, 2, 3, 4))
+    lv = _levels(cols)
     tab = {r["source"]: r for r in taguchi.anova(lv[:, :2], y, "ab", [(0, 1)])["rows"]}
-    cols = {r["source"]: r for r in taguchi.anova(lv, y, "abcd")["rows"]}
-    assert tab["a*b"]["ss"] == pytest.approx(cols["c"]["ss"] + cols["d"]["ss"], rel=1e-12)
+    by_col = {r["source"]: r for r in taguchi.anova(lv, y, "abcd")["rows"]}
+    assert tab["a*b"]["ss"] == pytest.approx(by_col["c"]["ss"] + by_col["d"]["ss"], rel=1e-12)
     assert tab["a*b"]["dof"] == 4
 
 
