@@ -20,6 +20,8 @@ STUDIES: list[str] = [
     "twin.studies.stability:register",
     "twin.studies.doe:register",
     "twin.studies.s004:register",
+    "twin.studies.mcdm:register",
+    "twin.studies.taguchi:register",
 ]
 
 
