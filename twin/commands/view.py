@@ -11,7 +11,7 @@ is written when the command cannot do what it was asked: the input, the output p
   started, else its own message (e.g. "Failed to open connection to X server") is the error line
   (the recording is written by then; the line says where).
 * ``--screenshot`` needs a Vulkan driver (:func:`twin.viz.screenshot.check_vulkan`); a viewer that
-  exits or panics while loading is a one-line error quoting it.
+  exits or panics while starting or loading is a one-line error quoting it.
 """
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ from twin.errors import TwinError
 
 #: Seconds the spawned viewer must keep running before ``twin view --spawn`` reports it open.
 SPAWN_CHECK_S = 1.5
-#: Seconds the headless viewer loads before a screenshot, unless --wait says otherwise.
+#: Seconds the headless viewer may load and settle before a screenshot, unless --wait says otherwise.
 DEFAULT_WAIT_S = 60.0
 
 
@@ -55,7 +55,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="also save a PNG of the default view from a headless viewer (needs Vulkan, e.g. Mesa's)")
     p.add_argument("--at", type=float, metavar="T", help="time cursor of the screenshot [s] (with --screenshot)")
     p.add_argument("--wait", type=float, metavar="S", default=None,
-                   help=f"seconds the headless viewer loads before the screenshot (with --screenshot; "
+                   help=f"with --screenshot: the most seconds to wait for the recording to load and the view "
+                        f"to settle (it is saved as soon as two frames in a row are identical; "
                         f"default {DEFAULT_WAIT_S:g})")
     p.set_defaults(func=run)
 
@@ -121,7 +122,8 @@ def run(args: argparse.Namespace) -> int:
         from twin.viz.screenshot import screenshot
 
         shot = screenshot(path, args.screenshot, at_s=args.at, wait_s=wait)
-        print(f"saved {shot}")
+        how = "view settled" if shot.settled else f"view still changing at --wait {wait:g} s; a larger --wait may help"
+        print(f"saved {shot.path} in {shot.seconds:.1f} s ({how})")
     if args.spawn:
         _spawn(exe, path)
     return 0
