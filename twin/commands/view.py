@@ -30,6 +30,8 @@ from twin.errors import TwinError
 
 #: Seconds the spawned viewer must keep running before ``twin view --spawn`` reports it open.
 SPAWN_CHECK_S = 1.5
+#: Window of the headless viewer [px] unless --window-size says otherwise.
+DEFAULT_WINDOW = (1600, 900)
 #: Seconds the headless viewer may load and settle before a screenshot, unless --wait says otherwise.
 DEFAULT_WAIT_S = 60.0
 
@@ -58,6 +60,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help=f"with --screenshot: the most seconds to wait for the recording to load and the view "
                         f"to settle (it is saved as soon as two frames in a row are identical; "
                         f"default {DEFAULT_WAIT_S:g})")
+    p.add_argument("--window-size", metavar="WxH", default=None,
+                   help="with --screenshot: size of the headless viewer's window in pixels (default 1600x900)")
     p.set_defaults(func=run)
 
 
@@ -92,12 +96,13 @@ def run(args: argparse.Namespace) -> int:
             raise TwinError(f"--wait: must be a finite number of seconds >= 0, got {args.wait!r}")
         if args.at is not None and not math.isfinite(args.at):
             raise TwinError(f"--at: must be a finite time [s], got {args.at!r}")
+        window = parse_window_size(args.window_size) if args.window_size is not None else DEFAULT_WINDOW
         from twin.viz.screenshot import check_vulkan, rerun_executable
 
         rerun_executable()
         check_vulkan()
     else:
-        for flag, value in (("--at", args.at), ("--wait", args.wait)):
+        for flag, value in (("--at", args.at), ("--wait", args.wait), ("--window-size", args.window_size)):
             if value is not None:
                 raise TwinError(f"{flag}: applies to --screenshot only; give --screenshot OUT.png or leave it out")
     if args.spawn:
@@ -121,12 +126,22 @@ def run(args: argparse.Namespace) -> int:
     if args.screenshot:
         from twin.viz.screenshot import screenshot
 
-        shot = screenshot(path, args.screenshot, at_s=args.at, wait_s=wait)
+        shot = screenshot(path, args.screenshot, at_s=args.at, wait_s=wait, window=window)
         how = "view settled" if shot.settled else f"view still changing at --wait {wait:g} s; a larger --wait may help"
         print(f"saved {shot.path} in {shot.seconds:.1f} s ({how})")
     if args.spawn:
         _spawn(exe, path)
     return 0
+
+
+def parse_window_size(text: str) -> tuple[int, int]:
+    """``WxH`` (e.g. ``1600x900``) as pixels, each 64..8192; else a one-line TwinError."""
+    parts = text.lower().split("x")
+    if len(parts) == 2 and all(p.strip().isdigit() for p in parts):
+        w, h = (int(p) for p in parts)
+        if 64 <= w <= 8192 and 64 <= h <= 8192:
+            return w, h
+    raise TwinError(f"--window-size: must be WIDTHxHEIGHT in pixels, each 64..8192 (e.g. 1600x900), got {text!r}")
 
 
 def has_display() -> bool:
