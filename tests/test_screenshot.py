@@ -17,7 +17,8 @@ import twin.viz.screenshot as shot
 from twin.commands.view import parse_window_size
 from twin.errors import TwinError
 
-linux_only = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the stand-in viewer is a POSIX shell script")
+linux_only = pytest.mark.skipif(not sys.platform.startswith("linux"),
+                                reason="the stand-in viewer is a POSIX shell script")
 
 
 def _viewer(d: Path, body: str) -> Path:
@@ -98,6 +99,10 @@ class FakeClient:
     def take_screenshot(self):
         self.clock[0] += self.cost
         self.shots += 1
+        if self.frames[0] == b"timeout":
+            self.frames.pop(0)
+            self.clock[0] += 15.0
+            raise TimeoutError("Deadline expired before operation could complete")
         return self.frames.pop(0) if len(self.frames) > 1 else self.frames[0]
 
 
@@ -124,6 +129,17 @@ def test_capture_takes_the_picture_as_it_is_at_the_deadline():
     assert _capture(FakeClient(clock, loading=100, frames=[b"x"]), clock, 2.0) == (b"x", False)  # still loading
     clock = [0.0]
     assert _capture(FakeClient(clock, loading=0, frames=[b"x"]), clock, 0.0) == (b"x", False)  # --wait 0: at once
+
+
+def test_capture_asks_again_after_a_timeout():
+    clock = [0.0]
+    client = FakeClient(clock, loading=0, frames=[b"a", b"timeout", b"a", b"a"])
+    # a, (timeout), a, a: the frame before a timeout does not count
+    assert _capture(client, clock, 60.0) == (b"a", True)
+    assert client.shots == 4
+    clock = [0.0]
+    with pytest.raises(TimeoutError):  # the last try, at the deadline, does not hide the error
+        _capture(FakeClient(clock, loading=0, frames=[b"timeout", b"timeout", b"x"]), clock, 10.0)
 
 
 def test_capture_stops_when_the_viewer_dies():

@@ -30,8 +30,10 @@ from twin.errors import TwinError
 
 #: Seconds the spawned viewer must keep running before ``twin view --spawn`` reports it open.
 SPAWN_CHECK_S = 1.5
+#: Default of --plot-window [s] (= ViewOptions.plot_window_s; kept here so the CLI loads no rerun).
+DEFAULT_PLOT_WINDOW_S = 0.3
 #: Window of the headless viewer [px] unless --window-size says otherwise.
-DEFAULT_WINDOW = (1600, 900)
+DEFAULT_WINDOW = (1920, 1080)
 #: Seconds the headless viewer may load and settle before a screenshot, unless --wait says otherwise.
 DEFAULT_WAIT_S = 60.0
 
@@ -50,9 +52,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="time window of the spectra [s] (default: a steady-speed second near the end)")
     p.add_argument("--pose-rate", type=float, metavar="HZ", default=1000.0,
                    help="rate of the 3-D poses and contact arrows [Hz] (signals keep their rate; default 1000)")
-    p.add_argument("--plot-window", type=float, metavar="S", default=1.0,
+    p.add_argument("--plot-window", type=float, metavar="S", default=DEFAULT_PLOT_WINDOW_S,
                    help="time window around the cursor of the accelerometer and contact plots [s] "
-                        "(0 = whole run; default 1)")
+                        f"(0 = whole run; default {DEFAULT_PLOT_WINDOW_S:g}: a time label every 100 ms)")
     p.add_argument("--screenshot", metavar="OUT.png",
                    help="also save a PNG of the default view from a headless viewer (needs Vulkan, e.g. Mesa's)")
     p.add_argument("--at", type=float, metavar="T", help="time cursor of the screenshot [s] (with --screenshot)")
@@ -61,7 +63,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         f"to settle (it is saved as soon as two frames in a row are identical; "
                         f"default {DEFAULT_WAIT_S:g})")
     p.add_argument("--window-size", metavar="WxH", default=None,
-                   help="with --screenshot: size of the headless viewer's window in pixels (default 1600x900)")
+                   help="with --screenshot: size of the headless viewer's window in pixels (default 1920x1080)")
     p.set_defaults(func=run)
 
 

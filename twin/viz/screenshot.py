@@ -240,17 +240,22 @@ def capture(client, alive: Callable[[], bool], wait_s: float, clock: Callable[[]
 
     Waits until nothing is loading (``get_state().loading`` empty), then takes screenshots until
     two in a row are identical (the plots' bounds and lazily fetched chunks stop changing); at
-    the latest after ``wait_s`` seconds [s] it takes the picture as it is (settled = False).
+    the latest after ``wait_s`` seconds [s] it takes the picture as it is (settled = False). A
+    call that times out (the client waits 15 s) is repeated until then.
     ``alive()`` False (the viewer exited) raises :class:`TwinError` via the caller's check."""
     deadline = clock() + wait_s
     last: bytes | None = None
     while clock() < deadline:
         if not alive():
             raise TwinError("the headless viewer stopped while loading")
-        if client.get_state().loading:
-            sleep(min(POLL_S, max(deadline - clock(), 0.0)))
+        try:
+            if client.get_state().loading:
+                sleep(min(POLL_S, max(deadline - clock(), 0.0)))
+                continue
+            img = client.take_screenshot()
+        except TimeoutError:  # a busy software renderer can miss the client's 15 s deadline: ask again
+            last = None
             continue
-        img = client.take_screenshot()
         if img == last:
             return img, True
         last = img
@@ -260,7 +265,7 @@ def capture(client, alive: Callable[[], bool], wait_s: float, clock: Callable[[]
 
 
 def screenshot(rrd: str | Path, png: str | Path, *, at_s: float | None = None, wait_s: float = 60.0,
-               window: tuple[int, int] = (1600, 900), port: int | None = None) -> Shot:
+               window: tuple[int, int] = (1920, 1080), port: int | None = None) -> Shot:
     """Save a PNG of ``rrd``'s default view with the time cursor at ``at_s`` [s] (paused).
 
     Waits at most ``wait_s`` [s] for the recording to load and the view to settle (see
