@@ -158,3 +158,10 @@ def test_window_size_is_checked(text):
 
 def test_window_size_parses():
     assert parse_window_size("800x450") == (800, 450) and parse_window_size("1920X1080") == (1920, 1080)
+
+
+def test_cli_plot_window_default_is_the_options_default():
+    from twin.commands.view import DEFAULT_PLOT_WINDOW_S
+    from twin.viz import ViewOptions
+
+    assert DEFAULT_PLOT_WINDOW_S == ViewOptions().plot_window_s

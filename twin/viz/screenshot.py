@@ -242,7 +242,8 @@ def capture(client, alive: Callable[[], bool], wait_s: float, clock: Callable[[]
     two in a row are identical (the plots' bounds and lazily fetched chunks stop changing); at
     the latest after ``wait_s`` seconds [s] it takes the picture as it is (settled = False). A
     call that times out (the client waits 15 s) is repeated until then.
-    ``alive()`` False (the viewer exited) raises :class:`TwinError` via the caller's check."""
+    ``alive()`` False (the viewer exited) raises :class:`TwinError`; ``clock`` and ``sleep``
+    (seconds) are replaceable for tests."""
     deadline = clock() + wait_s
     last: bytes | None = None
     while clock() < deadline:
