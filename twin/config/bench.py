@@ -17,7 +17,6 @@ from twin.config.sensors import Instrumentation, Sensors
 from twin.errors import ConfigError
 
 
-# --------------------------------------------------------------------------- config
 @dataclass(frozen=True)
 class BenchConfig:
     """Everything that defines one run of the bench, for either engine."""
@@ -115,8 +114,7 @@ class BenchConfig:
         return with_overrides(self, overrides)
 
 
-
-def joint_stiffness(cfg: "BenchConfig", joint: str) -> float:
+def joint_stiffness(cfg: BenchConfig, joint: str) -> float:
     """K of ``joint``'s hysteresis law before ``stiffness_scale`` [N/m^n]: the configured one
     (:meth:`Contact.stiffness_of`) or S003 Eq. 18 from the joint's own pin, bushing and
     materials (:func:`ln_stiffness`). Both engines resolve K here."""

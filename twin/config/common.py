@@ -64,4 +64,3 @@ def _joint_table(obj: Any, name: str) -> list[tuple[str, Any]]:
     for key, _ in items:
         _choice(key, f"{name}.{key}", JOINTS)
     return items
-

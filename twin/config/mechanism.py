@@ -372,7 +372,7 @@ class Contact:
 
     def stiffness_of(self, joint: str) -> float:
         """K given for ``joint`` [N/m^n] (``stiffnesses`` or the shared ``stiffness``); 0 = from
-        Eq. 18 (:func:`joint_stiffness` resolves it)."""
+        Eq. 18 (:func:`twin.config.joint_stiffness` resolves it)."""
         _choice(joint, "joint", JOINTS)
         return float(self.stiffnesses.get(joint, self.stiffness))
 
@@ -388,4 +388,3 @@ def ln_stiffness(joints: Joints, materials: Materials, joint: str) -> float:
     ri, rj = joints.bushing_radius_m(joint), joints.pin_radius(joint)
     h = materials.pin_of(joint).compliance_h + materials.bushing_of(joint).compliance_h
     return 4.0 / (3.0 * h) * math.sqrt(ri * rj / (ri - rj))
-
