@@ -46,9 +46,16 @@ def preset(test_id: int) -> BenchConfig:
     ``preset(i).replace(**{"drive.program": "protocol"})``."""
     if isinstance(test_id, bool) or not isinstance(test_id, int) or test_id not in TABLE4:
         raise ConfigError("--test", f"must be a Table 4 test id 1..12, got {test_id!r}")
+    return _test(test_id)
+
+
+# built once: the configurations are frozen (as BenchConfig()'s default sections are shared)
+@functools.lru_cache(maxsize=None)
+def _test(test_id: int) -> BenchConfig:
     return from_dict(BenchConfig, copy.deepcopy(_table4()[test_id]))
 
 
+@functools.lru_cache(maxsize=None)
 def _named(name: str) -> BenchConfig:
     return from_dict(BenchConfig, copy.deepcopy(_read(name)))
 
