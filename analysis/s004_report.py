@@ -2,7 +2,7 @@
 
 Runs ``--preset s004`` (S004's large slider–crank at a prescribed 30 rad/s, ADAMS IMPACT contact)
 with 0, 0.25 and 0.5 mm radial clearance at B in both engines, and S004's continuous-contact model
-(:mod:`twin.studies.s004`), and writes ``analysis/results/s004/``: ``s004.json`` (every number),
+(:mod:`twin.studies.continuous_contact`), and writes ``analysis/results/s004/``: ``s004.json`` (every number),
 ``README.md`` (the numbers beside the paper's) and PNGs (Fig. 4–7 counterparts, the comparison of
 the continuous-contact model with the contact model). Slider velocities of the contact runs are
 central differences of the (float64) slider position at 100 kHz; accelerations are AC6 (the
@@ -26,7 +26,7 @@ sys.path.insert(0, str(ROOT))
 from twin.config import named_preset  # noqa: E402
 from twin.kinematics import slider_kinematics  # noqa: E402
 from twin.simulate import simulate_run  # noqa: E402
-from twin.studies.s004 import ContinuousContact, Mechanism, phases  # noqa: E402
+from twin.studies.continuous_contact import ContinuousContact, Mechanism, phases  # noqa: E402
 
 W = 30.0                       # crank speed [rad/s] (S004 §3)
 T_TURN = 2 * math.pi / W       # one turn [s]
