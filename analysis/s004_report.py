@@ -52,10 +52,13 @@ def run(engine: str, c_mm: float, duration: float, **overrides):
 
 def rod_angle_bench_ecc(cfg, theta, ex_rod, ey_rod):
     """Eccentricity at B in the bench frame from the rod-frame channels: φ from
-    sin φ = (d_off − B'_y)/l with B' = B − e (two fixed-point passes: |e| ≪ l)."""
+    sin φ = (d_off − B'_y)/l with B' = B − e, starting from the ideal mechanism's rod angle
+    (:func:`twin.kinematics.rod_angle`; fixed-point passes: |e| ≪ l)."""
+    from twin.kinematics import rod_angle
+
     r, l, d = cfg.bodies.crank.length_m, cfg.bodies.rod.length_m, cfg.mechanism.d_off_m
     by = r * np.sin(theta)
-    phi = np.arcsin((d - by) / l)
+    phi = rod_angle(theta, r, l, d)
     for _ in range(3):
         ex = np.cos(phi) * ex_rod - np.sin(phi) * ey_rod
         ey = np.sin(phi) * ex_rod + np.cos(phi) * ey_rod

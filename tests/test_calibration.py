@@ -95,7 +95,7 @@ def test_preloaded_slow_impacts_are_captured_as_in_the_reference():
 
 
 def test_contact_check_case_meets_the_tolerances():
-    """``twin calibrate contact``'s check of one case: masses over a turn, static, free and
+    """``twin check contact``'s check of one case: masses over a turn, static, free and
     preloaded impacts."""
     r = check_case(BenchConfig(), "C", 0.1, speeds=SPEEDS[::2])
     assert r.ok, r
@@ -107,17 +107,16 @@ def test_effective_masses_follow_the_crank_and_match_the_reference_engine():
     """The effective masses (MuJoCo model, mj_solveM) over a turn equal those of the reference
     engine's reduced mass matrix (independent formulation) at the same poses and normals; they
     must change with the crank angle (a frozen pose would give one value)."""
+    from twin.natural_coordinates import N_Q, initial_state, mechanism_params, reduced_mass
     from twin.studies.contact_check import effective_masses
-    from twin.reference import model as M
-    from twin.reference.engine import engine_params
 
     cfg = preset(12)
-    P = engine_params(cfg)
+    P = mechanism_params(cfg)
     for j, off in (("B", 1), ("C", 3)):
         mj = effective_masses(cfg, j, n_theta=4, n_dir=2)
         ref = []
         for th in np.linspace(0, 2 * np.pi, 4, endpoint=False):
-            W = np.linalg.inv(M.reduced_mass(P, M.initial_state(cfg, th)[:M.N_Q]))[off:off + 2, off:off + 2]
+            W = np.linalg.inv(reduced_mass(P, initial_state(cfg, th)[:N_Q]))[off:off + 2, off:off + 2]
             for a in np.linspace(0, np.pi, 2, endpoint=False):
                 n = np.array([math.cos(a), math.sin(a)])
                 ref.append(1.0 / (n @ W @ n))
