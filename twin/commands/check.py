@@ -8,7 +8,8 @@ clearance at the smallest, median and largest effective mass (method:
 slow impacts. Writes a JSON report; exit status 1 when a case misses a tolerance.
 
 ``twin calibrate contact`` is the old name of the same command, kept as a deprecated alias for
-one version: the same options and output, plus a one-line note on stderr.
+one version: the same options and output, plus a one-line note on stderr (after the arguments
+are accepted, so a refused argument is still a one-line error).
 """
 
 from __future__ import annotations
@@ -50,11 +51,12 @@ def _add_contact(parent: argparse.ArgumentParser, func) -> None:
 
 
 def _run_contact_deprecated(args: argparse.Namespace) -> int:
-    print(DEPRECATION_NOTE, file=sys.stderr)
-    return _run_contact(args)
+    return _run_contact(args, deprecated=True)
 
 
-def _run_contact(args: argparse.Namespace) -> int:
+def _run_contact(args: argparse.Namespace, deprecated: bool = False) -> int:
+    """``deprecated``: called by the old name; the note goes to stderr once the arguments are
+    accepted (a refused argument stays a one-line error)."""
     import json
     from pathlib import Path
 
@@ -69,6 +71,8 @@ def _run_contact(args: argparse.Namespace) -> int:
     out = Path(args.out)
     check_output_file(out, "--out", ".json")
     cfg = load_config(args.config) if args.config else BenchConfig()
+    if deprecated:
+        print(DEPRECATION_NOTE, file=sys.stderr)
     report = contact_check(cfg, joints=joints, progress=not args.no_progress and sys.stderr.isatty())
     atomic_write_text(out, json.dumps(report, indent=1) + "\n")
     print("| case | m_eff min/median/max [kg] | restitution/0.02 | peak force/5 % | duration/10 % | static | capture |")
