@@ -35,10 +35,11 @@ What the builder does to the base model:
 
 Contact of a clearance joint (:func:`contact_setting`): with the bore bushing and
 ``mujoco.contact_source = "law"`` (default) the native module applies the configured reference
-law (:class:`NativeLaw`, its constants from :mod:`twin.contact_params`); ``mujoco.contact_solref``/``contact_solimp`` (raw MuJoCo values) or
-``contact_source = "first-guess"`` give MuJoCo's own soft contact instead (the documented linear
-first guess :func:`twin.contact_params.first_guess_contact`), which the ring and tendon bushings always use. The
-calibration table of issue 4 (a fitted two-pair solref/solimp law) is retired: the law is now
+law (:class:`NativeLaw`, its constants from :mod:`twin.contact_params`);
+``mujoco.contact_solref``/``contact_solimp`` (raw MuJoCo values) or ``contact_source =
+"first-guess"`` give MuJoCo's own soft contact instead (the documented linear first guess
+:func:`twin.contact_params.first_guess_contact`), which the ring and tendon bushings always use.
+The calibration table of issue 4 (a fitted two-pair solref/solimp law) is retired: the law is now
 exact by construction (issue 15).
 """
 
