@@ -33,7 +33,7 @@ COMMANDS: list[str] = [
     "twin.commands.export_mjcf",
     "twin.commands.view",
     "twin.commands.study",
-    "twin.commands.calibrate",
+    "twin.commands.check",
     "twin.commands.import_recording",
     "twin.commands.replay",
     "twin.commands.analyze",
