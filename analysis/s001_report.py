@@ -6,7 +6,7 @@ Run: ``python analysis/s001_report.py [--out analysis/results/s001] [--quick]`` 
 two shared cores; ``--quick`` leaves out the off-grid and cross-engine recoveries). Writes
 ``results.json``, the PNGs and ``tables.md`` (the numbers the README of the folder quotes).
 
-Everything is simulated from ``--preset s001`` (``twin.config._s001``: the paper's Table I-II,
+Everything is simulated from ``--preset s001`` (``twin/config/presets/s001.toml``: the paper's Table I-II,
 0 -> 300 rpm in 0.2 s, vertical plane) in both engines: the ideal run with joint C ideal, the
 clearance run with 0.5 mm radial clearance at C and e = 0.55, and the same with the paper's own
 contact law (ADAMS IMPACT, c_max 27 960 N s/m, d_max 10 µm). Force, orbit and the unsampled

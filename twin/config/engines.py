@@ -61,7 +61,7 @@ class MujocoSettings:
             exactly by the native module (``_bore.c``, issue 15); ring and tendon bushings,
             which the module does not serve, take the first guess. "first-guess": MuJoCo's own
             soft contact, the linear spring-damper with the LN law's duration and restitution
-            at 0.1 m/s (``builder.first_guess_contact``). ``contact_solref``/``solimp`` override
+            at 0.1 m/s (``twin.contact_params.first_guess_contact``). ``contact_solref``/``solimp`` override
             both. (Stored configurations with the retired "calibration" read as "law", and their
             retired ``contact_damping`` is dropped.)
         contact_stiffness_scale: factor on the twin's contact stiffness (the law's K, or the
