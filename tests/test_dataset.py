@@ -11,6 +11,8 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import os
+import re
 import signal
 import subprocess
 import sys
@@ -196,9 +198,12 @@ def test_generated_dataset_matches_its_manifest(tiny):
     assert info["complete"] and info["runs"] == {"planned": 8, "ok": 8, "failed": 0, "pending": 0}
     runs = pq.read_table(tiny / "runs.parquet").to_pylist()
     names = [c["name"] for c in info["channels"]]
+    labels = ["point", "repeat", "split", "factor_fault", "factor_motor_rpm", "fault", "clearance_b_mm",
+              "clearance_c_mm", "orientation", "program", "motor_rpm"]
+    assert info["format"] == "twin-dataset/2" and info["label_columns"] == labels
     for r in runs:
         t = pq.read_table(tiny / r["file"])
-        assert t.column_names == names and t.num_rows == 30_000 == r["rows"]
+        assert t.column_names == ["run_id", "t"] + labels + names and t.num_rows == 30_000 == r["rows"]
         # labels from the configuration stored in the file itself
         meta = json.loads(pq.read_schema(tiny / r["file"]).metadata[b"twin.dataset"])
         import tomllib
@@ -421,6 +426,98 @@ def test_failed_runs_are_recorded_and_a_full_disk_stops_with_one_line(tmp_path, 
 
 
 # ---------------------------------------------------------------------- reading
+def test_every_row_of_a_data_file_carries_its_run_id_time_and_labels(tiny):
+    # independent basis: the manifest row of the run, and t = k / rate_hz (FORMAT.md)
+    runs = pq.read_table(tiny / "runs.parquet").to_pylist()
+    info = json.loads((tiny / "info.json").read_text())
+    for r in runs:
+        t = pq.read_table(tiny / r["file"], columns=["run_id", "t"] + info["label_columns"])
+        for name in ["run_id"] + info["label_columns"]:
+            vals = set(t[name].to_pylist())
+            want = r[name]
+            assert len(vals) == 1 and (vals == {want} or (math.isnan(want) and math.isnan(vals.pop()))), name
+        np.testing.assert_array_equal(t["t"].to_numpy(), np.arange(t.num_rows) / 100_000.0)
+    assert {r["motor_rpm"] for r in runs} == {500.0, 750.0}
+
+
+def test_a_dataset_of_the_previous_format_is_read_and_not_added_to(tiny, tmp_path, capsys):
+    # a twin-dataset/1 folder: data files with the channels only (made here from the tiny one)
+    old = tmp_path / "old"
+    (old / "data").mkdir(parents=True)
+    info = json.loads((tiny / "info.json").read_text())
+    for k in ("key_columns", "label_columns"):
+        info.pop(k)
+    info["format"] = "twin-dataset/1"
+    (old / "info.json").write_text(json.dumps(info))
+    (old / "stats.json").write_bytes((tiny / "stats.json").read_bytes())
+    runs = pq.read_table(tiny / "runs.parquet")
+    rows = []
+    for r in runs.to_pylist():
+        t = pq.read_table(tiny / r["file"])
+        t = t.select([c["name"] for c in info["channels"]]).replace_schema_metadata(t.schema.metadata)
+        pq.write_table(t, old / r["file"])
+        rows.append({**r, "bytes": (old / r["file"]).stat().st_size, "sha256": _sha(old / r["file"])})
+    import pyarrow as pa
+    pq.write_table(pa.Table.from_pylist(rows, schema=runs.schema), old / "runs.parquet")
+    assert verify(old) == []
+    ds = open_dataset(old)
+    x, y = next(ds.windows("train", channels=["meas_AC4"], length_s=0.1))
+    assert x.shape == (1, 10_000) and y["fault"] in ("none", "B", "C", "BC")
+    assert main(["dataset", "info", str(old)]) == 0 and "twin-dataset/1" in capsys.readouterr().out
+    assert main(["dataset", "generate", str(TINY), "--out", str(old), "--no-progress"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "twin-dataset/1" in err and "new folder" in err and err.count("\n") == 0
+
+
+def test_a_data_file_is_labelled_rows_for_hugging_face_datasets(tiny):
+    datasets = pytest.importorskip("datasets")
+    runs = pq.read_table(tiny / "runs.parquet").to_pylist()
+    train = [str(tiny / r["file"]) for r in runs if r["split"] == "train"]
+    ds = datasets.load_dataset("parquet", data_files={"train": train}, split="train",
+                               cache_dir=str(tiny.parent / "hf-cache"))
+    assert ds.num_rows == 4 * 30_000
+    row = ds[30_000 + 123]  # a row of the second file, as the library gives it
+    r = next(r for r in runs if r["run_id"] == row["run_id"])
+    assert (row["fault"], row["clearance_c_mm"], row["motor_rpm"], row["split"]) == \
+        (r["fault"], r["clearance_c_mm"], r["motor_rpm"], "train")
+    assert row["t"] == 123 / 100_000.0 and isinstance(row["meas_AC4"], float)
+
+
+def test_data_files_are_labelled_rows_for_polars(tiny):
+    pl = pytest.importorskip("polars")
+    runs = {r["run_id"]: r for r in pq.read_table(tiny / "runs.parquet").to_pylist()}
+    per_run = (pl.scan_parquet(str(tiny / "data" / "*.parquet"))
+               .filter(pl.col("t") < 0.1)
+               .group_by("run_id", "fault", "clearance_b_mm", "factor_motor_rpm")
+               .agg(pl.len().alias("n"), pl.col("AC4").mean().alias("ac4"))
+               .collect())
+    assert per_run.height == 8 and set(per_run["n"]) == {10_000}
+    for d in per_run.iter_rows(named=True):
+        r = runs[d["run_id"]]
+        assert (d["fault"], d["clearance_b_mm"], d["factor_motor_rpm"]) == \
+            (r["fault"], r["clearance_b_mm"], r["factor_motor_rpm"])
+
+
+def _format_snippets() -> list[str]:
+    import re
+
+    text = (ROOT / "twin" / "dataset" / "FORMAT.md").read_text()
+    return re.findall(r"```python\n(.*?)```", text, flags=re.S)
+
+
+@pytest.mark.parametrize("k", range(len(_format_snippets())))
+def test_format_md_snippets_run_on_a_generated_dataset(tiny, k, tmp_path):
+    code = _format_snippets()[k]
+    for lib in ("datasets", "polars"):
+        if re.search(rf"^\s*(import|from) {lib}\b", code, flags=re.M):
+            pytest.importorskip(lib)
+    assert 'DIR = "tiny"' in code  # the snippet names its folder DIR, which the test points at its dataset
+    code = code.replace('DIR = "tiny"', f"DIR = {str(tiny)!r}")
+    env = {**os.environ, "HF_HOME": str(tmp_path / "hf"), "HF_DATASETS_OFFLINE": "1"}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path, env=env)
+    assert out.returncode == 0, out.stderr[-2000:]
+
+
 def test_files_are_read_without_twin(tiny):
     script = textwrap.dedent(f"""
         import json, sys

@@ -23,8 +23,8 @@ from typing import Any, Iterable, Iterator
 
 import numpy as np
 
-from twin.dataset.generate import FORMAT, DatasetError
-from twin.dataset.storage import file_sha256, read_columns, read_meta
+from twin.dataset.generate import FORMAT, READABLE, DatasetError
+from twin.dataset.storage import KEY_COLUMNS, file_sha256, read_columns, read_meta
 
 
 class Dataset:
@@ -41,8 +41,9 @@ class Dataset:
             self.info = json.loads(info_path.read_text())
         except (OSError, ValueError) as err:
             raise DatasetError(f"{info_path}: unreadable ({err})") from None
-        if self.info.get("format") != FORMAT:
-            raise DatasetError(f"{info_path}: format {self.info.get('format')!r}, expected {FORMAT}")
+        if self.info.get("format") not in READABLE:
+            raise DatasetError(f"{info_path}: format {self.info.get('format')!r}, this twin reads "
+                               f"{', '.join(READABLE)} (a newer twin's dataset? update twin)")
         runs = self.path / "runs.parquet"
         if not runs.is_file():
             raise DatasetError(f"{self.path}: no runs.parquet (generation never finished a call; run it again)")
@@ -57,6 +58,9 @@ class Dataset:
             raise DatasetError(f"{stats}: unreadable ({type(err).__name__}: {err}); run generate again to rewrite it") from None
         self.channels = {c["name"]: c for c in self.info["channels"]}
         self.rate_hz = float(self.info["channels"][0]["rate_hz"]) if self.info["channels"] else 0.0
+        #: key and label columns of the data files before the channels (none in twin-dataset/1)
+        self.key_columns: list[str] = list(self.info.get("key_columns", []))
+        self.label_columns: list[str] = list(self.info.get("label_columns", []))
 
     def rows(self, split: str | None = None, status: str = "ok") -> list[dict[str, Any]]:
         """Manifest rows (dicts), optionally of one split, by default the runs that succeeded."""
@@ -65,11 +69,12 @@ class Dataset:
 
     def read(self, run_id: str, channels: Iterable[str] | None = None, start: int = 0,
              stop: int | None = None) -> dict[str, np.ndarray]:
-        """Signals of one run (rows [start, stop))."""
+        """Signals of one run (rows [start, stop)): ``channels`` (default: every channel; key and
+        label columns may be named too)."""
         f = self.path / "data" / f"{run_id}.parquet"
         if not f.is_file():
             raise DatasetError(f"{self.path}: no data for run {run_id!r}")
-        return read_columns(f, channels, start, stop)
+        return read_columns(f, list(self.channels) if channels is None else channels, start, stop)
 
     def _norm(self, names: list[str]) -> tuple[np.ndarray, np.ndarray]:
         missing = [n for n in names if n not in self.stats]
@@ -163,7 +168,7 @@ def verify(path: str | Path, progress: bool = False) -> list[str]:
     and its labels agree with the configuration. Returns the problems (empty: all good)."""
     ds = Dataset(path)
     problems: list[str] = []
-    expected_cols = [c["name"] for c in ds.info["channels"]]
+    expected_cols = ds.key_columns + ds.label_columns + [c["name"] for c in ds.info["channels"]]
     rows = ds.runs.to_pylist()
     it = rows
     if progress:
@@ -197,6 +202,8 @@ def verify(path: str | Path, progress: bool = False) -> list[str]:
             problems.append(f"{rid}: columns differ from info.json")
         if meta.get("run_id") != rid:
             problems.append(f"{rid}: file metadata names run {meta.get('run_id')!r}")
+        if ds.key_columns and pf.schema_arrow.names == expected_cols and pf.metadata.num_rows:
+            problems += _check_labels(pf, r, ds, meta)
         fault = ("B" if r["clearance_b_mm"] > 0 else "") + ("C" if r["clearance_c_mm"] > 0 else "") or "none"
         if fault != r["fault"]:
             problems.append(f"{rid}: label fault {r['fault']!r} disagrees with clearances "
@@ -206,6 +213,28 @@ def verify(path: str | Path, progress: bool = False) -> list[str]:
         if f.stem not in ids:
             problems.append(f"{f.name}: not in the manifest")
     return problems
+
+
+def _check_labels(pf, r: dict[str, Any], ds: Dataset, meta: dict[str, Any]) -> list[str]:
+    """The key and label columns of a run file (twin-dataset/2) against its manifest row: every
+    row holds the run's id and labels, ``t`` is ``t0 + k / rate_hz``."""
+    import pyarrow.compute as pc
+
+    rid, out = r["run_id"], []
+    t = pf.read(columns=["t"])["t"].to_numpy()
+    t0, rate = float(meta.get("t0", 0.0)), float(meta["rate_hz"])
+    if not np.array_equal(t, t0 + np.arange(t.size, dtype=np.float64) / rate):
+        out.append(f"{rid}: column t is not t0 + k / rate_hz ({t0:g} s, {rate:g} Hz)")
+    tab = pf.read(columns=["run_id"] + ds.label_columns)
+    for name in ["run_id"] + ds.label_columns:
+        col = tab[name]
+        uniq = pc.unique(col).to_pylist()
+        want = r.get(name)
+        same = len(uniq) == 1 and (uniq[0] == want or (isinstance(want, float) and isinstance(uniq[0], float)
+                                                      and math.isnan(want) and math.isnan(uniq[0])))
+        if not same:
+            out.append(f"{rid}: column {name} holds {uniq[:3]!r}, manifest {want!r}")
+    return out
 
 
 def describe(path: str | Path) -> str:
