@@ -215,7 +215,7 @@ def test_generated_dataset_matches_its_manifest(tiny):
     assert types["encoder_counts"] == "int32" and types["volt_AC1"] == "float32" and types["AC4"] == "float32"
     assert types["encoder_angle"] == "float64" and types["ecc_C_x"] == "float64"
     text = describe(tiny)
-    assert "train      4       4      1      1      1      1" in text
+    assert "train     4       4     1  1  1   1" in text
 
 
 def test_volts_are_stored_exactly_and_counts_are_whole(tiny):
@@ -608,6 +608,34 @@ def test_plan_prints_runs_and_an_estimate(capsys):
     out = capsys.readouterr().out
     assert "tiny: 8 runs" in out and "2.4 s simulated" in out and "estimated wall time on 2 workers" in out
     assert out.count("\n") >= 13
+    # the fault factor is the fault label: one column, header and rows of the same width
+    head = next(line for line in out.splitlines() if "run_id" in line)
+    assert head.split() == ["index", "run_id", "split", "fault", "B", "mm", "C", "mm", "motor_rpm"]
+    rows = [line for line in out.splitlines() if re.match(r"\s+\d+\s+[0-9a-f]{16}\s", line)]
+    assert len(rows) == 8 and {len(r) for r in rows} == {len(head)}
+    assert rows[2].split()[3:] == ["B", "0.1", "0", "500"]
+
+
+def test_info_lists_the_runs_with_their_labels_and_as_json(tiny, capsys, tmp_path):
+    runs = pq.read_table(tiny / "runs.parquet").to_pylist()
+    assert main(["dataset", "info", str(tiny), "--show", "0"]) == 0
+    out = capsys.readouterr().out
+    for r in runs:  # every run id on a line with its status, split, fault and clearances
+        line = next(x for x in out.splitlines() if r["run_id"] in x)
+        assert line.split()[1:6] == ["ok", r["split"], r["fault"], f"{r['clearance_b_mm']:.4g}",
+                                     f"{r['clearance_c_mm']:.4g}"]
+    assert main(["dataset", "info", str(tiny), "--show", "3"]) == 0
+    assert "... 5 more (--show 0 lists all)" in capsys.readouterr().out
+    assert main(["dataset", "info", str(tiny), "--json"]) == 0
+    d = json.loads(capsys.readouterr().out, parse_constant=lambda c: pytest.fail(f"{c} in JSON"))
+    assert [x["run_id"] for x in d["runs"]] == [r["run_id"] for r in runs]
+    assert d["runs"][0] == {"run_id": runs[0]["run_id"], "status": "ok", "split": runs[0]["split"],
+                            "fault": runs[0]["fault"], "clearance_b_mm": runs[0]["clearance_b_mm"],
+                            "clearance_c_mm": runs[0]["clearance_c_mm"], "factor_motor_rpm": 500.0}
+    assert d["splits"]["train"] == {"runs": 4, "groups": 4, "by_fault": {"none": 1, "B": 1, "C": 1, "BC": 1}}
+    assert main(["dataset", "info", str(tiny), "--json", str(tmp_path / "i.json")]) == 0
+    assert json.loads((tmp_path / "i.json").read_text()) == d
+    assert main(["dataset", "info", str(tiny), "--json", str(tmp_path / "i.txt")]) == 2
 
 
 def test_workers_of_a_killed_driver_do_not_outlive_it(tmp_path):

@@ -237,27 +237,93 @@ def _check_labels(pf, r: dict[str, Any], ds: Dataset, meta: dict[str, Any]) -> l
     return out
 
 
-def describe(path: str | Path) -> str:
-    """``twin dataset info``: runs by status, class balance per split, size, channels."""
+#: label columns the run tables show (``info``, ``plan``); factors that are these are not repeated
+SHOWN_LABELS = ("fault", "clearance_b_mm", "clearance_c_mm")
+
+
+def run_label_names(rows: list[dict[str, Any]]) -> list[str]:
+    """The label columns a run table shows: split, fault, the clearances, and every varied factor
+    that is not one of them (``factor_fault`` is the fault column already)."""
+    factors = [k for k in (rows[0] if rows else {}) if k.startswith("factor_") and k[7:] not in SHOWN_LABELS]
+    return ["split", *SHOWN_LABELS, *factors]
+
+
+def format_table(header: list[str], rows: list[list[Any]]) -> list[str]:
+    """Lines of a plain text table: columns as wide as their widest cell, numbers right-aligned
+    (4 significant digits), text left-aligned."""
+    def cell(v: Any) -> str:
+        if v is None or (isinstance(v, float) and math.isnan(v)):
+            return "–"
+        if isinstance(v, float):
+            return f"{v:.4g}"
+        return str(v)
+
+    cells = [[cell(v) for v in r] for r in rows]
+    numeric = [all(v is None or (isinstance(v, (int, float)) and not isinstance(v, bool)) for v in (r[k] for r in rows))
+               for k in range(len(header))]
+    widths = [max([len(h)] + [len(r[k]) for r in cells]) for k, h in enumerate(header)]
+
+    def line(vals: list[str]) -> str:
+        return "  ".join(v.rjust(w) if num else v.ljust(w) for v, w, num in zip(vals, widths, numeric)).rstrip()
+
+    return [line(header)] + [line(r) for r in cells]
+
+
+def summary(path: str | Path) -> dict[str, Any]:
+    """``twin dataset info --json``: the dataset's name, format, completeness, run counts, size,
+    channels, class balance per split, and every run with its id, status and labels."""
     ds = Dataset(path)
     info = ds.info
     rows = ds.runs.to_pylist()
-    lines = [f"{ds.path}: dataset {info['name']!r} ({info['format']}), "
-             f"{'complete' if info['complete'] else 'INCOMPLETE (run generate again to finish)'}",
-             f"  runs: {info['runs']['planned']} planned, {info['runs']['ok']} ok, {info['runs']['failed']} failed, "
-             f"{info['runs']['pending']} pending; {sum(r['simulated_s'] for r in rows):.1f} s simulated, "
-             f"{sum(r['bytes'] for r in rows) / 1e6:.1f} MB of signals",
-             f"  channels ({len(ds.channels)}, {ds.rate_hz:g} Hz): " + ", ".join(ds.channels)]
+    labels = run_label_names(rows)
     faults = sorted({r["fault"] for r in rows}, key=["none", "B", "C", "BC"].index)
-    lines.append("  split   runs  groups  " + "  ".join(f"{f:>5s}" for f in faults))
+    splits = {}
     for s in ("train", "val", "test"):
         rs = [r for r in rows if r["split"] == s]
-        if not rs:
-            continue
-        counts = [sum(r["fault"] == f for r in rs) for f in faults]
-        lines.append(f"  {s:6s} {len(rs):5d} {len({r['point'] for r in rs}):7d}  "
-                     + "  ".join(f"{c:5d}" for c in counts))
-    failed = [r for r in rows if r["status"] == "failed"]
+        if rs:
+            splits[s] = {"runs": len(rs), "groups": len({r["point"] for r in rs}),
+                         "by_fault": {f: sum(r["fault"] == f for r in rs) for f in faults}}
+    return {
+        "path": str(ds.path), "name": info["name"], "format": info["format"], "complete": info["complete"],
+        "runs_by_status": info["runs"], "simulated_s": sum(r["simulated_s"] for r in rows),
+        "bytes": sum(r["bytes"] for r in rows), "rate_hz": ds.rate_hz,
+        "channels": [{k: c[k] for k in ("name", "unit", "dtype")} for c in info["channels"]],
+        "label_columns": ds.label_columns, "splits": splits,
+        "runs": [{"run_id": r["run_id"], "status": r["status"], **{k: _json_value(r.get(k)) for k in labels},
+                  **({"reason": r["reason"]} if r["status"] == "failed" else {})} for r in rows],
+    }
+
+
+def _json_value(v: Any) -> Any:
+    """NaN (a label a run lacks, e.g. motor_rpm of a speed program) as JSON's null."""
+    return None if isinstance(v, float) and math.isnan(v) else v
+
+
+def describe(path: str | Path, show: int = 20) -> str:
+    """``twin dataset info``: runs by status, class balance per split, size, channels, and the
+    first ``show`` runs with their ids and labels (0: every run)."""
+    d = summary(path)
+    rs = d["runs_by_status"]
+    lines = [f"{d['path']}: dataset {d['name']!r} ({d['format']}), "
+             f"{'complete' if d['complete'] else 'INCOMPLETE (run generate again to finish)'}",
+             f"  runs: {rs['planned']} planned, {rs['ok']} ok, {rs['failed']} failed, {rs['pending']} pending; "
+             f"{d['simulated_s']:.1f} s simulated, {d['bytes'] / 1e6:.1f} MB of signals",
+             f"  channels ({len(d['channels'])}, {d['rate_hz']:g} Hz): " + ", ".join(c["name"] for c in d["channels"])]
+    faults = list(next(iter(d["splits"].values()))["by_fault"]) if d["splits"] else []
+    lines += ["  " + x for x in format_table(
+        ["split", "runs", "groups", *faults],
+        [[s, v["runs"], v["groups"], *v["by_fault"].values()] for s, v in d["splits"].items()])]
+    runs = d["runs"] if show == 0 else d["runs"][:show]
+    if runs:
+        labels = [k for k in runs[0] if k not in ("run_id", "status", "reason")]
+        head = {"clearance_b_mm": "B mm", "clearance_c_mm": "C mm"}
+        lines.append("  runs (id, status and labels):")
+        lines += ["    " + x for x in format_table(
+            ["run_id", "status", *(head.get(k, k.removeprefix("factor_")) for k in labels)],
+            [[r["run_id"], r["status"], *(r[k] for k in labels)] for r in runs])]
+        if len(runs) < len(d["runs"]):
+            lines.append(f"    ... {len(d['runs']) - len(runs)} more (--show 0 lists all)")
+    failed = [r for r in d["runs"] if r["status"] == "failed"]
     for r in failed[:10]:
         lines.append(f"  failed {r['run_id']}: {r['reason']}")
     return "\n".join(lines)
