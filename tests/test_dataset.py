@@ -739,8 +739,10 @@ def test_a_clearance_at_the_ground_pivot_is_a_dataset_factor(tmp_path):
     rows = {r["factor_joints.clearance_a_mm"]: r for r in pq.read_table(out / "runs.parquet").to_pylist()}
     with_a = pq.read_table(out / rows[0.5]["file"])
     without = pq.read_table(out / rows[0.0]["file"])
-    assert with_a.schema.names == without.schema.names == ["encoder_angle", "ecc_A_x", "ecc_A_y", "pen_A", "fn_A",
-                                                            "ft_A"]
+    labels = json.loads((out / "info.json").read_text())["label_columns"]
+    assert "factor_joints.clearance_a_mm" in labels and set(with_a["factor_joints.clearance_a_mm"].to_pylist()) == {0.5}
+    assert with_a.schema.names == without.schema.names == ["run_id", "t", *labels, "encoder_angle", "ecc_A_x",
+                                                            "ecc_A_y", "pen_A", "fn_A", "ft_A"]
     cfg = preset(1).replace(**{"joints.clearance_a_mm": 0.5, "simulation.duration_s": 0.05})
     theta0 = float(DriveReference(cfg)(np.array([0.0]))[0][0])
     f_b, _ = static_pin_forces(cfg, theta0)
