@@ -440,6 +440,30 @@ def test_every_row_of_a_data_file_carries_its_run_id_time_and_labels(tiny):
     assert {r["motor_rpm"] for r in runs} == {500.0, 750.0}
 
 
+def test_verify_finds_a_file_whose_labels_disagree_with_the_manifest(tiny, tmp_path):
+    import shutil
+
+    import pyarrow as pa
+    import pyarrow.compute as pc
+
+    d = tmp_path / "copy"
+    shutil.copytree(tiny, d)
+    runs = pq.read_table(d / "runs.parquet")
+    rows = runs.to_pylist()
+    r = rows[0]
+    t = pq.read_table(d / r["file"])
+    k = t.column_names.index("fault")
+    t = t.set_column(k, "fault", pc.if_else(pc.equal(t["t"], 0.1), "BC", t["fault"]))  # one row relabelled
+    k = t.column_names.index("t")
+    t = t.set_column(k, "t", pa.array(t["t"].to_numpy() + 1e-9))
+    pq.write_table(t, d / r["file"])
+    rows[0] = {**r, "bytes": (d / r["file"]).stat().st_size, "sha256": _sha(d / r["file"])}
+    pq.write_table(pa.Table.from_pylist(rows, schema=runs.schema), d / "runs.parquet")
+    problems = verify(d)
+    assert len(problems) == 2 and all(p.startswith(r["run_id"]) for p in problems)
+    assert "column t is not t0 + k / rate_hz" in problems[0] and "column fault holds" in problems[1]
+
+
 def test_a_dataset_of_the_previous_format_is_read_and_not_added_to(tiny, tmp_path, capsys):
     # a twin-dataset/1 folder: data files with the channels only (made here from the tiny one)
     old = tmp_path / "old"
