@@ -23,8 +23,8 @@ from typing import Any, Iterable, Iterator
 
 import numpy as np
 
-from twin.dataset.generate import FORMAT, READABLE, DatasetError
-from twin.dataset.storage import KEY_COLUMNS, file_sha256, read_columns, read_meta
+from twin.dataset.generate import READABLE, DatasetError
+from twin.dataset.storage import file_sha256, read_columns, read_meta
 
 
 class Dataset:
