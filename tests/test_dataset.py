@@ -11,6 +11,8 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import os
+import re
 import signal
 import subprocess
 import sys
@@ -196,9 +198,12 @@ def test_generated_dataset_matches_its_manifest(tiny):
     assert info["complete"] and info["runs"] == {"planned": 8, "ok": 8, "failed": 0, "pending": 0}
     runs = pq.read_table(tiny / "runs.parquet").to_pylist()
     names = [c["name"] for c in info["channels"]]
+    labels = ["point", "repeat", "split", "factor_fault", "factor_motor_rpm", "fault", "clearance_b_mm",
+              "clearance_c_mm", "orientation", "program", "motor_rpm"]
+    assert info["format"] == "twin-dataset/2" and info["label_columns"] == labels
     for r in runs:
         t = pq.read_table(tiny / r["file"])
-        assert t.column_names == names and t.num_rows == 30_000 == r["rows"]
+        assert t.column_names == ["run_id", "t"] + labels + names and t.num_rows == 30_000 == r["rows"]
         # labels from the configuration stored in the file itself
         meta = json.loads(pq.read_schema(tiny / r["file"]).metadata[b"twin.dataset"])
         import tomllib
@@ -210,7 +215,7 @@ def test_generated_dataset_matches_its_manifest(tiny):
     assert types["encoder_counts"] == "int32" and types["volt_AC1"] == "float32" and types["AC4"] == "float32"
     assert types["encoder_angle"] == "float64" and types["ecc_C_x"] == "float64"
     text = describe(tiny)
-    assert "train      4       4      1      1      1      1" in text
+    assert "train     4       4     1  1  1   1" in text
 
 
 def test_volts_are_stored_exactly_and_counts_are_whole(tiny):
@@ -421,6 +426,122 @@ def test_failed_runs_are_recorded_and_a_full_disk_stops_with_one_line(tmp_path, 
 
 
 # ---------------------------------------------------------------------- reading
+def test_every_row_of_a_data_file_carries_its_run_id_time_and_labels(tiny):
+    # independent basis: the manifest row of the run, and t = k / rate_hz (FORMAT.md)
+    runs = pq.read_table(tiny / "runs.parquet").to_pylist()
+    info = json.loads((tiny / "info.json").read_text())
+    for r in runs:
+        t = pq.read_table(tiny / r["file"], columns=["run_id", "t"] + info["label_columns"])
+        for name in ["run_id"] + info["label_columns"]:
+            vals = set(t[name].to_pylist())
+            want = r[name]
+            assert len(vals) == 1 and (vals == {want} or (math.isnan(want) and math.isnan(vals.pop()))), name
+        np.testing.assert_array_equal(t["t"].to_numpy(), np.arange(t.num_rows) / 100_000.0)
+    assert {r["motor_rpm"] for r in runs} == {500.0, 750.0}
+
+
+def test_verify_finds_a_file_whose_labels_disagree_with_the_manifest(tiny, tmp_path):
+    import shutil
+
+    import pyarrow as pa
+    import pyarrow.compute as pc
+
+    d = tmp_path / "copy"
+    shutil.copytree(tiny, d)
+    runs = pq.read_table(d / "runs.parquet")
+    rows = runs.to_pylist()
+    r = rows[0]
+    t = pq.read_table(d / r["file"])
+    k = t.column_names.index("fault")
+    t = t.set_column(k, "fault", pc.if_else(pc.equal(t["t"], 0.1), "BC", t["fault"]))  # one row relabelled
+    k = t.column_names.index("t")
+    t = t.set_column(k, "t", pa.array(t["t"].to_numpy() + 1e-9))
+    pq.write_table(t, d / r["file"])
+    rows[0] = {**r, "bytes": (d / r["file"]).stat().st_size, "sha256": _sha(d / r["file"])}
+    pq.write_table(pa.Table.from_pylist(rows, schema=runs.schema), d / "runs.parquet")
+    problems = verify(d)
+    assert len(problems) == 2 and all(p.startswith(r["run_id"]) for p in problems)
+    assert "column t is not t0 + k / rate_hz" in problems[0] and "column fault holds" in problems[1]
+
+
+def test_a_dataset_of_the_previous_format_is_read_and_not_added_to(tiny, tmp_path, capsys):
+    # a twin-dataset/1 folder: data files with the channels only (made here from the tiny one)
+    old = tmp_path / "old"
+    (old / "data").mkdir(parents=True)
+    info = json.loads((tiny / "info.json").read_text())
+    for k in ("key_columns", "label_columns"):
+        info.pop(k)
+    info["format"] = "twin-dataset/1"
+    (old / "info.json").write_text(json.dumps(info))
+    (old / "stats.json").write_bytes((tiny / "stats.json").read_bytes())
+    runs = pq.read_table(tiny / "runs.parquet")
+    rows = []
+    for r in runs.to_pylist():
+        t = pq.read_table(tiny / r["file"])
+        t = t.select([c["name"] for c in info["channels"]]).replace_schema_metadata(t.schema.metadata)
+        pq.write_table(t, old / r["file"])
+        rows.append({**r, "bytes": (old / r["file"]).stat().st_size, "sha256": _sha(old / r["file"])})
+    import pyarrow as pa
+    pq.write_table(pa.Table.from_pylist(rows, schema=runs.schema), old / "runs.parquet")
+    assert verify(old) == []
+    ds = open_dataset(old)
+    x, y = next(ds.windows("train", channels=["meas_AC4"], length_s=0.1))
+    assert x.shape == (1, 10_000) and y["fault"] in ("none", "B", "C", "BC")
+    assert main(["dataset", "info", str(old)]) == 0 and "twin-dataset/1" in capsys.readouterr().out
+    assert main(["dataset", "generate", str(TINY), "--out", str(old), "--no-progress"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "twin-dataset/1" in err and "new folder" in err and err.count("\n") == 0
+
+
+def test_a_data_file_is_labelled_rows_for_hugging_face_datasets(tiny):
+    datasets = pytest.importorskip("datasets")
+    runs = pq.read_table(tiny / "runs.parquet").to_pylist()
+    train = [str(tiny / r["file"]) for r in runs if r["split"] == "train"]
+    ds = datasets.load_dataset("parquet", data_files={"train": train}, split="train",
+                               cache_dir=str(tiny.parent / "hf-cache"))
+    assert ds.num_rows == 4 * 30_000
+    row = ds[30_000 + 123]  # a row of the second file, as the library gives it
+    r = next(r for r in runs if r["run_id"] == row["run_id"])
+    assert (row["fault"], row["clearance_c_mm"], row["motor_rpm"], row["split"]) == \
+        (r["fault"], r["clearance_c_mm"], r["motor_rpm"], "train")
+    assert row["t"] == 123 / 100_000.0 and isinstance(row["meas_AC4"], float)
+
+
+def test_data_files_are_labelled_rows_for_polars(tiny):
+    pl = pytest.importorskip("polars")
+    runs = {r["run_id"]: r for r in pq.read_table(tiny / "runs.parquet").to_pylist()}
+    per_run = (pl.scan_parquet(str(tiny / "data" / "*.parquet"))
+               .filter(pl.col("t") < 0.1)
+               .group_by("run_id", "fault", "clearance_b_mm", "factor_motor_rpm")
+               .agg(pl.len().alias("n"), pl.col("AC4").mean().alias("ac4"))
+               .collect())
+    assert per_run.height == 8 and set(per_run["n"]) == {10_000}
+    for d in per_run.iter_rows(named=True):
+        r = runs[d["run_id"]]
+        assert (d["fault"], d["clearance_b_mm"], d["factor_motor_rpm"]) == \
+            (r["fault"], r["clearance_b_mm"], r["factor_motor_rpm"])
+
+
+def _format_snippets() -> list[str]:
+    import re
+
+    text = (ROOT / "twin" / "dataset" / "FORMAT.md").read_text()
+    return re.findall(r"```python\n(.*?)```", text, flags=re.S)
+
+
+@pytest.mark.parametrize("k", range(len(_format_snippets())))
+def test_format_md_snippets_run_on_a_generated_dataset(tiny, k, tmp_path):
+    code = _format_snippets()[k]
+    for lib in ("datasets", "polars"):
+        if re.search(rf"^\s*(import|from) {lib}\b", code, flags=re.M):
+            pytest.importorskip(lib)
+    assert 'DIR = "tiny"' in code  # the snippet names its folder DIR, which the test points at its dataset
+    code = code.replace('DIR = "tiny"', f"DIR = {str(tiny)!r}")
+    env = {**os.environ, "HF_HOME": str(tmp_path / "hf"), "HF_DATASETS_OFFLINE": "1"}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path, env=env)
+    assert out.returncode == 0, out.stderr[-2000:]
+
+
 def test_files_are_read_without_twin(tiny):
     script = textwrap.dedent(f"""
         import json, sys
@@ -511,6 +632,34 @@ def test_plan_prints_runs_and_an_estimate(capsys):
     out = capsys.readouterr().out
     assert "tiny: 8 runs" in out and "2.4 s simulated" in out and "estimated wall time on 2 workers" in out
     assert out.count("\n") >= 13
+    # the fault factor is the fault label: one column, header and rows of the same width
+    head = next(line for line in out.splitlines() if "run_id" in line)
+    assert head.split() == ["index", "run_id", "split", "fault", "B", "mm", "C", "mm", "motor_rpm"]
+    rows = [line for line in out.splitlines() if re.match(r"\s+\d+\s+[0-9a-f]{16}\s", line)]
+    assert len(rows) == 8 and {len(r) for r in rows} == {len(head)}
+    assert rows[2].split()[3:] == ["B", "0.1", "0", "500"]
+
+
+def test_info_lists_the_runs_with_their_labels_and_as_json(tiny, capsys, tmp_path):
+    runs = pq.read_table(tiny / "runs.parquet").to_pylist()
+    assert main(["dataset", "info", str(tiny), "--show", "0"]) == 0
+    out = capsys.readouterr().out
+    for r in runs:  # every run id on a line with its status, split, fault and clearances
+        line = next(x for x in out.splitlines() if r["run_id"] in x)
+        assert line.split()[1:6] == ["ok", r["split"], r["fault"], f"{r['clearance_b_mm']:.4g}",
+                                     f"{r['clearance_c_mm']:.4g}"]
+    assert main(["dataset", "info", str(tiny), "--show", "3"]) == 0
+    assert "... 5 more (--show 0 lists all)" in capsys.readouterr().out
+    assert main(["dataset", "info", str(tiny), "--json"]) == 0
+    d = json.loads(capsys.readouterr().out, parse_constant=lambda c: pytest.fail(f"{c} in JSON"))
+    assert [x["run_id"] for x in d["runs"]] == [r["run_id"] for r in runs]
+    assert d["runs"][0] == {"run_id": runs[0]["run_id"], "status": "ok", "split": runs[0]["split"],
+                            "fault": runs[0]["fault"], "clearance_b_mm": runs[0]["clearance_b_mm"],
+                            "clearance_c_mm": runs[0]["clearance_c_mm"], "factor_motor_rpm": 500.0}
+    assert d["splits"]["train"] == {"runs": 4, "groups": 4, "by_fault": {"none": 1, "B": 1, "C": 1, "BC": 1}}
+    assert main(["dataset", "info", str(tiny), "--json", str(tmp_path / "i.json")]) == 0
+    assert json.loads((tmp_path / "i.json").read_text()) == d
+    assert main(["dataset", "info", str(tiny), "--json", str(tmp_path / "i.txt")]) == 2
 
 
 def test_workers_of_a_killed_driver_do_not_outlive_it(tmp_path):
@@ -614,8 +763,10 @@ def test_a_clearance_at_the_ground_pivot_is_a_dataset_factor(tmp_path):
     rows = {r["factor_joints.clearance_a_mm"]: r for r in pq.read_table(out / "runs.parquet").to_pylist()}
     with_a = pq.read_table(out / rows[0.5]["file"])
     without = pq.read_table(out / rows[0.0]["file"])
-    assert with_a.schema.names == without.schema.names == ["encoder_angle", "ecc_A_x", "ecc_A_y", "pen_A", "fn_A",
-                                                            "ft_A"]
+    labels = json.loads((out / "info.json").read_text())["label_columns"]
+    assert "factor_joints.clearance_a_mm" in labels and set(with_a["factor_joints.clearance_a_mm"].to_pylist()) == {0.5}
+    assert with_a.schema.names == without.schema.names == ["run_id", "t", *labels, "encoder_angle", "ecc_A_x",
+                                                            "ecc_A_y", "pen_A", "fn_A", "ft_A"]
     cfg = preset(1).replace(**{"joints.clearance_a_mm": 0.5, "simulation.duration_s": 0.05})
     theta0 = float(DriveReference(cfg)(np.array([0.0]))[0][0])
     f_b, _ = static_pin_forces(cfg, theta0)

@@ -138,3 +138,74 @@ def test_failed_write_leaves_existing_file_untouched(run12, tmp_path):
             raise RuntimeError("engine died")
     assert target.read_bytes() == b"precious"
     assert sorted(x.name for x in tmp_path.iterdir()) == ["keep.mcap"]
+
+
+# ---------------------------------------------------------------------------- preview topic
+def test_preview_decodes_as_one_message_per_sample_with_every_channel_a_field(run12, tmp_path):
+    # decoded as Foxglove does: the MCAP index and the ros2msg/CDR decoder of mcap-ros2-support;
+    # independent basis: block means of the full-rate arrays computed here by summation
+    p = write_run(tmp_path / "r.mcap", run12, preview_rate_hz=1000.0)
+    m = 100  # 100 kHz / 1 kHz
+    with open(p, "rb") as fh:
+        reader = make_reader(fh, decoder_factories=[DecoderFactory()])
+        msgs = list(reader.iter_decoded_messages(topics=["/preview"], log_time_order=True))
+    n = run12.n // m
+    assert len(msgs) == n == 50
+    stamps = []
+    for k, (schema, channel, message, dec) in enumerate(msgs):
+        assert schema.name == "twin_msgs/msg/Preview" and channel.message_encoding == "cdr"
+        t_ns = round((k * m + (m - 1) / 2) / run12.rate_hz * 1e9)  # the block's centre
+        assert message.log_time == message.publish_time == t_ns
+        assert dec.header.stamp.sec * 10**9 + dec.header.stamp.nanosec == t_ns
+        stamps.append(t_ns)
+        for name, ch in run12.channels.items():
+            block = ch.data[k * m:(k + 1) * m].astype(np.float64)
+            want = sum(block.tolist()) / m
+            got = getattr(dec, name.lower())
+            tol = 1e-6 if ch.data.dtype == np.float32 else 1e-12
+            assert got == pytest.approx(want, rel=tol, abs=tol * (np.max(np.abs(block)) + 1e-300)), (k, name)
+    assert np.all(np.diff(stamps) == 1_000_000)  # monotonic, at the preview rate
+    fields = [f for f in msgs[0][3].__slots__ if f != "header"] if hasattr(msgs[0][3], "__slots__") else \
+        [f for f in vars(msgs[0][3]) if f != "header"]
+    assert fields == [c.lower() for c in run12.channels]
+
+
+def test_a_run_file_with_a_preview_reads_bit_for_bit_as_without(run12, tmp_path):
+    from twin.mcapfile import read_preview
+
+    plain = read_run(write_run(tmp_path / "a.mcap", run12))
+    p = tmp_path / "b.mcap"
+    with RunWriter(p, run12.config, preview_rate_hz=3000.0) as w:  # 33 samples a block: straddles chunks
+        for i0, i1 in ((0, 1), (1, 777), (777, 3001), (3001, run12.n)):
+            w.write(run12.slice(i0, i1))
+        w.close(run12.meta)
+    back = read_run(p)
+    assert list(back.channels) == list(plain.channels) and back.n == plain.n
+    for name in run12.channels:
+        assert back[name].tobytes() == run12[name].tobytes(), name
+    assert read_preview(tmp_path / "a.mcap") is None
+    stamps, prev = read_preview(p)
+    assert prev.n == run12.n // 33 and prev.rate_hz == pytest.approx(1e5 / 33)
+    assert prev.t0 == pytest.approx(16 / 1e5) and stamps[1] - stamps[0] == 330_000
+    np.testing.assert_allclose(prev["AC4"], run12["AC4"][:prev.n * 33].reshape(-1, 33).astype(np.float64).mean(1),
+                               rtol=1e-6)
+    with pytest.raises(TwinError, match="preview rate"):
+        RunWriter(tmp_path / "c.mcap", run12.config, preview_rate_hz=-1.0)
+
+
+def test_simulate_writes_a_1khz_preview_unless_told_otherwise(tmp_path, capsys):
+    from twin.cli import main
+    from twin.mcapfile import read_preview
+
+    base = ["simulate", "--test", "6", "--duration", "0.02", "--no-progress"]
+    assert main(base + ["--out", str(tmp_path / "a.mcap")]) == 0
+    stamps, prev = read_preview(tmp_path / "a.mcap")
+    assert prev.rate_hz == 1000.0 and prev.n == 20 and set(prev.channels) == set(read_run(tmp_path / "a.mcap").channels)
+    assert main(base + ["--out", str(tmp_path / "b.mcap"), "--preview-rate", "0"]) == 0
+    assert read_preview(tmp_path / "b.mcap") is None
+    capsys.readouterr()
+    for bad in ("-5", "2e5", "nan"):
+        assert main(base + ["--out", str(tmp_path / "c.mcap"), "--preview-rate", bad]) == 2
+        err = capsys.readouterr().err.strip()
+        assert "--preview-rate" in err and err.count("\n") == 0
+    assert not (tmp_path / "c.mcap").exists()

@@ -131,7 +131,38 @@ def test_cli_replay_writes_side_by_side_mcap_report_and_plots(clearance, capsys)
     assert run.config.drive.program == "trace"
     report = json.loads((out / "report.json").read_text())
     assert set(report["sensors"]) == {f"AC{i}" for i in range(1, 7)}
-    assert "## Accelerations" in (out / "report.md").read_text()
+    md = (out / "report.md").read_text()
+    assert "## Accelerations" in md
+    # AC5 sits on the slider with its axis along y (mjcf/bench.xml), the slider slides along x: it
+    # reads 1 g and sensor noise, so its NRMSE and correlation mean nothing and are not shown
+    flat = {a for a, m in report["sensors"].items() if m["near_constant"]}
+    assert flat == {"AC5"}
+    ac5 = report["sensors"]["AC5"]
+    assert ac5["recorded_mean_mps2"] == pytest.approx(9.81, abs=0.05)
+    assert "sensor noise" in ac5["near_constant_note"] and "of the mean" in ac5["near_constant_note"]
+    row = next(line for line in md.splitlines() if line.startswith("| AC5 |"))
+    assert row.count("near-constant") == 4 and "AC5 is nearly constant over the window" in md
+    assert "AC5    nearly constant (" in text and "not compared" in text
+    # each plot says what part of the recording it shows
+    assert report["plots"]["accelerations.png"].startswith("0.10–0.")
+    assert "of the 0–0.45 s recording" in report["plots"]["accelerations.png"]
+    assert report["plots"]["tracking.png"].startswith("crank rate over the whole run (0–0.45 s)")
+    for name, what in report["plots"].items():
+        assert f"{name}: {what}" in md
+
+
+def test_near_constant_is_a_spread_below_1_percent_of_the_mean_or_3_times_the_noise():
+    from twin.replay import near_constant
+
+    rng = np.random.default_rng(0)
+    noise = rng.normal(0.0, 0.05, 20_000)
+    assert near_constant(9.81 + noise, 0.066)  # 1 g and noise: both criteria
+    assert near_constant(9.81 + noise, 0.0)  # no noise figure: the mean alone
+    assert near_constant(noise, 0.066)  # zero mean, noise only: the noise alone
+    assert not near_constant(noise, 0.0)
+    swing = 10.0 * np.sin(np.linspace(0, 20 * np.pi, 20_000))
+    assert near_constant(swing + noise, 0.066) == ""  # motion: std 7.1 m/s²
+    assert near_constant(9.81 + 0.2 * np.sin(np.linspace(0, 20 * np.pi, 20_000)), 0.0) == ""  # 1.4 % of the mean
 
 
 def test_replay_errors(clearance, tmp_path, capsys):

@@ -14,6 +14,17 @@ Layout (documented for other tools in ``recordings/FORMAT.md``):
 * metadata records ``twin.config`` (``toml``: the full configuration), ``twin.run``
   (``format``, ``t0``, ``rate_hz``, ``n``, ``meta`` as JSON) and optionally ``twin.summary``.
 
+Preview (optional, ``preview_rate_hz`` > 0; ``twin simulate`` writes one at 1 kHz by default):
+a topic ``/preview`` with one message per preview sample, every channel of the run a scalar
+field (schema ``twin_msgs/msg/Preview``: ``std_msgs/Header header`` then one
+``float32``/``float64`` per channel), so that Foxglove's plot panel draws each channel as a time
+series (it cannot plot the arrays of the block messages). The preview is the block mean of
+``M = round(rate_hz / preview_rate_hz)`` consecutive full-rate samples (a boxcar anti-alias
+filter: no overshoot or ringing at impacts, streamed with no state but the incomplete block),
+stamped at the block's centre ``t0 + (k M + (M - 1) / 2) / rate_hz``; the trailing ``n mod M``
+samples have none. :func:`read_run` ignores it (it reads only ``/twin/`` topics, as readers of
+files without a preview do); :func:`read_preview` reads it back.
+
 Writes go to a temporary file that is renamed into place on success, so an existing file is
 never left half-written.
 
@@ -55,6 +66,11 @@ _UNREADABLE = (McapError, ZstdError, RuntimeError, EOFError, struct.error, Value
 FORMAT = "twin-run/1"
 TOPIC_PREFIX = "/twin/"
 DEFAULT_BLOCK = 5000
+#: the preview topic (outside TOPIC_PREFIX: readers of the full-rate channels never see it)
+PREVIEW_TOPIC = "/preview"
+PREVIEW_SCHEMA = "twin_msgs/msg/Preview"
+#: preview rate of ``twin simulate`` [Hz] (the library's writers write none unless asked)
+DEFAULT_PREVIEW_HZ = 1000.0
 #: chunk codecs a writer may use (the default "none": see the module docstring)
 _COMPRESSION = {"none": CompressionType.NONE, "lz4": CompressionType.LZ4, "zstd": CompressionType.ZSTD}
 _CDR_LE = b"\x00\x01\x00\x00"
@@ -130,6 +146,94 @@ def decode_block(data: bytes, dtypes: list[str]) -> tuple[int, int, float, list[
     return sec * 1_000_000_000 + nsec, first, rate, out
 
 
+_HEADER_DEF = """================================================================================
+MSG: std_msgs/Header
+builtin_interfaces/Time stamp
+string frame_id
+"""
+
+
+def preview_factor(rate_hz: float, preview_rate_hz: float) -> int:
+    """Full-rate samples per preview sample: round(rate / preview rate), at least 1."""
+    return max(1, int(round(rate_hz / preview_rate_hz)))
+
+
+def preview_layout(channels: list[Channel]) -> tuple[np.dtype, str]:
+    """The CDR layout of a preview message as a numpy structured dtype (one record = one whole
+    message, encapsulation header included) and its ros2msg schema text.
+
+    CDR (XCDR1, as ROS 2 writes it): every primitive aligned to its size, counted from the end of
+    the 4-byte encapsulation header; the header's empty ``frame_id`` is a length of 1 and a NUL.
+    """
+    names = ["encapsulation", "sec", "nanosec", "frame_id_len", "frame_id"]
+    formats: list[Any] = [("u1", 4), "<i4", "<u4", "<u4", "u1"]
+    offsets = [0, 4, 8, 12, 16]
+    pos = 13  # after the header, counted from the end of the encapsulation
+    lines = [f"# One sample of every channel of a twin run file ({FORMAT}): the block mean of the full-rate",
+             "# samples around header.stamp (the block's centre), see recordings/FORMAT.md",
+             "std_msgs/Header header"]
+    seen = {"header": "header"}
+    for c in channels:
+        f = field_name(c.name)
+        if f in seen:
+            raise RecordingError(f"channels {seen[f]} and {c.name} have the same preview field name {f!r}")
+        seen[f] = c.name
+        size = _DTYPES[c.data.dtype.name][1]
+        pos += (-pos) % size
+        names.append(f)
+        formats.append(("<f4" if size == 4 else "<f8"))
+        offsets.append(4 + pos)
+        pos += size
+        lines.append(f"{c.data.dtype.name} {f}  # {c.name} [{c.unit}]")
+    dt = np.dtype({"names": names, "formats": formats, "offsets": offsets, "itemsize": 4 + pos})
+    return dt, "\n".join(lines) + "\n" + _HEADER_DEF + _TIME_DEF
+
+
+class _Preview:
+    """The preview topic of a :class:`RunWriter` (see the module docstring): block means of
+    ``m`` samples, one message per block, streamed chunk by chunk."""
+
+    def __init__(self, w: Writer, run: Run, preview_rate_hz: float):
+        self.w = w
+        self.rate, self.t0 = run.rate_hz, run.t0
+        self.m = preview_factor(run.rate_hz, preview_rate_hz)
+        self.chans = list(run.channels.values())
+        self.dtype, text = preview_layout(self.chans)
+        sid = w.register_schema(PREVIEW_SCHEMA, "ros2msg", text.encode())
+        self.cid = w.register_channel(PREVIEW_TOPIC, "cdr", sid, metadata={
+            "names": ",".join(c.name for c in self.chans), "units": ",".join(c.unit for c in self.chans),
+            "dtypes": ",".join(c.data.dtype.name for c in self.chans), "groups": ",".join(c.group for c in self.chans),
+            "rate_hz": repr(self.rate / self.m), "samples_per_value": str(self.m), "method": "block mean",
+            "stamp": "centre of the block: t0 + (k * samples_per_value + (samples_per_value - 1) / 2) / run rate"})
+        self.pending: list[np.ndarray] | None = None
+        self.k = 0  # preview samples written
+
+    def add(self, chunk: Run) -> None:
+        arrays = [chunk.channels[c.name].data for c in self.chans]
+        if self.pending is not None:
+            arrays = [np.concatenate([p, a]) for p, a in zip(self.pending, arrays)]
+        nb = len(arrays[0]) // self.m
+        full = nb * self.m
+        self.pending = [np.array(a[full:]) for a in arrays] if full < len(arrays[0]) else None
+        if nb == 0:
+            return
+        rec = np.zeros(nb, dtype=self.dtype)
+        rec["encapsulation"] = np.frombuffer(_CDR_LE, dtype="u1")
+        idx = self.k + np.arange(nb)
+        stamps = np.round((self.t0 + (idx * self.m + (self.m - 1) / 2.0) / self.rate) * 1e9).astype(np.int64)
+        rec["sec"], rec["nanosec"] = np.divmod(stamps, 1_000_000_000)
+        rec["frame_id_len"] = 1
+        for c, a in zip(self.chans, arrays):
+            rec[field_name(c.name)] = a[:full].reshape(nb, self.m).mean(axis=1, dtype=np.float64)
+        buf = memoryview(rec.tobytes())
+        size = self.dtype.itemsize
+        add = self.w.add_message
+        for i in range(nb):
+            st = int(stamps[i])
+            add(self.cid, log_time=st, publish_time=st, sequence=self.k + i, data=buf[i * size:(i + 1) * size])
+        self.k += nb
+
+
 class RunWriter:
     """Streams a run, chunk by chunk, into an MCAP file (temporary file + rename): a
     :class:`twin.simulate.Sink`.
@@ -140,10 +244,14 @@ class RunWriter:
     """
 
     def __init__(self, path: str | Path, config: BenchConfig | None, block: int = DEFAULT_BLOCK,
-                 compression: str = "none"):
+                 compression: str = "none", preview_rate_hz: float = 0.0):
         self.path = Path(path)
         if compression not in _COMPRESSION:
             raise TwinError(f"compression: must be one of {', '.join(_COMPRESSION)}, got {compression!r}")
+        if not (np.isfinite(preview_rate_hz) and preview_rate_hz >= 0):
+            raise TwinError(f"preview rate: must be >= 0 Hz (0 = no preview), got {preview_rate_hz!r}")
+        self.preview_rate_hz = float(preview_rate_hz)
+        self._preview: _Preview | None = None
         self.compression = _COMPRESSION[compression]
         if self.path.suffix != ".mcap":
             raise TwinError(f"--out: run files must end in .mcap, got {self.path.name}")
@@ -182,6 +290,8 @@ class RunWriter:
                 metadata={"names": ",".join(names), "units": ",".join(c.unit for c in chans),
                           "dtypes": ",".join(c.data.dtype.name for c in chans)})
             self._groups[group] = (cid, names)
+        if self.preview_rate_hz > 0:
+            self._preview = _Preview(self._w, run, self.preview_rate_hz)
 
     def write(self, chunk: Run) -> None:
         """Append the samples of ``chunk`` (the next consecutive piece of the run)."""
@@ -199,6 +309,8 @@ class RunWriter:
         run = chunk if self._pending is None else Run.concat([self._pending, chunk])
         full = (run.n // self.block) * self.block
         try:
+            if self._preview is not None:
+                self._preview.add(chunk)
             self._emit(run.slice(0, full))
         except OSError as err:
             raise TwinError(f"{self.path}: cannot write ({err.strerror})") from None
@@ -273,10 +385,11 @@ class RunWriter:
 
 
 def write_run(path: str | Path, run: Run, summary: dict[str, Any] | None = None,
-              block: int = DEFAULT_BLOCK, extra_metadata: dict[str, dict[str, str]] | None = None) -> Path:
+              block: int = DEFAULT_BLOCK, extra_metadata: dict[str, dict[str, str]] | None = None,
+              preview_rate_hz: float = 0.0) -> Path:
     """Write a whole run to ``path`` (temporary file + rename); ``extra_metadata`` as in
-    :meth:`RunWriter.close`."""
-    with RunWriter(path, run.config, block=block) as w:
+    :meth:`RunWriter.close`; a preview topic at ``preview_rate_hz`` (0: none)."""
+    with RunWriter(path, run.config, block=block, preview_rate_hz=preview_rate_hz) as w:
         w.write(run)
         return w.close(run.meta, summary, extra_metadata)
 
@@ -320,6 +433,8 @@ def read_run(path: str | Path, groups: Iterable[str] | None = None) -> Run:
                 missing = wanted - set(topics)
                 if missing:
                     raise RecordingError(f"{p}: no groups {sorted(m[len(TOPIC_PREFIX):] for m in missing)}")
+            elif topics:  # the full-rate topics only (not the preview)
+                wanted = {t for t in topics if t.startswith(TOPIC_PREFIX)}
             blocks: dict[str, list[list[np.ndarray]]] = {}
             expected_first: dict[str, int] = {}
             chan_meta: dict[str, dict[str, str]] = {}
@@ -352,6 +467,34 @@ def read_run(path: str | Path, groups: Iterable[str] | None = None) -> Run:
     config = config_from_toml(meta_records["twin.config"]["toml"]) if "twin.config" in meta_records else None
     meta = json.loads(info.get("meta", "{}"))
     return Run(float(info["t0"]), rate, chans, config, meta)
+
+
+def read_preview(path: str | Path) -> tuple[np.ndarray, Run] | None:
+    """The preview topic of a run file: (stamps [ns], the preview as a :class:`Run` at the preview
+    rate whose ``t0`` is the first stamp), or None when the file has none."""
+    p = _check_path(path)
+    try:
+        with open(p, "rb") as fh:
+            reader = make_reader(fh, validate_crcs=True)
+            summary = reader.get_summary()
+            chans = [c for c in (summary.channels.values() if summary else ()) if c.topic == PREVIEW_TOPIC]
+            if not chans:
+                return None
+            md = dict(chans[0].metadata)
+            names, units, dtypes = (md[k].split(",") for k in ("names", "units", "dtypes"))
+            groups = md.get("groups", "").split(",") if md.get("groups") else ["preview"] * len(names)
+            cols = [Channel(n, u, g, np.zeros(0, dtype=d)) for n, u, g, d in zip(names, units, groups, dtypes)]
+            dt, _ = preview_layout(cols)
+            data = [m.data for _s, _c, m in reader.iter_messages(topics=[PREVIEW_TOPIC], log_time_order=True)]
+    except (*_UNREADABLE, OSError) as err:
+        raise RecordingError(f"{p}: corrupt or truncated MCAP file ({type(err).__name__}: {err})") from None
+    if any(len(d) != dt.itemsize for d in data):
+        raise RecordingError(f"{p}: preview message of an unexpected size")
+    rec = np.frombuffer(b"".join(data), dtype=dt)
+    stamps = rec["sec"].astype(np.int64) * 1_000_000_000 + rec["nanosec"]
+    out = {c.name: Channel(c.name, c.unit, c.group, rec[field_name(c.name)].astype(c.data.dtype)) for c in cols}
+    t0 = float(stamps[0]) / 1e9 if stamps.size else 0.0
+    return stamps, Run(t0, float(md["rate_hz"]), out, None, {"preview": md})
 
 
 def read_summary(path: str | Path) -> dict[str, Any] | None:

@@ -127,9 +127,40 @@ def _harmonic_amplitudes(f: np.ndarray, amp: np.ndarray, freqs: np.ndarray) -> l
     return out
 
 
+#: a recorded channel whose standard deviation in the window is below this share of its mean...
+NEAR_CONSTANT_OF_MEAN = 0.01
+#: ...or below this multiple of its sensor's noise is nearly constant (see :func:`near_constant`)
+NEAR_CONSTANT_OF_NOISE = 3.0
+
+
+def sensor_noise_rms(cfg: BenchConfig, sensor: str, rate_hz: float) -> float:
+    """RMS noise of an accelerometer over the recording's band [m/s²]: the datasheet density
+    (twin.instrument.accel) over 0 … rate/2, whatever the configuration's noise switch (the
+    bench's sensors have it)."""
+    from twin.instrument.accel import STANDARD_G, model_of
+
+    return model_of(cfg.instrumentation, sensor).noise_g_rthz * STANDARD_G * math.sqrt(rate_hz / 2.0)
+
+
+def near_constant(x: np.ndarray, noise_rms: float = 0.0) -> str:
+    """Why a recorded channel is nearly constant over the window, or "" if it is not: its spread
+    (standard deviation) is below 1 % of its mean (a sensor axis that feels gravity and almost no
+    motion, e.g. AC5 at 1 g) or below 3 times its sensor's noise. Such a channel's NRMSE,
+    correlation and DTW distance compare noise with noise, not motion."""
+    mean, std = float(np.mean(x)), float(np.std(x))
+    why = []
+    if std < NEAR_CONSTANT_OF_MEAN * abs(mean):
+        why.append(f"{100 * std / abs(mean):.2g} % of the mean {mean:.3g} m/s²")
+    if noise_rms > 0 and std < NEAR_CONSTANT_OF_NOISE * noise_rms:
+        why.append(f"{std / noise_rms:.2f} times the sensor noise {noise_rms:.2g} m/s²")
+    return f"standard deviation {std:.2g} m/s² = " + ", ".join(why) if why else ""
+
+
 def compare_accelerations(rec: dict[str, np.ndarray], sim: dict[str, np.ndarray], rate: float,
-                          crank_rate_hz: float, opts: ReplayOptions) -> dict[str, Any]:
-    """Per-sensor comparison of aligned recorded and simulated accelerations [m/s²]."""
+                          crank_rate_hz: float, opts: ReplayOptions,
+                          noise_rms: dict[str, float] | None = None) -> dict[str, Any]:
+    """Per-sensor comparison of aligned recorded and simulated accelerations [m/s²];
+    ``noise_rms``: each sensor's noise [m/s²], for the near-constant check (:func:`near_constant`)."""
     out: dict[str, Any] = {}
     harm = crank_rate_hz * np.arange(1, opts.harmonics + 1)
     n_dtw = min(len(next(iter(rec.values()))), max(16, int(round(opts.dtw_max_s * rate))))
@@ -148,7 +179,11 @@ def compare_accelerations(rec: dict[str, np.ndarray], sim: dict[str, np.ndarray]
                 er, es = band_energy_db(x, rate, lo, hi), band_energy_db(y, rate, lo, hi)
                 bands.append({"f_lo_hz": lo, "f_hi_hz": hi, "recorded_db": er, "simulated_db": es,
                               "difference_db": es - er})
+        flat = near_constant(x, (noise_rms or {}).get(name, 0.0))
         out[name] = {
+            "recorded_mean_mps2": float(np.mean(x)), "recorded_std_mps2": sx,
+            "noise_rms_mps2": (noise_rms or {}).get(name, float("nan")),
+            "near_constant": bool(flat), "near_constant_note": flat,
             "rms_error_mps2": float(np.sqrt(np.mean(e * e))),
             "max_abs_error_mps2": float(np.max(np.abs(e))),
             "nrmse_pct": 100.0 * float(np.sqrt(np.mean(e * e))) / rng if rng > 0 else float("nan"),
@@ -260,7 +295,8 @@ def _replay_into(out: Path, recording: str | Path, rec: Run, info: Any, repairs:
     sim_al = {a: sim_meas[f"sim_meas_{a}"][j0:j1] for a in sensors}
     turns = (phi[i1 - 1] - phi[i0]) / (2 * math.pi)
     crank_rate_hz = abs(turns) / ((i1 - 1 - i0) / rate)
-    comparison = compare_accelerations(rec_al, sim_al, rate, crank_rate_hz, opts)
+    comparison = compare_accelerations(rec_al, sim_al, rate, crank_rate_hz, opts,
+                                       {a: sensor_noise_rms(rec_cfg, a, rate) for a in sensors})
 
     sim_phi = sim["encoder_angle"].astype(np.float64)
     track = (sim_phi - phi)[i0:i1] / count
@@ -313,8 +349,9 @@ def _replay_into(out: Path, recording: str | Path, rec: Run, info: Any, repairs:
     report["files"]["mcap"] = mcap_path.name
     report["files"]["trace"] = trace.name
     if opts.plots:
-        report["files"]["plots"] = _plots(out, rec_al, sim_al, rate, j0, comparison, crank_rate_hz, opts,
-                                          track, pid, i0, sim, phi, cfg)
+        report["plots"] = _plots(out, rec_al, sim_al, rate, j0, comparison, crank_rate_hz, opts,
+                                 track, pid, i0, sim, phi, cfg, rec.n / rate)
+        report["files"]["plots"] = list(report["plots"])
     report["wall_s"] = {"simulation": sim_wall, "total": time.perf_counter() - wall0}
     atomic_write_json(out / "report.json", json.loads(json.dumps(report, default=json_default)))
     atomic_write_text(out / "report.md", render_markdown(report))
@@ -369,11 +406,18 @@ def render_markdown(r: dict[str, Any]) -> str:
     lines += ["", "## Accelerations (calibrated, m/s²)", "",
               "| sensor | RMS rec | RMS sim | RMS error | NRMSE % | peak rec | peak sim | corr | DTW % | DTW shift ms |",
               "|---|---|---|---|---|---|---|---|---|---|"]
+    flat = {a: m["near_constant_note"] for a, m in r["sensors"].items() if m.get("near_constant")}
     for a, m in r["sensors"].items():
+        nc = "near-constant*"
         lines.append(f"| {a} | {_fmt(m['recorded_rms_mps2'])} | {_fmt(m['simulated_rms_mps2'])} | "
-                     f"{_fmt(m['rms_error_mps2'])} | {_fmt(m['nrmse_pct'])} | {_fmt(m['recorded_peak_mps2'])} | "
-                     f"{_fmt(m['simulated_peak_mps2'])} | {_fmt(m['correlation'], '.4f')} | "
-                     f"{_fmt(m['dtw_distance_pct'])} | {_fmt(m['dtw_mean_shift_s'] * 1e3)} |")
+                     f"{_fmt(m['rms_error_mps2'])} | {nc if a in flat else _fmt(m['nrmse_pct'])} | "
+                     f"{_fmt(m['recorded_peak_mps2'])} | {_fmt(m['simulated_peak_mps2'])} | "
+                     f"{nc if a in flat else _fmt(m['correlation'], '.4f')} | "
+                     f"{nc if a in flat else _fmt(m['dtw_distance_pct'])} | "
+                     f"{nc if a in flat else _fmt(m['dtw_mean_shift_s'] * 1e3)} |")
+    for a, why in flat.items():
+        lines += ["", f"\\* {a} is nearly constant over the window ({why}): its NRMSE, correlation and DTW would "
+                  "compare sensor noise, not motion, and are left out (report.json keeps them); its RMS and peaks stand."]
     if any(m["bands"] for m in r["sensors"].values()):
         lines += ["", "## Band energies (Hann PSD, dB re 1 (m/s²)²)", "",
                   "| sensor | band Hz | recorded dB | simulated dB | sim − rec dB |", "|---|---|---|---|---|"]
@@ -395,38 +439,50 @@ def render_markdown(r: dict[str, Any]) -> str:
               "optimal warping path / (max − min of rec) (twin/signals.py); errors after removing the time lag.", ""]
     files = r.get("files", {})
     if files.get("plots"):
-        lines += ["## Plots", ""] + [f"![{p}]({p})" for p in files["plots"]] + [""]
+        shows = r.get("plots", {})
+        lines += ["## Plots", ""]
+        for p in files["plots"]:
+            lines += ([f"{p}: {shows[p]}", ""] if p in shows else []) + [f"![{p}]({p})", ""]
     return "\n".join(lines)
 
 
 def _plots(out: Path, rec: dict[str, np.ndarray], sim: dict[str, np.ndarray], rate: float, j0: int,
            comparison: dict[str, Any], crank_rate_hz: float, opts: ReplayOptions, track: np.ndarray,
-           pid: np.ndarray, i0: int, simrun: Run, phi: np.ndarray, cfg: BenchConfig) -> list[str]:
+           pid: np.ndarray, i0: int, simrun: Run, phi: np.ndarray, cfg: BenchConfig,
+           total_s: float) -> dict[str, str]:
+    """The PNG plots; returns what part of the recording each one shows, by file name."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     names = list(rec)
-    files = []
+    files: dict[str, str] = {}
     # time histories: about 1.2 crank turns from the window start
     n = len(next(iter(rec.values())))
     m = n if crank_rate_hz <= 0 else min(n, int(round(1.2 / crank_rate_hz * rate)))
     t = (j0 + np.arange(m)) / rate
+    whole = f"0–{total_s:.2f} s"
+    span = f"{t[0]:.2f}–{t[-1] + 1 / rate:.2f} s of the {whole} recording"
+    aligned = f"{j0 / rate:.2f}–{(j0 + n) / rate:.2f} s"
     fig, axes = plt.subplots(len(names), 1, figsize=(11, 2.0 * len(names)), sharex=True, squeeze=False)
     for ax, a in zip(axes[:, 0], names):
         ax.plot(t, rec[a][:m], lw=0.7, label="recorded", color="k")
         ax.plot(t, sim[a][:m], lw=0.7, label=f"simulated ({cfg.name})", color="tab:red", alpha=0.8)
         ax.set_ylabel(f"{a} [m/s²]")
         ax.grid(alpha=0.3)
+        if comparison.get(a, {}).get("near_constant"):
+            ax.text(0.01, 0.95, "nearly constant: not compared (report.md)", transform=ax.transAxes,
+                    fontsize=8, va="top", bbox={"facecolor": "white", "alpha": 0.8, "lw": 0})
     axes[0, 0].legend(loc="upper right", fontsize=8)
     axes[-1, 0].set_xlabel("time [s]")
     fig.suptitle(f"Calibrated accelerations, recorded vs simulated (clearance B {cfg.joints.clearance_b_mm:g} mm, "
-                 f"C {cfg.joints.clearance_c_mm:g} mm)")
+                 f"C {cfg.joints.clearance_c_mm:g} mm): {span}")
     fig.tight_layout()
     fig.savefig(out / "accelerations.png", dpi=110)
     plt.close(fig)
-    files.append("accelerations.png")
+    files["accelerations.png"] = (f"{span}" + (f" (about 1.2 crank turns from the start of the compared part "
+                                               f"{aligned})" if m < n else " (the whole compared part)"))
 
     # spectra: low frequency with harmonics, and up to 5 kHz with the bands
     fig, axes = plt.subplots(len(names), 2, figsize=(13, 2.0 * len(names)), squeeze=False)
@@ -448,15 +504,15 @@ def _plots(out: Path, rec: dict[str, np.ndarray], sim: dict[str, np.ndarray], ra
                     ax.axvline(h, color="tab:blue", ls="--", lw=0.6)
             ax.set_ylabel(f"{a} [m/s²]")
             ax.grid(alpha=0.3)
-    axes[0, 0].set_title("Hann FFT, crank rate and harmonics (dashed)")
-    axes[0, 1].set_title("Hann FFT to 5 kHz, bands shaded")
+    axes[0, 0].set_title(f"Hann FFT of {aligned}, crank rate and harmonics (dashed)")
+    axes[0, 1].set_title(f"Hann FFT of {aligned} to 5 kHz, bands shaded")
     axes[0, 0].legend(fontsize=8)
     axes[-1, 0].set_xlabel("frequency [Hz]")
     axes[-1, 1].set_xlabel("frequency [Hz]")
     fig.tight_layout()
     fig.savefig(out / "spectra.png", dpi=110)
     plt.close(fig)
-    files.append("spectra.png")
+    files["spectra.png"] = f"spectra of {aligned} of the {whole} recording (the compared part of the analysis window)"
 
     # crank tracking
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(11, 5), sharex=True)
@@ -464,6 +520,7 @@ def _plots(out: Path, rec: dict[str, np.ndarray], sim: dict[str, np.ndarray], ra
     a1.plot(ts, simrun["omega_ref"], lw=0.7, color="k", label="reference from the recorded counts (filtered)")
     a1.plot(ts, simrun["crank_speed"], lw=0.7, color="tab:red", alpha=0.8, ls="--", label="simulated")
     a1.set_ylabel("crank rate [rad/s]")
+    a1.set_title(f"crank rate, the whole run ({whole})", fontsize=9)
     a1.legend(fontsize=8)
     a1.grid(alpha=0.3)
     tw = (i0 + np.arange(len(track))) / rate
@@ -472,11 +529,13 @@ def _plots(out: Path, rec: dict[str, np.ndarray], sim: dict[str, np.ndarray], ra
     a2.axhline(1, color="gray", ls=":")
     a2.axhline(-1, color="gray", ls=":")
     a2.set_ylabel("angle error [counts]")
+    a2.set_title(f"angle errors over the analysis window ({tw[0]:.2f}–{tw[-1] + 1 / rate:.2f} s)", fontsize=9)
     a2.set_xlabel("time [s]")
     a2.legend(fontsize=8)
     a2.grid(alpha=0.3)
     fig.tight_layout()
     fig.savefig(out / "tracking.png", dpi=110)
     plt.close(fig)
-    files.append("tracking.png")
+    files["tracking.png"] = (f"crank rate over the whole run ({whole}); angle errors over the analysis window "
+                             f"({tw[0]:.2f}–{tw[-1] + 1 / rate:.2f} s)")
     return files

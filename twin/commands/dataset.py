@@ -42,8 +42,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     pl.add_argument("--no-estimate", action="store_true", help="skip the short timing runs of the estimate")
     pl.set_defaults(func=_plan)
 
-    i = ds.add_parser("info", help="runs by status, class balance per split, channels")
+    i = ds.add_parser("info", help="runs by status, class balance per split, channels, the runs with their labels",
+                      description="Describe a dataset folder: runs by status, class balance per split, size, "
+                                  "channels, and its runs with their ids and labels.")
     i.add_argument("dir", metavar="DIR")
+    i.add_argument("--show", type=int, default=20, metavar="K", help="runs listed (default 20; 0 = all)")
+    i.add_argument("--json", nargs="?", const="-", metavar="OUT.json",
+                   help="the same as JSON, every run included: alone, printed instead of the text; with a file "
+                        "name, written there")
     i.set_defaults(func=_info)
 
     v = ds.add_parser("verify", help="check every file against the manifest (checksums, lengths, labels)")
@@ -73,6 +79,7 @@ def _generate(args: argparse.Namespace) -> int:
 
 def _plan(args: argparse.Namespace) -> int:
     from twin.dataset.design import plan
+    from twin.dataset.reader import SHOWN_LABELS, format_table
     from twin.dataset.spec import load_spec
 
     if args.show < 0:
@@ -92,11 +99,12 @@ def _plan(args: argparse.Namespace) -> int:
         row = {f: counts.get((s, f), 0) for f in ("none", "B", "C", "BC")}
         print(f"  {s:5s}: " + ", ".join(f"{f} {n}" for f, n in row.items()))
     show = runs if args.show == 0 else runs[:args.show]
-    print("  index  run_id            split  fault  B mm   C mm   " + "  ".join(names))
-    for r in show:
-        vals = "  ".join(_fmt(r.factors.get(k)) for k in names)
-        print(f"  {r.index:5d}  {r.run_id}  {r.split:5s}  {r.labels['fault']:5s}  {r.labels['clearance_b_mm']:5.3g}"
-              f"  {r.labels['clearance_c_mm']:5.3g}  {vals}")
+    # factors that are a label (fault, the clearances) are the label columns already
+    names = [k for k in names if k not in SHOWN_LABELS]
+    for line in format_table(["index", "run_id", "split", "fault", "B mm", "C mm", *names],
+                             [[r.index, r.run_id, r.split, r.labels["fault"], r.labels["clearance_b_mm"],
+                               r.labels["clearance_c_mm"], *(_cell(r.factors.get(k)) for k in names)] for r in show]):
+        print("  " + line)
     if len(show) < len(runs):
         print(f"  ... {len(runs) - len(show)} more (--show 0 lists all)")
     if not args.no_estimate:
@@ -109,14 +117,27 @@ def _plan(args: argparse.Namespace) -> int:
     return 0
 
 
-def _fmt(v) -> str:
-    return f"{v:.4g}" if isinstance(v, float) else str(v)
+def _cell(v):
+    """A factor value as a table cell: numbers as they are (formatted by the table), others as text."""
+    return v if isinstance(v, (int, float)) and not isinstance(v, bool) else str(v)
 
 
 def _info(args: argparse.Namespace) -> int:
-    from twin.dataset.reader import describe
+    import json
 
-    print(describe(args.dir))
+    from twin.dataset.reader import describe, summary
+    from twin.util import atomic_write_json, check_output_file, json_default
+
+    if args.show < 0:
+        raise TwinError(f"--show: must be >= 0 (0 = all), got {args.show}")
+    js = check_output_file(args.json, "--json", ".json") if args.json not in (None, "-") else None
+    if args.json == "-":
+        print(json.dumps(summary(args.dir), indent=2, default=json_default))
+        return 0
+    print(describe(args.dir, show=args.show))
+    if js is not None:
+        atomic_write_json(js, summary(args.dir))
+        print(f"  wrote {js}")
     return 0
 
 

@@ -154,16 +154,19 @@ def _clearance(args: argparse.Namespace) -> int:
     model = ClearanceModel.load(path)
     a = identify_recording(model, rec)
     p = a["probabilities"]
-    print(f"{rec}: fault {a['fault']} (p = {p[a['fault']]:.2f}; " + ", ".join(f"{k} {v:.2f}" for k, v in p.items()) + ")")
+    print(f"{rec}: fault {a['fault']}, probability {p[a['fault']]:.2f} (class probabilities: "
+          + ", ".join(f"{k} {v:.2f}" for k, v in p.items()) + ")")
     for j in ("b", "c"):
         lo, hi = a[f"clearance_{j}_interval_mm"]
         v = a[f"clearance_{j}_mm"]
         print(f"  clearance {j.upper()}: " + (f"{v:.3g} mm (90 % interval {lo:.3g}-{hi:.3g} mm)" if v > 0
                                                 else "none (ball bearing)"))
     ev = a["evidence"]
-    print(f"  evidence: {ev['windows']} windows, {ev['revolutions']} revolutions over {ev['steady_s']:.2f} s at "
-          f"{ev['crank_hz']:.3f} Hz (model trained on {ev['model']['crank_hz_range'][0]:.2f}-"
-          f"{ev['model']['crank_hz_range'][1]:.2f} Hz, dataset {ev['model']['dataset']}); {a['seconds']:.2f} s")
+    lo_hz, hi_hz = ev["model"]["crank_hz_range"]
+    print(f"  evidence: {ev['windows']} window{'s' if ev['windows'] != 1 else ''}, {ev['revolutions']} crank revolutions, {ev['steady_s']:.2f} s of "
+          f"steady running at a crank rate of {ev['crank_hz']:.3f} Hz")
+    print(f"  model: trained on dataset {ev['model']['dataset']} at crank rates {lo_hz:.2f}-{hi_hz:.2f} Hz; "
+          f"identification time {a['seconds']:.2f} s")
     for w in a["warnings"]:
         print(f"  WARNING: {w}", file=sys.stderr)
     if js is not None:

@@ -96,5 +96,8 @@ def _print(r: dict, out: Path) -> None:
                                                       for lo, hi in r["bands_hz"]))
     for a, m in r["sensors"].items():
         bands = "  ".join(f"{b['recorded_db']:8.1f}/{b['simulated_db']:<8.1f}" for b in m["bands"])
+        if m.get("near_constant"):  # NRMSE, correlation and DTW of noise against noise: not shown
+            print(f"  {a:6s} nearly constant ({m['near_constant_note']}): not compared")
+            continue
         print(f"  {a:6s} {m['nrmse_pct']:7.2f} {m['correlation']:7.4f} {m['dtw_distance_pct']:7.3f}  {bands}")
     print(f"  wrote {out}/: {', '.join([r['files']['mcap'], *r['files'].get('report', []), *r['files'].get('plots', [])])}")

@@ -17,6 +17,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_config_args(p)
     p.add_argument("--out", metavar="RUN.mcap", help="run file to write (default: <name>.mcap)")
     p.add_argument("--no-out", action="store_true", help="do not write a run file")
+    p.add_argument("--preview-rate", type=float, metavar="HZ",
+                   help="rate of the run file's /preview topic [Hz]: one message per sample, every channel a "
+                        "field, for Foxglove's plot panel; block means of the full-rate samples (default 1000, "
+                        "or the output rate if lower; 0 = no preview)")
     p.add_argument("--summary-json", metavar="FILE", help="write the run summary as JSON")
     p.add_argument("--rerun", metavar="OUT.rrd", help="also stream the run into a rerun recording (as twin view)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -38,13 +42,15 @@ def run(args: argparse.Namespace) -> int:
     paths = [p.resolve() for p in (out, js, rrd) if p is not None]
     if len(set(paths)) < len(paths):
         raise TwinError("--out, --summary-json and --rerun must name different files")
+    preview = preview_rate(args.preview_rate, cfg.output_rate_hz)
     if out is not None:
-        check_free_space(cfg, out)
+        check_free_space(cfg, out, preview)
     sinks = []
     if out is not None:
         from twin.mcapfile import RunWriter  # the MCAP library only for a run that writes one
 
-        sinks.append(ThreadedSink(RunWriter(out, cfg)))  # encoding and file writes overlap the stepping
+        # encoding and file writes overlap the stepping
+        sinks.append(ThreadedSink(RunWriter(out, cfg, preview_rate_hz=preview)))
     if rrd is not None:
         sinks.append(_rerun_writer(rrd, cfg))
     if js is not None:
@@ -56,16 +62,36 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def check_free_space(cfg, out: Path) -> None:
+def preview_rate(given: float | None, output_rate_hz: float) -> float:
+    """The preview rate of ``--preview-rate`` [Hz]: the default (1 kHz, at most the output rate),
+    0 (none), or a given rate between 0 and the output rate."""
+    import math
+
+    from twin.mcapfile import DEFAULT_PREVIEW_HZ
+
+    if given is None:
+        return min(DEFAULT_PREVIEW_HZ, output_rate_hz)
+    if not math.isfinite(given) or given < 0 or given > output_rate_hz:
+        raise TwinError(f"--preview-rate: must be 0 (no preview) or a rate up to the output rate "
+                        f"{output_rate_hz:g} Hz, got {given:g}")
+    return given
+
+
+def check_free_space(cfg, out: Path, preview_hz: float = 0.0) -> None:
     """Refuse a run whose file cannot fit on the disk. Estimate: the channels' raw size plus 1 % (the
     chunks are uncompressed, twin.mcapfile: 2 s of test 12 are 28.05 MB for 28.00 MB of samples,
-    the rest the messages' framing, indexes and metadata)."""
+    the rest the messages' framing, indexes and metadata), plus the preview: per message its
+    samples and 72 bytes of header, framing and index (209 bytes in all for test 12's 23 channels,
+    measured by analysis/bench_preview.py)."""
     import shutil
 
     from twin.channels import channel_specs
 
-    raw = cfg.n_samples * sum(4 if s.dtype == "float32" else 8 for s in channel_specs(cfg))
+    specs = channel_specs(cfg)
+    raw = cfg.n_samples * sum(4 if s.dtype == "float32" else 8 for s in specs)
     need = int(raw * 1.01)
+    if preview_hz > 0:
+        need += int(cfg.duration_s * preview_hz * (72 + sum(4 if s.dtype == "float32" else 8 for s in specs)))
     free = shutil.disk_usage(out.parent if str(out.parent) else ".").free
     if need > free:
         raise TwinError(f"--out: the run file needs about {need / 1e9:.1f} GB and {out.parent or '.'} has "

@@ -5,7 +5,7 @@
 * :mod:`twin.dataset.design`: design points, seeds, run ids, configurations, splits;
 * :mod:`twin.dataset.worker`: one run in a worker (simulate, sensor chain, Parquet);
 * :mod:`twin.dataset.generate`: the driver (resume, process pool or Dask, manifest);
-* :mod:`twin.dataset.reader`: ``open(DIR)``, windows for training, ``verify``, ``describe``.
+* :mod:`twin.dataset.reader`: ``open(DIR)``, windows for training, ``verify``, ``describe``, ``summary``.
 
 The layout is documented in ``twin/dataset/FORMAT.md``.
 
@@ -18,7 +18,7 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-_LAZY = {"Dataset": "reader", "describe": "reader", "open": "reader", "verify": "reader",
+_LAZY = {"Dataset": "reader", "describe": "reader", "open": "reader", "summary": "reader", "verify": "reader",
          "DatasetSpec": "spec", "SpecError": "spec", "load_spec": "spec"}
 __all__ = sorted(_LAZY)
 

@@ -31,7 +31,7 @@ import json
 import math
 import sys
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterator
 
@@ -42,7 +42,10 @@ from twin.dataset.worker import column_specs
 from twin.errors import TwinError
 from twin.util import atomic_write_json, atomic_write_bytes, check_output_dir, remove_stale_temps
 
-FORMAT = "twin-dataset/1"
+FORMAT = "twin-dataset/2"
+#: formats this version reads: twin-dataset/1 (data files hold the channels only, no ``run_id``,
+#: ``t`` and label columns) is read as it is, never added to
+READABLE = ("twin-dataset/1", FORMAT)
 
 
 class DatasetError(TwinError):
@@ -59,6 +62,7 @@ class Prepared:
     columns: list[Any]
     done: dict[str, dict[str, Any]]
     identity: dict[str, Any]
+    label_types: dict[str, str] = field(default_factory=dict)
 
     @property
     def pending(self) -> list[RunPlan]:
@@ -102,7 +106,10 @@ def prepare(spec: DatasetSpec, out_dir: str | Path) -> Prepared:
         except (OSError, ValueError) as err:
             raise DatasetError(f"{info_path}: unreadable ({err})") from None
         if info.get("format") != FORMAT:
-            raise DatasetError(f"{info_path}: format {info.get('format')!r}, expected {FORMAT}")
+            older = info.get("format") in READABLE
+            raise DatasetError(f"--out: {out} holds a dataset of format {info.get('format')!r}"
+                               + (f" (an older twin's; this one reads it but writes {FORMAT} only): generate into a "
+                                  "new folder" if older else f", expected {FORMAT}: use another folder"))
         if info.get("identity") != json.loads(json.dumps(ident)):
             diff = sorted(k for k in set(ident) | set(info.get("identity", {}))
                           if info.get("identity", {}).get(k) != json.loads(json.dumps(ident)).get(k))
@@ -120,7 +127,7 @@ def prepare(spec: DatasetSpec, out_dir: str | Path) -> Prepared:
             # newer twin); adding the new runs beside the old ones would leave files no manifest names
             raise DatasetError(f"--out: {out} holds {len(stale)} runs that this spec no longer plans (their "
                                "configurations differ, e.g. made by another twin version); use another folder")
-    return Prepared(spec, out, runs, columns, done, ident)
+    return Prepared(spec, out, runs, columns, done, ident, label_types(runs))
 
 
 def _check_same_code(info_path: Path) -> None:
@@ -162,10 +169,53 @@ def _read_done(out: Path, ids: set[str]) -> dict[str, dict[str, Any]]:
     return done
 
 
+def run_labels(r: RunPlan) -> dict[str, Any]:
+    """The labels of a run, as in its row of ``runs.parquet`` and as constant columns of its data
+    file: split, design point and repeat, every varied factor (``factor_<name>``), fault and
+    clearances, orientation, drive program and constant motor speed (NaN otherwise)."""
+    out: dict[str, Any] = {"point": r.point, "repeat": r.repeat, "split": r.split}
+    for k, v in r.factors.items():
+        out[f"factor_{k}"] = v
+    out.update(r.labels)
+    out.update(orientation=r.config.mechanism.orientation, program=r.config.drive.program,
+               motor_rpm=r.config.drive.motor_rpm if r.config.drive.program == "constant" else math.nan)
+    return out
+
+
+def label_types(runs: list[RunPlan]) -> dict[str, str]:
+    """Arrow type of each label column, the same in every data file of the dataset (a factor that
+    is a number in every run is float64, a string otherwise, as in ``runs.parquet``)."""
+    values: dict[str, list[Any]] = {}
+    for r in runs:
+        for k, v in run_labels(r).items():
+            values.setdefault(k, []).append(v)
+    out = {}
+    for k, vals in values.items():
+        kinds = {type(v) for v in vals if v is not None}
+        if k in ("point", "repeat"):
+            out[k] = "int64"
+        elif kinds and kinds <= {int, float}:
+            out[k] = "float64"
+        else:
+            out[k] = "string"
+    return out
+
+
+def label_value(v: Any, dtype: str) -> Any:
+    """A label value as stored in a column of type ``dtype`` (None: NaN for numbers, null for strings)."""
+    if dtype == "float64":
+        return math.nan if v is None else float(v)
+    if dtype == "int64":
+        return int(v)
+    return None if v is None else str(v)
+
+
 def task_of(p: Prepared, r: RunPlan) -> dict[str, Any]:
+    labels = run_labels(r)
     return {"run_id": r.run_id, "index": r.index, "config_toml": r.config.to_toml(),
             "data_dir": str(p.out / "data"), "columns": [tuple(vars(c).values()) for c in p.columns],
-            "instrumented": list(p.spec.outputs.instrumented)}
+            "instrumented": list(p.spec.outputs.instrumented),
+            "labels": [(k, t, label_value(labels.get(k), t)) for k, t in p.label_types.items()]}
 
 
 # ---------------------------------------------------------------------- executors
@@ -404,13 +454,9 @@ class _Progress:
 def _row(p: Prepared, r: RunPlan) -> dict[str, Any]:
     res = p.done.get(r.run_id, {})
     row: dict[str, Any] = {"run_id": r.run_id, "index": r.index, "point": r.point, "repeat": r.repeat,
-                           "seed": r.seed, "split": r.split}
-    for k, v in r.factors.items():
-        row[f"factor_{k}"] = v
-    row.update(r.labels)
-    row.update(orientation=r.config.mechanism.orientation, program=r.config.drive.program,
-               motor_rpm=r.config.drive.motor_rpm if r.config.drive.program == "constant" else math.nan,
-               engine=r.config.simulation.engine, duration_s=r.config.duration_s,
+                           "seed": r.seed}
+    row.update(run_labels(r))  # split, factors, fault, clearances, orientation, program, motor_rpm
+    row.update(engine=r.config.simulation.engine, duration_s=r.config.duration_s,
                status=res.get("status", "pending"), reason=res.get("reason", ""),
                simulated_s=res.get("simulated_s") or 0.0, wall_s=res.get("wall_s") or 0.0,
                rows=int(res.get("rows") or 0), bytes=int(res.get("bytes") or 0), sha256=res.get("sha256", ""),
@@ -492,6 +538,8 @@ def _write_info(p: Prepared, complete: bool) -> dict[str, Any]:
                      for c in p.columns],
         "splits": {s: splits[s] for s in SPLITS if s in splits},
         "labels": ["fault", "clearance_b_mm", "clearance_c_mm"],
+        "key_columns": ["run_id", "t"],
+        "label_columns": list(p.label_types),
         "encoder_counts_per_rev": p.runs[0].config.instrumentation.encoder_counts_per_rev if p.runs else None,
         "versions": {"twin": __version__, "mujoco": mujoco.__version__, "pyarrow": pyarrow.__version__,
                      "python": sys.version.split()[0]},

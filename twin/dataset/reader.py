@@ -23,7 +23,7 @@ from typing import Any, Iterable, Iterator
 
 import numpy as np
 
-from twin.dataset.generate import FORMAT, DatasetError
+from twin.dataset.generate import READABLE, DatasetError
 from twin.dataset.storage import read_columns, read_meta
 from twin.util import file_sha256
 
@@ -42,8 +42,9 @@ class Dataset:
             self.info = json.loads(info_path.read_text())
         except (OSError, ValueError) as err:
             raise DatasetError(f"{info_path}: unreadable ({err})") from None
-        if self.info.get("format") != FORMAT:
-            raise DatasetError(f"{info_path}: format {self.info.get('format')!r}, expected {FORMAT}")
+        if self.info.get("format") not in READABLE:
+            raise DatasetError(f"{info_path}: format {self.info.get('format')!r}, this twin reads "
+                               f"{', '.join(READABLE)} (a newer twin's dataset? update twin)")
         runs = self.path / "runs.parquet"
         if not runs.is_file():
             raise DatasetError(f"{self.path}: no runs.parquet (generation never finished a call; run it again)")
@@ -58,6 +59,9 @@ class Dataset:
             raise DatasetError(f"{stats}: unreadable ({type(err).__name__}: {err}); run generate again to rewrite it") from None
         self.channels = {c["name"]: c for c in self.info["channels"]}
         self.rate_hz = float(self.info["channels"][0]["rate_hz"]) if self.info["channels"] else 0.0
+        #: key and label columns of the data files before the channels (none in twin-dataset/1)
+        self.key_columns: list[str] = list(self.info.get("key_columns", []))
+        self.label_columns: list[str] = list(self.info.get("label_columns", []))
 
     def rows(self, split: str | None = None, status: str = "ok") -> list[dict[str, Any]]:
         """Manifest rows (dicts), optionally of one split, by default the runs that succeeded."""
@@ -66,11 +70,12 @@ class Dataset:
 
     def read(self, run_id: str, channels: Iterable[str] | None = None, start: int = 0,
              stop: int | None = None) -> dict[str, np.ndarray]:
-        """Signals of one run (rows [start, stop))."""
+        """Signals of one run (rows [start, stop)): ``channels`` (default: every channel; key and
+        label columns may be named too)."""
         f = self.path / "data" / f"{run_id}.parquet"
         if not f.is_file():
             raise DatasetError(f"{self.path}: no data for run {run_id!r}")
-        return read_columns(f, channels, start, stop)
+        return read_columns(f, list(self.channels) if channels is None else channels, start, stop)
 
     def _norm(self, names: list[str]) -> tuple[np.ndarray, np.ndarray]:
         missing = [n for n in names if n not in self.stats]
@@ -164,7 +169,7 @@ def verify(path: str | Path, progress: bool = False) -> list[str]:
     and its labels agree with the configuration. Returns the problems (empty: all good)."""
     ds = Dataset(path)
     problems: list[str] = []
-    expected_cols = [c["name"] for c in ds.info["channels"]]
+    expected_cols = ds.key_columns + ds.label_columns + [c["name"] for c in ds.info["channels"]]
     rows = ds.runs.to_pylist()
     it = rows
     if progress:
@@ -198,6 +203,8 @@ def verify(path: str | Path, progress: bool = False) -> list[str]:
             problems.append(f"{rid}: columns differ from info.json")
         if meta.get("run_id") != rid:
             problems.append(f"{rid}: file metadata names run {meta.get('run_id')!r}")
+        if ds.key_columns and pf.schema_arrow.names == expected_cols and pf.metadata.num_rows:
+            problems += _check_labels(pf, r, ds, meta)
         fault = ("B" if r["clearance_b_mm"] > 0 else "") + ("C" if r["clearance_c_mm"] > 0 else "") or "none"
         if fault != r["fault"]:
             problems.append(f"{rid}: label fault {r['fault']!r} disagrees with clearances "
@@ -209,27 +216,115 @@ def verify(path: str | Path, progress: bool = False) -> list[str]:
     return problems
 
 
-def describe(path: str | Path) -> str:
-    """``twin dataset info``: runs by status, class balance per split, size, channels."""
+def _check_labels(pf, r: dict[str, Any], ds: Dataset, meta: dict[str, Any]) -> list[str]:
+    """The key and label columns of a run file (twin-dataset/2) against its manifest row: every
+    row holds the run's id and labels, ``t`` is ``t0 + k / rate_hz``."""
+    import pyarrow.compute as pc
+
+    rid, out = r["run_id"], []
+    t = pf.read(columns=["t"])["t"].to_numpy()
+    t0, rate = float(meta.get("t0", 0.0)), float(meta["rate_hz"])
+    if not np.array_equal(t, t0 + np.arange(t.size, dtype=np.float64) / rate):
+        out.append(f"{rid}: column t is not t0 + k / rate_hz ({t0:g} s, {rate:g} Hz)")
+    tab = pf.read(columns=["run_id"] + ds.label_columns)
+    for name in ["run_id"] + ds.label_columns:
+        col = tab[name]
+        uniq = pc.unique(col).to_pylist()
+        want = r.get(name)
+        same = len(uniq) == 1 and (uniq[0] == want or (isinstance(want, float) and isinstance(uniq[0], float)
+                                                      and math.isnan(want) and math.isnan(uniq[0])))
+        if not same:
+            out.append(f"{rid}: column {name} holds {uniq[:3]!r}, manifest {want!r}")
+    return out
+
+
+#: label columns the run tables show (``info``, ``plan``); factors that are these are not repeated
+SHOWN_LABELS = ("fault", "clearance_b_mm", "clearance_c_mm")
+
+
+def run_label_names(rows: list[dict[str, Any]]) -> list[str]:
+    """The label columns a run table shows: split, fault, the clearances, and every varied factor
+    that is not one of them (``factor_fault`` is the fault column already)."""
+    factors = [k for k in (rows[0] if rows else {}) if k.startswith("factor_") and k[7:] not in SHOWN_LABELS]
+    return ["split", *SHOWN_LABELS, *factors]
+
+
+def format_table(header: list[str], rows: list[list[Any]]) -> list[str]:
+    """Lines of a plain text table: columns as wide as their widest cell, numbers right-aligned
+    (4 significant digits), text left-aligned."""
+    def cell(v: Any) -> str:
+        if v is None or (isinstance(v, float) and math.isnan(v)):
+            return "–"
+        if isinstance(v, float):
+            return f"{v:.4g}"
+        return str(v)
+
+    cells = [[cell(v) for v in r] for r in rows]
+    numeric = [all(v is None or (isinstance(v, (int, float)) and not isinstance(v, bool)) for v in (r[k] for r in rows))
+               for k in range(len(header))]
+    widths = [max([len(h)] + [len(r[k]) for r in cells]) for k, h in enumerate(header)]
+
+    def line(vals: list[str]) -> str:
+        return "  ".join(v.rjust(w) if num else v.ljust(w) for v, w, num in zip(vals, widths, numeric)).rstrip()
+
+    return [line(header)] + [line(r) for r in cells]
+
+
+def summary(path: str | Path) -> dict[str, Any]:
+    """``twin dataset info --json``: the dataset's name, format, completeness, run counts, size,
+    channels, class balance per split, and every run with its id, status and labels."""
     ds = Dataset(path)
     info = ds.info
     rows = ds.runs.to_pylist()
-    lines = [f"{ds.path}: dataset {info['name']!r} ({info['format']}), "
-             f"{'complete' if info['complete'] else 'INCOMPLETE (run generate again to finish)'}",
-             f"  runs: {info['runs']['planned']} planned, {info['runs']['ok']} ok, {info['runs']['failed']} failed, "
-             f"{info['runs']['pending']} pending; {sum(r['simulated_s'] for r in rows):.1f} s simulated, "
-             f"{sum(r['bytes'] for r in rows) / 1e6:.1f} MB of signals",
-             f"  channels ({len(ds.channels)}, {ds.rate_hz:g} Hz): " + ", ".join(ds.channels)]
+    labels = run_label_names(rows)
     faults = sorted({r["fault"] for r in rows}, key=["none", "B", "C", "BC"].index)
-    lines.append("  split   runs  groups  " + "  ".join(f"{f:>5s}" for f in faults))
+    splits = {}
     for s in ("train", "val", "test"):
         rs = [r for r in rows if r["split"] == s]
-        if not rs:
-            continue
-        counts = [sum(r["fault"] == f for r in rs) for f in faults]
-        lines.append(f"  {s:6s} {len(rs):5d} {len({r['point'] for r in rs}):7d}  "
-                     + "  ".join(f"{c:5d}" for c in counts))
-    failed = [r for r in rows if r["status"] == "failed"]
+        if rs:
+            splits[s] = {"runs": len(rs), "groups": len({r["point"] for r in rs}),
+                         "by_fault": {f: sum(r["fault"] == f for r in rs) for f in faults}}
+    return {
+        "path": str(ds.path), "name": info["name"], "format": info["format"], "complete": info["complete"],
+        "runs_by_status": info["runs"], "simulated_s": sum(r["simulated_s"] for r in rows),
+        "bytes": sum(r["bytes"] for r in rows), "rate_hz": ds.rate_hz,
+        "channels": [{k: c[k] for k in ("name", "unit", "dtype")} for c in info["channels"]],
+        "label_columns": ds.label_columns, "splits": splits,
+        "runs": [{"run_id": r["run_id"], "status": r["status"], **{k: _json_value(r.get(k)) for k in labels},
+                  **({"reason": r["reason"]} if r["status"] == "failed" else {})} for r in rows],
+    }
+
+
+def _json_value(v: Any) -> Any:
+    """NaN (a label a run lacks, e.g. motor_rpm of a speed program) as JSON's null."""
+    return None if isinstance(v, float) and math.isnan(v) else v
+
+
+def describe(path: str | Path, show: int = 20) -> str:
+    """``twin dataset info``: runs by status, class balance per split, size, channels, and the
+    first ``show`` runs with their ids and labels (0: every run)."""
+    d = summary(path)
+    rs = d["runs_by_status"]
+    lines = [f"{d['path']}: dataset {d['name']!r} ({d['format']}), "
+             f"{'complete' if d['complete'] else 'INCOMPLETE (run generate again to finish)'}",
+             f"  runs: {rs['planned']} planned, {rs['ok']} ok, {rs['failed']} failed, {rs['pending']} pending; "
+             f"{d['simulated_s']:.1f} s simulated, {d['bytes'] / 1e6:.1f} MB of signals",
+             f"  channels ({len(d['channels'])}, {d['rate_hz']:g} Hz): " + ", ".join(c["name"] for c in d["channels"])]
+    faults = list(next(iter(d["splits"].values()))["by_fault"]) if d["splits"] else []
+    lines += ["  " + x for x in format_table(
+        ["split", "runs", "groups", *faults],
+        [[s, v["runs"], v["groups"], *v["by_fault"].values()] for s, v in d["splits"].items()])]
+    runs = d["runs"] if show == 0 else d["runs"][:show]
+    if runs:
+        labels = [k for k in runs[0] if k not in ("run_id", "status", "reason")]
+        head = {"clearance_b_mm": "B mm", "clearance_c_mm": "C mm"}
+        lines.append("  runs (id, status and labels):")
+        lines += ["    " + x for x in format_table(
+            ["run_id", "status", *(head.get(k, k.removeprefix("factor_")) for k in labels)],
+            [[r["run_id"], r["status"], *(r[k] for k in labels)] for r in runs])]
+        if len(runs) < len(d["runs"]):
+            lines.append(f"    ... {len(d['runs']) - len(runs)} more (--show 0 lists all)")
+    failed = [r for r in d["runs"] if r["status"] == "failed"]
     for r in failed[:10]:
         lines.append(f"  failed {r['run_id']}: {r['reason']}")
     return "\n".join(lines)

@@ -1,11 +1,17 @@
 """Signals of a dataset run as a Parquet file: written chunk by chunk, read with pyarrow alone.
 
-One file per run, ``data/<run_id>.parquet``: one column per channel, no time column (sample k
-is at ``t0 + k / rate_hz``), one row group per chunk of the run (0.5 s by default), zstd.
-Key-value metadata ``twin.dataset``: JSON with ``run_id``, ``rate_hz``, ``t0``, ``units`` and
-``groups`` per column, the run's configuration ``config_toml``. Encodings: BYTE_STREAM_SPLIT for
-floats, DELTA_BINARY_PACKED for counts, no dictionaries, zstd level 3 (chosen by
-``analysis/bench_storage.py`` against Arrow's defaults, Zarr v3, NPZ, HDF5 and MCAP). Storage types (``outputs.dtype``):
+One file per run, ``data/<run_id>.parquet``: first the key columns, ``run_id`` and ``t`` (sample
+time [s], ``t0 + k / rate_hz``), then the run's labels (the same values as its row of
+``runs.parquet``: split, fault, clearances, factors, orientation, speed...), constant over the
+file, then one column per channel; one row group per chunk of the run (0.5 s by default), zstd.
+Every row is a labelled sample, so ``datasets.load_dataset("parquet", ...)`` or
+``polars.scan_parquet`` need no join with the manifest. Key-value metadata ``twin.dataset``: JSON
+with ``run_id``, ``rate_hz``, ``t0``, ``units`` and ``groups`` per channel column, ``labels`` (the
+label column names), the run's configuration ``config_toml``. Encodings: BYTE_STREAM_SPLIT for
+floats (``t`` too), DELTA_BINARY_PACKED for counts, dictionaries only for ``run_id`` and the
+labels (one value per row group: a dictionary of one entry and a run-length of indices, a few
+bytes each), zstd level 3 (chosen by ``analysis/bench_storage.py`` against Arrow's defaults,
+Zarr v3, NPZ, HDF5 and MCAP). Storage types (``outputs.dtype``):
 
 * ``auto``: float32 where the channel is float32 in the run (accelerometers, forces, torque,
   calibrated accelerations) or float32 holds it exactly (quantized DAQ volts: 18-bit codes over
@@ -36,6 +42,10 @@ from twin.run import Channel, Run
 from twin.util import remove_stale_temps, temp_path
 
 META_KEY = b"twin.dataset"
+#: the key columns of every data file (format twin-dataset/2), before the labels and channels
+KEY_COLUMNS = ("run_id", "t")
+#: Arrow types a label column may have (``LabelColumn.dtype``)
+LABEL_TYPES = ("string", "float64", "int64")
 
 
 class WriteError(TwinError):
@@ -57,6 +67,20 @@ class ColumnSpec:
     group: str
     dtype: str  # float32 | float64 | int32
     exact: bool = False
+
+
+@dataclass(frozen=True)
+class LabelColumn:
+    """A label stored as a constant column of a run file: name, Arrow type (``LABEL_TYPES``) and
+    the run's value (None: null)."""
+
+    name: str
+    dtype: str
+    value: Any
+
+    def __post_init__(self) -> None:
+        if self.dtype not in LABEL_TYPES:
+            raise TwinError(f"label column {self.name}: dtype must be one of {', '.join(LABEL_TYPES)}, got {self.dtype!r}")
 
 
 def storage_dtype(name: str, run_dtype: str, mode: str, quantized: bool) -> tuple[str, bool]:
@@ -105,10 +129,15 @@ class Stats:
 class ParquetRunWriter:
     """Sink writing the chunks of one run into ``path`` (see module docstring)."""
 
-    def __init__(self, path: str | Path, columns: list[ColumnSpec], run_id: str, extra_meta: dict | None = None):
+    def __init__(self, path: str | Path, columns: list[ColumnSpec], run_id: str, extra_meta: dict | None = None,
+                 labels: Iterable[LabelColumn] = ()):
         self.path = Path(path)
         self.columns = columns
         self.run_id = run_id
+        self.labels = list(labels)
+        clash = {lab.name for lab in self.labels} & ({c.name for c in columns} | set(KEY_COLUMNS))
+        if clash:
+            raise TwinError(f"label columns {', '.join(sorted(clash))} clash with a key or channel column")
         self.extra = dict(extra_meta or {})
         self.tmp = temp_path(self.path, keep_suffix=True)
         self._w = None
@@ -126,16 +155,22 @@ class ParquetRunWriter:
         self._rate, self._t0 = chunk.rate_hz, chunk.t0
         meta = {"run_id": self.run_id, "rate_hz": chunk.rate_hz, "t0": chunk.t0,
                 "units": {c.name: c.unit for c in self.columns}, "groups": {c.name: c.group for c in self.columns},
-                **self.extra}
-        schema = pa.schema([pa.field(c.name, c.dtype) for c in self.columns],
-                           metadata={META_KEY: json.dumps(meta, sort_keys=True).encode()})
+                "labels": [lab.name for lab in self.labels], **self.extra}
+        fields = [pa.field("run_id", pa.string(), nullable=False), pa.field("t", pa.float64(), nullable=False)]
+        fields += [pa.field(lab.name, lab.dtype) for lab in self.labels]
+        fields += [pa.field(c.name, c.dtype) for c in self.columns]
+        schema = pa.schema(fields, metadata={META_KEY: json.dumps(meta, sort_keys=True).encode()})
         # encodings measured by analysis/bench_storage.py (10 s of test 12, truth and instrumented
         # channels): BYTE_STREAM_SPLIT without dictionaries, zstd level 3, one row group per 0.5 s
-        # chunk: 42 % of the raw size against 66 % for Arrow's defaults, 2.6x faster to write
+        # chunk: 42 % of the raw size against 66 % for Arrow's defaults, 2.6x faster to write.
+        # run_id and the labels are constant: dictionary encoded (one entry, run-length indices)
         encoding = {c.name: ("DELTA_BINARY_PACKED" if c.dtype == "int32" else "BYTE_STREAM_SPLIT") for c in self.columns}
+        encoding["t"] = "BYTE_STREAM_SPLIT"
+        dictionary = ["run_id"] + [lab.name for lab in self.labels]
+        self._labels = [pa.scalar(self.run_id, pa.string())] + [pa.scalar(lab.value, lab.dtype) for lab in self.labels]
         try:
-            self._w = pq.ParquetWriter(self.tmp, schema, compression="zstd", compression_level=3, use_dictionary=False,
-                                       column_encoding=encoding, write_statistics=False)
+            self._w = pq.ParquetWriter(self.tmp, schema, compression="zstd", compression_level=3,
+                                       use_dictionary=dictionary, column_encoding=encoding, write_statistics=False)
         except OSError as err:
             raise WriteError(f"{self.path}: cannot write ({err})") from None
         self._schema = schema
@@ -149,7 +184,10 @@ class ParquetRunWriter:
             return
         if self._w is None:
             self._open(chunk)
-        arrays = []
+        n = chunk.n
+        arrays = [pa.repeat(self._labels[0], n),
+                  pa.array(self._t0 + (self.rows + np.arange(n, dtype=np.float64)) / self._rate)]
+        arrays += [pa.repeat(v, n) for v in self._labels[1:]]
         for c in self.columns:
             x = chunk[c.name]
             y = x.astype(c.dtype)
@@ -232,12 +270,22 @@ def read_columns(path: str | Path, columns: Iterable[str] | None = None, start: 
     return {c: table.column(c).to_numpy()[start - first:stop - first] for c in names}
 
 
+def channel_names(path: str | Path, meta: dict[str, Any] | None = None) -> list[str]:
+    """The channel columns of a run file in file order: the columns its ``twin.dataset``
+    metadata gives a unit (the key and label columns of format twin-dataset/2 left out)."""
+    import pyarrow.parquet as pq
+
+    units = (meta or read_meta(path))["units"]
+    return [n for n in pq.read_schema(path).names if n in units]
+
+
 def read_run(path: str | Path, columns: Iterable[str] | None = None) -> Run:
-    """A run file as a :class:`~twin.run.Run` (for ``twin view``; configuration from the dataset)."""
+    """A run file as a :class:`~twin.run.Run` (for ``twin view``; configuration from the dataset):
+    its channels (default: all of them), not its key and label columns."""
     from twin.config import config_from_toml
 
     meta = read_meta(path)
-    cols = read_columns(path, columns)
+    cols = read_columns(path, channel_names(path, meta) if columns is None else columns)
     # channels a run lacks are stored as NaN columns (the dataset's union): left out here
     chans = {k: Channel(k, meta["units"].get(k, ""), meta["groups"].get(k, "extra"), v) for k, v in cols.items()
              if not (v.dtype.kind == "f" and v.size and np.isnan(v[0]) and np.all(np.isnan(v)))}

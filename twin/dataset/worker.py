@@ -101,10 +101,11 @@ class _Instrument:
 def run_one(task: dict[str, Any], stop: Any = None) -> dict[str, Any]:
     """Simulate one run of a dataset (see module docstring). ``task`` keys: ``run_id``, ``index``,
     ``config_toml``, ``data_dir``, ``columns`` (fields of :class:`~twin.dataset.storage.ColumnSpec`),
-    ``instrumented``. ``stop``: a :class:`threading.Event` of a driver that runs runs on threads;
+    ``instrumented``, ``labels`` (fields of :class:`~twin.dataset.storage.LabelColumn`: the run's
+    label columns). ``stop``: a :class:`threading.Event` of a driver that runs runs on threads;
     once set, the run is interrupted at its next chunk (KeyboardInterrupt: its file is removed)."""
     from twin.config import config_from_toml
-    from twin.dataset.storage import ColumnSpec, ParquetRunWriter, WriteError
+    from twin.dataset.storage import ColumnSpec, LabelColumn, ParquetRunWriter, WriteError
     from twin.util import file_sha256
     from twin.simulate import ThreadedSink, simulate
 
@@ -115,7 +116,8 @@ def run_one(task: dict[str, Any], stop: Any = None) -> dict[str, Any]:
     try:
         cfg = config_from_toml(task["config_toml"])
         columns = [ColumnSpec(*c) for c in task["columns"]]
-        writer = ParquetRunWriter(path, columns, rid, {"name": cfg.name, "config_toml": cfg.to_toml()})
+        labels = [LabelColumn(*lab) for lab in task.get("labels", ())]
+        writer = ParquetRunWriter(path, columns, rid, {"name": cfg.name, "config_toml": cfg.to_toml()}, labels)
         # the sensor chain and the Parquet writer run on a thread, overlapping the stepping
         sink = ThreadedSink(_Instrument(cfg, columns, writer, tuple(task["instrumented"])))
         outcome = simulate(cfg, [_Stop(stop), sink] if stop is not None else [sink])
