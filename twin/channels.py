@@ -19,6 +19,9 @@ Conventions (bench frame of :mod:`twin.config`):
   along the in-plane tangent ẑ × n (n = e/|e|) [N].
 * ``theta_ref`` / ``omega_ref``: the drive's reference bench angle [rad] and rate [rad/s];
   ``crank_torque``: torque applied by the PID to the crank about +z [N m].
+* optional groups ``motor`` and ``drive_energy`` (``drive.mode`` "motor"/"torque"): see
+  :mod:`twin.motor_drive` (motor angle/speed/torque, belt torque and slip, command voltage; the
+  work, energy and dissipation accumulators of the energy balance).
 * optional group ``energy`` (MuJoCo engine only; not computed unless asked for):
   ``energy_kinetic`` / ``energy_potential``: kinetic and gravitational potential energy of the
   three bodies (MuJoCo's ``e_kinetic``/``e_potential`` sensors; the soft contacts' elastic
@@ -32,6 +35,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from twin.config import ACCELEROMETERS, ALL_CHANNEL_GROUPS, JOINTS, BenchConfig
+from twin.motor_drive import DRIVE_ENERGY_CHANNELS as _DRIVE_ENERGY
+from twin.motor_drive import MOTOR_CHANNELS as _MOTOR
 
 
 @dataclass(frozen=True)
@@ -71,6 +76,9 @@ _STATIC: dict[str, list[ChannelSpec]] = {
         ChannelSpec("crank_torque", "N m", "drive", "float32", "PID torque on the crank"),
     ],
     # optional group (not in the default channel list): energy balances
+    # optional groups of the drive train (drive.mode "motor"/"torque", twin.motor_drive)
+    "motor": [ChannelSpec(n, u, "motor", dt, d) for n, u, dt, d in _MOTOR],
+    "drive_energy": [ChannelSpec(n, u, "drive_energy", dt, d) for n, u, dt, d in _DRIVE_ENERGY],
     "energy": [
         ChannelSpec("energy_kinetic", "J", "energy", "float64", "kinetic energy of the mechanism"),
         ChannelSpec("energy_potential", "J", "energy", "float64",

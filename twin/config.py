@@ -38,6 +38,7 @@ from typing import Any, Mapping
 import tomli_w
 
 from twin import model_xml
+from twin.drivetrain_params import Drivetrain
 from twin.errors import ConfigError
 
 #: defaults held by the base model mjcf/bench.xml (parsed once; ModelError if unreadable)
@@ -57,8 +58,10 @@ PROGRAMS: tuple[str, ...] = ("constant", "protocol", "trace", "steps")
 #: Output channel groups a run can carry (see :mod:`twin.channels`).
 CHANNEL_GROUPS: tuple[str, ...] = ("accel", "encoder", "crank", "slider", "joints", "drive")
 #: Channel groups a scene may ask for but that are not in the default list (they cost time):
-#: "energy" (mechanical energy and slider speed, for energy balances; MuJoCo engine only).
-OPTIONAL_CHANNEL_GROUPS: tuple[str, ...] = ("energy",)
+#: "energy" (mechanical energy and slider speed, for energy balances; MuJoCo engine only);
+#: "motor" (motor, belt and command channels; drive.mode "motor" or "torque" only);
+#: "drive_energy" (the drive train's work, dissipation and energy accumulators; "motor"/"torque").
+OPTIONAL_CHANNEL_GROUPS: tuple[str, ...] = ("energy", "motor", "drive_energy")
 #: Every channel group, in canonical order (the defaults, then the optional ones).
 ALL_CHANNEL_GROUPS: tuple[str, ...] = CHANNEL_GROUPS + OPTIONAL_CHANNEL_GROUPS
 #: Optional channel groups that only some engines produce: group -> engines.
@@ -628,7 +631,12 @@ class Drive:
             reference angle and rate: a finite drive stiffness, S003 §4.3) or "prescribed" (an
             infinitely stiff drive: the crank angle *is* the program, θ(t) = θ_ref(t), as the
             papers that impose the crank motion assume, S001's CosmosMotion motor, S004's
-            constant 30 rad/s, S000's 5000 rpm). Reference engine: the crank angle is a driving
+            constant 30 rad/s, S000's 5000 rpm), "motor" (the bench's drive train: the motor's
+            speed loop follows the analog command of the program on its own encoder and drives
+            the crank through the V-belt; parameters in ``[drivetrain]``,
+            :mod:`twin.drivetrain_params`) or "torque" (the same motor and belt driven by the
+            torque program ``drivetrain.torque_s``/``torque_nm``, released at
+            ``drivetrain.release_s``: the program's speeds are not used). Reference engine: the crank angle is a driving
             constraint of the R-matrix model (θ and θ̇ set from the program every step, the
             other coordinates from the reduced equations with θ̈ = α_ref; the drive torque is
             the θ row's residual). MuJoCo twin: the crank turns as an infinitely heavy
@@ -660,7 +668,7 @@ class Drive:
     mode: str = "pid"
     crank_rpm: float = 0.0
 
-    MODES: typing.ClassVar[tuple[str, ...]] = ("pid", "prescribed")
+    MODES: typing.ClassVar[tuple[str, ...]] = ("pid", "prescribed", "motor", "torque")
 
     def __post_init__(self) -> None:
         _choice(self.program, "program", PROGRAMS)
@@ -988,6 +996,7 @@ class BenchConfig:
     sensors: Sensors = field(default_factory=Sensors)
     simulation: Simulation = Simulation()
     instrumentation: Instrumentation = field(default_factory=Instrumentation)
+    drivetrain: Drivetrain = Drivetrain()
 
     def __post_init__(self) -> None:
         _check(isinstance(self.name, str) and 0 < len(self.name) <= 80 and _NAME_RE.fullmatch(self.name) is not None,
@@ -1022,6 +1031,18 @@ class BenchConfig:
                 raise ConfigError("sensors.channels",
                                   "the optional group 'energy' is not available with drive.mode = \"prescribed\" in "
                                   "the MuJoCo engine (its kinetic energy would hold the drive's infinite flywheel)")
+        if self.drive.mode in ("motor", "torque"):
+            self.drivetrain.controller_stride(sim.timestep_s)
+            if sim.engine == "mujoco" and self.mujoco.integrator not in ("Euler", "implicitfast", "implicit"):
+                raise ConfigError("mujoco.integrator",
+                                  f"must be \"Euler\", \"implicitfast\" or \"implicit\" for drive.mode = "
+                                  f"{self.drive.mode!r} (the drive train's native states advance once a step), "
+                                  f"got {self.mujoco.integrator!r}")
+        else:
+            for group in ("motor", "drive_energy"):
+                if group in sen.channels:
+                    raise ConfigError("sensors.channels", f"the optional group {group!r} needs drive.mode = "
+                                      f"\"motor\" or \"torque\", got {self.drive.mode!r}")
         for group, engines in ENGINE_ONLY_GROUPS.items():
             if group in sen.channels and sim.engine not in engines:
                 raise ConfigError("sensors.channels",
@@ -1053,8 +1074,13 @@ class BenchConfig:
 
     # -- serialization
     def to_dict(self) -> dict[str, Any]:
-        """Plain nested dict (tuples as lists), the TOML layout."""
-        return _to_plain(self)
+        """Plain nested dict (tuples as lists), the TOML layout. The ``[drivetrain]`` table is left
+        out while it holds the defaults and the drive does not use it (crank PID, prescribed), so
+        that the text and digest of such configurations are what they were before it existed."""
+        out = _to_plain(self)
+        if self.drive.mode in ("pid", "prescribed") and self.drivetrain == Drivetrain():
+            out.pop("drivetrain", None)
+        return out
 
     def to_toml(self) -> str:
         """Canonical TOML text of this configuration."""
@@ -1225,7 +1251,7 @@ def config_from_toml(text: str) -> BenchConfig:
 
 def with_overrides(cfg: BenchConfig, overrides: Mapping[str, Any]) -> BenchConfig:
     """Apply dotted-path overrides (``{"joints.clearance_b_mm": 0.1}``) and re-validate."""
-    data = cfg.to_dict()
+    data = _to_plain(cfg)
     for dotted, value in overrides.items():
         keys = dotted.split(".")
         node = data

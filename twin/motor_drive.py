@@ -1,0 +1,57 @@
+"""What both engines share of the drive train (``drive.mode`` "motor" or "torque"): the per-step
+input of the motor (speed set point or torque), the analog command voltage and the channels.
+
+The motor's speed set point is the drive program's motor speed: ``drive.belt_ratio`` × the
+program's crank rate ω_ref(t) (:class:`twin.drive.DriveReference`, with the controller's profile
+ramp ``drive.ramp_s``; for a trace program the trace's filtered speed), in the crank's turning
+sense. The command voltage channel is the DAQ's analog output: the program's motor speed command
+× ``instrumentation.command_v_per_rpm`` (±10 V ↔ ±1000 rpm; a step, before the controller's ramp)
+for "motor"; for "torque" the torque command scaled ±10 V ↔ ± ``drivetrain.peak_torque_nm``
+(PLACEHOLDER: the analog scaling of a torque command is the drive's setting, not known).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from twin.config import BenchConfig
+
+#: channels of the optional group "motor": (name, unit, dtype, description)
+MOTOR_CHANNELS: tuple[tuple[str, str, str, str], ...] = (
+    ("motor_angle", "rad", "float64", "motor rotor angle (turning with the crank's sense)"),
+    ("motor_speed", "rad/s", "float64", "motor rotor angular velocity"),
+    ("motor_torque", "N m", "float32", "motor electromagnetic torque (controller output, clamped)"),
+    ("belt_torque", "N m", "float32", "belt torque on the crank pulley (r_c x effective pull)"),
+    ("belt_slip", "m/s", "float32", "belt slip speed on the pulleys (creep and sliding)"),
+    ("command_voltage", "V", "float32", "analog motor command"),
+)
+#: channels of the optional group "drive_energy" (accumulated from t = 0)
+DRIVE_ENERGY_CHANNELS: tuple[tuple[str, str, str, str], ...] = (
+    ("motor_work", "J", "float64", "work of the motor torque on the rotor"),
+    ("energy_mechanical", "J", "float64", "kinetic + gravitational energy of the mechanism and the rotor"),
+    ("energy_belt", "J", "float64", "elastic energy of the belt spans"),
+    ("diss_belt_damping", "J", "float64", "energy dissipated by the belt's damping"),
+    ("diss_belt_slip", "J", "float64", "energy dissipated by belt creep and slip"),
+    ("diss_guide", "J", "float64", "energy dissipated by the slider guide's friction"),
+    ("diss_contact", "J", "float64",
+     "energy dissipated in the joints (contact law, joint friction; MuJoCo: every constraint force)"),
+)
+
+
+def motor_input(cfg: BenchConfig, k0: int, nstep: int, omega_ref: np.ndarray) -> np.ndarray:
+    """Per-step motor input of steps k0 .. k0 + nstep − 1: speed set point [rad/s] ("motor") or
+    motor torque [N m] ("torque", in the crank's turning sense)."""
+    if cfg.drive.mode == "motor":
+        return np.ascontiguousarray(cfg.drive.belt_ratio * np.asarray(omega_ref, dtype=np.float64))
+    t = (k0 + np.arange(nstep)) * cfg.simulation.timestep_s
+    return np.ascontiguousarray(cfg.mechanism.crank_direction * cfg.drivetrain.torque_program(t))
+
+
+def command_voltage(cfg: BenchConfig, t: np.ndarray) -> np.ndarray:
+    """Analog command [V] at times ``t`` (see the module docstring)."""
+    if cfg.drive.mode == "torque":
+        dt = cfg.drivetrain
+        return 10.0 * dt.torque_program(t) / dt.peak_torque_nm
+    from twin.drive import DriveReference
+
+    return cfg.instrumentation.command_v_per_rpm * DriveReference(cfg).command_rpm(t)
