@@ -58,7 +58,7 @@ class _Parser(argparse.ArgumentParser):
 SELECT_OPTIONS = ("config", "test")
 MODEL_OPTIONS = ("clearance_b", "clearance_c", "clearance_a", "orientation", "set")
 DRIVE_OPTIONS = ("speed", "protocol", "trace")
-RUN_OPTIONS = ("duration", "timestep", "engine", "channels", "output_rate")
+RUN_OPTIONS = ("duration", "timestep", "engine", "channels", "output_rate", "drive_mode")
 ALL_CONFIG_OPTIONS = SELECT_OPTIONS + MODEL_OPTIONS + DRIVE_OPTIONS + RUN_OPTIONS
 
 
@@ -113,6 +113,12 @@ def add_config_args(p: argparse.ArgumentParser, options: Sequence[str] = ALL_CON
                             "its period)")
     if "engine" in has:
         g.add_argument("--engine", choices=ENGINES, help="mujoco (the twin) or reference (R-matrix)")
+    if "drive_mode" in has:
+        g.add_argument("--drive-mode", choices=("pid", "prescribed", "motor", "torque"),
+                       help="how the crank is driven: pid (crank PID on the program, the default), prescribed, "
+                            "motor (the bench's motor speed loop and V-belt, [drivetrain] parameters) or torque "
+                            "(motor torque program, then release); motor and torque add the channel group "
+                            "'motor' unless --channels is given")
     if "channels" in has:
         g.add_argument("--channels", metavar="G,G", help=f"channel groups to compute: {','.join(ALL_CHANNEL_GROUPS)}")
     if "set" in has:
@@ -187,6 +193,11 @@ def config_from_args(args: argparse.Namespace) -> BenchConfig:
         ov["sensors.output_rate_hz"] = args.output_rate
     if _opt(args, "engine"):
         ov["simulation.engine"] = args.engine
+    if _opt(args, "drive_mode") is not None:
+        ov["drive.mode"] = args.drive_mode
+        if args.drive_mode in ("motor", "torque") and _opt(args, "channels") is None \
+                and "motor" not in cfg.sensors.channels:
+            ov["sensors.channels"] = list(cfg.sensors.channels) + ["motor"]
     if _opt(args, "channels") is not None:
         groups = [c.strip() for c in args.channels.split(",")]
         if not all(groups):
