@@ -96,9 +96,12 @@ DRIVETRAIN_FIELDS: tuple[str, ...] = (
 SENSOR_MOTOR_ANGLE = "motor_angle"
 SENSOR_MOTOR_SPEED = "motor_speed"
 SENSOR_DRIVETRAIN = "drivetrain"
-DRIVETRAIN_SENSOR_FIELDS: tuple[str, ...] = (
-    "motor_torque", "belt_torque", "belt_slip", "motor_work", "energy_belt", "diss_belt_damping",
-    "diss_belt_slip", "diss_guide", "diss_contact", "energy_mechanical")
+DRIVETRAIN_SENSOR_FIELDS: tuple[str, ...] = ("motor_torque", "belt_torque", "belt_slip")
+#: the accounts' user sensor (acceleration stage; with the channel group drive_energy only)
+SENSOR_DRIVETRAIN_ENERGY = "drivetrain_energy"
+DRIVETRAIN_ENERGY_FIELDS: tuple[str, ...] = (
+    "motor_work", "energy_belt", "diss_belt_damping", "diss_belt_slip", "diss_guide", "diss_contact",
+    "energy_mechanical")
 
 # sensors (base model)
 ACCEL_SENSORS = ("AC1", "AC2", "AC3", "AC4", "AC5", "AC6")

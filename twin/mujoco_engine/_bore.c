@@ -675,7 +675,7 @@ static PyObject* py_drivetrain_fields(PyObject* self, PyObject* args) {
 }
 
 static PyObject* py_drivetrain_layout(PyObject* self, PyObject* args) {
-  return Py_BuildValue("(dii)", DT_MAGIC, (int)DT_NSTATE_FIXED, (int)DT_NSENSOR);
+  return Py_BuildValue("(diii)", DT_MAGIC, (int)DT_NSTATE_FIXED, (int)DT_NSENSOR_TORQUE, (int)DT_NSENSOR);
 }
 
 static PyMethodDef methods[] = {
@@ -685,7 +685,7 @@ static PyMethodDef methods[] = {
   {"userdata_fields", py_userdata_fields, METH_NOARGS, "names of the bore geom's user data fields, in order (enum bore_user)."},
   {"guide_fields", py_guide_fields, METH_NOARGS, "names of a guide joint's user data fields, in order (enum guide_user)."},
   {"drivetrain_fields", py_drivetrain_fields, METH_NOARGS, "names of the drive train's numeric fields, in order (enum dt_field)."},
-  {"drivetrain_layout", py_drivetrain_layout, METH_NOARGS, "(marker, fixed userdata slots before 2 nv, sensor dimension) of the drive train."},
+  {"drivetrain_layout", py_drivetrain_layout, METH_NOARGS, "(marker, fixed userdata slots before 2 nv, torque sensor dimension, accounts sensor dimension) of the drive train."},
   {"guide_magic", py_guide_magic, METH_NOARGS, "joint user data marker value that marks a guide."},
   {NULL, NULL, 0, NULL}
 };

@@ -24,7 +24,7 @@
  *     Torque mode: the torque is that ctrl, clamped.
  *  3. belt pull F from x, v_rel = r_m w_m - r_c w_c and v_m (closed form, as belt_pull of the
  *     reference), motor dof gets u - r_m F, crank dof r_c F.
- * A user sensor on the motor hinge (needstage "acc") reports the step's values.
+ * User sensors on the motor hinge report the step's values (see drivetrain_sensor).
  */
 
 #define DT_MAGIC 7303.0
@@ -48,6 +48,9 @@ enum dt_state {
   /* then nv velocities (DTS_VPREV ..) and nv other passive forces of the previous step */
 };
 #define DT_NSTATE_FIXED DTS_VPREV
+/* dimensions of the two user sensors (see drivetrain_sensor) */
+#define DT_NSENSOR_TORQUE 3
+#define DT_NSENSOR 7
 
 /* the drive train's numeric data, or NULL */
 static const mjtNum* dt_params(const mjModel* m) {
@@ -156,11 +159,25 @@ static void drivetrain_passive(const mjModel* m, mjData* d) {
   d->qfrc_passive[dc] += p[DT_RC] * F;
   s[DTS_STARTED] = 1;
   s[DTS_TPREV] = d->time;
+  /* the position-stage user sensor on the motor hinge: MuJoCo computed (zeroed) it before this
+   * velocity-stage callback and leaves it alone afterwards, so no acceleration-stage sensor pass
+   * is needed for these */
+  const int jm = m->dof_jntid[dm];
+  for (int i = 0; i < m->nsensor; i++) {
+    if (m->sensor_type[i] != mjSENS_USER || m->sensor_objtype[i] != mjOBJ_JOINT || m->sensor_objid[i] != jm ||
+        m->sensor_needstage[i] != mjSTAGE_POS || m->sensor_dim[i] < DT_NSENSOR_TORQUE) continue;
+    mjtNum* out = d->sensordata + m->sensor_adr[i];
+    out[0] = s[DTS_U];
+    out[1] = p[DT_RC] * F;
+    out[2] = w;
+  }
 }
 
-/* user sensor on the motor hinge, needstage "acc": motor torque, belt torque on the crank, slip
- * speed, motor work, belt energy, dissipation (damping, slip, guide, joints), mechanism energy */
-#define DT_NSENSOR 10
+/* user sensors on the motor hinge: needstage "pos", written by the passive callback: motor
+ * torque, belt torque on the crank, slip speed; needstage "acc" (the accounts, after MuJoCo's
+ * energies): motor work, belt energy, dissipation (damping, slip, guide, joints), energy of the
+ * mechanism and the rotor */
+
 static void drivetrain_sensor(const mjModel* m, mjData* d, int stage) {
   if (stage != mjSTAGE_ACC) return;
   const mjtNum* p = dt_params(m);
@@ -171,17 +188,14 @@ static void drivetrain_sensor(const mjModel* m, mjData* d, int stage) {
   const int jm = m->dof_jntid[(int)p[DT_MOTOR_DOF]];
   for (int i = 0; i < m->nsensor; i++) {
     if (m->sensor_type[i] != mjSENS_USER || m->sensor_objtype[i] != mjOBJ_JOINT || m->sensor_objid[i] != jm ||
-        m->sensor_dim[i] < DT_NSENSOR) continue;
+        m->sensor_needstage[i] != mjSTAGE_ACC || m->sensor_dim[i] < DT_NSENSOR) continue;
     mjtNum* out = d->sensordata + m->sensor_adr[i];
-    out[0] = s[DTS_U];
-    out[1] = p[DT_RC] * s[DTS_F];
-    out[2] = s[DTS_W];
-    out[3] = s[DTS_WORK];
-    out[4] = 0.5 * p[DT_K] * s[DTS_X] * s[DTS_X];
-    out[5] = s[DTS_DDAMP];
-    out[6] = s[DTS_DSLIP];
-    out[7] = s[DTS_DGUIDE];
-    out[8] = s[DTS_DCONTACT];
-    out[9] = d->energy[0] + d->energy[1];
+    out[0] = s[DTS_WORK];
+    out[1] = 0.5 * p[DT_K] * s[DTS_X] * s[DTS_X];
+    out[2] = s[DTS_DDAMP];
+    out[3] = s[DTS_DSLIP];
+    out[4] = s[DTS_DGUIDE];
+    out[5] = s[DTS_DCONTACT];
+    out[6] = d->energy[0] + d->energy[1];
   }
 }

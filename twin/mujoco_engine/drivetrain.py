@@ -13,9 +13,11 @@ The model (:mod:`twin.drivetrain_params`) is added to the compiled bench by
   (Kelvin–Voigt spans in series with creep and slip) run in the native passive callback
   (``_drivetrain.h``, included by ``_bore.c``), parameters in the ``<numeric>`` ``drivetrain``
   (:data:`twin.names.DRIVETRAIN_FIELDS`), state in ``mjData.userdata`` after the contact slots;
-* sensors: the motor hinge's angle and speed, and a user sensor with the step's motor torque,
-  belt torque on the crank, slip speed and the work/energy/dissipation accounts
-  (:data:`twin.names.DRIVETRAIN_SENSOR_FIELDS`).
+* sensors: the motor hinge's angle and speed, a position-stage user sensor with the step's
+  motor torque, belt torque on the crank and slip speed (:data:`twin.names.DRIVETRAIN_SENSOR_FIELDS`,
+  written by the passive callback) and, with the channel group ``drive_energy``, an
+  acceleration-stage one with the work/energy/dissipation accounts
+  (:data:`twin.names.DRIVETRAIN_ENERGY_FIELDS`).
 """
 
 from __future__ import annotations
@@ -63,11 +65,15 @@ def add_drive_train(spec: mujoco.MjSpec, cfg: BenchConfig) -> None:
                         objtype=mujoco.mjtObj.mjOBJ_JOINT, objname=N.MOTOR_HINGE)
         spec.add_sensor(name=N.SENSOR_MOTOR_SPEED, type=mujoco.mjtSensor.mjSENS_JOINTVEL,
                         objtype=mujoco.mjtObj.mjOBJ_JOINT, objname=N.MOTOR_HINGE)
-    if "motor" in groups or "drive_energy" in groups or "drive" in groups:
+    if "motor" in groups or "drive" in groups:
+        # position stage: the passive callback writes it, no acceleration-stage sensor pass
         spec.add_sensor(name=N.SENSOR_DRIVETRAIN, type=mujoco.mjtSensor.mjSENS_USER,
                         objtype=mujoco.mjtObj.mjOBJ_JOINT, objname=N.MOTOR_HINGE,
-                        dim=len(N.DRIVETRAIN_SENSOR_FIELDS), needstage=mujoco.mjtStage.mjSTAGE_ACC)
+                        dim=len(N.DRIVETRAIN_SENSOR_FIELDS), needstage=mujoco.mjtStage.mjSTAGE_POS)
     if "drive_energy" in groups:
+        spec.add_sensor(name=N.SENSOR_DRIVETRAIN_ENERGY, type=mujoco.mjtSensor.mjSENS_USER,
+                        objtype=mujoco.mjtObj.mjOBJ_JOINT, objname=N.MOTOR_HINGE,
+                        dim=len(N.DRIVETRAIN_ENERGY_FIELDS), needstage=mujoco.mjtStage.mjSTAGE_ACC)
         spec.option.enableflags |= mujoco.mjtEnableBit.mjENBL_ENERGY
 
 

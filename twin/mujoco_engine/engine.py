@@ -35,9 +35,6 @@ from twin.mujoco_engine.accel import PosthocAccelerometers, posthoc_applies
 from twin.mujoco_engine.builder import build
 
 _STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
-#: channels of the group drive_energy, as the native sensor names them
-DRIVE_ENERGY_NAMES = ("motor_work", "energy_mechanical", "energy_belt", "diss_belt_damping", "diss_belt_slip",
-                      "diss_guide", "diss_contact")
 #: everything a step reads besides the model: physics, controls, warmstart and user data (v_imp)
 _SCENE_STATE = mujoco.mjtState.mjSTATE_INTEGRATION
 _clock: tuple[Any, int] | None = None  # (the mjcb_time global, MuJoCo's own clock as first seen here)
@@ -249,8 +246,8 @@ class MujocoEngine:
             t = (self._chunk_k0 + stride * np.arange(n)) * self.cfg.simulation.timestep_s
             out["command_voltage"] = command_voltage(self.cfg, t)
         if "drive_energy" in groups:
-            for name in DRIVE_ENERGY_NAMES:
-                out[name] = col(N.SENSOR_DRIVETRAIN, f[name])
+            for i, name in enumerate(N.DRIVETRAIN_ENERGY_FIELDS):
+                out[name] = col(N.SENSOR_DRIVETRAIN_ENERGY, i)
         return out
 
     def _channels(self, sens: np.ndarray, accel: np.ndarray | None = None) -> dict[str, np.ndarray]:
