@@ -53,7 +53,7 @@ def test_defaults_leave_todays_configuration_alone():
 
 
 @pytest.mark.parametrize("key,value", [("drivetrain.preload_n", -1.0), ("drivetrain.friction_mu", 0.0),
-                                       ("drivetrain.encoder_counts", 4096.5), ("drivetrain.torque_nm", [1.0]),
+                                       ("drivetrain.encoder_counts", 4096.5), ("drivetrain.torque_nm", [1.0, 2.0]),
                                        ("drivetrain.controller_rate_hz", 3000.0), ("drive.mode", "belt")])
 def test_bad_values_name_the_field(key, value):
     with pytest.raises(ConfigError) as err:

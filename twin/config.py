@@ -1486,13 +1486,28 @@ def _s004() -> BenchConfig:
     )
 
 
-#: Named presets of the other mechanisms of the seed papers (issue 18): name -> builder.
-NAMED_PRESETS: dict[str, typing.Callable[[], BenchConfig]] = {"s001": _s001, "s000": _s000, "s004": _s004}
+def _torque_release() -> BenchConfig:
+    """The torque-driven release test S003 §6 plans: Table 4 test 12's clearances (0.1 mm at B and
+    C), the motor driven by the torque program of :class:`twin.drivetrain_params.Drivetrain` (at rest
+    for 2 s, 1.2 N m for 0.5 s, released at 2.5 s) through the V-belt, 10 s (the coast-down and the
+    mechanism settling); channel group ``motor`` added."""
+    base = preset(12)
+    return dataclasses.replace(
+        base, name="torque_release", drive=dataclasses.replace(base.drive, mode="torque"),
+        simulation=dataclasses.replace(base.simulation, duration_s=10.0),
+        sensors=dataclasses.replace(base.sensors, channels=tuple(base.sensors.channels) + ("motor",)))
+
+
+#: Named presets of the other mechanisms of the seed papers (issue 18) and of the bench's planned
+#: torque-release test: name -> builder.
+NAMED_PRESETS: dict[str, typing.Callable[[], BenchConfig]] = {"s001": _s001, "s000": _s000, "s004": _s004,
+                                                              "torque_release": _torque_release}
 
 
 def named_preset(name: str, field_name: str = "--preset") -> BenchConfig:
     """Configuration of a paper's mechanism (``--preset NAME``, ``preset = "NAME"`` in TOML):
-    ``s001`` (S001's rig; see :func:`_s001`), ``s000`` (S000's Flores slider–crank; :func:`_s000`), ``s004`` (S004's large mechanism; :func:`_s004`)."""
+    ``s001`` (S001's rig; see :func:`_s001`), ``s000`` (S000's Flores slider–crank; :func:`_s000`), ``s004`` (S004's large mechanism; :func:`_s004`), ``torque_release`` (the bench's torque-driven
+    release test; :func:`_torque_release`)."""
     if not isinstance(name, str) or name.lower() not in NAMED_PRESETS:
         raise ConfigError(field_name, f"must be one of {', '.join(NAMED_PRESETS)}, got {name!r}")
     return NAMED_PRESETS[name.lower()]()

@@ -95,7 +95,9 @@ class Drivetrain:
         peak_torque_nm: motor torque clamp [N m] (S003 §2.3.2: 1.589).
         continuous_torque_nm: continuous rating [N m] (S003 §2.3.2: 0.795), reported, not
             clamped (see the module docstring).
-        torque_s: times of the torque program's steps [s] (``drive.mode = "torque"``).
+        torque_s: times of the torque program's steps [s] (``drive.mode = "torque"``). Default:
+            the release test S003 §6 plans, at rest for 2 s, 1.2 N m for 0.5 s (≈ 500 motor rpm
+            at release on the bench's mechanism), then released.
         torque_nm: motor torque from each of those times [N m].
         torque_ramp_s: linear ramp of each torque step [s] (0 = a true step).
         release_s: the torque is zero from this time on [s] (release and coast-down);
@@ -119,10 +121,10 @@ class Drivetrain:
     speed_ki_nm: float = 4.0
     peak_torque_nm: float = 1.589
     continuous_torque_nm: float = 0.795
-    torque_s: tuple[float, ...] = (0.0, 2.0)
-    torque_nm: tuple[float, ...] = (0.6, 0.3)
+    torque_s: tuple[float, ...] = (2.0,)
+    torque_nm: tuple[float, ...] = (1.2,)
     torque_ramp_s: float = 0.05
-    release_s: float = 4.0
+    release_s: float = 2.5
 
     def __post_init__(self) -> None:
         _num(self.rotor_inertia_kgm2, "rotor_inertia_kgm2", 0.0, 1.0, "kg m^2", lo_open=True)

@@ -146,7 +146,7 @@ class SummaryAccumulator:
             peak = self.config.drivetrain.peak_torque_nm if self.config else np.inf
             mo[0] += float(np.dot(u, u))
             mo[1] = max(mo[1], float(np.max(np.abs(u))))
-            mo[2] += float(np.count_nonzero(np.abs(u) >= peak * (1 - 1e-9)))
+            mo[2] += float(np.count_nonzero(np.abs(u) >= peak * (1 - 1e-6)))  # float32 channel
             mo[3] = max(mo[3], float(np.max(np.abs(chunk["belt_torque"]))))
             mo[4] = max(mo[4], float(np.max(np.abs(chunk["belt_slip"]))))
             self._motor = mo
