@@ -181,3 +181,31 @@ def test_engines_agree_on_crank_ripple(test):
         h[engine] = _harmonics(_run(cfg), cfg.output_rate_hz, 1.0)
     assert h["mujoco"][0] > 1.0  # a ripple to compare
     np.testing.assert_allclose(h["mujoco"], h["reference"], rtol=0.05)
+
+
+# ------------------------------------------------------------------------- replay
+@pytest.mark.slow
+def test_replay_compares_the_motor_drive(tmp_path):
+    """``twin replay --drive motor``: the motor model from the recorded command beside the PID."""
+    from pathlib import Path
+
+    from twin.replay import ReplayOptions, replay
+
+    rec = Path(__file__).resolve().parents[1] / "recordings" / "test3_synthetic.mcap"
+    r = replay(rec, tmp_path / "out", lambda c: c.replace(**{"simulation.engine": "reference"}),
+               ReplayOptions(plots=False, drive="motor"))
+    md = r["motor_drive"]
+    assert set(md["sensors"]) == set(r["sensors"])
+    assert md["sensors"]["AC4"]["pid_nrmse_pct"] == r["sensors"]["AC4"]["nrmse_pct"]
+    assert (tmp_path / "out" / "motor_command_trace.npz").is_file()
+    assert "Drives compared" in (tmp_path / "out" / "report.md").read_text()
+
+
+def test_dataset_factors_set_the_drive_train():
+    from twin.dataset.factors import NAMED
+
+    ov: dict = {}
+    NAMED["drive_mode"].apply("motor", ov, None, preset(12))
+    NAMED["belt_preload_n"].apply(80.0, ov, None, preset(12))
+    cfg = preset(12).replace(**ov)
+    assert cfg.drive.mode == "motor" and cfg.drivetrain.preload_n == 80.0

@@ -102,6 +102,11 @@ class Drivetrain:
         torque_ramp_s: linear ramp of each torque step [s] (0 = a true step).
         release_s: the torque is zero from this time on [s] (release and coast-down);
             0 = no release.
+        command_file: recorded analog command for ``drive.mode = "motor"`` (``.npz`` with ``t`` [s]
+            from the run's start and ``volts`` [V], e.g. a bench recording's ``motor_command``
+            channel; ``twin replay --drive motor`` writes one): the speed set point is that voltage
+            / ``instrumentation.command_v_per_rpm``, followed as recorded (no profile ramp), instead
+            of the drive program's speed. Empty = the program.
     """
 
     rotor_inertia_kgm2: float = 2e-4
@@ -125,6 +130,7 @@ class Drivetrain:
     torque_nm: tuple[float, ...] = (1.2,)
     torque_ramp_s: float = 0.05
     release_s: float = 2.5
+    command_file: str = ""
 
     def __post_init__(self) -> None:
         _num(self.rotor_inertia_kgm2, "rotor_inertia_kgm2", 0.0, 1.0, "kg m^2", lo_open=True)
@@ -156,6 +162,8 @@ class Drivetrain:
             raise ConfigError("torque_nm", f"must be torques within ±100 N m, got {list(self.torque_nm)!r}")
         _num(self.torque_ramp_s, "torque_ramp_s", 0.0, 100.0, "s")
         _num(self.release_s, "release_s", 0.0, 3600.0, "s")
+        if not isinstance(self.command_file, str):
+            raise ConfigError("command_file", f"must be a file name (or empty), got {self.command_file!r}")
 
     # -- derived (SI)
     @property

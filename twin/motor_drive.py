@@ -12,13 +12,15 @@ for "motor"; for "torque" the torque command scaled ±10 V ↔ ± ``drivetrain.p
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from twin.config import BenchConfig
 
 #: channels of the optional group "motor": (name, unit, dtype, description)
 MOTOR_CHANNELS: tuple[tuple[str, str, str, str], ...] = (
-    ("motor_angle", "rad", "float64", "motor rotor angle (turning with the crank's sense)"),
+    ("motor_angle", "rad", "float64", "motor rotor angle about +z (the crank angle's sense)"),
     ("motor_speed", "rad/s", "float64", "motor rotor angular velocity"),
     ("motor_torque", "N m", "float32", "motor electromagnetic torque (controller output, clamped)"),
     ("belt_torque", "N m", "float32", "belt torque on the crank pulley (r_c x effective pull)"),
@@ -38,10 +40,45 @@ DRIVE_ENERGY_CHANNELS: tuple[tuple[str, str, str, str], ...] = (
 )
 
 
+@functools.lru_cache(maxsize=4)
+def _command_trace(path: str, mtime_ns: int) -> tuple[np.ndarray, np.ndarray]:  # noqa: ARG001 - cache key
+    from twin.errors import ConfigError
+
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            t, v = np.asarray(z["t"], dtype=np.float64), np.asarray(z["volts"], dtype=np.float64)
+    except (OSError, KeyError, ValueError) as err:
+        raise ConfigError("drivetrain.command_file", f"{path}: needs arrays 't' and 'volts' ({err})") from None
+    if t.ndim != 1 or t.shape != v.shape or t.size < 2 or np.any(np.diff(t) <= 0) \
+            or not (np.all(np.isfinite(t)) and np.all(np.isfinite(v))):
+        raise ConfigError("drivetrain.command_file", f"{path}: 't' must increase and match 'volts', all finite")
+    return t, v
+
+
+def command_trace(cfg: BenchConfig) -> tuple[np.ndarray, np.ndarray] | None:
+    """(t [s], volts [V]) of ``drivetrain.command_file``, or None."""
+    import os
+
+    path = cfg.drivetrain.command_file
+    if not path:
+        return None
+    if not os.path.isfile(path):
+        from twin.errors import ConfigError
+
+        raise ConfigError("drivetrain.command_file", f"no such file: {path}")
+    return _command_trace(path, os.stat(path).st_mtime_ns)
+
+
 def motor_input(cfg: BenchConfig, k0: int, nstep: int, omega_ref: np.ndarray) -> np.ndarray:
-    """Per-step motor input of steps k0 .. k0 + nstep − 1: speed set point [rad/s] ("motor") or
-    motor torque [N m] ("torque", in the crank's turning sense)."""
+    """Per-step motor input of steps k0 .. k0 + nstep − 1, about +z like the crank angle: speed set
+    point [rad/s] ("motor") or motor torque [N m] ("torque"); a positive command turns the crank
+    in ``mechanism.crank_direction``."""
     if cfg.drive.mode == "motor":
+        rec = command_trace(cfg)
+        if rec is not None:
+            t = (k0 + np.arange(nstep)) * cfg.simulation.timestep_s
+            rpm = np.interp(t, rec[0], rec[1]) / cfg.instrumentation.command_v_per_rpm
+            return np.ascontiguousarray(cfg.mechanism.crank_direction * rpm * (2.0 * np.pi / 60.0))
         return np.ascontiguousarray(cfg.drive.belt_ratio * np.asarray(omega_ref, dtype=np.float64))
     t = (k0 + np.arange(nstep)) * cfg.simulation.timestep_s
     return np.ascontiguousarray(cfg.mechanism.crank_direction * cfg.drivetrain.torque_program(t))
@@ -52,6 +89,9 @@ def command_voltage(cfg: BenchConfig, t: np.ndarray) -> np.ndarray:
     if cfg.drive.mode == "torque":
         dt = cfg.drivetrain
         return 10.0 * dt.torque_program(t) / dt.peak_torque_nm
+    rec = command_trace(cfg)
+    if rec is not None:
+        return np.interp(t, rec[0], rec[1])
     from twin.drive import DriveReference
 
     return cfg.instrumentation.command_v_per_rpm * DriveReference(cfg).command_rpm(t)
