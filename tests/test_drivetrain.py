@@ -18,7 +18,8 @@ import pytest
 from twin.config import BenchConfig, preset
 from twin.drivetrain_params import Drivetrain
 from twin.errors import ConfigError
-from twin.kinematics import initial_pose, pose_rates
+from twin.kinematics import initial_pose
+from twin.motor_drive import crank_side_inertia, speed_harmonics
 from twin.simulate import simulate_run
 
 ENGINES = ("mujoco", "reference")
@@ -26,18 +27,6 @@ ENGINES = ("mujoco", "reference")
 
 def _run(cfg: BenchConfig) -> dict[str, np.ndarray]:
     return {k: np.asarray(v.data, dtype=np.float64) for k, v in simulate_run(cfg).channels.items()}
-
-
-def _crank_side_inertia(cfg: BenchConfig, theta: float) -> float:
-    """Kinetic energy of the ideal mechanism at unit crank rate ×2 (closed-form kinematics) [kg m²]."""
-    b = cfg.bodies
-    pose = initial_pose(cfg, theta)
-    phid, xd = pose_rates(cfg, pose, 1.0)
-    r = b.crank.length_m
-    i_a = b.crank.inertia_kgm2 + b.crank.mass_kg * b.crank.x_g_m ** 2
-    vb = r * np.array([-math.sin(theta), math.cos(theta)])
-    vg = vb + b.rod.x_g_m * phid * np.array([-math.sin(pose.phi), math.cos(pose.phi)])
-    return i_a + b.rod.mass_kg * float(vg @ vg) + b.rod.inertia_kgm2 * phid ** 2 + b.slider.mass_kg * xd ** 2
 
 
 # ----------------------------------------------------------------------- configuration
@@ -96,7 +85,7 @@ def test_rotor_belt_crank_natural_frequency(engine):
     ch = _run(cfg)
     dt, n = cfg.drivetrain, cfg.drive.belt_ratio
     r_m, r_c = dt.motor_pulley_radius_m, dt.crank_pulley_radius_m(n)
-    j_c = _crank_side_inertia(cfg, theta0)
+    j_c = crank_side_inertia(cfg, theta0)
     j_m = dt.rotor_inertia_kgm2 * (r_c / r_m) ** 2
     k_t = dt.stiffness_npm * r_c ** 2
     f_closed = math.sqrt(k_t * (1 / j_c + 1 / j_m)) / (2 * math.pi)
@@ -161,24 +150,15 @@ def test_energy_balance(engine, test):
 
 
 # ------------------------------------------------------------------ two engines
-def _harmonics(ch: dict[str, np.ndarray], rate: float, t0: float) -> np.ndarray:
-    """First three harmonics of the crank speed over crank angle (whole turns after t0), % of mean."""
-    t = np.arange(ch["crank_angle"].size) / rate
-    th, w = np.unwrap(ch["crank_angle"][t >= t0]), ch["crank_speed"][t >= t0]
-    turns = int((th[-1] - th[0]) // (2 * math.pi))
-    grid = th[0] + np.linspace(0, 2 * math.pi * turns, 512 * turns, endpoint=False)
-    spec = np.fft.rfft(np.interp(grid, th, w)) / grid.size
-    mean = spec[0].real
-    return np.array([2 * abs(spec[turns * k]) / mean * 100 for k in (1, 2, 3)])
-
-
 @pytest.mark.parametrize("test", [3, pytest.param(12, marks=pytest.mark.slow)])
 def test_engines_agree_on_crank_ripple(test):
     h = {}
     for engine in ENGINES:
         cfg = preset(test).replace(**{"drive.mode": "motor", "simulation.engine": engine, "simulation.duration_s": 2.2,
                                       "sensors.channels": ["crank", "motor"], "sensors.output_rate_hz": 10000.0})
-        h[engine] = _harmonics(_run(cfg), cfg.output_rate_hz, 1.0)
+        ch = _run(cfg)
+        keep = np.arange(ch["crank_angle"].size) / cfg.output_rate_hz >= 1.0  # after the spin-up
+        h[engine] = speed_harmonics(ch["crank_angle"][keep], ch["crank_speed"][keep])
     assert h["mujoco"][0] > 1.0  # a ripple to compare
     np.testing.assert_allclose(h["mujoco"], h["reference"], rtol=0.05)
 
@@ -209,3 +189,50 @@ def test_dataset_factors_set_the_drive_train():
     NAMED["belt_preload_n"].apply(80.0, ov, None, preset(12))
     cfg = preset(12).replace(**ov)
     assert cfg.drive.mode == "motor" and cfg.drivetrain.preload_n == 80.0
+
+
+# ------------------------------------------------------------------------ belt law
+def test_belt_law_creep_and_slip():
+    """The closed-form pull satisfies F = k x + c (v_rel − w(F)) with w = F |v_m|/EA below the
+    capstan limit (creep: speed loss ∝ pull) and F_max |v_m|/EA + (|F| − F_max)/c_slip beyond."""
+    from twin.reference import drivetrain as DT
+
+    cfg = preset(1).replace(**{"drive.mode": "motor"})
+    D = DT.build(cfg)
+    k, c, ea, fmax, cs = (D[i] for i in (DT.D_K, DT.D_C, DT.D_EA, DT.D_FMAX, DT.D_CS))
+    out = np.empty(3)
+    rng = np.random.default_rng(1)
+    for x, v_rel, v_m in zip(rng.normal(0, 3e-3, 200), rng.normal(0, 0.05, 200), rng.normal(0, 2.0, 200)):
+        DT.belt_pull(D, x, v_rel, v_m, out)
+        F, w, xd = out
+        expect_w = F * abs(v_m) / ea if abs(F) <= fmax else \
+            np.sign(F) * (fmax * abs(v_m) / ea + (abs(F) - fmax) / cs)
+        assert w == pytest.approx(expect_w, rel=1e-9, abs=1e-15)
+        assert F == pytest.approx(k * x + c * (v_rel - w), rel=1e-9, abs=1e-9)
+        assert xd == pytest.approx(v_rel - w, abs=1e-15)
+        assert F * w >= 0  # creep and slip dissipate
+    # continuity at the limit: the pull that just reaches F_max from both sides
+    v_m = 1.5
+    lam = v_m / ea
+    x_lim = fmax * (1 + c * lam) / k  # v_rel = 0
+    DT.belt_pull(D, x_lim * (1 - 1e-9), 0.0, v_m, out)
+    below = out[0]
+    DT.belt_pull(D, x_lim * (1 + 1e-9), 0.0, v_m, out)
+    assert below == pytest.approx(fmax, rel=1e-6) and out[0] == pytest.approx(fmax, rel=1e-6)
+
+
+def test_engines_agree_while_the_belt_slips():
+    """A slack belt (low preload) slips during the spin-up in both engines alike."""
+    runs = {}
+    for engine in ENGINES:
+        cfg = preset(1).replace(**{"drive.mode": "motor", "simulation.engine": engine, "simulation.duration_s": 0.4,
+                                   "drive.ramp_s": 0.1, "drivetrain.preload_n": 6.0,
+                                   "sensors.channels": ["crank", "motor"], "sensors.output_rate_hz": 1000.0})
+        runs[engine] = _run(cfg)
+        limit = cfg.drivetrain.max_pull_n * cfg.drivetrain.crank_pulley_radius_m(cfg.drive.belt_ratio)
+    for ch in runs.values():
+        assert np.max(np.abs(ch["belt_torque"])) < 1.1 * limit       # held near the capstan limit
+        assert np.max(np.abs(ch["belt_slip"])) > 0.05                 # and sliding [m/s], not creeping
+    a, b = runs["mujoco"], runs["reference"]
+    np.testing.assert_allclose(a["crank_speed"][-100:].mean(), b["crank_speed"][-100:].mean(), rtol=0.02)
+    np.testing.assert_allclose(a["motor_speed"][-100:].mean(), b["motor_speed"][-100:].mean(), rtol=0.02)

@@ -81,8 +81,9 @@ class Drivetrain:
             1:3.97 open drive), explore 2.4 – 3.1.
         slip_damping_nspm: regularization c_slip of sliding beyond the friction limit [N s/m]:
             the pull exceeds F_max by c_slip × (slip speed − creep). Numerical, not physical:
-            small is closer to Coulomb (explicit stability needs h k / (c + c_slip) < 2).
-            Default 20 (10 cm/s of sliding adds 2 N to a limit of ≈ 170 N), explore 5 – 200.
+            small is closer to Coulomb (explicit stability of the stretch needs
+            h k / (c + c_slip) < 2, c the belt damping). Default 2 (1 m/s of sliding adds 2 N to a
+            limit of ≈ 170 N with the default preload), explore 1 – 50.
         controller_rate_hz: sample rate of the speed loop [Hz]. PLACEHOLDER (the bench's EPOS
             settings are not known, S003 §6): 2500, explore 1000 – 10000. Its period must be a
             whole number of integration steps.
@@ -118,7 +119,7 @@ class Drivetrain:
     friction_mu: float = 0.3
     groove_angle_deg: float = 38.0
     wrap_angle_rad: float = 2.8
-    slip_damping_nspm: float = 20.0
+    slip_damping_nspm: float = 2.0
     controller_rate_hz: float = 2500.0
     encoder_counts: int = 4096
     speed_filter_hz: float = 100.0

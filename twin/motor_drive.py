@@ -95,3 +95,37 @@ def command_voltage(cfg: BenchConfig, t: np.ndarray) -> np.ndarray:
     from twin.drive import DriveReference
 
     return cfg.instrumentation.command_v_per_rpm * DriveReference(cfg).command_rpm(t)
+
+
+def crank_side_inertia(cfg: BenchConfig, theta: float) -> float:
+    """Inertia the ideal mechanism presents at the crank at bench angle ``theta`` [kg m²]: twice its
+    kinetic energy at unit crank rate, from the closed-form kinematics (:mod:`twin.kinematics`),
+    independent of either engine's mass matrix (for the drive train's closed-form checks)."""
+    import math
+
+    from twin.kinematics import initial_pose, pose_rates
+
+    b = cfg.bodies
+    pose = initial_pose(cfg, theta)
+    phid, xd = pose_rates(cfg, pose, 1.0)
+    i_a = b.crank.inertia_kgm2 + b.crank.mass_kg * b.crank.x_g_m ** 2
+    vb = b.crank.length_m * np.array([-math.sin(theta), math.cos(theta)])
+    vg = vb + b.rod.x_g_m * phid * np.array([-math.sin(pose.phi), math.cos(pose.phi)])
+    return float(i_a + b.rod.mass_kg * float(vg @ vg) + b.rod.inertia_kgm2 * phid ** 2 + b.slider.mass_kg * xd ** 2)
+
+
+def speed_harmonics(crank_angle: np.ndarray, crank_speed: np.ndarray, n: int = 3) -> np.ndarray:
+    """First ``n`` harmonics of the crank speed over crank angle (whole turns of the record, speed
+    resampled uniformly in angle), amplitude in % of the mean speed."""
+    import math
+
+    th = np.unwrap(np.asarray(crank_angle, dtype=np.float64))
+    w = np.asarray(crank_speed, dtype=np.float64)
+    if th[-1] < th[0]:
+        th, w = -th, -w
+    turns = int((th[-1] - th[0]) // (2 * math.pi))
+    if turns < 1:
+        raise ValueError("speed_harmonics needs at least one whole turn")
+    grid = th[0] + np.linspace(0, 2 * math.pi * turns, 512 * turns, endpoint=False)
+    spec = np.fft.rfft(np.interp(grid, th, w)) / grid.size
+    return np.array([2 * abs(spec[turns * k]) / spec[0].real * 100 for k in range(1, n + 1)])

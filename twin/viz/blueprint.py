@@ -94,8 +94,11 @@ def default_blueprint(cfg: BenchConfig, groups: dict[str, list[str]], channels: 
     friction = paths(*[f"ft_{j}" for j in JOINTS])
     ecc = paths(*[f"ecc_{j}_{k}" for j in JOINTS for k in ("x", "y")])
     encoder = paths("encoder_angle", "rec_encoder_angle") or paths("encoder_counts", "sim_encoder_counts")
-    motor = paths("motor_command", "sim_motor_command")
+    motor = paths("motor_command", "sim_motor_command", "command_voltage")
     torque = paths("crank_torque")
+    rotor = paths("motor_speed")                       # drive train (drive.mode motor/torque)
+    motor_torque = paths("motor_torque", "belt_torque")
+    slip = paths("belt_slip")
     angle = paths("crank_angle", "theta_ref")
     slider = paths("slider_position")
 
@@ -109,7 +112,8 @@ def default_blueprint(cfg: BenchConfig, groups: dict[str, list[str]], channels: 
                     if bottom else rrb.Vertical(grid, name="Signals"))
     drive = [_series(n, p) for n, p in (("crank speed", speed), ("encoder", encoder), ("motor command", motor),
                                          ("crank torque", torque), ("crank angle", angle),
-                                         ("slider position", slider)) if p]
+                                         ("slider position", slider), ("motor speed", rotor),
+                                         ("motor and belt torque", motor_torque), ("belt slip", slip)) if p]
     if drive:
         tabs.append(rrb.Grid(*drive, grid_columns=2, name="Drive & encoder"))
     contact = [_series(n, p, window=win) for n, p in (("contact force", force), ("friction force", friction),
