@@ -236,3 +236,15 @@ def test_engines_agree_while_the_belt_slips():
     a, b = runs["mujoco"], runs["reference"]
     np.testing.assert_allclose(a["crank_speed"][-100:].mean(), b["crank_speed"][-100:].mean(), rtol=0.02)
     np.testing.assert_allclose(a["motor_speed"][-100:].mean(), b["motor_speed"][-100:].mean(), rtol=0.02)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_chunking_does_not_change_the_drive_train(engine):
+    """The drive train's state (rotor, belt stretch, controller, accounts) carries over between chunks."""
+    base = preset(12).replace(**{"drive.mode": "motor", "simulation.engine": engine, "simulation.duration_s": 0.05,
+                                 "sensors.channels": ["crank", "motor", "drive_energy"],
+                                 "sensors.output_rate_hz": 10000.0})
+    a = _run(base.replace(**{"simulation.chunk_s": 0.05}))
+    b = _run(base.replace(**{"simulation.chunk_s": 0.0037}))
+    for name in ("crank_angle", "motor_speed", "motor_torque", "belt_torque", "motor_work", "diss_contact"):
+        np.testing.assert_array_equal(a[name], b[name], err_msg=name)

@@ -134,7 +134,7 @@ class SummaryAccumulator:
                 acc = self._acc.setdefault(a, [0.0, 0.0])
                 acc[0] += float(np.dot(x, x))
                 acc[1] = max(acc[1], float(np.max(np.abs(x))))
-        if "crank_angle" in chunk and "theta_ref" in chunk:
+        if "crank_angle" in chunk and "theta_ref" in chunk and not (self.config and self.config.drive.mode == "torque"):
             err = chunk["theta_ref"] - chunk["crank_angle"]
             tr = self._track if self._track is not None else [0.0, 0.0]
             tr[0] = max(tr[0], float(np.max(np.abs(err))))
