@@ -248,3 +248,13 @@ def test_chunking_does_not_change_the_drive_train(engine):
     b = _run(base.replace(**{"simulation.chunk_s": 0.0037}))
     for name in ("crank_angle", "motor_speed", "motor_torque", "belt_torque", "motor_work", "diss_contact"):
         np.testing.assert_array_equal(a[name], b[name], err_msg=name)
+
+
+def test_torque_presets():
+    from twin.config import named_preset
+
+    for name in ("torque_release", "torque_release_protocol"):
+        cfg = named_preset(name)
+        assert cfg.drive.mode == "torque" and "motor" in cfg.sensors.channels
+        tq = cfg.drivetrain.torque_program(np.arange(0.0, cfg.duration_s, 1e-3))
+        assert tq.max() > 0 and tq[-1] == 0.0  # spun up, then released

@@ -1498,16 +1498,35 @@ def _torque_release() -> BenchConfig:
         sensors=dataclasses.replace(base.sensors, channels=tuple(base.sensors.channels) + ("motor",)))
 
 
+def _torque_release_protocol() -> BenchConfig:
+    """The protocol variant of the release test: like the 38 s speed protocol, three runs of
+    increasing speed, each a spin-up at 1.2 N m (from 2, 12 and 22 s, for 0.22, 0.46 and 0.58 s:
+    measured with the defaults, both engines: motor speeds of about 270, 500 and 960 rpm around each
+    release, within a turn's ripple; the third depends on where the previous coast-down left the
+    swinging mechanism) followed by a torque-free coast-down, 34 s in all (the torque program's zero
+    steps are the releases)."""
+    base = _torque_release()
+    starts, spins = (2.0, 12.0, 22.0), (0.22, 0.46, 0.58)
+    times = tuple(t for s0, d in zip(starts, spins) for t in (s0, s0 + d))
+    torques = tuple(x for _ in starts for x in (1.2, 0.0))
+    return dataclasses.replace(
+        base, name="torque_release_protocol",
+        drivetrain=dataclasses.replace(base.drivetrain, torque_s=times, torque_nm=torques, release_s=0.0),
+        simulation=dataclasses.replace(base.simulation, duration_s=34.0))
+
+
 #: Named presets of the other mechanisms of the seed papers (issue 18) and of the bench's planned
 #: torque-release test: name -> builder.
 NAMED_PRESETS: dict[str, typing.Callable[[], BenchConfig]] = {"s001": _s001, "s000": _s000, "s004": _s004,
-                                                              "torque_release": _torque_release}
+                                                              "torque_release": _torque_release,
+                                                              "torque_release_protocol": _torque_release_protocol}
 
 
 def named_preset(name: str, field_name: str = "--preset") -> BenchConfig:
     """Configuration of a paper's mechanism (``--preset NAME``, ``preset = "NAME"`` in TOML):
     ``s001`` (S001's rig; see :func:`_s001`), ``s000`` (S000's Flores slider–crank; :func:`_s000`), ``s004`` (S004's large mechanism; :func:`_s004`), ``torque_release`` (the bench's torque-driven
-    release test; :func:`_torque_release`)."""
+    release test; :func:`_torque_release`), ``torque_release_protocol`` (three spin-ups and
+    coast-downs; :func:`_torque_release_protocol`)."""
     if not isinstance(name, str) or name.lower() not in NAMED_PRESETS:
         raise ConfigError(field_name, f"must be one of {', '.join(NAMED_PRESETS)}, got {name!r}")
     return NAMED_PRESETS[name.lower()]()
