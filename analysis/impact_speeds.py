@@ -1,7 +1,7 @@
 """The impact speeds that occur on the bench, measured from reference-engine runs.
 
 The check of the twin's contact law against the reference's single impacts
-(``twin/calibrate.py``, ``SPEEDS``; before issue 15 the range of the retired contact calibration)
+(``twin/studies/contact_check.py``, ``SPEEDS``; before issue 15 the range of the retired contact calibration)
 must cover the normal impact speeds the pins actually reach (issue 4: "measure that range from
 reference runs; at least 1 mm/s to 0.5 m/s"). This script runs the reference engine (R-matrix, Lankarani–Nikravesh,
 h = 1e-5 s) over
@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from twin.calibrate import SPEEDS
+from twin.studies.contact_check import SPEEDS
 from twin.config import CATALOGUE_DIAMETRAL_MM, BenchConfig, preset
 from twin.simulate import simulate_run
 from twin.summary import MIN_FREE_S, contact_onsets
@@ -82,7 +82,7 @@ def main() -> None:
             speeds[j].append(v)
             free[j].append(f)
     lo, hi = min(SPEEDS), max(SPEEDS)
-    print(f"checked range (twin.calibrate.SPEEDS): {lo * 1e3:g} mm/s to {hi * 1e3:g} mm/s")
+    print(f"checked range (twin.studies.contact_check.SPEEDS): {lo * 1e3:g} mm/s to {hi * 1e3:g} mm/s")
     print("| joint | contact events | impacts | v at impacts [mm/s]: min / p1 / p5 / median / p95 / p99 / max "
           "| impacts below / in / above range | all events: min / max [mm/s] |")
     print("|---|---:|---:|---|---|---|")

@@ -8,7 +8,7 @@ P pressing it into the wall:
 * reference: m δ̈ = P − max(0, K δ^n (1 + χ max(δ̇/v, −1))), Lankarani–Nikravesh damping χ from
   e, solved at tight tolerance by ``twin.impact.impact_hysteresis`` (its ``preload_n``);
 * the twin's default contact (``mujoco.contact_source = "law"``, issue 15): the probe of
-  ``twin.calibrate.probe_model`` (real bore collider, the native module applying the same law,
+  ``twin.studies.contact_check.probe_model`` (real bore collider, the native module applying the same law,
   the twin's timestep and integrator) with P applied as gravity along the impact direction,
   stepped by MuJoCo;
 * MuJoCo's own soft contact (``contact_source = "first-guess"``): the linear spring-damper with
@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import argparse
 
-from twin.calibrate import reference_impacts, twin_impacts
+from twin.studies.contact_check import reference_impacts, twin_impacts
 from twin.config import BenchConfig
 
 PRELOADS_N = (0.0, 10.0, 30.0, 100.0)

@@ -54,10 +54,6 @@ def run(name: str, work: Path, workers: int, engine: str | None = None) -> dict:
     return res
 
 
-def _pt(res: dict, i: int, r: str) -> float:
-    return res["points"][i]["responses"][r]
-
-
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--work", default="/tmp/s000_work", help="where the generated datasets go")

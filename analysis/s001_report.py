@@ -6,7 +6,7 @@ Run: ``python analysis/s001_report.py [--out analysis/results/s001] [--quick]`` 
 two shared cores; ``--quick`` leaves out the off-grid and cross-engine recoveries). Writes
 ``results.json``, the PNGs and ``tables.md`` (the numbers the README of the folder quotes).
 
-Everything is simulated from ``--preset s001`` (``twin.config._s001``: the paper's Table I-II,
+Everything is simulated from ``--preset s001`` (``twin/config/presets/s001.toml``: the paper's Table I-II,
 0 -> 300 rpm in 0.2 s, vertical plane) in both engines: the ideal run with joint C ideal, the
 clearance run with 0.5 mm radial clearance at C and e = 0.55, and the same with the paper's own
 contact law (ADAMS IMPACT, c_max 27 960 N s/m, d_max 10 µm). Force, orbit and the unsampled
@@ -33,26 +33,21 @@ BURST_GAP_S = 0.02    # onsets closer than this belong to one burst (a first imp
 
 
 def closed_form_acc(theta, omega, alpha, r, L):
-    """Exact slider acceleration of the ideal slider-crank (zero offset) [m/s^2]."""
-    s, c = np.sin(theta), np.cos(theta)
-    root = np.sqrt(L * L - (r * s) ** 2)
-    dx = -r * s - r * r * s * c / root                      # dx/dθ
-    d2x = -r * c - r * r * (c * c - s * s) / root - r ** 4 * s * s * c * c / root ** 3
-    return d2x * omega ** 2 + dx * alpha
+    """Exact slider acceleration of the ideal slider-crank (zero offset) [m/s^2]
+    (:func:`twin.kinematics.slider_kinematics`)."""
+    from twin.kinematics import slider_kinematics
+
+    return slider_kinematics(theta, omega, alpha, r, L)[2]
 
 
 def impacts(run, rate):
-    """Contact onsets after >= SEP_S of separation: indices, approach speeds [m/s]."""
-    pen = np.asarray(run["pen_C"], dtype=float)
+    """Contact onsets after >= SEP_S of separation (:func:`twin.summary.contact_onsets`): indices,
+    approach speeds [m/s]."""
+    from twin.summary import contact_onsets
+
     ecc = np.hypot(np.asarray(run["ecc_C_x"], float), np.asarray(run["ecc_C_y"], float))
-    on = pen > 0
-    gap = int(round(SEP_S * rate))
-    idx, last_contact = [], -10 ** 9
-    for i in np.flatnonzero(on):
-        if i - last_contact > gap and i > 0:
-            idx.append(i)
-        last_contact = i
-    idx = np.array(idx, dtype=int)
+    onsets, free = contact_onsets(np.asarray(run["pen_C"], dtype=float) > 0)
+    idx = onsets[free >= int(round(SEP_S * rate))].astype(int)
     speed = (ecc[idx] - ecc[idx - 1]) * rate if idx.size else np.array([])
     return idx, speed
 

@@ -2,7 +2,7 @@
 
 Runs ``--preset s004`` (S004's large slider–crank at a prescribed 30 rad/s, ADAMS IMPACT contact)
 with 0, 0.25 and 0.5 mm radial clearance at B in both engines, and S004's continuous-contact model
-(:mod:`twin.studies.s004`), and writes ``analysis/results/s004/``: ``s004.json`` (every number),
+(:mod:`twin.studies.continuous_contact`), and writes ``analysis/results/s004/``: ``s004.json`` (every number),
 ``README.md`` (the numbers beside the paper's) and PNGs (Fig. 4–7 counterparts, the comparison of
 the continuous-contact model with the contact model). Slider velocities of the contact runs are
 central differences of the (float64) slider position at 100 kHz; accelerations are AC6 (the
@@ -26,7 +26,7 @@ sys.path.insert(0, str(ROOT))
 from twin.config import named_preset  # noqa: E402
 from twin.kinematics import slider_kinematics  # noqa: E402
 from twin.simulate import simulate_run  # noqa: E402
-from twin.studies.s004 import ContinuousContact, Mechanism, phases  # noqa: E402
+from twin.studies.continuous_contact import ContinuousContact, Mechanism, phases  # noqa: E402
 
 W = 30.0                       # crank speed [rad/s] (S004 §3)
 T_TURN = 2 * math.pi / W       # one turn [s]
@@ -52,10 +52,13 @@ def run(engine: str, c_mm: float, duration: float, **overrides):
 
 def rod_angle_bench_ecc(cfg, theta, ex_rod, ey_rod):
     """Eccentricity at B in the bench frame from the rod-frame channels: φ from
-    sin φ = (d_off − B'_y)/l with B' = B − e (two fixed-point passes: |e| ≪ l)."""
+    sin φ = (d_off − B'_y)/l with B' = B − e, starting from the ideal mechanism's rod angle
+    (:func:`twin.kinematics.rod_angle`; fixed-point passes: |e| ≪ l)."""
+    from twin.kinematics import rod_angle
+
     r, l, d = cfg.bodies.crank.length_m, cfg.bodies.rod.length_m, cfg.mechanism.d_off_m
     by = r * np.sin(theta)
-    phi = np.arcsin((d - by) / l)
+    phi = rod_angle(theta, r, l, d)
     for _ in range(3):
         ex = np.cos(phi) * ex_rod - np.sin(phi) * ey_rod
         ey = np.sin(phi) * ex_rod + np.cos(phi) * ey_rod

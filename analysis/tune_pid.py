@@ -18,7 +18,7 @@ Method (pole placement on the rigid 1-DOF mechanism, then a check in the twin):
    rounded gains, and report the tracking error at steady speed in encoder counts.
 
 Run: ``python analysis/tune_pid.py`` (about a minute). Paste the printed gains into
-``twin/config.py`` (class ``PID``) when they change.
+``twin/config/drive.py`` (class ``PID``) when they change.
 """
 
 from __future__ import annotations
@@ -110,5 +110,5 @@ def check(gains: dict[str, float]) -> None:
 if __name__ == "__main__":
     raw = tune(BenchConfig())
     gains = {k: round_sig(v) for k, v in raw.items()}
-    print("rounded gains for twin/config.py PID:", gains)
+    print("rounded gains for twin/config/drive.py PID:", gains)
     check(gains)

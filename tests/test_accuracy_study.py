@@ -52,26 +52,25 @@ def test_quick_study_writes_table_json_and_plots(quick):
     assert data["settings"]["tests"] == [6, 12]
 
 
-def test_truth_against_itself_is_exact_and_the_reference_converges(quick):
+def test_the_reference_at_ten_times_the_truths_step_meets_every_target(quick):
+    """First-order symplectic Euler at h = 1e-5 against the truth at 1e-6: every metric of every
+    window within its stated target (``TARGETS``: impacts and peak force 10 %, RMS 3 %, band 1.5 dB)."""
     _, data = quick
-    rows = {r["key"]: r for r in data["summary"]}
-    truth = rows[A.TRUTH.key]
-    assert all(v == 0.0 for v in truth["mean"].values())
-    # the reference at 10x the truth's step: first-order symplectic Euler, already within every target
-    ref = rows["reference h=1e-5"]
-    assert ref["score"] < 0.5
-    assert ref["mean"]["rms_slider"] < 0.005 and ref["mean"]["band_db"] < 0.5
+    ref = next(r for r in data["summary"] if r["key"] == "reference h=1e-5")
+    for k, target in A.TARGETS.items():
+        assert ref["worst"][k] <= target, k
 
 
-def test_twin_default_reproduces_the_reference_statistics(quick):
+def test_twin_default_meets_every_target_against_the_converged_reference(quick):
+    """The twin's default against the converged reference (h = 1e-6), worst window of tests 6 and
+    12: impact count and peak contact force within 10 %, accelerometer RMS within 3 %, band energy
+    0.5-5 kHz within 1.5 dB (the study's stated targets, ``A.TARGETS``), so its score is <= 1."""
     _, data = quick
     d = next(r for r in data["summary"] if r["key"] == data["default"])
-    # accelerometer RMS within the 3 % target, peak contact force within 10 %, short windows
-    assert d["mean"]["rms_slider"] < 0.03 and d["mean"]["rms_rod"] < 0.03
-    assert d["worst"]["peak_fn"] < 0.10
-    # the impact-dominated windows' band energy: within a few dB of the reference
-    assert d["mean"]["band_db"] < 3.0
-    # timing is measured: per simulated second, positive
+    for k, target in A.TARGETS.items():
+        assert d["worst"][k] <= target, k
+    assert A.score(d["worst"]) <= 1.0
+    # timing is measured: per simulated second, positive and finite
     assert 0 < d["wall_per_sim_s"] < 60
 
 

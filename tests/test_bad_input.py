@@ -217,10 +217,12 @@ CASES: list[tuple[str, str]] = [
     ("identify train {ws}/missing_ds --out {ws}/m.txt", "--out"),
     ("identify train {ws}/missing_ds --out {ws}/m.joblib --splits train,dev", "--splits"),
     ("identify evaluate {ws}/afile {ws}/missing_ds --out {ws}/rep", "not a readable identification model"),
-    # study, calibrate, analyze
+    # study, check (and its deprecated name calibrate), analyze
     ("study formulations --out {ws}/afile", "--out"),
     ("study formulations --out {ws}/f --duration -1", "--duration"),
     ("study accuracy --out {ws}/afile --quick", "--out"),
+    ("check contact --joints X --out {ws}/cal.json", "--joints"),
+    ("check contact --out {ws}/cal.txt", "--out"),
     ("calibrate contact --joints X --out {ws}/cal.json", "--joints"),
     ("analyze repeatability {ws}/rec.mcap", "at least 2"),
     ("analyze repeatability {ws}/rec.mcap {ws}/missing.mcap", "missing.mcap"),

@@ -1,7 +1,7 @@
 """The twin's contact against the reference law's closed forms (issue 15, item 2).
 
 MuJoCo integrates the native law in a 1-DOF probe with the real bore collider and native module
-(:mod:`twin.calibrate`), and the whole bench at rest; the references are closed forms and the
+(:mod:`twin.studies.contact_check`), and the whole bench at rest; the references are closed forms and the
 reference's single-impact solution (ODE at tight tolerance, :mod:`twin.impact`). Tolerances are
 the issue's: static penetration 1 %, restitution ±0.02, peak force 5 %, duration 10 %.
 """
@@ -13,12 +13,12 @@ import math
 import numpy as np
 import pytest
 
-from twin.calibrate import (PRELOAD_SPEEDS, PRELOADS_N, SPEEDS, TOL_E, TOL_F, TOL_STATIC, TOL_T, check_case,
+from twin.studies.contact_check import (PRELOAD_SPEEDS, PRELOADS_N, SPEEDS, TOL_E, TOL_F, TOL_STATIC, TOL_T, check_case,
                             impact_errors, joint_case, reference_impacts, static_penetration, twin_impacts)
 from twin.config import BenchConfig, ln_stiffness, preset
 from twin.simulate import simulate_run
 
-#: effective masses a joint sees over a crank turn (twin.calibrate.effective_masses, README):
+#: effective masses a joint sees over a crank turn (twin.studies.contact_check.effective_masses, README):
 #: B 0.82-2.84 kg, C 1.16-1.47 kg; the extremes and C's median
 MASSES = {"B": (0.82, 2.84), "C": (1.16, 1.31, 1.47)}
 
@@ -95,7 +95,7 @@ def test_preloaded_slow_impacts_are_captured_as_in_the_reference():
 
 
 def test_contact_check_case_meets_the_tolerances():
-    """``twin calibrate contact``'s check of one case: masses over a turn, static, free and
+    """``twin check contact``'s check of one case: masses over a turn, static, free and
     preloaded impacts."""
     r = check_case(BenchConfig(), "C", 0.1, speeds=SPEEDS[::2])
     assert r.ok, r
@@ -107,17 +107,16 @@ def test_effective_masses_follow_the_crank_and_match_the_reference_engine():
     """The effective masses (MuJoCo model, mj_solveM) over a turn equal those of the reference
     engine's reduced mass matrix (independent formulation) at the same poses and normals; they
     must change with the crank angle (a frozen pose would give one value)."""
-    from twin.calibrate import effective_masses
-    from twin.reference import model as M
-    from twin.reference.engine import engine_params
+    from twin.natural_coordinates import N_Q, initial_state, mechanism_params, reduced_mass
+    from twin.studies.contact_check import effective_masses
 
     cfg = preset(12)
-    P = engine_params(cfg)
+    P = mechanism_params(cfg)
     for j, off in (("B", 1), ("C", 3)):
         mj = effective_masses(cfg, j, n_theta=4, n_dir=2)
         ref = []
         for th in np.linspace(0, 2 * np.pi, 4, endpoint=False):
-            W = np.linalg.inv(M.reduced_mass(P, M.initial_state(cfg, th)[:M.N_Q]))[off:off + 2, off:off + 2]
+            W = np.linalg.inv(reduced_mass(P, initial_state(cfg, th)[:N_Q]))[off:off + 2, off:off + 2]
             for a in np.linspace(0, np.pi, 2, endpoint=False):
                 n = np.array([math.cos(a), math.sin(a)])
                 ref.append(1.0 / (n @ W @ n))

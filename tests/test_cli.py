@@ -156,3 +156,39 @@ def test_a_trace_config_without_duration_runs_for_the_trace(tmp_path):
     (tmp_path / "d.toml").write_text(f'[drive]\nprogram = "trace"\ntrace_file = "{tmp_path / "tr.npz"}"\n'
                                      "[simulation]\nduration_s = 0.5\n")
     assert load_config(tmp_path / "d.toml").simulation.duration_s == 0.5
+
+
+def test_check_contact_and_its_deprecated_alias_behave_alike(tmp_path, monkeypatch, capsys):
+    """``twin check contact`` and the deprecated ``twin calibrate contact`` take the same options
+    and print and write the same; only the alias adds its one-line note on stderr. The check
+    itself is replaced by a fixed report here (this is the command line's wiring; the check's
+    physics is tests/test_calibration.py)."""
+    import json
+
+    import twin.studies.contact_check as contact_check_module
+    from twin.cli import main
+    from twin.commands.check import DEPRECATION_NOTE
+
+    seen = []
+
+    def fake_check(cfg, joints, progress):
+        seen.append(joints)
+        return {"ok": True, "cases": {"B:0.1": {"m_eff_kg": {"min": 0.8, "median": 1.3, "max": 3.5},
+                                                "max_scaled_error": {"restitution": 0.04, "peak_force": 0.2,
+                                                                     "duration": 0.05},
+                                                "static_error": 1e-6, "capture_agrees": True}}}
+
+    monkeypatch.setattr(contact_check_module, "contact_check", fake_check)
+    outputs = {}
+    for name in ("check", "calibrate"):
+        out = tmp_path / f"{name}.json"
+        assert main([name, "contact", "--joints", "B", "--no-progress", "--out", str(out)]) == 0
+        cap = capsys.readouterr()
+        outputs[name] = (cap.out.replace(str(out), "OUT"), out.read_text(), cap.err)
+    assert seen == [("B",), ("B",)]
+    assert outputs["check"][:2] == outputs["calibrate"][:2]
+    assert "| B:0.1 | 0.80/1.30/3.50 | 0.04 | 0.20 | 0.05 | 0.000 % | same |" in outputs["check"][0]
+    assert json.loads(outputs["check"][1])["ok"] is True
+    assert DEPRECATION_NOTE not in outputs["check"][2]
+    assert outputs["calibrate"][2].strip() == DEPRECATION_NOTE
+    assert len(DEPRECATION_NOTE.splitlines()) == 1

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from twin.config import BenchConfig, preset
-from twin.drivetrain_params import Drivetrain
+from twin.config import Drivetrain
 from twin.errors import ConfigError
 from twin.kinematics import initial_pose
 from twin.motor_drive import crank_side_inertia, speed_harmonics

@@ -285,7 +285,9 @@ def test_the_shipped_model_identifies_the_sample_recordings(rec, fault, c_mm, tm
     assert main(["identify", "clearance", str(REC / rec), "--json", str(js)]) == 0
     a = json.loads(js.read_text())
     assert a["fault"] == fault and a["warnings"] == []
-    assert a["clearance_c_mm"] == 0.0 if not c_mm else a["clearance_c_mm"] > 0.0
+    if not c_mm:  # no clearance found means no size at either joint
+        assert a["clearance_c_mm"] == 0.0 and a["clearance_b_mm"] == 0.0
+    # the size of the 0.1 mm clearance at C is held to its target in the strict xfail below
 
 
 @pytest.mark.skipif(not DEFAULT.is_file(), reason="no default model committed yet")
@@ -297,7 +299,10 @@ def test_the_shipped_model_identifies_the_sample_recordings(rec, fault, c_mm, tm
 def test_the_shipped_model_sizes_the_clearance_of_the_test6_sample(tmp_path):
     js = tmp_path / "a.json"
     assert main(["identify", "clearance", str(REC / "test6_synthetic.mcap"), "--json", str(js)]) == 0
-    lo, hi = json.loads(js.read_text())["clearance_c_interval_mm"]
+    a = json.loads(js.read_text())
+    lo, hi = a["clearance_c_interval_mm"]
+    # the targets: the size within a factor 1.5 of the truth and a 90 % interval that holds it
+    assert 0.1 / 1.5 <= a["clearance_c_mm"] <= 0.1 * 1.5
     assert lo <= 0.1 <= hi
 
 
@@ -357,8 +362,9 @@ def _measured_map(study: str, joint: str) -> dict[str, float]:
 
 @pytest.mark.parametrize("joint, studies", [("B", ("size_observability_b.json", "size_observability_b_start.json")),
                                             ("C", ("size_observability_speed.json", "size_observability_start.json"))])
-def test_the_size_resolution_map_is_the_measured_one(joint, studies):
-    """SIZE_RESOLVED_FROM_RPM[joint] is, per vertical axis, the stricter of the maps measured with every
+def test_regression_guard_the_size_resolution_map_is_the_committed_studies(joint, studies):
+    """Regression guard (its basis is the project's own committed studies, not an independent one):
+    SIZE_RESOLVED_FROM_RPM[joint] is, per vertical axis, the stricter of the maps measured with every
     run started at crank angle 0 and with the start angle drawn over a turn (``*_start.json``); at C the
     two are the same map, at B the start angle moves y from 250 to 300 rpm."""
     from twin.identify.model import SIZE_RESOLVED_FROM_RPM, size_resolved

@@ -280,7 +280,7 @@ def test_native_law_event_state_in_the_probe():
     chunks); δ̇/v_imp clamped at −1 while separating."""
     from mujoco import rollout
 
-    from twin.calibrate import probe_model
+    from twin.studies.contact_check import probe_model
 
     cfg = BenchConfig().replace(**{"joints.clearance_c_mm": 0.1})
     c = cfg.joints.radial_m("C")

@@ -13,6 +13,7 @@ from scipy.integrate import solve_ivp
 from twin.channels import channel_specs
 from twin.config import BenchConfig, preset
 from twin.errors import ConfigError
+from twin import natural_coordinates as natural
 from twin.reference import model as M
 from twin.reference.engine import ReferenceEngine, ReferenceOptions
 from twin.run import Run
@@ -37,7 +38,7 @@ def _free_params(cfg: BenchConfig, h: float) -> np.ndarray:
 
 def _free_run(cfg: BenchConfig, h: float, duration: float, theta0: float = math.pi / 3, every_s: float = 1e-3):
     P = _free_params(cfg, h)
-    st = M.initial_state(cfg, theta0)
+    st = natural.initial_state(cfg, theta0)
     n = int(round(duration / h))
     every = max(1, int(round(every_s / h)))
     bufs = [np.zeros(n // every + 2) for _ in range(4)]
@@ -53,7 +54,7 @@ def _state(clear_b: float, clear_c: float, theta: float, e_b=(0.0, 0.0), e_c=(0.
     cfg = BenchConfig().replace(**{"joints.clearance_b_mm": clear_b, "joints.clearance_c_mm": clear_c,
                                    "joints.initial_eccentricity": "centred", "mechanism.d_off_m": d_off})
     P = M.build_params(cfg)
-    q = M.initial_state(cfg, theta)[:M.N_Q].copy()
+    q = natural.initial_state(cfg, theta)[:M.N_Q].copy()
     if clear_b:
         q[2:4] = q[0:2] - np.asarray(e_b)
     if clear_c:
@@ -62,7 +63,7 @@ def _state(clear_b: float, clear_c: float, theta: float, e_b=(0.0, 0.0), e_c=(0.
     if clear_c:
         q[6] = q[4] + e_c[0]
     R, S = np.zeros((M.N_Q, M.N_Z)), np.zeros(M.N_Q)
-    nz = M.r_matrix(P, q, np.zeros(M.N_Q), R, S)
+    nz = natural.r_matrix(P, q, np.zeros(M.N_Q), R, S)
     zd = np.random.default_rng(1).normal(size=nz) * np.array([10.0, 0.05, -0.03, 0.02, 0.04])[:nz]
     qd = R[:, :nz] @ zd
     return P, q, qd, zd, nz
@@ -78,7 +79,7 @@ def _project(P, q):
 
 def _phi(P, q):
     res = np.zeros(M.N_Q)
-    M.residual(P, q, math.sin(q[7]), math.cos(q[7]), res)
+    natural.residual(P, q, math.sin(q[7]), math.cos(q[7]), res)
     return res
 
 
@@ -105,7 +106,7 @@ SCENES = [
 def test_r_matrix_against_finite_differences_of_the_constraints(scene):
     P, q, qd, zd, nz = _state(*scene)
     R, S = np.zeros((M.N_Q, M.N_Z)), np.zeros(M.N_Q)
-    assert M.r_matrix(P, q, qd, R, S) == nz
+    assert natural.r_matrix(P, q, qd, R, S) == nz
     R = R[:, :nz]
     eps = 1e-6
     constraint_rows = [i for i in range(7) if _is_constraint(P, i)]
@@ -125,8 +126,8 @@ def test_r_matrix_against_finite_differences_of_the_constraints(scene):
     # and Ṙż = (dR/dt) ż, from R at q ± δ q̇
     d = 1e-6
     Rp, Rm = np.zeros((M.N_Q, M.N_Z)), np.zeros((M.N_Q, M.N_Z))
-    M.r_matrix(P, q + d * qd, qd, Rp, np.zeros(M.N_Q))
-    M.r_matrix(P, q - d * qd, qd, Rm, np.zeros(M.N_Q))
+    natural.r_matrix(P, q + d * qd, qd, Rp, np.zeros(M.N_Q))
+    natural.r_matrix(P, q - d * qd, qd, Rm, np.zeros(M.N_Q))
     np.testing.assert_allclose((Rp[:, :nz] - Rm[:, :nz]) / (2 * d) @ zd, S, atol=1e-6 * max(1, np.abs(S).max()))
 
 
@@ -252,7 +253,7 @@ def test_agrees_with_minimal_coordinate_solution(orientation, d_off):
     errs = []
     for h in (1e-4, 1e-5):
         P = _free_params(cfg, h)
-        st = M.initial_state(cfg, theta0)
+        st = natural.initial_state(cfg, theta0)
         every = int(round(1e-3 / h))
         ths, ws = [st[7]], [st[M.S_QD + 7]]
         zero = np.zeros(every)
@@ -280,7 +281,7 @@ def test_rmatrix_equals_euler_on_minimal_ode():
         w += h * mm.acc(th, w)
         th += h * w
     P = _free_params(cfg, h)
-    st = M.initial_state(cfg, math.pi / 3)
+    st = natural.initial_state(cfg, math.pi / 3)
     z = np.zeros(n)
     assert M.run_steps(P, st, z, z, 1, np.empty((1, M.N_OUT)), False)[0] == M.OK
     assert st[7] == pytest.approx(th, abs=1e-7)

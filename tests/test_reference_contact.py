@@ -10,6 +10,7 @@ import pytest
 from twin.config import BenchConfig, ln_stiffness, preset
 from twin.impact import hysteresis_restitution, impact_hysteresis
 from twin.reference import contact as C
+from twin import natural_coordinates as natural
 from twin.reference import model as M
 from twin.simulate import simulate_run
 
@@ -61,11 +62,11 @@ def _impact(law: str, h: float, v: float = 0.1):
         "mechanism.guide_friction_n": 0.0, "contact.mu0": 0.0, "contact.law": law})
     P = M.build_params(cfg, drive=False)
     P[M.P_H] = h
-    st = M.initial_state(cfg, 0.0)
+    st = natural.initial_state(cfg, 0.0)
     st[6] += 1e-9                      # contact normal along +x
     M.contact_parameters(cfg, P, st)
     R, S = np.zeros((M.N_Q, M.N_Z)), np.zeros(M.N_Q)
-    nz = M.r_matrix(P, st[:M.N_Q], np.zeros(M.N_Q), R, S)
+    nz = natural.r_matrix(P, st[:M.N_Q], np.zeros(M.N_Q), R, S)
     st[M.S_QD:M.S_QD + M.N_Q] = R[:, :nz] @ np.array([0.0, v, 0.0])   # ż = (θ̇, ė_Cx, ė_Cy)
     c = cfg.joints.radial_m("C")
     n = int(round(2.5 * c / v / h))

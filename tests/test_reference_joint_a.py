@@ -15,6 +15,7 @@ import pytest
 from twin.config import ACCELEROMETERS, BenchConfig, preset
 from twin.drive import DriveReference
 from twin.kinematics import static_pin_forces
+from twin import natural_coordinates as natural
 from twin.reference import model as M
 from twin.reference.engine import ReferenceEngine
 from twin.simulate import simulate_run
@@ -156,7 +157,7 @@ def test_contact_power_at_a_and_b_is_that_of_the_material_contact_points(theta):
         "joints.clearance_a_mm": 0.1, "joints.clearance_b_mm": 0.1, "joints.clearance_c_mm": 0.0,
         "joints.initial_eccentricity": "centred", "joints.pin_diameters_m": {"A": 0.03, "B": 0.015}})
     P = M.build_params(cfg)
-    st = M.initial_state(cfg, theta)
+    st = natural.initial_state(cfg, theta)
     M.contact_parameters(cfg, P, st)
     assert P[M.P_RPIN_A] == 0.015 and P[M.P_RPIN_B] == 0.0075
     q = st[:M.N_Q].copy()
@@ -166,7 +167,7 @@ def test_contact_power_at_a_and_b_is_that_of_the_material_contact_points(theta):
     assert M.project(P, q, np.zeros(M.N_Q), math.sin(q[7]), math.cos(q[7]),
                      np.zeros(M.N_Q), np.zeros(M.N_Q), np.zeros(M.N_Q)) > 0
     R, S = np.zeros((M.N_Q, M.N_Z)), np.zeros(M.N_Q)
-    nz = M.r_matrix(P, q, np.zeros(M.N_Q), R, S)
+    nz = natural.r_matrix(P, q, np.zeros(M.N_Q), R, S)
     assert nz == 5
     qd = R[:, :nz] @ np.array([30.0, 0.02, -0.05, 0.03, 0.04])   # θ̇, ė_A, ė_B
     Q = np.zeros(M.N_Q)
@@ -239,20 +240,20 @@ def test_r_matrix_with_a_clearance_at_a_against_finite_differences():
     cfg = BenchConfig().replace(**{"joints.clearance_a_mm": 0.1, "joints.clearance_b_mm": 0.1,
                                    "joints.clearance_c_mm": 0.1, "joints.initial_eccentricity": "centred"})
     P = M.build_params(cfg)
-    q = M.initial_state(cfg, 1.1)[:M.N_Q].copy()
+    q = natural.initial_state(cfg, 1.1)[:M.N_Q].copy()
     q[8:10] = [3e-5, -2e-5]
     q[2:4] = q[0:2] - np.array([1e-5, 4e-5])
     assert M.project(P, q, np.zeros(M.N_Q), math.sin(q[7]), math.cos(q[7]),
                      np.zeros(M.N_Q), np.zeros(M.N_Q), np.zeros(M.N_Q)) > 0
     R, S = np.zeros((M.N_Q, M.N_Z)), np.zeros(M.N_Q)
-    assert M.r_matrix(P, q, np.zeros(M.N_Q), R, S) == 7
+    assert natural.r_matrix(P, q, np.zeros(M.N_Q), R, S) == 7
     zd = np.array([10.0, 0.05, -0.03, 0.02, 0.04, -0.01, 0.03])
     qd = R @ zd
-    M.r_matrix(P, q, qd, R, S)
+    natural.r_matrix(P, q, qd, R, S)
 
     def phi(x):
         res = np.zeros(M.N_Q)
-        M.residual(P, x, math.sin(x[7]), math.cos(x[7]), res)
+        natural.residual(P, x, math.sin(x[7]), math.cos(x[7]), res)
         return res[:3]                 # rows 0–2: the only constraints here
 
     eps = 1e-6
@@ -261,6 +262,6 @@ def test_r_matrix_with_a_clearance_at_a_against_finite_differences():
         assert np.max(np.abs(d)) < 1e-9, j
     assert np.allclose(R[8:10, 1:3], np.eye(2)) and np.allclose(R[8:10, [0, 3, 4, 5, 6]], 0)
     Rp, Rm = np.zeros((M.N_Q, M.N_Z)), np.zeros((M.N_Q, M.N_Z))
-    M.r_matrix(P, q + eps * qd, qd, Rp, np.zeros(M.N_Q))
-    M.r_matrix(P, q - eps * qd, qd, Rm, np.zeros(M.N_Q))
+    natural.r_matrix(P, q + eps * qd, qd, Rp, np.zeros(M.N_Q))
+    natural.r_matrix(P, q - eps * qd, qd, Rm, np.zeros(M.N_Q))
     np.testing.assert_allclose((Rp - Rm) / (2 * eps) @ zd, S, atol=1e-6 * max(1, np.abs(S).max()))

@@ -9,7 +9,7 @@ import pytest
 
 from twin.cli import main
 from twin.errors import ConfigError
-from twin.reference.penalty import PenaltyParams
+from twin.studies.penalty import PenaltyParams
 
 
 def test_simulate_with_reference_engine(tmp_path, capsys):

@@ -292,7 +292,7 @@ def test_adams_impact_law_of_the_native_module():
     """The solver's force on the probe's bore contact is the IMPACT force plus the native module's
     θ-damping term θ c h δ̈ with c = STEP(δ; d_max) c_max (README, contact law), for penetrations
     below, at and beyond d_max."""
-    from twin.calibrate import probe_model
+    from twin.studies.contact_check import probe_model
     from twin.mujoco_engine.builder import build
 
     cfg = named_preset("s001").replace(**{"contact.law": "adams-impact"})

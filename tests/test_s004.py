@@ -1,7 +1,7 @@
 """S004 (issue 18, item 3): the preset in both engines and the continuous-contact model.
 
 Independent bases: the closed-form kinematics (twin.kinematics.slider_kinematics) for the ideal
-run; for the continuous-contact model (twin.studies.s004), its energy with the crank held (the
+run; for the continuous-contact model (twin.studies.continuous_contact), its energy with the crank held (the
 equation of motion comes from the partial velocities, the energy from the positions' velocities:
 conservation checks the derivation), Newton–Euler on rod and slider (the force across the virtual
 rod must vanish for frictionless contact), and the limit c → 0 (the ideal mechanism).
@@ -17,7 +17,7 @@ import pytest
 from twin.config import ln_stiffness, named_preset
 from twin.kinematics import slider_kinematics
 from twin.simulate import simulate_run
-from twin.studies.s004 import ContinuousContact, Mechanism, phases
+from twin.studies.continuous_contact import ContinuousContact, Mechanism, phases
 
 W = 30.0
 

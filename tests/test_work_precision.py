@@ -11,7 +11,7 @@ import pytest
 
 from twin.config import preset
 from twin.errors import ConfigError
-from twin.reference import formulations as F
+from twin.studies import formulations as F
 from twin.reference.engine import ReferenceEngine, ReferenceOptions
 
 

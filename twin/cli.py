@@ -33,7 +33,7 @@ COMMANDS: list[str] = [
     "twin.commands.export_mjcf",
     "twin.commands.view",
     "twin.commands.study",
-    "twin.commands.calibrate",
+    "twin.commands.check",
     "twin.commands.import_recording",
     "twin.commands.replay",
     "twin.commands.analyze",
@@ -81,7 +81,7 @@ def add_config_args(p: argparse.ArgumentParser, options: Sequence[str] = ALL_CON
     if "test" in has:
         g.add_argument("--test", type=int, metavar="ID", help="Table 4 test preset, 1..12")
         g.add_argument("--preset", metavar="NAME",
-                       help="another paper's mechanism (issue 18): s001 (S001's rig, 0.5 mm radial clearance at C, "
+                       help="another paper's mechanism: s001 (S001's rig, 0.5 mm radial clearance at C, "
                             "0 -> 300 rpm in 0.2 s), s000 (S000's Flores slider-crank at 5000 rpm), s004 (S004's "
                             "steel mechanism, 0.5 mm radial clearance at B, prescribed 30 rad/s, ADAMS IMPACT contact), "
                             "torque_release (the bench's torque-driven release test: test 12's clearances, 1.2 N m "

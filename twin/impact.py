@@ -1,8 +1,8 @@
 """Single-impact analysis of contact force laws (1-DOF, mass m hitting at speed v).
 
 Used for the MuJoCo soft contact's first guess (builder), the reference's linear law, the
-check of the twin's native contact law against the reference (``twin calibrate contact``,
-:mod:`twin.calibrate`) and tests. The penetration δ obeys m δ̈ = −f(δ, δ̇),
+check of the twin's native contact law against the reference (``twin check contact``,
+:mod:`twin.studies.contact_check`) and tests. The penetration δ obeys m δ̈ = −f(δ, δ̇),
 δ(0) = 0, δ̇(0) = v; the contact ends when δ returns to 0 or the force would pull (a
 contact cannot adhere). Results: restitution e = −δ̇_end / v, peak force, duration.
 

@@ -18,27 +18,6 @@ import numpy as np
 
 from twin.config import BenchConfig
 
-#: channels of the optional group "motor": (name, unit, dtype, description)
-MOTOR_CHANNELS: tuple[tuple[str, str, str, str], ...] = (
-    ("motor_angle", "rad", "float64", "motor rotor angle about +z (the crank angle's sense)"),
-    ("motor_speed", "rad/s", "float64", "motor rotor angular velocity"),
-    ("motor_torque", "N m", "float32", "motor electromagnetic torque (controller output, clamped)"),
-    ("belt_torque", "N m", "float32", "belt torque on the crank pulley (r_c x effective pull)"),
-    ("belt_slip", "m/s", "float32", "belt slip speed on the pulleys (creep and sliding)"),
-    ("command_voltage", "V", "float32", "analog motor command"),
-)
-#: channels of the optional group "drive_energy" (accumulated from t = 0)
-DRIVE_ENERGY_CHANNELS: tuple[tuple[str, str, str, str], ...] = (
-    ("motor_work", "J", "float64", "work of the motor torque on the rotor"),
-    ("energy_mechanical", "J", "float64", "kinetic + gravitational energy of the mechanism and the rotor"),
-    ("energy_belt", "J", "float64", "elastic energy of the belt spans"),
-    ("diss_belt_damping", "J", "float64", "energy dissipated by the belt's damping"),
-    ("diss_belt_slip", "J", "float64", "energy dissipated by belt creep and slip"),
-    ("diss_guide", "J", "float64", "energy dissipated by the slider guide's friction"),
-    ("diss_contact", "J", "float64",
-     "energy dissipated in the joints (contact law, joint friction; MuJoCo: every constraint force)"),
-)
-
 
 @functools.lru_cache(maxsize=4)
 def _command_trace(path: str, mtime_ns: int) -> tuple[np.ndarray, np.ndarray]:  # noqa: ARG001 - cache key

@@ -1,4 +1,4 @@
-"""Every MJCF name Python uses, in one place (``tests/test_names.py`` resolves each one in
+"""Every MJCF name Python uses, in one place (``tests/test_mujoco_model.py`` resolves each one in
 the compiled models), and the layout of a bushing geom's user data. The base model is
 ``mjcf/bench.xml``, installed as the package ``twin.mjcf``."""
 

@@ -35,7 +35,6 @@ make sense. Every such error is one :class:`RecordingError` line naming the file
 
 from __future__ import annotations
 
-import hashlib
 import json
 import math
 import re
@@ -53,6 +52,7 @@ from twin.instrument.calibration import Calibration, calibrate_static, calibrati
 from twin.instrument.chain import DAQ_GROUP
 from twin.instrument.encoder import check_counts, max_counts_per_sample, unwrap_counts
 from twin.run import Channel, Run
+from twin.util import json_default
 
 RECORDING_FORMAT = "twin-recording/1"
 RECORDING_RECORD = "twin.recording"
@@ -106,7 +106,7 @@ class RecordingInfo:
                 "extra": self.extra}
 
     def to_record(self) -> dict[str, str]:
-        return {"format": RECORDING_FORMAT, "json": json.dumps(self.to_dict(), sort_keys=True, default=_json_default)}
+        return {"format": RECORDING_FORMAT, "json": json.dumps(self.to_dict(), sort_keys=True, default=json_default)}
 
     @classmethod
     def from_record(cls, record: Mapping[str, str], where: str = "") -> "RecordingInfo":
@@ -121,22 +121,6 @@ class RecordingInfo:
                        [str(r) for r in d.get("repairs", [])], dict(d.get("extra", {})))
         except (KeyError, ValueError, TypeError) as err:
             raise RecordingError(f"{where}: malformed '{RECORDING_RECORD}' record ({type(err).__name__}: {err})") from None
-
-
-def _json_default(o: Any) -> Any:
-    if isinstance(o, (np.floating, np.integer)):
-        return o.item()
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    raise TypeError(f"not JSON serializable: {type(o).__name__}")
-
-
-def file_sha256(path: str | Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
 
 
 # ------------------------------------------------------------------------ validation

@@ -29,15 +29,9 @@ from typing import Any, Iterable, Iterator, Protocol, runtime_checkable
 import numpy as np
 
 from twin.channels import channel_specs, encoder_from_bench
-from twin.config import BenchConfig
+from twin.config import ENGINE_CLASSES, BenchConfig
 from twin.errors import SimulationError, raise_terminated
 from twin.run import Channel, Run
-
-#: engine name -> "module:class" (imported on demand: the reference engine pulls in numba)
-ENGINES: dict[str, str] = {
-    "mujoco": "twin.mujoco_engine.engine:MujocoEngine",
-    "reference": "twin.reference.engine:ReferenceEngine",
-}
 
 #: channels the loop computes itself (from the drive reference and the crank angle)
 LOOP_CHANNELS = ("theta_ref", "omega_ref", "encoder_angle")
@@ -183,7 +177,7 @@ class Outcome:
 
 def make_engine(cfg: BenchConfig) -> Engine:
     """Instantiate the engine named by ``cfg.simulation.engine``."""
-    mod, cls = ENGINES[cfg.simulation.engine].split(":")
+    mod, cls = ENGINE_CLASSES[cfg.simulation.engine].split(":")  # imported on demand
     return getattr(importlib.import_module(mod), cls)(cfg)
 
 

@@ -9,6 +9,7 @@ target removes the leftovers of processes that no longer exist (:func:`remove_st
 from __future__ import annotations
 
 import errno
+import hashlib
 import json
 import os
 import re
@@ -36,6 +37,12 @@ def json_default(o: Any) -> Any:
     if isinstance(o, Path):
         return str(o)
     raise TypeError(f"not JSON serializable: {type(o).__name__}")
+
+
+def file_sha256(path: str | Path) -> str:
+    """SHA-256 of a file's bytes, as hex (read in blocks: any size)."""
+    with open(path, "rb") as fh:
+        return hashlib.file_digest(fh, "sha256").hexdigest()
 
 
 def resolve_workers(n: int | None, flag: str = "--workers") -> int:

@@ -54,10 +54,10 @@ def _zero_g(text: str) -> dict[str, float]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from twin.recording import (RecordingInfo, calibration_from_offsets, file_sha256, import_table,
+    from twin.recording import (RecordingInfo, calibration_from_offsets, import_table,
                                 parse_mapping, static_calibration_from, write_recording)
 
-    from twin.util import check_output_file
+    from twin.util import check_output_file, file_sha256
 
     cfg = config_from_args(args)
     inputs = [args.export] + ([args.calibration] if args.calibration else [])

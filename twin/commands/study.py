@@ -19,7 +19,9 @@ STUDIES: list[str] = [
     "twin.commands.study:register_accuracy",
     "twin.studies.stability:register",
     "twin.studies.doe:register",
-    "twin.studies.s004:register",
+    "twin.studies.continuous_contact:register",
+    "twin.studies.mcdm:register",
+    "twin.studies.taguchi:register",
 ]
 
 
@@ -65,7 +67,7 @@ def _run_formulations(args: argparse.Namespace) -> int:
     out = check_output_dir(args.out)
     cfg = load_config(args.config) if args.config else None
 
-    from twin.reference.formulations import run_study
+    from twin.studies.formulations import run_study
 
     data = run_study(out, cfg, args.duration, progress=not args.no_progress and sys.stderr.isatty(),
                      work_precision_methods={} if args.no_work_precision else None)

@@ -11,7 +11,7 @@ is written when the command cannot do what it was asked: the input, the output p
   started, else its own message (e.g. "Failed to open connection to X server") is the error line
   (the recording is written by then; the line says where).
 * ``--screenshot`` needs a Vulkan driver (:func:`twin.viz.screenshot.check_vulkan`); a viewer that
-  exits or panics while loading is a one-line error quoting it.
+  exits or panics while starting or loading is a one-line error quoting it.
 """
 
 from __future__ import annotations
@@ -30,7 +30,11 @@ from twin.errors import TwinError
 
 #: Seconds the spawned viewer must keep running before ``twin view --spawn`` reports it open.
 SPAWN_CHECK_S = 1.5
-#: Seconds the headless viewer loads before a screenshot, unless --wait says otherwise.
+#: Default of --plot-window [s] (= ViewOptions.plot_window_s; kept here so the CLI loads no rerun).
+DEFAULT_PLOT_WINDOW_S = 0.3
+#: Window of the headless viewer [px] unless --window-size says otherwise.
+DEFAULT_WINDOW = (1920, 1080)
+#: Seconds the headless viewer may load and settle before a screenshot, unless --wait says otherwise.
 DEFAULT_WAIT_S = 60.0
 
 
@@ -48,15 +52,18 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="time window of the spectra [s] (default: a steady-speed second near the end)")
     p.add_argument("--pose-rate", type=float, metavar="HZ", default=1000.0,
                    help="rate of the 3-D poses and contact arrows [Hz] (signals keep their rate; default 1000)")
-    p.add_argument("--plot-window", type=float, metavar="S", default=1.0,
+    p.add_argument("--plot-window", type=float, metavar="S", default=DEFAULT_PLOT_WINDOW_S,
                    help="time window around the cursor of the accelerometer and contact plots [s] "
-                        "(0 = whole run; default 1)")
+                        f"(0 = whole run; default {DEFAULT_PLOT_WINDOW_S:g}: a time label every 100 ms)")
     p.add_argument("--screenshot", metavar="OUT.png",
                    help="also save a PNG of the default view from a headless viewer (needs Vulkan, e.g. Mesa's)")
     p.add_argument("--at", type=float, metavar="T", help="time cursor of the screenshot [s] (with --screenshot)")
     p.add_argument("--wait", type=float, metavar="S", default=None,
-                   help=f"seconds the headless viewer loads before the screenshot (with --screenshot; "
+                   help=f"with --screenshot: the most seconds to wait for the recording to load and the view "
+                        f"to settle (it is saved as soon as two frames in a row are identical; "
                         f"default {DEFAULT_WAIT_S:g})")
+    p.add_argument("--window-size", metavar="WxH", default=None,
+                   help="with --screenshot: size of the headless viewer's window in pixels (default 1920x1080)")
     p.set_defaults(func=run)
 
 
@@ -91,12 +98,13 @@ def run(args: argparse.Namespace) -> int:
             raise TwinError(f"--wait: must be a finite number of seconds >= 0, got {args.wait!r}")
         if args.at is not None and not math.isfinite(args.at):
             raise TwinError(f"--at: must be a finite time [s], got {args.at!r}")
+        window = parse_window_size(args.window_size) if args.window_size is not None else DEFAULT_WINDOW
         from twin.viz.screenshot import check_vulkan, rerun_executable
 
         rerun_executable()
         check_vulkan()
     else:
-        for flag, value in (("--at", args.at), ("--wait", args.wait)):
+        for flag, value in (("--at", args.at), ("--wait", args.wait), ("--window-size", args.window_size)):
             if value is not None:
                 raise TwinError(f"{flag}: applies to --screenshot only; give --screenshot OUT.png or leave it out")
     if args.spawn:
@@ -120,11 +128,22 @@ def run(args: argparse.Namespace) -> int:
     if args.screenshot:
         from twin.viz.screenshot import screenshot
 
-        shot = screenshot(path, args.screenshot, at_s=args.at, wait_s=wait)
-        print(f"saved {shot}")
+        shot = screenshot(path, args.screenshot, at_s=args.at, wait_s=wait, window=window)
+        how = "view settled" if shot.settled else f"view still changing at --wait {wait:g} s; a larger --wait may help"
+        print(f"saved {shot.path} in {shot.seconds:.1f} s ({how})")
     if args.spawn:
         _spawn(exe, path)
     return 0
+
+
+def parse_window_size(text: str) -> tuple[int, int]:
+    """``WxH`` (e.g. ``1600x900``) as pixels, each 64..8192; else a one-line TwinError."""
+    parts = text.lower().split("x")
+    if len(parts) == 2 and all(p.strip().isdigit() for p in parts):
+        w, h = (int(p) for p in parts)
+        if 64 <= w <= 8192 and 64 <= h <= 8192:
+            return w, h
+    raise TwinError(f"--window-size: must be WIDTHxHEIGHT in pixels, each 64..8192 (e.g. 1600x900), got {text!r}")
 
 
 def has_display() -> bool:

@@ -142,7 +142,7 @@ NAMED: dict[str, Factor] = {f.name: f for f in (
     Factor("noise", "sensor noise on or off", (True, False), None, _set("instrumentation.noise")),
     Factor("drive_mode", "how the crank is driven: pid, prescribed, motor (motor speed loop and V-belt), torque "
            "(motor torque program, release)", ("pid", "prescribed", "motor", "torque"), None, _set("drive.mode")),
-    # the drive train's placeholders (twin.drivetrain_params; with drive_mode motor/torque): bounds are the
+    # the drive train's placeholders (twin.config.drivetrain; with drive_mode motor/torque): bounds are the
     # ranges the parameters' documentation asks users to explore
     *(Factor(name, f"drive train: {doc} (drivetrain.{field})", None, bounds, _set(f"drivetrain.{field}"))
       for name, field, doc, bounds in (

@@ -24,7 +24,8 @@ from typing import Any, Iterable, Iterator
 import numpy as np
 
 from twin.dataset.generate import FORMAT, DatasetError
-from twin.dataset.storage import file_sha256, read_columns, read_meta
+from twin.dataset.storage import read_columns, read_meta
+from twin.util import file_sha256
 
 
 class Dataset:

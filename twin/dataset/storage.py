@@ -23,7 +23,6 @@ update) are kept while writing, for the training split's normalization statistic
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 from dataclasses import dataclass
@@ -188,11 +187,6 @@ class ParquetRunWriter:
         except Exception:  # noqa: BLE001 - best effort on the error path
             pass
         self.tmp.unlink(missing_ok=True)
-
-
-def file_sha256(path: str | Path) -> str:
-    with open(path, "rb") as fh:
-        return hashlib.file_digest(fh, "sha256").hexdigest()
 
 
 def read_meta(path: str | Path) -> dict[str, Any]:

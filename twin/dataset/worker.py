@@ -104,7 +104,8 @@ def run_one(task: dict[str, Any], stop: Any = None) -> dict[str, Any]:
     ``instrumented``. ``stop``: a :class:`threading.Event` of a driver that runs runs on threads;
     once set, the run is interrupted at its next chunk (KeyboardInterrupt: its file is removed)."""
     from twin.config import config_from_toml
-    from twin.dataset.storage import ColumnSpec, ParquetRunWriter, WriteError, file_sha256
+    from twin.dataset.storage import ColumnSpec, ParquetRunWriter, WriteError
+    from twin.util import file_sha256
     from twin.simulate import ThreadedSink, simulate
 
     t0 = time.perf_counter()

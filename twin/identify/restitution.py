@@ -50,9 +50,8 @@ from twin.errors import ConfigError, RecordingError
 
 #: default coarse grid of the restitution coefficient [-]
 COARSE_GRID: tuple[float, ...] = tuple(round(0.15 + 0.05 * k, 2) for k in range(17))  # 0.15 .. 0.95
-#: default step of the fine grid [-] and its half width in coarse steps
+#: default step of the fine grid [-]
 FINE_STEP = 0.01
-FINE_HALF_WIDTH = 0.05
 #: default coarse grid of the IMPACT law's c_max [N s/m] (S001 Table IV: 25 000-28 000)
 C_MAX_GRID: tuple[float, ...] = tuple(5000.0 + 2500.0 * k for k in range(19))  # 5 000 .. 50 000
 #: parameters a sweep can vary: name -> (configuration field, default coarse grid, default fine step,

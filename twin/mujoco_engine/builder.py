@@ -35,10 +35,11 @@ What the builder does to the base model:
 
 Contact of a clearance joint (:func:`contact_setting`): with the bore bushing and
 ``mujoco.contact_source = "law"`` (default) the native module applies the configured reference
-law (:class:`NativeLaw`); ``mujoco.contact_solref``/``contact_solimp`` (raw MuJoCo values) or
-``contact_source = "first-guess"`` give MuJoCo's own soft contact instead (the documented linear
-first guess :func:`first_guess_contact`), which the ring and tendon bushings always use. The
-calibration table of issue 4 (a fitted two-pair solref/solimp law) is retired: the law is now
+law (:class:`NativeLaw`, its constants from :mod:`twin.contact_params`);
+``mujoco.contact_solref``/``contact_solimp`` (raw MuJoCo values) or ``contact_source =
+"first-guess"`` give MuJoCo's own soft contact instead (the documented linear first guess
+:func:`twin.contact_params.first_guess_contact`), which the ring and tendon bushings always use.
+The calibration table of issue 4 (a fitted two-pair solref/solimp law) is retired: the law is now
 exact by construction (issue 15).
 """
 
@@ -46,13 +47,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from functools import lru_cache
 
 import mujoco
 import numpy as np
 
 from twin import names as N
-from twin.config import JOINTS, BenchConfig, joint_stiffness
+from twin.config import JOINTS, BenchConfig
+from twin.contact_params import first_guess_contact, initial_linear_law, law_stiffness
 from twin.errors import ModelError
 from twin.impact import DAMPING_FACTOR
 from twin.mujoco_engine.accel import posthoc_applies
@@ -64,9 +65,6 @@ from twin.mujoco_engine.collider import ensure_installed
 #: Also the pair's impedance under the native law: its regularizer R = Â (1 − d)/d is the largest
 #: the native module keeps (the residual −a/R it leaves is 1e-4 of the row's inertial force)
 FLAT_SOLIMP = (1e-4, 1e-4, 1e-3, 0.5, 2.0)
-#: impact speed at which the first guess matches the reference law [m/s] (impact speeds on the
-#: bench: 0.4-201 mm/s, ``analysis/impact_speeds.py``); the reference's linear law uses the same
-FIRST_GUESS_SPEED = 0.1
 #: frictionless MuJoCo contact; friction is the native passive force (see module docstring)
 _CONDIM = 1
 
@@ -230,27 +228,6 @@ class BuildInfo:
 
 
 # ------------------------------------------------------------------ contact parameters
-@lru_cache(maxsize=64)
-def _first_guess_kc(K: float, n: float, e: float, m_eff: float) -> tuple[float, float]:
-    from twin.impact import linear_equivalent
-
-    return linear_equivalent(K, n, e, m_eff, FIRST_GUESS_SPEED, law="lankarani-nikravesh")
-
-
-def first_guess_contact(cfg: BenchConfig, joint: str, m_eff: float) -> tuple[float, float]:
-    """First guess (k [N/m], c [N s/m]) of a linear MuJoCo soft contact for ``joint``.
-
-    Method: the reference's Lankarani–Nikravesh law (K from S003 Eq. 18, n, e of the
-    configuration) is replaced by the unilateral linear spring-damper that has the same
-    contact duration and the same restitution for an impact of the effective mass ``m_eff``
-    at :data:`FIRST_GUESS_SPEED`. Used by the ring and tendon bushings, by
-    ``mujoco.contact_source = "first-guess"``, and as the placeholder solref of the native law's
-    pair (what a plain MuJoCo without the native module simulates).
-    """
-    K = joint_stiffness(cfg, joint)
-    return _first_guess_kc(float(K), float(cfg.contact.exponent), float(cfg.contact.restitution), float(m_eff))
-
-
 def native_law_applies(cfg: BenchConfig) -> bool:
     """Whether the clearance joints take the native reference law: bore bushing,
     ``mujoco.contact_source = "law"``, no raw ``contact_solref``/``contact_solimp``, and a
@@ -269,34 +246,14 @@ def impact_speed_coefficient(cfg: BenchConfig, joint: str) -> float:
     return law.damping * law.stiffness
 
 
-_LINEAR_LAWS: dict[str, dict[str, tuple[float, float]]] = {}
-
-
-def _reference_linear_law(cfg: BenchConfig) -> dict[str, tuple[float, float]]:
-    """{joint: (k, c)} of the reference engine's linear law for ``cfg``: the reference resolves
-    them at the drive's initial pose (c from the effective mass along the initial contact
-    normal, :func:`twin.reference.model.contact_parameters`); the twin takes the same numbers."""
-    from twin.drive import DriveReference
-    from twin.reference import model as M
-    from twin.reference.engine import engine_params
-
-    key = cfg.digest()
-    if key not in _LINEAR_LAWS:
-        P = engine_params(cfg)
-        theta0 = float(DriveReference(cfg)(np.array([0.0]))[0][0])
-        contacts = M.contact_parameters(cfg, P, M.initial_state(cfg, theta0))
-        _LINEAR_LAWS[key] = {j: (float(c.stiffness), float(c.damping_ns_per_m)) for j, c in contacts.items()}
-    return _LINEAR_LAWS[key]
-
-
 def native_law(cfg: BenchConfig, joint: str) -> NativeLaw:
     """The reference's contact law of ``joint`` as the native module applies it (:class:`NativeLaw`)."""
     ct, ms = cfg.contact, cfg.mujoco
     if ct.law == "linear":
-        k, c = _reference_linear_law(cfg)[joint]
+        k, c = initial_linear_law(cfg)[joint]
         return NativeLaw(ct.law, k * ms.contact_stiffness_scale, 1.0, c * ms.contact_damping_scale,
                          ct.impact_speed_floor_mps)
-    K = joint_stiffness(cfg, joint) * ct.stiffness_scale
+    K = law_stiffness(cfg, joint)
     if ct.law == "adams-impact":
         return NativeLaw(ct.law, K * ms.contact_stiffness_scale, float(ct.exponent),
                          ct.impact_c_max_nspm * ms.contact_damping_scale, ct.impact_speed_floor_mps,

@@ -1,6 +1,6 @@
 """The drive train in the MuJoCo twin (``drive.mode`` "motor" / "torque").
 
-The model (:mod:`twin.drivetrain_params`) is added to the compiled bench by
+The model (:mod:`twin.config.drivetrain`) is added to the compiled bench by
 :func:`add_drive_train` (spec edits) and :func:`finish` (numbers that need the compiled model):
 
 * a motor rotor body on the world with a hinge ``motor_hinge`` about z (inertia

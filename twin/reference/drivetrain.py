@@ -1,6 +1,6 @@
 """Drive train of the reference engine: motor rotor, speed controller and V-belt (numba).
 
-The model and its parameters are :mod:`twin.drivetrain_params` (the MuJoCo twin's native
+The model and its parameters are :mod:`twin.config.drivetrain` (the MuJoCo twin's native
 callback implements the same equations). Here they are kernels the stepping loop of
 :mod:`twin.reference.model` calls from three hooks when ``drive.mode`` is "motor" or "torque":
 
@@ -205,73 +205,3 @@ def outputs(D, ds, row):
     row[DO_DGUIDE] = ds[DS_DGUIDE]
     row[DO_DCONTACT] = ds[DS_DCONTACT]
     row[DO_ROTOR_KE] = 0.5 * D[D_JM] * ds[DS_OMEGA] * ds[DS_OMEGA]
-
-
-# ----------------------------------------------------------------- Python side
-_WARM = False
-
-
-class ReferenceTrain:
-    """The drive train of a :class:`twin.reference.engine.ReferenceEngine` run: parameters,
-    state, the chunk call of :func:`twin.reference.model.run_motor` and its channels."""
-
-    def __init__(self, cfg) -> None:
-        self.cfg = cfg
-        self.D = build(cfg)
-        self.ds = initial_state()
-        self._dbuf = np.empty((0, N_DO))
-        self._last: tuple[int, int, int] = (0, 0, 1)  # (first step, samples, stride) of the last chunk
-
-    def describe(self) -> str:
-        dt = self.cfg.drivetrain
-        return (f"{self.cfg.drive.mode}: rotor {dt.rotor_inertia_kgm2:g} kg m^2, V-belt k {dt.stiffness_npm:.6g} N/m, "
-                f"F_max {dt.max_pull_n:.6g} N, speed loop {dt.controller_rate_hz:g} Hz on {dt.encoder_counts} counts")
-
-    def warm_up(self) -> float:
-        """Compile or load the drive-train loop once per process; seconds spent."""
-        global _WARM
-        if _WARM:
-            return 0.0
-        import time
-
-        from twin.reference import model as M
-
-        t0 = time.perf_counter()
-        P = M.build_params(self.cfg)
-        st = M.initial_state(self.cfg, 0.0)
-        M.run_motor(P, self.D.copy(), st, initial_state(), np.zeros(1), 1, np.empty((1, M.N_OUT)),
-                    np.empty((1, N_DO)), True)
-        _WARM = True
-        return time.perf_counter() - t0
-
-    def reset(self) -> None:
-        self.ds = initial_state()
-
-    def run(self, P, st, k0: int, omega_ref, stride: int, buf, n_out: int):
-        from twin.motor_drive import motor_input
-        from twin.reference import model as M
-
-        nstep = len(omega_ref)
-        if self._dbuf.shape[0] < n_out:
-            self._dbuf = np.empty((n_out, N_DO))
-        sp = motor_input(self.cfg, k0, nstep, omega_ref)
-        self._last = (k0, n_out, stride)
-        return M.run_motor(P, self.D, st, self.ds, sp, stride, buf, self._dbuf, True)
-
-    def channels(self, n: int) -> dict[str, np.ndarray]:
-        from twin.motor_drive import command_voltage
-
-        groups = self.cfg.sensors.channels
-        d = self._dbuf[:n]
-        cols: dict[str, np.ndarray] = {}
-        if "motor" in groups:
-            k0, _, stride = self._last
-            t = (k0 + stride * np.arange(n)) * self.cfg.simulation.timestep_s
-            cols.update(motor_angle=d[:, DO_PHI], motor_speed=d[:, DO_OMEGA], motor_torque=d[:, DO_TORQUE],
-                        belt_torque=d[:, DO_BELT_TORQUE], belt_slip=d[:, DO_SLIP],
-                        command_voltage=command_voltage(self.cfg, t))
-        if "drive_energy" in groups:
-            cols.update(motor_work=d[:, DO_WORK], energy_mechanical=d[:, DO_EMECH], energy_belt=d[:, DO_EBELT],
-                        diss_belt_damping=d[:, DO_DDAMP], diss_belt_slip=d[:, DO_DSLIP], diss_guide=d[:, DO_DGUIDE],
-                        diss_contact=d[:, DO_DCONTACT])
-        return {k: np.array(v) for k, v in cols.items()}

@@ -3,7 +3,9 @@
 ``twin simulate --engine reference`` runs this instead of MuJoCo, with the same
 configuration, drive, channels, chunking and metadata (:class:`twin.simulate.Engine`), so
 the two engines compare channel by channel. The formulation is in
-:mod:`twin.reference.model`, the contact laws in :mod:`twin.reference.contact`.
+:mod:`twin.natural_coordinates` (coordinates, constraints, mass matrix) and
+:mod:`twin.reference.model` (forces, equations of motion, integration), the contact laws in
+:mod:`twin.reference.contact` with their constants from :mod:`twin.contact_params`.
 
 Clearance joints: any of A (the crank journal in the frame's bore; its eccentricity channels in
 the bench frame), B and C (rod frame), each with its own pin and bushing radii.
@@ -27,6 +29,7 @@ import numpy as np
 from twin import __version__ as twin_version
 from twin.config import ACCELEROMETERS, BenchConfig
 from twin.errors import ConfigError, SimulationError
+from twin.natural_coordinates import initial_state
 from twin.reference import model as M
 
 ENGINE_VERSION = "1"
@@ -122,7 +125,7 @@ class ReferenceEngine:
         self._drive = None
         self._train = None
         if cfg.drive.mode in ("motor", "torque"):
-            from twin.reference.drivetrain import ReferenceTrain
+            from twin.reference.drivetrain_run import ReferenceTrain
 
             self._train = ReferenceTrain(cfg)
             self.load_s += self._train.warm_up()
@@ -144,7 +147,7 @@ class ReferenceEngine:
             theta0 = float(DriveReference(self.cfg)(np.array([0.0]))[0][0])
         omega0 = self._drive.start_rate() if self._drive is not None else 0.0
         try:
-            self.state0 = M.initial_state(self.cfg, theta0, omega0, self.P)
+            self.state0 = initial_state(self.cfg, theta0, omega0, self.P)
         except ValueError as err:
             raise ConfigError("bodies", str(err)) from None
         self.contacts = M.contact_parameters(self.cfg, self.P, self.state0)
@@ -220,7 +223,7 @@ def warm_up() -> float:
     t0 = time.perf_counter()
     cfg = BenchConfig()
     P = M.build_params(cfg)
-    st = M.initial_state(cfg, 0.0)
+    st = initial_state(cfg, 0.0)
     z = np.zeros(0)
     M.run_steps(P, st, z, z, 1, np.empty((1, M.N_OUT)), True)
     _WARM = True
@@ -234,7 +237,7 @@ def warm_up_prescribed() -> float:
         return 0.0
     t0 = time.perf_counter()
     P = M.build_params(BenchConfig())
-    st = M.initial_state(BenchConfig(), 0.0)
+    st = initial_state(BenchConfig(), 0.0)
     z1 = np.zeros(1)
     M.run_prescribed(P, st, z1, z1, np.zeros(0), 1, np.empty((1, M.N_OUT)), True)
     _WARM_PRESCRIBED = True

@@ -1,10 +1,24 @@
-"""Default blueprint (layout) of a run's rerun recording: useful at first sight.
+"""Default blueprint (layout) of a run's rerun recording: useful at first sight, readable in a
+1920x1080 window (the default of ``twin view --screenshot``) and still in 1600x900.
 
-Left: the 3-D bench (true sizes, magnified orbit insets, contact arrows) above the journal
-orbits of the clearance joints (µm, trailing the time cursor). Right, in tabs: the
-accelerometers (simulated and recorded overlaid) with crank speed and contact forces; drive
-and encoder; contact details; spectra of the FFT window; raw DAQ channels; any other channel;
-the configuration document. Only views whose data exist are created.
+Left (2/5 of the width): the 3-D bench (true sizes, magnified orbit insets, contact arrows), the
+journal orbits of the clearance joints (µm, trailing the time cursor), the contact forces and
+the crank speed. Right (3/5), in tabs: the accelerometers (simulated and recorded overlaid) in
+a 2 x 3 grid; drive and encoder; contact details; spectra of the FFT window; raw DAQ channels;
+any other channel; the configuration document. Only views whose data exist are created.
+
+Readability, given how rerun 0.41 labels its axes (measured on screenshots; its source: a time
+label at every power of ten of seconds whose marks are at least ~150 px apart, a value label at
+every power of ten at least ~20 px apart):
+
+* time: the windowed plots are at least ~450 px wide, so the default 0.3 s window around the
+  cursor (:class:`ViewOptions`) gets a label every 100 ms (3 or 4); the crank speed over a 38 s
+  protocol run is ~600 px wide (a label every 10 s);
+* values: the accelerometer plots are ~290 px high at 1920x1080 (~225 at 1600x900): a range of
+  up to ~145 (1.45 powers of ten) gets a label every 10, a wider one one label per 100 (2 or
+  more); rerun has no setting for the value step;
+* titles carry the unit and the colour of each series (legends would list the hidden series of
+  a channel group too) and fit their title bars (:data:`MAX_TITLE_CHARS`).
 """
 
 from __future__ import annotations
@@ -16,9 +30,13 @@ from twin.config import ACCELEROMETERS, JOINTS, BenchConfig
 from twin.run import Channel
 from twin.viz.options import ViewOptions
 from twin.viz.scene import nice_magnification
-from twin.viz.style import view_title
+from twin.viz.style import CHAIN_COLOUR, COLOUR_NAMES, MEAS_COLOUR, SIM_COLOUR, view_title
 
 TIMELINE = "time"
+#: Longest plot title [characters] that fits the title bar of a plot of the right-hand tabs at
+#: 1600x900 (~480 px wide, ~375 px of it for the title at ~5.7 px a character, measured on a
+#: screenshot where 56 characters took 320 px; checked by the tests).
+MAX_TITLE_CHARS = 60
 
 
 class _Series:
@@ -57,12 +75,12 @@ def _eye(cfg: BenchConfig) -> rrb.EyeControls3D:
     cx = (l + 0.02) / 2.0  # the mechanism spans x = -r .. l + r (+ the guide)
     up = cfg.mechanism.orientation
     if up == "y":
-        return rrb.EyeControls3D(kind=rrb.Eye3DKind.Orbital, position=(cx, 0.10, 0.60),
+        return rrb.EyeControls3D(kind=rrb.Eye3DKind.Orbital, position=(cx, 0.06, 0.36),
                                  look_target=(cx, -0.02, 0.0), eye_up=(0.0, 1.0, 0.0))
     if up == "x":
-        return rrb.EyeControls3D(kind=rrb.Eye3DKind.Orbital, position=(cx + 0.10, 0.0, 0.60),
+        return rrb.EyeControls3D(kind=rrb.Eye3DKind.Orbital, position=(cx + 0.06, 0.0, 0.36),
                                  look_target=(cx, 0.0, 0.0), eye_up=(1.0, 0.0, 0.0))
-    return rrb.EyeControls3D(kind=rrb.Eye3DKind.Orbital, position=(cx, -0.33, 0.42),
+    return rrb.EyeControls3D(kind=rrb.Eye3DKind.Orbital, position=(cx, -0.20, 0.25),
                              look_target=(cx, 0.0, 0.0), eye_up=(0.0, 0.0, 1.0))
 
 
@@ -92,7 +110,6 @@ def default_blueprint(cfg: BenchConfig, groups: dict[str, list[str]], channels: 
     force = paths(*[f"fn_{j}" for j in JOINTS])
     pen = paths(*[f"pen_{j}" for j in JOINTS])
     friction = paths(*[f"ft_{j}" for j in JOINTS])
-    ecc = paths(*[f"ecc_{j}_{k}" for j in JOINTS for k in ("x", "y")])
     encoder = paths("encoder_angle", "rec_encoder_angle") or paths("encoder_counts", "sim_encoder_counts")
     motor = paths("motor_command", "sim_motor_command", "command_voltage")
     torque = paths("crank_torque")
@@ -103,33 +120,39 @@ def default_blueprint(cfg: BenchConfig, groups: dict[str, list[str]], channels: 
     slider = paths("slider_position")
 
     tabs: list[rrb.Container | rrb.View] = []
-    bottom = [v for v in (_series("crank speed", speed) if speed else None,
-                          _series("contact force", force, window=win) if force else None,
-                          _series("encoder", encoder) if encoder and not speed else None) if v is not None]
+    speed_view = _series("crank speed", speed) if speed else None
+    force_view = _series("contact force", force, window=win) if force else None
+    encoder_view = _series("encoder", encoder) if encoder and not speed else None
+    bottom = [v for v in (speed_view, force_view, encoder_view) if v is not None]
     if accel_views:
         grid = rrb.Grid(*accel_views, grid_columns=2, name="accelerometers")
-        tabs.append(rrb.Vertical(grid, rrb.Horizontal(*bottom), row_shares=[3, 1], name="Signals")
-                    if bottom else rrb.Vertical(grid, name="Signals"))
+        if bottom and not has_pose:  # no left column: speed and forces below the accelerometers
+            tabs.append(rrb.Vertical(grid, rrb.Horizontal(*bottom), row_shares=[3, 1], name="Signals"))
+        else:
+            tabs.append(rrb.Vertical(grid, name="Signals"))
     drive = [_series(n, p) for n, p in (("crank speed", speed), ("encoder", encoder), ("motor command", motor),
                                          ("crank torque", torque), ("crank angle", angle),
                                          ("slider position", slider), ("motor speed", rotor),
                                          ("motor and belt torque", motor_torque), ("belt slip", slip)) if p]
     if drive:
         tabs.append(rrb.Grid(*drive, grid_columns=2, name="Drive & encoder"))
+    frame = "rod frame; A: bench frame" if "ecc_A_x" in channels else "rod frame"
+    ecc_xy = [(f"eccentricity {k} ({frame})", paths(*[f"ecc_{j}_{k}" for j in JOINTS])) for k in ("x", "y")]
     contact = [_series(n, p, window=win) for n, p in (("contact force", force), ("friction force", friction),
-                                                       ("penetration", pen), ("eccentricity (rod frame; A: bench frame)" if "ecc_A_x" in channels else "eccentricity (rod frame)", ecc)) if p]
+                                                       ("penetration", pen), *ecc_xy) if p]
     if contact:
         tabs.append(rrb.Grid(*contact, grid_columns=2, name="Contact"))
     if fft_window is not None and fft_names:
         t0, t1 = fft_window
         sensors = [a for a in ACCELEROMETERS if any(n in fft_names for n in (a, f"meas_{a}", f"sim_meas_{a}"))]
-        kinds = (("", "sim (blue)"), ("sim_meas_", "sim+chain (purple)"), ("meas_", "rec (orange)"))
+        kinds = (("", f"sim ({COLOUR_NAMES[SIM_COLOUR]})"), ("sim_meas_", f"sim+chain ({COLOUR_NAMES[CHAIN_COLOUR]})"),
+                 ("meas_", f"rec ({COLOUR_NAMES[MEAS_COLOUR]})"))
         bars = []
         for a in sensors:
             shown = ", ".join(text for pre, text in kinds if f"{pre}{a}" in fft_names)
-            bars.append(rrb.BarChartView(origin=f"/fft/{a}", name=f"{a} {t0:g}–{t1:g} s [dB re 1 mm/s²]: {shown}",
+            bars.append(rrb.BarChartView(origin=f"/fft/{a}", name=f"{a} [dB]: {shown}",
                                          plot_legend=rrb.PlotLegend(visible=False)))
-        tabs.append(rrb.Grid(*bars, grid_columns=2, name="Spectra"))
+        tabs.append(rrb.Grid(*bars, grid_columns=2, name=f"Spectra {t0:g}–{t1:g} s (dB re 1 mm/s², Hz)"))
     daq = [_series(n, paths(n, f"sim_{n}")) for n in groups.get("daq", []) if n not in S.used]
     if daq:
         tabs.append(rrb.Grid(*daq, name="DAQ (raw)"))
@@ -140,9 +163,14 @@ def default_blueprint(cfg: BenchConfig, groups: dict[str, list[str]], channels: 
     right = rrb.Tabs(*tabs, active_tab=0)
 
     if has_pose:
-        mags = ", ".join(f"{j} ×{nice_magnification(cfg.joints.radial_m(j), opts.orbit_inset_radius_m)}"
-                         for j in joints)
-        title = "bench (true sizes)" + (f"; green circles: clearance, journal centre magnified {mags}" if mags else "")
+        mags = [(j, nice_magnification(cfg.joints.radial_m(j), opts.orbit_inset_radius_m)) for j in joints]
+        if mags and len({m for _, m in mags}) == 1:
+            mag_text = f"×{mags[0][1]} ({', '.join(j for j, _ in mags)})"
+        else:
+            mag_text = ", ".join(f"{j} ×{m}" for j, m in mags)
+        title = "bench (true size)"
+        if mags:
+            title += f"; green circles: clearance, journal centre magnified {mag_text}"
         bench = rrb.Spatial3DView(origin="/bench", name=title,
                                   eye_controls=_eye(cfg), line_grid=rrb.LineGrid3D(visible=False))
         trail = rrb.VisibleTimeRange(TIMELINE, start=rr.TimeRangeBoundary.cursor_relative(seconds=-opts.orbit_trail_s),
@@ -156,8 +184,17 @@ def default_blueprint(cfg: BenchConfig, groups: dict[str, list[str]], channels: 
                 line_grid=rrb.LineGrid3D(visible=False),
                 eye_controls=rrb.EyeControls3D(kind=rrb.Eye3DKind.Orbital, position=(0.0, 0.0, 3.2 * c_um),
                                                look_target=(0.0, 0.0, 0.0), eye_up=(0.0, 1.0, 0.0))))
-        left = rrb.Vertical(bench, rrb.Horizontal(*orbits), row_shares=[3, 2]) if orbits else bench
-        root = rrb.Horizontal(left, right, column_shares=[1, 1])
+        rows: list[rrb.Container | rrb.View] = [bench]
+        shares = [3.0]
+        if orbits:
+            rows.append(rrb.Horizontal(*orbits))
+            shares.append(3.0)
+        for v in (force_view, speed_view, encoder_view):  # below the bench: what explains the accelerations
+            if v is not None:
+                rows.append(v)
+                shares.append(2.0)
+        left = rrb.Vertical(*rows, row_shares=shares) if len(rows) > 1 else bench
+        root = rrb.Horizontal(left, right, column_shares=[2, 3])
     else:
         root = right
     return rrb.Blueprint(root, rrb.BlueprintPanel(state="collapsed"), rrb.SelectionPanel(state="collapsed"),

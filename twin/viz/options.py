@@ -21,8 +21,10 @@ class ViewOptions:
         orbit_trail_s: length of the orbit trail shown behind the time cursor [s].
         plot_window_s: time window around the cursor shown by the accelerometer and contact
             plots [s] (waveforms and impacts stay readable while scrubbing, and the viewer
-            draws a bounded number of points); 0 = the whole run. The crank-speed plot and
-            the drive tab always show the whole run.
+            draws a bounded number of points); 0 = the whole run. 0.3 s: about one crank
+            revolution at the top test speed, and a time label every 100 ms on a plot of the
+            default layout (rerun labels powers of ten of seconds, about 150 px apart at least).
+            The crank-speed plot and the drive tab always show the whole run.
         orbit_inset_radius_m: drawn radius of the magnified clearance circle in the 3-D view [m];
             the magnification is the 1-2-5 number that brings the radial clearance closest to it
             without exceeding it.
@@ -37,7 +39,7 @@ class ViewOptions:
     orbit_rate_hz: float = 10_000.0
     block_rows: int = 10_000
     orbit_trail_s: float = 0.2
-    plot_window_s: float = 1.0
+    plot_window_s: float = 0.3
     orbit_inset_radius_m: float = 0.06
     force_scale_m_per_n: float = 2e-4
     fft_window_s: tuple[float, float] | None = None

@@ -2,10 +2,12 @@
 
 Starts rerun's viewer in headless mode (``--headless``: an offscreen window driven by the
 viewer itself, no X server needed) with the Vulkan renderer, which on a machine without a GPU
-is Mesa's software rasterizer (Debian: ``apt-get install mesa-vulkan-drivers``). The recording
-is opened, the time cursor set, and after ``wait_s`` (the viewer loads chunks lazily and the
-software renderer is slow) the whole window is saved as PNG through
-``rerun.experimental.ViewerClient``.
+is Mesa's software rasterizer (Debian: ``apt-get install mesa-vulkan-drivers``). twin starts
+the viewer process itself (:class:`HeadlessViewer`: the flags ``ViewerClient.spawn`` would pass,
+plus the window size, which ``spawn`` cannot set), so the exit status it reads is the viewer's
+own; it connects ``rerun.experimental.ViewerClient`` once the port listens, opens the recording,
+sets the time cursor, waits until nothing is loading and two screenshots in a row are identical
+(at most ``wait_s``), and writes the PNG.
 
 What the machine needs is checked before any work (:func:`check_vulkan`, called by ``twin view``
 before it converts): on Linux a Vulkan installable client driver (ICD) must be registered where
@@ -27,12 +29,13 @@ import os
 import re
 import signal
 import socket
-import stat
+import subprocess
 import sys
 import tempfile
 import time
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Iterator
+from typing import Callable, Iterator
 
 from twin.errors import TwinError
 from twin.util import temp_path
@@ -42,6 +45,8 @@ SYSTEM_ICD_DIRS: tuple[str, ...] = ("/usr/local/etc/vulkan/icd.d", "/etc/vulkan/
                                     "/usr/local/share/vulkan/icd.d", "/usr/share/vulkan/icd.d")
 #: Seconds between checks that the headless viewer still runs while it loads.
 POLL_S = 0.25
+#: Seconds the headless viewer may take to listen on its port.
+START_TIMEOUT_S = 30.0
 _ANSI = re.compile(r"\x1b\[[0-9;]*[A-Za-z]")
 
 
@@ -150,15 +155,125 @@ def rerun_executable() -> Path:
     return exe
 
 
+def viewer_command(exe: str | Path, port: int, window: tuple[int, int]) -> list[str]:
+    """Command line of the headless viewer: the flags ``rerun.experimental.ViewerClient.spawn``
+    passes (rerun 0.41), plus the window size and the Vulkan renderer."""
+    return [str(exe), f"--port={port}", "--memory-limit=75%", "--server-memory-limit=1GiB", "--hide-welcome-screen",
+            "--headless", "--window-size", f"{window[0]}x{window[1]}", "--renderer", "vulkan"]
+
+
+class HeadlessViewer:
+    """A headless rerun viewer process this process started and owns: its exit status is
+    ``Popen.poll()`` (no launcher script, no status file), its output goes to ``log``, and
+    :meth:`stop` ends its process group. ``client`` is a ViewerClient once :meth:`connect` has
+    seen the port listening."""
+
+    def __init__(self, command: list[str], log: Path, runtime_dir: Path):
+        env = dict(os.environ, RUST_LOG="error", RUST_BACKTRACE="0", RERUN_APP_ONLY="true",
+                   XDG_RUNTIME_DIR=str(runtime_dir))
+        self.log = log
+        self.port = int(next(a for a in command if a.startswith("--port="))[len("--port="):])
+        with open(log, "wb") as out:
+            self.proc = subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=out, stderr=out, env=env,
+                                         start_new_session=True)
+        self.client = None
+
+    def status(self) -> int | None:
+        """The viewer's exit status, or None while it runs."""
+        return self.proc.poll()
+
+    def error(self, what: str) -> TwinError:
+        """One-line error: the viewer's exit status and message if it ended, else ``what``."""
+        code = self.status()
+        if code is None:  # a failing call may come just before the exit: give it a moment
+            try:
+                code = self.proc.wait(timeout=POLL_S)
+            except subprocess.TimeoutExpired:
+                code = None
+        out = self.log.read_bytes() if self.log.is_file() else b""
+        if code is None:
+            return TwinError(f"--screenshot: the headless viewer {what}")
+        return TwinError(f"--screenshot: the headless viewer exited (status {code}): "
+                         f"{viewer_message(out) if out.strip() else what}")
+
+    def connect(self, timeout_s: float = START_TIMEOUT_S):
+        """Wait until the viewer listens on its port (or exits: error), then connect a client."""
+        import rerun as rr
+
+        deadline = time.monotonic() + timeout_s
+        while True:
+            if self.status() is not None:
+                raise self.error("stopped while starting")
+            try:
+                socket.create_connection(("127.0.0.1", self.port), timeout=POLL_S).close()
+                break
+            except OSError:
+                if time.monotonic() > deadline:
+                    raise self.error(f"did not listen on port {self.port} within {timeout_s:g} s") from None
+                time.sleep(min(POLL_S, max(deadline - time.monotonic(), 0.0)) or 0.01)
+        self.client = rr.experimental.ViewerClient(f"rerun+http://127.0.0.1:{self.port}/proxy")
+        return self.client
+
+    def stop(self) -> None:
+        """End the viewer's process group (SIGTERM, SIGKILL after 5 s)."""
+        for sig, wait in ((signal.SIGTERM, 5.0), (signal.SIGKILL, 5.0)):
+            if self.status() is not None:
+                break
+            with contextlib.suppress(OSError):
+                os.killpg(self.proc.pid, sig)
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                self.proc.wait(timeout=wait)
+
+
+@dataclass(frozen=True)
+class Shot:
+    """A saved screenshot: where, after how long [s], and whether the view had settled."""
+
+    path: Path
+    seconds: float
+    settled: bool
+
+
+def capture(client, alive: Callable[[], bool], wait_s: float, clock: Callable[[], float] = time.monotonic,
+            sleep: Callable[[float], None] = time.sleep) -> tuple[bytes, bool]:
+    """PNG bytes of the viewer's window once its view has settled, and whether it did.
+
+    Waits until nothing is loading (``get_state().loading`` empty), then takes screenshots until
+    two in a row are identical (the plots' bounds and lazily fetched chunks stop changing); at
+    the latest after ``wait_s`` seconds [s] it takes the picture as it is (settled = False). A
+    call that times out (the client waits 15 s) is repeated until then.
+    ``alive()`` False (the viewer exited) raises :class:`TwinError`; ``clock`` and ``sleep``
+    (seconds) are replaceable for tests."""
+    deadline = clock() + wait_s
+    last: bytes | None = None
+    while clock() < deadline:
+        if not alive():
+            raise TwinError("the headless viewer stopped while loading")
+        try:
+            if client.get_state().loading:
+                sleep(min(POLL_S, max(deadline - clock(), 0.0)))
+                continue
+            img = client.take_screenshot()
+        except TimeoutError:  # a busy software renderer can miss the client's 15 s deadline: ask again
+            last = None
+            continue
+        if img == last:
+            return img, True
+        last = img
+    if not alive():
+        raise TwinError("the headless viewer stopped while loading")
+    return client.take_screenshot(), False
+
+
 def screenshot(rrd: str | Path, png: str | Path, *, at_s: float | None = None, wait_s: float = 60.0,
-               window: tuple[int, int] = (1600, 900), port: int | None = None) -> Path:
+               window: tuple[int, int] = (1920, 1080), port: int | None = None) -> Shot:
     """Save a PNG of ``rrd``'s default view with the time cursor at ``at_s`` [s] (paused).
 
-    ``port``: the viewer's gRPC port (default: a free one). Raises a one-line :class:`TwinError`
-    if no Vulkan driver is registered, or if the viewer exits or fails while loading or saving
-    (quoting its message); the PNG is written to a temporary name and renamed when complete."""
-    import rerun as rr
-
+    Waits at most ``wait_s`` [s] for the recording to load and the view to settle (see
+    :func:`capture`); ``window``: the window size [px]; ``port``: the viewer's gRPC port
+    (default: a free one). Raises a one-line :class:`TwinError` if no Vulkan driver is
+    registered, or if the viewer exits or fails while starting, loading or saving (quoting its
+    message); the PNG is written to a temporary name and renamed when complete."""
     rrd, png = Path(rrd).resolve(), Path(png).resolve()
     if not rrd.is_file():
         raise TwinError(f"{rrd}: no such recording")
@@ -168,58 +283,32 @@ def screenshot(rrd: str | Path, png: str | Path, *, at_s: float | None = None, w
         raise TwinError(f"--wait: must be a finite number of seconds >= 0, got {wait_s!r}")
     if at_s is not None and not (isinstance(at_s, (int, float)) and math.isfinite(at_s)):
         raise TwinError(f"--at: must be a finite time [s], got {at_s!r}")
+    if not (len(window) == 2 and all(isinstance(v, int) and 64 <= v <= 8192 for v in window)):
+        raise TwinError(f"window: must be two whole numbers of pixels in 64..8192, got {window!r}")
     check_vulkan()
     exe = rerun_executable()
-    port = port or _free_port()
+    t0 = time.monotonic()
     with tempfile.TemporaryDirectory() as d:
-        # ViewerClient.spawn has no window-size option: a tiny launcher adds the viewer flags; the
-        # viewer's output goes to a log (quoted on failure) and its exit status to a file
-        log, status, pidfile = Path(d) / "viewer.log", Path(d) / "exit-status", Path(d) / "pid"
-        launcher = Path(d) / "rerun-headless"
-        launcher.write_text(f'#!/bin/sh\necho $$ >"{pidfile}"\n'
-                            f'export RUST_LOG=error RUST_BACKTRACE=0 XDG_RUNTIME_DIR="{d}"\n'
-                            f'"{exe}" --window-size {window[0]}x{window[1]} --renderer vulkan "$@" '
-                            f'>"{log}" 2>&1\necho $? >"{status}"\n')
-        launcher.chmod(launcher.stat().st_mode | stat.S_IXUSR)
-
-        def failed(what: str) -> TwinError:
-            out = log.read_bytes() if log.is_file() else b""
-            code = status.read_text().strip() if status.is_file() else ""
-            ended = f"the headless viewer exited (status {code})" if code else f"the headless viewer {what}"
-            return TwinError(f"--screenshot: {ended}: {viewer_message(out) if out.strip() else what}")
-
-        client = None
+        viewer = HeadlessViewer(viewer_command(exe, port or _free_port(), window), Path(d) / "viewer.log", Path(d))
         tmp = temp_path(png, keep_suffix=True)
-        with _stderr_to(Path(d) / "sdk.log"):
-            try:
-                client = rr.experimental.ViewerClient.spawn(headless=True, executable_path=str(launcher), port=port,
-                                                            hide_welcome_screen=True)
-                client.open(str(rrd))
-                if at_s is not None:
-                    client.set_time("time", duration=float(at_s), play_state="paused")
-                deadline = time.monotonic() + wait_s
-                while (left := deadline - time.monotonic()) > 0:  # let it load; stop early if it dies
-                    if status.is_file():
-                        raise failed("stopped while loading")
-                    time.sleep(min(POLL_S, left))
-                client.save_screenshot(str(tmp))
-                if not tmp.is_file():
-                    raise failed("wrote no image")
-                os.replace(tmp, png)
-            except (OSError, RuntimeError, ValueError) as err:  # ConnectionError, TimeoutError: OSError
-                time.sleep(POLL_S)  # a dying viewer: let the launcher record its status
-                raise failed(f"did not answer ({type(err).__name__}: {' '.join(str(err).split()) or 'no message'})") \
-                    from None
-            finally:
-                tmp.unlink(missing_ok=True)
-                if client is not None:
-                    try:
-                        client.quit()
-                    except (OSError, RuntimeError):
-                        pass
-                elif pidfile.is_file() and not status.is_file():  # spawned, never connected: end its process group
-                    try:
-                        os.killpg(int(pidfile.read_text().strip()), signal.SIGTERM)
-                    except (OSError, ValueError):
-                        pass
-    return png
+        try:
+            with _stderr_to(Path(d) / "sdk.log"):  # the SDK's Rust logger writes to fd 2 directly
+                client = viewer.connect()
+                try:
+                    client.open(str(rrd))
+                    if at_s is not None:
+                        client.set_time("time", duration=float(at_s), play_state="paused")
+                    img, settled = capture(client, lambda: viewer.status() is None, float(wait_s))
+                except TwinError:
+                    raise viewer.error("stopped while loading") from None
+                except (OSError, RuntimeError, ValueError) as err:  # ConnectionError, TimeoutError: OSError
+                    raise viewer.error(f"did not answer ({type(err).__name__}: "
+                                       f"{' '.join(str(err).split()) or 'no message'})") from None
+            if not img.startswith(b"\x89PNG\r\n\x1a\n"):
+                raise viewer.error("sent no PNG image")
+            tmp.write_bytes(img)
+            os.replace(tmp, png)
+        finally:
+            tmp.unlink(missing_ok=True)
+            viewer.stop()
+    return Shot(png, time.monotonic() - t0, settled)

@@ -11,7 +11,7 @@ REF_COLOUR = (160, 160, 160)
 CHAIN_COLOUR = (148, 103, 189)
 JOINT_COLOUR = {"A": (148, 103, 189), "B": (44, 160, 44), "C": (214, 39, 40)}
 COLOUR_NAMES = {SIM_COLOUR: "blue", MEAS_COLOUR: "orange", REF_COLOUR: "grey", CHAIN_COLOUR: "purple",
-                JOINT_COLOUR["A"]: "violet", JOINT_COLOUR["B"]: "green",
+                JOINT_COLOUR["A"]: "purple", JOINT_COLOUR["B"]: "green",
                 JOINT_COLOUR["C"]: "red"}
 
 
@@ -50,12 +50,18 @@ def series_colour(ch: Channel) -> tuple[int, int, int]:
     return SIM_COLOUR
 
 
+def series_width(ch: Channel) -> float:
+    """Line width of a channel's series [ui points]: the crank speed and angle are drawn wider
+    than their grey references, which would otherwise hide them where they agree."""
+    return 2.5 if ch.name in ("crank_speed", "crank_angle") else 1.0
+
+
 #: short names of series in a multi-series plot title
 _SHORT = {"crank_speed": "crank", "omega_ref": "reference", "crank_angle": "crank", "theta_ref": "reference",
           "encoder_angle": "sim", "rec_encoder_angle": "rec", "encoder_counts": "rec",
           "sim_encoder_counts": "sim+chain", "motor_command": "rec", "sim_motor_command": "sim+chain",
           **{f"{q}_{j}": j for q in ("fn", "ft", "pen") for j in JOINTS},
-          **{f"ecc_{j}_{k}": f"{j} {k}" for j in JOINTS for k in ("x", "y")}}
+          **{f"ecc_{j}_{k}": j for j in JOINTS for k in ("x", "y")}}
 _WORDS = {"simulated": "sim", "simulated+chain": "sim+chain", "recorded": "rec"}
 
 

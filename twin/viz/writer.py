@@ -48,7 +48,7 @@ from twin.viz import scene
 from twin.viz.options import ViewOptions
 from twin.viz.pose import poses
 from twin.viz.spectrum import DB_REF_MPS2, amplitude_db, check_window, default_window
-from twin.viz.style import CHAIN_COLOUR, MEAS_COLOUR, SIM_COLOUR, series_colour, series_label
+from twin.viz.style import CHAIN_COLOUR, MEAS_COLOUR, SIM_COLOUR, series_colour, series_label, series_width
 
 APP_ID = "twin"
 TIMELINE = "time"
@@ -164,7 +164,7 @@ class RerunWriter:
             chans = [self._channels[n] for n in names]
             rec.log(signal_path(group), rr.SeriesLines(names=[series_label(c) for c in chans],
                                                        colors=[series_colour(c) for c in chans],
-                                                       widths=[1.0] * len(chans)), static=True)
+                                                       widths=[series_width(c) for c in chans]), static=True)
         if self._has_pose:
             self._scene = scene.log_static_scene(rec, self.cfg, self.opts.orbit_inset_radius_m)
             if self._joints:

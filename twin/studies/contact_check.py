@@ -21,7 +21,7 @@ The probe is a pin of mass m_eff on a slide joint inside the joint's bore: one D
 contact normal, the twin's timestep and integrator, the builder's own contact setting
 (:func:`twin.mujoco_engine.builder.contact_setting`). The effective masses a clearance joint sees
 over a crank turn come from the twin's model (:func:`effective_masses`, equal to the reference
-engine's reduced mass matrix). ``twin calibrate contact`` runs the whole check for every joint
+engine's reduced mass matrix). ``twin check contact`` runs the whole check for every joint
 and catalogue clearance at the smallest, median and largest effective mass.
 """
 
@@ -34,7 +34,8 @@ from typing import Iterable
 import mujoco
 import numpy as np
 
-from twin.config import CATALOGUE_DIAMETRAL_MM, BenchConfig, joint_stiffness, with_overrides
+from twin.config import CATALOGUE_DIAMETRAL_MM, BenchConfig, with_overrides
+from twin.contact_params import initial_linear_law, law_stiffness
 from twin.impact import ImpactResult, impact_hysteresis, impact_linear
 from twin.mujoco_engine.collider import ensure_installed
 from twin.names import BORE_USERDATA_FIELDS, bore_userdata, replace_bore_userdata
@@ -137,11 +138,9 @@ def reference_law(cfg: BenchConfig, joint: str) -> tuple[str, float, float]:
     """(law, K or k, c of the linear law) of the reference engine for ``joint``."""
     ct = cfg.contact
     if ct.law == "linear":
-        from twin.mujoco_engine.builder import _reference_linear_law
-
-        k, c = _reference_linear_law(cfg)[joint]
+        k, c = initial_linear_law(cfg)[joint]
         return ct.law, k, c
-    return ct.law, joint_stiffness(cfg, joint) * ct.stiffness_scale, 0.0
+    return ct.law, law_stiffness(cfg, joint), 0.0
 
 
 def reference_impacts(cfg: BenchConfig, joint: str, m_eff: float, speeds: Iterable[float] = SPEEDS,
@@ -271,7 +270,7 @@ def contact_check(cfg: BenchConfig, joints=("B", "C"), clearances=CATALOGUE_DIAM
     jobs = [(j, cl) for j in joints for cl in clearances if cl > 0]
     cases = [check_case(cfg, j, cl, speeds) for j, cl in tqdm(jobs, disable=not progress, desc="contact check")]
     return {
-        "method": "twin/calibrate.py (module docstring): the twin's native contact law in a MuJoCo probe "
+        "method": "twin/studies/contact_check.py (module docstring): the twin's native contact law in a MuJoCo probe "
                   "(real bore collider and native module) against the reference law's closed forms",
         "law": cfg.contact.law,
         "timestep_s": cfg.simulation.timestep_s,

@@ -24,7 +24,8 @@ import numpy as np
 from numba import njit
 
 from twin.errors import ConfigError
-from twin.reference import model as M
+from twin.natural_coordinates import N_Q, P_H, energy, mass_times, quadratic_terms, residual
+from twin.reference.model import _cholesky_solve, generalized_forces
 
 
 @dataclass(frozen=True)
@@ -87,22 +88,22 @@ def penalty_run(P, q, qd, alpha, zeta, omega, nsteps, every, th_d, en, phi, phid
 
     Returns (diverged, steps done, samples written). Diverged: non-finite state, failed
     factorization, ‖Φ‖ > 1 or |θ̇| > 1e4 rad/s (the run stops there)."""
-    h = P[M.P_H]
+    h = P[P_H]
     Mm = np.zeros((8, 8))
-    e = np.zeros(M.N_Q)
-    col = np.empty(M.N_Q)
+    e = np.zeros(N_Q)
+    col = np.empty(N_Q)
     for j in range(8):
         e[:] = 0.0
         e[j] = 1.0
-        M.mass_times(P, e, col)
+        mass_times(P, e, col)
         Mm[:, j] = col[:8]
     J = np.empty((7, 8))
     K = np.empty((8, 8))
     rhs = np.empty(8)
     Q = np.empty(8)
-    res = np.empty(M.N_Q)
-    quad = np.empty(M.N_Q)
-    Qf = np.empty(M.N_Q)
+    res = np.empty(N_Q)
+    quad = np.empty(N_Q)
+    Qf = np.empty(N_Q)
     lam = np.empty(7)
     cst = np.zeros(2)
     jo = np.zeros(5)
@@ -111,7 +112,7 @@ def penalty_run(P, q, qd, alpha, zeta, omega, nsteps, every, th_d, en, phi, phid
     diverged = False
     while True:
         s, c = math.sin(q[7]), math.cos(q[7])
-        M.residual(P, q, s, c, res)
+        residual(P, q, s, c, res)
         _jacobian(P, q, J)
         nphi = 0.0
         nphid = 0.0
@@ -125,7 +126,7 @@ def penalty_run(P, q, qd, alpha, zeta, omega, nsteps, every, th_d, en, phi, phid
         nphi = math.sqrt(nphi)
         if k % every == 0:
             th_d[m] = qd[7]
-            en[m] = M.energy(P, q, qd)
+            en[m] = energy(P, q, qd)
             phi[m] = nphi
             phid[m] = math.sqrt(nphid)
             m += 1
@@ -134,10 +135,10 @@ def penalty_run(P, q, qd, alpha, zeta, omega, nsteps, every, th_d, en, phi, phid
             break
         if k == nsteps:
             break
-        M.quadratic_terms(q, qd, s, c, quad)        # −Φ̇_q q̇ (rows 0–2)
+        quadratic_terms(q, qd, s, c, quad)        # −Φ̇_q q̇ (rows 0–2)
         for i in range(3):
             lam[i] -= quad[i]
-        M.generalized_forces(P, q, qd, 0.0, cst, cst, cst, Qf, jo, jo, jo)
+        generalized_forces(P, q, qd, 0.0, cst, cst, cst, Qf, jo, jo, jo)
         for i in range(8):
             Q[i] = Qf[i]
         for i in range(8):
@@ -150,7 +151,7 @@ def penalty_run(P, q, qd, alpha, zeta, omega, nsteps, every, th_d, en, phi, phid
                 for r in range(7):
                     acc2 += alpha * J[r, i] * J[r, j]
                 K[i, j] = acc2
-        if not M._cholesky_solve(K, rhs, 8):
+        if not _cholesky_solve(K, rhs, 8):
             diverged = True
             break
         for i in range(8):

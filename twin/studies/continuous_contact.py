@@ -285,7 +285,7 @@ def register(studies) -> None:
     p = studies.add_parser(
         "continuous-contact", help="S004's continuous-contact model (clearance at B as a massless virtual rod)",
         description="S004 §2.1: the clearance at the crank-rod joint B as a massless rod of length c, the crank "
-                    "prescribed, one degree of freedom from Lagrange's equations (twin/studies/s004.py). Runs it "
+                    "prescribed, one degree of freedom from Lagrange's equations (twin/studies/continuous_contact.py). Runs it "
                     "from the quasi-static start (the journal where the ideal pin force pushes it) and writes "
                     "continuous_contact.json (the crank angle up to which the journal stays on the wall, f_N >= 0, "
                     "and the slider's deviation from the ideal motion up to there), continuous_contact.npz (time "

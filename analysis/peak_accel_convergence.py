@@ -8,7 +8,7 @@ peak contact force, and the clearance joint's friction against its normal force:
 and 99th percentile of |ft_C|/fn_C where fn_C > 5 N and the pin slides at full μ0 (a value
 above μ0 = 0.05 means the friction took a larger normal force than the solver applied).
 
-Run: ``python analysis/ac6_peak.py [--steps 1e-5,5e-6,2e-6,1e-6] [--reference 1e-5,1e-6]``
+Run: ``python analysis/peak_accel_convergence.py [--steps 1e-5,5e-6,2e-6,1e-6] [--reference 1e-5,1e-6]``
 (one process, one simulation at a time; ~30 s with the defaults on two cores).
 """
 

@@ -33,8 +33,9 @@ from pathlib import Path
 import numpy as np
 
 from twin.config import BenchConfig
-from twin.reference import model as M
-from twin.reference.penalty import PenaltyParams, penalty_run
+from twin.natural_coordinates import N_Q, P_H, S_Q, S_QD, initial_state
+from twin.reference.model import N_OUT, OK, build_params, free_motion, run_steps
+from twin.studies.penalty import PenaltyParams, penalty_run
 from twin.util import atomic_write_bytes, atomic_write_json, atomic_write_text
 
 #: release angle of §4.1 [rad]
@@ -111,8 +112,8 @@ def study_config(cfg: BenchConfig | None = None) -> BenchConfig:
 
 
 def _params(cfg: BenchConfig, h: float, integrator: str = "euler") -> np.ndarray:
-    P = M.build_params(cfg, drive=False, guide_friction=False, joint_friction=False, integrator=integrator)
-    P[M.P_H] = h
+    P = build_params(cfg, drive=False, guide_friction=False, joint_friction=False, integrator=integrator)
+    P[P_H] = h
     return P
 
 
@@ -125,15 +126,15 @@ def run_case(cfg: BenchConfig, case: Case, duration_s: float = 5.0, theta0: floa
     nsamp = nsteps // every + 2
     bufs = [np.zeros(nsamp) for _ in range(4)]
     P = _params(cfg, h)
-    st = M.initial_state(cfg, theta0)
+    st = initial_state(cfg, theta0)
     _warm(P, st, case)
     if case.penalty is None:
         t0 = time.perf_counter()
-        status, steps, m = M.free_motion(P, st, nsteps, every, *bufs)
+        status, steps, m = free_motion(P, st, nsteps, every, *bufs)
         wall = time.perf_counter() - t0
-        diverged = status != M.OK
+        diverged = status != OK
     else:
-        q, qd = st[M.S_Q:M.S_Q + M.N_Q].copy(), st[M.S_QD:M.S_QD + M.N_Q].copy()
+        q, qd = st[S_Q:S_Q + N_Q].copy(), st[S_QD:S_QD + N_Q].copy()
         pp = case.penalty
         t0 = time.perf_counter()
         diverged, steps, m = penalty_run(P, q, qd, pp.alpha, pp.zeta, pp.omega, nsteps, every, *bufs)
@@ -145,9 +146,9 @@ def run_case(cfg: BenchConfig, case: Case, duration_s: float = 5.0, theta0: floa
 def _warm(P: np.ndarray, st: np.ndarray, case: Case) -> None:
     z = [np.zeros(4) for _ in range(4)]
     if case.penalty is None:
-        M.free_motion(P, st.copy(), 1, 1, *z)
+        free_motion(P, st.copy(), 1, 1, *z)
     else:
-        penalty_run(P, st[M.S_Q:M.S_Q + M.N_Q].copy(), st[M.S_QD:M.S_QD + M.N_Q].copy(), 1.0, 0.0, 0.0, 1, 1, *z)
+        penalty_run(P, st[S_Q:S_Q + N_Q].copy(), st[S_QD:S_QD + N_Q].copy(), 1.0, 0.0, 0.0, 1, 1, *z)
 
 
 # ------------------------------------------------------------ minimal coordinates
@@ -223,18 +224,18 @@ def _time_best(fn, repeats: int = 2) -> tuple[float, float]:
 
 def _rmatrix_theta(cfg: BenchConfig, h: float, duration_s: float, integrator: str) -> tuple[float, float]:
     P = _params(cfg, h, integrator)
-    st0 = M.initial_state(cfg, THETA0)
+    st0 = initial_state(cfg, THETA0)
     n = int(round(duration_s / h))
     z = np.zeros(n)
-    out = np.empty((1, M.N_OUT))
-    M.run_steps(P, st0.copy(), z[:1], z[:1], 1, out, False)  # compiled or loaded before the clock
+    out = np.empty((1, N_OUT))
+    run_steps(P, st0.copy(), z[:1], z[:1], 1, out, False)  # compiled or loaded before the clock
 
     def once():
         st = st0.copy()
         t0 = time.perf_counter()
-        status, _ = M.run_steps(P, st, z, z, n, out, False)
+        status, _ = run_steps(P, st, z, z, n, out, False)
         wall = time.perf_counter() - t0
-        return (float(st[M.S_Q + 7]) if status == M.OK else float("nan")), wall
+        return (float(st[S_Q + 7]) if status == OK else float("nan")), wall
 
     return _time_best(once)
 
@@ -503,10 +504,10 @@ def _notes(rows: list[dict]) -> str:
             if p3["diverged"] else "did NOT diverge here, unlike S003."))
     notes.append("- ΔE / T_max: energy error relative to the largest kinetic energy of the exact motion "
                  "(a datum-free scale). θ̇_exact: the minimal-coordinate solution (module docstring of "
-                 "twin/reference/formulations.py).")
+                 "twin/studies/formulations.py).")
     notes.append("- S003 plots but does not tabulate, and does not list all its (α, ω) pairs: the settings here are "
                  "our choice. Both formulations use the crank angle equation x_B sin θ − y_B cos θ = 0 (never "
-                 "singular, twin/reference/model.py); S003 does not print its exact form.")
+                 "singular, twin/reference/model.py and twin/natural_coordinates.py); S003 does not print its exact form.")
     return "\n".join(notes) + "\n"
 
 

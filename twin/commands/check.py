@@ -1,0 +1,87 @@
+"""``twin check contact``: check the twin's contact law against the reference's closed forms.
+
+Nothing is fitted: the MuJoCo twin applies the reference's contact law itself (native module
+``_bore.c``). The command checks that law as MuJoCo integrates it, for every joint and catalogue
+clearance at the smallest, median and largest effective mass (method:
+:mod:`twin.studies.contact_check`): static penetration (1 %), free single impacts over
+1 mm/s-0.5 m/s (restitution ±0.02, peak force 5 %, duration 10 %) and the capture of preloaded
+slow impacts. Writes a JSON report; exit status 1 when a case misses a tolerance.
+
+``twin calibrate contact`` is the old name of the same command, kept as a deprecated alias for
+one version: the same options and output, plus a one-line note on stderr (after the arguments
+are accepted, so a refused argument is still a one-line error).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+#: the note the deprecated ``twin calibrate`` prints on stderr before running
+DEPRECATION_NOTE = ("note: 'twin calibrate contact' is deprecated and will be removed in the next version; "
+                    "use 'twin check contact'")
+
+_CONTACT_HELP = "check the twin's contact law against the reference's single-impact solutions"
+_CONTACT_DESCRIPTION = (
+    "The twin's native contact law in a MuJoCo probe (real bore collider and native module) against the "
+    "reference law: static penetration (F/K)^(1/n) within 1 %, free single impacts 1 mm/s to 0.5 m/s at the "
+    "smallest, median and largest effective mass (restitution +-0.02, peak force 5 %, duration 10 %), capture "
+    "of preloaded slow impacts. Nothing is fitted. Exit status 1 when a case misses a tolerance.")
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("check", help="check the twin against the reference (contact law)",
+                       description="Checks of the MuJoCo twin against the reference engine's closed forms.")
+    _add_contact(p, _run_contact)
+    old = sub.add_parser("calibrate", help="deprecated name of 'twin check'",
+                         description="Deprecated name of 'twin check' (removed in the next version).")
+    _add_contact(old, _run_contact_deprecated)
+
+
+def _add_contact(parent: argparse.ArgumentParser, func) -> None:
+    what = parent.add_subparsers(dest="what", metavar="WHAT", parser_class=type(parent))
+    what.required = True
+    c = what.add_parser("contact", help=_CONTACT_HELP, description=_CONTACT_DESCRIPTION)
+    c.add_argument("--config", metavar="FILE", help="TOML configuration (contact law, materials, timestep)")
+    c.add_argument("--out", metavar="FILE", default="contact_check.json",
+                   help="JSON report to write (default contact_check.json)")
+    c.add_argument("--joints", default="B,C", help="joints to check (default B,C)")
+    c.add_argument("--no-progress", action="store_true", help="no progress bar")
+    c.set_defaults(func=func)
+
+
+def _run_contact_deprecated(args: argparse.Namespace) -> int:
+    return _run_contact(args, deprecated=True)
+
+
+def _run_contact(args: argparse.Namespace, deprecated: bool = False) -> int:
+    """``deprecated``: called by the old name; the note goes to stderr once the arguments are
+    accepted (a refused argument stays a one-line error)."""
+    import json
+    from pathlib import Path
+
+    from twin.config import BenchConfig, load_config
+    from twin.errors import ConfigError
+    from twin.studies.contact_check import contact_check
+    from twin.util import atomic_write_text, check_output_file
+
+    joints = tuple(j.strip().upper() for j in args.joints.split(",") if j.strip())
+    if not joints or any(j not in ("B", "C") for j in joints):
+        raise ConfigError("--joints", f"must be a comma list of B, C; got {args.joints!r}")
+    out = Path(args.out)
+    check_output_file(out, "--out", ".json")
+    cfg = load_config(args.config) if args.config else BenchConfig()
+    if deprecated:
+        print(DEPRECATION_NOTE, file=sys.stderr)
+    report = contact_check(cfg, joints=joints, progress=not args.no_progress and sys.stderr.isatty())
+    atomic_write_text(out, json.dumps(report, indent=1) + "\n")
+    print("| case | m_eff min/median/max [kg] | restitution/0.02 | peak force/5 % | duration/10 % | static | capture |")
+    print("|---|---|---:|---:|---:|---:|---|")
+    for key, r in report["cases"].items():
+        m, e = r["m_eff_kg"], r["max_scaled_error"]
+        print(f"| {key} | {m['min']:.2f}/{m['median']:.2f}/{m['max']:.2f} | {e['restitution']:.2f} | "
+              f"{e['peak_force']:.2f} | {e['duration']:.2f} | {100 * r['static_error']:.3f} % | "
+              f"{'same' if r['capture_agrees'] else 'DIFFERS'} |")
+    print(f"wrote {out}: {'every case within the tolerances' if report['ok'] else 'some case misses a tolerance'} "
+          f"(scaled errors <= 1 meet them)")
+    return 0 if report["ok"] else 1

@@ -1,0 +1,140 @@
+"""The whole configuration of one run, :class:`BenchConfig`, and what needs all of it."""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass, field
+from typing import Any
+
+import tomli_w
+
+from twin.config.common import ENGINE_ONLY_GROUPS, _NAME_RE, _check
+from twin.config.convert import _to_plain, with_overrides
+from twin.config.drive import PID, Drive
+from twin.config.drivetrain import Drivetrain
+from twin.config.engines import MujocoSettings, Simulation
+from twin.config.mechanism import Bodies, Contact, Joints, Materials, Mechanism, ln_stiffness
+from twin.config.sensors import Instrumentation, Sensors
+from twin.errors import ConfigError
+
+
+@dataclass(frozen=True)
+class BenchConfig:
+    """Everything that defines one run of the bench, for either engine."""
+
+    name: str = "test6"
+    bodies: Bodies = Bodies()
+    materials: Materials = Materials()
+    joints: Joints = Joints(clearance_c_mm=0.1)
+    mechanism: Mechanism = Mechanism()
+    contact: Contact = Contact()
+    mujoco: MujocoSettings = MujocoSettings()
+    drive: Drive = Drive()
+    pid: PID = PID()
+    sensors: Sensors = field(default_factory=Sensors)
+    simulation: Simulation = Simulation()
+    instrumentation: Instrumentation = field(default_factory=Instrumentation)
+    drivetrain: Drivetrain = Drivetrain()
+
+    def __post_init__(self) -> None:
+        _check(isinstance(self.name, str) and 0 < len(self.name) <= 80 and _NAME_RE.fullmatch(self.name) is not None,
+               "name", "must be 1-80 characters of letters, digits and . _ - + = @ , (it names the default output "
+               f"file), not starting with '.'; got {self.name!r}")
+        # cross-field rules: a configuration that exists can be run
+        sim, sen = self.simulation, self.sensors
+        if sim.duration_s == 0 and self.drive.program != "protocol":
+            raise ConfigError("simulation.duration_s",
+                              f"must be > 0 for the {self.drive.program} program (0 = the protocol's length); "
+                              + ("--trace FILE and configuration files fill in the trace's length"
+                                 if self.drive.program == "trace" else "got 0"))
+        k = 1.0 / (sim.timestep_s * sen.output_rate_hz)
+        stride = int(round(k))
+        if stride < 1 or abs(stride - k) > 1e-6 * k:
+            every = 1.0 / sim.timestep_s
+            raise ConfigError("simulation.timestep_s",
+                              f"{sim.timestep_s:g} s does not divide the output period 1/{sen.output_rate_hz:g} Hz; "
+                              f"use a timestep of (1/output_rate)/k for an integer k, or set the output rate "
+                              f"explicitly (sensors.output_rate_hz, --output-rate), e.g. {every:.10g} Hz for a "
+                              "sample every step")
+        if round(self.duration_s * sen.output_rate_hz) < 1:
+            raise ConfigError("simulation.duration_s",
+                              f"must hold at least one output sample (>= {1.0 / sen.output_rate_hz:g} s at "
+                              f"{sen.output_rate_hz:g} Hz), got {sim.duration_s!r}")
+        if self.drive.mode == "prescribed" and sim.engine == "mujoco":
+            if self.mujoco.integrator != "Euler":
+                raise ConfigError("mujoco.integrator",
+                                  "must be \"Euler\" for drive.mode = \"prescribed\" (the dead-beat drive lands each "
+                                  f"step on the program with Euler's update), got {self.mujoco.integrator!r}")
+            if "energy" in sen.channels:
+                raise ConfigError("sensors.channels",
+                                  "the optional group 'energy' is not available with drive.mode = \"prescribed\" in "
+                                  "the MuJoCo engine (its kinetic energy would hold the drive's infinite flywheel)")
+        if self.drive.mode in ("motor", "torque"):
+            self.drivetrain.controller_stride(sim.timestep_s)
+            if sim.engine == "mujoco" and self.mujoco.integrator not in ("Euler", "implicitfast", "implicit"):
+                raise ConfigError("mujoco.integrator",
+                                  f"must be \"Euler\", \"implicitfast\" or \"implicit\" for drive.mode = "
+                                  f"{self.drive.mode!r} (the drive train's native states advance once a step), "
+                                  f"got {self.mujoco.integrator!r}")
+        else:
+            for group in ("motor", "drive_energy"):
+                if group in sen.channels:
+                    raise ConfigError("sensors.channels", f"the optional group {group!r} needs drive.mode = "
+                                      f"\"motor\" or \"torque\", got {self.drive.mode!r}")
+        for group, engines in ENGINE_ONLY_GROUPS.items():
+            if group in sen.channels and sim.engine not in engines:
+                raise ConfigError("sensors.channels",
+                                  f"the optional group {group!r} is produced by the {' and '.join(engines)} engine "
+                                  f"only; remove it for simulation.engine = {sim.engine!r}")
+
+    # -- derived
+    @property
+    def duration_s(self) -> float:
+        """Simulated time of the run [s] (resolves ``simulation.duration_s = 0`` of the protocol)."""
+        if self.simulation.duration_s > 0:
+            return float(self.simulation.duration_s)
+        return self.drive.protocol_duration_s
+
+    @property
+    def output_rate_hz(self) -> float:
+        """Sample rate of the run's channels [Hz] (``sensors.output_rate_hz``)."""
+        return float(self.sensors.output_rate_hz)
+
+    @property
+    def output_stride(self) -> int:
+        """Integration steps per output sample (an integer by construction)."""
+        return int(round(1.0 / (self.simulation.timestep_s * self.sensors.output_rate_hz)))
+
+    @property
+    def n_samples(self) -> int:
+        """Number of output samples of a run of this configuration."""
+        return int(round(self.duration_s * self.sensors.output_rate_hz))
+
+    # -- serialization
+    def to_dict(self) -> dict[str, Any]:
+        """Plain nested dict (tuples as lists), the TOML layout. The ``[drivetrain]`` table is left
+        out while it holds the defaults and the drive does not use it (crank PID, prescribed), so
+        that the text and digest of such configurations are what they were before it existed."""
+        out = _to_plain(self)
+        if self.drive.mode in ("pid", "prescribed") and self.drivetrain == Drivetrain():
+            out.pop("drivetrain", None)
+        return out
+
+    def to_toml(self) -> str:
+        """Canonical TOML text of this configuration."""
+        return tomli_w.dumps(self.to_dict())
+
+    def digest(self) -> str:
+        """Short SHA-256 of the canonical TOML: a deterministic id of this configuration."""
+        return hashlib.sha256(self.to_toml().encode()).hexdigest()[:16]
+
+    def replace(self, **overrides: Any) -> "BenchConfig":
+        """Copy with dotted-path overrides, e.g. ``replace(**{"drive.motor_rpm": 500})``."""
+        return with_overrides(self, overrides)
+
+
+def joint_stiffness(cfg: BenchConfig, joint: str) -> float:
+    """K of ``joint``'s hysteresis law before ``stiffness_scale`` [N/m^n]: the configured one
+    (:meth:`Contact.stiffness_of`) or S003 Eq. 18 from the joint's own pin, bushing and
+    materials (:func:`ln_stiffness`). Both engines resolve K here."""
+    return cfg.contact.stiffness_of(joint) or ln_stiffness(cfg.joints, cfg.materials, joint)
