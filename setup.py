@@ -23,14 +23,15 @@ setup(
     packages=find_namespace_packages(include=["twin*"]) + ["twin.mjcf"],
     package_dir={"twin.mjcf": "mjcf"},
     package_data={
-        "twin": ["data/*.toml", "data/*.json", "data/*.xml", "data/*.joblib", "mujoco_engine/*.c", "dataset/*.md",
-                 "config/presets/*.toml"],
+        "twin": ["data/*.toml", "data/*.json", "data/*.xml", "data/*.joblib", "mujoco_engine/*.c", "mujoco_engine/*.h",
+                 "dataset/*.md", "config/presets/*.toml"],
         "twin.mjcf": ["*.xml"],
     },
     ext_modules=[
         Extension(
             "twin.mujoco_engine._bore",
             sources=["twin/mujoco_engine/_bore.c"],
+            depends=["twin/mujoco_engine/_drivetrain.h"],
             include_dirs=[include],
             extra_compile_args=["-O2"],
         )

@@ -19,6 +19,9 @@ Conventions (bench frame of :mod:`twin.config`):
   along the in-plane tangent ẑ × n (n = e/|e|) [N].
 * ``theta_ref`` / ``omega_ref``: the drive's reference bench angle [rad] and rate [rad/s];
   ``crank_torque``: torque applied by the PID to the crank about +z [N m].
+* optional groups ``motor`` and ``drive_energy`` (``drive.mode`` "motor"/"torque"): see
+  :mod:`twin.motor_drive` (motor angle/speed/torque, belt torque and slip, command voltage; the
+  work, energy and dissipation accumulators of the energy balance).
 * optional group ``energy`` (MuJoCo engine only; not computed unless asked for):
   ``energy_kinetic`` / ``energy_potential``: kinetic and gravitational potential energy of the
   three bodies (MuJoCo's ``e_kinetic``/``e_potential`` sensors; the soft contacts' elastic
@@ -32,6 +35,27 @@ from dataclasses import dataclass
 import numpy as np
 
 from twin.config import ACCELEROMETERS, ALL_CHANNEL_GROUPS, JOINTS, BenchConfig
+
+#: channels of the optional group "motor": (name, unit, dtype, description)
+MOTOR_CHANNELS: tuple[tuple[str, str, str, str], ...] = (
+    ("motor_angle", "rad", "float64", "motor rotor angle about +z (the crank angle's sense)"),
+    ("motor_speed", "rad/s", "float64", "motor rotor angular velocity"),
+    ("motor_torque", "N m", "float32", "motor electromagnetic torque (controller output, clamped)"),
+    ("belt_torque", "N m", "float32", "belt torque on the crank pulley (r_c x effective pull)"),
+    ("belt_slip", "m/s", "float32", "belt slip speed on the pulleys (creep and sliding)"),
+    ("command_voltage", "V", "float32", "analog motor command"),
+)
+#: channels of the optional group "drive_energy" (accumulated from t = 0)
+DRIVE_ENERGY_CHANNELS: tuple[tuple[str, str, str, str], ...] = (
+    ("motor_work", "J", "float64", "work of the motor torque on the rotor"),
+    ("energy_mechanical", "J", "float64", "kinetic + gravitational energy of the mechanism and the rotor"),
+    ("energy_belt", "J", "float64", "elastic energy of the belt spans"),
+    ("diss_belt_damping", "J", "float64", "energy dissipated by the belt's damping"),
+    ("diss_belt_slip", "J", "float64", "energy dissipated by belt creep and slip"),
+    ("diss_guide", "J", "float64", "energy dissipated by the slider guide's friction"),
+    ("diss_contact", "J", "float64",
+     "energy dissipated in the joints (contact law, joint friction; MuJoCo: every constraint force)"),
+)
 
 
 @dataclass(frozen=True)
@@ -71,6 +95,9 @@ _STATIC: dict[str, list[ChannelSpec]] = {
         ChannelSpec("crank_torque", "N m", "drive", "float32", "PID torque on the crank"),
     ],
     # optional group (not in the default channel list): energy balances
+    # optional groups of the drive train (drive.mode "motor"/"torque", twin.motor_drive)
+    "motor": [ChannelSpec(n, u, "motor", dt, d) for n, u, dt, d in MOTOR_CHANNELS],
+    "drive_energy": [ChannelSpec(n, u, "drive_energy", dt, d) for n, u, dt, d in DRIVE_ENERGY_CHANNELS],
     "energy": [
         ChannelSpec("energy_kinetic", "J", "energy", "float64", "kinetic energy of the mechanism"),
         ChannelSpec("energy_potential", "J", "energy", "float64",

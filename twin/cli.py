@@ -58,7 +58,7 @@ class _Parser(argparse.ArgumentParser):
 SELECT_OPTIONS = ("config", "test")
 MODEL_OPTIONS = ("clearance_b", "clearance_c", "clearance_a", "orientation", "set")
 DRIVE_OPTIONS = ("speed", "protocol", "trace")
-RUN_OPTIONS = ("duration", "timestep", "engine", "channels", "output_rate")
+RUN_OPTIONS = ("duration", "timestep", "engine", "channels", "output_rate", "drive_mode")
 ALL_CONFIG_OPTIONS = SELECT_OPTIONS + MODEL_OPTIONS + DRIVE_OPTIONS + RUN_OPTIONS
 
 
@@ -83,7 +83,10 @@ def add_config_args(p: argparse.ArgumentParser, options: Sequence[str] = ALL_CON
         g.add_argument("--preset", metavar="NAME",
                        help="another paper's mechanism: s001 (S001's rig, 0.5 mm radial clearance at C, "
                             "0 -> 300 rpm in 0.2 s), s000 (S000's Flores slider-crank at 5000 rpm), s004 (S004's "
-                            "steel mechanism, 0.5 mm radial clearance at B, prescribed 30 rad/s, ADAMS IMPACT contact)")
+                            "steel mechanism, 0.5 mm radial clearance at B, prescribed 30 rad/s, ADAMS IMPACT contact), "
+                            "torque_release (the bench's torque-driven release test: test 12's clearances, 1.2 N m "
+                            "on the motor for 0.5 s, then coast-down through the belt, 10 s), torque_release_protocol (three "
+                            "spin-ups of increasing length at 1.2 N m, each released, 34 s)")
     if "clearance_b" in has:
         g.add_argument("--clearance-b", type=float, metavar="MM",
                        help="diametral clearance at B [mm], 0 = ball bearing")
@@ -113,6 +116,12 @@ def add_config_args(p: argparse.ArgumentParser, options: Sequence[str] = ALL_CON
                             "its period)")
     if "engine" in has:
         g.add_argument("--engine", choices=ENGINES, help="mujoco (the twin) or reference (R-matrix)")
+    if "drive_mode" in has:
+        g.add_argument("--drive-mode", choices=("pid", "prescribed", "motor", "torque"),
+                       help="how the crank is driven: pid (crank PID on the program, the default), prescribed, "
+                            "motor (the bench's motor speed loop and V-belt, [drivetrain] parameters) or torque "
+                            "(motor torque program, then release); motor and torque add the channel group "
+                            "'motor' unless --channels is given")
     if "channels" in has:
         g.add_argument("--channels", metavar="G,G", help=f"channel groups to compute: {','.join(ALL_CHANNEL_GROUPS)}")
     if "set" in has:
@@ -187,6 +196,11 @@ def config_from_args(args: argparse.Namespace) -> BenchConfig:
         ov["sensors.output_rate_hz"] = args.output_rate
     if _opt(args, "engine"):
         ov["simulation.engine"] = args.engine
+    if _opt(args, "drive_mode") is not None:
+        ov["drive.mode"] = args.drive_mode
+        if args.drive_mode in ("motor", "torque") and _opt(args, "channels") is None \
+                and "motor" not in cfg.sensors.channels:
+            ov["sensors.channels"] = list(cfg.sensors.channels) + ["motor"]
     if _opt(args, "channels") is not None:
         groups = [c.strip() for c in args.channels.split(",")]
         if not all(groups):

@@ -26,8 +26,13 @@ ROD = "rod"
 SLIDER = "slider"
 BODIES = (CRANK, ROD, SLIDER)
 
+#: the motor rotor of the drive train (drive.mode "motor"/"torque"; added by the builder)
+MOTOR = "motor_rotor"
+
 # joints
 CRANK_HINGE = "crank_hinge"
+#: the motor rotor's hinge (drive train)
+MOTOR_HINGE = "motor_hinge"
 ROD_HINGE = "rod_hinge"
 SLIDER_SLIDE = "slider_slide"
 #: slide joints added at a clearance joint A (crank journal relative to the frame's bore, bench
@@ -74,6 +79,29 @@ def pair(joint: str, term: int = 0) -> str:
 # equality, actuator
 JOINT_C_CONNECT = "joint_C"
 CRANK_PID = "crank_pid"
+#: zero-gain actuator on the motor hinge whose ctrl carries the motor's speed set point [rad/s] or
+#: torque [N m] to the native drive train (drive.mode "motor"/"torque")
+MOTOR_COMMAND = "motor_command"
+#: the drive train's <numeric> (layout :data:`DRIVETRAIN_FIELDS`)
+DRIVETRAIN_NUMERIC = "drivetrain"
+#: marker in its first field (DT_MAGIC of _drivetrain.h)
+DRIVETRAIN_MAGIC = 7303.0
+#: field names of the drive train's numeric data, in order (enum dt_field of _drivetrain.h)
+DRIVETRAIN_FIELDS: tuple[str, ...] = (
+    "marker", "motor_dof", "crank_dof", "actuator", "slot", "mode", "r_m", "r_c", "k", "c",
+    "ea", "f_max", "c_slip", "stride", "counts", "alpha", "kp", "ki", "t_ctrl", "peak",
+    "account", "guide_dof")
+#: drive-train sensors: motor angle and speed (native), and the native module's user sensor
+#: (:data:`DRIVETRAIN_SENSOR_FIELDS`)
+SENSOR_MOTOR_ANGLE = "motor_angle"
+SENSOR_MOTOR_SPEED = "motor_speed"
+SENSOR_DRIVETRAIN = "drivetrain"
+DRIVETRAIN_SENSOR_FIELDS: tuple[str, ...] = ("motor_torque", "belt_torque", "belt_slip")
+#: the accounts' user sensor (acceleration stage; with the channel group drive_energy only)
+SENSOR_DRIVETRAIN_ENERGY = "drivetrain_energy"
+DRIVETRAIN_ENERGY_FIELDS: tuple[str, ...] = (
+    "motor_work", "energy_belt", "diss_belt_damping", "diss_belt_slip", "diss_guide", "diss_contact",
+    "energy_mechanical")
 
 # sensors (base model)
 ACCEL_SENSORS = ("AC1", "AC2", "AC3", "AC4", "AC5", "AC6")

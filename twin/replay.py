@@ -77,6 +77,11 @@ class ReplayOptions:
         nan: NaN policy of the recording reader ("error" or "interpolate").
         plots: write PNG plots.
         progress: show a progress bar while simulating.
+        drive: "pid" (the crank PID on the encoder trace, S003 §4.3) or "motor": in addition, the
+            motor model (``drive.mode = "motor"``, ``[drivetrain]``) driven by the recording's motor
+            command channel (``motor_command_trace.npz``) is simulated and compared with the recording
+            the same way; the report puts the two drives side by side (``motor_drive``). The MCAP
+            file, plots and the main tables stay the PID replay's.
     """
 
     window_s: tuple[float, float] | None = None
@@ -89,6 +94,7 @@ class ReplayOptions:
     nan: str = "error"
     plots: bool = True
     progress: bool = False
+    drive: str = "pid"
 
 
 def replay_config(rec_cfg: BenchConfig, trace_file: Path, rec: Run, zero_g_v: dict[str, float]) -> BenchConfig:
@@ -224,8 +230,14 @@ def replay(recording: str | Path, out_dir: str | Path,
         raise RecordingError(f"instrumentation.daq_rate_hz ({inst.daq_rate_hz:g} Hz) differs from the recording's "
                              f"rate ({rec.rate_hz:g} Hz)")
     trace = final / "encoder_trace.npz"
+    if opts.drive not in ("pid", "motor"):
+        raise TwinError(f"--drive: must be pid or motor, got {opts.drive!r}")
+    if opts.drive == "motor" and "motor_command" not in rec:
+        raise RecordingError(f"{recording}: --drive motor needs the recording's motor_command channel; it has none")
     # the simulated configuration (checked before anything is written) and the analysis window
     cfg = replay_config(base, trace, rec, dict(info.calibration.zero_g_v))
+    if opts.drive == "motor":
+        motor_config(cfg, final / "motor_command_trace.npz")  # checked before anything is written
     edge = 2.0 / cfg.drive.trace_filter_hz if cfg.drive.trace_filter_hz > 0 else 0.0
     window = _window_indices(rec.n, rec.rate_hz, opts.window_s, edge)
     # everything is written into a temporary folder beside the target, renamed into place at the
@@ -352,11 +364,61 @@ def _replay_into(out: Path, recording: str | Path, rec: Run, info: Any, repairs:
         report["plots"] = _plots(out, rec_al, sim_al, rate, j0, comparison, crank_rate_hz, opts,
                                  track, pid, i0, sim, phi, cfg, rec.n / rate)
         report["files"]["plots"] = list(report["plots"])
+    if opts.drive == "motor":
+        report["motor_drive"] = _motor_drive(out, rec, cfg, phi, window, lag, sensors, rec_meas, crank_rate_hz,
+                                             opts, comparison, tracking)
+        report["files"]["motor_command_trace"] = "motor_command_trace.npz"
     report["wall_s"] = {"simulation": sim_wall, "total": time.perf_counter() - wall0}
     atomic_write_json(out / "report.json", json.loads(json.dumps(report, default=json_default)))
     atomic_write_text(out / "report.md", render_markdown(report))
     report["files"]["report"] = ["report.json", "report.md"]
     return report
+
+
+def motor_config(cfg: BenchConfig, command_trace: Path) -> BenchConfig:
+    """The PID replay's configuration ``cfg`` driven instead by the motor model from the recorded
+    command (``drivetrain.command_file``), with the motor channels."""
+    groups = list(cfg.sensors.channels) + (["motor"] if "motor" not in cfg.sensors.channels else [])
+    return cfg.replace(**{"drive.mode": "motor", "drivetrain.command_file": str(command_trace),
+                          "sensors.channels": groups})
+
+
+def _motor_drive(out: Path, rec: Run, cfg: BenchConfig, phi: np.ndarray, window: tuple[int, int], lag: int,
+                 sensors: list[str], rec_meas: Run, crank_rate_hz: float, opts: ReplayOptions,
+                 pid_comparison: dict[str, Any], pid_tracking: dict[str, Any]) -> dict[str, Any]:
+    """The motor-driven replay (:class:`ReplayOptions` ``drive = "motor"``): simulate, put through the
+    same sensor chain and calibration, compare over the same window with the PID replay's time lag."""
+    from twin.simulate import simulate_run
+
+    trace = out / "motor_command_trace.npz"
+    np.savez(trace, t=np.arange(rec.n) / rec.rate_hz, volts=np.asarray(rec["motor_command"], dtype=np.float64))
+    mcfg = motor_config(cfg, trace)
+    t0 = time.perf_counter()
+    sim = simulate_run(mcfg, progress=opts.progress)
+    wall = time.perf_counter() - t0
+    sim_meas = measured_accel(apply_chain(sim, mcfg, prefix="sim_", stream=2),
+                              simulated_calibration(mcfg, opts.static_s, stream=3), prefix="sim_")
+    i0, i1 = window
+    j0, j1 = max(i0, -lag, 0), min(i1, rec.n - lag, rec.n)
+    comparison = compare_accelerations({a: rec_meas[f"meas_{a}"][j0 + lag:j1 + lag] for a in sensors},
+                                       {a: sim_meas[f"sim_meas_{a}"][j0:j1] for a in sensors}, rec.rate_hz,
+                                       crank_rate_hz, opts)
+    count = count_step_rad(cfg.instrumentation.encoder_counts_per_rev)
+    track = (sim["encoder_angle"].astype(np.float64) - phi)[i0:i1] / count
+    speed = np.gradient(np.asarray(sim["crank_angle"], dtype=np.float64)[i0:i1]) * rec.rate_hz
+    return {
+        "note": "motor speed loop and V-belt driven by the recorded motor command; same window and time lag "
+                "as the PID replay",
+        "tracking": {"sim_vs_recorded_max_counts": float(np.max(np.abs(track))),
+                     "sim_vs_recorded_rms_counts": float(np.sqrt(np.mean(track ** 2))),
+                     "pid_sim_vs_recorded_max_counts": pid_tracking["sim_vs_recorded_max_counts"]},
+        "crank_speed_ripple_pct": float(100 * (speed.max() - speed.min()) / abs(speed.mean())) if speed.size else None,
+        "sensors": {a: {k: comparison[a][k] for k in ("nrmse_pct", "correlation", "dtw_distance_pct",
+                                                      "simulated_rms_mps2", "simulated_peak_mps2")}
+                    | {f"pid_{k}": pid_comparison[a][k] for k in ("nrmse_pct", "correlation", "dtw_distance_pct")}
+                    for a in sensors},
+        "simulation": {"wall_s": wall, **{k: sim.meta.get(k) for k in ("engine", "steps", "real_time_factor")}},
+    }
 
 
 def _same_model(a: BenchConfig, b: BenchConfig) -> bool:
@@ -437,6 +499,19 @@ def render_markdown(r: dict[str, Any]) -> str:
             lines.append(f"| {a} | " + " | ".join(cells) + " |")
     lines += ["", "Definitions: NRMSE = RMS(sim − rec) / (max − min of rec); DTW % = RMS difference along the "
               "optimal warping path / (max − min of rec) (twin/signals.py); errors after removing the time lag.", ""]
+    md = r.get("motor_drive")
+    if md:
+        lines += ["## Drives compared: crank PID on the encoder vs motor model on the recorded command", "",
+                  f"Crank vs recorded encoder, max: PID {md['tracking']['pid_sim_vs_recorded_max_counts']:.1f} counts, "
+                  f"motor {md['tracking']['sim_vs_recorded_max_counts']:.1f} counts (RMS "
+                  f"{md['tracking']['sim_vs_recorded_rms_counts']:.1f}); motor run's crank speed ripple in the window "
+                  f"{_fmt(md['crank_speed_ripple_pct'])} % (max − min over mean).", "",
+                  "| sensor | NRMSE % PID / motor | corr PID / motor | DTW % PID / motor |", "|---|---|---|---|"]
+        for a, m in md["sensors"].items():
+            lines.append(f"| {a} | {_fmt(m['pid_nrmse_pct'])} / {_fmt(m['nrmse_pct'])} | "
+                         f"{_fmt(m['pid_correlation'], '.4f')} / {_fmt(m['correlation'], '.4f')} | "
+                         f"{_fmt(m['pid_dtw_distance_pct'])} / {_fmt(m['dtw_distance_pct'])} |")
+        lines += [""]
     files = r.get("files", {})
     if files.get("plots"):
         shows = r.get("plots", {})

@@ -10,6 +10,10 @@ Definitions (identical for both engines, so summaries compare line by line):
 * ``max_contact_force_N``: max of ``fn_J``.
 * ``rms_mps2`` / ``peak_mps2`` per accelerometer: RMS and max |a| of the proper
   acceleration over the run (gravity included, as the sensor reads it).
+* ``drive_train`` (runs with the channel group ``motor``): the motor's RMS and peak torque
+  [N m], its continuous rating and whether the RMS exceeds it (the drive's thermal limit is not
+  modelled: this flags runs the real motor would not sustain), the fraction of samples at the
+  peak clamp, the peak belt torque on the crank [N m] and the peak belt slip speed [m/s].
 """
 
 from __future__ import annotations
@@ -107,6 +111,7 @@ class SummaryAccumulator:
         self._impacts: dict[str, ImpactCounter] = {}
         self._acc: dict[str, list[float]] = {}  # name -> [sum of squares, peak |a|]
         self._track: list[float] | None = None  # [max |err|, sum err^2]
+        self._motor: list[float] | None = None  # [sum u^2, max |u|, samples at the clamp, max |belt|, max |slip|]
 
     def update(self, chunk: Run) -> None:
         if self.rate_hz is None:
@@ -129,12 +134,22 @@ class SummaryAccumulator:
                 acc = self._acc.setdefault(a, [0.0, 0.0])
                 acc[0] += float(np.dot(x, x))
                 acc[1] = max(acc[1], float(np.max(np.abs(x))))
-        if "crank_angle" in chunk and "theta_ref" in chunk:
+        if "crank_angle" in chunk and "theta_ref" in chunk and not (self.config and self.config.drive.mode == "torque"):
             err = chunk["theta_ref"] - chunk["crank_angle"]
             tr = self._track if self._track is not None else [0.0, 0.0]
             tr[0] = max(tr[0], float(np.max(np.abs(err))))
             tr[1] += float(np.dot(err, err))
             self._track = tr
+        if "motor_torque" in chunk:
+            u = chunk["motor_torque"].astype(np.float64)
+            mo = self._motor if self._motor is not None else [0.0, 0.0, 0.0, 0.0, 0.0]
+            peak = self.config.drivetrain.peak_torque_nm if self.config else np.inf
+            mo[0] += float(np.dot(u, u))
+            mo[1] = max(mo[1], float(np.max(np.abs(u))))
+            mo[2] += float(np.count_nonzero(np.abs(u) >= peak * (1 - 1e-6)))  # float32 channel
+            mo[3] = max(mo[3], float(np.max(np.abs(chunk["belt_torque"]))))
+            mo[4] = max(mo[4], float(np.max(np.abs(chunk["belt_slip"]))))
+            self._motor = mo
         self.n += chunk.n
 
     def result(self, meta: dict[str, Any] | None = None) -> dict[str, Any]:
@@ -167,6 +182,14 @@ class SummaryAccumulator:
                 out[a] = {"rms_mps2": float(np.sqrt(ss / n)) if n else 0.0, "peak_mps2": peak}
         if self._track is not None and n:
             out["tracking"] = {"max_abs_error_rad": self._track[0], "rms_error_rad": float(np.sqrt(self._track[1] / n))}
+        if self._motor is not None and n:
+            rms = float(np.sqrt(self._motor[0] / n))
+            cont = cfg.drivetrain.continuous_torque_nm if cfg else None
+            out["drive_train"] = {"motor_rms_torque_Nm": rms, "motor_peak_torque_Nm": self._motor[1],
+                                  "continuous_torque_Nm": cont,
+                                  "rms_exceeds_continuous": bool(cont is not None and rms > cont),
+                                  "fraction_at_peak_clamp": self._motor[2] / n,
+                                  "max_belt_torque_Nm": self._motor[3], "max_belt_slip_mps": self._motor[4]}
         return out
 
 

@@ -35,6 +35,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--dtw-window", type=float, default=0.002, metavar="S", help="DTW Sakoe-Chiba half-width [s]")
     p.add_argument("--dtw-max", type=float, default=0.5, metavar="S", help="DTW on at most this much of the window [s]")
     p.add_argument("--repair-nan", action="store_true", help="interpolate short NaN gaps (reported) instead of failing")
+    p.add_argument("--drive", choices=("pid", "motor"), default="pid",
+                   help="pid: the crank PID on the encoder trace (default); motor: also drive the motor model "
+                        "(speed loop and V-belt, [drivetrain] parameters) by the recorded motor command and compare "
+                        "both drives in the report")
     p.add_argument("--no-plots", action="store_true", help="no PNG plots")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
@@ -74,7 +78,7 @@ def run(args: argparse.Namespace) -> int:
     opts = ReplayOptions(window_s=tuple(args.window) if args.window else None, max_lag_s=args.max_lag,
                          dtw_window_s=args.dtw_window, dtw_max_s=args.dtw_max,
                          nan="interpolate" if args.repair_nan else "error", plots=not args.no_plots,
-                         progress=not args.no_progress and sys.stderr.isatty())
+                         progress=not args.no_progress and sys.stderr.isatty(), drive=args.drive)
     r = replay(rec, out, lambda c: replay_overrides(args, c), opts)
     _print(r, out)
     return 0
@@ -100,4 +104,9 @@ def _print(r: dict, out: Path) -> None:
             print(f"  {a:6s} nearly constant ({m['near_constant_note']}): not compared")
             continue
         print(f"  {a:6s} {m['nrmse_pct']:7.2f} {m['correlation']:7.4f} {m['dtw_distance_pct']:7.3f}  {bands}")
+    md = r.get("motor_drive")
+    if md:
+        print(f"  motor drive (recorded command): tracking max {md['tracking']['sim_vs_recorded_max_counts']:.1f} counts "
+              f"(PID {md['tracking']['pid_sim_vs_recorded_max_counts']:.1f}); NRMSE% motor/PID "
+              + ", ".join(f"{a} {m['nrmse_pct']:.1f}/{m['pid_nrmse_pct']:.1f}" for a, m in md["sensors"].items()))
     print(f"  wrote {out}/: {', '.join([r['files']['mcap'], *r['files'].get('report', []), *r['files'].get('plots', [])])}")

@@ -122,5 +122,11 @@ def _print_summary(s: dict, out: Path | None) -> None:
     acc = [f"{a} {s[a]['rms_mps2']:.1f}/{s[a]['peak_mps2']:.0f}" for a in ("AC1", "AC2", "AC3", "AC4", "AC5", "AC6") if a in s]
     if acc:
         print("  accel rms/peak [m/s^2]: " + ", ".join(acc))
+    if "drive_train" in s:
+        dt = s["drive_train"]
+        over = " (above the continuous rating)" if dt["rms_exceeds_continuous"] else ""
+        print(f"  motor torque rms/peak {dt['motor_rms_torque_Nm']:.3f}/{dt['motor_peak_torque_Nm']:.3f} N m{over}, "
+              f"{100 * dt['fraction_at_peak_clamp']:.1f} % at the clamp; belt torque peak "
+              f"{dt['max_belt_torque_Nm']:.2f} N m, slip peak {dt['max_belt_slip_mps'] * 1e3:.2f} mm/s")
     if out is not None:
         print(f"  wrote {out}")

@@ -21,7 +21,8 @@ Validation happens in ``__post_init__``; errors are :class:`~twin.errors.ConfigE
 naming the dotted TOML path of the field and what is allowed.
 
 Modules: the schema (:mod:`~twin.config.mechanism`: bodies, materials, joints, frame, contact;
-:mod:`~twin.config.drive`: drive program and PID; :mod:`~twin.config.sensors`: sensors and
+:mod:`~twin.config.drive`: drive program and PID; :mod:`~twin.config.drivetrain`: the motor and
+V-belt drive train; :mod:`~twin.config.sensors`: sensors and
 instrumentation; :mod:`~twin.config.engines`: the engines and their settings;
 :mod:`~twin.config.bench`: the whole :class:`BenchConfig`), the conversion to and from plain
 dicts with ``--set`` overrides (:mod:`~twin.config.convert`), the readers of TOML files and
@@ -35,6 +36,7 @@ from twin.config.common import (ACCELEROMETERS, ALL_CHANNEL_GROUPS, CATALOGUE_DI
                                 ENGINE_ONLY_GROUPS, JOINTS, OPTIONAL_CHANNEL_GROUPS, ORIENTATIONS, PROGRAMS)
 from twin.config.convert import from_dict, with_overrides
 from twin.config.drive import PID, Drive
+from twin.config.drivetrain import Drivetrain
 from twin.config.engines import ENGINE_CLASSES, ENGINES, MujocoSettings, Simulation
 from twin.config.loading import config_from_toml, load_config
 from twin.config.mechanism import Bodies, BodyParams, Contact, Joints, Material, Materials, Mechanism, ln_stiffness
@@ -47,7 +49,7 @@ __all__ = [
     "ACCELEROMETERS", "ACCEL_MODEL_NAMES", "ACCEL_RESPONSES", "ALL_CHANNEL_GROUPS", "CATALOGUE_DIAMETRAL_MM",
     "CHANNEL_GROUPS", "DAQ_RANGES", "ENGINES", "ENGINE_CLASSES", "ENGINE_ONLY_GROUPS", "JOINTS", "NAMED_PRESETS",
     "OPTIONAL_CHANNEL_GROUPS", "ORIENTATIONS", "PROGRAMS", "TABLE4",
-    "AccelMount", "BenchConfig", "Bodies", "BodyParams", "ConfigError", "Contact", "Drive", "Instrumentation",
+    "AccelMount", "BenchConfig", "Bodies", "BodyParams", "ConfigError", "Contact", "Drive", "Drivetrain", "Instrumentation",
     "Joints", "Material", "Materials", "Mechanism", "MujocoSettings", "PID", "Sensors", "Simulation",
     "config_from_toml", "from_dict", "joint_stiffness", "ln_stiffness", "load_config", "named_preset", "preset",
     "with_overrides",

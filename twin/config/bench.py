@@ -11,6 +11,7 @@ import tomli_w
 from twin.config.common import ENGINE_ONLY_GROUPS, _NAME_RE, _check
 from twin.config.convert import _to_plain, with_overrides
 from twin.config.drive import PID, Drive
+from twin.config.drivetrain import Drivetrain
 from twin.config.engines import MujocoSettings, Simulation
 from twin.config.mechanism import Bodies, Contact, Joints, Materials, Mechanism, ln_stiffness
 from twin.config.sensors import Instrumentation, Sensors
@@ -33,6 +34,7 @@ class BenchConfig:
     sensors: Sensors = field(default_factory=Sensors)
     simulation: Simulation = Simulation()
     instrumentation: Instrumentation = field(default_factory=Instrumentation)
+    drivetrain: Drivetrain = Drivetrain()
 
     def __post_init__(self) -> None:
         _check(isinstance(self.name, str) and 0 < len(self.name) <= 80 and _NAME_RE.fullmatch(self.name) is not None,
@@ -67,6 +69,18 @@ class BenchConfig:
                 raise ConfigError("sensors.channels",
                                   "the optional group 'energy' is not available with drive.mode = \"prescribed\" in "
                                   "the MuJoCo engine (its kinetic energy would hold the drive's infinite flywheel)")
+        if self.drive.mode in ("motor", "torque"):
+            self.drivetrain.controller_stride(sim.timestep_s)
+            if sim.engine == "mujoco" and self.mujoco.integrator not in ("Euler", "implicitfast", "implicit"):
+                raise ConfigError("mujoco.integrator",
+                                  f"must be \"Euler\", \"implicitfast\" or \"implicit\" for drive.mode = "
+                                  f"{self.drive.mode!r} (the drive train's native states advance once a step), "
+                                  f"got {self.mujoco.integrator!r}")
+        else:
+            for group in ("motor", "drive_energy"):
+                if group in sen.channels:
+                    raise ConfigError("sensors.channels", f"the optional group {group!r} needs drive.mode = "
+                                      f"\"motor\" or \"torque\", got {self.drive.mode!r}")
         for group, engines in ENGINE_ONLY_GROUPS.items():
             if group in sen.channels and sim.engine not in engines:
                 raise ConfigError("sensors.channels",
@@ -98,8 +112,13 @@ class BenchConfig:
 
     # -- serialization
     def to_dict(self) -> dict[str, Any]:
-        """Plain nested dict (tuples as lists), the TOML layout."""
-        return _to_plain(self)
+        """Plain nested dict (tuples as lists), the TOML layout. The ``[drivetrain]`` table is left
+        out while it holds the defaults and the drive does not use it (crank PID, prescribed), so
+        that the text and digest of such configurations are what they were before it existed."""
+        out = _to_plain(self)
+        if self.drive.mode in ("pid", "prescribed") and self.drivetrain == Drivetrain():
+            out.pop("drivetrain", None)
+        return out
 
     def to_toml(self) -> str:
         """Canonical TOML text of this configuration."""

@@ -45,7 +45,12 @@ class Drive:
             reference angle and rate: a finite drive stiffness, S003 §4.3) or "prescribed" (an
             infinitely stiff drive: the crank angle *is* the program, θ(t) = θ_ref(t), as the
             papers that impose the crank motion assume, S001's CosmosMotion motor, S004's
-            constant 30 rad/s, S000's 5000 rpm). Reference engine: the crank angle is a driving
+            constant 30 rad/s, S000's 5000 rpm), "motor" (the bench's drive train: the motor's
+            speed loop follows the analog command of the program on its own encoder and drives
+            the crank through the V-belt; parameters in ``[drivetrain]``,
+            :mod:`twin.config.drivetrain`) or "torque" (the same motor and belt driven by the
+            torque program ``drivetrain.torque_s``/``torque_nm``, released at
+            ``drivetrain.release_s``: the program's speeds are not used). Reference engine: the crank angle is a driving
             constraint of the R-matrix model (θ and θ̇ set from the program every step, the
             other coordinates from the reduced equations with θ̈ = α_ref; the drive torque is
             the θ row's residual). MuJoCo twin: the crank turns as an infinitely heavy
@@ -77,7 +82,7 @@ class Drive:
     mode: str = "pid"
     crank_rpm: float = 0.0
 
-    MODES: typing.ClassVar[tuple[str, ...]] = ("pid", "prescribed")
+    MODES: typing.ClassVar[tuple[str, ...]] = ("pid", "prescribed", "motor", "torque")
 
     def __post_init__(self) -> None:
         _choice(self.program, "program", PROGRAMS)

@@ -140,6 +140,20 @@ NAMED: dict[str, Factor] = {f.name: f for f in (
     Factor("mount_offset_m", "accelerometer mounting error: uniform ±value in x and y [m] (drawn per run)",
            None, (0.0, 0.02), _mount_offset),
     Factor("noise", "sensor noise on or off", (True, False), None, _set("instrumentation.noise")),
+    Factor("drive_mode", "how the crank is driven: pid, prescribed, motor (motor speed loop and V-belt), torque "
+           "(motor torque program, release)", ("pid", "prescribed", "motor", "torque"), None, _set("drive.mode")),
+    # the drive train's placeholders (twin.config.drivetrain; with drive_mode motor/torque): bounds are the
+    # ranges the parameters' documentation asks users to explore
+    *(Factor(name, f"drive train: {doc} (drivetrain.{field})", None, bounds, _set(f"drivetrain.{field}"))
+      for name, field, doc, bounds in (
+          ("rotor_inertia_kgm2", "rotor_inertia_kgm2", "motor rotor and pulley inertia [kg m^2]", (1e-4, 6e-4)),
+          ("belt_ea_n", "belt_ea_n", "belt axial stiffness EA [N]", (5e3, 1e5)),
+          ("belt_damping_nspm", "belt_damping_nspm", "belt span damping [N s/m]", (5.0, 100.0)),
+          ("belt_preload_n", "preload_n", "belt span preload [N]", (30.0, 300.0)),
+          ("belt_mu", "friction_mu", "belt-pulley friction coefficient [-]", (0.15, 0.5)),
+          ("speed_kp_nms", "speed_kp_nms", "speed loop proportional gain [N m s/rad]", (0.05, 0.5)),
+          ("speed_ki_nm", "speed_ki_nm", "speed loop integral gain [N m/rad]", (0.0, 20.0)),
+          ("speed_filter_hz", "speed_filter_hz", "speed estimate low-pass cutoff [Hz]", (30.0, 500.0)))),
 )}
 
 

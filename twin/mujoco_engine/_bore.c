@@ -535,7 +535,16 @@ static void add_friction_sensor(const mjModel* m, mjData* d, int gb, mjtNum ft) 
   }
 }
 
+#include "_drivetrain.h"
+
+static void passive_bore_joints(const mjModel* m, mjData* d);
+
 static void passive_bore(const mjModel* m, mjData* d) {
+  passive_bore_joints(m, d);
+  drivetrain_passive(m, d);  /* last: it books the other passive forces of the step */
+}
+
+static void passive_bore_joints(const mjModel* m, mjData* d) {
   if (g_prev_passive) g_prev_passive(m, d);
   const int sensors = g_sensor_pending == d;  /* this pass computes sensors (slots zeroed by MuJoCo) */
   if (sensors) g_sensor_pending = NULL;
@@ -556,6 +565,7 @@ static void passive_bore(const mjModel* m, mjData* d) {
 
 static void sensor_friction(const mjModel* m, mjData* d, int stage) {
   if (g_prev_sensor) g_prev_sensor(m, d, stage);
+  drivetrain_sensor(m, d, stage);
   if (m->nuser_geom < BORE_NUSER) return;
   if (stage == mjSTAGE_POS) {
     g_sensor_pending = d;  /* the passive callback of this pass writes the values */
@@ -650,12 +660,32 @@ static PyObject* py_guide_magic(PyObject* self, PyObject* args) {
   return PyFloat_FromDouble(GUIDE_MAGIC);
 }
 
+static PyObject* py_drivetrain_fields(PyObject* self, PyObject* args) {
+  PyObject* out = PyTuple_New(DT_NFIELDS);
+  if (!out) return NULL;
+  for (int i = 0; i < DT_NFIELDS; i++) {
+    PyObject* name = PyUnicode_FromString(dt_field_names[i]);
+    if (!name) {
+      Py_DECREF(out);
+      return NULL;
+    }
+    PyTuple_SET_ITEM(out, i, name);
+  }
+  return out;
+}
+
+static PyObject* py_drivetrain_layout(PyObject* self, PyObject* args) {
+  return Py_BuildValue("(diii)", DT_MAGIC, (int)DT_NSTATE_FIXED, (int)DT_NSENSOR_TORQUE, (int)DT_NSENSOR);
+}
+
 static PyMethodDef methods[] = {
   {"install", py_install, METH_VARARGS, "install(table, passive, sensor, applyFT): addresses of mjCOLLISIONFUNC, mjcb_passive, mjcb_sensor and the function mj_applyFT."},
   {"header_version", py_header_version, METH_NOARGS, "mjVERSION_HEADER the module was compiled against."},
   {"bore_magic", py_bore_magic, METH_NOARGS, "geom user data marker value that marks a bore."},
   {"userdata_fields", py_userdata_fields, METH_NOARGS, "names of the bore geom's user data fields, in order (enum bore_user)."},
   {"guide_fields", py_guide_fields, METH_NOARGS, "names of a guide joint's user data fields, in order (enum guide_user)."},
+  {"drivetrain_fields", py_drivetrain_fields, METH_NOARGS, "names of the drive train's numeric fields, in order (enum dt_field)."},
+  {"drivetrain_layout", py_drivetrain_layout, METH_NOARGS, "(marker, fixed userdata slots before 2 nv, torque sensor dimension, accounts sensor dimension) of the drive train."},
   {"guide_magic", py_guide_magic, METH_NOARGS, "joint user data marker value that marks a guide."},
   {NULL, NULL, 0, NULL}
 };

@@ -87,6 +87,8 @@ class PosthocAccelerometers:
         seen = set()
         for j in range(m.njnt):
             name = m.joint(j).name
+            if name == N.MOTOR_HINGE and m.body_parentid[m.jnt_bodyid[j]] == 0:
+                continue  # the drive train's rotor, on the world: no sensor on it
             if name not in expect:
                 raise ModelError(f"posthoc accelerometers: unexpected joint {name!r}")
             slot, typ, axis, body = expect[name]

@@ -61,6 +61,13 @@ def ensure_installed() -> None:
         raise EngineUnavailableError(
             f"the native module reads the guide joint's user data as {guide} but twin.names has "
             f"{(N.GUIDE_USERDATA_FIELDS, N.GUIDE_MAGIC)}; rebuild the extension ('pip install -e .')")
+    train = (tuple(_bore.drivetrain_fields()), *_bore.drivetrain_layout()[0:1], *_bore.drivetrain_layout()[2:4]) \
+        if hasattr(_bore, "drivetrain_fields") else None
+    if train != (N.DRIVETRAIN_FIELDS, N.DRIVETRAIN_MAGIC, len(N.DRIVETRAIN_SENSOR_FIELDS),
+                 len(N.DRIVETRAIN_ENERGY_FIELDS)):
+        raise EngineUnavailableError(
+            "the native module's drive-train layout differs from twin.names (DRIVETRAIN_FIELDS, DRIVETRAIN_MAGIC, "
+            "DRIVETRAIN_SENSOR_FIELDS, DRIVETRAIN_ENERGY_FIELDS); rebuild the extension ('pip install -e .')")
     lib = ctypes.CDLL(_library_path())
     table = ctypes.addressof(ctypes.c_void_p.in_dll(lib, "mjCOLLISIONFUNC"))
     passive = ctypes.addressof(ctypes.c_void_p.in_dll(lib, "mjcb_passive"))

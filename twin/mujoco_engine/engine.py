@@ -189,6 +189,12 @@ class MujocoEngine:
             # dead-beat prescribed drive: the control of step k is the program at t_{k+1} (and rate 0)
             nxt, _ = self._drive((self._k + 1 + np.arange(nstep)) * h)
             ctrl = np.stack([nxt, np.zeros(nstep)], axis=-1)[None]
+        elif self.cfg.drive.mode in ("motor", "torque"):
+            # the drive train's input (speed set point or torque) in the motor_command actuator's ctrl
+            from twin.motor_drive import motor_input
+
+            ctrl = motor_input(self.cfg, self._k, nstep, omega_ref)[None, :, None]
+            self._chunk_k0 = self._k
         else:
             ctrl = np.stack([theta_ref, omega_ref], axis=-1)[None]
         # per-step state output only for the posthoc accelerometers (row k: the state after step
@@ -222,6 +228,27 @@ class MujocoEngine:
         return (f"{self.cfg.name}: MuJoCo run diverged or stopped in the chunk {t_start:.4f}-{t_expected:.4f} s "
                 f"(time reached {t_reached:.6f} s; warnings: {', '.join(warn) or 'none'}; NaN or Inf in the state "
                 "or sensors); try a smaller timestep or stiffer settings")
+
+    def _train_channels(self, sens: np.ndarray, col) -> dict[str, np.ndarray]:
+        """Channels of the drive train (groups drive, motor, drive_energy)."""
+        from twin.motor_drive import command_voltage
+
+        groups, out = self.cfg.sensors.channels, {}
+        f = {name: i for i, name in enumerate(N.DRIVETRAIN_SENSOR_FIELDS)}
+        if "drive" in groups:
+            out["crank_torque"] = col(N.SENSOR_DRIVETRAIN, f["belt_torque"])
+        if "motor" in groups:
+            out["motor_angle"] = col(N.SENSOR_MOTOR_ANGLE)
+            out["motor_speed"] = col(N.SENSOR_MOTOR_SPEED)
+            for name in ("motor_torque", "belt_torque", "belt_slip"):
+                out[name] = col(N.SENSOR_DRIVETRAIN, f[name])
+            n, stride = sens.shape[0], self.cfg.output_stride
+            t = (self._chunk_k0 + stride * np.arange(n)) * self.cfg.simulation.timestep_s
+            out["command_voltage"] = command_voltage(self.cfg, t)
+        if "drive_energy" in groups:
+            for i, name in enumerate(N.DRIVETRAIN_ENERGY_FIELDS):
+                out[name] = col(N.SENSOR_DRIVETRAIN_ENERGY, i)
+        return out
 
     def _channels(self, sens: np.ndarray, accel: np.ndarray | None = None) -> dict[str, np.ndarray]:
         cfg, sl = self.cfg, self._sensor_slices
@@ -272,7 +299,9 @@ class MujocoEngine:
             out["energy_kinetic"] = col(N.SENSOR_ENERGY_KINETIC)
             out["energy_potential"] = col(N.SENSOR_ENERGY_POTENTIAL)
             out["slider_speed"] = col(N.SENSOR_SLIDER_SPEED)
-        if "drive" in groups:
+        if self.cfg.drive.mode in ("motor", "torque"):
+            out.update(self._train_channels(sens, col))
+        elif "drive" in groups:
             if self._drive is not None:
                 # the torque the mechanism receives: the actuator's minus the flywheel's share A θ̈
                 out["crank_torque"] = col(N.SENSOR_CRANK_TORQUE) - self._armature * col(N.SENSOR_CRANK_ANGACC, 2)

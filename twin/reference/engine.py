@@ -92,6 +92,10 @@ class ReferenceEngine:
             raise ConfigError("reference.integrator",
                               "the explicit midpoint integrator is not available with drive.mode = \"prescribed\" "
                               "(use \"euler\")")
+        if self.options.integrator == "midpoint" and cfg.drive.mode in ("motor", "torque"):
+            raise ConfigError("reference.integrator",
+                              f"the explicit midpoint integrator is not available with drive.mode = {cfg.drive.mode!r} "
+                              "(use \"euler\")")
         if self.options.integrator == "midpoint" and cfg.joints.clearance_joints:
             raise ConfigError("reference.integrator",
                               "the explicit midpoint integrator is for scenes without clearance joints: it is not "
@@ -119,6 +123,13 @@ class ReferenceEngine:
         self._buf = np.empty((0, M.N_OUT))
         self._k = 0
         self._drive = None
+        self._train = None
+        if cfg.drive.mode in ("motor", "torque"):
+            from twin.reference.drivetrain_run import ReferenceTrain
+
+            self._train = ReferenceTrain(cfg)
+            self.load_s += self._train.warm_up()
+            self.meta["drive"] = self._train.describe()
         if cfg.drive.mode == "prescribed":
             from twin.drive import DriveReference
 
@@ -143,6 +154,8 @@ class ReferenceEngine:
         self.meta["contact"] = {j: {"law": self.cfg.contact.law, **asdict(c)} for j, c in self.contacts.items()}
         self._st = self.state0.copy()
         self._k = 0
+        if self._train is not None:
+            self._train.reset()
 
     def advance(self, theta_ref: np.ndarray, omega_ref: np.ndarray, stride: int) -> dict[str, np.ndarray]:
         """One call of the compiled loop over ``len(theta_ref)`` steps (see
@@ -154,7 +167,9 @@ class ReferenceEngine:
         n_out = -(-nstep // stride)
         if self._buf.shape[0] < n_out:
             self._buf = np.empty((n_out, M.N_OUT))
-        if self._drive is not None:
+        if self._train is not None:
+            status, steps = self._train.run(self.P, self._st, self._k, omega_ref, stride, self._buf, n_out)
+        elif self._drive is not None:
             # the program at t_k .. t_{k+n} (the driving constraint's next value) and its acceleration
             t = (self._k + np.arange(nstep + 1)) * h
             th, om = self._drive(t)
@@ -192,6 +207,8 @@ class ReferenceEngine:
                     cols[name] = out[:, base + k]
         if "drive" in groups:
             cols["crank_torque"] = out[:, M.O_TORQUE]
+        if self._train is not None:
+            cols.update(self._train.channels(out.shape[0]))
         # copies: the output buffer is reused by the next chunk
         return {k: np.array(v) for k, v in cols.items()}
 

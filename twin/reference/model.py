@@ -67,6 +67,7 @@ from twin.natural_coordinates import (
     P_XG1, P_XG2, S_I, S_IN_A, S_IN_B, S_IN_C, S_Q, S_QD, S_VIMP_A, S_VIMP_B, S_VIMP_C, constraint_norm,
     effective_masses, energy, independent_rows, mass_times, mechanism_params, project, quadratic_terms, solve_aug,
     velocity_constraint_norm)
+from twin.reference import drivetrain as DT
 from twin.reference.contact import FRICTION_CODES, LAW_CODES, adams_friction_force, friction_force, normal_force, ramp
 
 #: integrators of :func:`run_steps` by name -> code in ``P[P_INTEGRATOR]``
@@ -388,7 +389,8 @@ def run_steps(P, st, theta_ref, omega_ref, stride, out, want_out):
     (if ``want_out``). Returns (status, steps done); status ``OK``, ``NEWTON_FAILED`` or
     ``NOT_FINITE``.
     """
-    return _integrate(P, st, theta_ref, omega_ref, np.empty(0), False, stride, out, want_out)
+    return _integrate(P, st, theta_ref, omega_ref, np.empty(0), False, stride, out, want_out,
+                      np.empty(0), np.empty(0), np.empty(0), out)
 
 
 @njit(cache=True, nogil=True)
@@ -401,12 +403,25 @@ def run_prescribed(P, st, theta_ref, omega_ref, alpha_ref, stride, out, want_out
     coordinates by symplectic Euler, sets θ, θ̇ to theta_ref[k + 1], omega_ref[k + 1] and projects
     (Newton on the constraints with z held, q̇ = R ż): the crank angle equals the program at every
     step to round-off, whatever the loads. Same returns as :func:`run_steps`."""
-    return _integrate(P, st, theta_ref, omega_ref, alpha_ref, True, stride, out, want_out)
+    return _integrate(P, st, theta_ref, omega_ref, alpha_ref, True, stride, out, want_out,
+                      np.empty(0), np.empty(0), np.empty(0), out)
 
 
 @njit(cache=True, nogil=True)
-def _integrate(P, st, theta_ref, omega_ref, alpha_ref, prescribed, stride, out, want_out):
-    """The stepping loop of :func:`run_steps` (PID drive) and :func:`run_prescribed`."""
+def run_motor(P, D, st, ds, setpoint, stride, out, dout, want_out):
+    """Integrate ``len(setpoint)`` steps driven by the drive train (``drive.mode`` "motor" or
+    "torque", :mod:`twin.reference.drivetrain`: parameters ``D``, state ``ds`` updated in place):
+    the crank receives the belt's torque; ``setpoint[k]`` is step k's motor speed set point
+    [rad/s] or motor torque [N m]. ``dout`` gets the drive train's sample rows. Same returns as
+    :func:`run_steps`."""
+    z = np.empty(0)
+    return _integrate(P, st, z, z, z, False, stride, out, want_out, D, ds, setpoint, dout)
+
+
+@njit(cache=True, nogil=True)
+def _integrate(P, st, theta_ref, omega_ref, alpha_ref, prescribed, stride, out, want_out, D, ds, setpoint, dout):
+    """The stepping loop of :func:`run_steps` (PID drive), :func:`run_prescribed` and
+    :func:`run_motor` (drive train: ``D`` non-empty)."""
     h = P[P_H]
     kp, kv, ki, imax = P[P_KP], P[P_KV], P[P_KI], P[P_IMAX]
     q = st[S_Q:S_Q + N_Q].copy()
@@ -434,7 +449,13 @@ def _integrate(P, st, theta_ref, omega_ref, alpha_ref, prescribed, stride, out, 
     dq = np.empty(N_Q)
     bb = np.empty(N_Q)
     s, c = math.sin(q[7]), math.cos(q[7])
-    n = alpha_ref.shape[0] if prescribed else theta_ref.shape[0]
+    motor = D.shape[0] > 0
+    n = alpha_ref.shape[0] if prescribed else (setpoint.shape[0] if motor else theta_ref.shape[0])
+    dtmp = np.empty(3)
+    qd0 = np.empty(N_Q)
+    Qg = np.zeros(N_Q)
+    if motor:
+        DT.gravity_forces(P[P_GX], P[P_GY], P[P_M1], P[P_XG1], P[P_R], P[P_M2], P[P_XG2], P[P_L], P[P_M3], Qg)
     tau_p = np.zeros(1)
     midpoint = P[P_INTEGRATOR] == 1.0 and not prescribed
     qm = np.empty(N_Q)        # midpoint stage (explicit midpoint only)
@@ -448,7 +469,7 @@ def _integrate(P, st, theta_ref, omega_ref, alpha_ref, prescribed, stride, out, 
     status = OK
     k = 0
     while k < n:
-        err = theta_ref[k] - q[7]
+        err = 0.0 if motor else theta_ref[k] - q[7]
         if prescribed:
             generalized_forces(P, q, qd, 0.0, cst_a, cst_b, cst_c, Q, ja, jb, jc)
             if not accelerations_prescribed(P, q, qd, s, c, Q, rows, nz, Rt, S, Mb, rhs, tmp, qdd,
@@ -457,13 +478,20 @@ def _integrate(P, st, theta_ref, omega_ref, alpha_ref, prescribed, stride, out, 
                 break
             tau = tau_p[0]
         else:
-            tau = kp * err + kv * (omega_ref[k] - qd[7]) + ki * integ
+            if motor:  # drive-train hook: the belt's torque on the crank
+                tau = DT.begin_step(D, ds, qd[7], setpoint[k], dtmp)
+            else:
+                tau = kp * err + kv * (omega_ref[k] - qd[7]) + ki * integ
             generalized_forces(P, q, qd, tau, cst_a, cst_b, cst_c, Q, ja, jb, jc)
             if not accelerations(P, q, qd, s, c, Q, rows, nz, Rt, S, Mb, rhs, tmp, qdd):
                 status = NOT_FINITE
                 break
         if want_out and k % stride == 0:
             _outputs(P, q, qd, qdd, tau, ja, jb, jc, out[k // stride])
+            if motor:
+                DT.outputs(D, ds, dout[k // stride])
+                if D[DT.D_ACCOUNT] != 0.0:
+                    dout[k // stride, DT.DO_EMECH] = energy(P, q, qd) + dout[k // stride, DT.DO_ROTOR_KE]
         if midpoint:
             # explicit midpoint (second order): the state at t + h/2 (projected), the accelerations
             # there (PID integral of the step start, contact events advanced at step starts only),
@@ -497,6 +525,9 @@ def _integrate(P, st, theta_ref, omega_ref, alpha_ref, prescribed, stride, out, 
                 q[i] += h * qdm[i]
                 qd[i] += h * qdd[i]
         else:
+            if motor:
+                for i in range(N_Q):
+                    qd0[i] = qd[i]
             for i in range(N_Q):
                 qd[i] += h * qdd[i]
                 q[i] += h * qd[i]
@@ -516,6 +547,9 @@ def _integrate(P, st, theta_ref, omega_ref, alpha_ref, prescribed, stride, out, 
             status = NOT_FINITE
             k += 1
             break
+        if motor:  # drive-train hook: rotor, belt stretch, accounts
+            fgd = DT.guide_force(P[P_FGUIDE], qd0[6], P[P_V0], P[P_V1])
+            DT.end_step(D, ds, Q, Qg, tau, fgd, qd0, qd)
         k += 1
     st[S_Q:S_Q + N_Q] = q
     st[S_QD:S_QD + N_Q] = qd

@@ -111,8 +111,11 @@ def default_blueprint(cfg: BenchConfig, groups: dict[str, list[str]], channels: 
     pen = paths(*[f"pen_{j}" for j in JOINTS])
     friction = paths(*[f"ft_{j}" for j in JOINTS])
     encoder = paths("encoder_angle", "rec_encoder_angle") or paths("encoder_counts", "sim_encoder_counts")
-    motor = paths("motor_command", "sim_motor_command")
+    motor = paths("motor_command", "sim_motor_command", "command_voltage")
     torque = paths("crank_torque")
+    rotor = paths("motor_speed")                       # drive train (drive.mode motor/torque)
+    motor_torque = paths("motor_torque", "belt_torque")
+    slip = paths("belt_slip")
     angle = paths("crank_angle", "theta_ref")
     slider = paths("slider_position")
 
@@ -129,7 +132,8 @@ def default_blueprint(cfg: BenchConfig, groups: dict[str, list[str]], channels: 
             tabs.append(rrb.Vertical(grid, name="Signals"))
     drive = [_series(n, p) for n, p in (("crank speed", speed), ("encoder", encoder), ("motor command", motor),
                                          ("crank torque", torque), ("crank angle", angle),
-                                         ("slider position", slider)) if p]
+                                         ("slider position", slider), ("motor speed", rotor),
+                                         ("motor and belt torque", motor_torque), ("belt slip", slip)) if p]
     if drive:
         tabs.append(rrb.Grid(*drive, grid_columns=2, name="Drive & encoder"))
     frame = "rod frame; A: bench frame" if "ecc_A_x" in channels else "rod frame"
