@@ -1,7 +1,9 @@
 """Drive programs: the crank angle and rate references the PID tracks.
 
-In simulation the motor and the V-belt are not modelled (S003 §4.3): a PID on the crank
-tracks a reference crank angle. Three programs produce that reference:
+With ``drive.mode`` "pid" or "prescribed" the motor and the V-belt are not modelled (S003 §4.3):
+a PID on the crank tracks a reference crank angle, or the crank follows it exactly. With "motor"
+the motor's speed loop follows the program's motor speed (:mod:`twin.drivetrain_params`,
+:mod:`twin.motor_drive`). Three programs produce that reference:
 
 * ``constant``: from rest, the motor command steps to ``motor_rpm`` at t = 0;
 * ``protocol``: the 38 s test of S003 §4.3 (stop, speed 1, stop, speed 2, stop, speed 3, stop);

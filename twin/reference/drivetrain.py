@@ -109,7 +109,7 @@ def begin_step(D, ds, omega_c, setpoint, tmp):
     [rad/s] (speed loop) or motor torque [N m] (torque program)."""
     peak = D[D_PEAK]
     if D[D_MODE] == MODE_SPEED:
-        if ds[DS_K] % D[D_STRIDE] == 0.0:
+        if ds[DS_K] == 0.0:  # steps to the next controller sample (counts down)
             counts = D[D_COUNTS]
             count = math.floor(ds[DS_PHI] * counts / (2.0 * math.pi))
             if ds[DS_STARTED] == 0.0:
@@ -127,6 +127,8 @@ def begin_step(D, ds, omega_c, setpoint, tmp):
             else:
                 u = peak if u > 0.0 else -peak
             ds[DS_U] = u
+            ds[DS_K] = D[D_STRIDE]
+        ds[DS_K] -= 1.0
     else:
         u = setpoint
         ds[DS_U] = peak if u > peak else (-peak if u < -peak else u)
@@ -164,7 +166,6 @@ def end_step(D, ds, Q, Qg, tau, f_guide, qd0, qd1):
     ds[DS_PHI] += h * w1
     xd = ds[DS_XDOT]
     ds[DS_X] += h * xd
-    ds[DS_K] += 1.0
     if D[D_ACCOUNT] != 0.0:
         ds[DS_WORK] += h * ds[DS_U] * 0.5 * (w0 + w1)
         ds[DS_DDAMP] += h * D[D_C] * xd * xd

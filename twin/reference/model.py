@@ -525,7 +525,7 @@ def _integrate(P, st, theta_ref, omega_ref, alpha_ref, prescribed, stride, out, 
                 q[i] += h * qdm[i]
                 qd[i] += h * qdd[i]
         else:
-            if motor:
+            if motor and D[DT.D_ACCOUNT] != 0.0:  # step-start velocities for the accounts
                 for i in range(N_Q):
                     qd0[i] = qd[i]
             for i in range(N_Q):
@@ -548,7 +548,7 @@ def _integrate(P, st, theta_ref, omega_ref, alpha_ref, prescribed, stride, out, 
             k += 1
             break
         if motor:  # drive-train hook: rotor, belt stretch, accounts
-            fgd = DT.guide_force(P[P_FGUIDE], qd0[6], P[P_V0], P[P_V1])
+            fgd = DT.guide_force(P[P_FGUIDE], qd0[6], P[P_V0], P[P_V1]) if D[DT.D_ACCOUNT] != 0.0 else 0.0
             DT.end_step(D, ds, Q, Qg, tau, fgd, qd0, qd)
         k += 1
     st[S_Q:S_Q + N_Q] = q
