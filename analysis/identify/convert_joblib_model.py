@@ -20,7 +20,8 @@ Method:
    (``predict_proba`` and ``predict`` of the classifier, ``predict`` of the regressors) on the window
    features of every sample recording (``recordings/*.mcap``) and on ``--random`` random feature
    matrices: every feature drawn uniformly over the span of the thresholds the trees split it at (plus
-   10 % either side), 10 % of the entries NaN (missing), one row +inf and one -inf throughout.
+   10 % either side; in every other row a quarter of the entries exactly at a threshold), 10 % of the
+   entries NaN (missing), one row +inf and one -inf throughout.
 4. Write the file (``ClearanceModel.save``, to a temporary name), load it back with
    ``ClearanceModel.load``, and check that the answers of ``identify_recording`` on every sample
    recording are the same as the format-2 model's (every field but the time taken), and the loaded
@@ -62,7 +63,8 @@ def recording_features() -> dict[str, np.ndarray]:
 
 def random_features(ensembles: list, n: int, seed: int = 0) -> np.ndarray:
     """``n`` rows: each feature uniform over its split thresholds' span (10 % either side; N(0, 1) for
-    a feature no tree splits at), 10 % NaN, row 0 +inf, row 1 -inf."""
+    a feature no tree splits at), in every other row a quarter of the entries exactly at a threshold
+    (where ``<=`` and ``<`` part), 10 % NaN, row 0 +inf, row 1 -inf."""
     rng = np.random.default_rng(seed)
     nf = ensembles[0].n_features
     X = rng.standard_normal((n, nf))
@@ -73,6 +75,9 @@ def random_features(ensembles: list, n: int, seed: int = 0) -> np.ndarray:
             lo, hi = t.min(), t.max()
             pad = 0.1 * (hi - lo) + 1e-9 * max(1.0, abs(lo))
             X[:, f] = rng.uniform(lo - pad, hi + pad, n)
+            # every other row: a quarter of the entries exactly at one of the feature's thresholds
+            at = (np.arange(n) % 2 == 1) & (rng.random(n) < 0.25)
+            X[at, f] = rng.choice(t, int(at.sum()))
     X[rng.random(X.shape) < 0.1] = np.nan
     X[0], X[1] = np.inf, -np.inf
     return X

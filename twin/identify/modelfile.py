@@ -19,11 +19,12 @@ from twin.identify.trees import ARRAYS, ModelError, TreeEnsemble
 MAX_MODEL_BYTES = 256 << 20  # a model file's size, and its members' unpacked sizes together, at most [B]
 ZIP_MAGIC = b"PK\x03\x04"
 # what a file that is not a zip archive most likely is, by its first bytes (for the refusal's message)
-_NOT_ZIP = ((b"\x80", "a pickle file (as joblib and pickle write; twin never unpickles a model, which could run code)"),
-            (b"\x78", "a zlib-compressed joblib pickle (twin never unpickles a model, which could run code)"),
-            (b"\x1f\x8b", "a gzip file (a compressed joblib pickle? twin never unpickles a model)"),
-            (b"BZh", "a bz2 file (a compressed joblib pickle? twin never unpickles a model)"),
-            (b"\xfd7zXZ", "an xz file (a compressed joblib pickle? twin never unpickles a model)"),
+_PICKLE = "never unpickled, as unpickling can run code"
+_NOT_ZIP = ((b"\x80", f"a pickle file (as joblib and pickle write), {_PICKLE}"),
+            (b"\x78", f"a zlib-compressed joblib pickle, {_PICKLE}"),
+            (b"\x1f\x8b", f"a gzip file (a compressed joblib pickle?), {_PICKLE}"),
+            (b"BZh", f"a bz2 file (a compressed joblib pickle?), {_PICKLE}"),
+            (b"\xfd7zXZ", f"an xz file (a compressed joblib pickle?), {_PICKLE}"),
             (b"\x93NUMPY", "a single .npy array"))
 _DATE = (1980, 1, 1, 0, 0, 0)  # members' timestamp: the same model gives the same bytes
 
@@ -57,35 +58,36 @@ def read_model(path: Path, fmt: str, estimators: tuple[str, ...]) -> tuple[dict[
     p = Path(path)
     if not p.is_file():
         raise ModelError(f"{p}: no such model file")
-    what = f"a {fmt} model file (an .npz archive of plain arrays and JSON)"
+    no = f"{p}: not a readable identification model"
+    what = f"a model file is a {fmt} .npz archive of plain arrays and JSON"
     if p.stat().st_size > MAX_MODEL_BYTES:
-        raise ModelError(f"{p}: {p.stat().st_size} bytes, over the {MAX_MODEL_BYTES} of {what}")
+        raise ModelError(f"{no} ({p.stat().st_size} bytes, over {MAX_MODEL_BYTES}; {what})")
     data = p.read_bytes()
     if not data.startswith(ZIP_MAGIC):
         kind = next((k for m, k in _NOT_ZIP if data.startswith(m)), "not a zip archive")
-        raise ModelError(f"{p}: {kind}, not {what}; retrain it with 'twin identify train'")
+        raise ModelError(f"{no} ({kind}; {what}: retrain it with 'twin identify train')")
     try:
         z = zipfile.ZipFile(BytesIO(data))
         infos = z.infolist()
         names = [i.filename for i in infos]
         if len(set(names)) != len(names):
-            raise ModelError(f"{p}: not {what} (a member name repeats)")
+            raise ModelError(f"{no} (a member name repeats; {what})")
         if sum(i.file_size for i in infos) > MAX_MODEL_BYTES:
-            raise ModelError(f"{p}: its members unpack to over {MAX_MODEL_BYTES} bytes, not {what}")
+            raise ModelError(f"{no} (its members unpack to over {MAX_MODEL_BYTES} bytes; {what})")
         bad = z.testzip()
         if bad is not None:
-            raise ModelError(f"{p}: damaged model file (member {bad} fails its CRC check)")
+            raise ModelError(f"{no} (damaged: member {bad} fails its CRC check)")
         if "model.json.npy" not in names:
-            raise ModelError(f"{p}: not {what} (no model.json member)")
+            raise ModelError(f"{no} (no model.json member; {what})")
         npz = np.load(BytesIO(data), allow_pickle=False)
         js = npz["model.json"]
         if js.dtype.kind != "U" or js.ndim != 0:
-            raise ModelError(f"{p}: not {what} (model.json is a {js.dtype} array of shape {js.shape}, not a text)")
+            raise ModelError(f"{no} (model.json is a {js.dtype} array of shape {js.shape}, not a text; {what})")
         meta = json.loads(str(js[()]))
     except ModelError:
         raise
     except Exception as err:  # noqa: BLE001 - a damaged or foreign archive, whatever broke: one line
-        raise ModelError(f"{p}: not a readable identification model ({_one_line(err)})") from None
+        raise ModelError(f"{no} ({_one_line(err)})") from None
     found = meta.get("format") if isinstance(meta, dict) else None
     if found != fmt:
         raise ModelError(f"{p}: a model of format {found!r}, this twin reads {fmt!r}; retrain it with "
@@ -93,8 +95,8 @@ def read_model(path: Path, fmt: str, estimators: tuple[str, ...]) -> tuple[dict[
     want = {"model.json"} | {f"{e}.{k}" for e in estimators for k in ARRAYS}
     if set(npz.files) != want:
         odd = sorted(set(npz.files) ^ want)
-        raise ModelError(f"{p}: not {what} (members {', '.join(odd[:4])}{' ...' if len(odd) > 4 else ''} "
-                         "missing or unexpected)")
+        raise ModelError(f"{no} (members {', '.join(odd[:4])}{' ...' if len(odd) > 4 else ''} missing or "
+                         f"unexpected; {what})")
     out: dict[str, TreeEnsemble] = {}
     for e in estimators:
         arrays = {}
@@ -102,12 +104,12 @@ def read_model(path: Path, fmt: str, estimators: tuple[str, ...]) -> tuple[dict[
             try:
                 arrays[k] = npz[f"{e}.{k}"]
             except Exception as err:  # noqa: BLE001 - object arrays (never unpickled), damaged headers
-                raise ModelError(f"{p}: member {e}.{k} is not a plain array ({_one_line(err)}); refused") from None
+                raise ModelError(f"{no} (member {e}.{k} is not a plain array: {_one_line(err)})") from None
         try:
             m = meta.get("estimators", {})[e]
             if not isinstance(m, dict):
                 raise TypeError(f"estimators.{e} is not an object")
             out[e] = TreeEnsemble.from_file(m, arrays)
         except (ModelError, KeyError, TypeError, AttributeError) as err:
-            raise ModelError(f"{p}: estimator {e} refused ({_one_line(err)})") from None
+            raise ModelError(f"{no} (estimator {e}: {_one_line(err)})") from None
     return meta, out
