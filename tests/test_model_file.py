@@ -332,3 +332,21 @@ def test_bit_flips_and_truncation_are_refused_in_one_line_or_change_nothing(smal
 def test_train_writes_the_npz_format_only(tmp_path, capsys):
     assert main(["identify", "train", str(tmp_path), "--out", str(tmp_path / "m.joblib")]) == 2
     assert "--out: must end in .npz" in capsys.readouterr().err
+
+
+def test_the_shipped_model_answers_without_scikit_learn_or_joblib():
+    """With scikit-learn and joblib made unimportable, the shipped model loads and answers the test-6
+    sample as it does with them (the answer's fields but the time taken)."""
+    import sys
+
+    from twin.identify.model import identify_recording
+
+    code = ("import sys, json; sys.modules['sklearn'] = sys.modules['joblib'] = None\n"
+            "from twin.identify.model import ClearanceModel, identify_recording\n"
+            f"a = identify_recording(ClearanceModel.load({str(SHIPPED)!r}), {str(REC)!r}); a.pop('seconds')\n"
+            "print(json.dumps(a, default=float))")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert r.returncode == 0, r.stderr
+    a = identify_recording(ClearanceModel.load(SHIPPED), REC)
+    a.pop("seconds")
+    assert json.loads(r.stdout) == json.loads(json.dumps(a, default=float))
