@@ -138,9 +138,8 @@ class ClearanceModel:
             names, version = meta["feature_names"], meta["feature_version"]
             half = {str(k): float(v) for k, v in meta["interval_log10"].items()}
             trained_on = meta["trained_on"]
-            lo, hi = (float(x) for x in trained_on["crank_hz_range"])
-            float(trained_on["rate_hz"])
-            if not isinstance(names, list) or not all(isinstance(n, str) for n in names) or \
+            hz = [float(x) for x in trained_on["crank_hz_range"]] + [float(trained_on["rate_hz"])]
+            if len(hz) != 3 or not isinstance(names, list) or not all(isinstance(n, str) for n in names) or \
                     not {"B", "C"} <= set(half) or not all(math.isfinite(v) and v >= 0 for v in half.values()):
                 raise ValueError("feature_names or interval_log10 malformed")
         except (KeyError, TypeError, ValueError, AttributeError) as err:
