@@ -23,7 +23,7 @@ setup(
     packages=find_namespace_packages(include=["twin*"]) + ["twin.mjcf"],
     package_dir={"twin.mjcf": "mjcf"},
     package_data={
-        "twin": ["data/*.toml", "data/*.json", "data/*.xml", "data/*.joblib", "mujoco_engine/*.c", "mujoco_engine/*.h",
+        "twin": ["data/*.toml", "data/*.json", "data/*.xml", "data/*.npz", "mujoco_engine/*.c", "mujoco_engine/*.h",
                  "dataset/*.md", "config/presets/*.toml"],
         "twin.mjcf": ["*.xml"],
     },

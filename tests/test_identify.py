@@ -140,7 +140,7 @@ def small(tmp_path_factory):
         spec = d / f"{name}.toml"
         spec.write_text(SMALL.format(name=name, seed=seed, rpm=rpm, repeats=rep))
         assert main(["dataset", "generate", str(spec), "--out", str(d / name), "--workers", "2", "--no-progress"]) == 0
-    model = d / "m.joblib"
+    model = d / "m.npz"
     assert main(["identify", "train", str(d / "small-train"), "--out", str(model), "--splits", "train",
                  "--workers", "2"]) == 0
     return d, model
@@ -183,7 +183,7 @@ def test_identify_refuses_what_it_cannot_answer(small, tmp_path, capsys):
     err = capsys.readouterr().err
     assert rc == 2 and "too little" in err and "revolutions" in err and err.count("\n") == 1
     # not a model; a model of another feature definition
-    bad = tmp_path / "bad.joblib"
+    bad = tmp_path / "bad.npz"
     bad.write_bytes(b"not a model")
     assert main(["identify", "clearance", str(REC / "test6_synthetic.mcap"), "--model", str(bad)]) == 2
     assert "not a readable identification model" in capsys.readouterr().err
@@ -191,7 +191,7 @@ def test_identify_refuses_what_it_cannot_answer(small, tmp_path, capsys):
 
     m = ClearanceModel.load(model)
     m.feature_version = "twin-identify-features/0"
-    old = tmp_path / "old.joblib"
+    old = tmp_path / "old.npz"
     m.save(old)
     assert main(["identify", "clearance", str(REC / "test6_synthetic.mcap"), "--model", str(old)]) == 2
     assert "retrain" in capsys.readouterr().err
@@ -204,7 +204,7 @@ def test_identify_refuses_what_it_cannot_answer(small, tmp_path, capsys):
     assert main(["identify", "clearance", str(REC / "test3_synthetic.mcap"), "--model", str(model), "--json", str(js)]) == 0
     a = json.loads(js.read_text())
     assert any("outside the training range" in w for w in a["warnings"])
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.json", "bad.joblib", "old.joblib", "short.mcap"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.json", "bad.npz", "old.npz", "short.mcap"]
 
 
 def test_several_datasets_pool_into_one_model_and_must_agree(small, tmp_path, capsys):
@@ -216,7 +216,7 @@ def test_several_datasets_pool_into_one_model_and_must_agree(small, tmp_path, ca
     from twin.identify.model import ClearanceModel
 
     d, _ = small
-    pooled = tmp_path / "pooled.joblib"
+    pooled = tmp_path / "pooled.npz"
     assert main(["identify", "train", str(d / "small-train"), str(d / "small-test"), "--out", str(pooled),
                  "--splits", "train", "--workers", "1"]) == 0
     tr = ClearanceModel.load(pooled).trained_on
@@ -228,11 +228,11 @@ def test_several_datasets_pool_into_one_model_and_must_agree(small, tmp_path, ca
     info["encoder_counts_per_rev"] = 4096
     (other / "info.json").write_text(json.dumps(info))
     capsys.readouterr()
-    assert main(["identify", "train", str(d / "small-train"), str(other), "--out", str(tmp_path / "x.joblib"),
+    assert main(["identify", "train", str(d / "small-train"), str(other), "--out", str(tmp_path / "x.npz"),
                  "--splits", "train", "--workers", "1"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "encoder_counts_per_rev" in err and "4096" in err
-    assert not (tmp_path / "x.joblib").exists()
+    assert not (tmp_path / "x.npz").exists()
 
 
 def test_a_location_only_dataset_leaves_the_size_regressors_as_they_were(small, tmp_path):
@@ -241,7 +241,7 @@ def test_a_location_only_dataset_leaves_the_size_regressors_as_they_were(small, 
     from twin.identify.model import ClearanceModel, pooled_features
 
     d, model = small
-    both = tmp_path / "both.joblib"
+    both = tmp_path / "both.npz"
     assert main(["identify", "train", str(d / "small-train"), "--location-only", str(d / "small-test"), "--out",
                  str(both), "--splits", "train", "--workers", "1"]) == 0
     a, b = ClearanceModel.load(model), ClearanceModel.load(both)
@@ -273,7 +273,7 @@ def test_an_evaluation_pools_datasets_and_keeps_each_ones_figures(small):
 
 
 # ------------------------------------------------------------- the shipped model
-DEFAULT = ROOT / "twin" / "data" / "identify_default.joblib"
+DEFAULT = ROOT / "twin" / "data" / "identify_default.npz"
 
 
 @pytest.mark.skipif(not DEFAULT.is_file(), reason="no default model committed yet")

@@ -8,7 +8,7 @@ calibrate the recording, cut its steady part into windows, compute the features,
 median of the repeats, beside the time of reading the recording alone (the floor every answer
 pays).
 
-Run: ``python analysis/identify/bench_identify.py [--repeats 5] [--model MODEL.joblib]``.
+Run: ``python analysis/identify/bench_identify.py [--repeats 5] [--model MODEL.npz]``.
 """
 
 from __future__ import annotations

@@ -29,7 +29,7 @@ from twin.recording import crank_trace, synthetic_recording, write_recording
 from twin.simulate import simulate_run
 
 ROOT = Path(__file__).resolve().parents[2]
-MODEL = ROOT / "twin" / "data" / "identify_default.joblib"
+MODEL = ROOT / "twin" / "data" / "identify_default.npz"
 #: as recordings/make_samples.py
 OFFSETS = {"AC1": 2.513, "AC2": 2.488, "AC3": 2.506, "AC4": 2.471, "AC5": 2.522, "AC6": 2.494}
 RIPPLE = (0.015, 0.025)

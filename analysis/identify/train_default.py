@@ -10,7 +10,7 @@ resumes):
    crank's start angle drawn; 240: y vertical at 737.5-800 rpm, start drawn; and 120 runs with x vertical
    at 312.5 rpm, the slider's free-flight speed, healthy, B or C, for the location model only);
 2. ``twin identify train WORK/clearance_id WORK/clearance_id_dense WORK/clearance_id_start WORK/clearance_id_top
-   --location-only WORK/clearance_id_band --interval-folds speed --out twin/data/identify_default.joblib``
+   --location-only WORK/clearance_id_band --interval-folds speed --out twin/data/identify_default.npz``
    (train and val splits, pooled; the intervals calibrated on answers at speeds left out);
 3. ``twin dataset generate analysis/datasets/clearance_id_test.toml --out WORK/clearance_id_test``,
    ``clearance_id_test_b.toml`` and ``clearance_id_test_c.toml``: the test data (200 + 400 + 400 runs),

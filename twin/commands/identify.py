@@ -11,7 +11,7 @@ from twin.errors import TwinError
 from twin.util import resolve_workers
 
 #: the model that ships with the package (analysis/identify/train_default.py makes it)
-DEFAULT_MODEL = "identify_default.joblib"
+DEFAULT_MODEL = "identify_default.npz"
 
 
 def default_model_path() -> Path:
@@ -32,7 +32,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     t.add_argument("dataset", metavar="DATASET", nargs="+",
                    help="dataset folder(s) of one engine, sample rate and encoder resolution; several are pooled "
                         "(e.g. catalogue clearances beside continuous ones)")
-    t.add_argument("--out", metavar="MODEL.joblib", required=True)
+    t.add_argument("--out", metavar="MODEL.npz", required=True, help="model file to write (.npz: plain arrays and JSON)")
     t.add_argument("--splits", default="train,val", help="splits to train on (default train,val)")
     t.add_argument("--workers", type=int, metavar="N", help="processes for the features (default: the cores)")
     t.add_argument("--interval-folds", choices=("runs", "speed"), default="runs",
@@ -45,7 +45,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     e = ids.add_parser("evaluate", help="evaluate a model on a dataset, or several pooled: confusion matrix, "
                                         "recall, size errors")
-    e.add_argument("model", metavar="MODEL.joblib")
+    e.add_argument("model", metavar="MODEL.npz")
     e.add_argument("dataset", metavar="DATASET", nargs="+",
                    help="dataset folder(s) of one engine, sample rate and encoder resolution; several are pooled "
                         "(e.g. a test set and its extension by another seed)")
@@ -56,7 +56,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     c = ids.add_parser("clearance", help="which joint has clearance in a bench recording, and how much")
     c.add_argument("recording", metavar="REC.mcap")
-    c.add_argument("--model", metavar="MODEL.joblib", help="model (default: the one shipped with twin)")
+    c.add_argument("--model", metavar="MODEL.npz", help="model file (default: the one shipped with twin)")
     c.add_argument("--json", metavar="OUT.json", help="also write the answer as JSON")
     c.set_defaults(func=_clearance)
 
@@ -99,10 +99,10 @@ def _splits(text: str) -> tuple[str, ...]:
 
 
 def _train(args: argparse.Namespace) -> int:
-    from twin.identify.model import train
+    from twin.identify.model import MODEL_SUFFIX, train
     from twin.util import check_output_file
 
-    out = check_output_file(args.out, "--out", ".joblib")
+    out = check_output_file(args.out, "--out", MODEL_SUFFIX)
     model, info = train(list(args.dataset), _splits(args.splits), resolve_workers(args.workers),
                         interval_folds=args.interval_folds, location_only=list(args.location_only))
     model.save(out)
@@ -150,7 +150,7 @@ def _clearance(args: argparse.Namespace) -> int:
     rec, js = _recording_and_json(args)
     path = Path(args.model) if args.model else default_model_path()
     if not args.model and not path.is_file():
-        raise TwinError(f"no default model in this installation ({path}); give --model MODEL.joblib")
+        raise TwinError(f"no default model in this installation ({path}); give --model MODEL.npz")
     model = ClearanceModel.load(path)
     a = identify_recording(model, rec)
     p = a["probabilities"]

@@ -4,6 +4,9 @@
   domain (order tracking with the encoder), bands, impacts and shape statistics;
 * :mod:`twin.identify.model`: the gradient-boosting model (fault location, clearance size with a
   90 % interval), training on a ``twin dataset``, identification of a recording;
+* :mod:`twin.identify.trees`: the gradient-boosted trees as plain arrays (exported from scikit-learn,
+  answered with numpy);
+* :mod:`twin.identify.modelfile`: the model file (an ``.npz`` of plain arrays and JSON, no pickle);
 * :mod:`twin.identify.evaluate`: confusion matrix, recall, size errors and interval coverage on a
   dataset.
 """

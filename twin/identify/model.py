@@ -22,11 +22,34 @@
   format 1 took the 5 % and 95 % quantile regressors instead: their window medians stayed at the
   catalogue's ends (0.02–0.5 mm for almost every answer), covering the truth while saying nothing.
   A joint the classifier finds healthy reports 0 (ball bearing).
-* The model is saved (joblib) with its feature definition (version and names), what it was
-  trained on (dataset name, identity digest, rate, speed range, clearances and orientations seen)
-  and the library versions; loading checks the feature version, and identifying checks the
+* The model is saved with its feature definition (version and names), what it was trained on
+  (dataset name, identity digest, rate, speed range, clearances and orientations seen) and the
+  library versions; loading checks the format and the feature version, and identifying checks the
   recording's rate and speed against the training data (a speed outside the training range is
   answered with a warning, never silently).
+
+Model file (format ``twin-identify-model/3``, suffix ``.npz``; :meth:`ClearanceModel.save`,
+:meth:`ClearanceModel.load`): a NumPy ``.npz`` archive (a zip of ``.npy`` members, each with its
+CRC-32) of plain arrays and one JSON text, read with ``allow_pickle=False``: loading it runs no code
+from the file, and answering needs no scikit-learn. Members:
+
+* ``model.json``: a 0-d unicode array holding JSON: ``format`` (``twin-identify-model/3``),
+  ``feature_version`` and ``feature_names`` (:mod:`twin.identify.features`), ``interval_log10`` (the
+  conformal half widths [log10], see above), ``trained_on`` (the training data, with ``versions``:
+  twin, scikit-learn and numpy of the training), and ``estimators``: per estimator (``classifier``,
+  ``size_B``, ``size_C``) its kind (link: ``softmax`` for the classifier, ``identity`` for the size
+  regressors), number of features, trees per iteration, classes and source
+  (:meth:`twin.identify.trees.TreeEnsemble.meta`);
+* per estimator E, the arrays ``E.baseline``, ``E.tree_nodes``, ``E.feature``, ``E.threshold``,
+  ``E.missing_left``, ``E.left``, ``E.right``, ``E.is_leaf``, ``E.value`` (dtypes and meaning:
+  :mod:`twin.identify.trees`).
+
+Loading refuses, in one line naming the file: anything but a zip archive (a pickle or ``.joblib``
+file, as model format 2 was, is named as such and never unpickled), a damaged archive (CRC, truncation),
+another format version, other members, an array of another dtype (object arrays included: never
+unpickled), trees that a walk could not use safely, and a feature version this twin does not compute.
+The scikit-learn estimators of the training are exported by :func:`twin.identify.trees.from_sklearn`,
+whose answers are checked equal bit for bit on the training windows.
 """
 
 from __future__ import annotations
@@ -34,7 +57,6 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import os
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -43,8 +65,8 @@ from typing import Any
 import numpy as np
 
 from twin.config import Drive
-from twin.errors import TwinError
 from twin.identify.features import FEATURE_VERSION, REVS_PER_WINDOW, IdentifyError, feature_names, features
+from twin.identify.trees import ModelError, TreeEnsemble, from_sklearn
 
 CLASSES = ("none", "B", "C", "BC")
 # Size resolution per joint: the lowest motor speed [rpm] (belt 1:3.97) per vertical axis from which the
@@ -69,19 +91,19 @@ BELT_RATIO = Drive.belt_ratio  # motor turns per crank turn of the bench's V-bel
 COVERAGE = 0.90  # nominal coverage of the reported intervals
 CONFORMAL_FOLDS = 5
 MONDRIAN_MIN_RUNS = 20  # out-of-fold runs each side needs before the interval at C is split by resolution
-MODEL_FORMAT = "twin-identify-model/2"
-
-
-class ModelError(TwinError):
-    """A model file is missing, unreadable or does not fit the data."""
+MODEL_FORMAT = "twin-identify-model/3"
+MODEL_SUFFIX = ".npz"
+ESTIMATORS = ("classifier", "size_B", "size_C")
 
 
 @dataclass
 class ClearanceModel:
     """A trained identification model (see module docstring)."""
 
+    # the location classifier: a TreeEnsemble (as trained and as loaded), or anything with predict_proba
+    # and classes_ (a scikit-learn estimator is exported on save)
     classifier: Any
-    size: dict[str, Any]  # per joint, the median regressor of log10 clearance [log10 mm]
+    size: dict[str, Any]  # per joint, the median regressor of log10 clearance [log10 mm] (likewise, predict)
     # per joint, the conformal half width w [log10]; "B_unresolved" / "C_unresolved", where present, the
     # half width of answers at that joint below its size-resolution map (SIZE_RESOLVED_FROM_RPM), "B" / "C"
     # then that of the others
@@ -93,38 +115,46 @@ class ClearanceModel:
 
     # ------------------------------------------------------------------ io
     def save(self, path: str | Path) -> Path:
-        import joblib
+        """Write the model file (module docstring: format ``twin-identify-model/3``) atomically;
+        scikit-learn estimators are exported first (:func:`twin.identify.trees.from_sklearn`)."""
+        from twin.identify.modelfile import write_model
 
-        from twin.util import temp_path
-
-        p = Path(path)
-        tmp = temp_path(p, keep_suffix=True)
-        try:
-            joblib.dump(self, tmp, compress=3)
-            os.replace(tmp, p)
-        finally:
-            tmp.unlink(missing_ok=True)
-        return p
+        est = {"classifier": self.classifier, "size_B": self.size["B"], "size_C": self.size["C"]}
+        est = {k: v if isinstance(v, TreeEnsemble) else from_sklearn(v) for k, v in est.items()}
+        meta = {"format": MODEL_FORMAT, "feature_version": self.feature_version,
+                "feature_names": list(self.feature_names), "interval_log10": dict(self.interval_log10),
+                "trained_on": self.trained_on, "estimators": {k: v.meta() for k, v in est.items()}}
+        return write_model(path, meta, est)
 
     @staticmethod
     def load(path: str | Path) -> "ClearanceModel":
-        import joblib
+        """Read a model file, refusing in one line anything but a ``twin-identify-model/3`` file of this
+        twin's features (module docstring); nothing in the file is run."""
+        from twin.identify.modelfile import read_model
 
         p = Path(path)
-        if not p.is_file():
-            raise ModelError(f"{p}: no such model file")
+        meta, est = read_model(p, MODEL_FORMAT, ESTIMATORS)
         try:
-            m = joblib.load(p)
-        except Exception as err:  # noqa: BLE001 - any unpickling problem is one line
-            raise ModelError(f"{p}: not a readable identification model ({type(err).__name__}: {err})") from None
-        if not isinstance(m, ClearanceModel) or getattr(m, "format", None) != MODEL_FORMAT:
-            fmt = getattr(m, "format", None)
-            raise ModelError(f"{p}: not a {MODEL_FORMAT} model" + (f" (it is {fmt}; retrain it with 'twin identify "
-                                                                   "train')" if isinstance(fmt, str) else ""))
-        if m.feature_version != FEATURE_VERSION or m.feature_names != feature_names():
-            raise ModelError(f"{p}: made for features {m.feature_version!r}, this twin computes {FEATURE_VERSION!r}; "
+            names, version = meta["feature_names"], meta["feature_version"]
+            half = {str(k): float(v) for k, v in meta["interval_log10"].items()}
+            trained_on = meta["trained_on"]
+            hz = [float(x) for x in trained_on["crank_hz_range"]] + [float(trained_on["rate_hz"])]
+            if len(hz) != 3 or not isinstance(names, list) or not all(isinstance(n, str) for n in names) or \
+                    not {"B", "C"} <= set(half) or not all(math.isfinite(v) and v >= 0 for v in half.values()):
+                raise ValueError("feature_names or interval_log10 malformed")
+        except (KeyError, TypeError, ValueError, AttributeError) as err:
+            raise ModelError(f"{p}: not a readable identification model (metadata: {type(err).__name__}: "
+                             f"{err})") from None
+        if version != FEATURE_VERSION or names != feature_names():
+            raise ModelError(f"{p}: made for features {version!r}, this twin computes {FEATURE_VERSION!r}; "
                              "retrain it with 'twin identify train'")
-        return m
+        if any(e.n_features != len(names) for e in est.values()) or est["classifier"].kind == "identity" or \
+                not set(est["classifier"].classes) <= set(CLASSES) or est["size_B"].kind != "identity" or \
+                est["size_C"].kind != "identity":
+            raise ModelError(f"{p}: not a readable identification model (estimators do not fit its "
+                             f"{len(names)} features and classes {', '.join(CLASSES)})")
+        return ClearanceModel(est["classifier"], {"B": est["size_B"], "C": est["size_C"]}, half,
+                              feature_version=version, feature_names=names, trained_on=trained_on)
 
     # ------------------------------------------------------------- predict
     def identify(self, X: np.ndarray, resolved: dict[str, bool]) -> dict[str, Any]:
@@ -319,6 +349,7 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
                                          min_samples_leaf=leaf, class_weight="balanced",
                                          early_stopping=len(X) >= 500, validation_fraction=0.15, random_state=seed)
     clf.fit(X, y)
+    classifier = from_sklearn(clf, check=X)  # what the file holds: answers equal bit for bit, checked
     size: dict[str, Any] = {}
     half_width: dict[str, float] = {}
     n_folds: dict[str, int] = {}
@@ -338,7 +369,7 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
                                                 random_state=seed)
             return reg.fit(X[use], np.log10(truth[use]))
 
-        size[j] = fit(sel)
+        size[j] = from_sklearn(fit(sel), check=X[sel])
         # out-of-fold scores of whole runs (see module docstring)
         fold = _conformal_folds(rows, np.unique(owner_a[sel]), interval_folds, seed)
         n_folds[j] = int(fold.max()) + 1
@@ -384,7 +415,7 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
                      "half_width_log10": half_width},
         "feature_seconds": t_feat, "fit_seconds": time.perf_counter() - t0 - t_feat,
     }
-    return ClearanceModel(clf, size, half_width, trained_on=trained_on), trained_on
+    return ClearanceModel(classifier, size, half_width, trained_on=trained_on), trained_on
 
 
 def _clearances_seen(values: list[float]) -> list[float] | dict[str, Any]:
