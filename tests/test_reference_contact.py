@@ -11,7 +11,7 @@ from twin.config import BenchConfig, ln_stiffness, preset
 from twin.impact import hysteresis_restitution, impact_hysteresis
 from twin.reference import contact as C
 from twin.reference import model as M
-from twin.simulate import simulate_run
+from twin.simulation import simulate_run
 
 from conftest import short
 

@@ -132,7 +132,7 @@ def decode_block(data: bytes, dtypes: list[str]) -> tuple[int, int, float, list[
 
 class RunWriter:
     """Streams a run, chunk by chunk, into an MCAP file (temporary file + rename): a
-    :class:`twin.simulate.Sink`.
+    :class:`twin.simulation.Sink`.
 
     The temporary file ``.NAME.PID.tmp`` is created at the first :meth:`write` (so a writer
     made before a run that then fails to start leaves nothing), :meth:`close` finalizes and

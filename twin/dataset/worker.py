@@ -105,7 +105,7 @@ def run_one(task: dict[str, Any], stop: Any = None) -> dict[str, Any]:
     once set, the run is interrupted at its next chunk (KeyboardInterrupt: its file is removed)."""
     from twin.config import config_from_toml
     from twin.dataset.storage import ColumnSpec, ParquetRunWriter, WriteError, file_sha256
-    from twin.simulate import ThreadedSink, simulate
+    from twin.simulation import ThreadedSink, simulate
 
     t0 = time.perf_counter()
     rid = task["run_id"]

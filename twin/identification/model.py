@@ -1,7 +1,7 @@
 """The clearance identification model: train on a dataset, save, load, identify.
 
 * **Fault location**: scikit-learn's ``HistGradientBoostingClassifier`` (none, B, C, BC) on the
-  window features (:mod:`twin.identify.features`), classes weighted to balance; a recording's
+  window features (:mod:`twin.identification.features`), classes weighted to balance; a recording's
   class probabilities are the mean over its windows.
 * **Clearance size**: per joint, a ``HistGradientBoostingRegressor`` with the quantile loss at
   50 % (the median) on log10 of the diametral clearance, trained on the windows of the runs where
@@ -31,20 +31,22 @@
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import math
 import os
+import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Iterator
 
 import numpy as np
 
 from twin.config import Drive
 from twin.errors import TwinError
-from twin.identify.features import FEATURE_VERSION, REVS_PER_WINDOW, IdentifyError, feature_names, features
+from twin.identification.features import FEATURE_VERSION, REVS_PER_WINDOW, IdentifyError, feature_names, features
 
 CLASSES = ("none", "B", "C", "BC")
 # Size resolution per joint: the lowest motor speed [rpm] (belt 1:3.97) per vertical axis from which the
@@ -70,6 +72,9 @@ COVERAGE = 0.90  # nominal coverage of the reported intervals
 CONFORMAL_FOLDS = 5
 MONDRIAN_MIN_RUNS = 20  # out-of-fold runs each side needs before the interval at C is split by resolution
 MODEL_FORMAT = "twin-identify-model/2"
+# module paths classes had when model files were saved before the package was renamed (the shipped
+# model's file names twin.identify.model): aliased while a model file loads
+_FORMER_MODULES = {"twin.identify.model": __name__}
 
 
 class ModelError(TwinError):
@@ -114,7 +119,8 @@ class ClearanceModel:
         if not p.is_file():
             raise ModelError(f"{p}: no such model file")
         try:
-            m = joblib.load(p)
+            with _former_module_names():
+                m = joblib.load(p)
         except Exception as err:  # noqa: BLE001 - any unpickling problem is one line
             raise ModelError(f"{p}: not a readable identification model ({type(err).__name__}: {err})") from None
         if not isinstance(m, ClearanceModel) or getattr(m, "format", None) != MODEL_FORMAT:
@@ -150,6 +156,20 @@ class ClearanceModel:
             out[f"clearance_{j.lower()}_interval_mm"] = [lo, hi] if has else [0.0, 0.0]
             out[f"clearance_{j.lower()}_if_faulty_mm"] = {"median": mid, "interval_90": [lo, hi]}
         return out
+
+
+@contextlib.contextmanager
+def _former_module_names() -> Iterator[None]:
+    """While a model file loads, its classes' former module paths (:data:`_FORMER_MODULES`) name the
+    modules they moved to."""
+    added = [old for old in _FORMER_MODULES if old not in sys.modules]
+    for old in added:
+        sys.modules[old] = sys.modules[_FORMER_MODULES[old]]
+    try:
+        yield
+    finally:
+        for old in added:
+            sys.modules.pop(old, None)
 
 
 def size_resolved(joint: str, orientation: str, crank_hz: float) -> bool:

@@ -1,9 +1,0 @@
-"""Clearance identification from a bench recording (``twin identify``).
-
-* :mod:`twin.identify.features`: window features of the calibrated accelerations in the crank-angle
-  domain (order tracking with the encoder), bands, impacts and shape statistics;
-* :mod:`twin.identify.model`: the gradient-boosting model (fault location, clearance size with a
-  90 % interval), training on a ``twin dataset``, identification of a recording;
-* :mod:`twin.identify.evaluate`: confusion matrix, recall, size errors and interval coverage on a
-  dataset.
-"""
