@@ -4,7 +4,7 @@ the crank PID, both engines, side by side in one run.
 For each engine (MuJoCo twin, reference engine) and each drive ("pid": the crank PID of today;
 "motor": the motor's speed loop and the V-belt with the same default channel groups; "motor +
 channels": the same plus the optional group ``motor``), the whole engine path
-(``twin.simulate.run_chunks``: drive reference, stepping, channel assembly at 100 kHz) runs
+(``twin.simulation.run_chunks``: drive reference, stepping, channel assembly at 100 kHz) runs
 ``--duration`` simulated seconds of test 12 from rest (0.5 s spin-up ramp to 750 motor rpm,
 then full speed). The figure is the process's CPU time (``time.process_time``: on a shared,
 oversubscribed machine wall time mostly measures waiting) of the chunk loop per simulated second,
@@ -22,7 +22,7 @@ import argparse
 import time
 
 from twin.config import preset
-from twin.simulate import make_engine, run_chunks
+from twin.simulation import make_engine, run_chunks
 
 VARIANTS = {"pid": {}, "motor": {"drive.mode": "motor"},
             "motor + channels": {"drive.mode": "motor", "sensors.channels": None}}

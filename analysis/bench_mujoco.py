@@ -14,7 +14,7 @@ variant alike:
 * ``floor``: the same model with constraints disabled (``mjDSBL_CONSTRAINT``: no collision,
   no contact, no loop closure, no guide friction): the lower bound of this model;
 * ``ratio`` = scene / floor (the issue's target: clearance scenes within 2x the floor);
-* ``engine RTF``: the real-time factor of the whole engine path (``twin.simulate.simulate``:
+* ``engine RTF``: the real-time factor of the whole engine path (``twin.simulation.simulate``:
   reference generation, rollout, channel assembly) over the same simulated time;
 * ``posthoc / sensor``: the step time of the posthoc setting over the sensor setting's.
 
@@ -36,7 +36,7 @@ from mujoco import rollout
 from twin.config import preset
 from twin.mujoco_engine.engine import MujocoEngine
 from twin.drive import DriveReference
-from twin.simulate import run_chunks, simulate_run
+from twin.simulation import run_chunks, simulate_run
 
 _STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
 SCENES = {"ideal (test 3)": 3, "C only (test 6)": 6, "B+C (test 12)": 12}

@@ -1,17 +1,17 @@
 """What writing the output costs, as a share of a run's wall time, for both engines (issue 16, item 4).
 
 For Table 4 test 12 (B+C, all channels of the default groups, 100 kHz) over ``--duration``
-simulated seconds, :func:`twin.simulate.simulate` runs in this process, interleaved, best of
+simulated seconds, :func:`twin.simulation.simulate` runs in this process, interleaved, best of
 ``--repeats``, with:
 
 * ``none``: no sink (engine build, stepping, the chunk loop and the summary);
 * ``mcap``: the MCAP run file writer (:class:`twin.mcapfile.RunWriter`) called in the chunk loop;
-* ``mcap, thread``: the same writer behind :class:`twin.simulate.ThreadedSink` (what
+* ``mcap, thread``: the same writer behind :class:`twin.simulation.ThreadedSink` (what
   ``twin simulate`` does);
 * ``dataset``: what a dataset worker writes (``twin/dataset/worker.py``: the default outputs,
   truth groups accel, encoder, joints plus every instrumented channel: the streaming sensor chain
   and calibration, then :class:`twin.dataset.storage.ParquetRunWriter`), in the loop;
-* ``dataset, thread``: the same behind :class:`~twin.simulate.ThreadedSink` (what the worker does).
+* ``dataset, thread``: the same behind :class:`~twin.simulation.ThreadedSink` (what the worker does).
 
 Reported per engine and output: the wall time of the whole ``simulate`` call, the engine's
 stepping time (``meta["wall_s"]``, which grows when a writer thread competes for the core), what
@@ -37,7 +37,7 @@ import time
 from pathlib import Path
 
 from twin.config import preset
-from twin.simulate import ThreadedSink, simulate
+from twin.simulation import ThreadedSink, simulate
 
 
 class Timed:

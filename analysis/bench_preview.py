@@ -26,7 +26,7 @@ from pathlib import Path
 import twin.mcapfile
 from twin.config import preset
 from twin.mcapfile import RunWriter
-from twin.simulate import simulate_run
+from twin.simulation import simulate_run
 
 _OWN = [0.0]
 _add = twin.mcapfile._Preview.add

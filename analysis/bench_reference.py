@@ -38,7 +38,7 @@ import time
 t0 = time.perf_counter()
 from twin.config import preset
 from twin.reference.engine import ReferenceEngine
-from twin.simulate import run_chunks
+from twin.simulation import run_chunks
 t1 = time.perf_counter()
 cfg = preset(12).replace(**{"simulation.duration_s": 0.01, "simulation.engine": "reference"})
 eng = ReferenceEngine(cfg)
@@ -57,7 +57,7 @@ def _scene(test: int, duration: float, engine: str, **ov):
 
 def speed(duration: float, repeats: int, with_mujoco: bool) -> None:
     from twin.reference.engine import ReferenceEngine
-    from twin.simulate import run_chunks
+    from twin.simulation import run_chunks
 
     print(f"\nstepping speed, h = 1e-5 s, {duration:g} s per run, best of {repeats} (µs/step, real-time factor)")
     print(f"{'scene':18s} {'reference':>22s}" + (f" {'mujoco':>22s} {'ref speed-up':>13s}" if with_mujoco else ""))
@@ -100,7 +100,7 @@ def first_call() -> None:
 
 
 def floor_sensitivity(duration: float) -> None:
-    from twin.simulate import simulate_run
+    from twin.simulation import simulate_run
 
     print(f"\nimpact-speed floor (contact.impact_speed_floor_mps), test 12, {duration:g} s: "
           "impacts / max force [N] per joint, AC1 AC3 AC6 rms/peak [m/s²], wall [s]")

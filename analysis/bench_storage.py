@@ -11,7 +11,7 @@ Method
    (``twin.instrument.apply_chain``: ``volt_AC1..6`` and ``motor_command`` [V], 18-bit
    quantized float64; ``encoder_counts``, whole-number float64) and the calibrated
    accelerations ``meas_AC1..6`` [m/s^2] (``simulated_calibration`` + ``measured_accel``, float64),
-   as ``twin/replay.py`` builds them. 37 channels, 252 bytes of raw data per sample.
+   as ``twin/bench_replay.py`` builds them. 37 channels, 252 bytes of raw data per sample.
 2. **Writes stream.** Every layout except NPZ is written the way the generator will write it:
    chunks of ``--chunk-s`` (0.5 s, the simulator's chunk) handed to the writer one after the
    other; a writer keeps at most one row group / chunk of its own. NPZ cannot stream
@@ -150,9 +150,9 @@ def make_config(duration: float, program: str):
 
 
 def make_source(duration: float, program: str, chunk_s: float) -> Source:
-    """Simulate the run and add the instrumented channels (twin/replay.py steps 3-4)."""
+    """Simulate the run and add the instrumented channels (twin/bench_replay.py steps 3-4)."""
     from twin.instrument import apply_chain, measured_accel, simulated_calibration
-    from twin.simulate import simulate_run
+    from twin.simulation import simulate_run
 
     cfg = make_config(duration, program)
     t0 = time.perf_counter()

@@ -3,10 +3,10 @@
 Measured in one run, interleaved round by round (the machine is shared, so only ratios taken side by
 side mean anything), on the B+C scene (Table 4 test 12, 750 rpm; ``--duration`` simulated seconds):
 
-* **scene**: :func:`twin.simulate.simulate` of the scene, every chunk's channels hashed (SHA-256 of
+* **scene**: :func:`twin.simulation.simulate` of the scene, every chunk's channels hashed (SHA-256 of
   the bytes, in order: the same work in every mode), in warm processes (imports and the first build
   done before timing): one scene alone in this process; two scenes on two threads of this process
-  (:func:`twin.simulate.simulate_many`); two scenes in two warm worker processes started together;
+  (:func:`twin.simulation.simulate_many`); two scenes in two warm worker processes started together;
 * **dataset run**: :func:`twin.dataset.worker.run_one`, what a dataset generation runs per run (the
   engine, the sensor chain and the Parquet writer on its thread, instrumented and truth channels of
   ``analysis/datasets/tiny.toml``), alone, on two threads, on two processes, as above;
@@ -135,7 +135,7 @@ class Section:
 
 def scene(toml: str) -> str:
     from twin.config import config_from_toml
-    from twin.simulate import simulate
+    from twin.simulation import simulate
 
     d = Digest()
     simulate(config_from_toml(toml), [d])
@@ -199,7 +199,7 @@ def main() -> int:
     from twin.config import preset
     from twin.dataset.generate import prepare, task_of
     from twin.dataset.spec import parse_spec
-    from twin.simulate import simulate_many
+    from twin.simulation import simulate_many
 
     cfg = preset(12).replace(**{"simulation.duration_s": args.duration,
                                 "drive.ramp_s": min(preset(12).drive.ramp_s, args.duration / 4)})

@@ -48,7 +48,7 @@ from twin.config import preset
 from twin.mujoco_engine.builder import build
 from twin.drive import DriveReference
 from twin.mujoco_engine.engine import MujocoEngine
-from twin.simulate import run_chunks
+from twin.simulation import run_chunks
 
 STEPS = 20_000
 REPEATS = 5

@@ -43,7 +43,7 @@ def scene_config(clearance_mm: float, rpm: float, engine: str, h: float, duratio
 
 
 def measure(job: tuple) -> dict:
-    from twin.simulate import simulate_run
+    from twin.simulation import simulate_run
     from twin.summary import count_impacts
 
     label, clearance_mm, rpm, engine, h, duration = job

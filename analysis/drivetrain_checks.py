@@ -24,7 +24,7 @@ import numpy as np
 from twin.config import preset
 from twin.kinematics import initial_pose
 from twin.motor_drive import crank_side_inertia, speed_harmonics
-from twin.simulate import simulate_run
+from twin.simulation import simulate_run
 
 ENGINES = ("mujoco", "reference")
 

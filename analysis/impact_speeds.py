@@ -34,7 +34,7 @@ from tqdm import tqdm
 
 from twin.studies.contact_check import SPEEDS
 from twin.config import CATALOGUE_DIAMETRAL_MM, BenchConfig, preset
-from twin.simulate import simulate_run
+from twin.simulation import simulate_run
 from twin.summary import MIN_FREE_S, contact_onsets
 
 CHANNELS = ["crank", "joints"]

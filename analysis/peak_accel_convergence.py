@@ -25,7 +25,7 @@ def measure(engine: str, h: float) -> dict:
 
     from contact_table import WINDOW_S, scene_config
     from twin.instrument.accel import model_of, response_ba
-    from twin.simulate import simulate_run
+    from twin.simulation import simulate_run
 
     cfg = scene_config(0.5, 750.0, engine, h, 2.0)
     run = simulate_run(cfg)

@@ -31,7 +31,7 @@ import numpy as np
 
 from twin.config import preset
 from twin.motor_drive import speed_harmonics
-from twin.simulate import simulate_run
+from twin.simulation import simulate_run
 
 #: Table 4 clearance cases: name -> test id at 750 rpm (the speed is set separately)
 CASES = {"ideal": 3, "C": 6, "B": 9, "BC": 12}

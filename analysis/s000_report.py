@@ -130,7 +130,7 @@ def ideal_run() -> dict:
     import math
 
     from twin.config import named_preset
-    from twin.simulate import simulate_run
+    from twin.simulation import simulate_run
 
     out = {}
     for engine in ("reference", "mujoco"):

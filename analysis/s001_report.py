@@ -76,8 +76,8 @@ def main() -> int:
     import matplotlib.pyplot as plt
 
     from twin.config import ln_stiffness, named_preset
-    from twin.identify.restitution import SweepOptions, sweep_restitution, synthetic_recording
-    from twin.simulate import simulate_run
+    from twin.identification.restitution import SweepOptions, sweep_restitution, synthetic_recording
+    from twin.simulation import simulate_run
 
     base = named_preset("s001")
     r, L = base.bodies.crank.length_m, base.bodies.rod.length_m
@@ -281,7 +281,7 @@ def main() -> int:
     tmp.rmdir()
 
     # landscape of the 0.55 recovery, low-passed and full band, on a regular grid
-    from twin.identify.restitution import _lowpass, recorded_acceleration, rms_mismatch, simulated_acceleration
+    from twin.identification.restitution import _lowpass, recorded_acceleration, rms_mismatch, simulated_acceleration
 
     p = out / "_land.mcap"
     synthetic_recording(base, p, 0.55, noise_mps2=5.0, seed=11)

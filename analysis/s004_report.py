@@ -25,7 +25,7 @@ sys.path.insert(0, str(ROOT))
 
 from twin.config import named_preset  # noqa: E402
 from twin.kinematics import slider_kinematics  # noqa: E402
-from twin.simulate import simulate_run  # noqa: E402
+from twin.simulation import simulate_run  # noqa: E402
 from twin.studies.continuous_contact import ContinuousContact, Mechanism, phases  # noqa: E402
 
 W = 30.0                       # crank speed [rad/s] (S004 §3)

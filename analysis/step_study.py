@@ -48,7 +48,7 @@ import numpy as np
 
 from twin.config import ACCELEROMETERS, preset
 from twin.instrument.accel import STANDARD_G, AccelStream, model_of
-from twin.simulate import simulate_run
+from twin.simulation import simulate_run
 
 H_REF, H_LONG, H_FINE = 1e-5, 2e-5, 5e-6
 DAQ_HZ = 100_000.0

@@ -30,7 +30,7 @@ import numpy as np
 from twin.config import BenchConfig, preset
 from twin.drive import RPM_TO_RAD_S
 from twin.kinematics import rod_angle, slider_position
-from twin.simulate import simulate_run
+from twin.simulation import simulate_run
 
 ERROR_COUNTS = 0.5          # target steady tracking error [encoder counts]
 COUNTS_PER_REV = 32768      # 4x quadrature of the SICK DGS80 (S003 §2.3.3)

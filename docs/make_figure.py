@@ -24,7 +24,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from twin.config import preset  # noqa: E402
-from twin.simulate import simulate_run  # noqa: E402
+from twin.simulation import simulate_run  # noqa: E402
 
 MAGNIFY = 200.0          # clearance circles in the geometry sketch
 THETA_DEG = 60.0         # crank angle of the sketch

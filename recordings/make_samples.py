@@ -46,7 +46,7 @@ import numpy as np
 from twin.config import preset
 from twin.instrument.chain import static_recording
 from twin.recording import RecordingInfo, crank_trace, synthetic_recording, write_recording
-from twin.simulate import simulate_run
+from twin.simulation import simulate_run
 
 #: zero-g output voltages of the six (synthetic) sensors [V]; mid-supply is 2.5 V
 OFFSETS = {"AC1": 2.513, "AC2": 2.488, "AC3": 2.506, "AC4": 2.471, "AC5": 2.522, "AC6": 2.494}

@@ -37,7 +37,7 @@ SAMPLE = ROOT / "recordings" / "test6_synthetic.mcap"
 def workspace(tmp_path_factory) -> Path:
     ws = tmp_path_factory.mktemp("bad_input")
     from twin.mcapfile import write_run
-    from twin.simulate import simulate_run
+    from twin.simulation import simulate_run
 
     write_run(ws / "run.mcap", simulate_run(short(preset(6), 0.02)))
     shutil.copy(SAMPLE, ws / "rec.mcap")
@@ -331,7 +331,7 @@ def test_every_twin_error_survives_a_process_boundary():
     import importlib
 
     for mod in ("twin.cli", "twin.dataset.generate", "twin.dataset.spec", "twin.dataset.storage",
-                "twin.identify.features", "twin.identify.model", "twin.signals"):  # each defines a TwinError
+                "twin.identification.features", "twin.identification.model", "twin.signals"):  # each defines a TwinError
         importlib.import_module(mod)
     from twin.errors import ConfigError, TwinError
 

@@ -16,7 +16,7 @@ import pytest
 from twin.studies.contact_check import (PRELOAD_SPEEDS, PRELOADS_N, SPEEDS, TOL_E, TOL_F, TOL_STATIC, TOL_T, check_case,
                             impact_errors, joint_case, reference_impacts, static_penetration, twin_impacts)
 from twin.config import BenchConfig, ln_stiffness, preset
-from twin.simulate import simulate_run
+from twin.simulation import simulate_run
 
 #: effective masses a joint sees over a crank turn (twin.studies.contact_check.effective_masses, README):
 #: B 0.82-2.84 kg, C 1.16-1.47 kg; the extremes and C's median
@@ -151,7 +151,7 @@ def test_default_build_needs_no_ode_solver():
     import subprocess
     import sys
 
-    code = ("import sys\nfrom twin.config import BenchConfig\nfrom twin.simulate import simulate_run\n"
+    code = ("import sys\nfrom twin.config import BenchConfig\nfrom twin.simulation import simulate_run\n"
             "simulate_run(BenchConfig().replace(**{'simulation.duration_s': 0.001}))\n"
             "print(sorted(m for m in ('scipy.integrate', 'twin.reference.model', 'numba') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()

@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from twin import simulate as simulate_mod
+from twin import simulation as simulate_mod
 from twin.cli import main
 from twin.errors import SimulationError
 from twin.mcapfile import read_run, read_summary

@@ -384,7 +384,7 @@ def test_failed_runs_are_recorded_and_a_full_disk_stops_with_one_line(tmp_path, 
     import twin.dataset.storage as S
     from twin.dataset.worker import run_one
     from twin.errors import SimulationError
-    from twin.simulate import simulate as real_simulate
+    from twin.simulation import simulate as real_simulate
 
     runs = plan(load_spec(TINY))
     bad_id, full_id = runs[1].run_id, runs[5].run_id
@@ -405,7 +405,7 @@ def test_failed_runs_are_recorded_and_a_full_disk_stops_with_one_line(tmp_path, 
         return real_write(self, chunk)
 
     monkeypatch.setattr(G, "executor", inline)
-    monkeypatch.setattr("twin.simulate.simulate", flaky_simulate)
+    monkeypatch.setattr("twin.simulation.simulate", flaky_simulate)
     monkeypatch.setattr(S.ParquetRunWriter, "write", full_write)
     out = tmp_path / "ds"
     rc = main(["dataset", "generate", str(TINY), "--out", str(out), "--workers", "1"])

@@ -172,7 +172,7 @@ def test_s000_ideal_slider_acceleration_equals_the_closed_form(engine):
     """The ideal S000 mechanism at 5000 rpm, crank speed prescribed: the slider's peak acceleration
     is r ω² (1 + r/L) = 1.94e4 m/s² (S000 Table 4's 0.05 mm point: 2.0e4) within 0.5 % (as S001's
     test), and the crank speed is the program's."""
-    from twin.simulate import simulate_run
+    from twin.simulation import simulate_run
 
     cfg = named_preset("s000").replace(**{"joints.clearance_c_mm": 0.0, "simulation.engine": engine})
     run = simulate_run(cfg)

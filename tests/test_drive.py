@@ -10,7 +10,7 @@ import pytest
 from twin.config import BenchConfig, preset
 from twin.drive import RPM_TO_RAD_S, DriveReference, command_events
 from twin.errors import RecordingError
-from twin.simulate import simulate_run
+from twin.simulation import simulate_run
 
 from conftest import short
 

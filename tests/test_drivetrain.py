@@ -20,7 +20,7 @@ from twin.config import Drivetrain
 from twin.errors import ConfigError
 from twin.kinematics import initial_pose
 from twin.motor_drive import crank_side_inertia, speed_harmonics
-from twin.simulate import simulate_run
+from twin.simulation import simulate_run
 
 ENGINES = ("mujoco", "reference")
 
@@ -169,7 +169,7 @@ def test_replay_compares_the_motor_drive(tmp_path):
     """``twin replay --drive motor``: the motor model from the recorded command beside the PID."""
     from pathlib import Path
 
-    from twin.replay import ReplayOptions, replay
+    from twin.bench_replay import ReplayOptions, replay
 
     rec = Path(__file__).resolve().parents[1] / "recordings" / "test3_synthetic.mcap"
     r = replay(rec, tmp_path / "out", lambda c: c.replace(**{"simulation.engine": "reference"}),

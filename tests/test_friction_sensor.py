@@ -25,7 +25,7 @@ from twin import names as N
 from twin.config import preset
 from twin.drive import DriveReference
 from twin.mujoco_engine.engine import MujocoEngine
-from twin.simulate import run_chunks
+from twin.simulation import run_chunks
 
 _STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
 

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from twin.cli import main
-from twin.identify.features import CRANK_RADIUS_M, IdentifyError, feature_names, features, steady_windows
+from twin.identification.features import CRANK_RADIUS_M, IdentifyError, feature_names, features, steady_windows
 
 ROOT = Path(__file__).resolve().parent.parent
 REC = ROOT / "recordings"
@@ -160,7 +160,7 @@ def test_a_model_finds_large_clearances_in_runs_it_never_saw(small, capsys):
     assert all(v == 1.0 for v in r["recall"].values())
     assert (d / "rep" / "confusion.png").stat().st_size > 0 and "Confusion matrix" in (d / "rep" / "report.md").read_text()
     # the size at each joint where the sensors resolve it: the runs of the map's speeds and orientations, no other
-    from twin.identify.model import size_resolved
+    from twin.identification.model import size_resolved
 
     for J in ("B", "C"):
         j_runs = [p for p in r["predictions"] if p[f"true_{J.lower()}_mm"] > 0]
@@ -187,7 +187,7 @@ def test_identify_refuses_what_it_cannot_answer(small, tmp_path, capsys):
     bad.write_bytes(b"not a model")
     assert main(["identify", "clearance", str(REC / "test6_synthetic.mcap"), "--model", str(bad)]) == 2
     assert "not a readable identification model" in capsys.readouterr().err
-    from twin.identify.model import ClearanceModel
+    from twin.identification.model import ClearanceModel
 
     m = ClearanceModel.load(model)
     m.feature_version = "twin-identify-features/0"
@@ -213,7 +213,7 @@ def test_several_datasets_pool_into_one_model_and_must_agree(small, tmp_path, ca
     refused in one line naming the difference."""
     import shutil
 
-    from twin.identify.model import ClearanceModel
+    from twin.identification.model import ClearanceModel
 
     d, _ = small
     pooled = tmp_path / "pooled.npz"
@@ -238,7 +238,7 @@ def test_several_datasets_pool_into_one_model_and_must_agree(small, tmp_path, ca
 def test_a_location_only_dataset_leaves_the_size_regressors_as_they_were(small, tmp_path):
     """``--location-only DS``: its runs join the location model's training, not the size regressors'
     nor their intervals: the size answers are bit for bit those of a model trained without it."""
-    from twin.identify.model import ClearanceModel, pooled_features
+    from twin.identification.model import ClearanceModel, pooled_features
 
     d, model = small
     both = tmp_path / "both.npz"
@@ -257,8 +257,8 @@ def test_a_location_only_dataset_leaves_the_size_regressors_as_they_were(small, 
 def test_an_evaluation_pools_datasets_and_keeps_each_ones_figures(small):
     """``twin identify evaluate MODEL DS1 DS2`` (a test set and its extension): the pooled report holds
     every run of both, each run answered as alone, and the location accuracy of each dataset."""
-    from twin.identify.evaluate import evaluate
-    from twin.identify.model import ClearanceModel
+    from twin.identification.evaluate import evaluate
+    from twin.identification.model import ClearanceModel
 
     d, model = small
     m = ClearanceModel.load(model)
@@ -318,7 +318,7 @@ def test_the_shipped_model_sizes_the_clearance_of_the_test6_sample(tmp_path):
 
 
 def test_the_size_target_is_half_the_catalogue_gap_there():
-    from twin.identify.evaluate import half_gap_mm
+    from twin.identification.evaluate import half_gap_mm
 
     # catalogue 0.02, 0.05, 0.07, 0.10, 0.50, 1.00 mm: half the nearer neighbour's gap
     assert [round(half_gap_mm(c), 6) for c in (0.02, 0.05, 0.07, 0.1, 0.5, 1.0)] == \
@@ -330,7 +330,7 @@ def test_the_size_target_is_half_the_catalogue_gap_there():
 def test_size_figures_are_split_by_clearance_value_and_speed():
     """Hand-made answers: the per-speed table holds each (value, speed) cell's own median error,
     target and coverage, and the markdown marks the cells over the target."""
-    from twin.identify.evaluate import render_markdown, size_by_speed
+    from twin.identification.evaluate import render_markdown, size_by_speed
 
     def p(true_c, est, lo, hi, rpm):
         return {"true_c_mm": true_c, "c_mm": est, "c_int": [lo, hi], "motor_rpm": rpm, "crank_hz": rpm / 3.97 / 60}
@@ -378,7 +378,7 @@ def test_regression_guard_the_size_resolution_map_is_the_committed_studies(joint
     SIZE_RESOLVED_FROM_RPM[joint] is, per vertical axis, the stricter of the maps measured with every
     run started at crank angle 0 and with the start angle drawn over a turn (``*_start.json``); at C the
     two are the same map, at B the start angle moves y from 250 to 300 rpm."""
-    from twin.identify.model import SIZE_RESOLVED_FROM_RPM, size_resolved
+    from twin.identification.model import SIZE_RESOLVED_FROM_RPM, size_resolved
 
     at0, drawn = (_measured_map(s, joint) for s in studies)
     assert {o: max(at0[o], drawn[o]) for o in at0} == SIZE_RESOLVED_FROM_RPM[joint]
@@ -397,7 +397,7 @@ def test_regression_guard_the_size_resolution_map_is_the_committed_studies(joint
 def test_an_answer_at_C_where_the_size_is_not_resolved_says_so(tmp_path, monkeypatch):
     """The test-6 sample (C, y vertical, 751 motor rpm) is resolved by the measured map; with the
     threshold for y put over its speed the same answer carries the flag and a warning."""
-    import twin.identify.model as M
+    import twin.identification.model as M
     from twin.commands.identify import default_model_path
 
     m = M.ClearanceModel.load(default_model_path())
@@ -417,7 +417,7 @@ def test_an_answer_at_B_below_its_map_says_so_and_takes_the_wide_interval(monkey
     of B's unresolved half width around the same size; C is untouched."""
     import dataclasses
 
-    import twin.identify.model as M
+    import twin.identification.model as M
     from twin.commands.identify import default_model_path
 
     class BC:
@@ -446,7 +446,7 @@ def test_interval_folds_by_speed_leave_each_speed_out_and_each_joint_is_split_by
     three speeds or an unknown grouping is refused. The answer's interval at each joint takes the
     unresolved half width below that joint's map, the resolved one on it, and a model without the
     split one width; a resolution flag missing for a joint is refused."""
-    from twin.identify.model import ClearanceModel, ModelError, _conformal_folds, train
+    from twin.identification.model import ClearanceModel, ModelError, _conformal_folds, train
 
     rows = [{"motor_rpm": rpm, "crank_hz": rpm / 238.2} for rpm in (250.0, 500.0, 250.0, 750.0, 500.0, 750.0)]
     f = _conformal_folds(rows, np.arange(6), "speed", 0)
@@ -490,7 +490,7 @@ def test_interval_folds_by_speed_leave_each_speed_out_and_each_joint_is_split_by
 def test_an_interval_ending_on_a_trained_value_holds_it():
     """The median regressor answers log10 of a trained clearance exactly; 10 ** log10(0.02) is
     0.020000000000000004 in floating point, which must not put 0.02 outside an interval ending on it."""
-    from twin.identify.model import ClearanceModel
+    from twin.identification.model import ClearanceModel
 
     class Const:
         def __init__(self, v):
@@ -516,7 +516,7 @@ def test_an_interval_ending_on_a_trained_value_holds_it():
 
 def test_the_interval_is_the_conformal_rank_of_the_out_of_fold_scores():
     """Split-conformal rank: with n scores, the ceil((n + 1) 0.9)-th smallest (Romano et al. 2019)."""
-    from twin.identify.model import ModelError, conformal_half_width
+    from twin.identification.model import ModelError, conformal_half_width
 
     scores = np.arange(1, 20) / 100.0  # n = 19: rank ceil(20 * 0.9) = 18
     assert conformal_half_width(np.random.default_rng(1).permutation(scores)) == 0.18
@@ -529,7 +529,7 @@ def test_median_error_interval_matches_the_asymptotic_spread_of_a_median():
     """The bootstrap interval of a cell's median error: holds the median, is one point for one run or
     identical runs, and for n draws of an exponential (median ln 2, density 1/2 there) spans about
     2 * 1.645 / (2 f sqrt(n)) = 3.29 / sqrt(n), the sample median's asymptotic 90 % interval."""
-    from twin.identify.evaluate import median_ci90
+    from twin.identification.evaluate import median_ci90
 
     assert median_ci90([0.3]) == [0.3, 0.3] and median_ci90([0.2, 0.2, 0.2]) == [0.2, 0.2]
     x = np.random.default_rng(5).exponential(1.0, 400)
@@ -540,7 +540,7 @@ def test_median_error_interval_matches_the_asymptotic_spread_of_a_median():
 
 
 def test_markdown_flags_cells_the_runs_do_not_settle():
-    from twin.identify.evaluate import _meets
+    from twin.identification.evaluate import _meets
 
     assert _meets({"meets_target": True, "target_mm": 0.01, "median_abs_error_ci90_mm": [0.002, 0.004]}) == "yes"
     assert _meets({"meets_target": True, "target_mm": 0.01, "median_abs_error_ci90_mm": [0.006, 0.013]}) == "yes*"

@@ -100,7 +100,7 @@ def find_cycle(graph: dict[str, set[str]]) -> list[str] | None:
 def test_graph_reads_the_package():
     """The walk finds the modules and the edges it should (guards the test against reading nothing)."""
     graph = import_graph()
-    assert {"twin.config", "twin.config.loading", "twin.simulate", "twin.drive", "twin.channels"} <= set(graph)
+    assert {"twin.config", "twin.config.loading", "twin.simulation", "twin.drive", "twin.channels"} <= set(graph)
     assert "twin.config" in graph["twin.drive"]  # module level: from twin.config import BenchConfig
     assert "twin.tracefile" in graph["twin.config.loading"]
 

@@ -356,7 +356,7 @@ def test_streamed_chain_is_bit_identical_to_the_whole_run(case, chunking):
 def test_streamed_chain_on_a_simulated_run_streamed_by_simulate():
     """The use it is for: a sink putting simulate()'s chunks through the chain as they come."""
     from twin.config import preset
-    from twin.simulate import Collector, simulate
+    from twin.simulation import Collector, simulate
 
     from conftest import short
 

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from twin.config import preset
-from twin.simulate import simulate_run
+from twin.simulation import simulate_run
 from twin.summary import count_impacts
 from twin.viz.pose import poses
 

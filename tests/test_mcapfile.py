@@ -16,7 +16,7 @@ from twin.config import preset
 from twin.errors import RecordingError, TwinError
 from twin.mcapfile import DEFAULT_BLOCK, RunWriter, read_metadata, read_run, write_run
 from twin.run import Run
-from twin.simulate import simulate_run
+from twin.simulation import simulate_run
 from twin.summary import summarize
 
 from conftest import short

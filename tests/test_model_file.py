@@ -20,9 +20,9 @@ import numpy as np
 import pytest
 
 from twin.cli import main
-from twin.identify.features import feature_names
-from twin.identify.model import MODEL_FORMAT, ClearanceModel, ModelError
-from twin.identify.trees import TreeEnsemble, from_sklearn
+from twin.identification.features import feature_names
+from twin.identification.model import MODEL_FORMAT, ClearanceModel, ModelError
+from twin.identification.trees import TreeEnsemble, from_sklearn
 
 ROOT = Path(__file__).resolve().parent.parent
 REC = ROOT / "recordings" / "test6_synthetic.mcap"
@@ -120,10 +120,17 @@ def test_the_shipped_model_of_format_2_exports_as_scikit_learn_answers(tmp_path)
     features with NaNs; where the shipped file was converted from it, its arrays are the export's."""
     import joblib
 
-    from twin.identify.model import recording_inputs
-    from twin.identify.features import features
+    from twin.identification.model import recording_inputs
+    from twin.identification.features import features
 
     src = _git_old_model(tmp_path)
+    # the format-2 pickle names the package by its former name, twin.identify
+    import sys
+
+    import twin.identification
+    import twin.identification.model
+    sys.modules.setdefault("twin.identify", twin.identification)
+    sys.modules.setdefault("twin.identify.model", twin.identification.model)
     old = joblib.load(src)
     acc, counts, rate, cpr, cfg = recording_inputs(REC)
     Xs = features(acc, counts, rate, cpr, orientation=cfg.mechanism.orientation)[0]
@@ -339,10 +346,10 @@ def test_the_shipped_model_answers_without_scikit_learn_or_joblib():
     sample as it does with them (the answer's fields but the time taken)."""
     import sys
 
-    from twin.identify.model import identify_recording
+    from twin.identification.model import identify_recording
 
     code = ("import sys, json; sys.modules['sklearn'] = sys.modules['joblib'] = None\n"
-            "from twin.identify.model import ClearanceModel, identify_recording\n"
+            "from twin.identification.model import ClearanceModel, identify_recording\n"
             f"a = identify_recording(ClearanceModel.load({str(SHIPPED)!r}), {str(REC)!r}); a.pop('seconds')\n"
             "print(json.dumps(a, default=float))")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)

@@ -34,7 +34,7 @@ from twin.drive import DriveReference
 from twin.kinematics import static_pin_forces
 from twin.mujoco_engine.builder import build, export_xml
 from twin.mujoco_engine.engine import MujocoEngine
-from twin.simulate import simulate_run
+from twin.simulation import simulate_run
 
 from conftest import bore_bias_acceleration, short
 

@@ -10,7 +10,7 @@ from twin import names as N
 from twin.config import preset
 from twin.errors import ConfigError
 from twin.mujoco_engine.builder import build, export_xml
-from twin.simulate import simulate_run
+from twin.simulation import simulate_run
 
 from conftest import short
 

@@ -15,7 +15,7 @@ from twin.drive import DriveReference
 from twin.kinematics import slider_position
 from twin.mujoco_engine.builder import build
 from twin.mujoco_engine.engine import MujocoEngine
-from twin.simulate import simulate_run
+from twin.simulation import simulate_run
 
 from conftest import bore_bias_acceleration, short
 

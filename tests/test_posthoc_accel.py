@@ -25,7 +25,7 @@ from twin.config import preset
 from twin.errors import ConfigError
 from twin.mujoco_engine.builder import build
 from twin.mujoco_engine.engine import MujocoEngine
-from twin.simulate import run_chunks
+from twin.simulation import run_chunks
 
 TOL = 1e-7  # m/s², see the module docstring
 EPS = np.finfo(float).eps

@@ -17,7 +17,7 @@ from twin.config import BenchConfig
 from twin.drive import DriveReference
 from twin.errors import ConfigError
 from twin.kinematics import slider_kinematics
-from twin.simulate import make_engine, run_chunks
+from twin.simulation import make_engine, run_chunks
 
 
 def ideal(engine: str, crank_rpm: float, ramp_s: float = 0.0, duration: float = 0.05) -> BenchConfig:

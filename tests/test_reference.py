@@ -18,7 +18,7 @@ from twin.reference import model as M
 from twin.reference.engine import ReferenceEngine, ReferenceOptions
 from twin.run import Run
 from twin.drive import DriveReference
-from twin.simulate import run_chunks, simulate_run
+from twin.simulation import run_chunks, simulate_run
 from twin.summary import summarize
 
 from conftest import short

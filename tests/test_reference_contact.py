@@ -12,7 +12,7 @@ from twin.impact import hysteresis_restitution, impact_hysteresis
 from twin.reference import contact as C
 from twin import natural_coordinates as natural
 from twin.reference import model as M
-from twin.simulate import simulate_run
+from twin.simulation import simulate_run
 
 from conftest import short
 

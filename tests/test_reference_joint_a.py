@@ -18,7 +18,7 @@ from twin.kinematics import static_pin_forces
 from twin import natural_coordinates as natural
 from twin.reference import model as M
 from twin.reference.engine import ReferenceEngine
-from twin.simulate import simulate_run
+from twin.simulation import simulate_run
 
 from conftest import short
 

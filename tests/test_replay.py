@@ -14,8 +14,8 @@ from twin.config import preset
 from twin.errors import RecordingError
 from twin.mcapfile import read_run
 from twin.recording import RecordingInfo, crank_trace, synthetic_recording, write_recording
-from twin.replay import ReplayOptions, replay
-from twin.simulate import simulate_run
+from twin.bench_replay import ReplayOptions, replay
+from twin.simulation import simulate_run
 
 COUNT = 2 * math.pi / 32768
 OFFSETS = {"AC1": 2.513, "AC2": 2.488, "AC3": 2.506, "AC4": 2.471, "AC5": 2.522, "AC6": 2.494}
@@ -152,7 +152,7 @@ def test_cli_replay_writes_side_by_side_mcap_report_and_plots(clearance, capsys)
 
 
 def test_near_constant_is_a_spread_below_1_percent_of_the_mean_or_3_times_the_noise():
-    from twin.replay import near_constant
+    from twin.bench_replay import near_constant
 
     rng = np.random.default_rng(0)
     noise = rng.normal(0.0, 0.05, 20_000)

@@ -14,7 +14,7 @@ from twin.config import BenchConfig
 from twin.instrument import measured_accel
 from twin.mcapfile import write_run
 from twin.recording import read_recording
-from twin.replay import ReplayOptions, render_markdown, replay
+from twin.bench_replay import ReplayOptions, render_markdown, replay
 from twin.run import Run
 
 SAMPLES = Path(__file__).resolve().parents[1] / "recordings"

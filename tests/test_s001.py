@@ -14,7 +14,7 @@ from twin.cli import build_parser, config_from_args
 from twin.config import BenchConfig, config_from_toml, ln_stiffness, load_config, named_preset
 from twin.drive import DriveReference
 from twin.errors import ConfigError
-from twin.simulate import simulate_run
+from twin.simulation import simulate_run
 
 from conftest import bore_bias_acceleration
 
@@ -185,7 +185,7 @@ _OFF_GRID = tuple(round(0.17 + 0.05 * k, 2) for k in range(17))
 
 
 def _recover(tmp_path, e_true: float, engine: str = "mujoco") -> float:
-    from twin.identify.restitution import SweepOptions, sweep_restitution, synthetic_recording
+    from twin.identification.restitution import SweepOptions, sweep_restitution, synthetic_recording
 
     cfg = named_preset("s001").replace(**{"simulation.engine": engine})
     rec = synthetic_recording(cfg, tmp_path / f"s001_e{e_true}.mcap", e_true, noise_mps2=5.0, seed=7)
@@ -204,7 +204,7 @@ def test_restitution_recovered_from_a_synthetic_noisy_recording(tmp_path):
 
 def test_sweep_starts_must_be_a_whole_number_of_at_least_one():
     from twin.errors import ConfigError
-    from twin.identify.restitution import SweepOptions
+    from twin.identification.restitution import SweepOptions
 
     for bad in (0, -1, 1.5):
         with pytest.raises(ConfigError, match="--starts"):
@@ -232,7 +232,7 @@ def test_identify_restitution_command(tmp_path, capsys):
     import json
 
     from twin.cli import main
-    from twin.identify.restitution import synthetic_recording
+    from twin.identification.restitution import synthetic_recording
 
     cfg = named_preset("s001").replace(**{"simulation.duration_s": 0.4})
     rec = synthetic_recording(cfg, tmp_path / "rec.mcap", 0.55, noise_mps2=5.0, seed=1)
@@ -339,7 +339,7 @@ def test_impact_damping_recovered_from_a_synthetic_noisy_recording(tmp_path):
     """S001's own procedure (Table IV): sweep the IMPACT law's c_max until the slider acceleration
     matches; a noisy synthetic recording at the paper's 27 960 N s/m gives it back within 5 %
     (the coarse grid 6 100, 8 600, ... N s/m does not hold it)."""
-    from twin.identify.restitution import SweepOptions, sweep_restitution, synthetic_recording
+    from twin.identification.restitution import SweepOptions, sweep_restitution, synthetic_recording
 
     cfg = named_preset("s001").replace(**{"simulation.engine": "reference", "contact.law": "adams-impact"})
     rec = synthetic_recording(cfg, tmp_path / "impact.mcap", 27960.0, noise_mps2=5.0, seed=7, parameter="c_max")

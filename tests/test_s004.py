@@ -16,7 +16,7 @@ import pytest
 
 from twin.config import ln_stiffness, named_preset
 from twin.kinematics import slider_kinematics
-from twin.simulate import simulate_run
+from twin.simulation import simulate_run
 from twin.studies.continuous_contact import ContinuousContact, Mechanism, phases
 
 W = 30.0

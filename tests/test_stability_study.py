@@ -11,7 +11,7 @@ from twin.channels import channel_specs
 from twin.cli import main
 from twin.config import CHANNEL_GROUPS, preset
 from twin.errors import ConfigError
-from twin.simulate import simulate_run
+from twin.simulation import simulate_run
 from twin.studies import stability as S
 
 
@@ -148,7 +148,7 @@ def test_the_reference_re_run_deflects_under_the_twins_perturbed_stiffness(monke
     """A scene over the limit is compared with the reference engine under the same law: the twin's
     stiffness factor becomes the reference's contact.stiffness_scale (else a softer twin contact
     would be judged against the unperturbed law)."""
-    import twin.simulate
+    import twin.simulation
 
     seen = []
 
@@ -160,7 +160,7 @@ def test_the_reference_re_run_deflects_under_the_twins_perturbed_stiffness(monke
         seen.append(cfg)
         return FakeRun()
 
-    monkeypatch.setattr(twin.simulate, "simulate_run", fake_simulate_run)
+    monkeypatch.setattr(twin.simulation, "simulate_run", fake_simulate_run)
     cfg = preset(6).replace(**{"mujoco.contact_stiffness_scale": 0.81, "contact.stiffness_scale": 1.1,
                                "mujoco.contact_damping_scale": 0.94})
     out = S.reference_check(cfg)

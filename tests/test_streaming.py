@@ -17,7 +17,7 @@ import pytest
 from twin.config import preset
 from twin.errors import SimulationError, TwinError
 from twin.mcapfile import RunWriter, read_run, read_summary
-from twin.simulate import Collector, run_chunks, simulate, simulate_run
+from twin.simulation import Collector, run_chunks, simulate, simulate_run
 from twin.summary import ImpactCounter, SummaryAccumulator, SummaryJsonWriter, count_impacts, summarize
 
 from conftest import short
@@ -163,14 +163,14 @@ def test_run_chunks_is_the_one_loop_and_engines_do_not_import_it():
         tree = ast.parse(path.read_text())
         mods = {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)}
         mods |= {a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
-        assert "twin.simulate" not in mods and "twin.cli" not in mods, path
+        assert "twin.simulation" not in mods and "twin.cli" not in mods, path
     cfg = short(preset(3), 0.02, **{"simulation.chunk_s": 0.007})
     chunks = list(run_chunks(cfg))
     assert [c.n for c in chunks] == [700, 700, 600] and [c.t0 for c in chunks] == pytest.approx([0, 0.007, 0.014])
 
 
 def test_engine_that_returns_too_few_samples_is_refused():
-    from twin.simulate import make_engine
+    from twin.simulation import make_engine
 
     cfg = short(preset(3), 0.02)
     eng = make_engine(cfg)

@@ -1,4 +1,4 @@
-"""Output written on a thread (twin.simulate.ThreadedSink): same bytes, same lifecycle; chunks never
+"""Output written on a thread (twin.simulation.ThreadedSink): same bytes, same lifecycle; chunks never
 share memory with the engine's buffers."""
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ import pytest
 from twin.config import preset
 from twin.errors import TwinError
 from twin.mcapfile import RunWriter, read_run
-from twin.simulate import Collector, ThreadedSink, simulate, simulate_run
+from twin.simulation import Collector, ThreadedSink, simulate, simulate_run
 
 from conftest import short
 

@@ -14,7 +14,7 @@ import pytest
 
 from twin.config import preset
 from twin.mujoco_engine.engine import MujocoEngine
-from twin.simulate import Collector, simulate, simulate_many, simulate_run
+from twin.simulation import Collector, simulate, simulate_many, simulate_run
 from twin.drive import DriveReference
 
 from conftest import short

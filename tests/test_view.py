@@ -27,7 +27,7 @@ from twin.config import preset
 from twin.kinematics import rod_angle as ideal_rod_angle
 from twin.mcapfile import read_run, write_run
 from twin.run import Channel, Run
-from twin.simulate import simulate_run
+from twin.simulation import simulate_run
 from twin.viz import RerunWriter, ViewOptions, convert_file, file_recording_id, write_rrd
 from twin.viz import blueprint as bp
 from twin.viz.pose import ENCODER_COUNTS_PER_REV, poses, rod_angle

@@ -35,7 +35,7 @@ def test_midpoint_is_second_order_and_euler_first_order():
 
 def test_reference_engine_midpoint_option_on_an_ideal_scene():
     cfg = preset(3).replace(**{"simulation.engine": "reference", "simulation.duration_s": 0.1, "drive.ramp_s": 0.05})
-    from twin.simulate import Collector, simulate
+    from twin.simulation import Collector, simulate
 
     def run(h, integrator):
         c = cfg.replace(**{"simulation.timestep_s": h})

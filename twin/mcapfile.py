@@ -236,7 +236,7 @@ class _Preview:
 
 class RunWriter:
     """Streams a run, chunk by chunk, into an MCAP file (temporary file + rename): a
-    :class:`twin.simulate.Sink`.
+    :class:`twin.simulation.Sink`.
 
     The temporary file ``.NAME.PID.tmp`` is created at the first :meth:`write` (so a writer
     made before a run that then fails to start leaves nothing), :meth:`close` finalizes and

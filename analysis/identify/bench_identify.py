@@ -2,7 +2,7 @@
 
 Method: a synthetic 2 s bench recording of Table 4 test 12 (the reference engine through the
 sensor chain, as ``recordings/make_samples.py`` makes the samples) is written once; then, in this
-process and on one core (the model's own thread count set to 1), ``twin.identify.model.
+process and on one core (the model's own thread count set to 1), ``twin.identification.model.
 identify_recording`` runs ``--repeats`` times with the shipped model (or ``--model``): read and
 calibrate the recording, cut its steady part into windows, compute the features, predict. Best and
 median of the repeats, beside the time of reading the recording alone (the floor every answer
@@ -26,7 +26,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")  # one core: scikit-learn's OpenMP
 def make_recording(path: Path) -> None:
     from twin.config import preset
     from twin.recording import synthetic_recording, write_recording
-    from twin.simulate import simulate_run
+    from twin.simulation import simulate_run
 
     cfg = preset(12).replace(**{"simulation.duration_s": 2.0, "simulation.engine": "reference", "drive.ramp_s": 0.3})
     truth = simulate_run(cfg)
@@ -40,7 +40,7 @@ def main() -> None:
     ap.add_argument("--model", help="model file (default: the shipped one)")
     args = ap.parse_args()
     from twin.commands.identify import default_model_path
-    from twin.identify.model import ClearanceModel, identify_recording, recording_inputs
+    from twin.identification.model import ClearanceModel, identify_recording, recording_inputs
 
     model = ClearanceModel.load(args.model or default_model_path())
     with tempfile.TemporaryDirectory() as d:

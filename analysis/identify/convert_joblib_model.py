@@ -12,7 +12,7 @@ Method:
 
 2. Export the location classifier and the two size regressors (``HistGradientBoosting*``) as arrays:
    every fitted tree's nodes (feature index, numeric threshold, missing-go-left, children, leaf values),
-   the baseline and the link (:func:`twin.identify.trees.from_sklearn`; categorical features are refused).
+   the baseline and the link (:func:`twin.identification.trees.from_sklearn`; categorical features are refused).
    The metadata are kept as they are (feature version and names, interval half widths, ``trained_on``
    with the library versions of the training); ``trained_on.converted_from`` records the source file's
    name, SHA-256 and format.
@@ -48,8 +48,8 @@ ROOT = Path(__file__).resolve().parents[2]
 
 def recording_features() -> dict[str, np.ndarray]:
     """Window features of every sample recording that has them (the calibration-only one has none)."""
-    from twin.identify.features import IdentifyError, features
-    from twin.identify.model import recording_inputs
+    from twin.identification.features import IdentifyError, features
+    from twin.identification.model import recording_inputs
 
     out = {}
     for rec in sorted((ROOT / "recordings").glob("*.mcap")):
@@ -107,13 +107,18 @@ def main() -> int:
     args = ap.parse_args()
     import joblib
 
-    from twin.identify.model import MODEL_SUFFIX, ClearanceModel, identify_recording
-    from twin.identify.trees import from_sklearn
+    from twin.identification.model import MODEL_SUFFIX, ClearanceModel, identify_recording
+    from twin.identification.trees import from_sklearn
     from twin.util import temp_path
 
     src, out = Path(args.source), Path(args.out)
     if out.suffix != MODEL_SUFFIX:
         sys.exit(f"--out: must end in {MODEL_SUFFIX}")
+    # the format-2 pickle names the package by its former name, twin.identify
+    import twin.identification
+    import twin.identification.model
+    sys.modules.setdefault("twin.identify", twin.identification)
+    sys.modules.setdefault("twin.identify.model", twin.identification.model)
     old = joblib.load(src)  # trusted source only (module docstring)
     if getattr(old, "format", None) != "twin-identify-model/2":
         sys.exit(f"{src}: not a model of format twin-identify-model/2 ({getattr(old, 'format', None)!r})")

@@ -5,9 +5,9 @@ Method. ``analysis/datasets/clearance_id_length.toml``: 72 reference-engine runs
 clearance at C only (0.05, 0.07, 0.1 mm), x, y and z vertical, 325 and 475 motor rpm (development
 speeds), contact parameters, sensor offsets, mounting and noise drawn as in the development set,
 its own seed. Each run is cut into the model's windows of two steady crank revolutions
-(``twin.identify.features``; back to back from the end of the steady part). The answer from the
+(``twin.identification.features``; back to back from the end of the steady part). The answer from the
 last ``k`` windows — what a recording of 2k steady revolutions would give — is the model's own
-(:meth:`twin.identify.model.ClearanceModel.identify`: location from the windows' mean class
+(:meth:`twin.identification.model.ClearanceModel.identify`: location from the windows' mean class
 probabilities, size the median of the windows' answers, the model's conformal 90 % interval, the
 wider one where the run is below the size-resolution map).
 The datasets' 3 s runs hold one window at 300-325 rpm, two at 450-475 rpm and three to four at 650-750.
@@ -35,8 +35,8 @@ KS = (1, 2, 3, 4, 7)  # windows used, from the end of the steady part
 
 def main(argv: list[str] | None = None) -> int:
     from twin.dataset import open as open_dataset
-    from twin.identify.evaluate import half_gap_mm
-    from twin.identify.model import ClearanceModel, dataset_features, resolution
+    from twin.identification.evaluate import half_gap_mm
+    from twin.identification.model import ClearanceModel, dataset_features, resolution
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("dataset")

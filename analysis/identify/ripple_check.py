@@ -24,9 +24,9 @@ from pathlib import Path
 import numpy as np
 
 from twin.config import preset
-from twin.identify.model import ClearanceModel, identify_recording
+from twin.identification.model import ClearanceModel, identify_recording
 from twin.recording import crank_trace, synthetic_recording, write_recording
-from twin.simulate import simulate_run
+from twin.simulation import simulate_run
 
 ROOT = Path(__file__).resolve().parents[2]
 MODEL = ROOT / "twin" / "data" / "identify_default.npz"

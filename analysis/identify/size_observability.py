@@ -7,7 +7,7 @@ neighbouring catalogue sizes (default 0.05, 0.07, 0.1 mm) with the nominal conta
 ``--draws`` random draws of the parameters the datasets randomize (restitution 0.32-0.48, μ0
 0.04-0.06, Eq. 18's K ±20 %, the twin's contact damping ×0.5-2, impact-speed gain ×0.5-2, guide
 friction 1.5-4 N: ``analysis/datasets/clearance_id.toml``), the same draws at every size. The
-features are ``twin.identify.features`` on the calibrated accelerations and encoder counts of the
+features are ``twin.identification.features`` on the calibrated accelerations and encoder counts of the
 bench's sensor chain (``twin.instrument``: sensor response, noise of its own seed per run, 18-bit DAQ,
 static calibration), as a dataset run's; with ``--truth`` on the noise-free accelerations (the encoder
 counts from the crank angle), an upper bound of what a recording can hold. With ``--start-angles`` each
@@ -62,8 +62,8 @@ def draws(n: int, seed: int = 17, start_angles: bool = False) -> list[dict[str, 
 def one_run(job: tuple) -> dict:
     """Features (mean over windows), contact share and impacts per turn of one run."""
     from twin.config import BenchConfig
-    from twin.identify.features import features
-    from twin.simulate import simulate_run
+    from twin.identification.features import features
+    from twin.simulation import simulate_run
     from twin.summary import count_impacts
 
     orientation, rpm, size, k, over, duration, sensed, joint = job
@@ -77,7 +77,7 @@ def one_run(job: tuple) -> dict:
         "instrumentation.seed": 1000 + k, **over})
     run = simulate_run(cfg)
     if sensed:  # the bench's chain: sensor response, noise, 18-bit DAQ, encoder, static calibration
-        from twin.identify.model import simulated_inputs
+        from twin.identification.model import simulated_inputs
 
         acc, counts, rate, cpr = simulated_inputs(run, cfg)
     else:

@@ -26,9 +26,9 @@ import numpy as np
 def one(job: tuple) -> dict:
     engine, angle, model_path = job
     from twin.config import preset
-    from twin.identify.features import features
-    from twin.identify.model import ClearanceModel, simulated_inputs, size_answer
-    from twin.simulate import simulate_run
+    from twin.identification.features import features
+    from twin.identification.model import ClearanceModel, simulated_inputs, size_answer
+    from twin.simulation import simulate_run
 
     cfg = preset(6).replace(**{"simulation.engine": engine, "simulation.duration_s": 5.5, "drive.ramp_s": 0.4,
                                "drive.initial_encoder_angle_rad": angle, "instrumentation.seed": 0,

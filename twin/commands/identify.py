@@ -65,7 +65,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                        description="Simulate the recording's configuration with a coarse-to-fine sweep of "
                                    "contact.restitution and keep the value whose calibrated accelerometer signal "
                                    "(sensor chain and calibration on both sides) is closest (RMS) to the recording's "
-                                   "(twin.identify.restitution).")
+                                   "(twin.identification.restitution).")
     r.add_argument("recording", metavar="REC.mcap")
     r.add_argument("--sensor", default="AC6", help="accelerometer compared (default AC6, the slider along the guide)")
     r.add_argument("--start", type=float, default=0.0, metavar="S", help="window start [s] (default 0)")
@@ -99,7 +99,7 @@ def _splits(text: str) -> tuple[str, ...]:
 
 
 def _train(args: argparse.Namespace) -> int:
-    from twin.identify.model import MODEL_SUFFIX, train
+    from twin.identification.model import MODEL_SUFFIX, train
     from twin.util import check_output_file
 
     out = check_output_file(args.out, "--out", MODEL_SUFFIX)
@@ -115,8 +115,8 @@ def _train(args: argparse.Namespace) -> int:
 
 
 def _evaluate(args: argparse.Namespace) -> int:
-    from twin.identify.evaluate import evaluate, write_report
-    from twin.identify.model import ClearanceModel
+    from twin.identification.evaluate import evaluate, write_report
+    from twin.identification.model import ClearanceModel
     from twin.util import check_output_dir
 
     out = check_output_dir(args.out, "--out")
@@ -144,7 +144,7 @@ def _recording_and_json(args: argparse.Namespace) -> tuple[Path, Path | None]:
 
 
 def _clearance(args: argparse.Namespace) -> int:
-    from twin.identify.model import ClearanceModel, identify_recording
+    from twin.identification.model import ClearanceModel, identify_recording
     from twin.util import atomic_write_json
 
     rec, js = _recording_and_json(args)
@@ -175,7 +175,7 @@ def _clearance(args: argparse.Namespace) -> int:
 
 
 def _restitution(args: argparse.Namespace) -> int:
-    from twin.identify.restitution import SweepOptions, sweep_restitution
+    from twin.identification.restitution import SweepOptions, sweep_restitution
     from twin.util import atomic_write_json
 
     rec, js = _recording_and_json(args)

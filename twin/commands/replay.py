@@ -63,7 +63,7 @@ def replay_overrides(args: argparse.Namespace, rec_cfg: BenchConfig) -> BenchCon
 def run(args: argparse.Namespace) -> int:
     import math
 
-    from twin.replay import ReplayOptions, replay
+    from twin.bench_replay import ReplayOptions, replay
 
     rec = Path(args.recording)
     if rec.suffix != ".mcap":
@@ -85,7 +85,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _print(r: dict, out: Path) -> None:
-    from twin.replay import _lag_text
+    from twin.bench_replay import _lag_text
 
     c, tr = r["configuration"], r["tracking"]
     print(f"{r['recording']}: {r['duration_s']:.3f} s at {r['sample_rate_hz']:g} Hz; model {c['name']} "

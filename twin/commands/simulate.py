@@ -28,7 +28,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from twin.simulate import ThreadedSink, simulate
+    from twin.simulation import ThreadedSink, simulate
     from twin.summary import SummaryJsonWriter
     from twin.util import check_output_file
 

@@ -1,5 +1,5 @@
 """The engines and their run settings: the one list of engine names (and the class that
-implements each, imported on demand by :func:`twin.simulate.make_engine`), the MuJoCo twin's solver
+implements each, imported on demand by :func:`twin.simulation.make_engine`), the MuJoCo twin's solver
 and contact settings, and the run settings shared by both engines."""
 
 from __future__ import annotations

@@ -283,7 +283,7 @@ def _local(workers: int, fn: Callable[[dict], dict] | None = None) -> Callable[[
 
 
 def _threads(workers: int, fn: Callable[..., dict] | None = None) -> Callable[[list[dict]], Iterator[dict]]:
-    """Executor on ``workers`` threads of this process (:func:`twin.simulate.simulate_many`'s way:
+    """Executor on ``workers`` threads of this process (:func:`twin.simulation.simulate_many`'s way:
     one engine, model and data object per run; the engines release the GIL while they step, so the
     files are the bytes a worker process writes). A run whose thread crashes the process takes the
     driver with it (the finished runs are kept; the same command resumes). When the driver stops

@@ -22,7 +22,7 @@ Zarr v3, NPZ, HDF5 and MCAP). Storage types (``outputs.dtype``):
 * ``float32``: every float channel float32 (lossy for the float64 ones: documented, for users
   who want the smallest files), counts int32.
 
-The writer is a :class:`twin.simulate.Sink`: a temporary file beside the target, renamed by
+The writer is a :class:`twin.simulation.Sink`: a temporary file beside the target, renamed by
 ``close``, deleted by ``abort``. Per-channel statistics (count, mean, M2, min, max; Chan's parallel
 update) are kept while writing, for the training split's normalization statistics.
 """

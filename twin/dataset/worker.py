@@ -107,7 +107,7 @@ def run_one(task: dict[str, Any], stop: Any = None) -> dict[str, Any]:
     from twin.config import config_from_toml
     from twin.dataset.storage import ColumnSpec, LabelColumn, ParquetRunWriter, WriteError
     from twin.util import file_sha256
-    from twin.simulate import ThreadedSink, simulate
+    from twin.simulation import ThreadedSink, simulate
 
     t0 = time.perf_counter()
     rid = task["run_id"]

@@ -19,7 +19,7 @@ the twin, 1 its static calibration recording, 2 and 3 the same for the virtual s
 replay (so a replay of a synthetic recording does not reuse the recording's noise).
 
 Whole runs or chunks: :class:`ChainStream` takes a run as consecutive chunks (e.g. those
-:func:`twin.simulate.simulate` streams to its sinks) and returns each chunk's DAQ samples,
+:func:`twin.simulation.simulate` streams to its sinks) and returns each chunk's DAQ samples,
 carrying every piece of state across chunks (filter states started in steady state at the run's
 very first sample, the noise generators' streams, the decimation phase, the sample count behind
 the time base); :func:`apply_chain` is one :class:`ChainStream` fed the whole run. The DAQ

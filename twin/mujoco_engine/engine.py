@@ -10,7 +10,7 @@ Per-scene state. A scene's state is more than ``mujoco.rollout`` takes (``mjSTAT
 the solver warmstart (passed to it separately) and the native contact law's stored impact speed
 of each clearance joint (``mjData.userdata``, one slot per joint, see ``_bore.c``), which the
 rollout neither sets nor resets. Each engine has its own model and data object, so scenes on
-separate engines (on threads: :func:`twin.simulate.simulate_many`) share nothing; :meth:`reset`
+separate engines (on threads: :func:`twin.simulation.simulate_many`) share nothing; :meth:`reset`
 clears the impact speeds with the rest of the data, and :meth:`snapshot` / :meth:`restore` move
 the whole state (``mjSTATE_INTEGRATION``: physics, controls, warmstart, user data) and the step
 count, so a run continued from a snapshot, in this engine or another of the same
@@ -63,7 +63,7 @@ def stage_timers_off() -> None:
 
 class MujocoEngine:
     """MuJoCo twin of the bench (see module docstring); the chunk loop is
-    :func:`twin.simulate.run_chunks`."""
+    :func:`twin.simulation.run_chunks`."""
 
     name = "mujoco"
 
@@ -171,7 +171,7 @@ class MujocoEngine:
     # -------------------------------------------------------------------- stepping
     def advance(self, theta_ref: np.ndarray, omega_ref: np.ndarray, stride: int) -> dict[str, np.ndarray]:
         """One ``mujoco.rollout`` call over ``len(theta_ref)`` steps (see
-        :meth:`twin.simulate.Engine.advance`)."""
+        :meth:`twin.simulation.Engine.advance`)."""
         m, d, h = self.model, self.data, self.cfg.simulation.timestep_s
         nstep = len(theta_ref)
         if self._sens.shape[1] < nstep:

@@ -1,7 +1,7 @@
 """The reference engine: R-matrix natural-coordinate model of S003 with contact and friction.
 
 ``twin simulate --engine reference`` runs this instead of MuJoCo, with the same
-configuration, drive, channels, chunking and metadata (:class:`twin.simulate.Engine`), so
+configuration, drive, channels, chunking and metadata (:class:`twin.simulation.Engine`), so
 the two engines compare channel by channel. The formulation is in
 :mod:`twin.natural_coordinates` (coordinates, constraints, mass matrix) and
 :mod:`twin.reference.model` (forces, equations of motion, integration), the contact laws in
@@ -81,7 +81,7 @@ def engine_params(cfg: BenchConfig, options: ReferenceOptions = ReferenceOptions
 
 class ReferenceEngine:
     """R-matrix reference engine (see module docstring); the chunk loop is
-    :func:`twin.simulate.run_chunks`."""
+    :func:`twin.simulation.run_chunks`."""
 
     name = "reference"
 
@@ -159,7 +159,7 @@ class ReferenceEngine:
 
     def advance(self, theta_ref: np.ndarray, omega_ref: np.ndarray, stride: int) -> dict[str, np.ndarray]:
         """One call of the compiled loop over ``len(theta_ref)`` steps (see
-        :meth:`twin.simulate.Engine.advance`)."""
+        :meth:`twin.simulation.Engine.advance`)."""
         if self._st is None:
             self.reset()
         h = self.cfg.simulation.timestep_s

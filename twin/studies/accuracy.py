@@ -259,7 +259,7 @@ def pareto_front(points: Sequence[Sequence[float]]) -> list[bool]:
 # ---------------------------------------------------------------------------- the study
 def run_variant(v: Variant, test_id: int, s: StudySettings) -> tuple[WindowStats, dict[str, Any]]:
     """Simulate one variant on one test; (window stats, timing)."""
-    from twin.simulate import simulate_run
+    from twin.simulation import simulate_run
 
     cfg = v.config(scene(test_id, s))
     t = time.perf_counter()

@@ -287,7 +287,7 @@ def scene_metrics(run: Any, cfg: BenchConfig, scene: dict[str, Any]) -> dict[str
 def run_scene(scene: dict[str, Any], trace_dir: Path) -> dict[str, Any]:
     """Simulate one scene and return its metrics (a raised engine error counts as a divergence)."""
     from twin.errors import SimulationError
-    from twin.simulate import simulate_run
+    from twin.simulation import simulate_run
 
     cfg = scene_config(scene, trace_dir)
     t0 = time.perf_counter()
@@ -327,7 +327,7 @@ def reference_check(cfg: BenchConfig) -> dict[str, Any]:
     """pen/c of the reference engine at its converged step (REFERENCE_TIMESTEP_S) on the same
     scene, under the twin's perturbed law (module docstring): tells a physical exceedance of
     PEN_LIMIT (the converged reference exceeds it too) from a numerical one."""
-    from twin.simulate import simulate_run
+    from twin.simulation import simulate_run
 
     e_ref = carried_restitution(cfg)
     over = {"simulation.engine": "reference", "simulation.timestep_s": REFERENCE_TIMESTEP_S,

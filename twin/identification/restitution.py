@@ -190,7 +190,7 @@ def simulated_acceleration(cfg: BenchConfig, e: float, n: int, rate_hz: float, s
     """The twin's calibrated ``sensor`` acceleration [m/s²] (sensor chain without noise, simulated
     static calibration) for restitution ``e``: ``n`` samples at ``rate_hz``."""
     from twin.instrument import apply_chain, measured_accel, simulated_calibration
-    from twin.simulate import simulate_run
+    from twin.simulation import simulate_run
 
     c = _candidate_config(cfg, e, n, rate_hz, engine, parameter)
     sim = simulate_run(c)
@@ -327,7 +327,7 @@ def synthetic_recording(cfg: BenchConfig, path: str | Path, value: float, noise_
     (:func:`twin.recording.synthetic_recording`)."""
     from twin.recording import synthetic_recording as make, write_recording
     from twin.run import Channel
-    from twin.simulate import simulate_run
+    from twin.simulation import simulate_run
 
     c = cfg.replace(**{PARAMETERS[parameter][0]: float(value), "instrumentation.seed": int(seed),
                        "sensors.output_rate_hz": cfg.instrumentation.daq_rate_hz})
@@ -339,5 +339,5 @@ def synthetic_recording(cfg: BenchConfig, path: str | Path, value: float, noise_
     daq, info = make(truth, c, notes=f"synthetic: {parameter} {value:g}, {noise_mps2:g} m/s^2 RMS white "
                                      f"noise on {sensor}, engine {c.simulation.engine}",
                      extra={parameter: float(value), "noise_mps2": float(noise_mps2), "sensor": sensor},
-                     created_by="twin.identify.restitution")
+                     created_by="twin.identification.restitution")
     return write_recording(path, daq, info)

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from twin.config import CATALOGUE_DIAMETRAL_MM
-from twin.identify.model import CLASSES, SIZE_RESOLVED_FROM_RPM, ClearanceModel, pooled_features, resolution
+from twin.identification.model import CLASSES, SIZE_RESOLVED_FROM_RPM, ClearanceModel, pooled_features, resolution
 
 
 def half_gap_mm(c: float) -> float:
@@ -132,7 +132,7 @@ def size_by_speed(faulty: list[dict[str, Any]], j: str) -> dict[str, dict[str, d
 
 def size_where_resolved(preds: list[dict[str, Any]], j: str) -> dict[str, Any]:
     """Size figures at joint ``j`` ("b" or "c") per clearance value over the runs whose speed and
-    orientation the bench's sensors resolve the size at (:func:`twin.identify.model.size_resolved`),
+    orientation the bench's sensors resolve the size at (:func:`twin.identification.model.size_resolved`),
     and how many are not."""
     faulty = [p for p in preds if p[f"true_{j}_mm"] > 0]
     ok = [p for p in faulty if p[f"{j}_resolved"]]

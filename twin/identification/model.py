@@ -1,7 +1,7 @@
 """The clearance identification model: train on a dataset, save, load, identify.
 
 * **Fault location**: scikit-learn's ``HistGradientBoostingClassifier`` (none, B, C, BC) on the
-  window features (:mod:`twin.identify.features`), classes weighted to balance; a recording's
+  window features (:mod:`twin.identification.features`), classes weighted to balance; a recording's
   class probabilities are the mean over its windows.
 * **Clearance size**: per joint, a ``HistGradientBoostingRegressor`` with the quantile loss at
   50 % (the median) on log10 of the diametral clearance, trained on the windows of the runs where
@@ -34,21 +34,21 @@ CRC-32) of plain arrays and one JSON text, read with ``allow_pickle=False``: loa
 from the file, and answering needs no scikit-learn. Members:
 
 * ``model.json``: a 0-d unicode array holding JSON: ``format`` (``twin-identify-model/3``),
-  ``feature_version`` and ``feature_names`` (:mod:`twin.identify.features`), ``interval_log10`` (the
+  ``feature_version`` and ``feature_names`` (:mod:`twin.identification.features`), ``interval_log10`` (the
   conformal half widths [log10], see above), ``trained_on`` (the training data, with ``versions``:
   twin, scikit-learn and numpy of the training), and ``estimators``: per estimator (``classifier``,
   ``size_B``, ``size_C``) its kind (link: ``softmax`` for the classifier, ``identity`` for the size
   regressors), number of features, trees per iteration, classes and source
-  (:meth:`twin.identify.trees.TreeEnsemble.meta`);
+  (:meth:`twin.identification.trees.TreeEnsemble.meta`);
 * per estimator E, the arrays ``E.baseline``, ``E.tree_nodes``, ``E.feature``, ``E.threshold``,
   ``E.missing_left``, ``E.left``, ``E.right``, ``E.is_leaf``, ``E.value`` (dtypes and meaning:
-  :mod:`twin.identify.trees`).
+  :mod:`twin.identification.trees`).
 
 Loading refuses, in one line naming the file: anything but a zip archive (a pickle or ``.joblib``
 file, as model format 2 was, is named as such and never unpickled), a damaged archive (CRC, truncation),
 another format version, other members, an array of another dtype (object arrays included: never
 unpickled), trees that a walk could not use safely, and a feature version this twin does not compute.
-The scikit-learn estimators of the training are exported by :func:`twin.identify.trees.from_sklearn`,
+The scikit-learn estimators of the training are exported by :func:`twin.identification.trees.from_sklearn`,
 whose answers are checked equal bit for bit on the training windows.
 """
 
@@ -65,8 +65,8 @@ from typing import Any
 import numpy as np
 
 from twin.config import Drive
-from twin.identify.features import FEATURE_VERSION, REVS_PER_WINDOW, IdentifyError, feature_names, features
-from twin.identify.trees import ModelError, TreeEnsemble, from_sklearn
+from twin.identification.features import FEATURE_VERSION, REVS_PER_WINDOW, IdentifyError, feature_names, features
+from twin.identification.trees import ModelError, TreeEnsemble, from_sklearn
 
 CLASSES = ("none", "B", "C", "BC")
 # Size resolution per joint: the lowest motor speed [rpm] (belt 1:3.97) per vertical axis from which the
@@ -116,8 +116,8 @@ class ClearanceModel:
     # ------------------------------------------------------------------ io
     def save(self, path: str | Path) -> Path:
         """Write the model file (module docstring: format ``twin-identify-model/3``) atomically;
-        scikit-learn estimators are exported first (:func:`twin.identify.trees.from_sklearn`)."""
-        from twin.identify.modelfile import write_model
+        scikit-learn estimators are exported first (:func:`twin.identification.trees.from_sklearn`)."""
+        from twin.identification.modelfile import write_model
 
         est = {"classifier": self.classifier, "size_B": self.size["B"], "size_C": self.size["C"]}
         est = {k: v if isinstance(v, TreeEnsemble) else from_sklearn(v) for k, v in est.items()}
@@ -130,7 +130,7 @@ class ClearanceModel:
     def load(path: str | Path) -> "ClearanceModel":
         """Read a model file, refusing in one line anything but a ``twin-identify-model/3`` file of this
         twin's features (module docstring); nothing in the file is run."""
-        from twin.identify.modelfile import read_model
+        from twin.identification.modelfile import read_model
 
         p = Path(path)
         meta, est = read_model(p, MODEL_FORMAT, ESTIMATORS)

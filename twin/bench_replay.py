@@ -10,7 +10,7 @@ real ones; the two are compared. Steps of :func:`replay`:
    filter (``drive.trace_filter_hz``, :meth:`twin.drive.DriveReference._prepare_trace`);
 3. simulate with the recording's bench configuration, or an overridden one (e.g. ideal joints
    on a clearance recording, as in Fig. 16), at the recording's sample rate
-   (:func:`twin.simulate.simulate`);
+   (:func:`twin.simulation.simulate`);
 4. virtual sensor chain on the simulated run (:func:`twin.instrument.apply_chain`), its zero-g
    offsets set to the recording's calibration so that raw volts are comparable, calibrated
    with a simulated static recording exactly as the bench calibrates (Eq. 1–4);
@@ -262,7 +262,7 @@ def _replay_into(out: Path, recording: str | Path, rec: Run, info: Any, repairs:
     """Steps 2-6 of :func:`replay`, writing into the folder ``out`` (renamed into place by the
     caller); the configuration ``cfg`` names the trace at its final place."""
     from twin.mcapfile import write_run
-    from twin.simulate import simulate_run
+    from twin.simulation import simulate_run
     from twin.util import atomic_write_json, atomic_write_text
 
     # 1-2. encoder counts -> angle trace for the drive
@@ -388,7 +388,7 @@ def _motor_drive(out: Path, rec: Run, cfg: BenchConfig, phi: np.ndarray, window:
                  pid_comparison: dict[str, Any], pid_tracking: dict[str, Any]) -> dict[str, Any]:
     """The motor-driven replay (:class:`ReplayOptions` ``drive = "motor"``): simulate, put through the
     same sensor chain and calibration, compare over the same window with the PID replay's time lag."""
-    from twin.simulate import simulate_run
+    from twin.simulation import simulate_run
 
     trace = out / "motor_command_trace.npz"
     np.savez(trace, t=np.arange(rec.n) / rec.rate_hz, volts=np.asarray(rec["motor_command"], dtype=np.float64))

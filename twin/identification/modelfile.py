@@ -1,8 +1,8 @@
 """The identification model's file: a NumPy ``.npz`` archive of plain arrays and one JSON text (the
-format is described in :mod:`twin.identify.model`), written deterministically (fixed member order
+format is described in :mod:`twin.identification.model`), written deterministically (fixed member order
 and timestamps) and read without running anything from the file: no pickle, ``allow_pickle=False``,
 every member's CRC checked before use, sizes bounded, the trees checked by
-:class:`twin.identify.trees.TreeEnsemble`. Every refusal is one line naming the file."""
+:class:`twin.identification.trees.TreeEnsemble`. Every refusal is one line naming the file."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from twin.identify.trees import ARRAYS, ModelError, TreeEnsemble
+from twin.identification.trees import ARRAYS, ModelError, TreeEnsemble
 
 MAX_MODEL_BYTES = 256 << 20  # a model file's size, and its members' unpacked sizes together, at most [B]
 ZIP_MAGIC = b"PK\x03\x04"

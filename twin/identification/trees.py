@@ -1,6 +1,6 @@
 """Gradient-boosted trees as plain arrays: exported from scikit-learn, evaluated with numpy.
 
-The identification model's estimators (:mod:`twin.identify.model`) are scikit-learn's
+The identification model's estimators (:mod:`twin.identification.model`) are scikit-learn's
 ``HistGradientBoostingClassifier`` / ``HistGradientBoostingRegressor`` while training; the model file
 holds them as a :class:`TreeEnsemble`: the fitted trees' node arrays and the baseline, evaluated by
 :meth:`TreeEnsemble.predict_raw` (a vectorized walk of all trees at once), so that answering needs
