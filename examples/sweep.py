@@ -5,7 +5,7 @@ bearing catalogue's values) swept from a ball bearing (0) to 0.5 mm, and plots t
 over the last half of each run against the clearance (a PNG). Every run is an in-memory
 ``twin.run.Run`` from ``twin.simulate``.
 
-    python examples/sweep.py --out sweep.png            # 6 clearances, 1 s each (about a minute)
+    python examples/sweep.py --out sweep.png            # 6 clearances, 1 s each (about 10 s)
     python examples/sweep.py --small --out sweep.png    # 2 clearances, 0.05 s each (a test)
 """
 
