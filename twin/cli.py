@@ -227,6 +227,9 @@ def config_from_args(args: argparse.Namespace) -> BenchConfig:
 
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="twin", description="Digital twin of the slider-crank clearance test bench.")
+    from twin import __version__
+
+    parser.add_argument("--version", action="version", version=f"twin {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
     for mod in COMMANDS:

@@ -46,6 +46,10 @@ class EngineUnavailableError(TwinError):
     """An engine or native extension is not available in this installation."""
 
 
+class MissingExtraError(TwinError, ImportError):
+    """An optional dependency is not installed; the message names the pip command that adds it."""
+
+
 class Terminated(KeyboardInterrupt):
     """SIGTERM, raised in the main thread like Ctrl-C so that every writer's clean-up runs
     (temporary files removed, nothing half-written left under the final name)."""

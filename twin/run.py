@@ -15,7 +15,7 @@ import numpy as np
 
 from twin.channels import spec_by_name
 from twin.config import BenchConfig
-from twin.errors import RecordingError
+from twin.errors import MissingExtraError, RecordingError
 
 
 @dataclass
@@ -117,6 +117,18 @@ class Run:
         for c in self.channels.values():
             out.setdefault(c.group, []).append(c.name)
         return out
+
+    def to_pandas(self):
+        """The run as a pandas DataFrame: a column per channel (its dtype kept), indexed by the
+        sample times ``t`` [s]; ``df.attrs["units"]`` holds each channel's unit. Needs pandas,
+        which the twin does not depend on (``pip install pandas``)."""
+        try:
+            import pandas as pd
+        except ImportError:
+            raise MissingExtraError("Run.to_pandas needs pandas, which is not installed: pip install pandas") from None
+        df = pd.DataFrame({k: c.data for k, c in self.channels.items()}, index=pd.Index(self.time, name="t"))
+        df.attrs["units"] = {k: c.unit for k, c in self.channels.items()}
+        return df
 
     # -- transforms
     def slice(self, start: int, stop: int) -> "Run":

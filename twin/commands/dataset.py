@@ -30,7 +30,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="'processes': --workers worker processes; 'threads': --workers threads of this process "
                         "(default: threads up to 2 workers, processes beyond; the same files either way); Dask "
                         "distributed: 'local' starts a LocalCluster of --workers processes, tcp://HOST:8786 uses "
-                        "a running cluster (workers must see --out)")
+                        "a running cluster (workers must see --out); Dask comes with the cluster extra: "
+                        "pip install 'twin[cluster]'")
     g.add_argument("--limit", type=int, metavar="K", help="simulate at most K of the missing runs this time")
     g.add_argument("--no-progress", action="store_true", help="no progress bar")
     g.set_defaults(func=_generate)

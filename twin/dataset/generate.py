@@ -39,7 +39,7 @@ from twin import __version__
 from twin.dataset.design import RunPlan, base_config, plan
 from twin.dataset.spec import SPLITS, DatasetSpec
 from twin.dataset.worker import column_specs
-from twin.errors import TwinError
+from twin.errors import MissingExtraError, TwinError
 from twin.util import atomic_write_json, atomic_write_bytes, check_output_dir, remove_stale_temps
 
 FORMAT = "twin-dataset/2"
@@ -314,11 +314,20 @@ def _threads(workers: int, fn: Callable[..., dict] | None = None) -> Callable[[l
     return run
 
 
-def _dask_client(address: str):
+#: what --scheduler says where Dask is not installed (the local executors never import it)
+NO_DASK = "--scheduler {}: Dask is not installed; a Dask scheduler needs the cluster extra: pip install 'twin[cluster]'"
+
+
+def _require_dask(address: str) -> None:
     try:
-        from distributed import Client
-    except ImportError:  # pragma: no cover - a dependency of the package
-        raise TwinError("--scheduler: Dask distributed is not installed (pip install distributed)") from None
+        import distributed  # noqa: F401 - an optional dependency (the cluster extra)
+    except ImportError:
+        raise MissingExtraError(NO_DASK.format(address)) from None
+
+
+def _dask_client(address: str):
+    from distributed import Client
+
     try:
         return Client(address, timeout="20s")
     except (OSError, TimeoutError) as err:
@@ -326,6 +335,7 @@ def _dask_client(address: str):
 
 
 def _dask(address: str, workers: int) -> Callable[[list[dict]], Iterator[dict]]:
+    _require_dask(address)  # before anything is written
     if address != "local":
         _dask_client(address).close()  # reachable now, before anything is written
 

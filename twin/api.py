@@ -1,0 +1,147 @@
+"""The Python API of the twin: the calls ``import twin`` offers (``twin.preset``, ``twin.simulate``,
+``twin.replay``, ``twin.identify``), each a thin front of the module that does the work.
+
+Every example below runs in the test suite (doctest), so it stays true:
+
+>>> import twin
+>>> cfg = twin.preset(6)                      # Table 4 test 6: 0.1 mm at C, 750 rpm
+>>> run = twin.simulate(cfg, duration=0.05)   # a twin.run.Run, in memory
+>>> run.n, run.rate_hz                      # 0.05 s at 100 kHz
+(5000, 100000.0)
+>>> float(run.time[-1])                       # sample times [s]
+0.04999
+>>> run["crank_angle"].dtype                  # channels are numpy arrays
+dtype('float64')
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Mapping
+
+from twin.config import BenchConfig
+from twin.errors import ConfigError
+from twin.run import Run
+
+
+def preset(which: int | str = 6) -> BenchConfig:
+    """The configuration of a bench test or of a paper's mechanism.
+
+    ``which``: a Table 4 test id of the bench paper, 1..12 (clearances at joints B and C, constant
+    motor speed), or the name of another mechanism of the seed papers: ``"s000"``, ``"s001"``,
+    ``"s004"`` (also ``"test6"`` for 6). Returns a :class:`twin.config.BenchConfig` (frozen; change
+    fields with ``cfg.replace(**{"dotted.name": value})``).
+
+    >>> import twin
+    >>> cfg = twin.preset(6)
+    >>> cfg.name, cfg.joints.clearance_c_mm, cfg.drive.motor_rpm
+    ('test6', 0.1, 750.0)
+    >>> twin.preset("s001").name
+    's001'
+    >>> twin.preset(13)
+    Traceback (most recent call last):
+    ...
+    twin.errors.ConfigError: --test: must be a Table 4 test id 1..12, got 13
+    """
+    from twin.config import named_preset
+    from twin.config import preset as table4
+
+    if isinstance(which, str):
+        name = which.strip().lower()
+        if name.startswith("test") and name[4:].isdigit():
+            return table4(int(name[4:]))
+        if name.isdigit():
+            return table4(int(name))
+        return named_preset(name, "preset")
+    return table4(which)
+
+
+def simulate(cfg: BenchConfig | int | str | None = None, duration: float | None = None, *,
+             engine: str | None = None, overrides: Mapping[str, Any] | None = None,
+             out: str | Path | None = None, progress: bool = False) -> Run:
+    """Simulate a configuration and return the whole run in memory.
+
+    ``cfg``: a :class:`~twin.config.BenchConfig`, or what :func:`preset` takes (default: test 6);
+    ``duration``: simulated time [s] (default: the configuration's ``simulation.duration_s``);
+    ``engine``: ``"mujoco"`` (the twin) or ``"reference"`` (the R-matrix engine); ``overrides``:
+    other fields by dotted name, as in a TOML file (``{"drive.motor_rpm": 500.0}``); ``out``: also
+    write the run file (MCAP) there; ``progress``: a progress bar on stderr.
+
+    Returns a :class:`twin.run.Run`: ``run.time`` [s], ``run["AC6"]`` (a numpy array per channel,
+    SI units in ``run.channels[name].unit``), ``run.config``, ``run.meta`` and ``run.to_pandas()``.
+    A run keeps every sample in memory (about 0.9 MB per simulated second per channel at 100 kHz);
+    stream long runs to files with :func:`twin.simulation.simulate` and its sinks instead.
+
+    >>> import twin
+    >>> run = twin.simulate(twin.preset(6), duration=0.05, overrides={"sensors.channels": ["crank"]})
+    >>> list(run.channels)
+    ['crank_angle', 'crank_speed']
+    >>> run.channels["crank_speed"].unit
+    'rad/s'
+    """
+    from twin.simulation import ThreadedSink, simulate_run
+
+    if cfg is None or isinstance(cfg, (int, str)):
+        cfg = preset(6 if cfg is None else cfg)
+    if not isinstance(cfg, BenchConfig):
+        raise ConfigError("cfg", f"must be a BenchConfig, a Table 4 test id or a preset name, got {type(cfg).__name__}")
+    changes = dict(overrides or {})
+    if duration is not None:
+        changes["simulation.duration_s"] = duration
+    if engine is not None:
+        changes["simulation.engine"] = engine
+    if changes:
+        cfg = cfg.replace(**changes)
+    sinks = []
+    if out is not None:
+        from twin.mcapfile import RunWriter
+        from twin.util import check_output_file
+
+        sinks.append(ThreadedSink(RunWriter(check_output_file(out, "out", ".mcap"), cfg)))
+    return simulate_run(cfg, progress=progress, sinks=sinks)
+
+
+def replay(recording: str | Path, out_dir: str | Path, *, overrides: Mapping[str, Any] | None = None,
+           window_s: tuple[float, float] | None = None, plots: bool = True, progress: bool = False) -> dict[str, Any]:
+    """Replay a bench recording through the twin, as ``twin replay`` does.
+
+    The recorded encoder angle drives the simulation; the simulated accelerations go through the
+    bench's sensor chain and calibration and are compared with the recorded ones over the analysis
+    window ``window_s`` = (start, stop) [s] from the recording's first sample (default: the second
+    half, at most 1 s). ``overrides``: fields of the recording's configuration to change by dotted
+    name (``{"joints.clearance_c_mm": 0.0}`` replays with an ideal joint C).
+
+    Writes ``out_dir`` (``replay.mcap``, ``report.json``, ``report.md``, PNG plots unless
+    ``plots=False``) and returns the report as a dict: ``"sensors"`` (per accelerometer: RMS
+    error, NRMSE, correlation, DTW distance, harmonics, band energies), ``"time_lag_s"``,
+    ``"tracking"`` (crank tracking error), ``"window_s"`` (the analysis window), ...
+    (``recordings/FORMAT.md`` describes the files).
+    """
+    from twin.bench_replay import ReplayOptions
+    from twin.bench_replay import replay as bench_replay
+
+    changes = dict(overrides or {})
+    configure = (lambda c: c.replace(**changes)) if changes else None
+    return bench_replay(recording, out_dir, configure,
+                        ReplayOptions(window_s=window_s, plots=plots, progress=progress))
+
+
+def identify(recording: str | Path, model: str | Path | None = None) -> dict[str, Any]:
+    """Locate and size the clearance faults of a bench recording, as ``twin identify clearance``.
+
+    ``model``: a model file made by ``twin identify train`` (default: the model shipped with the
+    twin). Returns a dict: ``"fault"`` (``"none"``, ``"B"``, ``"C"`` or ``"BC"``),
+    ``"probabilities"`` per class, ``"clearance_b_mm"`` and ``"clearance_c_mm"`` (0 for a ball
+    bearing) with their 90 % ``"clearance_b_interval_mm"`` / ``"clearance_c_interval_mm"``,
+    ``"warnings"`` (e.g. a size the bench's sensors do not resolve at that speed), ``"evidence"``
+    (windows, revolutions, crank rate, model) and ``"seconds"``.
+
+    The shipped model is a joblib file: load only model files you trust.
+    """
+    from twin.commands.identify import default_model_path
+    from twin.identification.model import ClearanceModel, ModelError, identify_recording
+
+    path = Path(model) if model is not None else default_model_path()
+    if model is None and not path.is_file():
+        raise ModelError(f"no default model in this installation ({path}); give model=PATH")
+    return identify_recording(ClearanceModel.load(path), recording)
