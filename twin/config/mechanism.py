@@ -263,7 +263,7 @@ class Contact:
 
     Attributes:
         law: normal force law of both engines ("lankarani-nikravesh", "hunt-crossley",
-            "flores", "linear" or "adams-impact"). "adams-impact" is ADAMS' IMPACT function as
+            "flores", "linear", "adams-impact" or "johnson-cylindrical"). "adams-impact" is ADAMS' IMPACT function as
             S001 (§II, Eq. 3 and 9) and S004 use it: F = K δⁿ + STEP(δ, 0, 0, d_max, c_max) δ̇
             (STEP the cubic h0 + (h1 − h0) Δ²(3 − 2Δ)), K and n as for the other laws,
             ``impact_c_max_nspm`` and ``impact_d_max_m``; ``restitution`` is not used by it.
