@@ -80,3 +80,34 @@ def test_cylindrical_law_run_agrees_between_engines():
     (pr, fr), (pm, fm) = out["reference"], out["mujoco"]
     assert pm == pytest.approx(pr, rel=0.02) and fm == pytest.approx(fr, rel=0.02)
     assert pr < DR   # the length-dependent law keeps the journal inside its clearance here
+
+
+def test_native_module_applies_the_cylindrical_law():
+    """The solver's force on the probe's bore contact (``_bore.c``, law 4) is F_J(δ)(1 + χ δ̇/v_imp)
+    plus the native module's θ-damping term (c = χ F_J / v_imp, the same rule as the hysteresis
+    laws, tests/test_mujoco_physics.py), F_J from Johnson's relation, below and near the turning
+    point and in the clamped branch (δ̇/v_imp < −1)."""
+    import mujoco
+
+    from twin.studies.contact_check import probe_model
+
+    e = 0.9
+    cfg = named_preset("s004").replace(**{"contact.law": "johnson-cylindrical", "contact.restitution": e})
+    model = probe_model(cfg, "B", 50.0)
+    chi = 0.75 * (1 - e * e)
+    h = model.opt.timestep
+    for delta in (1e-6, 5e-5, 2.5e-4):
+        for rate, v_imp in ((0.05, 0.1), (-0.05, 0.1), (-0.3, 0.1)):
+            d = mujoco.MjData(model)
+            d.qpos[0], d.qvel[0] = DR + delta, rate
+            d.userdata[0] = v_imp
+            mujoco.mj_forward(model, d)
+            fe = johnson_elastic_force(delta, K_S004, DR)
+            F = fe * (1 + chi * max(rate / v_imp, -1.0))
+            cd = 0.0 if rate < -v_imp else chi * fe / v_imp
+            a_diag = d.efc_diagA[0]
+            theta = 1 - 1 / (a_diag * cd * h) if cd * h * a_diag > 2 else 0.5
+            gamma = theta * cd * h
+            r0 = a_diag * (1 - 1e-4) / 1e-4
+            r = 1 / gamma if gamma * r0 > 1 else r0
+            assert d.efc_force[0] == pytest.approx(F + float(d.qacc[0]) / r, rel=1e-9)
