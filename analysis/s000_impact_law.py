@@ -9,7 +9,8 @@ the preset, and compares the responses over t ≥ 0.024 s (as ``twin study doe``
 (``comparison.json``). S000 does not print its IMPACT damping: c_max and d_max are PLACEHOLDERs,
 run at three values of c_max (ADAMS' default 10 N s/mm = 1e4 N s/m, ten times more and ten times less) with
 d_max = 1e-4 m (ADAMS' default penetration 0.1 mm). Writes ``analysis/results/s000/impact_law.json``
-and ``impact_law.md``.
+and ``impact_law.md``; also the MuJoCo twin at three points (the engines' agreement with this law),
+Table 4 read as diametral clearances, and the crank inertia 1e-5 kg m^2 at two points. About a minute.
 
     python analysis/s000_impact_law.py [--points all|large]   # "large": c >= 0.2 mm only
 """
@@ -80,7 +81,18 @@ def main() -> int:
                         "crank_inertia_1e-4": responses(named_preset("s000").replace(**base)),
                         "crank_inertia_1e-5": responses(named_preset("s000").replace(
                             **base, **{"bodies.crank.inertia_kgm2": 1e-5}))})
-    out = {"settle_s": SETTLE_S, "dampings": [list(d) for d in DAMPINGS], "rows": rows, "crank_inertia": inertia}
+    # the MuJoCo twin at three points with ADAMS' default damping: the engines' agreement with this law
+    engines = []
+    for i in (0, 3, 7):
+        c, K = paper[i][0], paper[i][1]
+        row = {"point": i + 1, "clearance_mm": c, "K": K}
+        for eng in ("reference", "mujoco"):
+            row[eng] = responses(named_preset("s000").replace(**{
+                "joints.clearance_c_mm": 2.0 * c, "contact.stiffness": K, "contact.law": "adams-impact",
+                "contact.impact_c_max_nspm": 1e4, "contact.impact_d_max_m": 1e-4, "simulation.engine": eng}))
+        engines.append(row)
+    out = {"settle_s": SETTLE_S, "dampings": [list(d) for d in DAMPINGS], "rows": rows, "crank_inertia": inertia,
+           "engines_impact_1e4": engines}
     (RES / "impact_law.json").write_text(json.dumps(out, indent=1))
     (RES / "impact_law.md").write_text(markdown(out))
     print(f"wrote {RES / 'impact_law.md'}")
@@ -130,6 +142,12 @@ def markdown(out: dict) -> str:
             v = r[key]
             L.append(f"| {r['point']} | {r['clearance_mm']:g} | {key.split('_')[-1]} | {v['max_slider_accel']:.6g} | "
                      f"{v['max_contact_force']:.6g} | {v['max_power']:.6g} |")
+    L += ["", "Both engines with IMPACT, c_max 1e4 N s/m (reference / MuJoCo):", "",
+          "| # | c [mm] | accel | force |", "|---|---|---|---|"]
+    for r in out["engines_impact_1e4"]:
+        a, m = r["reference"], r["mujoco"]
+        L.append(f"| {r['point']} | {r['clearance_mm']:g} | {a['max_slider_accel']:.4g} / {m['max_slider_accel']:.4g} | "
+                 f"{a['max_contact_force']:.4g} / {m['max_contact_force']:.4g} |")
     L += ["", "Ratio ours / paper, median (min–max) over the points with c >= 0.2 mm:", ""]
     L.append(f"* Lankarani–Nikravesh e 0.9, diametral reading: acceleration {np.median(dia['a']):.2f} "
              f"({min(dia['a']):.2f}–{max(dia['a']):.2f}), force {np.median(dia['f']):.2f} "
