@@ -10,7 +10,7 @@ the preset, and compares the responses over t ≥ 0.024 s (as ``twin study doe``
 run at three values of c_max (ADAMS' default 10 N s/mm = 1e4 N s/m, ten times more and ten times less) with
 d_max = 1e-4 m (ADAMS' default penetration 0.1 mm). Writes ``analysis/results/s000/impact_law.json``
 and ``impact_law.md``; also the MuJoCo twin at three points (the engines' agreement with this law),
-Table 4 read as diametral clearances, and the crank inertia 1e-5 kg m^2 at two points. About a minute.
+Table 4 read as diametral clearances, and the crank inertia 1e-5 kg m^2 at two points. About 15 s on 2 cores.
 
     python analysis/s000_impact_law.py [--points all|large]   # "large": c >= 0.2 mm only
 """
