@@ -7,6 +7,10 @@ constants of a joint's contact law from here, so the two engines apply the same 
 * hysteresis laws (Lankarani–Nikravesh, Hunt–Crossley, Flores) and ADAMS IMPACT: K of S003
   Eq. 18 (:func:`twin.config.joint_stiffness`: the joint's ``contact.stiffness_of(j)`` if set)
   times ``contact.stiffness_scale`` (:func:`law_stiffness`);
+* Johnson's cylindrical law (``johnson-cylindrical``): k = π L E* [N/m] (L the bushing length,
+  1/E* = h_i + h_j of Eq. 18, or ``contact.stiffness_of(j)`` if set) times
+  ``contact.stiffness_scale``, and the joint's radial clearance ΔR (:func:`cylindrical_stiffness`,
+  :func:`johnson_elastic_force`);
 * linear law f = k δ + c δ̇: k = ``contact.stiffness_of(j)`` if set, else the linear contact with
   the Lankarani–Nikravesh law's contact duration for an impact at :data:`LINEAR_MATCH_SPEED`
   (:func:`twin.impact.linear_equivalent`), times ``contact.stiffness_scale``; c gives it the
@@ -41,7 +45,7 @@ class JointContact:
 
     Attributes:
         radial_clearance_m: c [m].
-        stiffness: K of the law [N/m^n] (linear law: [N/m]).
+        stiffness: K of the law [N/m^n] (linear law: [N/m]; Johnson cylindrical: k = π L E* [N/m]).
         exponent: n [-].
         damping_ns_per_m: damping of the linear law, c_max of the ADAMS IMPACT law [N s/m] (None for the
             hysteresis laws).
@@ -75,10 +79,63 @@ def joint_contact(cfg: BenchConfig, joint: str, m_eff: float) -> JointContact:
         k *= con.stiffness_scale
         c = 2.0 * linear_damping_ratio(con.restitution) * math.sqrt(k * m_eff)
         return JointContact(radial, float(k), 1.0, float(c), m_eff)
+    if con.law == "johnson-cylindrical":  # k = π L E*; ΔR the joint's radial clearance
+        return JointContact(radial, cylindrical_stiffness(cfg, joint), 1.0, None, m_eff)
     K = law_stiffness(cfg, joint)
     if con.law == "adams-impact":  # K δⁿ + STEP(δ; d_max) c_max δ̇
         return JointContact(radial, float(K), con.exponent, con.impact_c_max_nspm, m_eff)
     return JointContact(radial, float(K), con.exponent, None, m_eff)
+
+
+def cylindrical_stiffness(cfg: BenchConfig, joint: str) -> float:
+    """k = π L E* of ``joint``'s Johnson cylindrical law [N/m] (L the bushing length [m],
+    1/E* = (1 − ν_i²)/E_i + (1 − ν_j²)/E_j [1/Pa]), or the joint's ``contact.stiffness_of`` if
+    set, times ``contact.stiffness_scale``."""
+    k = cfg.contact.stiffness_of(joint)
+    if not k > 0:
+        m = cfg.materials
+        h = m.pin_of(joint).compliance_h + m.bushing_of(joint).compliance_h
+        k = math.pi * cfg.joints.bushing_length(joint) / h
+    return float(k * cfg.contact.stiffness_scale)
+
+
+def johnson_elastic_force(delta: float, k: float, dr: float) -> float:
+    """Elastic force of a cylinder of length L in a cylindrical bore [N] (Johnson, *Contact
+    Mechanics*, 1985, §5.6; the "Johnson" model of Pereira, Ramalho & Ambrósio, Nonlinear Dyn. 63
+    (2011) 681–697): the F that solves
+
+        δ = (F / k) [ln(4 ΔR k / F) − 1],   k = π L E* [N/m],  ΔR the radial clearance [m],
+
+    δ the penetration [m]. With z = −e δ / (4 ΔR) the solution is F = −k δ / W₋₁(z), W₋₁ the
+    lower branch of Lambert's W (w ≤ −1), found by Halley's iteration. The relation holds up to
+    its turning point δ* = 4 ΔR / e² (≈ 0.54 ΔR, F* = k δ*), where dF/dδ is unbounded; beyond
+    it the force continues as k δ (outside the model's range: say so where it is reached).
+    Plain Python on floats, compiled as it is by the reference engine (numba)."""
+    if delta <= 0.0:
+        return 0.0
+    z = -math.e * delta / (4.0 * dr)
+    if z <= -1.0 / math.e:
+        return k * delta
+    p2 = 2.0 * (1.0 + math.e * z)
+    if p2 < 0.25:  # near the branch point: w = -1 - p - p²/3 - ...
+        p = math.sqrt(p2)
+        w = -1.0 - p - p2 / 3.0
+    else:          # asymptotic: w = L - ln(-L), L = ln(-z)
+        L1 = math.log(-z)
+        w = L1 - math.log(-L1)
+    for _ in range(30):
+        ew = math.exp(w)
+        f = w * ew - z
+        wp1 = w + 1.0
+        if wp1 == 0.0:
+            break
+        dw = f / (ew * wp1 - (w + 2.0) * f / (2.0 * wp1))
+        w -= dw
+        if w > -1.0:
+            w = -1.0
+        if abs(dw) <= 1e-15 * abs(w):
+            break
+    return -k * delta / w
 
 
 _LINEAR_LAWS: dict[str, dict[str, tuple[float, float]]] = {}

@@ -155,13 +155,14 @@ BORE_MAGIC = 7301.0
 #:   S001 Table II) with μ_d = ``mu0``, stiction transition velocity v_s = ``v0``, friction
 #:   transition velocity v_d = ``v1`` and ``mus`` = μ_s [-];
 #: * ``dmax``: the ADAMS IMPACT law's (``law`` 3) penetration of full damping [m]; its K, n and
-#:   c_max are ``stiffness``, ``exponent`` and ``damping``.
+#:   c_max are ``stiffness``, ``exponent`` and ``damping``; Johnson's cylindrical law (``law`` 4):
+#:   the radial clearance ΔR [m], with k = π L E* in ``stiffness`` and χ in ``damping``.
 BORE_USERDATA_FIELDS: tuple[str, ...] = ("marker", "mu0", "v0", "v1", "law", "stiffness", "exponent", "damping",
                                          "speed_floor", "slot", "friction", "mus", "dmax")
 #: codes of the ``friction`` field
 BORE_FRICTION_LAWS: dict[str, int] = {"regularized-coulomb": 0, "adams": 1}
 #: codes of the ``law`` field
-BORE_LAWS: dict[str, int] = {"soft": 0, "hysteresis": 1, "linear": 2, "impact": 3}
+BORE_LAWS: dict[str, int] = {"soft": 0, "hysteresis": 1, "linear": 2, "impact": 3, "cylinder": 4}
 #: values of the optional fields when not given (MuJoCo's soft contact, no slot)
 _BORE_USERDATA_OPTIONAL = {"marker": BORE_MAGIC, "law": 0.0, "stiffness": 0.0, "exponent": 0.0, "damping": 0.0,
                            "speed_floor": 0.0, "slot": -1.0, "friction": 0.0, "mus": 0.0, "dmax": 0.0}

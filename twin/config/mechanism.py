@@ -263,10 +263,16 @@ class Contact:
 
     Attributes:
         law: normal force law of both engines ("lankarani-nikravesh", "hunt-crossley",
-            "flores", "linear" or "adams-impact"). "adams-impact" is ADAMS' IMPACT function as
+            "flores", "linear", "adams-impact" or "johnson-cylindrical"). "adams-impact" is ADAMS' IMPACT function as
             S001 (§II, Eq. 3 and 9) and S004 use it: F = K δⁿ + STEP(δ, 0, 0, d_max, c_max) δ̇
             (STEP the cubic h0 + (h1 − h0) Δ²(3 − 2Δ)), K and n as for the other laws,
             ``impact_c_max_nspm`` and ``impact_d_max_m``; ``restitution`` is not used by it.
+            "johnson-cylindrical" is the elastic force of a pin of length L in its bore (Johnson,
+            Contact Mechanics, 1985, §5.6): δ = (F/k)[ln(4 ΔR k/F) − 1], k = π L E*, ΔR the radial
+            clearance (:func:`twin.contact_params.johnson_elastic_force`), with the
+            Lankarani–Nikravesh damping F_e (1 + 3(1 − e²)/4 · δ̇/δ̇⁻) of ``restitution``; its
+            stiffness grows with the bushing length, where Eq. 18's K ignores it. ``exponent``
+            is not used by it; ``stiffness``, if set, is its k [N/m].
         restitution: coefficient of restitution e [-] (S003: 0.4, tuned against the bench).
         exponent: force exponent n [-] (S003: 1.5).
         stiffness: contact stiffness K [N/m^n]; 0 = computed from the pin/bushing geometry
@@ -334,7 +340,7 @@ class Contact:
     v_kinetic_mps: float = 0.01016
 
     LAWS: typing.ClassVar[tuple[str, ...]] = ("lankarani-nikravesh", "hunt-crossley", "flores", "linear",
-                                              "adams-impact")
+                                              "adams-impact", "johnson-cylindrical")
     FRICTION_LAWS: typing.ClassVar[tuple[str, ...]] = ("regularized-coulomb", "adams")
 
     def __post_init__(self) -> None:

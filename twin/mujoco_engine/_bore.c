@@ -32,7 +32,14 @@
  *   law 1, hysteresis (Lankarani-Nikravesh, Hunt-Crossley, Flores; S003 Eq. 17):
  *       F = K delta^n (1 + chi max(delta'/v_imp, -1)),  K = user[STIFFNESS], n = user[EXPONENT],
  *       chi = user[DAMPING];
- *   law 2, linear: F = K delta + c delta',  c = user[DAMPING].
+ *   law 2, linear: F = K delta + c delta',  c = user[DAMPING];
+ *   law 3, ADAMS IMPACT: F = K delta^n + STEP(delta, 0, 0, d_max, c_max) delta',  c_max =
+ *       user[DAMPING], d_max = user[DMAX];
+ *   law 4, Johnson's cylindrical law: as law 1 with K delta^n replaced by F_J(delta), the F
+ *       that solves delta = (F/K) [ln(4 dR K/F) - 1] (Johnson, Contact Mechanics, 1985, 5.6;
+ *       K = pi L E*, dR = user[DMAX] the radial clearance; twin/contact_params.py
+ *       johnson_elastic_force, the same algorithm: F = -K delta / W_-1(-e delta/(4 dR)), and
+ *       K delta beyond the relation's turning point delta = 4 dR/e^2).
  *
  * How the solver is made to apply it. For an active contact row MuJoCo's primal solvers
  * (Newton, CG) return the force f = D (aref - J qacc) = (aref - a)/R, a = J qacc the row's
@@ -136,7 +143,8 @@ enum bore_user {
   BORE_MU0,              /* regularized Coulomb friction: mu0 [-] (0 = off) */
   BORE_V0,               /* v0 [m/s]: mu = 0 below */
   BORE_V1,               /* v1 [m/s]: mu = mu0 above */
-  BORE_LAW,              /* contact law: 0 = MuJoCo's solref/solimp, 1 = hysteresis, 2 = linear, 3 = ADAMS IMPACT */
+  BORE_LAW,              /* contact law: 0 = MuJoCo's solref/solimp, 1 = hysteresis, 2 = linear, 3 = ADAMS IMPACT,
+                            4 = Johnson cylindrical */
   BORE_STIFFNESS,        /* K [N/m^n] (linear law: [N/m]) */
   BORE_EXPONENT,         /* n [-] (linear law: 1) */
   BORE_DAMPING,          /* hysteresis: chi [-]; linear: c [N s/m] */
@@ -144,7 +152,7 @@ enum bore_user {
   BORE_SLOT,             /* d->userdata index that keeps v_imp (-1 = none) */
   BORE_FRICTION,         /* friction law: 0 = regularized Coulomb (mu0, v0, v1), 1 = Adams/COSMOS */
   BORE_MUS,              /* Adams/COSMOS: static coefficient mu_s [-] (mu_d = mu0, v_s = v0, v_d = v1) */
-  BORE_DMAX,             /* ADAMS IMPACT law: penetration of full damping d_max [m] */
+  BORE_DMAX,             /* ADAMS IMPACT law: penetration of full damping d_max [m]; Johnson law: radial clearance [m] */
   BORE_NUSER             /* number of fields */
 };
 static const char* const bore_user_names[] = {
@@ -154,7 +162,37 @@ static const char* const bore_user_names[] = {
 _Static_assert(sizeof(bore_user_names) / sizeof(bore_user_names[0]) == BORE_NUSER,
                "bore_user_names must name every field of enum bore_user");
 
-enum bore_law { LAW_SOFT = 0, LAW_HYSTERESIS = 1, LAW_LINEAR = 2, LAW_IMPACT = 3 };
+enum bore_law { LAW_SOFT = 0, LAW_HYSTERESIS = 1, LAW_LINEAR = 2, LAW_IMPACT = 3, LAW_CYLINDER = 4 };
+
+/* Johnson's cylindrical elastic force [N] at penetration delta > 0 [m] for K = pi L E* [N/m] and
+ * radial clearance dr [m]: F = -K delta / W_-1(z), z = -e delta / (4 dr), by Halley's iteration
+ * (twin/contact_params.py johnson_elastic_force, same steps); K delta beyond z = -1/e */
+static mjtNum johnson_force(mjtNum delta, mjtNum K, mjtNum dr) {
+  const mjtNum E = 2.718281828459045;
+  if (!(delta > 0)) return 0;
+  const mjtNum z = -E * delta / (4 * dr);
+  if (z <= -1 / E) return K * delta;
+  const mjtNum p2 = 2 * (1 + E * z);
+  mjtNum w;
+  if (p2 < 0.25) {
+    const mjtNum p = sqrt(p2);
+    w = -1 - p - p2 / 3;
+  } else {
+    const mjtNum l1 = log(-z);
+    w = l1 - log(-l1);
+  }
+  for (int i = 0; i < 30; i++) {
+    const mjtNum ew = exp(w);
+    const mjtNum f = w * ew - z;
+    const mjtNum wp1 = w + 1;
+    if (wp1 == 0) break;
+    const mjtNum dw = f / (ew * wp1 - (w + 2) * f / (2 * wp1));
+    w -= dw;
+    if (w > -1) w = -1;
+    if (fabs(dw) <= 1e-15 * fabs(w)) break;
+  }
+  return -K * delta / w;
+}
 
 /* Adams' cubic STEP: h0 for x <= x0, h1 for x >= x1, h0 + (h1 - h0) D^2 (3 - 2 D) between */
 static mjtNum step3(mjtNum x, mjtNum x0, mjtNum h0, mjtNum x1, mjtNum h1) {
@@ -319,7 +357,7 @@ static int contact_bore(const mjModel* m, const mjContact* con) {
 static int law_row(const mjModel* m, const mjData* d, int gb, int row) {
   const int law = (int)m->geom_user[gb * m->nuser_geom + BORE_LAW];
   const int type = d->efc_type[row];
-  return (law == LAW_HYSTERESIS || law == LAW_LINEAR || law == LAW_IMPACT) &&
+  return (law == LAW_HYSTERESIS || law == LAW_LINEAR || law == LAW_IMPACT || law == LAW_CYLINDER) &&
          (type == mjCNSTR_CONTACT_FRICTIONLESS || type == mjCNSTR_CONTACT_ELLIPTIC);
 }
 
@@ -360,7 +398,7 @@ static void contact_law(const mjModel* m, mjData* d) {
     const mjtNum* user = m->geom_user + gb * nu;
     if (user[BORE_MARKER] != BORE_MAGIC) continue;
     const int law = (int)user[BORE_LAW];
-    if (law != LAW_HYSTERESIS && law != LAW_LINEAR && law != LAW_IMPACT) continue;
+    if (law != LAW_HYSTERESIS && law != LAW_LINEAR && law != LAW_IMPACT && law != LAW_CYLINDER) continue;
     const int slot = (int)user[BORE_SLOT];
     const int has_slot = slot >= 0 && slot < m->nuserdata;
     int icon = -1;
@@ -393,11 +431,11 @@ static void contact_law(const mjModel* m, mjData* d) {
     }
     const mjtNum K = user[BORE_STIFFNESS];
     mjtNum fe, c;                                 /* elastic force, damping coefficient */
-    if (law == LAW_HYSTERESIS) {
+    if (law == LAW_HYSTERESIS || law == LAW_CYLINDER) {
       const mjtNum n = user[BORE_EXPONENT];
       const mjtNum chi = user[BORE_DAMPING];
-      const mjtNum dn = n == 1.5 ? delta * sqrt(delta) : pow(delta, n);
-      fe = K * dn;
+      if (law == LAW_CYLINDER) fe = johnson_force(delta, K, user[BORE_DMAX]);
+      else fe = K * (n == 1.5 ? delta * sqrt(delta) : pow(delta, n));
       c = chi * fe / vimp;
       if (rate < -vimp) {                         /* clamp delta'/v_imp at -1: no rate term */
         fe *= 1 - chi;

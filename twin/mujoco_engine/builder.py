@@ -53,7 +53,8 @@ import numpy as np
 
 from twin import names as N
 from twin.config import JOINTS, BenchConfig
-from twin.contact_params import first_guess_contact, initial_linear_law, law_stiffness
+from twin.contact_params import (cylindrical_stiffness, first_guess_contact, initial_linear_law, johnson_elastic_force,
+                                 law_stiffness)
 from twin.errors import ModelError
 from twin.impact import DAMPING_FACTOR
 from twin.mujoco_engine.accel import posthoc_applies
@@ -112,7 +113,10 @@ class NativeLaw:
       ``damping`` = χ(e) of the law (:data:`twin.impact.DAMPING_FACTOR`);
     * linear law: F = k δ + c δ̇, ``damping`` = c [N s/m];
     * ADAMS IMPACT (``adams-impact``, S001/S004): F = K δⁿ + STEP(δ, 0, 0, d_max, c_max) δ̇,
-      ``damping`` = c_max [N s/m], ``d_max_m`` = d_max.
+      ``damping`` = c_max [N s/m], ``d_max_m`` = d_max;
+    * Johnson's cylindrical law (``johnson-cylindrical``): F = F_J(δ) (1 + χ max(δ̇/v_imp, −1)),
+      F_J :func:`twin.contact_params.johnson_elastic_force` with ``stiffness`` = k = π L E* [N/m]
+      and ``d_max_m`` = the radial clearance ΔR [m], χ the Lankarani–Nikravesh factor of e.
 
     The same numbers as the reference engine (:mod:`twin.reference.contact`), times the twin's
     perturbation factors ``mujoco.contact_stiffness_scale`` (K), ``contact_damping_scale``
@@ -124,7 +128,8 @@ class NativeLaw:
         exponent: n [-] (linear: 1).
         damping: χ [-] (linear: c [N s/m]).
         speed_floor_mps: floor of v_imp [m/s] (``contact.impact_speed_floor_mps``).
-        d_max_m: penetration of full damping of the ADAMS IMPACT law [m] (0 for the others).
+        d_max_m: penetration of full damping of the ADAMS IMPACT law, radial clearance ΔR of the Johnson
+            cylindrical law [m] (0 for the others).
     """
 
     law: str
@@ -137,7 +142,8 @@ class NativeLaw:
     @property
     def code(self) -> int:
         """The ``law`` field of the bore user data (:data:`twin.names.BORE_LAWS`)."""
-        return N.BORE_LAWS[{"linear": "linear", "adams-impact": "impact"}.get(self.law, "hysteresis")]
+        return N.BORE_LAWS[{"linear": "linear", "adams-impact": "impact",
+                            "johnson-cylindrical": "cylinder"}.get(self.law, "hysteresis")]
 
     def userdata(self, slot: int) -> dict[str, float]:
         """The bore user data fields of the law (``slot``: the ``mjData.userdata`` index of v_imp)."""
@@ -152,7 +158,13 @@ class NativeLaw:
         if self.law == "adams-impact":
             x = min(max(delta / self.d_max_m, 0.0), 1.0)
             return self.damping * x * x * (3.0 - 2.0 * x)
-        return self.damping * self.stiffness * max(delta, 0.0) ** self.exponent / v_imp
+        return self.damping * self.elastic_force(delta) / v_imp
+
+    def elastic_force(self, delta: float) -> float:
+        """The law's elastic part [N] (hysteresis and Johnson laws): K δⁿ, or F_J(δ)."""
+        if self.law == "johnson-cylindrical":
+            return johnson_elastic_force(delta, self.stiffness, self.d_max_m)
+        return self.stiffness * max(delta, 0.0) ** self.exponent
 
     def force(self, delta: float, rate: float, v_imp: float) -> float:
         """The law's force [N] (what the native module applies; ≥ 0)."""
@@ -163,7 +175,7 @@ class NativeLaw:
         elif self.law == "adams-impact":
             f = self.stiffness * delta ** self.exponent + self.damping_coefficient(delta) * rate
         else:
-            f = self.stiffness * delta ** self.exponent * (1.0 + self.damping * max(rate / v_imp, -1.0))
+            f = self.elastic_force(delta) * (1.0 + self.damping * max(rate / v_imp, -1.0))
         return max(f, 0.0)
 
     def to_json(self) -> dict:
@@ -171,6 +183,8 @@ class NativeLaw:
                "speed_floor_mps": self.speed_floor_mps}
         if self.law == "adams-impact":
             out["d_max_m"] = self.d_max_m
+        if self.law == "johnson-cylindrical":
+            out["radial_clearance_m"] = self.d_max_m
         return out
 
 
@@ -253,6 +267,11 @@ def native_law(cfg: BenchConfig, joint: str) -> NativeLaw:
         k, c = initial_linear_law(cfg)[joint]
         return NativeLaw(ct.law, k * ms.contact_stiffness_scale, 1.0, c * ms.contact_damping_scale,
                          ct.impact_speed_floor_mps)
+    if ct.law == "johnson-cylindrical":  # k = π L E*, ΔR in d_max_m, LN damping of e
+        chi = DAMPING_FACTOR["lankarani-nikravesh"](ct.restitution)
+        return NativeLaw(ct.law, cylindrical_stiffness(cfg, joint) * ms.contact_stiffness_scale, 1.0,
+                         chi * ms.impact_damping_gain * ms.contact_damping_scale, ct.impact_speed_floor_mps,
+                         cfg.joints.radial_m(joint))
     K = law_stiffness(cfg, joint)
     if ct.law == "adams-impact":
         return NativeLaw(ct.law, K * ms.contact_stiffness_scale, float(ct.exponent),

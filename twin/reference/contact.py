@@ -18,6 +18,9 @@ Laws (S003 Eq. 17 and the forms of :mod:`twin.impact`):
 * Flores et al.:        f = K δ^n [1 + 8(1 − e)/(5e) · δ̇/δ̇⁻]
 * linear:               f = K δ + c_lin δ̇
 * ADAMS IMPACT (S001, S004): f = K δ^n + STEP(δ, 0, 0, d_max, c_max) δ̇ (c_max in ``c_lin``)
+* Johnson's cylindrical law: f = F_J(δ) [1 + 3(1 − e²)/4 · δ̇/δ̇⁻], F_J the elastic force of a pin
+  in its bore of length L (:func:`twin.contact_params.johnson_elastic_force`; K = π L E*, the
+  radial clearance ΔR in ``c_lin``)
 
 In the hysteresis laws the ratio δ̇/δ̇⁻ is kept above −1 during separation (S003 §3: no
 artificial sticking). Every law returns max(f, 0): a contact pushes, never pulls.
@@ -40,6 +43,8 @@ import math
 
 from numba import njit
 
+from twin.contact_params import johnson_elastic_force as _johnson_elastic_force
+
 #: law name (``cfg.contact.law``) -> code used inside the compiled loop
 LAW_CODES: dict[str, int] = {
     "lankarani-nikravesh": 0,
@@ -47,7 +52,11 @@ LAW_CODES: dict[str, int] = {
     "flores": 2,
     "linear": 3,
     "adams-impact": 4,
+    "johnson-cylindrical": 5,
 }
+
+#: the Johnson cylindrical elastic force, compiled from its plain-Python definition
+johnson_elastic = njit(cache=True)(_johnson_elastic_force)
 
 
 @njit(cache=True)
@@ -109,11 +118,26 @@ def adams_impact(delta, delta_dot, K, n, c_max, d_max):
 
 
 @njit(cache=True)
+def johnson_cylindrical(delta, delta_dot, v_impact, K, n, e, c_lin):
+    """Johnson's cylindrical law with Lankarani–Nikravesh damping [N] (K = π L E* [N/m], c_lin =
+    ΔR [m]); 0 if δ ≤ 0."""
+    if delta <= 0.0:
+        return 0.0
+    ratio = delta_dot / v_impact
+    if ratio < -1.0:
+        ratio = -1.0
+    f = johnson_elastic(delta, K, c_lin) * (1.0 + 0.75 * (1.0 - e * e) * ratio)
+    return f if f > 0.0 else 0.0
+
+
+@njit(cache=True)
 def normal_force(code, delta, delta_dot, v_impact, K, n, e, c_lin, d_max=1e-5):
-    """Normal force of the law with ``code`` (:data:`LAW_CODES`) [N]; ``c_lin`` is the linear law's c
-    or the IMPACT law's c_max, ``d_max`` the IMPACT law's penetration of full damping."""
+    """Normal force of the law with ``code`` (:data:`LAW_CODES`) [N]; ``c_lin`` is the linear law's c,
+    the IMPACT law's c_max or the Johnson law's radial clearance ΔR [m], ``d_max`` the IMPACT law's penetration of full damping."""
     if code == 4:
         return adams_impact(delta, delta_dot, K, n, c_lin, d_max)
+    if code == 5:
+        return johnson_cylindrical(delta, delta_dot, v_impact, K, n, e, c_lin)
     if code == 0:
         return lankarani_nikravesh(delta, delta_dot, v_impact, K, n, e, c_lin)
     if code == 1:

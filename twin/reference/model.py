@@ -635,5 +635,7 @@ def contact_parameters(cfg: BenchConfig, P: np.ndarray, st: np.ndarray) -> dict[
         P[kidx] = jc.stiffness
         if jc.damping_ns_per_m is not None:  # linear law: c; ADAMS IMPACT: c_max in the linear law's slot
             P[cidx] = jc.damping_ns_per_m
+        elif cfg.contact.law == "johnson-cylindrical":  # its radial clearance ΔR in the same slot
+            P[cidx] = jc.radial_clearance_m
         out[jt] = jc
     return out
