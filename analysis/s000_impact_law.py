@@ -33,7 +33,7 @@ DAMPINGS = ((1e5, 1e-4), (1e4, 1e-4), (1e3, 1e-4))
 
 
 def responses(cfg) -> dict[str, float]:
-    from twin.simulate import simulate_run
+    from twin.simulation import simulate_run
 
     run = simulate_run(cfg)
     m = run.time >= SETTLE_S

@@ -31,7 +31,7 @@ sys.path.insert(0, str(ROOT))
 
 from twin.config import ln_stiffness, named_preset  # noqa: E402
 from twin.contact_params import cylindrical_stiffness  # noqa: E402
-from twin.simulate import simulate_run  # noqa: E402
+from twin.simulation import simulate_run  # noqa: E402
 from twin.studies.continuous_contact import phases  # noqa: E402
 
 W = 30.0

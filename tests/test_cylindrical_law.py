@@ -16,7 +16,7 @@ from scipy.special import lambertw
 
 from twin.config import named_preset
 from twin.contact_params import cylindrical_stiffness, johnson_elastic_force
-from twin.simulate import simulate_run
+from twin.simulation import simulate_run
 
 K_S004 = math.pi * 0.05 * 207e9 / (2 * (1 - 0.3 ** 2))   # π L E*, steel on steel, L = 50 mm [N/m]
 DR = 0.5e-3                                             # radial clearance [m]
