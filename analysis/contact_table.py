@@ -76,7 +76,7 @@ def main() -> None:
     with ProcessPoolExecutor(a.workers) as ex:
         rows = list(ex.map(measure, jobs))
     by = {(r["scene"], r["engine"], r["timestep_s"]): r for r in rows}
-    lines = ["# Issue 15 table: MuJoCo twin (default, h = 1e-5 s) against the reference engine", "",
+    lines = ["# Contact table: MuJoCo twin (default, h = 1e-5 s) against the reference engine", "",
              "C clearance, B ideal, y up, statistics over t in (1, 2] s. Differences relative to the reference "
              "(impacts: twin minus reference). Targets: force and AC6 5 %, penetration 5 % in continuous contact "
              "and 10 % at impacts, impacts 10 %.", ""]

@@ -43,7 +43,7 @@ class MujocoSettings:
         guide_friction: the slider guide's friction (``mechanism.guide_friction_n``): "native"
             (default): the reference engine's law, F ramp(|v|) against the slider's velocity
             with the ramp of ``contact.v0_mps``/``v1_mps``, a passive force of the native module
-            (issue 15: MuJoCo's frictionloss constraint holds the slider at its reversals where
+            (MuJoCo's frictionloss constraint holds the slider at its reversals where
             the reference's friction vanishes, and shifted the 0.5-5 kHz band energy of the
             250 rpm tests by 4-6 dB); "frictionloss": MuJoCo's dry-friction constraint
             (``frictionloss`` with ``guide_solreffriction``), the base model's.
@@ -58,7 +58,7 @@ class MujocoSettings:
         contact_source: "law" (default): the bore bushing's contact force is the reference's
             own law (``contact.law``: Lankarani–Nikravesh K δⁿ (1 + χ δ̇/v_imp) with its stored
             impact speed and floor, Hunt–Crossley, Flores or linear; same K, n, e), applied
-            exactly by the native module (``_bore.c``, issue 15); ring and tendon bushings,
+            exactly by the native module (``_bore.c``); ring and tendon bushings,
             which the module does not serve, take the first guess. "first-guess": MuJoCo's own
             soft contact, the linear spring-damper with the LN law's duration and restitution
             at 0.1 m/s (``twin.contact_params.first_guess_contact``). ``contact_solref``/``solimp`` override

@@ -62,7 +62,7 @@ def config_from_toml(text: str) -> BenchConfig:
     Files written by earlier versions are migrated: ``mujoco.impact_speed_floor_mps`` is now
     ``contact.impact_speed_floor_mps`` (one floor for both engines); ``mujoco.contact_source =
     "calibration"`` (the retired calibration table) reads as "law" and the retired
-    ``mujoco.contact_damping`` is dropped (the native law carries its own damping, issue 15).
+    ``mujoco.contact_damping`` is dropped (the native law carries its own damping).
     """
     try:
         data = tomllib.loads(text)

@@ -124,7 +124,7 @@ class Joints:
         clearance_c_mm: diametral clearance at C [mm], same rules.
         clearance_a_mm: diametral clearance at the ground–crank pivot A [mm], same rules. The
             S003 bench carries its crank shaft in ball bearings (0, the default); the general
-            mechanism of the seeds may have a clearance there too (issue 18). At A the pin is
+            mechanism of the seeds may have a clearance there too. At A the pin is
             the crank's journal and the bushing the frame's bore, so e_A = crank journal −
             frame bore centre.
         allow_noncatalogue: accept clearances outside the catalogue (0.02–1.00 mm values).

@@ -39,8 +39,8 @@ law (:class:`NativeLaw`, its constants from :mod:`twin.contact_params`);
 ``mujoco.contact_solref``/``contact_solimp`` (raw MuJoCo values) or ``contact_source =
 "first-guess"`` give MuJoCo's own soft contact instead (the documented linear first guess
 :func:`twin.contact_params.first_guess_contact`), which the ring and tendon bushings always use.
-The calibration table of issue 4 (a fitted two-pair solref/solimp law) is retired: the law is now
-exact by construction (issue 15).
+The former calibration table (a fitted two-pair solref/solimp law) is retired: the law is now
+exact by construction.
 """
 
 from __future__ import annotations

@@ -21,7 +21,7 @@ compared with the truth's window of the same test:
   a 2 s window at 100 kHz would cost minutes per pair) with a 5 ms Sakoe–Chiba band [%].
 
 Per variant each metric is averaged over the tests (and joints); the table also gives the worst
-test. The *score* is the largest ratio of a targeted metric's mean to its target (issue 4: impact
+test. The *score* is the largest ratio of a targeted metric's mean to its target (impact
 count and peak force 10 %, RMS 3 %, band energy 1.5 dB): score ≤ 1 meets every target on
 average. Cost is the engine's own stepping wall time per simulated second (``run.meta["wall_s"]``,
 model build excluded), measured in this process one run after another, so ratios between
@@ -62,7 +62,7 @@ DTW_RATE_HZ = 10_000.0
 DTW_WINDOW_S = 0.005
 #: Spectral band of ``band_db`` [Hz].
 BAND_HZ = (500.0, 5000.0)
-#: Targeted metrics and their targets (issue 4).
+#: Targeted metrics and their targets.
 TARGETS: dict[str, float] = {"impacts": 0.10, "peak_fn": 0.10, "rms_slider": 0.03, "rms_rod": 0.03,
                              "band_db": 1.5}
 #: Every metric, in table order, with its unit ("" = relative, shown in %).
@@ -138,7 +138,7 @@ class StudySettings:
         tests: Table 4 test ids (each must have a clearance).
         ramp_s: spin-up of the constant program [s] (``drive.ramp_s``).
         settle_s: time after the ramp before the window starts [s].
-        window_s: analysed window [s] (issue 4: 2 s).
+        window_s: analysed window [s] (2 s).
     """
 
     tests: tuple[int, ...] = CLEARANCE_TESTS

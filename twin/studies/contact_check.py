@@ -1,8 +1,8 @@
-"""Check of the twin's pin/bushing contact against the reference law's closed forms (issue 15).
+"""Check of the twin's pin/bushing contact against the reference law's closed forms.
 
-Since issue 15 the MuJoCo twin's contact force at a clearance joint *is* the reference's law
+The MuJoCo twin's contact force at a clearance joint *is* the reference's law
 (:class:`twin.mujoco_engine.builder.NativeLaw`, applied by ``_bore.c``): nothing is fitted any
-more. The calibration table of issue 4 (a two-pair solref/solimp law fitted to LN single impacts)
+more. The former calibration table (a two-pair solref/solimp law fitted to LN single impacts)
 and its fit are retired. What remains here checks the law as MuJoCo actually integrates it, in a
 probe with the real bore collider and native module, against closed forms:
 
@@ -12,7 +12,7 @@ probe with the real bore collider and native module, against closed forms:
    (:data:`SPEEDS`; bench impacts measured on reference runs span 0.4–201 mm/s,
    ``analysis/impact_speeds.py``): restitution −δ̇(separation)/v, peak force and contact
    duration against the reference's single-impact solution (ODE at tight tolerance,
-   :mod:`twin.impact`). Tolerances (issue 15): restitution ±0.02, peak force 5 %, duration 10 %.
+   :mod:`twin.impact`). Tolerances: restitution ±0.02, peak force 5 %, duration 10 %.
 3. Preloaded impacts: the same with a constant load pressing the pin into the wall; the
    reference captures slow impacts (the mass never leaves the wall) and the twin must capture
    the same ones.
@@ -40,11 +40,11 @@ from twin.impact import ImpactResult, impact_hysteresis, impact_linear
 from twin.mujoco_engine.collider import ensure_installed
 from twin.names import BORE_USERDATA_FIELDS, bore_userdata, replace_bore_userdata
 
-#: impact speeds of the check [m/s] (issue 15: 1 mm/s to 0.5 m/s). Measured on reference runs
+#: impact speeds of the check [m/s] (1 mm/s to 0.5 m/s). Measured on reference runs
 #: (``analysis/impact_speeds.py``, analysis/results/impact_speeds): bench impacts span
 #: 0.4-201 mm/s, 97.7 % (C) and 100 % (B) of them inside this range
 SPEEDS = tuple(np.geomspace(1e-3, 0.5, 10))
-#: tolerances of issue 15: restitution (absolute), peak force and duration (relative), static
+#: tolerances: restitution (absolute), peak force and duration (relative), static
 #: penetration (relative)
 TOL_E, TOL_F, TOL_T, TOL_STATIC = 0.02, 0.05, 0.10, 0.01
 #: horizon of a probe impact: no separation by then = captured [s]

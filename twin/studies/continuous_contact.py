@@ -1,4 +1,4 @@
-r"""S004's continuous-contact model: the clearance at B as a virtual massless rod (issue 18, item 3).
+r"""S004's continuous-contact model: the clearance at B as a virtual massless rod.
 
 S004 (``../shared/seeds/004_…``, Xiao, Song & Zhang 2019, §2.1) assumes that the journal of the
 clearance joint B never leaves the bushing wall: the pin centre B and the bushing (rod eye)

@@ -11,7 +11,7 @@ coordinate θ (Lagrange: J(θ) θ̈ + ½ J'(θ) θ̇² + V'(θ) = 0, closed-form
 kinematics, scipy DOP853 at rtol 1e-12) and reports each run's largest crank-speed error
 against it: the energy alone does not show a formulation that is wrong but conservative.
 
-Work–precision (issue 16, item 5): the same free motion integrated by the R-matrix with
+Work–precision: the same free motion integrated by the R-matrix with
 symplectic Euler and with the explicit midpoint rule (``ReferenceOptions.integrator``), by the
 MuJoCo twin (its compiled model of the same mechanism: ideal joints, actuation disabled) with
 Euler and RK4, and by Exudyn (generalized-α, its default spectral radius 0.9; three rigid 2-D
@@ -374,7 +374,7 @@ def work_precision(cfg: BenchConfig, duration_s: float, theta_exact: float,
 
 
 def work_precision_markdown(rows: list[dict], duration_s: float, exudyn: bool) -> str:
-    lines = [f"## Work–precision: θ({duration_s:g} s) against the exact solution (issue 16, item 5)", "",
+    lines = [f"## Work–precision: θ({duration_s:g} s) against the exact solution", "",
              "Same release as above (no drive, no friction). Cost measured in this process, one run after another "
              "(best of 2 for runs under 1 s); it moves with the machine's load, the ratios less. Front: no other run "
              "is at most as costly per simulated second and at most as wrong.", "",

@@ -1,4 +1,4 @@
-"""Visual inspection of runs and recordings in rerun (issue 6).
+"""Visual inspection of runs and recordings in rerun.
 
 * :func:`convert_file`: a run/recording MCAP file -> ``.rrd`` (``twin view``);
 * :func:`write_rrd`: an in-memory :class:`~twin.run.Run` -> ``.rrd``;
