@@ -1,4 +1,4 @@
-"""What writing the output costs, as a share of a run's wall time, for both engines (issue 16, item 4).
+"""What writing the output costs, as a share of a run's wall time, for both engines.
 
 For Table 4 test 12 (B+C, all channels of the default groups, 100 kHz) over ``--duration``
 simulated seconds, :func:`twin.simulation.simulate` runs in this process, interleaved, best of

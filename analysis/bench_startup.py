@@ -1,4 +1,4 @@
-"""Start-up cost of a ``twin simulate`` process: how long until the first step (issue 16, item 4).
+"""Start-up cost of a ``twin simulate`` process: how long until the first step.
 
 Measures, best of ``--repeats`` fresh processes each (interleaved):
 

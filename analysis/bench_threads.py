@@ -1,4 +1,4 @@
-"""Multi-scene throughput: one scene alone against two on two threads and on two processes (issue 16, item 4).
+"""Multi-scene throughput: one scene alone against two on two threads and on two processes.
 
 Measured in one run, interleaved round by round (the machine is shared, so only ratios taken side by
 side mean anything), on the B+C scene (Table 4 test 12, 750 rpm; ``--duration`` simulated seconds):

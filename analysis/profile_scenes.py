@@ -1,4 +1,4 @@
-"""What each default scene skips, and what that saves: µs/step before/after (issue 4, item 4).
+"""What each default scene skips, and what that saves: µs/step before/after.
 
 The twin builds every scene with only what it needs (``twin/mujoco_engine/builder.py``):
 no collision detection at all in an ideal scene, one explicit pair (per contact-law term)

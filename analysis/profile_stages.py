@@ -1,4 +1,4 @@
-"""Where a MuJoCo twin step goes, stage by stage (issue 16, item 1).
+"""Where a MuJoCo twin step goes, stage by stage.
 
 For the ideal (Table 4 test 3), C-only (test 6) and B+C (test 12) scenes at h = 1e-5 s
 (models, state at full speed and control sequence from ``analysis/bench_mujoco.py``'s

@@ -1,4 +1,4 @@
-"""S000 report (issue 18): the DOE/Kriging study of Zhang, Xu, Flores & Lankarani reproduced with the twin.
+"""S000 report: the DOE/Kriging study of Zhang, Xu, Flores & Lankarani reproduced with the twin.
 
 Runs ``twin study doe`` (``twin.studies.doe``) on the four specs of ``analysis/datasets/``:
 

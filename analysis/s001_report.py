@@ -1,4 +1,4 @@
-"""S001's rig reproduced (issue 18): the ideal run against the closed form, the clearance run's
+"""S001's rig reproduced: the ideal run against the closed form, the clearance run's
 journal orbit, contact force and acceleration spikes against the paper's figures, and the
 restitution recovery table of ``twin identify restitution``.
 

@@ -1,4 +1,4 @@
-"""S004 report (issue 18, item 3): ``python analysis/s004_report.py [--out DIR] [--quick]``.
+"""S004 report: ``python analysis/s004_report.py [--out DIR] [--quick]``.
 
 Runs ``--preset s004`` (S004's large slider–crank at a prescribed 30 rad/s, ADAMS IMPACT contact)
 with 0, 0.25 and 0.5 mm radial clearance at B in both engines, and S004's continuous-contact model

@@ -1,5 +1,5 @@
 """Output rate versus physics step: is h = 2e-5 s with 100 kHz instrumented output within the sensor
-noise floor of the h = 1e-5 s result? (issue 16, item 3)
+noise floor of the h = 1e-5 s result?
 
 The bench's accelerometers are band-limited (ADXL100x: 21 kHz resonance, "3 dB bandwidth" 11 kHz)
 before the 100 kHz DAQ, so a physics step longer than the output period might do: run the twin at

@@ -1,4 +1,4 @@
-"""Does the sample recordings' speed ripple explain the shipped model's size miss at C? (issue 17)
+"""Does the sample recordings' speed ripple explain the shipped model's size miss at C?
 
 The sample recordings of ``recordings/`` (``recordings/make_samples.py``: reference engine, the
 twin's sensor chain, the crank driven through an encoder trace whose speed fluctuates within each
