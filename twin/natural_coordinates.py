@@ -119,12 +119,16 @@ P_CLR_A, P_C_A, P_RBUSH_A, P_RPIN_A, P_K_A, P_CLIN_A, P_RPIN_C = (P_PRESCRIBED +
 P_MA, P_MAB = P_RPIN_C + 1, P_RPIN_C + 2  # crank mass matrix blocks M_ii (on A') and M_ij (A'–B) [kg]
 # 0 symplectic Euler (default), 1 explicit midpoint (twin.reference.model.INTEGRATORS); the last entry
 P_INTEGRATOR = P_MAB + 1
-N_PARAMS = P_INTEGRATOR + 1
+# the slider guide's clearance (twin.guide): flag, half play c_g [m], half span a [m], contact
+# stiffness K_g [N/m^n], the slider's moment of inertia about C' [kg m²] (its tilt coordinate),
+# its static moments m₃ x_G and m₃ d_off about C' [kg m] (centre of mass at C' + R(φ)(x_G, −d_off))
+P_CLR_G, P_C_G, P_GA, P_K_G, P_I3, P_S3X, P_S3D = (P_INTEGRATOR + 1 + i for i in range(7))
+N_PARAMS = P_S3D + 1
 
 #: number of coordinates q (module docstring)
-N_Q = 10
-#: most independent coordinates: θ and the eccentricities at A, B and C
-N_Z = 7
+N_Q = 12
+#: most independent coordinates: θ, the eccentricities at A, B and C, the slider's y_g and φ
+N_Z = 9
 
 # --------------------------------------------------------------------- state layout
 S_Q, S_QD = 0, N_Q     # q[0:10], q̇[10:20]
@@ -132,7 +136,8 @@ S_I = 2 * N_Q          # PID integral state [rad s]
 S_IN_B, S_VIMP_B = S_I + 1, S_I + 2  # contact event flag and stored impact speed at B
 S_IN_C, S_VIMP_C = S_I + 3, S_I + 4  # same at C
 S_IN_A, S_VIMP_A = S_I + 5, S_I + 6  # same at A
-N_STATE = S_I + 7
+S_GUIDE = S_I + 7      # guide contact events: [in, v_imp] of the slider's front, then rear end
+N_STATE = S_I + 11
 
 
 # ------------------------------------------------------------------------- kernels
@@ -154,6 +159,8 @@ def solve_aug(q, s, c, b, out):
     vxBp = vxB - b[3]
     vyBp = vyB - b[4]
     vyC = -b[6]
+    if b[10] != 0.0:           # the slider's transverse velocity (guide clearance; exact 0 otherwise)
+        vyC += b[10]
     dx = xC - xBp
     dy = yC - yBp
     vxC = (b[2] + 2.0 * dx * vxBp + 2.0 * dy * vyBp - 2.0 * dy * vyC) / (2.0 * dx)
@@ -167,6 +174,8 @@ def solve_aug(q, s, c, b, out):
     out[7] = th_d
     out[8] = vxA
     out[9] = vyA
+    out[10] = b[10]
+    out[11] = b[11]
 
 
 @njit(cache=True)
@@ -190,7 +199,7 @@ def residual(P, q, s, c, out):
         out[6] = 0.0
     else:
         out[5] = q[6] - q[4]
-        out[6] = P[P_DOFF] - q[5]
+        out[6] = P[P_DOFF] + q[10] - q[5] if P[P_CLR_G] > 0.5 else P[P_DOFF] - q[5]
     out[7] = 0.0
     if P[P_CLR_A] > 0.5:
         out[8] = 0.0
@@ -198,6 +207,12 @@ def residual(P, q, s, c, out):
     else:                      # the journal centre on the bore centre, the origin
         out[8] = q[8]
         out[9] = q[9]
+    if P[P_CLR_G] > 0.5:       # the slider's transverse position and tilt: independent
+        out[10] = 0.0
+        out[11] = 0.0
+    else:                      # the preloaded ideal guide: y_g = φ = 0
+        out[10] = q[10]
+        out[11] = q[11]
 
 
 @njit(cache=True)
@@ -225,9 +240,11 @@ def velocity_constraint_norm(P, q, qd):
     if P[P_CLR_B] < 0.5:
         acc += (qd[0] - qd[2]) ** 2 + (qd[1] - qd[3]) ** 2
     if P[P_CLR_C] < 0.5:
-        acc += (qd[6] - qd[4]) ** 2 + qd[5] ** 2
+        acc += (qd[6] - qd[4]) ** 2 + (qd[10] - qd[5]) ** 2
     if P[P_CLR_A] < 0.5:
         acc += qd[8] ** 2 + qd[9] ** 2
+    if P[P_CLR_G] < 0.5:
+        acc += qd[10] ** 2 + qd[11] ** 2
     return math.sqrt(acc)
 
 
@@ -263,6 +280,10 @@ def independent_rows(P, rows):
         rows[nz] = 5
         rows[nz + 1] = 6
         nz += 2
+    if P[P_CLR_G] > 0.5:
+        rows[nz] = 10
+        rows[nz + 1] = 11
+        nz += 2
     return nz
 
 
@@ -278,9 +299,16 @@ def mass_times(P, v, out):
     out[4] = b * v[2] + cc * v[4]
     out[5] = b * v[3] + cc * v[5]
     out[6] = m3 * v[6]
+    if P[P_CLR_G] > 0.5:       # the slider's tilt couples (linearized at φ = 0, see twin.guide)
+        out[6] += P[P_S3D] * v[11]
     out[7] = 0.0
     out[8] = ma * v[8] + mab * v[0]
     out[9] = ma * v[9] + mab * v[1]
+    out[10] = m3 * v[10]
+    out[11] = P[P_I3] * v[11]
+    if P[P_CLR_G] > 0.5:
+        out[10] += P[P_S3X] * v[11]
+        out[11] += P[P_S3D] * v[6] + P[P_S3X] * v[10]
 
 
 @njit(cache=True)
@@ -359,7 +387,10 @@ def project(P, q, qd, s, c, res, dq, b):
         b[4] = qd[1] - qd[3]
     if P[P_CLR_C] > 0.5:
         b[5] = qd[6] - qd[4]
-        b[6] = -qd[5]
+        b[6] = qd[10] - qd[5] if P[P_CLR_G] > 0.5 else -qd[5]
+    if P[P_CLR_G] > 0.5:
+        b[10] = qd[10]
+        b[11] = qd[11]
     solve_aug(q, s, c, b, dq)
     for i in range(N_Q):
         qd[i] = dq[i]
@@ -384,6 +415,10 @@ def energy(P, q, qd):
           + m2 * (gx * ((1.0 - a2) * q[2] + a2 * q[4]) + gy * ((1.0 - a2) * q[3] + a2 * q[5]))
           + P[P_M3] * gx * q[6]
           + wa * (gx * q[8] + gy * q[9]))
+    if P[P_CLR_G] > 0.5:       # the slider's transverse position and tilt (guide clearance)
+        cf, sf = math.cos(q[11]), math.sin(q[11])
+        xg, dd = P[P_S3X], P[P_S3D]   # m₃ x_G, m₃ d_off: m₃ (r(φ) − r(0)), r = R(φ)(x_G, −d_off)
+        V -= P[P_M3] * gy * q[10] + gx * (xg * (cf - 1.0) + dd * sf) + gy * (xg * sf - dd * (cf - 1.0))
     return T + V
 
 
@@ -418,6 +453,11 @@ def mechanism_params(cfg: BenchConfig) -> np.ndarray:
     P[P_RPIN_A], P[P_RPIN_B], P[P_RPIN_C] = j.pin_radius("A"), j.pin_radius("B"), j.pin_radius("C")
     P[P_RBUSH_A] = j.bushing_radius_m("A")
     P[P_RBUSH_B], P[P_RBUSH_C] = j.bushing_radius_m("B"), j.bushing_radius_m("C")
+    if j.guide_play:
+        P[P_CLR_G], P[P_C_G], P[P_GA] = 1.0, j.guide_radial_m, j.guide_span_m / 2.0
+        m3, xg3, d = b.slider.mass_kg, b.slider.x_g_m, mech.d_off_m
+        P[P_I3] = b.slider.inertia_kgm2 + m3 * (xg3 ** 2 + d ** 2)  # about C'
+        P[P_S3X], P[P_S3D] = m3 * xg3, m3 * d
     return P
 
 
@@ -434,7 +474,7 @@ def effective_masses(cfg: BenchConfig, P: np.ndarray, q: np.ndarray) -> dict[str
         if cfg.joints.diametral_mm(jt) <= 0:
             continue
         e = {"A": np.array([q[8], q[9]]), "B": np.array([q[0] - q[2], q[1] - q[3]]),
-             "C": np.array([q[6] - q[4], P[P_DOFF] - q[5]])}[jt]
+             "C": np.array([q[6] - q[4], P[P_DOFF] + q[10] - q[5]])}[jt]
         n = e / np.linalg.norm(e) if np.linalg.norm(e) > 0 else np.array([0.0, 1.0])
         w = W[off:off + 2, off:off + 2]
         out[jt] = float(1.0 / (n @ w @ n))
@@ -450,7 +490,8 @@ def initial_state(cfg: BenchConfig, theta: float, omega: float = 0.0, P: np.ndar
     pose = initial_pose(cfg, theta)
     st = np.zeros(N_STATE)
     st[S_Q:S_Q + N_Q] = [pose.b_pin[0], pose.b_pin[1], pose.b_bush[0], pose.b_bush[1],
-                         pose.c_bush[0], pose.c_bush[1], pose.c_pin[0], pose.theta, pose.e_a[0], pose.e_a[1]]
+                         pose.c_bush[0], pose.c_bush[1], pose.c_pin[0], pose.theta, pose.e_a[0], pose.e_a[1],
+                         0.0, 0.0]
     if omega != 0.0:
         if P is None:
             raise ValueError("initial_state: a turning start needs the parameter vector P")

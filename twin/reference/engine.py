@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from twin import __version__ as twin_version
+from twin.channels import GUIDE_CHANNELS
 from twin.config import ACCELEROMETERS, BenchConfig
 from twin.errors import ConfigError, SimulationError
 from twin.natural_coordinates import initial_state
@@ -205,6 +206,9 @@ class ReferenceEngine:
                 base = {"A": M.O_JOINT_A, "B": M.O_JOINT_B, "C": M.O_JOINT_C}[jt]  # A: bench frame
                 for k, name in enumerate((f"ecc_{jt}_x", f"ecc_{jt}_y", f"pen_{jt}", f"fn_{jt}", f"ft_{jt}")):
                     cols[name] = out[:, base + k]
+            if cfg.joints.guide_play:
+                for k, (name, *_) in enumerate(GUIDE_CHANNELS):
+                    cols[name] = out[:, M.O_GUIDE + k]
         if "drive" in groups:
             cols["crank_torque"] = out[:, M.O_TORQUE]
         if self._train is not None:
