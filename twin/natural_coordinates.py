@@ -95,7 +95,7 @@ import numpy as np
 from numba import njit
 
 from twin.config import BenchConfig
-from twin.kinematics import initial_pose
+from twin.kinematics import guide_start, initial_pose
 
 # ----------------------------------------------------------------- parameter layout
 P_R, P_L, P_DOFF, P_GX, P_GY = 0, 1, 2, 3, 4
@@ -492,6 +492,7 @@ def initial_state(cfg: BenchConfig, theta: float, omega: float = 0.0, P: np.ndar
     st[S_Q:S_Q + N_Q] = [pose.b_pin[0], pose.b_pin[1], pose.b_bush[0], pose.b_bush[1],
                          pose.c_bush[0], pose.c_bush[1], pose.c_pin[0], pose.theta, pose.e_a[0], pose.e_a[1],
                          0.0, 0.0]
+    st[S_Q + 10] = guide_start(cfg)
     if omega != 0.0:
         if P is None:
             raise ValueError("initial_state: a turning start needs the parameter vector P")

@@ -1,0 +1,73 @@
+"""The slider guide's two-sided clearance (``joints.clearance_guide_mm``): statics in closed form,
+the two engines against each other, clearance 0 unchanged, configuration errors."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from twin.config import BenchConfig, preset
+from twin.config.mechanism import guide_stiffness
+from twin.errors import ConfigError
+from twin.simulate import simulate_run
+
+G = 9.81
+
+
+def _static_cfg(engine: str, x_g: float = 0.02) -> BenchConfig:
+    """Ideal B and C, the crank held by its PID at rest (motor 0 rpm), 0.1 mm guide play, the
+    slider's centre of mass x_g ahead of C (a known moment), gravity −y: the known side load."""
+    return BenchConfig().replace(**{
+        "joints.clearance_c_mm": 0.0, "joints.clearance_guide_mm": 0.1, "bodies.slider.x_g_m": x_g,
+        "drive.motor_rpm": 0.0, "drive.ramp_s": 0.0, "simulation.engine": engine, "simulation.duration_s": 0.4,
+        "sensors.output_rate_hz": 1000.0})
+
+
+def _closed_form(cfg: BenchConfig) -> tuple[float, float, float, float]:
+    """Statics of the slider resting on the lower rail: (F_front, F_rear, y_g, φ).
+
+    Without friction at rest the slider takes no load along the guide, so the rod's end C carries
+    its weight share m₂ g ξ₂/l straight down onto the pin (moments about B'); the rails carry
+    W = (m₃ + m₂ ξ₂/l) g through the ends at ±a, and the slider's weight acts x_G ahead of C':
+    F_f + F_r = W, a (F_f − F_r) = m₃ g x_G. Each end sinks δ = (F/K)^(1/n) into the lower rail
+    at −c: p_f = −c − δ_f = y_g + a sin φ, p_r = −c − δ_r = y_g − a sin φ."""
+    b, j = cfg.bodies, cfg.joints
+    a, c = j.guide_span_m / 2, j.guide_radial_m
+    W = (b.slider.mass_kg + b.rod.mass_kg * b.rod.x_g_m / b.rod.length_m) * G
+    dm = b.slider.mass_kg * G * b.slider.x_g_m / a
+    f_f, f_r = (W + dm) / 2, (W - dm) / 2
+    K, n = guide_stiffness(j, cfg.materials), cfg.contact.exponent
+    d_f, d_r = (f_f / K) ** (1 / n), (f_r / K) ** (1 / n)
+    return f_f, f_r, -c - (d_f + d_r) / 2, math.asin((d_r - d_f) / (2 * a))
+
+
+@pytest.mark.parametrize("engine", ["reference", "mujoco"])
+def test_static_tilt_and_contact_forces_under_side_load(engine):
+    cfg = _static_cfg(engine)
+    f_f, f_r, y_g, phi = _closed_form(cfg)
+    run = simulate_run(cfg)
+    ch = {k: run.channels[k].data[-20:].astype(float) for k in
+          ("fn_guide_front", "fn_guide_rear", "slider_y", "slider_tilt")}
+    assert abs(f_f - f_r) > 5.0          # the moment is a real part of the load
+    assert np.allclose(ch["fn_guide_front"], f_f, rtol=2e-3)
+    assert np.allclose(ch["fn_guide_rear"], f_r, rtol=2e-3)
+    assert np.allclose(ch["slider_y"], y_g, rtol=0, atol=2e-9)
+    assert np.allclose(ch["slider_tilt"], phi, rtol=2e-3)
+    assert phi < 0                        # the front end sinks deeper: nose down, clockwise
+
+
+def test_guide_config_errors_name_the_field():
+    for bad in (-0.1, 5.0, float("nan"), "x"):
+        with pytest.raises(ConfigError, match="joints.clearance_guide_mm"):
+            BenchConfig().replace(**{"joints.clearance_guide_mm": bad})
+    with pytest.raises(ConfigError, match="joints.guide_span_m"):
+        BenchConfig().replace(**{"joints.guide_span_m": 0.0})
+
+
+def test_zero_guide_clearance_keeps_the_configuration_text():
+    cfg = preset(12)
+    assert "clearance_guide_mm" not in cfg.to_toml()
+    assert cfg.replace(**{"joints.clearance_guide_mm": 0.0}).digest() == cfg.digest()
+    assert "clearance_guide_mm = 0.1" in cfg.replace(**{"joints.clearance_guide_mm": 0.1}).to_toml()
