@@ -455,9 +455,11 @@ def mechanism_params(cfg: BenchConfig) -> np.ndarray:
     P[P_RBUSH_B], P[P_RBUSH_C] = j.bushing_radius_m("B"), j.bushing_radius_m("C")
     if j.guide_play:
         P[P_CLR_G], P[P_C_G], P[P_GA] = 1.0, j.guide_radial_m, j.guide_span_m / 2.0
-        m3, xg3, d = b.slider.mass_kg, b.slider.x_g_m, mech.d_off_m
-        P[P_I3] = b.slider.inertia_kgm2 + m3 * (xg3 ** 2 + d ** 2)  # about C'
-        P[P_S3X], P[P_S3D] = m3 * xg3, m3 * d
+        m3, xg3 = b.slider.mass_kg, b.slider.x_g_m
+        # the slider's centre of mass sits x_G ahead of C' at its height (as the MuJoCo twin's
+        # slider body has it): no offset normal to the slider's axis, m₃ d_off's slot holds 0
+        P[P_I3] = b.slider.inertia_kgm2 + m3 * xg3 ** 2
+        P[P_S3X], P[P_S3D] = m3 * xg3, 0.0
     return P
 
 
