@@ -87,3 +87,33 @@ def test_engines_agree_on_peak_guide_forces_in_a_running_scene():
     ref, mj = np.array(peaks["reference"]), np.array(peaks["mujoco"])
     assert ref.min() > 100.0              # impacts, not the resting load (~40 N)
     assert np.all(np.abs(mj - ref) <= 0.05 * ref), (ref, mj)
+
+
+def test_rerun_view_plots_the_guide_channels():
+    """The default rerun layout has a plot for the guide's rail forces, friction, transverse
+    position and tilt, each title fitting its plot with a unit."""
+    import rerun.blueprint as rrb
+
+    from twin.viz import blueprint as bp
+    from twin.viz.options import ViewOptions
+
+    cfg = preset(12).replace(**{"joints.clearance_guide_mm": 0.1, "simulation.engine": "reference",
+                                "simulation.duration_s": 0.01})
+    run = simulate_run(cfg)
+    blue = bp.default_blueprint(run.config, run.groups, run.channels, ("B", "C"), True, None, [], ViewOptions())
+
+    def walk(node):
+        contents = getattr(node, "contents", None)
+        if isinstance(contents, (list, tuple)) and contents and hasattr(contents[0], "id"):
+            for c in contents:
+                yield from walk(c)
+        else:
+            yield node
+
+    titles = [v.name for v in walk(blue.root_container) if isinstance(v, rrb.TimeSeriesView)]
+    # a plot of one series is titled by the channel (twin.viz.style.view_title)
+    for head in ("fn_guide_front [N]", "fn_guide_rear [N]", "ft_guide_front [N]", "ft_guide_rear [N]",
+                 "slider_y [m]", "slider_tilt [rad]"):
+        found = [t for t in titles if t.startswith(head)]
+        assert len(found) == 1, (head, titles)
+        assert len(found[0]) <= bp.MAX_TITLE_CHARS and "[" in found[0], found[0]
