@@ -117,3 +117,50 @@ def test_rerun_view_plots_the_guide_channels():
         found = [t for t in titles if t.startswith(head)]
         assert len(found) == 1, (head, titles)
         assert len(found[0]) <= bp.MAX_TITLE_CHARS and "[" in found[0], found[0]
+
+
+def test_guide_clearance_is_a_dataset_factor(tmp_path):
+    """The named factor ``clearance_guide_mm``: the run with play stores the guide's truth
+    channels, the run without has them NaN. With the crank held at rest the slider, started on
+    the lower rail, settles into it: the time mean of the two end forces over the 0.05 s is the
+    weight share W = (m₃ + m₂ ξ₂/l) g of the closed-form statics (within 2 %: the mean force is W
+    minus m Δv_y / T, the momentum the slider gains while it sinks the first micrometre)."""
+    import textwrap
+
+    import pyarrow.parquet as pq
+
+    from twin.cli import main
+
+    spec = tmp_path / "g.toml"
+    spec.write_text(textwrap.dedent("""
+        [dataset]
+        name = "guide"
+        [base]
+        test = 1
+        engine = "reference"
+        duration_s = 0.05
+        [design]
+        kind = "grid"
+        [factors]
+        clearance_guide_mm = [0.0, 0.1]
+        "drive.motor_rpm" = [0.0]
+        [outputs]
+        truth = ["encoder", "joints"]
+        instrumented = []
+        [splits]
+        train = 1.0
+        val = 0.0
+        test = 0.0
+    """))
+    out = tmp_path / "ds"
+    assert main(["dataset", "generate", str(spec), "--out", str(out), "--workers", "1", "--no-progress"]) == 0
+    rows = {r["factor_clearance_guide_mm"]: r for r in pq.read_table(out / "runs.parquet").to_pylist()}
+    with_g = pq.read_table(out / rows[0.1]["file"]).to_pydict()
+    without = pq.read_table(out / rows[0.0]["file"]).to_pydict()
+    names = ["slider_y", "slider_tilt", "fn_guide_front", "fn_guide_rear", "ft_guide_front", "ft_guide_rear"]
+    assert set(names) <= set(with_g) and set(names) <= set(without)
+    assert np.all(np.isnan(np.asarray(without["fn_guide_front"], dtype=float)))
+    b = BenchConfig().bodies
+    W = (b.slider.mass_kg + b.rod.mass_kg * b.rod.x_g_m / b.rod.length_m) * G
+    total = np.asarray(with_g["fn_guide_front"], dtype=float) + np.asarray(with_g["fn_guide_rear"], dtype=float)
+    assert abs(total.mean() - W) < 0.02 * W, (total.mean(), W)

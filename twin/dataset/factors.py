@@ -134,6 +134,9 @@ NAMED: dict[str, Factor] = {f.name: f for f in (
     Factor("stiffness_scale", "factor on the contact stiffness, both engines [-]", None, (0.1, 10.0),
            _set("contact.stiffness_scale")),
     Factor("guide_friction_n", "slider guide friction [N]", None, (0.0, 100.0), _set("mechanism.guide_friction_n")),
+    Factor("clearance_guide_mm", "two-sided clearance of the slider guide: the slider's total transverse play "
+           "between its rails [mm], 0 = the preloaded ideal guide", None, (0.0, 1.0),
+           _set("joints.clearance_guide_mm")),
     Factor("pid_scale", "factor on the three PID gains [-]", None, (0.1, 10.0), _pid_scale),
     Factor("zero_g_spread_v", "standard deviation of the sensors' zero-g offsets around mid-supply [V] "
            "(drawn per run)", None, (0.0, 0.5), _zero_g_spread),
