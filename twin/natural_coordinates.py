@@ -123,7 +123,8 @@ P_INTEGRATOR = P_MAB + 1
 # stiffness K_g [N/m^n], the slider's moment of inertia about C' [kg m²] (its tilt coordinate),
 # its static moments m₃ x_G and m₃ d_off about C' [kg m] (centre of mass at C' + R(φ)(x_G, −d_off))
 P_CLR_G, P_C_G, P_GA, P_K_G, P_I3, P_S3X, P_S3D = (P_INTEGRATOR + 1 + i for i in range(7))
-N_PARAMS = P_S3D + 1
+P_OUT_ENERGY = P_S3D + 1   # 1: the reference engine's samples carry T and V (channel group "energy")
+N_PARAMS = P_OUT_ENERGY + 1
 
 #: number of coordinates q (module docstring)
 N_Q = 12
@@ -395,6 +396,17 @@ def project(P, q, qd, s, c, res, dq, b):
     for i in range(N_Q):
         qd[i] = dq[i]
     return it
+
+
+@njit(cache=True)
+def kinetic_energy(P, q, qd):
+    """Kinetic energy T = ½ q̇ᵀ M q̇ [J]."""
+    mv = np.empty(N_Q)
+    mass_times(P, qd, mv)
+    T = 0.0
+    for i in range(N_Q):
+        T += 0.5 * qd[i] * mv[i]
+    return T
 
 
 @njit(cache=True)

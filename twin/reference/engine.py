@@ -209,6 +209,10 @@ class ReferenceEngine:
             if cfg.joints.guide_play:
                 for k, (name, *_) in enumerate(GUIDE_CHANNELS):
                     cols[name] = out[:, M.O_GUIDE + k]
+        if "energy" in groups:
+            cols["energy_kinetic"] = out[:, M.O_EKIN]
+            cols["energy_potential"] = out[:, M.O_EPOT]
+            cols["slider_speed"] = out[:, M.O_VSLIDER]
         if "drive" in groups:
             cols["crank_torque"] = out[:, M.O_TORQUE]
         if self._train is not None:

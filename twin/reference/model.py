@@ -61,13 +61,13 @@ from twin.config import ACCELEROMETERS, BenchConfig
 from twin.config.mechanism import guide_stiffness
 from twin.contact_params import JointContact, joint_contact
 from twin.natural_coordinates import (
-    N_Q, N_Z, P_C_A, P_C_B, P_C_C, P_CLIN_A, P_CLIN_B, P_CLIN_C, P_CLR_A, P_CLR_B, P_CLR_C, P_DMAX,
-    P_CLR_G, P_DOFF, P_E, P_FGUIDE, P_FRIC_LAW, P_GX, P_GY, P_H, P_IMAX, P_INTEGRATOR, P_K_A, P_K_B, P_K_C, P_KI, P_KP,
-    P_KV, P_L, P_LAW, P_M1, P_M2, P_M3, P_MU0, P_MUS, P_N, P_NEWTON_MAXIT, P_NEWTON_TOL, P_PRESCRIBED, P_R,
-    P_RBUSH_A, P_RBUSH_B, P_RBUSH_C, P_RPIN_A, P_RPIN_B, P_RPIN_C, P_SENS, P_V0, P_V1, P_VD, P_VMIN, P_VS,
-    P_XG1, P_XG2, P_K_G, S_GUIDE, S_I, S_IN_A, S_IN_B, S_IN_C, S_Q, S_QD, S_VIMP_A, S_VIMP_B, S_VIMP_C,
-    constraint_norm,    effective_masses, energy, independent_rows, mass_times, mechanism_params, project, quadratic_terms, solve_aug,
-    velocity_constraint_norm)
+    N_Q, N_Z, P_CLIN_A, P_CLIN_B, P_CLIN_C, P_CLR_A, P_CLR_B, P_CLR_C, P_CLR_G, P_C_A, P_C_B, P_C_C, P_DMAX,
+    P_DOFF, P_E, P_FGUIDE, P_FRIC_LAW, P_GX, P_GY, P_H, P_IMAX, P_INTEGRATOR, P_KI, P_KP, P_KV, P_K_A, P_K_B,
+    P_K_C, P_K_G, P_L, P_LAW, P_M1, P_M2, P_M3, P_MU0, P_MUS, P_N, P_NEWTON_MAXIT, P_NEWTON_TOL, P_OUT_ENERGY,
+    P_PRESCRIBED, P_R, P_RBUSH_A, P_RBUSH_B, P_RBUSH_C, P_RPIN_A, P_RPIN_B, P_RPIN_C, P_SENS, P_V0, P_V1, P_VD,
+    P_VMIN, P_VS, P_XG1, P_XG2, S_GUIDE, S_I, S_IN_A, S_IN_B, S_IN_C, S_Q, S_QD, S_VIMP_A, S_VIMP_B, S_VIMP_C,
+    constraint_norm, effective_masses, energy, independent_rows, kinetic_energy, mass_times, mechanism_params,
+    project, quadratic_terms, solve_aug, velocity_constraint_norm)
 from twin.reference import drivetrain as DT
 from twin.reference.guide import N_GUIDE_OUT, guide_forces
 from twin.reference.contact import FRICTION_CODES, LAW_CODES, adams_friction_force, friction_force, normal_force, ramp
@@ -84,7 +84,8 @@ O_TORQUE = 9
 O_JOINT_B, O_JOINT_C = 10, 15  # ecc_x, ecc_y (rod frame), pen, fn, ft
 O_JOINT_A = 20                 # the same at A, ecc in the bench frame
 O_GUIDE = 25                   # y_g, φ, fn front, fn rear, ft front, ft rear (twin.reference.guide)
-N_OUT = O_GUIDE + N_GUIDE_OUT
+O_EKIN, O_EPOT, O_VSLIDER = O_GUIDE + N_GUIDE_OUT, O_GUIDE + N_GUIDE_OUT + 1, O_GUIDE + N_GUIDE_OUT + 2
+N_OUT = O_VSLIDER + 1          # the last three with P[P_OUT_ENERGY] only (channel group "energy")
 
 #: integration status codes of :func:`run_steps`
 OK, NEWTON_FAILED, NOT_FINITE = 0, 1, 2
@@ -402,6 +403,11 @@ def _outputs(P, q, qd, qdd, tau, ja, jb, jc, row):
         row[O_JOINT_A + k] = ja[k] if P[P_CLR_A] > 0.5 else 0.0
     for k in range(N_GUIDE_OUT):
         row[O_GUIDE + k] = jc[5 + k] if P[P_CLR_G] > 0.5 else 0.0
+    if P[P_OUT_ENERGY] > 0.5:  # T and V (the potential up to a constant: zero with every centre of mass at A)
+        t = kinetic_energy(P, q, qd)
+        row[O_EKIN] = t
+        row[O_EPOT] = energy(P, q, qd) - t
+        row[O_VSLIDER] = qd[6]
 
 
 @njit(cache=True, nogil=True)  # no GIL while stepping: a sink's writer thread runs meanwhile
@@ -644,6 +650,7 @@ def build_params(cfg: BenchConfig, *, min_impact_speed_mps: float = 1e-3, newton
     P[P_NEWTON_TOL], P[P_NEWTON_MAXIT] = newton_tol_m, newton_max_iter
     P[P_INTEGRATOR] = INTEGRATORS[integrator]
     P[P_PRESCRIBED] = 1.0 if cfg.drive.mode == "prescribed" else 0.0
+    P[P_OUT_ENERGY] = 1.0 if "energy" in cfg.sensors.channels else 0.0
     if cfg.joints.guide_play:
         P[P_K_G] = guide_stiffness(cfg.joints, cfg.materials)
     for i, name in enumerate(ACCELEROMETERS):
