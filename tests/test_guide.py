@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from twin.config import BenchConfig, preset
+from twin.config import BenchConfig, config_from_toml, preset
 from twin.config.mechanism import guide_stiffness
 from twin.errors import ConfigError
 from twin.simulate import simulate_run
@@ -70,7 +70,9 @@ def test_zero_guide_clearance_keeps_the_configuration_text():
     cfg = preset(12)
     assert "clearance_guide_mm" not in cfg.to_toml()
     assert cfg.replace(**{"joints.clearance_guide_mm": 0.0}).digest() == cfg.digest()
-    assert "clearance_guide_mm = 0.1" in cfg.replace(**{"joints.clearance_guide_mm": 0.1}).to_toml()
+    with_play = cfg.replace(**{"joints.clearance_guide_mm": 0.1})
+    assert "clearance_guide_mm = 0.1" in with_play.to_toml()
+    assert config_from_toml(with_play.to_toml()) == with_play       # TOML round trip
 
 
 def test_engines_agree_on_peak_guide_forces_in_a_running_scene():
