@@ -97,10 +97,10 @@ class ReferenceEngine:
             raise ConfigError("reference.integrator",
                               f"the explicit midpoint integrator is not available with drive.mode = {cfg.drive.mode!r} "
                               "(use \"euler\")")
-        if self.options.integrator == "midpoint" and cfg.joints.clearance_joints:
+        if self.options.integrator == "midpoint" and (cfg.joints.clearance_joints or cfg.joints.guide_play):
             raise ConfigError("reference.integrator",
-                              "the explicit midpoint integrator is for scenes without clearance joints: it is not "
-                              "stable through hard impacts at the bench's steps (use \"euler\")")
+                              "the explicit midpoint integrator is for scenes without clearance joints or guide "
+                              "clearance: it is not stable through hard impacts at the bench's steps (use \"euler\")")
         t0 = time.perf_counter()
         self.P = engine_params(cfg, self.options)
         self.build_s = time.perf_counter() - t0
