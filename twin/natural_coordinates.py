@@ -9,22 +9,24 @@ linear contact law of both engines needs.
 Coordinates (S003 Eq. 14, extended by the crank journal), bench frame of :mod:`twin.config`
 (the frame's bore centre A at the origin)::
 
-    q = [x_B, y_B, x'_B, y'_B, x_C, y_C, x'_C, θ, x_A, y_A]      indices 0..9   (N_Q = 10)
+    q = [x_B, y_B, x'_B, y'_B, x_C, y_C, x'_C, θ, x_A, y_A, y_g, φ]    indices 0..11   (N_Q = 12)
 
 * A' = (x_A, y_A): centre of the crank's journal at the ground pivot A (crank body 1; the
   bushing at A is the frame's bore, fixed, centred at the origin);
 * B = (x_B, y_B): centre of the crank pin (crank body 1);
 * B' = (x'_B, y'_B): centre of the rod's eye at B (rod body 2, origin of the rod frame);
 * C = (x_C, y_C): centre of the rod's eye at C (rod body 2);
-* C' = (x'_C, d_off): centre of the slider pin (slider body 3 translates on the guide
-  y = 0 through A; C' is ``d_off`` above it, so only x'_C is a coordinate);
-* θ: crank bench angle from +x (direction A' → B).
+* C' = (x'_C, d_off + y_g): centre of the slider pin (slider body 3 translates on the guide
+  y = 0 through A; C' is ``d_off`` above it);
+* θ: crank bench angle from +x (direction A' → B);
+* y_g, φ: the slider's transverse position and tilt in a guide with clearance
+  (``joints.clearance_guide_mm``, :mod:`twin.reference.guide`); 0 with the ideal guide.
 
 Pins sit on the crank (the journal A', the pin B) and on the slider (C'); bushings are the
 frame's bore (A) and the rod eyes (B', C). A' and θ sit at the end of q so that the indices of
 the S003 coordinates are those of the eight-coordinate model that had A fixed.
 
-Equations. Ten rows, always the same (the "augmented" set)::
+Equations. Twelve rows, always the same (the "augmented" set)::
 
     0  (x_B − x_A)² + (y_B − y_A)² − r²      crank length      constraint
     1  (x_B − x_A) sin θ − (y_B − y_A) cos θ crank angle       constraint
@@ -32,18 +34,21 @@ Equations. Ten rows, always the same (the "augmented" set)::
     3  x_B − x'_B        = e_Bx          pair B (Eq. 15)  constraint (= 0) or independent
     4  y_B − y'_B        = e_By          pair B (Eq. 15)  constraint (= 0) or independent
     5  x'_C − x_C        = e_Cx          pair C (Eq. 16)  constraint (= 0) or independent
-    6  d_off − y_C       = e_Cy          pair C (Eq. 16)  constraint (= 0) or independent
+    6  d_off + y_g − y_C = e_Cy          pair C (Eq. 16)  constraint (= 0) or independent
     7  θ                                 crank angle              independent
     8  x_A               = e_Ax          pair A           constraint (= 0) or independent
     9  y_A               = e_Ay          pair A           constraint (= 0) or independent
+    10 y_g                               guide            constraint (= 0) or independent
+    11 φ                                 guide            constraint (= 0) or independent
 
 An ideal joint keeps its two pair rows as constraints (nine constraints, one degree of
 freedom, S003 §3: A' is then held at the origin and the model is S003's). A clearance joint
 drops them from the constraint set and uses the same two expressions — the eccentricity
 e = pin − bushing in the bench frame, the "relative journal position" — as independent
 coordinates, next to θ; its contact is a force element. q itself never changes. Independent
-coordinates z, in this order: θ, then e_A, e_B, e_C of the joints that have a clearance
-(r = 1, 3, 5 or 7).
+coordinates z, in this order: θ, then e_A, e_B, e_C of the joints that have a clearance, then
+y_g, φ with a guide clearance (r = 1 … 9). With the ideal guide rows 10–11 hold y_g = φ = 0 and
+every product skips or adds exact zeros: runs are bit-identical to the ten-coordinate model.
 
 Crank angle equation. S003 writes θ "as a function of x_B or y_B": x_B = r cos θ is
 singular with the crank length row where y_B = 0, y_B = r sin θ where x_B = 0, so a code
@@ -54,11 +59,11 @@ d_x sin θ − d_y cos θ = 0 (d parallel to (cos θ, sin θ)). Together with ro
 block is singular only with the rod perpendicular to the guide, which the bench's geometry
 (l > r + |d_off| + the clearances) excludes.
 
-Velocity transformation (S003 Eq. 11–13). With A(q) the 10×10 Jacobian of the ten rows
-(constant rows 3–9), A q̇ = [0, 0, 0, ė_B or 0, ė_C or 0, θ̇, ė_A or 0]: the columns of
+Velocity transformation (S003 Eq. 11–13). With A(q) the 12×12 Jacobian of the twelve rows
+(constant rows 3–11), A q̇ = [0, 0, 0, ė_B or 0, ė_C or 0, θ̇, ė_A or 0, ẏ_g, φ̇ or 0]: the columns of
 R = A⁻¹[0; I] belonging to the independent rows give q̇ = R ż with Φ_q R = 0, and
 differentiating once more, q̈ = R z̈ + Ṙż with Ṙż = A⁻¹[−Φ̇_q q̇; 0]. The reduced equations
-Rᵀ M R z̈ = Rᵀ (Q − M Ṙż) have r ≤ 7 unknowns. A is solved in closed form (:func:`solve_aug`:
+Rᵀ M R z̈ = Rᵀ (Q − M Ṙż) have r ≤ 9 unknowns. A is solved in closed form (:func:`solve_aug`:
 Ȧ' from rows 8–9, a 2×2 block for Ḃ − Ȧ', one row for the rod, substitutions for the rest:
 about 35 flops), never inverted. With A ideal, Ȧ' = 0 exactly and every operation of the
 eight-coordinate model is repeated on the same numbers (the new terms add exact zeros), so
@@ -79,7 +84,8 @@ Exact as long as |d| = L, which the length constraints keep. For the rod (Table 
 from B, I_G) i = B', j = C, L = l. For the crank (m₁, ξ_G from A, I_G) i = A', j = B, L = r:
 M_jj = I_A / r² on (x_B, y_B) with I_A = I_G + m₁ ξ_G², M_ii on (x_A, y_A) and M_ij coupling
 them (with A' fixed, Ȧ' = 0, only M_jj acts: the crank turning about A). The slider translates:
-m₃ on x'_C (its y and rotation are taken by the guide). θ carries no mass (it is tied to A' and B
+m₃ on x'_C (its y and rotation are taken by the ideal guide; with a guide clearance m₃ on y_g,
+I_G + m₃ x_G² on φ and the coupling m₃ x_G of y_g and φ at φ = 0, :mod:`twin.reference.guide`). θ carries no mass (it is tied to A' and B
 by rows 0–1).
 
 Everything here is compiled with numba (``cache=True``); the parameter vector layout is given by
