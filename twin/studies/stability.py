@@ -82,7 +82,7 @@ import numpy as np
 
 from twin.config import CATALOGUE_DIAMETRAL_MM, ORIENTATIONS, BenchConfig, preset
 from twin.errors import ConfigError, TwinError
-from twin.studies.stability_bench import ENGINES, bench_draws, bench_overrides, label, rotor_energy
+from twin.studies.stability_bench import ENGINES, bench_draws, bench_overrides, guide_penetration, label, rotor_energy
 from twin.util import atomic_write_bytes, atomic_write_json, atomic_write_text, check_output_dir
 
 #: Largest admissible penetration / radial clearance [-].
@@ -287,6 +287,8 @@ def scene_metrics(run: Any, cfg: BenchConfig, scene: dict[str, Any]) -> dict[str
         pen[j] = {"max_pen_m": float(np.nanmax(p)), "c_m": c, "pen_over_c": float(np.nanmax(p) / c)}
     out["joints"] = pen
     out["max_pen_over_c"] = max((v["pen_over_c"] for v in pen.values()), default=0.0)
+    if cfg.joints.guide_play:  # reported, not a criterion (stability_bench.guide_penetration)
+        out["guide_pen_over_c"] = guide_penetration(run, cfg) / cfg.joints.guide_radial_m
     i0 = min(int(math.ceil(scene["settle_s"] * run.rate_hz)), run.n - 1)
     err = np.abs(run["crank_angle"][i0:] - run["theta_ref"][i0:])
     out["tracking_max_rad"] = float(np.max(err))
@@ -402,6 +404,7 @@ def summarize(rows: list[dict[str, Any]], wall_s: float) -> dict[str, Any]:
                                    if x.get("reference", {}).get("cause") == "numerical"],
         "max_pen_over_c": worst[0], "max_pen_over_c_scene": worst[1],
         "pen_over_c": _stats([p for p, _ in pen]),
+        "guide_pen_over_c": _stats([x["guide_pen_over_c"] for x in m if "guide_pen_over_c" in x]),
         "energy_created": sum(bool(x.get("energy_created")) for x in m),
         "energy_created_scenes": [r["scene"]["index"] for r, x in zip(rows, m) if x.get("energy_created")],
         "residual_rel": _stats([x.get("residual_rel") for x in m]),

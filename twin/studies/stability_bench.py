@@ -15,6 +15,8 @@ Each bench scene runs in both engines (MuJoCo and the reference), one row per en
 energy balance of a "motor" scene takes the belt's torque on the crank as the work input (the
 ``crank_torque`` channel of that mode) and leaves the rotor out of ΔE: the MuJoCo twin's kinetic
 energy sensor covers every body, so the rotor's ½ J ω_m² (``motor_speed``) is subtracted.
+The guide's deepest penetration over its half play, ``guide_pen_over_c``, is reported per row,
+not judged: it is the contact law's own deflection (the rails' stiffness is a placeholder).
 """
 
 from __future__ import annotations
@@ -63,6 +65,15 @@ def rotor_energy(run: Any, cfg: Any) -> np.ndarray | float:
         w = np.asarray(run["motor_speed"], dtype=np.float64)
         return 0.5 * cfg.drivetrain.rotor_inertia_kgm2 * w * w
     return 0.0
+
+
+def guide_penetration(run: Any, cfg: Any) -> float:
+    """Largest penetration of the slider's ends into the guide's rails over the run [m] (from
+    ``slider_y``, ``slider_tilt``: p = y_g ± a sin φ + d_off (1 − cos φ), rails at ±c)."""
+    y, phi = np.asarray(run["slider_y"], dtype=float), np.asarray(run["slider_tilt"], dtype=float)
+    a, c, d = cfg.joints.guide_span_m / 2.0, cfg.joints.guide_radial_m, cfg.mechanism.d_off_m
+    ends = [y + s * a * np.sin(phi) + d * (1.0 - np.cos(phi)) for s in (1.0, -1.0)]
+    return float(max(0.0, max(np.max(np.abs(p)) for p in ends) - c))
 
 
 def label(scene: dict[str, Any]) -> str:
