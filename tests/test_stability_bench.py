@@ -36,7 +36,7 @@ def test_short_bench_campaign_in_both_engines():
 
 @pytest.mark.slow
 def test_full_bench_campaign():
-    """The full campaign (500 scenes of 0.5-3 s, each in both engines: about 40 min on 2 cores):
+    """The full campaign (500 scenes of 0.5-3 s, each in both engines: about 25 min on 2 cores, estimated):
     0 divergences and no energy created."""
     data = S.run_study(None, S.StudySettings(scenes=500, seed=1, bench=True))
     s = data["summary"]
