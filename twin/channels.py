@@ -81,6 +81,23 @@ def _joint_specs(joint: str) -> list[ChannelSpec]:
     ]
 
 
+#: the slider guide's channels (``joints.clearance_guide_mm`` > 0; in the "joints" group): the
+#: slider's transverse position and tilt, and per contact point (the shoe's front and rear ends)
+#: the rails' normal force along +y on the slider (positive: from the lower rail) and friction along +x
+GUIDE_CHANNELS: tuple[tuple[str, str, str, str], ...] = (
+    ("slider_y", "m", "float64", "slider pin C' transverse position from its centred place (+y)"),
+    ("slider_tilt", "rad", "float64", "slider tilt about +z"),
+    ("fn_guide_front", "N", "float32", "rail normal force on the slider's front end, along +y (+: lower rail)"),
+    ("fn_guide_rear", "N", "float32", "rail normal force on the slider's rear end, along +y (+: lower rail)"),
+    ("ft_guide_front", "N", "float32", "rail friction force on the slider's front end, along +x"),
+    ("ft_guide_rear", "N", "float32", "rail friction force on the slider's rear end, along +x"),
+)
+
+
+def _guide_specs() -> list[ChannelSpec]:
+    return [ChannelSpec(n, u, "joint_guide", dt, d) for n, u, dt, d in GUIDE_CHANNELS]
+
+
 _STATIC: dict[str, list[ChannelSpec]] = {
     "accel": [ChannelSpec(a, "m/s^2", "accel", "float32", f"{a} proper acceleration") for a in ACCELEROMETERS],
     "encoder": [ChannelSpec("encoder_angle", "rad", "encoder", "float64", "crank encoder angle, zero at -y")],
@@ -118,6 +135,8 @@ def channel_specs(cfg: BenchConfig) -> list[ChannelSpec]:
             no_ft = cfg.simulation.engine == "mujoco" and cfg.mujoco.bushing in ("ring", "tendon")
             for j in cfg.joints.clearance_joints:
                 out.extend(s for s in _joint_specs(j) if not (no_ft and s.name.startswith("ft_")))
+            if cfg.joints.guide_play:
+                out.extend(_guide_specs())
         else:
             out.extend(_STATIC[group])
     return out
@@ -133,6 +152,9 @@ def spec_by_name(name: str) -> ChannelSpec | None:
         for s in _joint_specs(j):
             if s.name == name:
                 return s
+    for s in _guide_specs():
+        if s.name == name:
+            return s
     return None
 
 

@@ -56,7 +56,7 @@ class _Parser(argparse.ArgumentParser):
 
 #: configuration options, by what they describe (``add_config_args(p, options=...)``)
 SELECT_OPTIONS = ("config", "test")
-MODEL_OPTIONS = ("clearance_b", "clearance_c", "clearance_a", "orientation", "set")
+MODEL_OPTIONS = ("clearance_b", "clearance_c", "clearance_a", "clearance_guide", "orientation", "set")
 DRIVE_OPTIONS = ("speed", "protocol", "trace")
 RUN_OPTIONS = ("duration", "timestep", "engine", "channels", "output_rate", "drive_mode")
 ALL_CONFIG_OPTIONS = SELECT_OPTIONS + MODEL_OPTIONS + DRIVE_OPTIONS + RUN_OPTIONS
@@ -96,6 +96,10 @@ def add_config_args(p: argparse.ArgumentParser, options: Sequence[str] = ALL_CON
     if "clearance_a" in has:
         g.add_argument("--clearance-a", type=float, metavar="MM",
                        help="diametral clearance at the ground pivot A [mm], 0 = ball bearing (the bench's)")
+    if "clearance_guide" in has:
+        g.add_argument("--clearance-guide", type=float, metavar="MM",
+                       help="two-sided clearance of the slider guide [mm]: the slider's total transverse play "
+                            "between its rails (joints.clearance_guide_mm); 0 = the preloaded ideal guide")
     if "orientation" in has:
         g.add_argument("--orientation", choices=ORIENTATIONS, help="bench axis that points up")
     drive = [o for o in DRIVE_OPTIONS if o in has]
@@ -174,6 +178,8 @@ def config_from_args(args: argparse.Namespace) -> BenchConfig:
         ov["joints.clearance_c_mm"] = args.clearance_c
     if _opt(args, "clearance_a") is not None:
         ov["joints.clearance_a_mm"] = args.clearance_a
+    if _opt(args, "clearance_guide") is not None:
+        ov["joints.clearance_guide_mm"] = args.clearance_guide
     if _opt(args, "orientation"):
         ov["mechanism.orientation"] = args.orientation
     if _opt(args, "speed") is not None:

@@ -140,6 +140,18 @@ def loaded_eccentricity(cfg: BenchConfig, joint: str, theta: float = 0.0) -> np.
     return -c * f / fn
 
 
+def guide_start(cfg: BenchConfig) -> float:
+    """The slider's transverse start y_g [m]: 0 (centred) without a guide clearance or with
+    ``initial_eccentricity = "centred"``; else on the rail gravity's guide-normal component
+    pushes it to (−c_g with gravity along −y; no drop at t = 0), tilt 0. The pin C' starts
+    at d_off + y_g."""
+    j = cfg.joints
+    gy = cfg.mechanism.gravity_vector[1]
+    if not j.guide_play or j.initial_eccentricity == "centred" or gy == 0:
+        return 0.0
+    return -j.guide_radial_m if gy < 0 else j.guide_radial_m
+
+
 def initial_pose(cfg: BenchConfig, theta: float) -> Pose:
     """Pose at crank angle θ with the configured initial eccentricities, at rest."""
     r, l = cfg.bodies.crank.length_m, cfg.bodies.rod.length_m
@@ -147,7 +159,8 @@ def initial_pose(cfg: BenchConfig, theta: float) -> Pose:
     e_a = loaded_eccentricity(cfg, "A", theta)
     b_pin = e_a + r * np.array([np.cos(theta), np.sin(theta)])
     b_bush = b_pin - e_b
-    s = (cfg.mechanism.d_off_m - e_c[1] - b_bush[1]) / l
+    y_g = guide_start(cfg)
+    s = ((cfg.mechanism.d_off_m + y_g if y_g else cfg.mechanism.d_off_m) - e_c[1] - b_bush[1]) / l
     if abs(s) >= 1:
         raise ValueError("rod cannot reach the guide: check lengths and d_off")
     phi = float(np.arcsin(s))

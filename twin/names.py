@@ -103,6 +103,22 @@ DRIVETRAIN_ENERGY_FIELDS: tuple[str, ...] = (
     "motor_work", "energy_belt", "diss_belt_damping", "diss_belt_slip", "diss_guide", "diss_contact",
     "energy_mechanical")
 
+# the slider guide's clearance (joints.clearance_guide_mm > 0, twin.mujoco_engine.guide): the
+# slider's transverse slide and tilt hinge (after slider_slide, at the slider frame Cs), the native
+# law's <numeric> (layout GUIDE_CLEARANCE_FIELDS, marker GC_MAGIC of _guide.h) and sensors
+SLIDER_Y = "slider_transverse"
+SLIDER_TILT = "slider_tilt"
+GUIDE_CLEARANCE_NUMERIC = "guide_clearance"
+GUIDE_CLEARANCE_MAGIC = 7311.0
+GUIDE_CLEARANCE_FIELDS: tuple[str, ...] = (
+    "marker", "dof_x", "dof_y", "dof_r", "slot", "c", "a", "k", "n", "chi", "v_min",
+    "friction_law", "mu0", "v0", "v1", "mu_static", "v_static", "v_kinetic")
+SENSOR_SLIDER_Y = "slider_y"
+SENSOR_SLIDER_TILT = "slider_tilt"
+#: the native module's user sensor on the tilt hinge: rail forces on the slider's ends
+SENSOR_GUIDE = "guide_contacts"
+GUIDE_SENSOR_FIELDS: tuple[str, ...] = ("fn_guide_front", "fn_guide_rear", "ft_guide_front", "ft_guide_rear")
+
 # sensors (base model)
 ACCEL_SENSORS = ("AC1", "AC2", "AC3", "AC4", "AC5", "AC6")
 SENSOR_CRANK_ANGLE = "crank_angle"

@@ -9,22 +9,24 @@ linear contact law of both engines needs.
 Coordinates (S003 Eq. 14, extended by the crank journal), bench frame of :mod:`twin.config`
 (the frame's bore centre A at the origin)::
 
-    q = [x_B, y_B, x'_B, y'_B, x_C, y_C, x'_C, θ, x_A, y_A]      indices 0..9   (N_Q = 10)
+    q = [x_B, y_B, x'_B, y'_B, x_C, y_C, x'_C, θ, x_A, y_A, y_g, φ]    indices 0..11   (N_Q = 12)
 
 * A' = (x_A, y_A): centre of the crank's journal at the ground pivot A (crank body 1; the
   bushing at A is the frame's bore, fixed, centred at the origin);
 * B = (x_B, y_B): centre of the crank pin (crank body 1);
 * B' = (x'_B, y'_B): centre of the rod's eye at B (rod body 2, origin of the rod frame);
 * C = (x_C, y_C): centre of the rod's eye at C (rod body 2);
-* C' = (x'_C, d_off): centre of the slider pin (slider body 3 translates on the guide
-  y = 0 through A; C' is ``d_off`` above it, so only x'_C is a coordinate);
-* θ: crank bench angle from +x (direction A' → B).
+* C' = (x'_C, d_off + y_g): centre of the slider pin (slider body 3 translates on the guide
+  y = 0 through A; C' is ``d_off`` above it);
+* θ: crank bench angle from +x (direction A' → B);
+* y_g, φ: the slider's transverse position and tilt in a guide with clearance
+  (``joints.clearance_guide_mm``, :mod:`twin.reference.guide`); 0 with the ideal guide.
 
 Pins sit on the crank (the journal A', the pin B) and on the slider (C'); bushings are the
 frame's bore (A) and the rod eyes (B', C). A' and θ sit at the end of q so that the indices of
 the S003 coordinates are those of the eight-coordinate model that had A fixed.
 
-Equations. Ten rows, always the same (the "augmented" set)::
+Equations. Twelve rows, always the same (the "augmented" set)::
 
     0  (x_B − x_A)² + (y_B − y_A)² − r²      crank length      constraint
     1  (x_B − x_A) sin θ − (y_B − y_A) cos θ crank angle       constraint
@@ -32,18 +34,21 @@ Equations. Ten rows, always the same (the "augmented" set)::
     3  x_B − x'_B        = e_Bx          pair B (Eq. 15)  constraint (= 0) or independent
     4  y_B − y'_B        = e_By          pair B (Eq. 15)  constraint (= 0) or independent
     5  x'_C − x_C        = e_Cx          pair C (Eq. 16)  constraint (= 0) or independent
-    6  d_off − y_C       = e_Cy          pair C (Eq. 16)  constraint (= 0) or independent
+    6  d_off + y_g − y_C = e_Cy          pair C (Eq. 16)  constraint (= 0) or independent
     7  θ                                 crank angle              independent
     8  x_A               = e_Ax          pair A           constraint (= 0) or independent
     9  y_A               = e_Ay          pair A           constraint (= 0) or independent
+    10 y_g                               guide            constraint (= 0) or independent
+    11 φ                                 guide            constraint (= 0) or independent
 
 An ideal joint keeps its two pair rows as constraints (nine constraints, one degree of
 freedom, S003 §3: A' is then held at the origin and the model is S003's). A clearance joint
 drops them from the constraint set and uses the same two expressions — the eccentricity
 e = pin − bushing in the bench frame, the "relative journal position" — as independent
 coordinates, next to θ; its contact is a force element. q itself never changes. Independent
-coordinates z, in this order: θ, then e_A, e_B, e_C of the joints that have a clearance
-(r = 1, 3, 5 or 7).
+coordinates z, in this order: θ, then e_A, e_B, e_C of the joints that have a clearance, then
+y_g, φ with a guide clearance (r = 1 … 9). With the ideal guide rows 10–11 hold y_g = φ = 0 and
+every product skips or adds exact zeros: runs are bit-identical to the ten-coordinate model.
 
 Crank angle equation. S003 writes θ "as a function of x_B or y_B": x_B = r cos θ is
 singular with the crank length row where y_B = 0, y_B = r sin θ where x_B = 0, so a code
@@ -54,11 +59,11 @@ d_x sin θ − d_y cos θ = 0 (d parallel to (cos θ, sin θ)). Together with ro
 block is singular only with the rod perpendicular to the guide, which the bench's geometry
 (l > r + |d_off| + the clearances) excludes.
 
-Velocity transformation (S003 Eq. 11–13). With A(q) the 10×10 Jacobian of the ten rows
-(constant rows 3–9), A q̇ = [0, 0, 0, ė_B or 0, ė_C or 0, θ̇, ė_A or 0]: the columns of
+Velocity transformation (S003 Eq. 11–13). With A(q) the 12×12 Jacobian of the twelve rows
+(constant rows 3–11), A q̇ = [0, 0, 0, ė_B or 0, ė_C or 0, θ̇, ė_A or 0, ẏ_g, φ̇ or 0]: the columns of
 R = A⁻¹[0; I] belonging to the independent rows give q̇ = R ż with Φ_q R = 0, and
 differentiating once more, q̈ = R z̈ + Ṙż with Ṙż = A⁻¹[−Φ̇_q q̇; 0]. The reduced equations
-Rᵀ M R z̈ = Rᵀ (Q − M Ṙż) have r ≤ 7 unknowns. A is solved in closed form (:func:`solve_aug`:
+Rᵀ M R z̈ = Rᵀ (Q − M Ṙż) have r ≤ 9 unknowns. A is solved in closed form (:func:`solve_aug`:
 Ȧ' from rows 8–9, a 2×2 block for Ḃ − Ȧ', one row for the rod, substitutions for the rest:
 about 35 flops), never inverted. With A ideal, Ȧ' = 0 exactly and every operation of the
 eight-coordinate model is repeated on the same numbers (the new terms add exact zeros), so
@@ -79,7 +84,8 @@ Exact as long as |d| = L, which the length constraints keep. For the rod (Table 
 from B, I_G) i = B', j = C, L = l. For the crank (m₁, ξ_G from A, I_G) i = A', j = B, L = r:
 M_jj = I_A / r² on (x_B, y_B) with I_A = I_G + m₁ ξ_G², M_ii on (x_A, y_A) and M_ij coupling
 them (with A' fixed, Ȧ' = 0, only M_jj acts: the crank turning about A). The slider translates:
-m₃ on x'_C (its y and rotation are taken by the guide). θ carries no mass (it is tied to A' and B
+m₃ on x'_C (its y and rotation are taken by the ideal guide; with a guide clearance m₃ on y_g,
+I_G + m₃ x_G² on φ and the coupling m₃ x_G of y_g and φ at φ = 0, :mod:`twin.reference.guide`). θ carries no mass (it is tied to A' and B
 by rows 0–1).
 
 Everything here is compiled with numba (``cache=True``); the parameter vector layout is given by
@@ -95,7 +101,7 @@ import numpy as np
 from numba import njit
 
 from twin.config import BenchConfig
-from twin.kinematics import initial_pose
+from twin.kinematics import guide_start, initial_pose
 
 # ----------------------------------------------------------------- parameter layout
 P_R, P_L, P_DOFF, P_GX, P_GY = 0, 1, 2, 3, 4
@@ -119,12 +125,17 @@ P_CLR_A, P_C_A, P_RBUSH_A, P_RPIN_A, P_K_A, P_CLIN_A, P_RPIN_C = (P_PRESCRIBED +
 P_MA, P_MAB = P_RPIN_C + 1, P_RPIN_C + 2  # crank mass matrix blocks M_ii (on A') and M_ij (A'–B) [kg]
 # 0 symplectic Euler (default), 1 explicit midpoint (twin.reference.model.INTEGRATORS); the last entry
 P_INTEGRATOR = P_MAB + 1
-N_PARAMS = P_INTEGRATOR + 1
+# the slider guide's clearance (twin.guide): flag, half play c_g [m], half span a [m], contact
+# stiffness K_g [N/m^n], the slider's moment of inertia about C' [kg m²] (its tilt coordinate),
+# its static moments m₃ x_G and m₃ d_off about C' [kg m] (centre of mass at C' + R(φ)(x_G, −d_off))
+P_CLR_G, P_C_G, P_GA, P_K_G, P_I3, P_S3X, P_S3D = (P_INTEGRATOR + 1 + i for i in range(7))
+P_OUT_ENERGY = P_S3D + 1   # 1: the reference engine's samples carry T and V (channel group "energy")
+N_PARAMS = P_OUT_ENERGY + 1
 
 #: number of coordinates q (module docstring)
-N_Q = 10
-#: most independent coordinates: θ and the eccentricities at A, B and C
-N_Z = 7
+N_Q = 12
+#: most independent coordinates: θ, the eccentricities at A, B and C, the slider's y_g and φ
+N_Z = 9
 
 # --------------------------------------------------------------------- state layout
 S_Q, S_QD = 0, N_Q     # q[0:10], q̇[10:20]
@@ -132,7 +143,8 @@ S_I = 2 * N_Q          # PID integral state [rad s]
 S_IN_B, S_VIMP_B = S_I + 1, S_I + 2  # contact event flag and stored impact speed at B
 S_IN_C, S_VIMP_C = S_I + 3, S_I + 4  # same at C
 S_IN_A, S_VIMP_A = S_I + 5, S_I + 6  # same at A
-N_STATE = S_I + 7
+S_GUIDE = S_I + 7      # guide contact events: [in, v_imp] of the slider's front, then rear end
+N_STATE = S_I + 11
 
 
 # ------------------------------------------------------------------------- kernels
@@ -154,6 +166,8 @@ def solve_aug(q, s, c, b, out):
     vxBp = vxB - b[3]
     vyBp = vyB - b[4]
     vyC = -b[6]
+    if b[10] != 0.0:           # the slider's transverse velocity (guide clearance; exact 0 otherwise)
+        vyC += b[10]
     dx = xC - xBp
     dy = yC - yBp
     vxC = (b[2] + 2.0 * dx * vxBp + 2.0 * dy * vyBp - 2.0 * dy * vyC) / (2.0 * dx)
@@ -167,6 +181,8 @@ def solve_aug(q, s, c, b, out):
     out[7] = th_d
     out[8] = vxA
     out[9] = vyA
+    out[10] = b[10]
+    out[11] = b[11]
 
 
 @njit(cache=True)
@@ -190,7 +206,7 @@ def residual(P, q, s, c, out):
         out[6] = 0.0
     else:
         out[5] = q[6] - q[4]
-        out[6] = P[P_DOFF] - q[5]
+        out[6] = P[P_DOFF] + q[10] - q[5] if P[P_CLR_G] > 0.5 else P[P_DOFF] - q[5]
     out[7] = 0.0
     if P[P_CLR_A] > 0.5:
         out[8] = 0.0
@@ -198,6 +214,12 @@ def residual(P, q, s, c, out):
     else:                      # the journal centre on the bore centre, the origin
         out[8] = q[8]
         out[9] = q[9]
+    if P[P_CLR_G] > 0.5:       # the slider's transverse position and tilt: independent
+        out[10] = 0.0
+        out[11] = 0.0
+    else:                      # the preloaded ideal guide: y_g = φ = 0
+        out[10] = q[10]
+        out[11] = q[11]
 
 
 @njit(cache=True)
@@ -225,9 +247,11 @@ def velocity_constraint_norm(P, q, qd):
     if P[P_CLR_B] < 0.5:
         acc += (qd[0] - qd[2]) ** 2 + (qd[1] - qd[3]) ** 2
     if P[P_CLR_C] < 0.5:
-        acc += (qd[6] - qd[4]) ** 2 + qd[5] ** 2
+        acc += (qd[6] - qd[4]) ** 2 + (qd[10] - qd[5]) ** 2
     if P[P_CLR_A] < 0.5:
         acc += qd[8] ** 2 + qd[9] ** 2
+    if P[P_CLR_G] < 0.5:
+        acc += qd[10] ** 2 + qd[11] ** 2
     return math.sqrt(acc)
 
 
@@ -263,6 +287,10 @@ def independent_rows(P, rows):
         rows[nz] = 5
         rows[nz + 1] = 6
         nz += 2
+    if P[P_CLR_G] > 0.5:
+        rows[nz] = 10
+        rows[nz + 1] = 11
+        nz += 2
     return nz
 
 
@@ -278,9 +306,16 @@ def mass_times(P, v, out):
     out[4] = b * v[2] + cc * v[4]
     out[5] = b * v[3] + cc * v[5]
     out[6] = m3 * v[6]
+    if P[P_CLR_G] > 0.5:       # the slider's tilt couples (linearized at φ = 0, see twin.guide)
+        out[6] += P[P_S3D] * v[11]
     out[7] = 0.0
     out[8] = ma * v[8] + mab * v[0]
     out[9] = ma * v[9] + mab * v[1]
+    out[10] = m3 * v[10]
+    out[11] = P[P_I3] * v[11]
+    if P[P_CLR_G] > 0.5:
+        out[10] += P[P_S3X] * v[11]
+        out[11] += P[P_S3D] * v[6] + P[P_S3X] * v[10]
 
 
 @njit(cache=True)
@@ -359,11 +394,25 @@ def project(P, q, qd, s, c, res, dq, b):
         b[4] = qd[1] - qd[3]
     if P[P_CLR_C] > 0.5:
         b[5] = qd[6] - qd[4]
-        b[6] = -qd[5]
+        b[6] = qd[10] - qd[5] if P[P_CLR_G] > 0.5 else -qd[5]
+    if P[P_CLR_G] > 0.5:
+        b[10] = qd[10]
+        b[11] = qd[11]
     solve_aug(q, s, c, b, dq)
     for i in range(N_Q):
         qd[i] = dq[i]
     return it
+
+
+@njit(cache=True)
+def kinetic_energy(P, q, qd):
+    """Kinetic energy T = ½ q̇ᵀ M q̇ [J]."""
+    mv = np.empty(N_Q)
+    mass_times(P, qd, mv)
+    T = 0.0
+    for i in range(N_Q):
+        T += 0.5 * qd[i] * mv[i]
+    return T
 
 
 @njit(cache=True)
@@ -384,6 +433,10 @@ def energy(P, q, qd):
           + m2 * (gx * ((1.0 - a2) * q[2] + a2 * q[4]) + gy * ((1.0 - a2) * q[3] + a2 * q[5]))
           + P[P_M3] * gx * q[6]
           + wa * (gx * q[8] + gy * q[9]))
+    if P[P_CLR_G] > 0.5:       # the slider's transverse position and tilt (guide clearance)
+        cf, sf = math.cos(q[11]), math.sin(q[11])
+        xg, dd = P[P_S3X], P[P_S3D]   # m₃ x_G, m₃ d_off: m₃ (r(φ) − r(0)), r = R(φ)(x_G, −d_off)
+        V -= P[P_M3] * gy * q[10] + gx * (xg * (cf - 1.0) + dd * sf) + gy * (xg * sf - dd * (cf - 1.0))
     return T + V
 
 
@@ -418,6 +471,13 @@ def mechanism_params(cfg: BenchConfig) -> np.ndarray:
     P[P_RPIN_A], P[P_RPIN_B], P[P_RPIN_C] = j.pin_radius("A"), j.pin_radius("B"), j.pin_radius("C")
     P[P_RBUSH_A] = j.bushing_radius_m("A")
     P[P_RBUSH_B], P[P_RBUSH_C] = j.bushing_radius_m("B"), j.bushing_radius_m("C")
+    if j.guide_play:
+        P[P_CLR_G], P[P_C_G], P[P_GA] = 1.0, j.guide_radial_m, j.guide_span_m / 2.0
+        m3, xg3 = b.slider.mass_kg, b.slider.x_g_m
+        # the slider's centre of mass sits x_G ahead of C' at its height (as the MuJoCo twin's
+        # slider body has it): no offset normal to the slider's axis, m₃ d_off's slot holds 0
+        P[P_I3] = b.slider.inertia_kgm2 + m3 * xg3 ** 2
+        P[P_S3X], P[P_S3D] = m3 * xg3, 0.0
     return P
 
 
@@ -434,7 +494,7 @@ def effective_masses(cfg: BenchConfig, P: np.ndarray, q: np.ndarray) -> dict[str
         if cfg.joints.diametral_mm(jt) <= 0:
             continue
         e = {"A": np.array([q[8], q[9]]), "B": np.array([q[0] - q[2], q[1] - q[3]]),
-             "C": np.array([q[6] - q[4], P[P_DOFF] - q[5]])}[jt]
+             "C": np.array([q[6] - q[4], P[P_DOFF] + q[10] - q[5]])}[jt]
         n = e / np.linalg.norm(e) if np.linalg.norm(e) > 0 else np.array([0.0, 1.0])
         w = W[off:off + 2, off:off + 2]
         out[jt] = float(1.0 / (n @ w @ n))
@@ -450,7 +510,9 @@ def initial_state(cfg: BenchConfig, theta: float, omega: float = 0.0, P: np.ndar
     pose = initial_pose(cfg, theta)
     st = np.zeros(N_STATE)
     st[S_Q:S_Q + N_Q] = [pose.b_pin[0], pose.b_pin[1], pose.b_bush[0], pose.b_bush[1],
-                         pose.c_bush[0], pose.c_bush[1], pose.c_pin[0], pose.theta, pose.e_a[0], pose.e_a[1]]
+                         pose.c_bush[0], pose.c_bush[1], pose.c_pin[0], pose.theta, pose.e_a[0], pose.e_a[1],
+                         0.0, 0.0]
+    st[S_Q + 10] = guide_start(cfg)
     if omega != 0.0:
         if P is None:
             raise ValueError("initial_state: a turning start needs the parameter vector P")

@@ -14,6 +14,9 @@ Definitions (identical for both engines, so summaries compare line by line):
   [N m], its continuous rating and whether the RMS exceeds it (the drive's thermal limit is not
   modelled: this flags runs the real motor would not sustain), the fraction of samples at the
   peak clamp, the peak belt torque on the crank [N m] and the peak belt slip speed [m/s].
+* ``guide`` (runs with a guide clearance and the channel group ``joints``): the play [mm], the
+  slider's max |y_g| [m] and |tilt| [rad], the max rail force at its front and rear ends [N] and
+  the contact onsets of each end (either rail; defined as ``impacts``).
 """
 
 from __future__ import annotations
@@ -112,6 +115,8 @@ class SummaryAccumulator:
         self._acc: dict[str, list[float]] = {}  # name -> [sum of squares, peak |a|]
         self._track: list[float] | None = None  # [max |err|, sum err^2]
         self._motor: list[float] | None = None  # [sum u^2, max |u|, samples at the clamp, max |belt|, max |slip|]
+        self._guide: list[float] | None = None  # [max |y|, max |tilt|, max |fn front|, max |fn rear|]
+        self._guide_impacts: dict[str, ImpactCounter] = {}
 
     def update(self, chunk: Run) -> None:
         if self.rate_hz is None:
@@ -128,6 +133,14 @@ class SummaryAccumulator:
             st["max_penetration_m"] = max(st["max_penetration_m"], float(np.max(chunk[f"pen_{j}"])))
             st["max_contact_force_N"] = max(st["max_contact_force_N"], float(np.max(fn)))
             self._impacts.setdefault(j, ImpactCounter(chunk.rate_hz)).update(fn > 0)
+        if "fn_guide_front" in chunk:
+            gd = self._guide if self._guide is not None else [0.0, 0.0, 0.0, 0.0]
+            for i, name in enumerate(("slider_y", "slider_tilt", "fn_guide_front", "fn_guide_rear")):
+                gd[i] = max(gd[i], float(np.max(np.abs(chunk[name]))))
+            for end in ("front", "rear"):
+                self._guide_impacts.setdefault(end, ImpactCounter(chunk.rate_hz)).update(
+                    chunk[f"fn_guide_{end}"] != 0)
+            self._guide = gd
         for a in ACCELEROMETERS:
             if a in chunk:
                 x = chunk[a].astype(np.float64)
@@ -176,6 +189,12 @@ class SummaryAccumulator:
                 js.update(max_eccentricity_m=st["max_eccentricity_m"], max_penetration_m=st["max_penetration_m"],
                           impacts=self._impacts[j].count, max_contact_force_N=st["max_contact_force_N"])
             out[j] = js
+        if self._guide is not None:
+            out["guide"] = {"clearance_mm": cfg.joints.clearance_guide_mm if cfg else None,
+                            "max_transverse_m": self._guide[0], "max_tilt_rad": self._guide[1],
+                            "max_force_front_N": self._guide[2], "max_force_rear_N": self._guide[3],
+                            "impacts_front": self._guide_impacts["front"].count,
+                            "impacts_rear": self._guide_impacts["rear"].count}
         for a in ACCELEROMETERS:
             if a in self._acc:
                 ss, peak = self._acc[a]

@@ -119,6 +119,11 @@ def _print_summary(s: dict, out: Path | None) -> None:
                   f"max force {js['max_contact_force_N']:.0f} N")
         else:
             print(f"  joint {j}: ideal (ball bearing)")
+    if "guide" in s:
+        g = s["guide"]
+        print(f"  guide: {g['clearance_mm']:g} mm play, max transverse {g['max_transverse_m']*1e6:.1f} um, "
+              f"max tilt {g['max_tilt_rad']*1e3:.3f} mrad, max force front/rear {g['max_force_front_N']:.0f}/"
+              f"{g['max_force_rear_N']:.0f} N, {g['impacts_front']}/{g['impacts_rear']} contact onsets")
     acc = [f"{a} {s[a]['rms_mps2']:.1f}/{s[a]['peak_mps2']:.0f}" for a in ("AC1", "AC2", "AC3", "AC4", "AC5", "AC6") if a in s]
     if acc:
         print("  accel rms/peak [m/s^2]: " + ", ".join(acc))

@@ -116,6 +116,10 @@ class BenchConfig:
         out while it holds the defaults and the drive does not use it (crank PID, prescribed), so
         that the text and digest of such configurations are what they were before it existed."""
         out = _to_plain(self)
+        joints = out.get("joints", {})
+        if all(joints.get(k) == v for k, v in Joints.GUIDE_DEFAULTS.items()):
+            for k in Joints.GUIDE_DEFAULTS:
+                joints.pop(k, None)
         if self.drive.mode in ("pid", "prescribed") and self.drivetrain == Drivetrain():
             out.pop("drivetrain", None)
         return out

@@ -26,14 +26,14 @@ PROGRAMS: tuple[str, ...] = ("constant", "protocol", "trace", "steps")
 #: Output channel groups a run can carry (see :mod:`twin.channels`).
 CHANNEL_GROUPS: tuple[str, ...] = ("accel", "encoder", "crank", "slider", "joints", "drive")
 #: Channel groups a scene may ask for but that are not in the default list (they cost time):
-#: "energy" (mechanical energy and slider speed, for energy balances; MuJoCo engine only);
+#: "energy" (mechanical energy and slider speed, for energy balances; both engines);
 #: "motor" (motor, belt and command channels; drive.mode "motor" or "torque" only);
 #: "drive_energy" (the drive train's work, dissipation and energy accumulators; "motor"/"torque").
 OPTIONAL_CHANNEL_GROUPS: tuple[str, ...] = ("energy", "motor", "drive_energy")
 #: Every channel group, in canonical order (the defaults, then the optional ones).
 ALL_CHANNEL_GROUPS: tuple[str, ...] = CHANNEL_GROUPS + OPTIONAL_CHANNEL_GROUPS
 #: Optional channel groups that only some engines produce: group -> engines.
-ENGINE_ONLY_GROUPS: dict[str, tuple[str, ...]] = {"energy": ("mujoco",)}
+ENGINE_ONLY_GROUPS: dict[str, tuple[str, ...]] = {}
 #: Configuration names (they name default output files).
 _NAME_RE = re.compile(r"[A-Za-z0-9_+=@,-][A-Za-z0-9._+=@,-]*")
 #: Accelerometers of the bench (S003 Table 3).

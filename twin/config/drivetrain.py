@@ -213,3 +213,17 @@ class Drivetrain:
         if self.release_s > 0:
             out = np.where(t >= self.release_s, 0.0, out)
         return np.clip(out, -self.peak_torque_nm, self.peak_torque_nm)
+
+
+#: the placeholders' ranges a user should explore (their documentation above), as (factor name,
+#: field, description, (low, high)): the dataset factors and the stability campaign draw from them
+EXPLORE_RANGES: tuple[tuple[str, str, str, tuple[float, float]], ...] = (
+    ("rotor_inertia_kgm2", "rotor_inertia_kgm2", "motor rotor and pulley inertia [kg m^2]", (1e-4, 6e-4)),
+    ("belt_ea_n", "belt_ea_n", "belt axial stiffness EA [N]", (5e3, 1e5)),
+    ("belt_damping_nspm", "belt_damping_nspm", "belt span damping [N s/m]", (5.0, 100.0)),
+    ("belt_preload_n", "preload_n", "belt span preload [N]", (30.0, 300.0)),
+    ("belt_mu", "friction_mu", "belt-pulley friction coefficient [-]", (0.15, 0.5)),
+    ("speed_kp_nms", "speed_kp_nms", "speed loop proportional gain [N m s/rad]", (0.05, 0.5)),
+    ("speed_ki_nm", "speed_ki_nm", "speed loop integral gain [N m/rad]", (0.0, 20.0)),
+    ("speed_filter_hz", "speed_filter_hz", "speed estimate low-pass cutoff [Hz]", (30.0, 500.0)),
+)

@@ -140,6 +140,19 @@ class Joints:
         initial_eccentricity: ``"loaded"`` starts each journal touching the bushing on the side
             its static load pushes it to (no artificial drop at t = 0); ``"centred"`` starts
             it at the bushing centre.
+        clearance_guide_mm: two-sided clearance of the slider guide [mm]: the total transverse
+            play of the slider between its two rails (S003 §2.2.1 names it; the paper's model
+            leaves it out). 0 = the preloaded ideal linear guide (pure translation, S003 §3).
+            Otherwise the slider gains its transverse position and tilt, and its front and rear
+            ends (``guide_span_m`` apart) each touch the upper or the lower rail through the
+            joints' contact law and friction (docs/guide.md). Any value in [0, 5) mm (no catalogue).
+        guide_span_m: distance between the slider's front and rear contact points along the
+            guide [m]. PLACEHOLDER: S003 gives the slider's length, 0.05 m (Table 1), not its
+            shoe spacing; the default takes that length.
+        guide_edge_radius_m: radius of curvature of the slider's contact edges on the flat
+            rails [m], for the contact stiffness (S003 Eq. 18 in the limit of a flat rail,
+            R_i → ∞: K = 4/(3(h_i + h_j)) √R_j, slider and rails of the pin's steel).
+            PLACEHOLDER: not given; 0.01 m (the journal's default radius).
     """
 
     clearance_b_mm: float = 0.0
@@ -151,6 +164,14 @@ class Joints:
     pin_diameters_m: Mapping[str, float] = field(default_factory=dict)
     bushing_lengths_m: Mapping[str, float] = field(default_factory=dict)
     initial_eccentricity: str = "loaded"
+    clearance_guide_mm: float = 0.0
+    guide_span_m: float = 0.05
+    guide_edge_radius_m: float = 0.01
+
+    #: guide fields left out of the TOML text while they hold these defaults (so that the text and
+    #: digest of a configuration without a guide clearance are what they were before they existed)
+    GUIDE_DEFAULTS: typing.ClassVar[dict[str, float]] = {
+        "clearance_guide_mm": 0.0, "guide_span_m": 0.05, "guide_edge_radius_m": 0.01}
 
     def __post_init__(self) -> None:
         for name in ("clearance_a_mm", "clearance_b_mm", "clearance_c_mm"):
@@ -173,6 +194,23 @@ class Joints:
             _check(self.pin_diameter(jt) < 0.5, "pin_diameters_m" if jt in self.pin_diameters_m else "pin_diameter_m",
                    f"must be < 0.5 m, got {self.pin_diameter(jt)!r} at joint {jt}")
         _choice(self.initial_eccentricity, "initial_eccentricity", ("loaded", "centred"))
+        g = self.clearance_guide_mm
+        _check(isinstance(g, (int, float)) and not isinstance(g, bool) and math.isfinite(g) and 0 <= g < 5.0,
+               "clearance_guide_mm", f"must be 0 (ideal preloaded guide) or a clearance in (0, 5) mm, got {g!r}")
+        for name, hi in (("guide_span_m", 1.0), ("guide_edge_radius_m", 1.0)):
+            v = getattr(self, name)
+            _check(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and 0 < v <= hi,
+                   name, f"must be a length in (0, {hi:g}] m, got {v!r}")
+
+    @property
+    def guide_radial_m(self) -> float:
+        """Half the guide's play: the slider's free transverse travel each way from the centre [m]."""
+        return self.clearance_guide_mm * 1e-3 / 2.0
+
+    @property
+    def guide_play(self) -> bool:
+        """True when the guide has a clearance (the slider's transverse position and tilt are free)."""
+        return self.clearance_guide_mm > 0
 
     def diametral_mm(self, joint: str) -> float:
         """Diametral clearance of ``joint`` ("A", "B" or "C") [mm]."""
@@ -394,3 +432,13 @@ def ln_stiffness(joints: Joints, materials: Materials, joint: str) -> float:
     ri, rj = joints.bushing_radius_m(joint), joints.pin_radius(joint)
     h = materials.pin_of(joint).compliance_h + materials.bushing_of(joint).compliance_h
     return 4.0 / (3.0 * h) * math.sqrt(ri * rj / (ri - rj))
+
+
+def guide_stiffness(joints: Joints, materials: Materials) -> float:
+    """Contact stiffness K of the slider's ends on the guide rails [N/m^n] (the joints' law and
+    exponent): S003 Eq. 18 in the limit of a flat rail (bushing radius R_i → ∞),
+    K = 4 / (3 (h_i + h_j)) · √R_j with R_j = ``joints.guide_edge_radius_m`` and slider and rail
+    of the pin's steel (h = (1 − ν²)/E each): the Hertz point contact of a crowned edge on a flat.
+    PLACEHOLDER geometry (the edge radius); the papers give no guide contact data."""
+    pin = materials.pin_of("C")
+    return 4.0 / (3.0 * 2.0 * pin.compliance_h) * math.sqrt(joints.guide_edge_radius_m)

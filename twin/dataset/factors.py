@@ -18,6 +18,7 @@ from typing import Any, Callable
 import numpy as np
 
 from twin.config import ACCELEROMETERS, CATALOGUE_DIAMETRAL_MM, BenchConfig
+from twin.config.drivetrain import EXPLORE_RANGES
 from twin.dataset.spec import SpecError
 
 #: fault classes: which joints have a clearance
@@ -134,6 +135,9 @@ NAMED: dict[str, Factor] = {f.name: f for f in (
     Factor("stiffness_scale", "factor on the contact stiffness, both engines [-]", None, (0.1, 10.0),
            _set("contact.stiffness_scale")),
     Factor("guide_friction_n", "slider guide friction [N]", None, (0.0, 100.0), _set("mechanism.guide_friction_n")),
+    Factor("clearance_guide_mm", "two-sided clearance of the slider guide: the slider's total transverse play "
+           "between its rails [mm], 0 = the preloaded ideal guide", None, (0.0, 1.0),
+           _set("joints.clearance_guide_mm")),
     Factor("pid_scale", "factor on the three PID gains [-]", None, (0.1, 10.0), _pid_scale),
     Factor("zero_g_spread_v", "standard deviation of the sensors' zero-g offsets around mid-supply [V] "
            "(drawn per run)", None, (0.0, 0.5), _zero_g_spread),
@@ -145,15 +149,7 @@ NAMED: dict[str, Factor] = {f.name: f for f in (
     # the drive train's placeholders (twin.config.drivetrain; with drive_mode motor/torque): bounds are the
     # ranges the parameters' documentation asks users to explore
     *(Factor(name, f"drive train: {doc} (drivetrain.{field})", None, bounds, _set(f"drivetrain.{field}"))
-      for name, field, doc, bounds in (
-          ("rotor_inertia_kgm2", "rotor_inertia_kgm2", "motor rotor and pulley inertia [kg m^2]", (1e-4, 6e-4)),
-          ("belt_ea_n", "belt_ea_n", "belt axial stiffness EA [N]", (5e3, 1e5)),
-          ("belt_damping_nspm", "belt_damping_nspm", "belt span damping [N s/m]", (5.0, 100.0)),
-          ("belt_preload_n", "preload_n", "belt span preload [N]", (30.0, 300.0)),
-          ("belt_mu", "friction_mu", "belt-pulley friction coefficient [-]", (0.15, 0.5)),
-          ("speed_kp_nms", "speed_kp_nms", "speed loop proportional gain [N m s/rad]", (0.05, 0.5)),
-          ("speed_ki_nm", "speed_ki_nm", "speed loop integral gain [N m/rad]", (0.0, 20.0)),
-          ("speed_filter_hz", "speed_filter_hz", "speed estimate low-pass cutoff [Hz]", (30.0, 500.0)))),
+      for name, field, doc, bounds in EXPLORE_RANGES),
 )}
 
 

@@ -82,7 +82,8 @@ def dataset_columns(runs: list[RunPlan], spec: DatasetSpec) -> list[Any]:
     if not runs:
         return []
     probe = runs[0].config.replace(**{"joints.clearance_a_mm": 0.1, "joints.clearance_b_mm": 0.1,
-                                       "joints.clearance_c_mm": 0.1, "joints.allow_noncatalogue": True})
+                                       "joints.clearance_c_mm": 0.1, "joints.allow_noncatalogue": True,
+                                       "joints.clearance_guide_mm": 0.1})
     every = column_specs(probe, spec.outputs.truth, spec.outputs.instrumented, spec.outputs.dtype)
     present: set[str] = set()
     for r in runs:

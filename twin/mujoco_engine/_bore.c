@@ -574,11 +574,13 @@ static void add_friction_sensor(const mjModel* m, mjData* d, int gb, mjtNum ft) 
 }
 
 #include "_drivetrain.h"
+#include "_guide.h"
 
 static void passive_bore_joints(const mjModel* m, mjData* d);
 
 static void passive_bore(const mjModel* m, mjData* d) {
   passive_bore_joints(m, d);
+  guide_passive(m, d);       /* the guide clearance's contacts (before the drive train books them) */
   drivetrain_passive(m, d);  /* last: it books the other passive forces of the step */
 }
 
@@ -712,6 +714,24 @@ static PyObject* py_drivetrain_fields(PyObject* self, PyObject* args) {
   return out;
 }
 
+static PyObject* py_guide_clearance_fields(PyObject* self, PyObject* args) {
+  PyObject* out = PyTuple_New(GC_NFIELDS);
+  if (!out) return NULL;
+  for (int i = 0; i < GC_NFIELDS; i++) {
+    PyObject* name = PyUnicode_FromString(gc_field_names[i]);
+    if (!name) {
+      Py_DECREF(out);
+      return NULL;
+    }
+    PyTuple_SET_ITEM(out, i, name);
+  }
+  return out;
+}
+
+static PyObject* py_guide_clearance_layout(PyObject* self, PyObject* args) {
+  return Py_BuildValue("(dii)", GC_MAGIC, (int)GC_NSTATE, (int)GC_NSENSOR);
+}
+
 static PyObject* py_drivetrain_layout(PyObject* self, PyObject* args) {
   return Py_BuildValue("(diii)", DT_MAGIC, (int)DT_NSTATE_FIXED, (int)DT_NSENSOR_TORQUE, (int)DT_NSENSOR);
 }
@@ -724,6 +744,8 @@ static PyMethodDef methods[] = {
   {"guide_fields", py_guide_fields, METH_NOARGS, "names of a guide joint's user data fields, in order (enum guide_user)."},
   {"drivetrain_fields", py_drivetrain_fields, METH_NOARGS, "names of the drive train's numeric fields, in order (enum dt_field)."},
   {"drivetrain_layout", py_drivetrain_layout, METH_NOARGS, "(marker, fixed userdata slots before 2 nv, torque sensor dimension, accounts sensor dimension) of the drive train."},
+  {"guide_clearance_fields", py_guide_clearance_fields, METH_NOARGS, "names of the guide clearance's numeric fields, in order (enum gc_field)."},
+  {"guide_clearance_layout", py_guide_clearance_layout, METH_NOARGS, "(marker, userdata slots, sensor dimension) of the guide clearance."},
   {"guide_magic", py_guide_magic, METH_NOARGS, "joint user data marker value that marks a guide."},
   {NULL, NULL, 0, NULL}
 };

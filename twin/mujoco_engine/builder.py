@@ -59,6 +59,7 @@ from twin.errors import ModelError
 from twin.impact import DAMPING_FACTOR
 from twin.mujoco_engine.accel import posthoc_applies
 from twin.mujoco_engine import drivetrain
+from twin.mujoco_engine import guide as guide_clearance
 from twin.mujoco_engine.collider import ensure_installed
 
 #: flat, tiny impedance: the contact force is then exactly k δ + c δ̇ with a direct solref
@@ -454,6 +455,8 @@ def build_spec(cfg: BenchConfig) -> mujoco.MjSpec:
     act.dynprm[0] = cfg.pid.imax
     if cfg.drive.mode == "prescribed":
         _prescribed_drive(spec, cfg)
+    if guide_clearance.applies(cfg):
+        guide_clearance.add_guide(spec, cfg)
     if drivetrain.applies(cfg):
         drivetrain.add_drive_train(spec, cfg)
     return spec
@@ -549,6 +552,8 @@ def build(cfg: BenchConfig) -> tuple[mujoco.MjSpec, mujoco.MjModel, BuildInfo]:
     info = BuildInfo()
     if not cfg.joints.clearance_joints:
         info.sensors = [x.name for x in spec.sensors]
+        if guide_clearance.applies(cfg):
+            guide_clearance.finish(spec, cfg, _compile(spec, cfg))
         if drivetrain.applies(cfg):
             drivetrain.finish(spec, cfg, _compile(spec, cfg))
         return spec, _compile(spec, cfg), info
@@ -617,6 +622,8 @@ def build(cfg: BenchConfig) -> tuple[mujoco.MjSpec, mujoco.MjModel, BuildInfo]:
         info.contacts[jt] = setting
         info.a_hat[jt] = a_hat
     info.sensors = [x.name for x in spec.sensors]
+    if guide_clearance.applies(cfg):
+        guide_clearance.finish(spec, cfg, model)
     if drivetrain.applies(cfg):
         drivetrain.finish(spec, cfg, model)
     return spec, _compile(spec, cfg), info

@@ -68,6 +68,12 @@ def ensure_installed() -> None:
         raise EngineUnavailableError(
             "the native module's drive-train layout differs from twin.names (DRIVETRAIN_FIELDS, DRIVETRAIN_MAGIC, "
             "DRIVETRAIN_SENSOR_FIELDS, DRIVETRAIN_ENERGY_FIELDS); rebuild the extension ('pip install -e .')")
+    gc = (tuple(_bore.guide_clearance_fields()), _bore.guide_clearance_layout()[0], _bore.guide_clearance_layout()[2]) \
+        if hasattr(_bore, "guide_clearance_fields") else None
+    if gc != (N.GUIDE_CLEARANCE_FIELDS, N.GUIDE_CLEARANCE_MAGIC, len(N.GUIDE_SENSOR_FIELDS)):
+        raise EngineUnavailableError(
+            "the native module's guide-clearance layout differs from twin.names (GUIDE_CLEARANCE_FIELDS, "
+            "GUIDE_CLEARANCE_MAGIC, GUIDE_SENSOR_FIELDS); rebuild the extension ('pip install -e .')")
     lib = ctypes.CDLL(_library_path())
     table = ctypes.addressof(ctypes.c_void_p.in_dll(lib, "mjCOLLISIONFUNC"))
     passive = ctypes.addressof(ctypes.c_void_p.in_dll(lib, "mjcb_passive"))

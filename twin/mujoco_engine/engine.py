@@ -133,6 +133,8 @@ class MujocoEngine:
             d.qpos[m.jnt_qposadr[m.joint(N.ECC_B_X).id]] = rel[0]
             d.qpos[m.jnt_qposadr[m.joint(N.ECC_B_Y).id]] = rel[1]
         d.qpos[m.jnt_qposadr[m.joint(N.SLIDER_SLIDE).id]] = pose.slider_x
+        if cfg.joints.guide_play:  # the slider's frame Cs: y_g from the guide's start (tilt 0)
+            d.qpos[m.jnt_qposadr[m.joint(N.SLIDER_Y).id]] = pose.c_pin[1] - cfg.mechanism.d_off_m
         omega = self._drive.start_rate() if self._drive is not None else 0.0
         if omega != 0.0:
             # a prescribed drive at speed from t = 0: every velocity consistent with it (ė = 0)
@@ -295,6 +297,13 @@ class MujocoEngine:
                                                                col(N.sensor_contact(jt), 2)), 0.0)
                 else:  # tendon limit force (the sensor is the tendon's limit force)
                     out[f"fn_{jt}"] = np.abs(col(N.sensor_contact(jt), 0))
+            if cfg.joints.guide_play:
+                # C' from the frame Cs: y_g = y_Cs − d_off (1 − cos φ) (twin.reference.guide)
+                tilt = col(N.SENSOR_SLIDER_TILT)
+                out["slider_y"] = col(N.SENSOR_SLIDER_Y) - cfg.mechanism.d_off_m * (1.0 - np.cos(tilt))
+                out["slider_tilt"] = tilt
+                for i, name in enumerate(N.GUIDE_SENSOR_FIELDS):
+                    out[name] = col(N.SENSOR_GUIDE, i)
         if "energy" in groups:
             out["energy_kinetic"] = col(N.SENSOR_ENERGY_KINETIC)
             out["energy_potential"] = col(N.SENSOR_ENERGY_POTENTIAL)

@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from twin import __version__ as twin_version
+from twin.channels import GUIDE_CHANNELS
 from twin.config import ACCELEROMETERS, BenchConfig
 from twin.errors import ConfigError, SimulationError
 from twin.natural_coordinates import initial_state
@@ -96,10 +97,10 @@ class ReferenceEngine:
             raise ConfigError("reference.integrator",
                               f"the explicit midpoint integrator is not available with drive.mode = {cfg.drive.mode!r} "
                               "(use \"euler\")")
-        if self.options.integrator == "midpoint" and cfg.joints.clearance_joints:
+        if self.options.integrator == "midpoint" and (cfg.joints.clearance_joints or cfg.joints.guide_play):
             raise ConfigError("reference.integrator",
-                              "the explicit midpoint integrator is for scenes without clearance joints: it is not "
-                              "stable through hard impacts at the bench's steps (use \"euler\")")
+                              "the explicit midpoint integrator is for scenes without clearance joints or guide "
+                              "clearance: it is not stable through hard impacts at the bench's steps (use \"euler\")")
         t0 = time.perf_counter()
         self.P = engine_params(cfg, self.options)
         self.build_s = time.perf_counter() - t0
@@ -205,6 +206,13 @@ class ReferenceEngine:
                 base = {"A": M.O_JOINT_A, "B": M.O_JOINT_B, "C": M.O_JOINT_C}[jt]  # A: bench frame
                 for k, name in enumerate((f"ecc_{jt}_x", f"ecc_{jt}_y", f"pen_{jt}", f"fn_{jt}", f"ft_{jt}")):
                     cols[name] = out[:, base + k]
+            if cfg.joints.guide_play:
+                for k, (name, *_) in enumerate(GUIDE_CHANNELS):
+                    cols[name] = out[:, M.O_GUIDE + k]
+        if "energy" in groups:
+            cols["energy_kinetic"] = out[:, M.O_EKIN]
+            cols["energy_potential"] = out[:, M.O_EPOT]
+            cols["slider_speed"] = out[:, M.O_VSLIDER]
         if "drive" in groups:
             cols["crank_torque"] = out[:, M.O_TORQUE]
         if self._train is not None:

@@ -58,16 +58,18 @@ import numpy as np
 from numba import njit
 
 from twin.config import ACCELEROMETERS, BenchConfig
+from twin.config.mechanism import guide_stiffness
 from twin.contact_params import JointContact, joint_contact
 from twin.natural_coordinates import (
-    N_Q, N_Z, P_C_A, P_C_B, P_C_C, P_CLIN_A, P_CLIN_B, P_CLIN_C, P_CLR_A, P_CLR_B, P_CLR_C, P_DMAX,
-    P_DOFF, P_E, P_FGUIDE, P_FRIC_LAW, P_GX, P_GY, P_H, P_IMAX, P_INTEGRATOR, P_K_A, P_K_B, P_K_C, P_KI, P_KP,
-    P_KV, P_L, P_LAW, P_M1, P_M2, P_M3, P_MU0, P_MUS, P_N, P_NEWTON_MAXIT, P_NEWTON_TOL, P_PRESCRIBED, P_R,
-    P_RBUSH_A, P_RBUSH_B, P_RBUSH_C, P_RPIN_A, P_RPIN_B, P_RPIN_C, P_SENS, P_V0, P_V1, P_VD, P_VMIN, P_VS,
-    P_XG1, P_XG2, S_I, S_IN_A, S_IN_B, S_IN_C, S_Q, S_QD, S_VIMP_A, S_VIMP_B, S_VIMP_C, constraint_norm,
-    effective_masses, energy, independent_rows, mass_times, mechanism_params, project, quadratic_terms, solve_aug,
-    velocity_constraint_norm)
+    N_Q, N_Z, P_CLIN_A, P_CLIN_B, P_CLIN_C, P_CLR_A, P_CLR_B, P_CLR_C, P_CLR_G, P_C_A, P_C_B, P_C_C, P_DMAX,
+    P_DOFF, P_E, P_FGUIDE, P_FRIC_LAW, P_GX, P_GY, P_H, P_IMAX, P_INTEGRATOR, P_KI, P_KP, P_KV, P_K_A, P_K_B,
+    P_K_C, P_K_G, P_L, P_LAW, P_M1, P_M2, P_M3, P_MU0, P_MUS, P_N, P_NEWTON_MAXIT, P_NEWTON_TOL, P_OUT_ENERGY,
+    P_PRESCRIBED, P_R, P_RBUSH_A, P_RBUSH_B, P_RBUSH_C, P_RPIN_A, P_RPIN_B, P_RPIN_C, P_SENS, P_V0, P_V1, P_VD,
+    P_VMIN, P_VS, P_XG1, P_XG2, S_GUIDE, S_I, S_IN_A, S_IN_B, S_IN_C, S_Q, S_QD, S_VIMP_A, S_VIMP_B, S_VIMP_C,
+    constraint_norm, effective_masses, energy, independent_rows, kinetic_energy, mass_times, mechanism_params,
+    project, quadratic_terms, solve_aug, velocity_constraint_norm)
 from twin.reference import drivetrain as DT
+from twin.reference.guide import N_GUIDE_OUT, guide_forces
 from twin.reference.contact import FRICTION_CODES, LAW_CODES, adams_friction_force, friction_force, normal_force, ramp
 
 #: integrators of :func:`run_steps` by name -> code in ``P[P_INTEGRATOR]``
@@ -81,7 +83,9 @@ O_ACC = 3              # AC1..AC6: 3..8
 O_TORQUE = 9
 O_JOINT_B, O_JOINT_C = 10, 15  # ecc_x, ecc_y (rod frame), pen, fn, ft
 O_JOINT_A = 20                 # the same at A, ecc in the bench frame
-N_OUT = 25
+O_GUIDE = 25                   # y_g, φ, fn front, fn rear, ft front, ft rear (twin.reference.guide)
+O_EKIN, O_EPOT, O_VSLIDER = O_GUIDE + N_GUIDE_OUT, O_GUIDE + N_GUIDE_OUT + 1, O_GUIDE + N_GUIDE_OUT + 2
+N_OUT = O_VSLIDER + 1          # the last three with P[P_OUT_ENERGY] only (channel group "energy")
 
 #: integration status codes of :func:`run_steps`
 OK, NEWTON_FAILED, NOT_FINITE = 0, 1, 2
@@ -115,8 +119,12 @@ def _joint(P, q, qd, joint, cst, Q, jout):
         edx, edy = qd[0] - qd[2], qd[1] - qd[3]
         c, Rb, Rp, K, clin = P[P_C_B], P[P_RBUSH_B], P[P_RPIN_B], P[P_K_B], P[P_CLIN_B]
     elif joint == J_C:
-        ex, ey = q[6] - q[4], P[P_DOFF] - q[5]
-        edx, edy = qd[6] - qd[4], -qd[5]
+        if P[P_CLR_G] > 0.5:   # the slider pin C' moves with the slider's y_g
+            ex, ey = q[6] - q[4], P[P_DOFF] + q[10] - q[5]
+            edx, edy = qd[6] - qd[4], qd[10] - qd[5]
+        else:
+            ex, ey = q[6] - q[4], P[P_DOFF] - q[5]
+            edx, edy = qd[6] - qd[4], -qd[5]
         c, Rb, Rp, K, clin = P[P_C_C], P[P_RBUSH_C], P[P_RPIN_C], P[P_K_C], P[P_CLIN_C]
     else:  # A: the crank journal A' in the frame's bore (centred at the origin)
         ex, ey = q[8], q[9]
@@ -172,7 +180,9 @@ def _joint(P, q, qd, joint, cst, Q, jout):
         Q[9] += Fy
         _rod_force(P, q, -Fx, -Fy, q[2] + Rb * nx, q[3] + Rb * ny, Q)
     elif joint == J_C:
-        Q[6] += Fx                                 # slider pin: the guide takes F_y
+        Q[6] += Fx                                 # slider pin: the ideal guide takes F_y
+        if P[P_CLR_G] > 0.5:
+            Q[10] += Fy
         _rod_force(P, q, -Fx, -Fy, q[4] + Rb * nx, q[5] + Rb * ny, Q)
     else:
         # crank journal point P = A' + R_pin n: F on A', torque (R_pin n × F)_z on θ; the opposite
@@ -185,7 +195,8 @@ def _joint(P, q, qd, joint, cst, Q, jout):
 @njit(cache=True)
 def generalized_forces(P, q, qd, tau, cst_a, cst_b, cst_c, Q, ja, jb, jc):
     """Q(q, q̇, τ): gravity, drive torque, guide friction and contact elements (joint J's
-    event state ``cst_j``, its output ``jj``)."""
+    event state ``cst_j``, its output ``jj``). With a guide clearance ``cst_c`` also holds the
+    guide's events (entries 2–5) and ``jc`` its outputs (entries 5–10, :mod:`twin.reference.guide`)."""
     gx, gy = P[P_GX], P[P_GY]
     w1 = P[P_M1] * P[P_XG1] / P[P_R]
     wa = P[P_M1] - w1          # the crank's weight share on A': m₁ (1 − ξ_G/r)
@@ -201,6 +212,8 @@ def generalized_forces(P, q, qd, tau, cst_a, cst_b, cst_c, Q, ja, jb, jc):
     Q[7] = tau
     Q[8] = wa * gx
     Q[9] = wa * gy
+    Q[10] = 0.0
+    Q[11] = 0.0
     fg = P[P_FGUIDE]
     if fg > 0.0:
         v = qd[6]
@@ -215,6 +228,8 @@ def generalized_forces(P, q, qd, tau, cst_a, cst_b, cst_c, Q, ja, jb, jc):
         _joint(P, q, qd, J_B, cst_b, Q, jb)
     if P[P_CLR_C] > 0.5:
         _joint(P, q, qd, J_C, cst_c, Q, jc)
+    if P[P_CLR_G] > 0.5:
+        guide_forces(P, q, qd, cst_c[2:6], jc[5:5 + N_GUIDE_OUT], Q)
 
 
 @njit(cache=True)
@@ -263,8 +278,8 @@ def _assemble(P, q, qd, s, c, Q, rows, nz, Rt, S, Mb, rhs, tmp):
     mass_times(P, S, mr)
     for i in range(N_Q):
         b[i] = Q[i] - mr[i]
-    # with A ideal, R's rows 8–9 are exact zeros: the products skip them (the same sums)
-    nq = N_Q if P[P_CLR_A] > 0.5 else 8
+    # with A and the guide ideal, R's rows 8–11 are exact zeros: the products skip them (the same sums)
+    nq = N_Q if (P[P_CLR_A] > 0.5 or P[P_CLR_G] > 0.5) else 8
     for j in range(nz):
         acc = 0.0
         for k in range(nq):
@@ -357,6 +372,14 @@ def _outputs(P, q, qd, qdd, tau, ja, jb, jc, row):
                 v = ax * hx + ay * hy
             else:
                 v = ax * px_ + ay * py_
+        elif P[P_CLR_G] > 0.5:  # slider with guide clearance: P = Cs + R(φ)(sx, sy), Cs = C' + R(φ)(0, −d_off)
+            cf, sf = math.cos(q[11]), math.sin(q[11])
+            ry_ = sy - P[P_DOFF]
+            rx, ry = cf * sx - sf * ry_, sf * sx + cf * ry_
+            w, al = qd[11], qdd[11]
+            ax = qdd[6] - al * ry - w * w * rx - gx
+            ay = qdd[10] + al * rx - w * w * ry - gy
+            v = (ax * cf + ay * sf) if axis < 2 else (-ax * sf + ay * cf)
         else:            # slider: translates along x, frame = bench frame
             ax = qdd[6] - gx
             ay = -gy
@@ -378,6 +401,13 @@ def _outputs(P, q, qd, qdd, tau, ja, jb, jc, row):
                 row[base + k] = 0.0
     for k in range(5):         # A: eccentricity in the bench frame (the bushing is the frame's bore)
         row[O_JOINT_A + k] = ja[k] if P[P_CLR_A] > 0.5 else 0.0
+    for k in range(N_GUIDE_OUT):
+        row[O_GUIDE + k] = jc[5 + k] if P[P_CLR_G] > 0.5 else 0.0
+    if P[P_OUT_ENERGY] > 0.5:  # T and V (the potential up to a constant: zero with every centre of mass at A)
+        t = kinetic_energy(P, q, qd)
+        row[O_EKIN] = t
+        row[O_EPOT] = energy(P, q, qd) - t
+        row[O_VSLIDER] = qd[6]
 
 
 @njit(cache=True, nogil=True)  # no GIL while stepping: a sink's writer thread runs meanwhile
@@ -429,14 +459,16 @@ def _integrate(P, st, theta_ref, omega_ref, alpha_ref, prescribed, stride, out, 
     integ = st[S_I]
     cst_a = np.empty(2)
     cst_b = np.empty(2)
-    cst_c = np.empty(2)
+    cst_c = np.empty(6)        # C's event, then the guide's (front, rear)
     cst_a[0], cst_a[1] = st[S_IN_A], st[S_VIMP_A]
     cst_b[0], cst_b[1] = st[S_IN_B], st[S_VIMP_B]
     cst_c[0], cst_c[1] = st[S_IN_C], st[S_VIMP_C]
+    for i in range(4):
+        cst_c[2 + i] = st[S_GUIDE + i]
     Q = np.empty(N_Q)
     ja = np.zeros(5)
     jb = np.zeros(5)
-    jc = np.zeros(5)
+    jc = np.zeros(5 + N_GUIDE_OUT)
     rows = np.empty(N_Z, dtype=np.int64)
     nz = independent_rows(P, rows)
     Rt = np.empty((N_Z, N_Q))
@@ -456,16 +488,18 @@ def _integrate(P, st, theta_ref, omega_ref, alpha_ref, prescribed, stride, out, 
     Qg = np.zeros(N_Q)
     if motor:
         DT.gravity_forces(P[P_GX], P[P_GY], P[P_M1], P[P_XG1], P[P_R], P[P_M2], P[P_XG2], P[P_L], P[P_M3], Qg)
+        if P[P_CLR_G] > 0.5:   # gravity on the slider's y_g (its moment on φ is booked as guide contact)
+            Qg[10] = P[P_M3] * P[P_GY]
     tau_p = np.zeros(1)
     midpoint = P[P_INTEGRATOR] == 1.0 and not prescribed
     qm = np.empty(N_Q)        # midpoint stage (explicit midpoint only)
     qdm = np.empty(N_Q)
     cm_a = np.empty(2)
     cm_b = np.empty(2)
-    cm_c = np.empty(2)
+    cm_c = np.empty(6)
     jm_a = np.zeros(5)
     jm_b = np.zeros(5)
-    jm_c = np.zeros(5)
+    jm_c = np.zeros(5 + N_GUIDE_OUT)
     status = OK
     k = 0
     while k < n:
@@ -509,7 +543,8 @@ def _integrate(P, st, theta_ref, omega_ref, alpha_ref, prescribed, stride, out, 
             taum = kp * (theta_ref[k] + 0.5 * h * omega_ref[k] - qm[7]) + kv * (om_ref - qdm[7]) + ki * integ
             cm_a[0], cm_a[1] = cst_a[0], cst_a[1]
             cm_b[0], cm_b[1] = cst_b[0], cst_b[1]
-            cm_c[0], cm_c[1] = cst_c[0], cst_c[1]
+            for i in range(6):
+                cm_c[i] = cst_c[i]
             generalized_forces(P, qm, qdm, taum, cm_a, cm_b, cm_c, Q, jm_a, jm_b, jm_c)
             if not accelerations(P, qm, qdm, sm, cm, Q, rows, nz, Rt, S, Mb, rhs, tmp, qdd):
                 status = NOT_FINITE
@@ -557,6 +592,8 @@ def _integrate(P, st, theta_ref, omega_ref, alpha_ref, prescribed, stride, out, 
     st[S_IN_A], st[S_VIMP_A] = cst_a[0], cst_a[1]
     st[S_IN_B], st[S_VIMP_B] = cst_b[0], cst_b[1]
     st[S_IN_C], st[S_VIMP_C] = cst_c[0], cst_c[1]
+    for i in range(4):
+        st[S_GUIDE + i] = cst_c[2 + i]
     return status, k
 
 
@@ -613,6 +650,9 @@ def build_params(cfg: BenchConfig, *, min_impact_speed_mps: float = 1e-3, newton
     P[P_NEWTON_TOL], P[P_NEWTON_MAXIT] = newton_tol_m, newton_max_iter
     P[P_INTEGRATOR] = INTEGRATORS[integrator]
     P[P_PRESCRIBED] = 1.0 if cfg.drive.mode == "prescribed" else 0.0
+    P[P_OUT_ENERGY] = 1.0 if "energy" in cfg.sensors.channels else 0.0
+    if cfg.joints.guide_play:
+        P[P_K_G] = guide_stiffness(cfg.joints, cfg.materials)
     for i, name in enumerate(ACCELEROMETERS):
         mnt = cfg.sensors.accelerometers[name]
         base = P_SENS + 4 * i

@@ -82,6 +82,7 @@ import numpy as np
 
 from twin.config import CATALOGUE_DIAMETRAL_MM, ORIENTATIONS, BenchConfig, preset
 from twin.errors import ConfigError, TwinError
+from twin.studies.stability_bench import ENGINES, bench_draws, bench_overrides, guide_penetration, label, rotor_energy
 from twin.util import atomic_write_bytes, atomic_write_json, atomic_write_text, check_output_dir
 
 #: Largest admissible penetration / radial clearance [-].
@@ -117,11 +118,14 @@ class StudySettings:
         scenes: number of scenes N (≥ 1).
         seed: seed S (≥ 0); scene i draws from ``default_rng([S, i])``.
         duration_range_s: range of the scenes' simulated durations [s].
+        bench: also draw the guide clearance and the drive train and run every scene in both
+            engines (:mod:`twin.studies.stability_bench`).
     """
 
     scenes: int = 500
     seed: int = 1
     duration_range_s: tuple[float, float] = (0.5, 3.0)
+    bench: bool = False
 
     def __post_init__(self) -> None:
         if isinstance(self.scenes, bool) or not isinstance(self.scenes, int) or self.scenes < 1:
@@ -130,14 +134,16 @@ class StudySettings:
             raise ConfigError("--seed", f"must be an integer >= 0, got {self.seed!r}")
 
 
-def quick(scenes: int = 20, seed: int = 1) -> StudySettings:
+def quick(scenes: int = 20, seed: int = 1, bench: bool = False) -> StudySettings:
     """The CI version: short scenes (0.3–1.0 s)."""
-    return StudySettings(scenes=scenes, seed=seed, duration_range_s=(0.3, 1.0))
+    return StudySettings(scenes=scenes, seed=seed, duration_range_s=(0.3, 1.0), bench=bench)
 
 
 # ----------------------------------------------------------------------- sampler
-def sample_scene(seed: int, index: int, duration_range_s: tuple[float, float] = (0.5, 3.0)) -> dict[str, Any]:
-    """Parameters of scene ``index`` of seed ``seed`` (JSON-ready; see module docstring).
+def sample_scene(seed: int, index: int, duration_range_s: tuple[float, float] = (0.5, 3.0),
+                 bench: bool = False) -> dict[str, Any]:
+    """Parameters of scene ``index`` of seed ``seed`` (JSON-ready; see module docstring); with
+    ``bench`` the whole-bench draws follow (:func:`twin.studies.stability_bench.bench_draws`).
 
     Durations and program times are rounded to 0.1 ms so they fall on the output grid.
     """
@@ -177,9 +183,12 @@ def sample_scene(seed: int, index: int, duration_range_s: tuple[float, float] = 
                              "ramp_up2_s": up2}
         drive["motor_rpm"] = [r4(rng.uniform(*RPM_RANGE)) for _ in range(2)]
         settle = r4(rest + up)
-    return {"index": index, "seed": seed, "clearance_b_mm": cb, "clearance_c_mm": cc, "orientation": orientation,
-            "drive": drive, "initial_encoder_angle_rad": phi0, "timestep_s": timestep,
-            "contact_stiffness_scale": ks, "contact_damping_scale": cs, "duration_s": duration, "settle_s": settle}
+    scene = {"index": index, "seed": seed, "clearance_b_mm": cb, "clearance_c_mm": cc, "orientation": orientation,
+             "drive": drive, "initial_encoder_angle_rad": phi0, "timestep_s": timestep,
+             "contact_stiffness_scale": ks, "contact_damping_scale": cs, "duration_s": duration, "settle_s": settle}
+    if bench:
+        scene.update(bench_draws(rng))
+    return scene
 
 
 def startstop_trace(scene: dict[str, Any], belt_ratio: float) -> tuple[np.ndarray, np.ndarray]:
@@ -233,6 +242,10 @@ def scene_config(scene: dict[str, Any], trace_dir: Path | None = None) -> BenchC
         path = Path(trace_dir) / f"trace_s{scene['seed']}_{scene['index']:05d}.npz"
         np.savez(path, t=t, angle=angle)
         ov.update({"drive.program": "trace", "drive.trace_file": str(path)})
+    if "drive_mode" in scene:
+        ov.update(bench_overrides(scene))
+        if scene["drive_mode"] == "motor":
+            ov["sensors.channels"] = list(CHANNELS) + ["motor"]
     return base.replace(**ov)
 
 
@@ -249,7 +262,7 @@ def energy_balance(run: Any, cfg: BenchConfig) -> dict[str, float]:
     w_in = _cumtrapz(power, dt)
     w_pos = float(_cumtrapz(np.maximum(power, 0.0), dt)[-1])
     d_guide = _cumtrapz(cfg.mechanism.guide_friction_n * np.abs(run["slider_speed"]), dt)
-    energy = run["energy_kinetic"] + run["energy_potential"]
+    energy = run["energy_kinetic"] + run["energy_potential"] - rotor_energy(run, cfg)
     res = w_in - d_guide - (energy - energy[0])
     scale = max(w_pos, 1e-12)
     return {"work_in_J": float(w_in[-1]), "work_pos_J": w_pos, "guide_dissipation_J": float(d_guide[-1]),
@@ -274,6 +287,8 @@ def scene_metrics(run: Any, cfg: BenchConfig, scene: dict[str, Any]) -> dict[str
         pen[j] = {"max_pen_m": float(np.nanmax(p)), "c_m": c, "pen_over_c": float(np.nanmax(p) / c)}
     out["joints"] = pen
     out["max_pen_over_c"] = max((v["pen_over_c"] for v in pen.values()), default=0.0)
+    if cfg.joints.guide_play:  # reported, not a criterion (stability_bench.guide_penetration)
+        out["guide_pen_over_c"] = guide_penetration(run, cfg) / cfg.joints.guide_radial_m
     i0 = min(int(math.ceil(scene["settle_s"] * run.rate_hz)), run.n - 1)
     err = np.abs(run["crank_angle"][i0:] - run["theta_ref"][i0:])
     out["tracking_max_rad"] = float(np.max(err))
@@ -389,6 +404,7 @@ def summarize(rows: list[dict[str, Any]], wall_s: float) -> dict[str, Any]:
                                    if x.get("reference", {}).get("cause") == "numerical"],
         "max_pen_over_c": worst[0], "max_pen_over_c_scene": worst[1],
         "pen_over_c": _stats([p for p, _ in pen]),
+        "guide_pen_over_c": _stats([x["guide_pen_over_c"] for x in m if "guide_pen_over_c" in x]),
         "energy_created": sum(bool(x.get("energy_created")) for x in m),
         "energy_created_scenes": [r["scene"]["index"] for r, x in zip(rows, m) if x.get("energy_created")],
         "residual_rel": _stats([x.get("residual_rel") for x in m]),
@@ -404,7 +420,9 @@ def summarize(rows: list[dict[str, Any]], wall_s: float) -> dict[str, Any]:
 def run_study(out: Path | None, settings: StudySettings, progress: bool = False,
               log: Callable[[str], None] | None = None) -> dict[str, Any]:
     """Run the campaign; write the outputs to ``out`` (if given); return the JSON data."""
-    scenes = [sample_scene(settings.seed, i, settings.duration_range_s) for i in range(settings.scenes)]
+    scenes = [sample_scene(settings.seed, i, settings.duration_range_s, settings.bench) for i in range(settings.scenes)]
+    if settings.bench:  # every bench scene in both engines: one row each
+        scenes = [{**sc, "engine": e} for sc in scenes for e in ENGINES]
     rows = []
     t0 = time.perf_counter()
     bar = None
@@ -473,10 +491,10 @@ def one_line(data: dict[str, Any]) -> str:
 def _program_label(sc: dict[str, Any]) -> str:
     d = sc["drive"]
     if d["program"] == "constant":
-        return f"constant {d['motor_rpm']:.0f} rpm, ramp {d['ramp_s']:.3f} s"
+        return f"constant {d['motor_rpm']:.0f} rpm, ramp {d['ramp_s']:.3f} s" + label(sc)
     if d["program"] == "protocol":
-        return f"protocol {'/'.join(f'{r:.0f}' for r in d['protocol_rpm'])} rpm"
-    return f"start/stop {'/'.join(f'{r:.0f}' for r in d['motor_rpm'])} rpm"
+        return f"protocol {'/'.join(f'{r:.0f}' for r in d['protocol_rpm'])} rpm" + label(sc)
+    return f"start/stop {'/'.join(f'{r:.0f}' for r in d['motor_rpm'])} rpm" + label(sc)
 
 
 def markdown(data: dict[str, Any]) -> str:
@@ -594,6 +612,10 @@ def register(studies: Any) -> None:
     p.add_argument("--seed", type=int, required=True, metavar="S", help="seed (>= 0); scene i depends on (S, i)")
     p.add_argument("--out", metavar="DIR", default="stability", help="output directory (default ./stability)")
     p.add_argument("--quick", action="store_true", help="short scenes (0.3-1.0 s instead of 0.5-3.0 s): the CI version")
+    p.add_argument("--bench", action="store_true",
+                   help="the whole bench: also draw the slider guide's clearance and the drive (crank PID or the "
+                        "motor with its V-belt, the drive train's parameters over their ranges), and run every "
+                        "scene in both engines (one row each)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=_run)
 
@@ -601,8 +623,9 @@ def register(studies: Any) -> None:
 def _run(args: Any) -> int:
     import sys
 
-    settings = (quick if args.quick else lambda scenes, seed: StudySettings(scenes=scenes, seed=seed))(
-        args.scenes, args.seed)
+    settings = (quick if args.quick else lambda scenes, seed, bench: StudySettings(scenes=scenes, seed=seed,
+                                                                                  bench=bench))(
+        args.scenes, args.seed, args.bench)
     out = check_output_dir(args.out)
     data = run_study(out, settings, progress=not args.no_progress,
                      log=lambda m: print(m, file=sys.stderr, flush=True))

@@ -118,6 +118,9 @@ def default_blueprint(cfg: BenchConfig, groups: dict[str, list[str]], channels: 
     slip = paths("belt_slip")
     angle = paths("crank_angle", "theta_ref")
     slider = paths("slider_position")
+    # guide clearance (joints.clearance_guide_mm): one plot per channel (titled by it)
+    guide = [(name, paths(name)) for name in ("fn_guide_front", "fn_guide_rear", "ft_guide_front",
+                                              "ft_guide_rear", "slider_y", "slider_tilt")]
 
     tabs: list[rrb.Container | rrb.View] = []
     speed_view = _series("crank speed", speed) if speed else None
@@ -139,7 +142,7 @@ def default_blueprint(cfg: BenchConfig, groups: dict[str, list[str]], channels: 
     frame = "rod frame; A: bench frame" if "ecc_A_x" in channels else "rod frame"
     ecc_xy = [(f"eccentricity {k} ({frame})", paths(*[f"ecc_{j}_{k}" for j in JOINTS])) for k in ("x", "y")]
     contact = [_series(n, p, window=win) for n, p in (("contact force", force), ("friction force", friction),
-                                                       ("penetration", pen), *ecc_xy) if p]
+                                                       ("penetration", pen), *ecc_xy, *guide) if p]
     if contact:
         tabs.append(rrb.Grid(*contact, grid_columns=2, name="Contact"))
     if fft_window is not None and fft_names:
