@@ -11,7 +11,7 @@ import pytest
 from twin.config import BenchConfig, config_from_toml, preset
 from twin.config.mechanism import guide_stiffness
 from twin.errors import ConfigError
-from twin.simulate import simulate_run
+from twin.simulation import simulate_run
 
 G = 9.81
 
