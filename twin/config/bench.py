@@ -14,6 +14,7 @@ from twin.config.drive import PID, Drive
 from twin.config.engines import MujocoSettings, Simulation
 from twin.config.mechanism import Bodies, Contact, Joints, Materials, Mechanism, ln_stiffness
 from twin.config.sensors import Instrumentation, Sensors
+from twin.config.spatial import Spatial
 from twin.errors import ConfigError
 
 
@@ -33,6 +34,7 @@ class BenchConfig:
     sensors: Sensors = field(default_factory=Sensors)
     simulation: Simulation = Simulation()
     instrumentation: Instrumentation = field(default_factory=Instrumentation)
+    spatial: Spatial = Spatial()
 
     def __post_init__(self) -> None:
         _check(isinstance(self.name, str) and 0 < len(self.name) <= 80 and _NAME_RE.fullmatch(self.name) is not None,
@@ -67,6 +69,13 @@ class BenchConfig:
                 raise ConfigError("sensors.channels",
                                   "the optional group 'energy' is not available with drive.mode = \"prescribed\" in "
                                   "the MuJoCo engine (its kinetic energy would hold the drive's infinite flywheel)")
+        if self.spatial.enabled:
+            from twin.spatial.checks import check_spatial
+
+            check_spatial(self)
+        elif "slider_accel" in sen.channels:
+            raise ConfigError("sensors.channels", "the optional group 'slider_accel' is produced by the spatial "
+                              "mechanism only (spatial.enabled = true); remove it")
         for group, engines in ENGINE_ONLY_GROUPS.items():
             if group in sen.channels and sim.engine not in engines:
                 raise ConfigError("sensors.channels",

@@ -27,7 +27,8 @@ PROGRAMS: tuple[str, ...] = ("constant", "protocol", "trace", "steps")
 CHANNEL_GROUPS: tuple[str, ...] = ("accel", "encoder", "crank", "slider", "joints", "drive")
 #: Channel groups a scene may ask for but that are not in the default list (they cost time):
 #: "energy" (mechanical energy and slider speed, for energy balances; MuJoCo engine only).
-OPTIONAL_CHANNEL_GROUPS: tuple[str, ...] = ("energy",)
+#: "slider_accel" (the slider's acceleration along its guide; spatial mechanism only).
+OPTIONAL_CHANNEL_GROUPS: tuple[str, ...] = ("energy", "slider_accel")
 #: Every channel group, in canonical order (the defaults, then the optional ones).
 ALL_CHANNEL_GROUPS: tuple[str, ...] = CHANNEL_GROUPS + OPTIONAL_CHANNEL_GROUPS
 #: Optional channel groups that only some engines produce: group -> engines.
