@@ -164,6 +164,9 @@ class SpatialReferenceEngine:
         t = (self._k + np.arange(nstep + 1)) * h
         th, om = self._drive(t)
         al = self._drive.acceleration(t[:-1])
+        if self._k == 0 and self.options.drive:
+            om = np.array(om, dtype=float)
+            om[0] = self._drive.start_rate()  # the right-hand limit of a speed jump at t = 0
         status, steps = SM.run(self.P, self.jon, self.M, self.Qg, self._st, np.ascontiguousarray(th, dtype=float),
                                np.ascontiguousarray(om, dtype=float), np.ascontiguousarray(al, dtype=float),
                                stride, self._buf)

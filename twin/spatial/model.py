@@ -16,8 +16,11 @@ q̈ = R z̈ + q̈ₚ with Φ_q q̈ₚ = γ (the minimum-norm particular solution
 Rᵀ M R z̈ = Rᵀ (Q − M q̈ₚ). ż are the independent velocities: the crank's (none with the drive), and
 the relative motions the clearance joints free (two at A, three at B and C each).
 
-Integration: symplectic Euler (S003 Eq. 21), then Newton projection of q onto Φ = 0 (minimum-norm
-corrections) and projection of q̇ onto Φ_q q̇ + Φ_t = 0.
+Integration: symplectic Euler (S003 Eq. 21), then Newton projection of q onto Φ = 0 and of q̇ onto
+Φ_q q̇ + Φ_t = 0 that keep the independent coordinates (θ without the drive, the clearance joints'
+relative positions) at their values after the step, as the planar R-matrix model does (a
+minimum-norm projection instead moves the crank's free journal by the crank-length correction,
+r ω² h²/4 per step: half its true acceleration at S002's speeds).
 
 Forces Q: gravity; per clearance joint the contact law of :mod:`twin.reference.contact` on the
 penetration δ = |e| − c (e = pin − bushing centre; A: the journal A in the bearing at the origin, radial
@@ -76,10 +79,15 @@ def _d3(a, i, j):
 
 
 @njit(cache=True)
-def constraints(P, jon, q, v, th, om, al, Phi, J, gam, phit):
-    """Fill Φ, Φ_q, γ = −Φ̇_q q̇ − Φ_tt and Φ_t at (q, q̇, θ, ω, α); returns the number of rows."""
+def constraints(P, jon, full, q, v, th, om, al, Phi, J, gam, phit, indep):
+    """Fill Φ, Φ_q, γ = −Φ̇_q q̇ − Φ_tt and Φ_t at (q, q̇, θ, ω, α); returns the number of rows.
+
+    ``full``: every joint's pair rows and the crank-angle row, whatever the joints and the drive (the
+    square 15 × 15 system of the projection); ``indep[i]`` = 1 marks a row that is an independent
+    coordinate there (a clearance joint's relative position, the crank angle without the drive)."""
     m = 0
     J[:, :] = 0.0
+    indep[:] = 0
     # crank in the plane x = 0
     for idx in (IA, IBC):
         Phi[m] = q[idx]
@@ -107,25 +115,27 @@ def constraints(P, jon, q, v, th, om, al, Phi, J, gam, phit):
         gam[m] = 0.0
         phit[m] = 0.0
         m += 1
-    # ideal joints
-    if jon[0] == 0:
+    # joint pairs: rows of the ideal joints, independent coordinates of the clearance joints
+    if jon[0] == 0 or full:
         for k in (1, 2):
             Phi[m] = q[IA + k]
             J[m, IA + k] = 1.0
             gam[m] = 0.0
             phit[m] = 0.0
+            indep[m] = jon[0]
             m += 1
     for (jj, ip, ib) in ((1, IBR, IBC), (2, ICR, ICS)):
-        if jon[jj] == 0:
+        if jon[jj] == 0 or full:
             for k in range(3):
                 Phi[m] = q[ip + k] - q[ib + k]
                 J[m, ip + k] = 1.0
                 J[m, ib + k] = -1.0
                 gam[m] = 0.0
                 phit[m] = 0.0
+                indep[m] = jon[jj]
                 m += 1
-    # prescribed drive
-    if P[P_DRIVE] > 0.5:
+    # crank angle: the prescribed drive (rheonomic), or the independent coordinate
+    if P[P_DRIVE] > 0.5 or full:
         s, c = math.sin(th), math.cos(th)
         dy, dz = q[IBC + 1] - q[IA + 1], q[IBC + 2] - q[IA + 2]
         vy, vz = v[IBC + 1] - v[IA + 1], v[IBC + 2] - v[IA + 2]
@@ -137,28 +147,40 @@ def constraints(P, jon, q, v, th, om, al, Phi, J, gam, phit):
         dn = -dy * s + dz * c           # d·n
         phit[m] = om * dn1
         gam[m] = -(2.0 * om * vn1 + al * dn1 - om * om * dn)
+        indep[m] = 0 if P[P_DRIVE] > 0.5 else 1
         m += 1
     return m
 
 
 @njit(cache=True)
-def _project(P, jon, q, v, th, om, Phi, J, gam, phit):
-    """Newton projection of q onto Φ = 0, then of q̇ onto Φ_q q̇ + Φ_t = 0; False if Newton fails."""
+def _project(P, jon, q, v, th, om, Phi, J, gam, phit, indep):
+    """Coordinate-partitioned projection (as S003's R-matrix with independent coordinates): Newton on
+    the square system of every constraint plus the independent coordinates held at their values after
+    the step (q moves only in the dependent directions), then the same for q̇. Without the drive, θ
+    is taken from q as it is (``th``, ``om`` unused). False if Newton fails."""
     tol = P[P_TOL]
+    if P[P_DRIVE] < 0.5:
+        th = math.atan2(q[IBC + 2] - q[IA + 2], q[IBC + 1] - q[IA + 1])
+        om = 0.0
+    m = constraints(P, jon, True, q, v, th, om, 0.0, Phi, J, gam, phit, indep)
+    target = np.zeros(m)
+    for i in range(m):
+        if indep[i] == 1:
+            target[i] = Phi[i]
     ok = False
     for _ in range(int(P[P_MAXIT])):
-        m = constraints(P, jon, q, v, th, om, 0.0, Phi, J, gam, phit)
-        Jm = J[:m]
-        A = Jm @ Jm.T
-        dq = Jm.T @ np.linalg.solve(A, Phi[:m])
+        m = constraints(P, jon, True, q, v, th, om, 0.0, Phi, J, gam, phit, indep)
+        dq = np.linalg.solve(J[:m], Phi[:m] - target)
         q -= dq
         if np.max(np.abs(dq)) <= tol:
             ok = True
             break
-    m = constraints(P, jon, q, v, th, om, 0.0, Phi, J, gam, phit)
-    Jm = J[:m]
-    r = Jm @ v + phit[:m]
-    v -= Jm.T @ np.linalg.solve(Jm @ Jm.T, r)
+    m = constraints(P, jon, True, q, v, th, om, 0.0, Phi, J, gam, phit, indep)
+    r = J[:m] @ v + phit[:m]
+    for i in range(m):
+        if indep[i] == 1:
+            r[i] = 0.0
+    v -= np.linalg.solve(J[:m], r)
     return ok
 
 
@@ -265,11 +287,11 @@ def forces(P, jon, Qg, q, v, st, Q, jout):
 
 
 @njit(cache=True)
-def accelerations(P, jon, M, Qg, q, v, th, om, al, st, Phi, J, gam, phit, Q, jout, acc):
+def accelerations(P, jon, M, Qg, q, v, th, om, al, st, Phi, J, gam, phit, indep, Q, jout, acc):
     """q̈ by the velocity transformation (module docstring) into ``acc``; returns (drive torque about x
     [N m], elastic energy [J])."""
     eel = forces(P, jon, Qg, q, v, st, Q, jout)
-    m = constraints(P, jon, q, v, th, om, al, Phi, J, gam, phit)
+    m = constraints(P, jon, False, q, v, th, om, al, Phi, J, gam, phit, indep)
     Jm = np.ascontiguousarray(J[:m])
     U, s, Vt = np.linalg.svd(Jm)
     # particular solution q̈ₚ = V_m S⁻¹ Uᵀ γ
@@ -304,14 +326,15 @@ def run(P, jon, M, Qg, st, th, om, al, stride, out):
     J = np.zeros((MAX_ROWS, NQ))
     gam = np.zeros(MAX_ROWS)
     phit = np.zeros(MAX_ROWS)
+    indep = np.zeros(MAX_ROWS, dtype=np.int64)
     Q = np.zeros(NQ)
     jout = np.zeros((3, 6))
     acc = np.zeros(NQ)
     g0, g1, g2 = P[P_G], P[P_G + 1], P[P_G + 2]
     h = P[P_H]
     for k in range(nstep):
-        torque, eel = accelerations(P, jon, M, Qg, q, v, th[k], om[k], al[k], st, Phi, J, gam, phit, Q, jout,
-                                    acc)
+        torque, eel = accelerations(P, jon, M, Qg, q, v, th[k], om[k], al[k], st, Phi, J, gam, phit, indep, Q,
+                                    jout, acc)
         if k % stride == 0:
             o = out[k // stride]
             dy, dz = q[IBC + 1] - q[IA + 1], q[IBC + 2] - q[IA + 2]
@@ -333,7 +356,7 @@ def run(P, jon, M, Qg, st, th, om, al, stride, out):
             o[O_EEL] = eel
         v += acc * h
         q += v * h
-        if not _project(P, jon, q, v, th[k + 1], om[k + 1], Phi, J, gam, phit):
+        if not _project(P, jon, q, v, th[k + 1], om[k + 1], Phi, J, gam, phit, indep):
             st[S_Q:S_Q + NQ] = q
             st[S_V:S_V + NQ] = v
             return NEWTON_FAILED, k
