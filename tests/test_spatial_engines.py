@@ -24,7 +24,7 @@ def test_mujoco_ideal_slider_follows_closed_form():
     run = simulate_run(cfg)
     x, _, _ = slider_closed_form(cfg, run["crank_angle"], run["crank_speed"])
     assert np.max(np.abs(run["slider_position"] - x)) <= 1e-6 * np.max(np.abs(x))
-    assert np.ptp(run["slider_position"]) > 0.01
+    assert np.ptp(run["slider_position"]) > 0.002  # millimetres of stroke within the window
 
 
 def test_mujoco_first_impacts_match_reference():

@@ -21,7 +21,7 @@ def _s002(**overrides):
     return named_preset("s002").replace(**{"simulation.engine": "reference", **overrides})
 
 
-@pytest.mark.parametrize("axis,offset", [("x", 0.15), ("y", 0.02)])
+@pytest.mark.parametrize("axis,offset", [("x", 0.019554), ("x", 0.15), ("y", 0.02)])
 def test_ideal_slider_matches_closed_form_kinematics(axis, offset):
     """Independent basis: the slider's position and acceleration in closed form (twin.spatial.geometry,
     from |C − B| = L differentiated twice by hand), at the run's crank angles, ≤ 1e-6 relative."""
@@ -33,7 +33,7 @@ def test_ideal_slider_matches_closed_form_kinematics(axis, offset):
     x, _, a = slider_closed_form(cfg, theta, omega)
     assert np.max(np.abs(run["slider_position"] - x)) <= 1e-6 * np.max(np.abs(x))
     assert np.max(np.abs(run["slider_acceleration"] - a)) <= 1e-6 * np.max(np.abs(a))
-    assert np.ptp(run["slider_position"]) > 0.05  # the slider does move (a stroke of centimetres)
+    assert np.ptp(run["slider_position"]) > 0.005  # the slider does move (a stroke of millimetres at least)
 
 
 def _energy_error(clearance_mm: float, h: float) -> tuple[float, float]:

@@ -36,15 +36,16 @@ class Spatial:
             distance r from the x axis). Default 0: the guide in the plane XOZ, as S002 says ("the
             slider along the x axis in the XOZ plane"). Range: the guide's distance from the crank
             axis plus the crank length below the rod length (0.98 ×, checked).
-        guide_offset_z_m: z of the guide line [m]. PLACEHOLDER, as ``guide_offset_y_m``: 0.15 m keeps
-            the rod (350 mm) clear of the crank axis at every S002 crank length (80–120 mm) with a
-            stroke of 2r sin(φ) ≈ 0.8 × 2r; range 0.05–0.2 m for S002's lengths.
+        guide_offset_z_m: z of the guide line [m]. PLACEHOLDER, as ``guide_offset_y_m``: 19.554 mm,
+            tuned by ``analysis/s002_guide_offset.py`` so that the ideal mechanism's peak slider
+            acceleration of S002's run 1 (80 mm, 800 rpm) is the paper's 32.72 m/s² (its runs 2 and 3
+            then follow to 0.04 %). Range: 0.01–0.2 m (the slider's stroke is about 2 r h / L).
     """
 
     enabled: bool = False
     guide_axis: str = "x"
     guide_offset_y_m: float = 0.0
-    guide_offset_z_m: float = 0.15
+    guide_offset_z_m: float = 0.019554
 
     def __post_init__(self) -> None:
         _check(isinstance(self.enabled, bool), "enabled", f"must be true or false, got {self.enabled!r}")

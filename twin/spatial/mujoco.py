@@ -266,6 +266,9 @@ class SpatialMujocoEngine:
         sa, sv = m.jnt_qposadr[m.joint(SLIDER_SLIDE).id], m.jnt_dofadr[m.joint(SLIDER_SLIDE).id]
         d.qpos[sa] = float((q[G.ICS:G.ICS + 3] - p0) @ g)
         d.qvel[sv] = float(v[G.ICS:G.ICS + 3] @ g)
+        # the first step's control (the dead-beat drive onto theta_ref(h)), so that the forward pass's
+        # accelerations, the solver's warm start of the first step, are the drive's and not a jump to 0
+        d.ctrl[0] = float(self._drive(np.array([self.cfg.simulation.timestep_s]))[0][0])
         mujoco.mj_forward(m, d)
         self._k = 0
 
