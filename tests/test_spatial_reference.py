@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from twin.config import ConfigError, named_preset
-from twin.simulate import simulate_run
+from twin.simulate import Collector, simulate, simulate_run
 from twin.spatial import model as SM
-from twin.spatial.engine import SpatialOptions, run_raw
+from twin.spatial.engine import SpatialOptions, SpatialReferenceEngine, run_raw
 from twin.spatial.geometry import slider_closed_form
 
 IDEAL = {"joints.clearance_a_mm": 0.0, "joints.clearance_b_mm": 0.0, "joints.clearance_c_mm": 0.0}
@@ -62,14 +62,17 @@ def test_energy_conserved_without_friction_and_damping(clearance_mm):
 def test_spatial_model_in_a_plane_reproduces_planar_reference(clearance_mm):
     """Guide in the crank's plane, gravity in that plane, μ = 0: the spatial model is the planar one
     (spatial x, y, z = planar z, x, y; a spherical joint moving in a plane is a revolute joint with the
-    same contact law). Independent basis: the planar reference engine (twin.reference), a separate
+    same contact law), projected as the planar engine projects. Independent basis: the planar reference engine (twin.reference), a separate
     formulation and code; the runs must agree to round-off through the impacts."""
     c = clearance_mm
     base = _s002(**{"simulation.duration_s": 0.05, "joints.clearance_a_mm": c, "joints.clearance_b_mm": c,
                     "joints.clearance_c_mm": c, "contact.mu0": 0.0, "mechanism.d_off_m": 0.02,
                     "contact.impact_speed_floor_mps": 0.1})
-    spatial = simulate_run(base.replace(**{"spatial.guide_axis": "y", "spatial.guide_offset_z_m": 0.02,
-                                           "mechanism.orientation": "z"}))
+    cfg = base.replace(**{"spatial.guide_axis": "y", "spatial.guide_offset_z_m": 0.02, "mechanism.orientation": "z"})
+    keep = Collector()
+    # the planar engine's projection (independent coordinates held): the same discrete motion
+    simulate(cfg, [keep], engine=SpatialReferenceEngine(cfg, SpatialOptions(projection="partitioned")))
+    spatial = keep.run
     planar = simulate_run(base.replace(**{"spatial.enabled": False,
                                           "sensors.channels": ["encoder", "crank", "slider", "joints", "drive"]}))
     assert np.max(np.abs(spatial["slider_position"] - planar["slider_position"])) < 1e-12

@@ -34,13 +34,20 @@ class SpatialOptions:
         newton_tol_m: the position projection stops when max |Δq| ≤ this [m].
         newton_max_iter: iterations before the step is declared failed.
         drive: False releases the crank (no driving constraint: the free motion of the energy check).
+        projection: "mass" (mass-weighted, the default: the centres of mass stay where the step put
+            them, as a free body's) or "partitioned" (the independent coordinates held, as the planar
+            reference engine does: with it the spatial model laid in a plane is that engine's run to
+            round-off). See :func:`twin.spatial.model._project`.
     """
 
     newton_tol_m: float = 1e-10
     newton_max_iter: int = 20
     drive: bool = True
+    projection: str = "mass"
 
     def __post_init__(self) -> None:
+        if self.projection not in ("mass", "partitioned"):
+            raise ConfigError("reference.projection", f"must be mass or partitioned, got {self.projection!r}")
         if not (isinstance(self.newton_tol_m, (int, float)) and 0 < self.newton_tol_m <= 1e-6):
             raise ConfigError("reference.newton_tol_m", f"must lie in (0, 1e-6] m, got {self.newton_tol_m!r}")
         if isinstance(self.newton_max_iter, bool) or not isinstance(self.newton_max_iter, int) \
@@ -75,6 +82,7 @@ def build(cfg: Any, options: SpatialOptions = SpatialOptions()) -> tuple[np.ndar
     P[SM.P_V0], P[SM.P_V1] = con.v0_mps, con.v1_mps
     P[SM.P_TOL], P[SM.P_MAXIT] = options.newton_tol_m, options.newton_max_iter
     P[SM.P_H] = cfg.simulation.timestep_s
+    P[SM.P_PROJ] = 1.0 if options.projection == "mass" else 0.0
     jon = np.zeros(3, dtype=np.int64)
     contacts: dict[str, Any] = {}
     for jt in cfg.joints.clearance_joints:
@@ -120,6 +128,7 @@ class SpatialReferenceEngine:
         t0 = time.perf_counter()
         self.P, self.jon, contacts = build(cfg, self.options)
         self.M = G.mass_matrix(cfg)
+        self.Minv = np.linalg.inv(self.M)
         self.Qg = G.gravity_forces(cfg)
         self.build_s = time.perf_counter() - t0
         self.load_s = warm_up()
@@ -167,7 +176,7 @@ class SpatialReferenceEngine:
         if self._k == 0 and self.options.drive:
             om = np.array(om, dtype=float)
             om[0] = self._drive.start_rate()  # the right-hand limit of a speed jump at t = 0
-        status, steps = SM.run(self.P, self.jon, self.M, self.Qg, self._st, np.ascontiguousarray(th, dtype=float),
+        status, steps = SM.run(self.P, self.jon, self.M, self.Minv, self.Qg, self._st, np.ascontiguousarray(th, dtype=float),
                                np.ascontiguousarray(om, dtype=float), np.ascontiguousarray(al, dtype=float),
                                stride, self._buf)
         if status != SM.OK:
@@ -233,7 +242,7 @@ def warm_up() -> float:
     st[G.IBC + 1] = 0.1
     st[G.IBR + 1] = 0.1
     z = np.zeros(1)
-    SM.run(P, np.zeros(3, dtype=np.int64), np.eye(G.NQ), np.zeros(G.NQ), st, z, z, np.zeros(0), 1,
+    SM.run(P, np.zeros(3, dtype=np.int64), np.eye(G.NQ), np.eye(G.NQ), np.zeros(G.NQ), st, z, z, np.zeros(0), 1,
            np.empty((1, SM.N_OUT)))
     _WARM = True
     return time.perf_counter() - t0

@@ -17,10 +17,14 @@ Rᵀ M R z̈ = Rᵀ (Q − M q̈ₚ). ż are the independent velocities: the cra
 the relative motions the clearance joints free (two at A, three at B and C each).
 
 Integration: symplectic Euler (S003 Eq. 21), then Newton projection of q onto Φ = 0 and of q̇ onto
-Φ_q q̇ + Φ_t = 0 that keep the independent coordinates (θ without the drive, the clearance joints'
-relative positions) at their values after the step, as the planar R-matrix model does (a
-minimum-norm projection instead moves the crank's free journal by the crank-length correction,
-r ω² h²/4 per step: half its true acceleration at S002's speeds).
+Φ_q q̇ + Φ_t = 0 (:func:`_project`): coordinate-partitioned, keeping the independent coordinates (θ
+without the drive, the clearance joints' relative positions) at their values after the step, as the
+planar R-matrix model does; or mass-weighted (each body's centre of mass where the step put it). A
+minimum-norm projection is neither: it moves the crank's free journal by the crank-length correction,
+r ω² h²/4 per step, half its true acceleration at S002's speeds. The partitioned projection holds the
+relative position of a clearance joint, so the crank's correction at B (its centripetal curvature,
+r ω² h²/2 per step) also moves the rod's ball: an O(h) error of the rod's flight that the mass-weighted
+projection does not make.
 
 Forces Q: gravity; per clearance joint the contact law of :mod:`twin.reference.contact` on the
 penetration δ = |e| − c (e = pin − bushing centre; A: the journal A in the bearing at the origin, radial
@@ -51,7 +55,8 @@ P_GUIDE_F = 15   # guide friction force [N]
 P_V0, P_V1 = 16, 17
 P_TOL, P_MAXIT = 18, 19
 P_H = 20         # timestep [s]
-P_JOINT = 21     # per joint (A, B, C): 12 values
+P_PROJ = 21      # projection: 0 = coordinate-partitioned, 1 = mass-weighted
+P_JOINT = 22     # per joint (A, B, C): 12 values
 J_ON, J_C, J_K, J_N, J_E, J_LAW, J_CLIN, J_DMAX, J_R, J_MU, J_FLOOR = range(11)
 J_SIZE = 12
 N_P = P_JOINT + 3 * J_SIZE
@@ -153,34 +158,48 @@ def constraints(P, jon, full, q, v, th, om, al, Phi, J, gam, phit, indep):
 
 
 @njit(cache=True)
-def _project(P, jon, q, v, th, om, Phi, J, gam, phit, indep):
-    """Coordinate-partitioned projection (as S003's R-matrix with independent coordinates): Newton on
-    the square system of every constraint plus the independent coordinates held at their values after
-    the step (q moves only in the dependent directions), then the same for q̇. Without the drive, θ
-    is taken from q as it is (``th``, ``om`` unused). False if Newton fails."""
+def _project(P, jon, Minv, q, v, th, om, Phi, J, gam, phit, indep):
+    """Project q onto Φ = 0 and q̇ onto Φ_q q̇ + Φ_t = 0 after a step; False if Newton fails.
+
+    ``P[P_PROJ]`` = 0, coordinate-partitioned (as S003's R-matrix with independent coordinates): Newton
+    on the square system of every constraint plus the independent coordinates (the clearance joints'
+    relative positions, θ without the drive) held at their values after the step, so q moves only in
+    the dependent directions. 1, mass-weighted: corrections M⁻¹Φ_qᵀ(Φ_q M⁻¹Φ_qᵀ)⁻¹ r, the smallest in
+    kinetic-energy norm (each body's centre of mass stays where the step put it)."""
     tol = P[P_TOL]
+    mass = P[P_PROJ] > 0.5
     if P[P_DRIVE] < 0.5:
         th = math.atan2(q[IBC + 2] - q[IA + 2], q[IBC + 1] - q[IA + 1])
         om = 0.0
-    m = constraints(P, jon, True, q, v, th, om, 0.0, Phi, J, gam, phit, indep)
+    m = constraints(P, jon, not mass, q, v, th, om, 0.0, Phi, J, gam, phit, indep)
     target = np.zeros(m)
     for i in range(m):
         if indep[i] == 1:
             target[i] = Phi[i]
     ok = False
     for _ in range(int(P[P_MAXIT])):
-        m = constraints(P, jon, True, q, v, th, om, 0.0, Phi, J, gam, phit, indep)
-        dq = np.linalg.solve(J[:m], Phi[:m] - target)
+        m = constraints(P, jon, not mass, q, v, th, om, 0.0, Phi, J, gam, phit, indep)
+        if mass:
+            Jm = np.ascontiguousarray(J[:m])
+            W = Minv @ Jm.T
+            dq = W @ np.linalg.solve(Jm @ W, Phi[:m])
+        else:
+            dq = np.linalg.solve(J[:m], Phi[:m] - target)
         q -= dq
         if np.max(np.abs(dq)) <= tol:
             ok = True
             break
-    m = constraints(P, jon, True, q, v, th, om, 0.0, Phi, J, gam, phit, indep)
+    m = constraints(P, jon, not mass, q, v, th, om, 0.0, Phi, J, gam, phit, indep)
     r = J[:m] @ v + phit[:m]
-    for i in range(m):
-        if indep[i] == 1:
-            r[i] = 0.0
-    v -= np.linalg.solve(J[:m], r)
+    if mass:
+        Jm = np.ascontiguousarray(J[:m])
+        W = Minv @ Jm.T
+        v -= W @ np.linalg.solve(Jm @ W, r)
+    else:
+        for i in range(m):
+            if indep[i] == 1:
+                r[i] = 0.0
+        v -= np.linalg.solve(J[:m], r)
     return ok
 
 
@@ -314,7 +333,7 @@ def accelerations(P, jon, M, Qg, q, v, th, om, al, st, Phi, J, gam, phit, indep,
 
 
 @njit(cache=True)
-def run(P, jon, M, Qg, st, th, om, al, stride, out):
+def run(P, jon, M, Minv, Qg, st, th, om, al, stride, out):
     """Integrate len(al) steps from state ``st`` (updated in place); step k goes from t_k to t_{k+1}
     with the drive's θ, ω at t_k, t_{k+1} (``th``, ``om``: len(al) + 1 values; ignored without the
     drive) and α at t_k. Writes the sample of every ``stride``-th step (the state before it, with its
@@ -356,7 +375,7 @@ def run(P, jon, M, Qg, st, th, om, al, stride, out):
             o[O_EEL] = eel
         v += acc * h
         q += v * h
-        if not _project(P, jon, q, v, th[k + 1], om[k + 1], Phi, J, gam, phit, indep):
+        if not _project(P, jon, Minv, q, v, th[k + 1], om[k + 1], Phi, J, gam, phit, indep):
             st[S_Q:S_Q + NQ] = q
             st[S_V:S_V + NQ] = v
             return NEWTON_FAILED, k
