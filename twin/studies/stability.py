@@ -117,17 +117,22 @@ class StudySettings:
         scenes: number of scenes N (≥ 1).
         seed: seed S (≥ 0); scene i draws from ``default_rng([S, i])``.
         duration_range_s: range of the scenes' simulated durations [s].
+        family: "bench" (the planar twin's scenes, this module) or "spatial" (S002's mechanism in both
+            engines, :mod:`twin.spatial.stability`).
     """
 
     scenes: int = 500
     seed: int = 1
     duration_range_s: tuple[float, float] = (0.5, 3.0)
+    family: str = "bench"
 
     def __post_init__(self) -> None:
         if isinstance(self.scenes, bool) or not isinstance(self.scenes, int) or self.scenes < 1:
             raise ConfigError("--scenes", f"must be an integer >= 1, got {self.scenes!r}")
         if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
             raise ConfigError("--seed", f"must be an integer >= 0, got {self.seed!r}")
+        if self.family not in ("bench", "spatial"):
+            raise ConfigError("--family", f"must be bench or spatial, got {self.family!r}")
 
 
 def quick(scenes: int = 20, seed: int = 1) -> StudySettings:
@@ -404,7 +409,10 @@ def summarize(rows: list[dict[str, Any]], wall_s: float) -> dict[str, Any]:
 def run_study(out: Path | None, settings: StudySettings, progress: bool = False,
               log: Callable[[str], None] | None = None) -> dict[str, Any]:
     """Run the campaign; write the outputs to ``out`` (if given); return the JSON data."""
-    scenes = [sample_scene(settings.seed, i, settings.duration_range_s) for i in range(settings.scenes)]
+    sample, run_one = sample_scene, run_scene
+    if settings.family == "spatial":
+        from twin.spatial.stability import run_scene as run_one, sample_scene as sample  # noqa: F811
+    scenes = [sample(settings.seed, i, settings.duration_range_s) for i in range(settings.scenes)]
     rows = []
     t0 = time.perf_counter()
     bar = None
@@ -415,7 +423,7 @@ def run_study(out: Path | None, settings: StudySettings, progress: bool = False,
     try:
         with tempfile.TemporaryDirectory(prefix="twin_stability_") as tmp:
             for sc in scenes:
-                met = run_scene(sc, Path(tmp))
+                met = run_one(sc, Path(tmp))
                 rows.append({"scene": sc, "metrics": met})
                 if bar is not None:
                     bar.update(1)
@@ -594,6 +602,8 @@ def register(studies: Any) -> None:
     p.add_argument("--seed", type=int, required=True, metavar="S", help="seed (>= 0); scene i depends on (S, i)")
     p.add_argument("--out", metavar="DIR", default="stability", help="output directory (default ./stability)")
     p.add_argument("--quick", action="store_true", help="short scenes (0.3-1.0 s instead of 0.5-3.0 s): the CI version")
+    p.add_argument("--family", choices=("bench", "spatial"), default="bench",
+                   help="scene family: the bench's planar twin (default) or S002's spatial mechanism in both engines")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=_run)
 
@@ -603,6 +613,10 @@ def _run(args: Any) -> int:
 
     settings = (quick if args.quick else lambda scenes, seed: StudySettings(scenes=scenes, seed=seed))(
         args.scenes, args.seed)
+    if getattr(args, "family", "bench") != "bench":
+        from dataclasses import replace
+
+        settings = replace(settings, family=args.family)
     out = check_output_dir(args.out)
     data = run_study(out, settings, progress=not args.no_progress,
                      log=lambda m: print(m, file=sys.stderr, flush=True))
