@@ -68,7 +68,8 @@ def test_spatial_model_in_a_plane_reproduces_planar_reference(clearance_mm):
     base = _s002(**{"simulation.duration_s": 0.05, "joints.clearance_a_mm": c, "joints.clearance_b_mm": c,
                     "joints.clearance_c_mm": c, "contact.mu0": 0.0, "mechanism.d_off_m": 0.02,
                     "contact.impact_speed_floor_mps": 0.1})
-    cfg = base.replace(**{"spatial.guide_axis": "y", "spatial.guide_offset_z_m": 0.02, "mechanism.orientation": "z"})
+    cfg = base.replace(**{"spatial.guide_axis": "y", "spatial.guide_offset_z_m": 0.02,
+                          "mechanism.orientation": "z"})
     keep = Collector()
     # the planar engine's projection (independent coordinates held): the same discrete motion
     simulate(cfg, [keep], engine=SpatialReferenceEngine(cfg, SpatialOptions(projection="partitioned")))

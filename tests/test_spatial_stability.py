@@ -31,3 +31,10 @@ def test_a_short_spatial_scene_runs_in_both_engines():
 def test_family_is_checked():
     with pytest.raises(ConfigError):
         dataclasses.replace(StudySettings(scenes=1), family="planar")
+
+
+def test_agreement_factor_is_the_bench_familys():
+    from twin.spatial import stability as spatial
+    from twin.studies import stability as bench
+
+    assert spatial.REFERENCE_AGREEMENT == bench.REFERENCE_AGREEMENT

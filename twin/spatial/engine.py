@@ -176,7 +176,8 @@ class SpatialReferenceEngine:
         if self._k == 0 and self.options.drive:
             om = np.array(om, dtype=float)
             om[0] = self._drive.start_rate()  # the right-hand limit of a speed jump at t = 0
-        status, steps = SM.run(self.P, self.jon, self.M, self.Minv, self.Qg, self._st, np.ascontiguousarray(th, dtype=float),
+        status, steps = SM.run(self.P, self.jon, self.M, self.Minv, self.Qg, self._st,
+                               np.ascontiguousarray(th, dtype=float),
                                np.ascontiguousarray(om, dtype=float), np.ascontiguousarray(al, dtype=float),
                                stride, self._buf)
         if status != SM.OK:
