@@ -30,7 +30,7 @@ setup(
     ext_modules=[
         Extension(
             "twin.mujoco_engine._bore",
-            sources=["twin/mujoco_engine/_bore.c"],
+            sources=["twin/mujoco_engine/_bore.c", "twin/mujoco_engine/_socket.c"],
             depends=["twin/mujoco_engine/_drivetrain.h"],
             include_dirs=[include],
             extra_compile_args=["-O2"],

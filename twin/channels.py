@@ -98,6 +98,19 @@ def _guide_specs() -> list[ChannelSpec]:
     return [ChannelSpec(n, u, "joint_guide", dt, d) for n, u, dt, d in GUIDE_CHANNELS]
 
 
+def _spatial_joint_specs(joint: str) -> list[ChannelSpec]:
+    """A joint of the spatial mechanism: 3D eccentricity in the spatial frame, |friction force|."""
+    g = f"joint_{joint}"
+    return [
+        ChannelSpec(f"ecc_{joint}_x", "m", g, "float64", f"eccentricity at {joint}, x"),
+        ChannelSpec(f"ecc_{joint}_y", "m", g, "float64", f"eccentricity at {joint}, y"),
+        ChannelSpec(f"ecc_{joint}_z", "m", g, "float64", f"eccentricity at {joint}, z"),
+        ChannelSpec(f"pen_{joint}", "m", g, "float64", f"penetration at {joint}"),
+        ChannelSpec(f"fn_{joint}", "N", g, "float32", f"normal contact force at {joint}"),
+        ChannelSpec(f"ft_{joint}", "N", g, "float32", f"magnitude of the friction force at {joint}"),
+    ]
+
+
 _STATIC: dict[str, list[ChannelSpec]] = {
     "accel": [ChannelSpec(a, "m/s^2", "accel", "float32", f"{a} proper acceleration") for a in ACCELEROMETERS],
     "encoder": [ChannelSpec("encoder_angle", "rad", "encoder", "float64", "crank encoder angle, zero at -y")],
@@ -121,6 +134,9 @@ _STATIC: dict[str, list[ChannelSpec]] = {
                     "gravitational potential energy of the mechanism (zero at the bench origin)"),
         ChannelSpec("slider_speed", "m/s", "energy", "float64", "slider velocity along the guide"),
     ],
+    # optional group of the spatial mechanism
+    "slider_accel": [ChannelSpec("slider_acceleration", "m/s^2", "slider_accel", "float64",
+                                 "slider acceleration along the guide")],
 }
 
 
@@ -130,7 +146,10 @@ def channel_specs(cfg: BenchConfig) -> list[ChannelSpec]:
     for group in ALL_CHANNEL_GROUPS:
         if group not in cfg.sensors.channels:
             continue
-        if group == "joints":
+        if group == "joints" and cfg.spatial.enabled:
+            for j in cfg.joints.clearance_joints:
+                out.extend(_spatial_joint_specs(j))
+        elif group == "joints":
             # MuJoCo's ring and tendon bushings give no signed friction force on the pin
             no_ft = cfg.simulation.engine == "mujoco" and cfg.mujoco.bushing in ("ring", "tendon")
             for j in cfg.joints.clearance_joints:
@@ -149,7 +168,7 @@ def spec_by_name(name: str) -> ChannelSpec | None:
             if s.name == name:
                 return s
     for j in JOINTS:
-        for s in _joint_specs(j):
+        for s in _joint_specs(j) + _spatial_joint_specs(j)[2:3]:
             if s.name == name:
                 return s
     for s in _guide_specs():

@@ -177,6 +177,11 @@ class Outcome:
 
 def make_engine(cfg: BenchConfig) -> Engine:
     """Instantiate the engine named by ``cfg.simulation.engine``."""
+    if cfg.spatial.enabled:  # the spatial mechanism has its own pair of engines
+        from twin.spatial import SPATIAL_ENGINE_CLASSES
+
+        mod, cls = SPATIAL_ENGINE_CLASSES[cfg.simulation.engine].split(":")
+        return getattr(importlib.import_module(mod), cls)(cfg)
     mod, cls = ENGINE_CLASSES[cfg.simulation.engine].split(":")  # imported on demand
     return getattr(importlib.import_module(mod), cls)(cfg)
 

@@ -8,7 +8,7 @@ Definitions (identical for both engines, so summaries compare line by line):
   (``fn_J > 0``) that follow at least ``min_free_s`` of separation. Re-contacts after
   shorter separations belong to the same impact event (chatter).
 * ``max_contact_force_N``: max of ``fn_J``.
-* ``rms_mps2`` / ``peak_mps2`` per accelerometer: RMS and max |a| of the proper
+* ``rms_mps2`` / ``peak_mps2`` per accelerometer (and of ``slider_acceleration``, spatial runs): RMS and max |a| of the proper
   acceleration over the run (gravity included, as the sensor reads it).
 * ``drive_train`` (runs with the channel group ``motor``): the motor's RMS and peak torque
   [N m], its continuous rating and whether the RMS exceeds it (the drive's thermal limit is not
@@ -129,7 +129,8 @@ class SummaryAccumulator:
             ex, ey, fn = chunk[f"ecc_{j}_x"], chunk[f"ecc_{j}_y"], chunk[f"fn_{j}"]
             st = self._joints.setdefault(j, {"max_eccentricity_m": 0.0, "max_penetration_m": 0.0,
                                              "max_contact_force_N": 0.0})
-            st["max_eccentricity_m"] = max(st["max_eccentricity_m"], float(np.max(np.hypot(ex, ey))))
+            ecc = np.hypot(ex, ey) if f"ecc_{j}_z" not in chunk else np.hypot(np.hypot(ex, ey), chunk[f"ecc_{j}_z"])
+            st["max_eccentricity_m"] = max(st["max_eccentricity_m"], float(np.max(ecc)))
             st["max_penetration_m"] = max(st["max_penetration_m"], float(np.max(chunk[f"pen_{j}"])))
             st["max_contact_force_N"] = max(st["max_contact_force_N"], float(np.max(fn)))
             self._impacts.setdefault(j, ImpactCounter(chunk.rate_hz)).update(fn > 0)
@@ -141,7 +142,7 @@ class SummaryAccumulator:
                 self._guide_impacts.setdefault(end, ImpactCounter(chunk.rate_hz)).update(
                     chunk[f"fn_guide_{end}"] != 0)
             self._guide = gd
-        for a in ACCELEROMETERS:
+        for a in ACCELEROMETERS + ("slider_acceleration",):
             if a in chunk:
                 x = chunk[a].astype(np.float64)
                 acc = self._acc.setdefault(a, [0.0, 0.0])
@@ -195,7 +196,7 @@ class SummaryAccumulator:
                             "max_force_front_N": self._guide[2], "max_force_rear_N": self._guide[3],
                             "impacts_front": self._guide_impacts["front"].count,
                             "impacts_rear": self._guide_impacts["rear"].count}
-        for a in ACCELEROMETERS:
+        for a in ACCELEROMETERS + ("slider_acceleration",):
             if a in self._acc:
                 ss, peak = self._acc[a]
                 out[a] = {"rms_mps2": float(np.sqrt(ss / n)) if n else 0.0, "peak_mps2": peak}

@@ -22,6 +22,7 @@ STUDIES: list[str] = [
     "twin.studies.continuous_contact:register",
     "twin.studies.mcdm:register",
     "twin.studies.taguchi:register",
+    "twin.studies.taguchi_run:register",
 ]
 
 

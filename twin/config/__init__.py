@@ -41,6 +41,7 @@ from twin.config.engines import ENGINE_CLASSES, ENGINES, MujocoSettings, Simulat
 from twin.config.loading import config_from_toml, load_config
 from twin.config.mechanism import Bodies, BodyParams, Contact, Joints, Material, Materials, Mechanism, ln_stiffness
 from twin.config.presets import NAMED_PRESETS, TABLE4, named_preset, preset
+from twin.config.spatial import Spatial
 from twin.config.sensors import (ACCEL_MODEL_NAMES, ACCEL_RESPONSES, DAQ_RANGES, AccelMount, Instrumentation,
                                  Sensors)
 from twin.errors import ConfigError
@@ -50,7 +51,7 @@ __all__ = [
     "CHANNEL_GROUPS", "DAQ_RANGES", "ENGINES", "ENGINE_CLASSES", "ENGINE_ONLY_GROUPS", "JOINTS", "NAMED_PRESETS",
     "OPTIONAL_CHANNEL_GROUPS", "ORIENTATIONS", "PROGRAMS", "TABLE4",
     "AccelMount", "BenchConfig", "Bodies", "BodyParams", "ConfigError", "Contact", "Drive", "Drivetrain", "Instrumentation",
-    "Joints", "Material", "Materials", "Mechanism", "MujocoSettings", "PID", "Sensors", "Simulation",
+    "Joints", "Material", "Materials", "Mechanism", "MujocoSettings", "PID", "Sensors", "Simulation", "Spatial",
     "config_from_toml", "from_dict", "joint_stiffness", "ln_stiffness", "load_config", "named_preset", "preset",
     "with_overrides",
 ]

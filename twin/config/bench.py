@@ -15,6 +15,7 @@ from twin.config.drivetrain import Drivetrain
 from twin.config.engines import MujocoSettings, Simulation
 from twin.config.mechanism import Bodies, Contact, Joints, Materials, Mechanism, ln_stiffness
 from twin.config.sensors import Instrumentation, Sensors
+from twin.config.spatial import Spatial
 from twin.errors import ConfigError
 
 
@@ -35,6 +36,7 @@ class BenchConfig:
     simulation: Simulation = Simulation()
     instrumentation: Instrumentation = field(default_factory=Instrumentation)
     drivetrain: Drivetrain = Drivetrain()
+    spatial: Spatial = Spatial()
 
     def __post_init__(self) -> None:
         _check(isinstance(self.name, str) and 0 < len(self.name) <= 80 and _NAME_RE.fullmatch(self.name) is not None,
@@ -81,6 +83,13 @@ class BenchConfig:
                 if group in sen.channels:
                     raise ConfigError("sensors.channels", f"the optional group {group!r} needs drive.mode = "
                                       f"\"motor\" or \"torque\", got {self.drive.mode!r}")
+        if self.spatial.enabled:
+            from twin.spatial.checks import check_spatial
+
+            check_spatial(self)
+        elif "slider_accel" in sen.channels:
+            raise ConfigError("sensors.channels", "the optional group 'slider_accel' is produced by the spatial "
+                              "mechanism only (spatial.enabled = true); remove it")
         for group, engines in ENGINE_ONLY_GROUPS.items():
             if group in sen.channels and sim.engine not in engines:
                 raise ConfigError("sensors.channels",
@@ -113,8 +122,9 @@ class BenchConfig:
     # -- serialization
     def to_dict(self) -> dict[str, Any]:
         """Plain nested dict (tuples as lists), the TOML layout. The ``[drivetrain]`` table is left
-        out while it holds the defaults and the drive does not use it (crank PID, prescribed), so
-        that the text and digest of such configurations are what they were before it existed."""
+        out while it holds the defaults and the drive does not use it (crank PID, prescribed), and the
+        ``[spatial]`` table while it holds the defaults (the planar bench), so that the text and
+        digest of such configurations are what they were before these tables existed."""
         out = _to_plain(self)
         joints = out.get("joints", {})
         if all(joints.get(k) == v for k, v in Joints.GUIDE_DEFAULTS.items()):
@@ -122,6 +132,8 @@ class BenchConfig:
                 joints.pop(k, None)
         if self.drive.mode in ("pid", "prescribed") and self.drivetrain == Drivetrain():
             out.pop("drivetrain", None)
+        if self.spatial == Spatial():  # the planar bench: no [spatial] table (same text and digest as before it)
+            out.pop("spatial", None)
         return out
 
     def to_toml(self) -> str:

@@ -28,8 +28,9 @@ CHANNEL_GROUPS: tuple[str, ...] = ("accel", "encoder", "crank", "slider", "joint
 #: Channel groups a scene may ask for but that are not in the default list (they cost time):
 #: "energy" (mechanical energy and slider speed, for energy balances; both engines);
 #: "motor" (motor, belt and command channels; drive.mode "motor" or "torque" only);
-#: "drive_energy" (the drive train's work, dissipation and energy accumulators; "motor"/"torque").
-OPTIONAL_CHANNEL_GROUPS: tuple[str, ...] = ("energy", "motor", "drive_energy")
+#: "drive_energy" (the drive train's work, dissipation and energy accumulators; "motor"/"torque");
+#: "slider_accel" (the slider's acceleration along its guide; spatial mechanism only).
+OPTIONAL_CHANNEL_GROUPS: tuple[str, ...] = ("energy", "motor", "drive_energy", "slider_accel")
 #: Every channel group, in canonical order (the defaults, then the optional ones).
 ALL_CHANNEL_GROUPS: tuple[str, ...] = CHANNEL_GROUPS + OPTIONAL_CHANNEL_GROUPS
 #: Optional channel groups that only some engines produce: group -> engines.

@@ -219,6 +219,10 @@ static const char* const guide_user_names[] = {"marker", "force", "v0", "v1"};
 _Static_assert(sizeof(guide_user_names) / sizeof(guide_user_names[0]) == GUIDE_NUSER,
                "guide_user_names must name every field of enum guide_user");
 
+/* the ball-in-socket collider of the spatial mechanism (_socket.c): a marked sphere is a socket */
+int twin_socket_install(void* table_addr, double magic);
+void twin_socket_tangent(const mjtNum vball[3], const mjtNum vsocket[3], const mjtNum n[3], mjtNum t[3]);
+
 static mjfCollision g_previous = NULL;
 static mjfGeneric g_prev_passive = NULL;
 static mjfSensor g_prev_sensor = NULL;
@@ -324,7 +328,8 @@ static mjtNum bore_bias_acceleration(const mjModel* m, const mjData* d, const mj
   const mjtNum* xp = d->geom_xpos + 3 * gp;
   const mjtNum* xb = d->geom_xpos + 3 * gb;
   const mjtNum* R = d->geom_xmat + 9 * gb;
-  const mjtNum a[3] = {R[2], R[5], R[8]};
+  const int sph = m->geom_type[gb] == mjGEOM_SPHERE;  /* a socket (_socket.c): no axis, e in 3D */
+  const mjtNum a[3] = {sph ? 0 : R[2], sph ? 0 : R[5], sph ? 0 : R[8]};
   mjtNum e[3] = {xp[0] - xb[0], xp[1] - xb[1], xp[2] - xb[2]};
   const mjtNum ea = e[0] * a[0] + e[1] * a[1] + e[2] * a[2];
   for (int k = 0; k < 3; k++) e[k] -= ea * a[k];
@@ -526,6 +531,7 @@ static int bore_friction(const mjModel* m, const mjData* d, int icon, friction_t
   out->t[2] = a[0] * n[1] - a[1] * n[0];
   const mjtNum* vpin = b1 ? vb : va;
   const mjtNum* vbore = b1 ? va : vb;
+  if (m->geom_type[gb] == mjGEOM_SPHERE) twin_socket_tangent(vpin, vbore, n, out->t);  /* socket: along the slip */
   const mjtNum vt = (vpin[0] - vbore[0]) * out->t[0] + (vpin[1] - vbore[1]) * out->t[1] +
                     (vpin[2] - vbore[2]) * out->t[2];
   const mjtNum s = fabs(vt);
@@ -646,6 +652,7 @@ static PyObject* py_install(PyObject* self, PyObject* args) {
     table[mjGEOM_CYLINDER][mjGEOM_CYLINDER] = collide_pin_bore;
     changed = 1;
   }
+  if (twin_socket_install((void*)table, BORE_MAGIC)) changed = 1;
   if (*passive != passive_bore) {
     g_prev_passive = *passive;
     *passive = passive_bore;

@@ -120,18 +120,23 @@ class StudySettings:
         duration_range_s: range of the scenes' simulated durations [s].
         bench: also draw the guide clearance and the drive train and run every scene in both
             engines (:mod:`twin.studies.stability_bench`).
+        family: "bench" (the planar twin's scenes, this module) or "spatial" (S002's mechanism in both
+            engines, :mod:`twin.spatial.stability`).
     """
 
     scenes: int = 500
     seed: int = 1
     duration_range_s: tuple[float, float] = (0.5, 3.0)
     bench: bool = False
+    family: str = "bench"
 
     def __post_init__(self) -> None:
         if isinstance(self.scenes, bool) or not isinstance(self.scenes, int) or self.scenes < 1:
             raise ConfigError("--scenes", f"must be an integer >= 1, got {self.scenes!r}")
         if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
             raise ConfigError("--seed", f"must be an integer >= 0, got {self.seed!r}")
+        if self.family not in ("bench", "spatial"):
+            raise ConfigError("--family", f"must be bench or spatial, got {self.family!r}")
 
 
 def quick(scenes: int = 20, seed: int = 1, bench: bool = False) -> StudySettings:
@@ -420,9 +425,16 @@ def summarize(rows: list[dict[str, Any]], wall_s: float) -> dict[str, Any]:
 def run_study(out: Path | None, settings: StudySettings, progress: bool = False,
               log: Callable[[str], None] | None = None) -> dict[str, Any]:
     """Run the campaign; write the outputs to ``out`` (if given); return the JSON data."""
-    scenes = [sample_scene(settings.seed, i, settings.duration_range_s, settings.bench) for i in range(settings.scenes)]
-    if settings.bench:  # every bench scene in both engines: one row each
-        scenes = [{**sc, "engine": e} for sc in scenes for e in ENGINES]
+    run_one = run_scene
+    if settings.family == "spatial":
+        from twin.spatial.stability import run_scene as run_one, sample_scene as sample_spatial  # noqa: F811
+
+        scenes = [sample_spatial(settings.seed, i, settings.duration_range_s) for i in range(settings.scenes)]
+    else:
+        scenes = [sample_scene(settings.seed, i, settings.duration_range_s, settings.bench)
+                  for i in range(settings.scenes)]
+        if settings.bench:  # every bench scene in both engines: one row each
+            scenes = [{**sc, "engine": e} for sc in scenes for e in ENGINES]
     rows = []
     t0 = time.perf_counter()
     bar = None
@@ -433,7 +445,7 @@ def run_study(out: Path | None, settings: StudySettings, progress: bool = False,
     try:
         with tempfile.TemporaryDirectory(prefix="twin_stability_") as tmp:
             for sc in scenes:
-                met = run_scene(sc, Path(tmp))
+                met = run_one(sc, Path(tmp))
                 rows.append({"scene": sc, "metrics": met})
                 if bar is not None:
                     bar.update(1)
@@ -616,6 +628,8 @@ def register(studies: Any) -> None:
                    help="the whole bench: also draw the slider guide's clearance and the drive (crank PID or the "
                         "motor with its V-belt, the drive train's parameters over their ranges), and run every "
                         "scene in both engines (one row each)")
+    p.add_argument("--family", choices=("bench", "spatial"), default="bench",
+                   help="scene family: the bench's planar twin (default) or S002's spatial mechanism in both engines")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=_run)
 
@@ -626,6 +640,10 @@ def _run(args: Any) -> int:
     settings = (quick if args.quick else lambda scenes, seed, bench: StudySettings(scenes=scenes, seed=seed,
                                                                                   bench=bench))(
         args.scenes, args.seed, args.bench)
+    if getattr(args, "family", "bench") != "bench":
+        from dataclasses import replace
+
+        settings = replace(settings, family=args.family)
     out = check_output_dir(args.out)
     data = run_study(out, settings, progress=not args.no_progress,
                      log=lambda m: print(m, file=sys.stderr, flush=True))

@@ -2,7 +2,7 @@
 package beside this module (each value's source in the file's comments).
 
 * ``table4.toml``: the twelve tests of S003 Table 4 (``[test.N]`` tables), :func:`preset`;
-* ``s001.toml``, ``s000.toml``, ``s004.toml``: the mechanisms of the other seed papers,
+* ``s001.toml``, ``s000.toml``, ``s004.toml``, ``s002.toml`` (spatial): the mechanisms of the other seed papers,
   :func:`named_preset`;
 * ``torque_release.toml``, ``torque_release_protocol.toml``: the bench's planned torque-driven
   release test and its three-speed protocol variant (drive train, ``drive.mode = "torque"``),
@@ -67,14 +67,14 @@ def _named(name: str) -> BenchConfig:
 #: name -> builder (reads ``NAME.toml``).
 NAMED_PRESETS: dict[str, typing.Callable[[], BenchConfig]] = {
     name: functools.partial(_named, name)
-    for name in ("s001", "s000", "s004", "torque_release", "torque_release_protocol")
+    for name in ("s001", "s000", "s004", "s002", "torque_release", "torque_release_protocol")
 }
 
 
 def named_preset(name: str, field_name: str = "--preset") -> BenchConfig:
     """Configuration of a paper's mechanism (``--preset NAME``, ``preset = "NAME"`` in TOML):
     ``s001`` (S001's rig), ``s000`` (S000's Flores slider–crank), ``s004`` (S004's large
-    mechanism), ``torque_release`` (the bench's torque-driven release test),
+    mechanism), ``s002`` (S002's spatial slider–crank), ``torque_release`` (the bench's torque-driven release test),
     ``torque_release_protocol`` (three spin-ups and coast-downs); the sources of their numbers are in the files ``NAME.toml`` of this folder."""
     if not isinstance(name, str) or name.lower() not in NAMED_PRESETS:
         raise ConfigError(field_name, f"must be one of {', '.join(NAMED_PRESETS)}, got {name!r}")

@@ -1,0 +1,82 @@
+"""The spatial slider–crank of S002 in MuJoCo (twin.spatial.mujoco) against the closed form and the
+spatial reference engine."""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+import pytest
+
+from twin.config import named_preset
+from twin.simulate import simulate_run
+from twin.spatial.geometry import slider_closed_form
+from twin.summary import summarize
+
+
+def _s002(engine: str, **overrides):
+    return named_preset("s002").replace(**{"simulation.engine": engine, **overrides})
+
+
+def test_mujoco_ideal_slider_follows_closed_form():
+    """Ideal joints (connect equalities, soft: MuJoCo has no hard loop closure): the slider's position
+    against the closed form (twin.spatial.geometry) ≤ 1e-6 relative."""
+    cfg = _s002("mujoco", **{"simulation.duration_s": 0.03, "joints.clearance_a_mm": 0.0,
+                             "joints.clearance_b_mm": 0.0, "joints.clearance_c_mm": 0.0})
+    run = simulate_run(cfg)
+    x, _, _ = slider_closed_form(cfg, run["crank_angle"], run["crank_speed"])
+    assert np.max(np.abs(run["slider_position"] - x)) <= 1e-6 * np.max(np.abs(x))
+    assert np.ptp(run["slider_position"]) > 0.002  # millimetres of stroke within the window
+
+
+def test_mujoco_first_impacts_match_reference():
+    """0.1 mm radial clearance at A, B, C (S002 level 1): both engines start at speed with every joint
+    centred; the joints' first contacts begin within a step of each other."""
+    out = {}
+    for engine in ("reference", "mujoco"):
+        out[engine] = simulate_run(_s002(engine, **{"simulation.duration_s": 0.003}))
+    for j in "ABC":
+        ka = int(np.argmax(out["reference"][f"fn_{j}"] > 0))
+        kb = int(np.argmax(out["mujoco"][f"fn_{j}"] > 0))
+        assert ka > 0 and abs(ka - kb) <= 1, (j, ka, kb)
+
+
+# S002's clearance levels (radial 0.1, 0.4, 0.7 mm, Eq. 1) as diametral clearances; the s002 preset's
+# 0.3 s run at its 5 µs step. Measured gaps (MuJoCo vs reference), the failing ones xfail:
+#   0.2 mm: A −3.4 %, B +0.4 %, C −0.5 %, RMS −0.9 %
+#   0.8 mm: A −2.4 %, B −19.8 %, C −4.6 %, RMS +1.7 %
+#   1.4 mm: A −2.3 %, B −16.7 %, C −4.3 %, RMS +5.7 %
+# The peak at B is the largest of a few impacts of a chaotic sequence: at a 1.25 µs step the gaps at B
+# are +6.5 %, −2.0 % and −17.9 % (and the RMS at 1.4 mm −2.5 %), each engine's own peak moving as much
+# with the step; A, the paper's response, stays within 3.5 % at every level and step.
+_GAPS = {(0.8, "B"): "−19.8 %", (1.4, "B"): "−16.7 %", (1.4, "rms"): "+5.7 %"}
+_CASES = [pytest.param(c, q, id=f"{c}mm-{q}", marks=[pytest.mark.xfail(strict=True, reason=(
+              f"measured gap {_GAPS[(c, q)]} (MuJoCo vs reference, s002 preset, 0.3 s at 5 µs)"))]
+              if (c, q) in _GAPS else [])
+          for c in (0.2, 0.8, 1.4) for q in ("A", "B", "C", "rms")]
+
+
+@functools.lru_cache(maxsize=None)
+def _summaries(clearance_mm: float) -> tuple[dict, dict]:
+    c = clearance_mm
+    out = []
+    for engine in ("reference", "mujoco"):
+        run = simulate_run(_s002(engine, **{"joints.clearance_a_mm": c, "joints.clearance_b_mm": c,
+                                            "joints.clearance_c_mm": c}))
+        out.append(summarize(run))
+    return out[0], out[1]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("clearance_mm,quantity", _CASES)
+def test_engines_agree_at_s002_clearance_levels(clearance_mm, quantity):
+    """Independent basis: the two engines (separate formulations: natural coordinates with an R matrix,
+    MuJoCo's joint coordinates with native colliders). Peak contact force of each joint within 5 %,
+    slider acceleration RMS within 2 %."""
+    ref, mj = _summaries(clearance_mm)
+    if quantity == "rms":
+        r, m = ref["slider_acceleration"]["rms_mps2"], mj["slider_acceleration"]["rms_mps2"]
+        assert abs(m / r - 1) <= 0.02, (r, m)
+    else:
+        r, m = ref[quantity]["max_contact_force_N"], mj[quantity]["max_contact_force_N"]
+        assert abs(m / r - 1) <= 0.05, (r, m)

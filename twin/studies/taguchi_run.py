@@ -1,0 +1,191 @@
+"""``twin study taguchi SPEC --out DIR``: an orthogonal-array experiment simulated through the dataset
+generator, then the Taguchi analysis of :mod:`twin.studies.taguchi` (S002's L27).
+
+* **SPEC** is a dataset spec (``twin/dataset/spec.py``, a ``list`` design: one point per run of the
+  array, in run order) with one more table, ``[taguchi]``:
+
+  - ``factors``: analysis factor name → the spec factor that holds its level (other factors of the
+    spec may vary with them: a crank length and its inertia);
+  - ``responses``: per run, from the stored channels over t ≥ ``settle_s``: ``max_slider_accel``
+    (max |slider_acceleration| [m/s²]), ``rms_slider_accel``, ``max_force_A``/``_B``/``_C`` (max of
+    ``fn_J`` [N]), ``max_force`` (over every joint);
+  - ``settle_s`` [s] (default 0), ``sn`` (``smaller``, default, or ``larger``), ``interactions``
+    (e.g. ``["crank_length_m*clearance_a_mm"]``), ``alpha`` (0.05).
+
+* The design runs through the dataset generator (:func:`twin.dataset.generate.generate`) into
+  ``DIR/dataset`` (a second call resumes it); either engine (``base.engine``).
+
+Outputs: ``DIR/responses.csv`` (one row per run: run id, the analysis factors, the responses, the
+run's wall time) and what ``twin study taguchi-analyze`` writes from it: ``taguchi.json``,
+``report.md``, main-effect and S/N PNGs.
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import io
+import json
+import math
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+
+from twin.dataset.spec import DatasetSpec, SpecError, parse_spec, read_spec_toml
+
+RESPONSES = ("max_slider_accel", "rms_slider_accel", "max_force_A", "max_force_B", "max_force_C", "max_force")
+
+
+@dataclasses.dataclass(frozen=True)
+class TaguchiSpec:
+    """A parsed ``[taguchi]`` table and its dataset spec."""
+
+    dataset: DatasetSpec
+    factors: dict[str, str]
+    responses: tuple[str, ...]
+    settle_s: float = 0.0
+    sn: str = "smaller"
+    interactions: tuple[str, ...] = ()
+    alpha: float = 0.05
+
+
+def parse_taguchi(data: Mapping[str, Any], source: str = "") -> TaguchiSpec:
+    """Validate a spec given as nested dicts: a dataset spec plus ``[taguchi]``."""
+    data = dict(data)
+    tg = data.pop("taguchi", None)
+    if not isinstance(tg, Mapping):
+        raise SpecError("taguchi", "a Taguchi study spec needs a [taguchi] table (factors, responses)")
+    allowed = ("factors", "responses", "settle_s", "sn", "interactions", "alpha")
+    for k in tg:
+        if k not in allowed:
+            raise SpecError(f"taguchi.{k}", f"unknown key; allowed: {', '.join(allowed)}")
+    ds = parse_spec(data, source)
+    if ds.design != "list":
+        raise SpecError("design.kind", f"must be \"list\" for a Taguchi study (the array's runs), got {ds.design!r}")
+    fac = tg.get("factors")
+    names = {f.name for f in ds.factors} | {k for p in ds.points for k in p}
+    if not (isinstance(fac, Mapping) and fac and all(isinstance(v, str) for v in fac.values())):
+        raise SpecError("taguchi.factors", "must be a table: analysis factor name = the spec factor it reads")
+    for k, v in fac.items():
+        if v not in names:
+            raise SpecError(f"taguchi.factors.{k}", f"{v!r} is not a factor of the design ({', '.join(sorted(names))})")
+    resp = tg.get("responses")
+    if not (isinstance(resp, list) and resp and all(r in RESPONSES for r in resp)):
+        raise SpecError("taguchi.responses", f"must be a non-empty list of {', '.join(RESPONSES)}; got {resp!r}")
+    settle = tg.get("settle_s", 0.0)
+    if not (isinstance(settle, (int, float)) and 0 <= settle < ds.duration_s):
+        raise SpecError("taguchi.settle_s", f"must lie in [0, base.duration_s = {ds.duration_s:g}) s, got {settle!r}")
+    sn = tg.get("sn", "smaller")
+    if sn not in ("smaller", "larger"):
+        raise SpecError("taguchi.sn", f"must be smaller or larger, got {sn!r}")
+    inter = tg.get("interactions", [])
+    if not (isinstance(inter, list) and all(isinstance(i, str) for i in inter)):
+        raise SpecError("taguchi.interactions", f"must be a list of A*B strings, got {inter!r}")
+    alpha = tg.get("alpha", 0.05)
+    if not (isinstance(alpha, (int, float)) and 0 < alpha < 1):
+        raise SpecError("taguchi.alpha", f"must lie in (0, 1), got {alpha!r}")
+    return TaguchiSpec(ds, dict(fac), tuple(resp), float(settle), sn, tuple(inter), float(alpha))
+
+
+def load_taguchi(path: str | Path) -> TaguchiSpec:
+    """Read a Taguchi study spec file (one-line errors naming the file or key)."""
+    p = Path(path)
+    spec = parse_taguchi(read_spec_toml(p, "a Taguchi study spec"), source=str(p))
+    if spec.dataset.base_config is not None and not Path(spec.dataset.base_config).is_absolute():
+        spec = dataclasses.replace(spec, dataset=dataclasses.replace(
+            spec.dataset, base_config=str(p.parent / spec.dataset.base_config)))
+    return spec
+
+
+def run_responses(path: Path, rate_hz: float, settle_s: float, names: tuple[str, ...]) -> dict[str, float]:
+    """The responses of one stored run (``data/<run_id>.parquet``) over t >= settle_s."""
+    import pyarrow.parquet as pq
+
+    cols = pq.read_schema(path).names
+    want = [c for c in cols if c == "slider_acceleration" or c.startswith("fn_")]
+    tab = pq.read_table(path, columns=want)
+    i0 = int(math.ceil(settle_s * rate_hz - 1e-9))
+    col = {c: np.asarray(tab.column(c).to_numpy(zero_copy_only=False), float)[i0:] for c in tab.column_names}
+    out = {}
+    for r in names:
+        if r in ("max_slider_accel", "rms_slider_accel"):
+            if "slider_acceleration" not in col:
+                raise SpecError("taguchi.responses", f"{r} needs the channel group slider_accel in outputs.truth")
+            a = col["slider_acceleration"]
+            out[r] = float(np.max(np.abs(a))) if r.startswith("max") else float(np.sqrt(np.mean(a * a)))
+        elif r == "max_force":
+            fn = [float(np.max(v)) for k, v in col.items() if k.startswith("fn_")]
+            out[r] = max(fn) if fn else 0.0
+        else:
+            key = "fn_" + r[-1]
+            if key not in col:
+                raise SpecError("taguchi.responses", f"{r} needs joint {r[-1]} with a clearance and the group "
+                                                     "joints in outputs.truth")
+            out[r] = float(np.max(col[key]))
+    return out
+
+
+def simulate(spec: TaguchiSpec, out: Path, workers: int | None, progress: bool) -> list[dict[str, Any]]:
+    """Generate the design into ``out`` (resumes); per run: id, analysis factors, responses, wall time."""
+    from twin.dataset.design import plan
+    from twin.dataset.generate import generate
+    from twin.errors import TwinError
+
+    generate(spec.dataset, out, workers=workers, progress=progress)
+    rows = []
+    for r in plan(spec.dataset):
+        res = json.loads((out / "results" / f"{r.run_id}.json").read_text())
+        if res["status"] != "ok":
+            raise TwinError(f"Taguchi run {r.run_id} ({r.factors}) failed: {res.get('reason')}")
+        resp = run_responses(out / "data" / f"{r.run_id}.parquet", spec.dataset.outputs.rate_hz, spec.settle_s,
+                             spec.responses)
+        rows.append({"run_id": r.run_id, **{k: r.factors[v] for k, v in spec.factors.items()}, **resp,
+                     "wall_s": res.get("wall_s")})
+    return rows
+
+
+def responses_csv(rows: list[dict[str, Any]]) -> str:
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
+    w.writeheader()
+    w.writerows(rows)
+    return buf.getvalue()
+
+
+def register(studies: Any) -> None:
+    """Add ``twin study taguchi`` to the ``twin study`` group."""
+    p = studies.add_parser(
+        "taguchi", help="an orthogonal-array experiment (S002's L27) simulated, then its Taguchi analysis",
+        description="Runs the list design of SPEC (a dataset spec with a [taguchi] table) through the dataset "
+                    "generator, computes the responses of every run, writes DIR/responses.csv and the Taguchi "
+                    "analysis of twin study taguchi-analyze (S/N ratios, main effects, ANOVA, prediction at the "
+                    "optimum, PNGs). See twin/studies/taguchi_run.py.")
+    p.add_argument("spec", metavar="SPEC", help="Taguchi study spec (.toml): a dataset spec plus [taguchi]")
+    p.add_argument("--out", required=True, metavar="DIR", help="output directory (created if missing)")
+    p.add_argument("--workers", type=int, default=None, metavar="N", help="worker processes (default: all cores)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=_run)
+
+
+def _run(args: Any) -> int:
+    import sys
+    import time
+    from types import SimpleNamespace
+
+    from twin.studies import taguchi
+    from twin.util import atomic_write_text, check_output_dir
+
+    spec = load_taguchi(args.spec)
+    out = check_output_dir(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    t0 = time.perf_counter()
+    rows = simulate(spec, out / "dataset", args.workers, not args.no_progress and sys.stderr.isatty())
+    wall = time.perf_counter() - t0
+    atomic_write_text(out / "responses.csv", responses_csv(rows))
+    print(f"simulated {len(rows)} runs ({spec.dataset.engine}, {spec.dataset.duration_s:g} s each) in {wall:.1f} s; "
+          f"wrote {out / 'responses.csv'}")
+    ns = SimpleNamespace(responses_csv=str(out / "responses.csv"), responses=",".join(spec.responses),
+                         factors=",".join(spec.factors), sn=spec.sn, interactions=",".join(spec.interactions) or None,
+                         pool=None, predict_with=None, alpha=spec.alpha, confirmation_runs=1, out=str(out))
+    return taguchi._run(ns)
