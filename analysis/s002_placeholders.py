@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from twin.config import named_preset
-from twin.simulate import simulate_run
+from twin.simulation import simulate_run
 
 OUT = Path(__file__).resolve().parent / "results/s002/simulated/placeholders.md"
 SETTLE_S = 0.1

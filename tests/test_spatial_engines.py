@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from twin.config import named_preset
-from twin.simulate import simulate_run
+from twin.simulation import simulate_run
 from twin.spatial.geometry import slider_closed_form
 from twin.summary import summarize
 

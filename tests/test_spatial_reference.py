@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from twin.config import ConfigError, named_preset
-from twin.simulate import Collector, simulate, simulate_run
+from twin.simulation import Collector, simulate, simulate_run
 from twin.spatial import model as SM
 from twin.spatial.engine import SpatialOptions, SpatialReferenceEngine, run_raw
 from twin.spatial.geometry import slider_closed_form

@@ -6,7 +6,7 @@ bearing) and at the spherical joints B and C (a ball in a socket).
 * :mod:`twin.spatial.geometry`: the mechanism's constants from a configuration, closed-form kinematics;
 * :mod:`twin.spatial.model`: the reference's compiled equations of motion (natural coordinates,
   R-matrix) and stepping loop;
-* :mod:`twin.spatial.engine`: the reference engine for :func:`twin.simulate.simulate`.
+* :mod:`twin.spatial.engine`: the reference engine for :func:`twin.simulation.simulate`.
 """
 
 #: engine name -> "module:class" of the spatial mechanism's engines (imported on demand)

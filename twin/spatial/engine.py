@@ -1,5 +1,5 @@
 """The spatial reference engine (``twin simulate --preset s002 --engine reference``): the model of
-:mod:`twin.spatial.model` behind the chunk loop of :func:`twin.simulate.run_chunks`, with the bench's
+:mod:`twin.spatial.model` behind the chunk loop of :func:`twin.simulation.run_chunks`, with the bench's
 configuration, channels and summary.
 
 Channels (see :mod:`twin.channels`): ``crank_angle`` (θ from +y about +x, unwrapped) and
@@ -118,7 +118,7 @@ def initial_state(cfg: Any, theta0: float, omega0: float) -> np.ndarray:
 
 
 class SpatialReferenceEngine:
-    """Spatial reference engine (module docstring); the chunk loop is :func:`twin.simulate.run_chunks`."""
+    """Spatial reference engine (module docstring); the chunk loop is :func:`twin.simulation.run_chunks`."""
 
     name = "reference"
 
@@ -162,7 +162,7 @@ class SpatialReferenceEngine:
 
     def advance(self, theta_ref: np.ndarray, omega_ref: np.ndarray, stride: int) -> dict[str, np.ndarray]:
         """Integrate ``len(theta_ref)`` steps on the drive's program (see
-        :meth:`twin.simulate.Engine.advance`)."""
+        :meth:`twin.simulation.Engine.advance`)."""
         if self._st is None:
             self.reset()
         h = self.cfg.simulation.timestep_s

@@ -76,7 +76,7 @@ def scene_config(scene: dict[str, Any], engine: str) -> Any:
 
 def _engine_metrics(scene: dict[str, Any], engine: str, pen_limit: float) -> dict[str, Any]:
     from twin.errors import SimulationError
-    from twin.simulate import simulate_run
+    from twin.simulation import simulate_run
 
     cfg = scene_config(scene, engine)
     t0 = time.perf_counter()
