@@ -166,6 +166,11 @@ def compare_accelerations(rec: dict[str, np.ndarray], sim: dict[str, np.ndarray]
     return out
 
 
+#: the files a replay writes in its folder; an existing folder holding anything else is not replaced
+REPLAY_FILES = frozenset({"replay.mcap", "report.json", "report.md", "encoder_trace.npz", "accelerations.png",
+                          "spectra.png", "tracking.png"})
+
+
 def replay(recording: str | Path, out_dir: str | Path,
            configure: Callable[[BenchConfig], BenchConfig] | None = None,
            opts: ReplayOptions = ReplayOptions()) -> dict[str, Any]:
@@ -177,7 +182,9 @@ def replay(recording: str | Path, out_dir: str | Path,
     from twin.util import check_output_dir, replace_dir, temp_path
 
     wall0 = time.perf_counter()
-    final = check_output_dir(out_dir, need_parent=False)
+    # the folder is replaced whole at the end: an existing one may hold only what a replay writes
+    # (never the recording, never the user's other files), and the recording must not lie inside it
+    final = check_output_dir(out_dir, need_parent=False, own=lambda n: n in REPLAY_FILES, inputs=(recording,))
     rec, info, repairs = read_recording(recording, nan=opts.nan)
     if info.calibration is None:
         raise RecordingError(f"{recording}: no calibration data; re-import it with --calibration STATIC "

@@ -42,6 +42,8 @@ class Dataset:
             self.info = json.loads(info_path.read_text())
         except (OSError, ValueError) as err:
             raise DatasetError(f"{info_path}: unreadable ({err})") from None
+        if not isinstance(self.info, dict):
+            raise DatasetError(f"{info_path}: must hold a JSON object, got {type(self.info).__name__}")
         if self.info.get("format") != FORMAT:
             raise DatasetError(f"{info_path}: format {self.info.get('format')!r}, expected {FORMAT}")
         runs = self.path / "runs.parquet"
@@ -56,8 +58,12 @@ class Dataset:
             self.stats: dict[str, dict[str, float]] = json.loads(stats.read_text())["channels"] if stats.is_file() else {}
         except (OSError, ValueError, KeyError, TypeError) as err:
             raise DatasetError(f"{stats}: unreadable ({type(err).__name__}: {err}); run generate again to rewrite it") from None
-        self.channels = {c["name"]: c for c in self.info["channels"]}
-        self.rate_hz = float(self.info["channels"][0]["rate_hz"]) if self.info["channels"] else 0.0
+        chans = self.info.get("channels")
+        try:
+            self.channels = {c["name"]: c for c in chans}  # type: ignore[union-attr]
+            self.rate_hz = float(chans[0]["rate_hz"]) if chans else 0.0  # type: ignore[index]
+        except (TypeError, KeyError, ValueError, IndexError):
+            raise DatasetError(f"{info_path}: 'channels' must be a list of {{name, rate_hz, ...}} tables") from None
 
     def rows(self, split: str | None = None, status: str = "ok") -> list[dict[str, Any]]:
         """Manifest rows (dicts), optionally of one split, by default the runs that succeeded."""
