@@ -124,6 +124,27 @@ class RecordingInfo:
 
 
 # ------------------------------------------------------------------------ validation
+#: how far beyond its supply rails a recorded accelerometer voltage may read (ADC noise, offsets) [V]
+RAIL_TOL_V = 0.1
+
+
+def check_motion(run: Run, where: str, min_turns: float = 1.0, min_ratio: float = 0.5) -> None:
+    """Refuse a recording whose crank does not turn: at least ``min_turns`` net crank revolutions,
+    and net motion at least ``min_ratio`` of the path travelled at 1 ms resolution (a random walk
+    of the encoder travels far and arrives nowhere)."""
+    cfg = run.config
+    c = np.asarray(run.channels["encoder_counts"].data, dtype=np.float64)
+    cpr = float(cfg.instrumentation.encoder_counts_per_rev) if cfg is not None else 1.0
+    k = max(1, int(round(run.rate_hz * 0.001)))
+    d = c[::k]
+    net = abs(float(d[-1] - d[0])) / cpr if d.size else 0.0
+    path = float(np.sum(np.abs(np.diff(d)))) / cpr if d.size > 1 else 0.0
+    if net < min_turns or net < min_ratio * path:
+        raise RecordingError(f"{where}: too little motion to replay: the crank turns {net:.2f} revolutions net "
+                             f"over a path of {path:.2f} (at least {min_turns:g} net revolutions and "
+                             f"{min_ratio:.0%} of the path are needed)")
+
+
 def _max_crank_rpm(cfg: BenchConfig) -> float:
     """Fastest crank speed the drive can command (±1000 motor rpm through the belt) [rpm]."""
     return 1000.0 / cfg.drive.belt_ratio
@@ -229,6 +250,14 @@ def validate_daq(run: Run, cfg: BenchConfig, nan: str = "error", encoder_repair:
                                      f"(t = {run.t0 + i / run.rate_hz:.6f} s); import with --repair-nan to "
                                      f"interpolate gaps of up to {MAX_NAN_GAP} samples")
             x = _fill_nan(x, name, run.rate_hz, repairs)
+        if name.startswith("volt_AC") and x.size:
+            # an accelerometer's output cannot leave its supply rails (ADC noise: a 0.1 V margin)
+            top = cfg.instrumentation.supply_v
+            lo, hi = float(np.nanmin(x)), float(np.nanmax(x))
+            if lo < -RAIL_TOL_V or hi > top + RAIL_TOL_V:
+                bad = lo if lo < -RAIL_TOL_V else hi
+                raise RecordingError(f"{where}: channel {name} reaches {bad:.4g} V, outside the sensor's output "
+                                     f"rails [0, {top:g}] V (instrumentation.supply_v; unit or gain wrong?)")
         chans[name] = Channel(name, CHANNEL_UNITS[name], DAQ_GROUP, x)
     return Run(run.t0, run.rate_hz, chans, cfg, dict(run.meta)), repairs
 

@@ -186,6 +186,9 @@ def replay(recording: str | Path, out_dir: str | Path,
     # (never the recording, never the user's other files), and the recording must not lie inside it
     final = check_output_dir(out_dir, need_parent=False, own=lambda n: n in REPLAY_FILES, inputs=(recording,))
     rec, info, repairs = read_recording(recording, nan=opts.nan)
+    from twin.recording import check_motion
+
+    check_motion(rec, str(recording))
     if info.calibration is None:
         raise RecordingError(f"{recording}: no calibration data; re-import it with --calibration STATIC "
                              "(a static recording in the calibration pose) or --zero-g AC1=V,...")

@@ -10,7 +10,7 @@ from typing import Any, Mapping
 from twin.config.bench import BenchConfig
 from twin.config.convert import _deep_merge, from_dict
 from twin.config.presets import named_preset, preset
-from twin.errors import ConfigError
+from twin.errors import ConfigError, TwinError
 from twin.tracefile import trace_duration
 from twin.util import toml_loads
 
@@ -26,7 +26,12 @@ def load_config(path: str | Path) -> BenchConfig:
     from twin.util import read_input_bytes, show
 
     p = Path(path)
-    raw = read_input_bytes(p, "--config")  # a regular file of bounded size: a FIFO or /dev/zero never hangs
+    try:
+        raw = read_input_bytes(p, "--config")  # a regular file of bounded size: a FIFO or /dev/zero never hangs
+    except ConfigError:
+        raise
+    except TwinError as err:
+        raise ConfigError("--config", str(err).split(": ", 1)[1]) from None
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as err:
