@@ -42,6 +42,11 @@ COMMANDS: list[str] = [
 ]
 
 
+#: options whose value is a path (their ``dest``): an empty value is refused for every command
+PATH_OPTIONS = ("out", "save", "json", "summary_json", "rerun", "screenshot", "model", "calibration", "config",
+                "trace")
+
+
 class UsageError(TwinError):
     """A command line argparse refuses (unknown option, bad value type, missing argument)."""
 
@@ -237,6 +242,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = parser.parse_args(argv)
     except TwinError as err:  # usage errors; a broken installation (ModelError, EngineUnavailableError)
         return _fail(str(err))
+    for dest in PATH_OPTIONS:  # an empty path must not silently become a default name
+        v = getattr(args, dest, None)
+        if isinstance(v, str) and not v.strip():
+            return _fail(f"--{dest.replace('_', '-')}: is empty; give a path")
     previous = None
     if threading.current_thread() is threading.main_thread():
         previous = signal.signal(signal.SIGTERM, raise_terminated)

@@ -442,7 +442,7 @@ def _read_npz(path: Path) -> tuple[dict[str, np.ndarray], dict[str, str]]:
     arrays: dict[str, Any] = {}
     unreadable = (OSError, ValueError, EOFError, KeyError, NotImplementedError, zipfile.BadZipFile, zlib.error)
     try:  # our own file object: np.load leaks its own when the zip directory is unreadable
-        with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as z:
+        with open(path, "rb") as fh, _npz(np.load(fh, allow_pickle=False), path) as z:
             for k in z.files:
                 try:
                     arrays[k] = z[k]
@@ -472,6 +472,12 @@ def _read_npz(path: Path) -> tuple[dict[str, np.ndarray], dict[str, str]]:
             raise RecordingError(f"{path}: column {k!r} has {n} rows but {first!r} has {lengths[first]}; "
                                  "all columns need the same length")
     return cols, units
+
+
+def _npz(loaded, path):
+    if not isinstance(loaded, np.lib.npyio.NpzFile):  # an .npy array renamed .npz
+        raise RecordingError(f"{path}: not an .npz archive of named arrays (a single .npy array renamed?)")
+    return loaded
 
 
 def read_table(path: str | Path) -> tuple[dict[str, np.ndarray], dict[str, str]]:

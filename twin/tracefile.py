@@ -27,7 +27,10 @@ def load_trace(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
         raise ConfigError("drive.trace_file", f"no such file: {p}")
     try:
         if p.suffix == ".npz":
-            with np.load(p, allow_pickle=False) as z:
+            loaded = np.load(p, allow_pickle=False)
+            if not isinstance(loaded, np.lib.npyio.NpzFile):  # an .npy array renamed .npz
+                raise RecordingError(f"{p}: not an .npz archive of named arrays (a single .npy array renamed?)")
+            with loaded as z:
                 missing = [k for k in ("t", "angle") if k not in z.files]
                 if missing:
                     raise RecordingError(f"{p}: needs arrays 't' and 'angle', has {', '.join(z.files) or 'none'}")

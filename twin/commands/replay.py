@@ -65,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
     if rec.suffix != ".mcap":
         raise TwinError(f"{rec}: a recording is an .mcap file; convert DAQ exports with 'twin import'")
     if not rec.is_file():
-        raise TwinError(f"{rec}: no such file")
+        raise TwinError(f"{rec}: " + ("not a regular file (a folder, pipe or device)" if rec.exists() else "no such file"))
     out = Path(args.out if args.out else f"replay_{rec.stem}")  # replay() checks it before any work
     for name in ("max_lag", "dtw_window", "dtw_max"):
         v = getattr(args, name)

@@ -326,6 +326,8 @@ def default_scheduler(workers: int) -> str:
 
 
 def executor(scheduler: str | None, workers: int) -> Callable[[list[dict]], Iterator[dict]]:
+    if scheduler is not None and not scheduler.strip():
+        raise TwinError("--scheduler: is empty; give processes, threads, local or a Dask scheduler address")
     scheduler = scheduler or default_scheduler(workers)
     if scheduler == "processes":
         return _local(workers)
