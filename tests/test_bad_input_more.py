@@ -542,3 +542,155 @@ def test_the_new_table_covers_every_command_and_is_large():
     from test_bad_input import CASES as OLD
 
     assert not {c[0] for c in CASES} & {c[0] for c in OLD}, "the new cases repeat the old table"
+
+
+# ------------------------------------------------------------ replay deletes nothing it did not write
+def test_replay_into_the_recordings_own_folder_deletes_nothing(tmp_path, capsys, monkeypatch):
+    """`twin replay DIR/rec.mcap --out DIR` once replaced DIR whole (the recording and the user's
+    files deleted, exit 0): it is refused, and so is any folder holding files a replay did not write."""
+    monkeypatch.chdir(tmp_path)
+    d = tmp_path / "DIR"
+    d.mkdir()
+    shutil.copy(SAMPLE, d / "rec.mcap")
+    (d / "notes.txt").write_text("mine\n")
+    before = snapshot(tmp_path)
+    for out in (d, Path("DIR"), Path("DIR/"), Path("DIR/..") / "DIR"):
+        assert main(["replay", str(d / "rec.mcap"), "--out", str(out), "--no-plots"]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "--out" in err, err
+    assert snapshot(tmp_path) == before
+
+
+def test_replay_may_replace_its_own_earlier_folder(tmp_path, capsys):
+    """A folder holding only what a replay writes (an earlier replay) is replaced as before."""
+    from twin.replay import REPLAY_FILES, replay  # noqa: F401
+
+    from twin.util import check_output_dir
+
+    out = tmp_path / "rp"
+    out.mkdir()
+    for name in ("replay.mcap", "report.json", "accelerations.png"):
+        (out / name).write_bytes(b"earlier replay")
+    assert check_output_dir(out, own=lambda n: n in REPLAY_FILES, inputs=(SAMPLE,)) == out
+    (out / "mine.txt").write_text("x")
+    with pytest.raises(Exception, match="did not write.*mine.txt"):
+        check_output_dir(out, own=lambda n: n in REPLAY_FILES, inputs=(SAMPLE,))
+
+
+# ------------------------------------------------------------------------ output names
+def test_a_legal_250_character_name_is_written(tmp_path):
+    """The temporary name beside a target must fit wherever the target fits (it once added 20+
+    characters to a 250-character name and failed with ENAMETOOLONG)."""
+    from twin.util import atomic_write_text, temp_path
+
+    name = "n" * 245 + ".json"
+    assert len(name) == 250
+    tmp = temp_path(tmp_path / name)
+    assert len(tmp.name.encode()) <= 255 and tmp.name.startswith(".")
+    atomic_write_text(tmp_path / name, "{}\n")
+    assert sorted(p.name for p in tmp_path.iterdir()) == [name]
+    assert main(["export-mjcf", "--out", str(tmp_path / ("m" * 246 + ".xml"))]) == 0
+    assert len(list(tmp_path.iterdir())) == 2
+
+
+def test_leftovers_of_dead_processes_are_removed_by_any_later_run_in_the_folder(tmp_path):
+    """A SIGKILLed writer leaves its temporary file; the next run writing anything in that folder
+    removes it (its process no longer exists); a live process's temporary is kept."""
+    from twin.util import _HOST
+
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    pid = int(dead.stdout)
+    left = [tmp_path / f".run.mcap.{_HOST}-{pid}.tmp", tmp_path / f".old.rrd.{_HOST}-{pid}.tmp.rrd"]
+    for p in left:
+        p.write_bytes(b"half written")
+    (tmp_path / f".x.tmp.dir.{_HOST}-{pid}.tmp").mkdir()
+    live = tmp_path / f".busy.mcap.{_HOST}-{os.getppid()}.tmp"
+    live.write_bytes(b"being written")
+    assert main(["export-mjcf", "--out", str(tmp_path / "other.xml")]) == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([live.name, "other.xml"])
+
+
+# --------------------------------------------------------------------------- full disk
+def test_standard_output_on_a_full_disk_is_one_line(tmp_path):
+    if not Path("/dev/full").exists():
+        pytest.skip("no /dev/full")
+    with open("/dev/full", "w") as full:
+        r = subprocess.run([sys.executable, "-m", "twin.cli", "dataset", "plan", str(ROOT / "analysis" / "datasets" /
+                            "tiny.toml"), "--no-estimate"], stdout=full, stderr=subprocess.PIPE, text=True,
+                           cwd=tmp_path, timeout=120)
+    assert r.returncode in (1, 2), r.stderr
+    assert r.stderr.count("\n") == 1 and r.stderr.startswith("twin: error: "), r.stderr
+    assert "Traceback" not in r.stderr and "Exception ignored" not in r.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
+# ---------------------------------------------------------------------- folder lock
+def _tiny_spec(tmp_path: Path) -> Path:
+    spec = tmp_path / "s.toml"
+    spec.write_text('[dataset]\nname = "lock"\n[base]\ntest = 6\nduration_s = 0.01\n[factors]\n'
+                    'motor_rpm = [300.0]\n[outputs]\nrate_hz = 10000.0\ntruth = ["accel"]\ninstrumented = false\n')
+    return spec
+
+
+def test_a_second_generator_on_a_folder_is_refused_naming_the_holder(tmp_path, capsys):
+    import socket
+
+    from twin.util import FolderLock
+
+    spec, out = _tiny_spec(tmp_path), tmp_path / "ds"
+    out.mkdir()
+    with FolderLock(out, "--out", "twin dataset generate"):
+        before = snapshot(tmp_path)
+        assert main(["dataset", "generate", str(spec), "--out", str(out), "--limit", "0", "--no-progress"]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "in use by another twin dataset generate" in err, err
+        assert f"pid {os.getpid()}" in err and socket.gethostname() in err, err
+        assert snapshot(tmp_path) == before
+    # released: the same command runs
+    assert main(["dataset", "generate", str(spec), "--out", str(out), "--limit", "0", "--no-progress"]) == 0
+
+
+def test_the_lock_of_a_killed_holder_is_taken_over(tmp_path, capsys):
+    """SIGKILL cannot be handled, but the kernel drops a dead process's flock: the next generator
+    runs (the holder line of the dead process left in the file is overwritten)."""
+    spec, out = _tiny_spec(tmp_path), tmp_path / "ds"
+    out.mkdir()
+    holder = subprocess.Popen([sys.executable, "-c", "import sys, time; from twin.util import FolderLock; "
+                               f"FolderLock({str(out)!r}).acquire(); print('held', flush=True); time.sleep(120)"],
+                              stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        assert main(["dataset", "generate", str(spec), "--out", str(out), "--limit", "0", "--no-progress"]) == 2
+        assert f"pid {holder.pid}" in capsys.readouterr().err
+    finally:
+        holder.kill()
+        holder.wait(timeout=60)
+    assert f"pid {holder.pid}" in (out / ".twin.lock").read_text()  # SIGKILL: no clean-up ran
+    assert main(["dataset", "generate", str(spec), "--out", str(out), "--no-progress"]) == 0
+    assert (out / "runs.parquet").is_file()
+    assert (out / ".twin.lock").read_text() == ""  # released at the end of the run
+
+
+# ----------------------------------------------------------------------- divergence
+def test_a_diverging_run_stops_in_one_line_and_leaves_no_mujoco_log(tmp_path, capfd, monkeypatch):
+    """A timestep of 1 ms (100 times the default) cannot resolve the 0.1 mm clearance's impacts and
+    the run diverges within milliseconds: one line naming the time, the quantity and the fields
+    likely responsible; MuJoCo's own warning neither printed nor written to MUJOCO_LOG.TXT; no
+    output file."""
+    monkeypatch.chdir(tmp_path)
+    rc = main(["simulate", "--test", "6", "--duration", "0.05", "--no-progress", "--out", str(tmp_path / "x.mcap"),
+               "--timestep", "1e-3", "--output-rate", "1000"])
+    out, err = capfd.readouterr()
+    assert rc == 2 and out == "" and err.count("\n") == 1, (rc, out, err)
+    assert "diverged at t = " in err and "qacc" in err and "simulation.timestep_s" in err, err
+    assert "WARNING" not in out + err and list(tmp_path.iterdir()) == []
+
+
+def test_restitution_one_runs_without_damping():
+    """e = 1 is a perfectly elastic contact: the linear equivalent has no damping (a root finder
+    once failed on it with a traceback)."""
+    from twin.impact import impact_linear, linear_damping_ratio
+
+    assert linear_damping_ratio(1.0) == 0.0
+    assert impact_linear(1.0, 0.0, 1.0, 1.0).restitution == pytest.approx(1.0, abs=1e-6)  # closed form: e = 1
+    assert 0.3 < linear_damping_ratio(0.4) < 0.4  # the documented 0.358
