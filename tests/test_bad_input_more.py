@@ -214,6 +214,8 @@ def ws(tmp_path_factory) -> Path:
     (ws / "empty.csv").write_text("")
     # DAQ exports
     _export(ws / "export.csv", 200)
+    np.savetxt(ws / "notime.csv", np.loadtxt(ws / "export.csv", delimiter=",", skiprows=1)[:, 1:], delimiter=",",
+               header=",".join([f"volt_AC{i} [V]" for i in range(1, 7)] + ["encoder_counts [count]"]), comments="")
     _export(ws / "rails.csv", 200, volts=lambda i, n: np.full(n, 7.5 if i == 3 else 2.5))
     _export(ws / "neg_rails.csv", 200, volts=lambda i, n: np.full(n, -1.0 if i == 2 else 2.5))
     # recordings: a small valid one (too little motion to replay) and damaged copies
@@ -386,6 +388,8 @@ CASES: list[tuple[str, str]] = [
     ("import {ws}/rails.csv --test 6 --out {ws}/r.mcap", "rails"),
     ("import {ws}/neg_rails.csv --test 6 --out {ws}/r.mcap", "rails"),
     ("import {ws}/export.csv --test 6 --out {ws}/r.mcap --rate 50000", "--rate"),
+    ("import {ws}/export.csv --test 6 --out {ws}/r.mcap --rate 100005", "--rate"),
+    ("import {ws}/notime.csv --test 6 --out {ws}/r.mcap --rate 100005", "--rate"),
     ("import {ws}/export.csv --test 6 --out {ws}/r.mcap --rate nan", "--rate"),
     ("import {ws}/export.csv --test 6 --out {ws}/r.mcap --rate inf", "--rate"),
     ("import {ws}/export.csv --test 6 --out {ws}/r.mcap --rate -5", "--rate"),

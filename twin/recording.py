@@ -71,6 +71,9 @@ UNIT_ALIASES: dict[str, tuple[str, float]] = {
 MAX_NAN_GAP = 16
 #: Relative tolerance of the sample rate against the configuration and of time regularity.
 RATE_TOL = 1e-4
+#: how closely a stored recording's rate must match the configured DAQ rate (and --rate the time
+#: column) [-]: replay and identify compare the two to this precision
+STORED_RATE_TOL = 1e-6
 
 
 @dataclass
@@ -533,8 +536,11 @@ def _time_base(t: np.ndarray | None, rate_hz: float | None, n: int, where: str) 
         rate = float(np.float64(1.0) / np.float64(h))
     if not math.isfinite(rate):
         raise RecordingError(f"{where}: time step {h:.3g} s is too small (the time column must be in seconds)")
-    if rate_hz is not None and abs(rate - rate_hz) > RATE_TOL * rate_hz:
-        raise RecordingError(f"{where}: wrong sample rate: the time column says {rate:.6g} Hz, --rate says {rate_hz:g} Hz")
+    if rate_hz is not None and abs(rate - rate_hz) > STORED_RATE_TOL * rate_hz:
+        # the rate stored is --rate's: it must be the time column's, to the precision replay and
+        # identify compare rates with (a rate accepted here and refused there helps no one)
+        raise RecordingError(f"{where}: wrong sample rate: the time column says {rate:.9g} Hz, --rate says "
+                             f"{rate_hz:.9g} Hz (they must agree to {STORED_RATE_TOL:g}; leave out --rate)")
     if rate_hz is not None:
         rate = float(rate_hz)
     else:
@@ -659,6 +665,11 @@ def import_table(path: str | Path, cfg: BenchConfig, mapping: Mapping[str, tuple
         arrays[target] = x
         units[target] = stored
     groups = {k: DAQ_GROUP for k in arrays}
+    rate_cfg = cfg.instrumentation.daq_rate_hz
+    if RATE_TOL * rate_cfg >= abs(rate - rate_cfg) > STORED_RATE_TOL * rate_cfg:
+        raise RecordingError(f"{where}: sampled at {rate:.9g} Hz but instrumentation.daq_rate_hz is {rate_cfg:g} Hz; "
+                             f"replay and identify need them equal to {STORED_RATE_TOL:g} (--rate, or set "
+                             f"instrumentation.daq_rate_hz = {rate:.9g})")
     run = Run.from_arrays(t0, rate, arrays, cfg, {"imported_from": str(p)}, units=units, groups=groups)
     if set(require) == set(REQUIRED_CHANNELS):
         run, more = validate_daq(run, cfg, nan=nan, encoder_repair=encoder_repair,
