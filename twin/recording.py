@@ -131,23 +131,6 @@ class RecordingInfo:
 RAIL_TOL_V = 0.1
 
 
-def check_motion(run: Run, where: str, min_turns: float = 1.0, min_ratio: float = 0.5) -> None:
-    """Refuse a recording whose crank does not turn: at least ``min_turns`` net crank revolutions,
-    and net motion at least ``min_ratio`` of the path travelled at 1 ms resolution (a random walk
-    of the encoder travels far and arrives nowhere)."""
-    cfg = run.config
-    c = np.asarray(run.channels["encoder_counts"].data, dtype=np.float64)
-    cpr = float(cfg.instrumentation.encoder_counts_per_rev) if cfg is not None else 1.0
-    k = max(1, int(round(run.rate_hz * 0.001)))
-    d = c[::k]
-    net = abs(float(d[-1] - d[0])) / cpr if d.size else 0.0
-    path = float(np.sum(np.abs(np.diff(d)))) / cpr if d.size > 1 else 0.0
-    if net < min_turns or net < min_ratio * path:
-        raise RecordingError(f"{where}: too little motion to replay: the crank turns {net:.2f} revolutions net "
-                             f"over a path of {path:.2f} (at least {min_turns:g} net revolutions and "
-                             f"{min_ratio:.0%} of the path are needed)")
-
-
 def _max_crank_rpm(cfg: BenchConfig) -> float:
     """Fastest crank speed the drive can command (±1000 motor rpm through the belt) [rpm]."""
     return 1000.0 / cfg.drive.belt_ratio
@@ -445,7 +428,7 @@ def _read_npz(path: Path) -> tuple[dict[str, np.ndarray], dict[str, str]]:
     arrays: dict[str, Any] = {}
     unreadable = (OSError, ValueError, EOFError, KeyError, NotImplementedError, zipfile.BadZipFile, zlib.error)
     try:  # our own file object: np.load leaks its own when the zip directory is unreadable
-        with open(path, "rb") as fh, _npz(np.load(fh, allow_pickle=False), path) as z:
+        with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as z:
             for k in z.files:
                 try:
                     arrays[k] = z[k]
@@ -475,12 +458,6 @@ def _read_npz(path: Path) -> tuple[dict[str, np.ndarray], dict[str, str]]:
             raise RecordingError(f"{path}: column {k!r} has {n} rows but {first!r} has {lengths[first]}; "
                                  "all columns need the same length")
     return cols, units
-
-
-def _npz(loaded, path):
-    if not isinstance(loaded, np.lib.npyio.NpzFile):  # an .npy array renamed .npz
-        raise RecordingError(f"{path}: not an .npz archive of named arrays (a single .npy array renamed?)")
-    return loaded
 
 
 def read_table(path: str | Path) -> tuple[dict[str, np.ndarray], dict[str, str]]:
