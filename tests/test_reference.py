@@ -353,6 +353,5 @@ def test_bad_options_give_clear_errors():
 
 
 def test_geometry_the_rod_cannot_close_is_a_config_error():
-    cfg = preset(3).replace(**{"bodies.rod.length_m": 0.1})  # rod shorter than the crank
-    with pytest.raises(ConfigError, match="bodies"):
-        ReferenceEngine(cfg).reset()
+    with pytest.raises(ConfigError, match="bodies"):  # refused by the configuration, before any engine
+        ReferenceEngine(preset(3).replace(**{"bodies.rod.length_m": 0.1})).reset()  # rod shorter than the crank

@@ -207,6 +207,28 @@ def compare_accelerations(rec: dict[str, np.ndarray], sim: dict[str, np.ndarray]
     return out
 
 
+def check_motion(run: Run, where: str, min_turns: float = 1.0, min_ratio: float = 0.5) -> None:
+    """Refuse a recording whose crank does not turn: at least ``min_turns`` net crank revolutions,
+    and net motion at least ``min_ratio`` of the path travelled at 1 ms resolution (a random walk
+    of the encoder travels far and arrives nowhere)."""
+    cfg = run.config
+    c = np.asarray(run.channels["encoder_counts"].data, dtype=np.float64)
+    cpr = float(cfg.instrumentation.encoder_counts_per_rev) if cfg is not None else 1.0
+    k = max(1, int(round(run.rate_hz * 0.001)))
+    d = c[::k]
+    net = abs(float(d[-1] - d[0])) / cpr if d.size else 0.0
+    path = float(np.sum(np.abs(np.diff(d)))) / cpr if d.size > 1 else 0.0
+    if net < min_turns or net < min_ratio * path:
+        raise RecordingError(f"{where}: too little motion to replay: the crank turns {net:.2f} revolutions net "
+                             f"over a path of {path:.2f} (at least {min_turns:g} net revolutions and "
+                             f"{min_ratio:.0%} of the path are needed)")
+
+
+#: the files a replay writes in its folder; an existing folder holding anything else is not replaced
+REPLAY_FILES = frozenset({"replay.mcap", "report.json", "report.md", "encoder_trace.npz", "accelerations.png",
+                          "spectra.png", "tracking.png"})
+
+
 def replay(recording: str | Path, out_dir: str | Path,
            configure: Callable[[BenchConfig], BenchConfig] | None = None,
            opts: ReplayOptions = ReplayOptions()) -> dict[str, Any]:
@@ -218,8 +240,11 @@ def replay(recording: str | Path, out_dir: str | Path,
     from twin.util import check_output_dir, replace_dir, temp_path
 
     wall0 = time.perf_counter()
-    final = check_output_dir(out_dir, need_parent=False)
+    # the folder is replaced whole at the end: an existing one may hold only what a replay writes
+    # (never the recording, never the user's other files), and the recording must not lie inside it
+    final = check_output_dir(out_dir, need_parent=False, own=lambda n: n in REPLAY_FILES, inputs=(recording,))
     rec, info, repairs = read_recording(recording, nan=opts.nan)
+    check_motion(rec, str(recording))
     if info.calibration is None:
         raise RecordingError(f"{recording}: no calibration data; re-import it with --calibration STATIC "
                              "(a static recording in the calibration pose) or --zero-g AC1=V,...")

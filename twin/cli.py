@@ -42,6 +42,11 @@ COMMANDS: list[str] = [
 ]
 
 
+#: options whose value is a path (their ``dest``): an empty value is refused for every command
+PATH_OPTIONS = ("out", "save", "json", "summary_json", "rerun", "screenshot", "model", "calibration", "config",
+                "trace")
+
+
 class UsageError(TwinError):
     """A command line argparse refuses (unknown option, bad value type, missing argument)."""
 
@@ -135,9 +140,15 @@ def add_config_args(p: argparse.ArgumentParser, options: Sequence[str] = ALL_CON
 
 
 def _parse_value(key: str, text: str) -> Any:
+    from twin.util import toml_loads
+
+    if "\n" in text or "\r" in text:
+        raise ConfigError(f"--set {key}", "the value must be on one line")
     try:
-        return tomllib.loads(f"v = {text}")["v"]
-    except tomllib.TOMLDecodeError:
+        return toml_loads(f"v = {text}")["v"]
+    except tomllib.TOMLDecodeError as err:
+        if "nested deeper" in str(err):
+            raise ConfigError(f"--set {key}", str(err)) from None
         return text  # bare strings: --set mechanism.orientation=x
 
 
@@ -253,16 +264,20 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser = build_parser()
         args = parser.parse_args(argv)
     except TwinError as err:  # usage errors; a broken installation (ModelError, EngineUnavailableError)
-        print(f"twin: error: {err}", file=sys.stderr)
-        return 2
+        return _fail(str(err))
+    for dest in PATH_OPTIONS:  # an empty path must not silently become a default name
+        v = getattr(args, dest, None)
+        if isinstance(v, str) and not v.strip():
+            return _fail(f"--{dest.replace('_', '-')}: is empty; give a path")
     previous = None
     if threading.current_thread() is threading.main_thread():
         previous = signal.signal(signal.SIGTERM, raise_terminated)
     try:
-        return int(args.func(args) or 0)
+        rc = int(args.func(args) or 0)
+        sys.stdout.flush()  # a full disk under `> /dev/full` shows here, not as a traceback at exit
+        return rc
     except TwinError as err:
-        print(f"twin: error: {err}", file=sys.stderr)
-        return 2
+        return _fail(str(err))
     except Terminated:
         print("twin: terminated", file=sys.stderr)
         return 128 + signal.SIGTERM
@@ -270,13 +285,47 @@ def main(argv: Sequence[str] | None = None) -> int:
         print("twin: interrupted", file=sys.stderr)
         return 130
     except BrokenPipeError:  # `twin ... | head`: the reader left; nothing to report
-        import os
-
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        _silence_stdout()
         return 1
+    except OSError as err:  # the system refused (disk full, a file vanished): say which file, and why
+        import errno as _errno
+
+        where = f"{err.filename}: " if err.filename else ("standard output: " if err.errno == _errno.ENOSPC else "")
+        if err.errno == _errno.ENOSPC:
+            _silence_stdout()
+        return _fail(f"{where}{err.strerror or err}")
+    except (RecursionError, MemoryError) as err:
+        return _fail(f"the input is too large or too deeply nested to process ({type(err).__name__})")
     finally:
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)
+
+
+def _one_line(text: str) -> str:
+    """A message on one line: control characters (a newline in a file name) escaped."""
+    text = text.strip()
+    if any(ord(c) < 32 or ord(c) == 127 for c in text):
+        text = text.encode("unicode_escape", "backslashreplace").decode("ascii")
+    return text
+
+
+def _fail(message: str) -> int:
+    print(f"twin: error: {_one_line(message)}", file=sys.stderr)
+    return 2
+
+
+def _silence_stdout() -> None:
+    """Point standard output at /dev/null: the interpreter's flush at exit must not fail again."""
+    import os
+
+    try:
+        sys.stdout.flush()
+    except OSError:
+        pass
+    try:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):
+        pass
 
 
 if __name__ == "__main__":  # pragma: no cover

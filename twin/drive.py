@@ -91,7 +91,18 @@ class DriveReference:
         self.theta0 = float(bench_from_encoder(d.initial_encoder_angle_rad, self.direction))
         self._trace = None
         if d.program == "trace":
-            self._trace = self._prepare_trace(*load_trace(d.trace_file))
+            from twin.tracefile import check_trace_speed
+
+            t, phi = load_trace(d.trace_file)
+            # the fastest crank the drive commands: the motor's ±1000 rpm through the belt, or crank_rpm
+            check_trace_speed(t, phi, max(1000.0 / d.belt_ratio, abs(d.crank_rpm)), str(d.trace_file))
+            self._trace = self._prepare_trace(t, phi)
+            h = float(np.median(np.diff(t)))
+            run_s = float(cfg.simulation.duration_s)
+            if run_s > self.trace_duration_s + h + 1e-9:
+                raise ConfigError("simulation.duration_s", f"is {run_s:g} s but the trace {d.trace_file} covers "
+                                                           f"{self.trace_duration_s:g} s; shorten the run or give a "
+                                                           "longer trace")
         else:
             self.events = command_events(cfg)
 

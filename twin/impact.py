@@ -112,7 +112,15 @@ def linear_damping_ratio(restitution: float) -> float:
     def f(zeta):
         return impact_linear(1.0, 2 * zeta, 1.0, 1.0).restitution - restitution
 
-    return brentq(f, 1e-6, 0.99, xtol=1e-10)
+    lo, hi = 1e-6, 0.99
+    if f(lo) <= 0:  # (nearly) perfectly elastic, e = 1 included: no damping
+        return 0.0
+    if f(hi) > 0:
+        from twin.errors import ConfigError
+
+        raise ConfigError("contact.restitution", f"{restitution:g} is below {f(hi) + restitution:.3g}, the least a "
+                                                 "linear spring-damper contact reaches (damping ratio 0.99)")
+    return brentq(f, lo, hi, xtol=1e-10)
 
 
 #: Scale-free constants of a hysteresis law's free impact and of its linear equivalent, by

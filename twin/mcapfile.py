@@ -405,10 +405,47 @@ def read_metadata(path: str | Path) -> dict[str, dict[str, str]]:
 
 
 def _check_path(path: str | Path) -> Path:
+    import os
+    import stat
+
+    from twin.util import show
+
     p = Path(path)
-    if not p.is_file():
-        raise RecordingError(f"{p}: no such file")
+    try:
+        st = os.stat(p)
+    except OSError:
+        raise RecordingError(f"{show(p)}: no such file") from None
+    if not stat.S_ISREG(st.st_mode):
+        raise RecordingError(f"{show(p)}: not a regular file (a folder, pipe or device)")
+    if st.st_size < 8 + 8:  # magic, header and footer: an MCAP cut to its magic bytes holds nothing
+        raise RecordingError(f"{show(p)}: not a readable MCAP file ({st.st_size} bytes, truncated)")
     return p
+
+
+def _field(p: Path, info: dict[str, str], key: str, kind: type, lo: float, hi: float) -> Any:
+    """A number of a run file's 'twin.run' record, checked (one line naming the field otherwise)."""
+    import math
+
+    raw = info.get(key)
+    try:
+        v = kind(raw)
+    except (TypeError, ValueError):
+        raise RecordingError(f"{p}: metadata twin.run.{key} must be a number, got {raw!r}") from None
+    if not (math.isfinite(v) and lo <= v <= hi):
+        raise RecordingError(f"{p}: metadata twin.run.{key} = {raw!r} lies outside [{lo:g}, {hi:g}]")
+    return v
+
+
+def _channel_meta(p: Path, topic: str, md: dict[str, str]) -> tuple[list[str], list[str], list[str]]:
+    """Names, units and dtypes of a channel's metadata: all present and of one length."""
+    missing = [k for k in ("names", "units", "dtypes") if not md.get(k)]
+    if missing:
+        raise RecordingError(f"{p}: topic {topic} lacks its channel metadata {', '.join(missing)}")
+    names, units, dtypes = md["names"].split(","), md["units"].split(","), md["dtypes"].split(",")
+    if not len(names) == len(units) == len(dtypes) or len(set(names)) != len(names) or not all(names):
+        raise RecordingError(f"{p}: topic {topic} metadata names {len(names)} channels, {len(units)} units and "
+                             f"{len(dtypes)} types (they must agree, names unique and not empty)")
+    return names, units, dtypes
 
 
 def read_run(path: str | Path, groups: Iterable[str] | None = None) -> Run:
@@ -424,8 +461,9 @@ def read_run(path: str | Path, groups: Iterable[str] | None = None) -> Run:
             info = meta_records["twin.run"]
             if info.get("format") != FORMAT:
                 raise RecordingError(f"{p}: unsupported run format {info.get('format')!r}, expected {FORMAT}")
-            n = int(info["n"])
-            rate = float(info["rate_hz"])
+            n = _field(p, info, "n", int, 0, 2**40)
+            rate = _field(p, info, "rate_hz", float, 1e-6, 1e9)
+            t0 = _field(p, info, "t0", float, -1e12, 1e12)
             wanted = None if groups is None else {TOPIC_PREFIX + g for g in groups}
             summary = reader.get_summary()
             topics = {c.topic: c for c in summary.channels.values()} if summary else {}
@@ -443,8 +481,10 @@ def read_run(path: str | Path, groups: Iterable[str] | None = None) -> Run:
                 if not topic.startswith(TOPIC_PREFIX):
                     continue
                 md = chan_meta.setdefault(topic, dict(channel.metadata))
-                dtypes = md["dtypes"].split(",")
+                _, _, dtypes = _channel_meta(p, topic, md)
                 _, first, _, arrays = decode_block(message.data, dtypes)
+                if len(arrays) != len(dtypes) or len({len(a) for a in arrays}) > 1:
+                    raise RecordingError(f"{p}: topic {topic} holds {len(arrays)} arrays for {len(dtypes)} channels")
                 if first != expected_first.get(topic, 0):
                     raise RecordingError(f"{p}: topic {topic} has a gap or is out of order at sample {first}")
                 expected_first[topic] = first + len(arrays[0])
@@ -456,7 +496,7 @@ def read_run(path: str | Path, groups: Iterable[str] | None = None) -> Run:
     order = info.get("channels", "").split(",") if info.get("channels") else None
     chans: dict[str, Channel] = {}
     for topic, md in chan_meta.items():
-        names, units = md["names"].split(","), md["units"].split(",")
+        names, units, _ = _channel_meta(p, topic, md)
         if expected_first[topic] != n:
             raise RecordingError(f"{p}: topic {topic} holds {expected_first[topic]} samples, expected {n} (truncated?)")
         for k, (name, unit) in enumerate(zip(names, units)):
@@ -464,9 +504,20 @@ def read_run(path: str | Path, groups: Iterable[str] | None = None) -> Run:
             chans[name] = Channel(name, unit, topic[len(TOPIC_PREFIX):], data)
     if order:
         chans = {k: chans[k] for k in order if k in chans}
-    config = config_from_toml(meta_records["twin.config"]["toml"]) if "twin.config" in meta_records else None
-    meta = json.loads(info.get("meta", "{}"))
-    return Run(float(info["t0"]), rate, chans, config, meta)
+    stored = meta_records.get("twin.config", {})
+    if "twin.config" in meta_records and "toml" not in stored:
+        raise RecordingError(f"{p}: metadata twin.config holds no 'toml' entry")
+    try:
+        config = config_from_toml(stored["toml"]) if "twin.config" in meta_records else None
+    except TwinError as err:
+        raise RecordingError(f"{p}: stored configuration: {err}") from None
+    try:
+        meta = json.loads(info.get("meta", "{}"))
+    except ValueError as err:
+        raise RecordingError(f"{p}: metadata twin.run.meta is not JSON ({err})") from None
+    if not isinstance(meta, dict):
+        raise RecordingError(f"{p}: metadata twin.run.meta must be a JSON object, got {type(meta).__name__}")
+    return Run(t0, rate, chans, config, meta)
 
 
 def read_preview(path: str | Path) -> tuple[np.ndarray, Run] | None:
@@ -500,4 +551,12 @@ def read_preview(path: str | Path) -> tuple[np.ndarray, Run] | None:
 def read_summary(path: str | Path) -> dict[str, Any] | None:
     """The summary stored in a run file, if any."""
     md = read_metadata(path)
-    return json.loads(md["twin.summary"]["json"]) if "twin.summary" in md else None
+    if "twin.summary" not in md:
+        return None
+    try:
+        out = json.loads(md["twin.summary"].get("json", ""))
+    except ValueError as err:
+        raise RecordingError(f"{path}: metadata twin.summary is not JSON ({err})") from None
+    if not isinstance(out, dict):
+        raise RecordingError(f"{path}: metadata twin.summary must be a JSON object")
+    return out

@@ -71,6 +71,9 @@ UNIT_ALIASES: dict[str, tuple[str, float]] = {
 MAX_NAN_GAP = 16
 #: Relative tolerance of the sample rate against the configuration and of time regularity.
 RATE_TOL = 1e-4
+#: how closely a stored recording's rate must match the configured DAQ rate (and --rate the time
+#: column) [-]: replay and identify compare the two to this precision
+STORED_RATE_TOL = 1e-6
 
 
 @dataclass
@@ -124,6 +127,10 @@ class RecordingInfo:
 
 
 # ------------------------------------------------------------------------ validation
+#: how far beyond its supply rails a recorded accelerometer voltage may read (ADC noise, offsets) [V]
+RAIL_TOL_V = 0.1
+
+
 def _max_crank_rpm(cfg: BenchConfig) -> float:
     """Fastest crank speed the drive can command (±1000 motor rpm through the belt) [rpm]."""
     return 1000.0 / cfg.drive.belt_ratio
@@ -229,6 +236,14 @@ def validate_daq(run: Run, cfg: BenchConfig, nan: str = "error", encoder_repair:
                                      f"(t = {run.t0 + i / run.rate_hz:.6f} s); import with --repair-nan to "
                                      f"interpolate gaps of up to {MAX_NAN_GAP} samples")
             x = _fill_nan(x, name, run.rate_hz, repairs)
+        if name.startswith("volt_AC") and x.size:
+            # an accelerometer's output cannot leave its supply rails (ADC noise: a 0.1 V margin)
+            top = cfg.instrumentation.supply_v
+            lo, hi = float(np.nanmin(x)), float(np.nanmax(x))
+            if lo < -RAIL_TOL_V or hi > top + RAIL_TOL_V:
+                bad = lo if lo < -RAIL_TOL_V else hi
+                raise RecordingError(f"{where}: channel {name} reaches {bad:.4g} V, outside the sensor's output "
+                                     f"rails [0, {top:g}] V (instrumentation.supply_v; unit or gain wrong?)")
         chans[name] = Channel(name, CHANNEL_UNITS[name], DAQ_GROUP, x)
     return Run(run.t0, run.rate_hz, chans, cfg, dict(run.meta)), repairs
 
@@ -498,8 +513,11 @@ def _time_base(t: np.ndarray | None, rate_hz: float | None, n: int, where: str) 
         rate = float(np.float64(1.0) / np.float64(h))
     if not math.isfinite(rate):
         raise RecordingError(f"{where}: time step {h:.3g} s is too small (the time column must be in seconds)")
-    if rate_hz is not None and abs(rate - rate_hz) > RATE_TOL * rate_hz:
-        raise RecordingError(f"{where}: wrong sample rate: the time column says {rate:.6g} Hz, --rate says {rate_hz:g} Hz")
+    if rate_hz is not None and abs(rate - rate_hz) > STORED_RATE_TOL * rate_hz:
+        # the rate stored is --rate's: it must be the time column's, to the precision replay and
+        # identify compare rates with (a rate accepted here and refused there helps no one)
+        raise RecordingError(f"{where}: wrong sample rate: the time column says {rate:.9g} Hz, --rate says "
+                             f"{rate_hz:.9g} Hz (they must agree to {STORED_RATE_TOL:g}; leave out --rate)")
     if rate_hz is not None:
         rate = float(rate_hz)
     else:
@@ -624,6 +642,11 @@ def import_table(path: str | Path, cfg: BenchConfig, mapping: Mapping[str, tuple
         arrays[target] = x
         units[target] = stored
     groups = {k: DAQ_GROUP for k in arrays}
+    rate_cfg = cfg.instrumentation.daq_rate_hz
+    if RATE_TOL * rate_cfg >= abs(rate - rate_cfg) > STORED_RATE_TOL * rate_cfg:
+        raise RecordingError(f"{where}: sampled at {rate:.9g} Hz but instrumentation.daq_rate_hz is {rate_cfg:g} Hz; "
+                             f"replay and identify need them equal to {STORED_RATE_TOL:g} (--rate, or set "
+                             f"instrumentation.daq_rate_hz = {rate:.9g})")
     run = Run.from_arrays(t0, rate, arrays, cfg, {"imported_from": str(p)}, units=units, groups=groups)
     if set(require) == set(REQUIRED_CHANNELS):
         run, more = validate_daq(run, cfg, nan=nan, encoder_repair=encoder_repair,

@@ -27,7 +27,10 @@ def load_trace(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
         raise ConfigError("drive.trace_file", f"no such file: {p}")
     try:
         if p.suffix == ".npz":
-            with np.load(p, allow_pickle=False) as z:
+            loaded = np.load(p, allow_pickle=False)
+            if not isinstance(loaded, np.lib.npyio.NpzFile):  # an .npy array renamed .npz
+                raise RecordingError(f"{p}: not an .npz archive of named arrays (a single .npy array renamed?)")
+            with loaded as z:
                 missing = [k for k in ("t", "angle") if k not in z.files]
                 if missing:
                     raise RecordingError(f"{p}: needs arrays 't' and 'angle', has {', '.join(z.files) or 'none'}")
@@ -56,7 +59,44 @@ def load_trace(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
         raise RecordingError(f"{p}: trace holds NaN or infinite samples")
     if np.any(np.diff(t) <= 0):
         raise RecordingError(f"{p}: time must be strictly increasing")
+    if t.size < MIN_TRACE_SAMPLES:
+        raise RecordingError(f"{p}: holds {t.size} samples; a trace needs at least {MIN_TRACE_SAMPLES}")
+    dt = np.diff(t)
+    if float(np.min(dt)) < MIN_TRACE_SPACING_S:
+        i = int(np.argmin(dt))
+        raise RecordingError(f"{p}: samples {i} and {i + 1} lie {float(dt[i]):.3g} s apart; the spacing must be at "
+                             f"least {MIN_TRACE_SPACING_S:g} s (time in seconds?)")
+    if float(np.max(dt)) > MAX_TRACE_GAP_S:
+        i = int(np.argmax(dt))
+        raise RecordingError(f"{p}: a gap of {float(dt[i]):.3g} s after sample {i}; samples may lie at most "
+                             f"{MAX_TRACE_GAP_S:g} s apart")
     return t, a
+
+
+#: fewest samples of a trace (a spline through 2-3 samples is no drive)
+MIN_TRACE_SAMPLES = 8
+#: closest sample spacing [s] (10 MHz: far beyond any encoder DAQ; closer spacing is a unit error
+#: and would make the uniform grid of the drive's filter billions of samples long)
+MIN_TRACE_SPACING_S = 1e-7
+#: widest gap between samples [s]
+MAX_TRACE_GAP_S = 1.0
+
+
+def check_trace_speed(t: np.ndarray, angle: np.ndarray, max_crank_rpm: float, where: str) -> None:
+    """Refuse a trace whose crank turns faster than the drive can (1.5 x ``max_crank_rpm``, over 5 ms
+    or 4 samples, whichever is longer, so that encoder quantization does not count): typically an
+    angle in degrees, not radians."""
+    if t.size < 2:
+        return
+    h = float(np.median(np.diff(t)))
+    k = max(1, min(t.size - 1, int(np.ceil(max(0.005 / h, 4)))))
+    rate = np.abs(angle[k:] - angle[:-k]) / (t[k:] - t[:-k])  # [rad/s]
+    top = float(np.max(rate)) * 60.0 / (2 * np.pi)
+    if top > 1.5 * max_crank_rpm:
+        i = int(np.argmax(rate))
+        raise ConfigError("drive.trace_file", f"{where}: the crank turns at {top:.4g} rpm at t = {t[i]:.4g} s, beyond "
+                                              f"the drive's {max_crank_rpm:.4g} rpm; the angle must be in radians "
+                                              "(degrees?)")
 
 
 def trace_duration(path: str | Path) -> float:

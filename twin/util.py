@@ -15,8 +15,9 @@ import os
 import re
 import shutil
 import socket
+import stat
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any, Callable, Iterable
 
 import numpy as np
 
@@ -55,12 +56,35 @@ def resolve_workers(n: int | None, flag: str = "--workers") -> int:
 
 
 # ------------------------------------------------------------------ temporary files
+def _name_max(directory: Path) -> int:
+    """Longest file name (bytes) the file system of ``directory`` (or its nearest existing parent) allows."""
+    d = directory
+    for _ in range(64):
+        try:
+            return int(os.pathconf(d, "PC_NAME_MAX"))
+        except (OSError, ValueError):
+            if d == d.parent:
+                break
+            d = d.parent
+    return 255
+
+
 def temp_path(target: str | Path, keep_suffix: bool = False) -> Path:
     """Temporary name of this process for ``target``: ``.NAME.PID.tmp`` beside it
-    (``keep_suffix``: ``.NAME.PID.tmp.SUFFIX``, for writers that check the extension)."""
+    (``keep_suffix``: ``.NAME.PID.tmp.SUFFIX``, for writers that check the extension).
+
+    The name fits wherever the target's fits: a name too long for the file system once the
+    prefix and suffix are added is shortened to its start plus a hash of the whole name."""
     p = Path(target)
     ext = p.suffix if keep_suffix else ""
-    return p.with_name(f".{p.name}.{_HOST}-{os.getpid()}.tmp{ext}")
+    tail = f".{_HOST}-{os.getpid()}.tmp{ext}"
+    name = p.name
+    limit = _name_max(p.parent if str(p.parent) else Path("."))
+    if len(os.fsencode(f".{name}{tail}")) > limit:
+        digest = hashlib.sha1(os.fsencode(name)).hexdigest()[:10]
+        keep = name.encode("utf-8", "surrogateescape")[: max(1, limit - len(os.fsencode(tail)) - 13)]
+        name = keep.decode("utf-8", "ignore") + "~" + digest
+    return p.with_name(f".{name}{tail}")
 
 
 def _alive(pid: int) -> bool:
@@ -78,9 +102,10 @@ def _alive(pid: int) -> bool:
 
 
 def remove_stale_temps(target: str | Path) -> list[Path]:
-    """Remove temporary files (or folders) of ``target`` left by processes that no longer run
-    (killed with SIGKILL, power loss). Returns what was removed; a temporary of a live process is
-    kept (another run is writing the same target)."""
+    """Remove temporary files (or folders) left in the folder of ``target`` by processes of this
+    machine that no longer run (killed with SIGKILL, power loss), whatever target they were
+    writing. Returns what was removed; a temporary of a live process is kept (another run is
+    writing there)."""
     p = Path(target)
     removed: list[Path] = []
     parent = p.parent if str(p.parent) else Path(".")
@@ -90,8 +115,8 @@ def remove_stale_temps(target: str | Path) -> list[Path]:
         return removed
     for e in entries:
         m = _TMP_RE.match(e.name)
-        if not m or m["name"] != p.name or (m["host"] or _HOST) != _HOST or _alive(int(m["pid"])):
-            continue  # not ours, written on another machine, or its process still runs
+        if not m or (m["host"] or _HOST) != _HOST or _alive(int(m["pid"])):
+            continue  # not a temporary, written on another machine, or its process still runs
         try:
             if e.is_dir() and not e.is_symlink():
                 shutil.rmtree(e)
@@ -103,6 +128,11 @@ def remove_stale_temps(target: str | Path) -> list[Path]:
     return removed
 
 
+def remove_stale_temps_in(folder: str | Path) -> list[Path]:
+    """:func:`remove_stale_temps` for every temporary directly inside ``folder``."""
+    return remove_stale_temps(Path(folder) / "x")
+
+
 # ------------------------------------------------------------- output path checks
 def _why(err: OSError) -> str:
     return err.strerror or errno.errorcode.get(err.errno or 0, str(err))
@@ -111,11 +141,11 @@ def _why(err: OSError) -> str:
 def _probe_dir_writable(directory: Path, flag: str, target: Path) -> None:
     """Create and remove a file in ``directory``: the only reliable writability test
     (``os.access`` says yes to root on read-only or virtual file systems such as /proc)."""
-    probe = directory / f".{target.name}.{_HOST}-{os.getpid()}.tmp.probe"
+    probe = directory / f".twin-probe.{_HOST}-{os.getpid()}.tmp"  # fits wherever the target fits
     try:
         fd = os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
     except OSError as err:
-        raise TwinError(f"{flag}: cannot write in {directory} ({_why(err)})") from None
+        raise TwinError(f"{flag}: cannot write in {show(directory)} ({_why(err)})") from None
     os.close(fd)
     try:
         os.unlink(probe)
@@ -123,53 +153,172 @@ def _probe_dir_writable(directory: Path, flag: str, target: Path) -> None:
         pass
 
 
+def show(path: str | Path) -> str:
+    """A path for a one-line message: control characters (a newline in a name) escaped."""
+    text = str(path)
+    if any(ord(c) < 32 or ord(c) == 127 for c in text):
+        return text.encode("unicode_escape", "backslashreplace").decode("ascii")
+    return text
+
+
+def check_path_name(path: str | Path, flag: str) -> Path:
+    """A path given on the command line: not empty, each name within the file system's
+    NAME_MAX and the whole within PATH_MAX, no symbolic-link loop on the way. One line naming
+    ``flag`` otherwise."""
+    text = os.fspath(path)
+    if not text.strip():
+        raise TwinError(f"{flag}: is empty; give a path")
+    p = Path(text)
+    limit = _name_max(p.parent if str(p.parent) else Path("."))
+    for part in p.parts:
+        if len(os.fsencode(part)) > limit:
+            raise TwinError(f"{flag}: the name {show(part[:40])}... is {len(os.fsencode(part))} bytes long; "
+                            f"the file system allows {limit}")
+    if len(os.fsencode(text)) >= 4096:
+        raise TwinError(f"{flag}: the path is {len(os.fsencode(text))} bytes long; the system allows 4095")
+    for q in (p, *p.parents):
+        try:
+            os.stat(q)
+        except OSError as err:
+            if err.errno == errno.ELOOP:
+                raise TwinError(f"{flag}: {show(q)} is a symbolic-link loop") from None
+            if err.errno == errno.ENAMETOOLONG:
+                raise TwinError(f"{flag}: {show(q)}: name too long") from None
+    return p
+
+
 def check_output_file(path: str | Path, flag: str, suffixes: str | Iterable[str],
                       inputs: Iterable[str | Path] = ()) -> Path:
     """Check an output file given on the command line before any work starts.
 
     It must end in one of ``suffixes``, its folder must exist and be writable, it must not be a
-    folder, nor one of ``inputs``. Stale temporary files of the target are removed. Raises a
-    one-line :class:`TwinError` naming ``flag`` otherwise. Nothing is created.
+    folder, nor one of ``inputs``; its name must fit the file system (:func:`check_path_name`).
+    Stale temporary files in its folder are removed. Raises a one-line :class:`TwinError` naming
+    ``flag`` otherwise. Nothing is created.
     """
-    out = Path(path)
+    out = check_path_name(path, flag)
     allowed = (suffixes,) if isinstance(suffixes, str) else tuple(suffixes)
-    if out.suffix not in allowed:
-        raise TwinError(f"{flag}: must end in {' or '.join(allowed)}, got {str(out)!r}")
+    if out.suffix not in allowed or out.name.startswith(".") and out.name == out.suffix:
+        raise TwinError(f"{flag}: must end in {' or '.join(allowed)}, got {show(out)!r}")
     parent = out.parent if str(out.parent) else Path(".")
     if not parent.exists():
-        raise TwinError(f"{flag}: directory {parent} does not exist")
+        raise TwinError(f"{flag}: directory {show(parent)} does not exist")
     if not parent.is_dir():
-        raise TwinError(f"{flag}: {parent} is not a directory")
+        raise TwinError(f"{flag}: {show(parent)} is not a directory")
     if out.is_dir():
-        raise TwinError(f"{flag}: {out} is a directory")
+        raise TwinError(f"{flag}: {show(out)} is a directory")
+    if out.is_symlink() and not out.exists():
+        raise TwinError(f"{flag}: {show(out)} is a dangling symbolic link")
     if out.exists() and not out.is_file():
-        raise TwinError(f"{flag}: {out} exists and is not a regular file")
+        raise TwinError(f"{flag}: {show(out)} exists and is not a regular file")
     for i in inputs:
         if Path(i).exists() and out.exists() and out.resolve() == Path(i).resolve():
-            raise TwinError(f"{flag}: {out} is also an input; choose another output")
+            raise TwinError(f"{flag}: {show(out)} is also an input; choose another output")
     _probe_dir_writable(parent, flag, out)
     remove_stale_temps(out)
     return out
 
 
-def check_output_dir(path: str | Path, flag: str = "--out", need_parent: bool = True) -> Path:
+def check_output_dir(path: str | Path, flag: str = "--out", need_parent: bool = True,
+                     own: Callable[[str], bool] | None = None, inputs: Iterable[str | Path] = ()) -> Path:
     """An output folder given on the command line: it may exist (as a folder) or be created (in an
     existing parent unless ``need_parent`` is False, for callers that create parents). The
-    folder that will hold it must be writable. Raises TwinError naming ``flag`` otherwise."""
-    out = Path(path)
+    folder that will hold it must be writable. Raises TwinError naming ``flag`` otherwise.
+
+    A command that replaces the folder whole passes ``own``, which tells the names it writes:
+    an existing folder holding anything else (the user's files, the input) is refused, so that
+    nothing the command did not write is ever deleted. No ``inputs`` may lie inside it."""
+    out = check_path_name(path, flag)
     if out.exists() and not out.is_dir():
-        raise TwinError(f"{flag}: {out} exists and is not a directory")
+        raise TwinError(f"{flag}: {show(out)} exists and is not a directory")
+    if out.is_symlink() and not out.exists():
+        raise TwinError(f"{flag}: {show(out)} is a dangling symbolic link")
+    here = out.resolve()
+    for i in inputs:
+        ip = Path(i).resolve()
+        if ip == here or here in ip.parents:
+            raise TwinError(f"{flag}: {show(out)} holds the input {show(i)}; choose another folder")
+    if own is not None and (out.name in ("", ".", "..") or here == Path.cwd().resolve() or here == here.parent):
+        raise TwinError(f"{flag}: {show(path)!r} names the current or a parent folder, which this command would "
+                        "replace whole; give a new folder name")
+    if own is not None and out.is_dir():
+        foreign = sorted(e.name for e in out.iterdir() if not own(e.name) and not _TMP_RE.match(e.name))
+        if foreign:
+            listed = ", ".join(show(n) for n in foreign[:3]) + (", ..." if len(foreign) > 3 else "")
+            raise TwinError(f"{flag}: {show(out)} holds files this command did not write ({listed}); "
+                            "it would be replaced whole: give a new or empty folder")
     parent = out.parent if str(out.parent) else Path(".")
     if need_parent and not parent.exists():
-        raise TwinError(f"{flag}: parent directory {parent} does not exist")
+        raise TwinError(f"{flag}: parent directory {show(parent)} does not exist")
     probe_in = parent
     while not probe_in.exists():
         probe_in = probe_in.parent
     if not probe_in.is_dir():
-        raise TwinError(f"{flag}: {probe_in} is not a directory")
+        raise TwinError(f"{flag}: {show(probe_in)} is not a directory")
     _probe_dir_writable(probe_in, flag, out)
     remove_stale_temps(out)
     return out
+
+
+# ------------------------------------------------------------------------ input files
+#: largest text input (configuration, spec) read [bytes]
+MAX_TEXT_BYTES = 16 * 1024 * 1024
+
+
+def check_input_file(path: str | Path, flag: str, max_bytes: int | None = None) -> Path:
+    """An input file given on the command line, checked before any read: it exists, is a
+    regular file (a FIFO, a device such as /dev/zero or a folder would hang or never end) and
+    is at most ``max_bytes`` long. One line naming ``flag`` otherwise."""
+    text = os.fspath(path)
+    if not text.strip():
+        raise TwinError(f"{flag}: is empty; give a file")
+    p = Path(text)
+    try:
+        st = os.stat(p)
+    except OSError as err:
+        raise TwinError(f"{flag}: cannot read {show(p)} ({_why(err)})") from None
+    if stat.S_ISDIR(st.st_mode):
+        raise TwinError(f"{flag}: {show(p)} is a directory, not a file")
+    if not stat.S_ISREG(st.st_mode):
+        raise TwinError(f"{flag}: {show(p)} is not a regular file (a pipe or device); give a file")
+    if max_bytes is not None and st.st_size > max_bytes:
+        raise TwinError(f"{flag}: {show(p)} is {st.st_size} bytes; at most {max_bytes} are read")
+    return p
+
+
+def read_input_bytes(path: str | Path, flag: str, max_bytes: int = MAX_TEXT_BYTES) -> bytes:
+    """The bytes of an input file after :func:`check_input_file`."""
+    p = check_input_file(path, flag, max_bytes)
+    try:
+        with open(p, "rb") as fh:
+            return fh.read(max_bytes + 1)[:max_bytes]
+    except OSError as err:
+        raise TwinError(f"{flag}: cannot read {show(p)} ({_why(err)})") from None
+
+
+#: deepest nesting of tables and arrays accepted in TOML input
+MAX_TOML_DEPTH = 32
+
+
+def toml_loads(text: str) -> dict[str, Any]:
+    """``tomllib.loads`` that refuses deep nesting as a TOMLDecodeError (one line) instead of a
+    RecursionError: nothing the twin reads is nested more than a few levels."""
+    import tomllib
+
+    try:
+        data = tomllib.loads(text)
+    except RecursionError:
+        raise tomllib.TOMLDecodeError(f"tables or arrays nested deeper than {MAX_TOML_DEPTH} levels") from None
+    stack: list[tuple[Any, int]] = [(data, 1)]
+    while stack:
+        obj, d = stack.pop()
+        if d > MAX_TOML_DEPTH:
+            raise tomllib.TOMLDecodeError(f"tables or arrays nested deeper than {MAX_TOML_DEPTH} levels")
+        if isinstance(obj, dict):
+            stack.extend((v, d + 1) for v in obj.values())
+        elif isinstance(obj, list):
+            stack.extend((v, d + 1) for v in obj)
+    return data
 
 
 # -------------------------------------------------------------------- atomic writes
@@ -229,3 +378,71 @@ def replace_dir(tmp_dir: Path, target: Path) -> Path:
     if old is not None:
         shutil.rmtree(old, ignore_errors=True)
     return target
+
+
+# ---------------------------------------------------------------------- folder lock
+class FolderLock:
+    """An exclusive lock on an output folder held while a command writes there (``twin dataset
+    generate``): a second writer is refused in one line naming the holder's host and PID.
+
+    The lock is ``fcntl.flock`` on the file ``.twin.lock`` in the folder; the holder writes its
+    host, PID and start time into it for the message. The kernel releases a flock when its
+    holder's last descriptor closes, which includes death by SIGKILL: a lock of a process that no
+    longer exists is never stale, the next run simply takes it (and overwrites the holder line).
+    The file itself is kept (emptied) on release: unlinking it would let a third process lock a
+    new file while a second still holds the old one. On a local disk this is exact. On NFS, Linux
+    maps flock to NFS byte-range locks (NLM for v3, the v4 lock state): two hosts do exclude each
+    other, and a dead client's lock is released when the server's lease expires (about 90 s on
+    v4) or, on v3, when the client's lock daemon recovers — until then the run is refused and
+    the message names the holder so a user can check it.
+    """
+
+    NAME = ".twin.lock"
+
+    def __init__(self, folder: str | Path, flag: str = "--out", what: str = "twin"):
+        self.folder = Path(folder)
+        self.flag, self.what = flag, what
+        self.fd: int | None = None
+
+    def acquire(self) -> "FolderLock":
+        import fcntl
+        import time
+
+        path = self.folder / self.NAME
+        try:
+            fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
+        except OSError as err:
+            raise TwinError(f"{self.flag}: cannot lock {show(self.folder)} ({_why(err)})") from None
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as err:
+            holder = ""
+            try:
+                holder = os.pread(fd, 200, 0).decode("utf-8", "replace").strip()
+            except OSError:
+                pass
+            os.close(fd)
+            if err.errno in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
+                raise TwinError(f"{self.flag}: {show(self.folder)} is in use by another {self.what} "
+                                f"({show(holder) or 'holder unknown'}); wait for it to end") from None
+            raise TwinError(f"{self.flag}: cannot lock {show(self.folder)} ({_why(err)})") from None
+        line = f"host {socket.gethostname()} pid {os.getpid()} since {time.strftime('%Y-%m-%d %H:%M:%S')}\n"
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, line.encode(), 0)
+        self.fd = fd
+        return self
+
+    def release(self) -> None:
+        if self.fd is not None:
+            try:
+                os.ftruncate(self.fd, 0)
+            except OSError:
+                pass
+            os.close(self.fd)  # releases the flock
+            self.fd = None
+
+    def __enter__(self) -> "FolderLock":
+        return self.acquire()
+
+    def __exit__(self, *exc: object) -> None:
+        self.release()

@@ -50,8 +50,23 @@ def run_repeatability(args: argparse.Namespace) -> int:
         raise TwinError("repeatability: give at least 2 runs")
     if args.decimate < 1:
         raise TwinError(f"--decimate: must be an integer >= 1, got {args.decimate}")
-    if args.json and not Path(args.json).parent.exists():
-        raise TwinError(f"--json: directory {Path(args.json).parent} does not exist")
+    import math
+
+    from twin.util import check_output_file
+
+    for flag, v in (("--start", args.start), ("--stop", args.stop), ("--align-angle", args.align_angle)):
+        if v is not None and not math.isfinite(v):
+            raise TwinError(f"{flag}: must be a finite number, got {v!r}")
+    if args.start is not None and args.start < 0:
+        raise TwinError(f"--start: must be a time >= 0 s, got {args.start!r}")
+    if args.stop is not None and args.stop <= (args.start or 0.0):
+        raise TwinError(f"--stop: must be a time > --start, got {args.stop!r}")
+    if not (math.isfinite(args.dtw_window) and 0 <= args.dtw_window <= 10):
+        raise TwinError(f"--dtw-window: must lie in [0, 10] s, got {args.dtw_window!r}")
+    if args.align_angle is not None and not -360 <= args.align_angle <= 360:
+        raise TwinError(f"--align-angle: must lie in [-360, 360] degrees, got {args.align_angle!r}")
+    if args.json is not None:  # checked before the work, not after
+        check_output_file(args.json, "--json", ".json", inputs=args.runs)
     rep = repeatability(args.runs, args.channel, args.start, args.stop, args.dtw_window, args.align_angle,
                         args.decimate, progress=not args.no_progress and sys.stderr.isatty())
     result, lengths = rep.result, rep.window_samples

@@ -77,7 +77,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "adams-impact law, S001 Table IV)")
     r.add_argument("--grid", metavar="V,V,...", help="coarse grid (default e 0.15,0.20,...,0.95; c_max "
                                                        "5000,7500,...,50000 N s/m)")
-    r.add_argument("--fine-step", type=float, default=-1.0, metavar="DV",
+    r.add_argument("--fine-step", type=float, default=None, metavar="DV",
                    help="step of the fine grid around the coarse best (default e 0.01, c_max 500 N s/m; "
                         "0 = coarse only)")
     r.add_argument("--lowpass", type=float, default=200.0, metavar="HZ",
@@ -179,14 +179,23 @@ def _restitution(args: argparse.Namespace) -> int:
     from twin.util import atomic_write_json
 
     rec, js = _recording_and_json(args)
+    import math
+
     grid: tuple[float, ...] = ()
-    if args.grid:
+    if args.grid is not None:
         try:
             grid = tuple(float(x) for x in args.grid.split(","))
         except ValueError:
             raise TwinError(f"--grid: comma-separated {args.parameter} values, got {args.grid!r}") from None
+        if not all(math.isfinite(v) for v in grid):
+            raise TwinError(f"--grid: values must be finite numbers, got {args.grid!r}")
+    if args.fine_step is not None and not (math.isfinite(args.fine_step) and args.fine_step >= 0):
+        raise TwinError(f"--fine-step: must be >= 0 (0 = coarse grid only), got {args.fine_step!r}")
+    for flag, v, lo, hi in (("--lowpass", args.lowpass, 0.0, 1e6), ("--max-lag", args.max_lag, 0.0, 10.0)):
+        if not (math.isfinite(v) and lo <= v <= hi):
+            raise TwinError(f"{flag}: must lie in [{lo:g}, {hi:g}], got {v!r}")
     opts = SweepOptions(sensor=args.sensor, start_s=args.start, stop_s=args.stop, coarse=grid,
-                        fine_step=args.fine_step, engine=args.engine or "", max_lag_s=args.max_lag,
+                        fine_step=-1.0 if args.fine_step is None else args.fine_step, engine=args.engine or "", max_lag_s=args.max_lag,
                         lowpass_hz=args.lowpass, parameter=args.parameter, starts=args.starts)
     res = sweep_restitution(rec, opts)
     found = (f"restitution e = {res.value:.3f}" if res.parameter == "restitution"

@@ -88,7 +88,8 @@ def run(args: argparse.Namespace) -> int:
         if src.is_dir():
             raise TwinError(f"{src}: is a directory; expected a .mcap run or recording file, or a dataset folder")
         if not src.is_file():
-            raise TwinError(f"{src}: no such file")
+            raise TwinError(f"{src}: " + ("not a regular file (a folder, pipe or device)" if src.exists()
+                                          else "no such file"))
         default = default_output(src)
     out = check_output_file(args.save if args.save else default, "--save", ".rrd", inputs=[src])
     wait = DEFAULT_WAIT_S if args.wait is None else args.wait

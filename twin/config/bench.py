@@ -43,6 +43,12 @@ class BenchConfig:
                "name", "must be 1-80 characters of letters, digits and . _ - + = @ , (it names the default output "
                f"file), not starting with '.'; got {self.name!r}")
         # cross-field rules: a configuration that exists can be run
+        crank, rod = self.bodies.crank.length_m, self.bodies.rod.length_m
+        if rod <= crank + abs(self.mechanism.d_off_m):
+            raise ConfigError("bodies.rod.length_m",
+                              f"{rod:g} m must exceed the crank's length ({crank:g} m, bodies.crank.length_m) plus the "
+                              f"guide offset (|mechanism.d_off_m| = {abs(self.mechanism.d_off_m):g} m): a shorter rod "
+                              "cannot follow the crank round a full turn")
         sim, sen = self.simulation, self.sensors
         if sim.duration_s == 0 and self.drive.program != "protocol":
             raise ConfigError("simulation.duration_s",

@@ -84,9 +84,11 @@ def from_dict(cls: type, data: Mapping[str, Any], path: str = "") -> Any:
     for f in fields(cls):
         if f.name in data:
             sub = data[f.name]
-            if base is not None and isinstance(sub, Mapping):
-                # a partial table overrides the default sub-config field by field
-                sub = _deep_merge(_to_plain(getattr(base, f.name)), sub)
+            cur = _to_plain(getattr(base, f.name)) if base is not None else None
+            if isinstance(sub, Mapping) and isinstance(cur, Mapping):
+                # a partial table overrides the default sub-config field by field (a table given for
+                # a number is left to _convert, which refuses it naming the field)
+                sub = _deep_merge(cur, sub)
             kwargs[f.name] = _convert(sub, hints[f.name], f"{prefix}{f.name}")
     try:
         return cls(**kwargs)

@@ -10,8 +10,9 @@ from typing import Any, Mapping
 from twin.config.bench import BenchConfig
 from twin.config.convert import _deep_merge, from_dict
 from twin.config.presets import named_preset, preset
-from twin.errors import ConfigError
+from twin.errors import ConfigError, TwinError
 from twin.tracefile import trace_duration
+from twin.util import toml_loads
 
 
 def load_config(path: str | Path) -> BenchConfig:
@@ -22,22 +23,24 @@ def load_config(path: str | Path) -> BenchConfig:
     """
     if not str(path):
         raise ConfigError("--config", "is empty; give a TOML configuration file")
+    from twin.util import read_input_bytes, show
+
     p = Path(path)
     try:
-        raw = p.read_bytes()
-    except IsADirectoryError:
-        raise ConfigError("--config", f"{p} is a directory, not a TOML file") from None
-    except OSError as err:
-        raise ConfigError("--config", f"cannot read {p}: {err.strerror}") from None
+        raw = read_input_bytes(p, "--config")  # a regular file of bounded size: a FIFO or /dev/zero never hangs
+    except ConfigError:
+        raise
+    except TwinError as err:
+        raise ConfigError("--config", str(err).split(": ", 1)[1]) from None
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as err:
-        raise ConfigError("--config", f"{p} is not a UTF-8 text (TOML) file: byte {err.start} "
+        raise ConfigError("--config", f"{show(p)} is not a UTF-8 text (TOML) file: byte {err.start} "
                                       f"is {raw[err.start:err.start + 1]!r}") from None
     try:
-        data = tomllib.loads(text)
+        data = toml_loads(text)
     except tomllib.TOMLDecodeError as err:
-        raise ConfigError("--config", f"{p} is not valid TOML: {err}") from None
+        raise ConfigError("--config", f"{show(p)} is not valid TOML: {err}") from None
     base: dict[str, Any] = {}
     if "test" in data and "preset" in data:
         raise ConfigError("preset", "cannot be combined with test = N: give one starting point")
@@ -65,7 +68,7 @@ def config_from_toml(text: str) -> BenchConfig:
     ``mujoco.contact_damping`` is dropped (the native law carries its own damping).
     """
     try:
-        data = tomllib.loads(text)
+        data = toml_loads(text)
     except tomllib.TOMLDecodeError as err:
         raise ConfigError("config", f"stored configuration is not valid TOML: {err}") from None
     mj = data.get("mujoco")

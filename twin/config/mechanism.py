@@ -15,6 +15,10 @@ from twin.errors import ConfigError
 
 
 # --------------------------------------------------------------------------- bodies
+#: smallest clearance accepted off the catalogue [mm diametral]
+MIN_CLEARANCE_MM = 1e-3
+
+
 @dataclass(frozen=True)
 class BodyParams:
     """Rigid body of the mechanism (S003 Table 1). Defaults: mjcf/bench.xml (S003 Table 1).
@@ -37,6 +41,13 @@ class BodyParams:
         _positive(self.length_m, "length_m", "m")
         _finite(self.x_g_m, "x_g_m", "m")
         _positive(self.inertia_kgm2, "inertia_kgm2", "kg m^2")
+        # a body of a bench-top mechanism: beyond these the model is no slider-crank (and a mass of
+        # 1e300 kg overflows the contact forces)
+        _check(1e-6 <= self.mass_kg <= 1e4, "mass_kg", f"must lie in [1e-06, 10000] kg, got {self.mass_kg!r}")
+        _check(self.length_m <= 100, "length_m", f"must be at most 100 m, got {self.length_m!r}")
+        _check(1e-12 <= self.inertia_kgm2 <= 1e4, "inertia_kgm2",
+               f"must lie in [1e-12, 10000] kg m^2, got {self.inertia_kgm2!r}")
+        _check(abs(self.x_g_m) <= 100, "x_g_m", f"must lie within ±100 m, got {self.x_g_m!r}")
 
 
 @dataclass(frozen=True)
@@ -185,6 +196,10 @@ class Joints:
                        "(set joints.allow_noncatalogue = true for other values)")
             if value != 0:
                 _check(value < 5.0, name, f"must be < 5 mm even off-catalogue, got {value!r}")
+                # below the surfaces' roughness and the contact's own penetration (0.1-0.5 um) a
+                # clearance is no gap: the joint is a ball bearing (0)
+                _check(value >= MIN_CLEARANCE_MM, name, f"must be 0 (ball bearing) or at least {MIN_CLEARANCE_MM:g} mm "
+                       f"(1 um) even off-catalogue, got {value!r}")
         _positive(self.pin_diameter_m, "pin_diameter_m", "m")
         _positive(self.bushing_length_m, "bushing_length_m", "m")
         for name in ("pin_diameters_m", "bushing_lengths_m"):

@@ -40,7 +40,8 @@ from twin.dataset.design import RunPlan, base_config, plan
 from twin.dataset.spec import SPLITS, DatasetSpec
 from twin.dataset.worker import column_specs
 from twin.errors import MissingExtraError, TwinError
-from twin.util import atomic_write_json, atomic_write_bytes, check_output_dir, remove_stale_temps
+from twin.util import (_TMP_RE, FolderLock, atomic_write_json, atomic_write_bytes, check_output_dir,
+                       remove_stale_temps, remove_stale_temps_in)
 
 FORMAT = "twin-dataset/2"
 #: formats this version reads: twin-dataset/1 (data files hold the channels only, no ``run_id``,
@@ -98,7 +99,7 @@ def prepare(spec: DatasetSpec, out_dir: str | Path) -> Prepared:
     ident = identity(spec)
     out = check_output_dir(out_dir, "--out", need_parent=False)
     info_path = out / "info.json"
-    if out.exists() and any(out.iterdir()):
+    if out.exists() and any(e.name != FolderLock.NAME and not _TMP_RE.match(e.name) for e in out.iterdir()):
         if not info_path.is_file():
             raise DatasetError(f"--out: {out} is not empty and holds no dataset (no info.json); choose an empty "
                                "or new folder")
@@ -106,6 +107,8 @@ def prepare(spec: DatasetSpec, out_dir: str | Path) -> Prepared:
             info = json.loads(info_path.read_text())
         except (OSError, ValueError) as err:
             raise DatasetError(f"{info_path}: unreadable ({err})") from None
+        if not isinstance(info, dict):
+            raise DatasetError(f"{info_path}: must hold a JSON object, got {type(info).__name__}")
         if info.get("format") != FORMAT:
             older = info.get("format") in READABLE
             raise DatasetError(f"--out: {out} holds a dataset of format {info.get('format')!r}"
@@ -324,6 +327,10 @@ def _require_dask(address: str) -> None:
         import distributed  # noqa: F401 - an optional dependency (the cluster extra)
     except ImportError:
         raise MissingExtraError(NO_DASK.format(address)) from None
+    import re
+
+    if address != "local" and not re.fullmatch(r"(tcp|tls|ucx)://[^\s/:]+(:\d{1,5})?/?|inproc://\S+", address):
+        raise TwinError(f"--scheduler: {address!r} is not a Dask scheduler address like tcp://HOST:8786")
 
 
 def _dask_client(address: str):
@@ -331,8 +338,9 @@ def _dask_client(address: str):
 
     try:
         return Client(address, timeout="20s")
-    except (OSError, TimeoutError) as err:
-        raise TwinError(f"--scheduler: cannot reach a Dask scheduler at {address} ({err})") from None
+    except Exception as err:  # noqa: BLE001 - distributed raises many types for an unreachable address
+        why = str(err).strip().splitlines()[0][:200] if str(err).strip() else type(err).__name__
+        raise TwinError(f"--scheduler: cannot reach a Dask scheduler at {address} ({why})") from None
 
 
 def _dask(address: str, workers: int) -> Callable[[list[dict]], Iterator[dict]]:
@@ -379,6 +387,8 @@ def default_scheduler(workers: int) -> str:
 
 
 def executor(scheduler: str | None, workers: int) -> Callable[[list[dict]], Iterator[dict]]:
+    if scheduler is not None and not scheduler.strip():
+        raise TwinError("--scheduler: is empty; give processes, threads, local or a Dask scheduler address")
     scheduler = scheduler or default_scheduler(workers)
     if scheduler == "processes":
         return _local(workers)
@@ -399,16 +409,23 @@ def generate(spec: DatasetSpec, out_dir: str | Path, workers: int | None = None,
     if limit is not None and limit < 0:
         raise TwinError(f"--limit: must be >= 0, got {limit}")
     run_tasks = executor(scheduler, workers)  # checks the scheduler before anything is written
-    p = prepare(spec, out_dir)
+    p = prepare(spec, out_dir)  # every check, nothing written
+    p.out.mkdir(parents=True, exist_ok=True)
+    # one generator per folder: a second is refused naming the holder; the kernel frees the lock
+    # of a holder that died (SIGKILL included), so a later run takes it over
+    with FolderLock(p.out, "--out", "twin dataset generate"):
+        p = prepare(spec, out_dir)  # again under the lock: runs the previous holder finished count as done
+        return _generate_locked(p, workers, scheduler, run_tasks, limit, progress)
+
+
+def _generate_locked(p: Prepared, workers: int, scheduler: str | None, run_tasks, limit: int | None,
+                     progress: bool) -> dict[str, Any]:
     out = p.out
-    out.mkdir(parents=True, exist_ok=True)
     _write_info(p, complete=False)  # first: a folder with info.json is this dataset's, whatever happens next
     (out / "data").mkdir(exist_ok=True)
     (out / "results").mkdir(exist_ok=True)
-    for d in (out / "data", out / "results"):
-        for f in d.iterdir():
-            if ".tmp" in f.name:
-                remove_stale_temps(d / _target_of(f.name))
+    for d in (out, out / "data", out / "results"):
+        remove_stale_temps_in(d)  # leftovers of killed processes, whatever they were writing
     todo = p.pending[:limit] if limit is not None else p.pending
     t_start = time.perf_counter()
     sim_total = sum(r.config.duration_s for r in todo)

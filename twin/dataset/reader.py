@@ -42,6 +42,8 @@ class Dataset:
             self.info = json.loads(info_path.read_text())
         except (OSError, ValueError) as err:
             raise DatasetError(f"{info_path}: unreadable ({err})") from None
+        if not isinstance(self.info, dict):
+            raise DatasetError(f"{info_path}: must hold a JSON object, got {type(self.info).__name__}")
         if self.info.get("format") not in READABLE:
             raise DatasetError(f"{info_path}: format {self.info.get('format')!r}, this twin reads "
                                f"{', '.join(READABLE)} (a newer twin's dataset? update twin)")
@@ -57,8 +59,12 @@ class Dataset:
             self.stats: dict[str, dict[str, float]] = json.loads(stats.read_text())["channels"] if stats.is_file() else {}
         except (OSError, ValueError, KeyError, TypeError) as err:
             raise DatasetError(f"{stats}: unreadable ({type(err).__name__}: {err}); run generate again to rewrite it") from None
-        self.channels = {c["name"]: c for c in self.info["channels"]}
-        self.rate_hz = float(self.info["channels"][0]["rate_hz"]) if self.info["channels"] else 0.0
+        chans = self.info.get("channels")
+        try:
+            self.channels = {c["name"]: c for c in chans}  # type: ignore[union-attr]
+            self.rate_hz = float(chans[0]["rate_hz"]) if chans else 0.0  # type: ignore[index]
+        except (TypeError, KeyError, ValueError, IndexError):
+            raise DatasetError(f"{info_path}: 'channels' must be a list of {{name, rate_hz, ...}} tables") from None
         #: key and label columns of the data files before the channels (none in twin-dataset/1)
         self.key_columns: list[str] = list(self.info.get("key_columns", []))
         self.label_columns: list[str] = list(self.info.get("label_columns", []))

@@ -344,6 +344,7 @@ def parse_spec(data: Mapping[str, Any], source: str = "") -> DatasetSpec:
         if not (isinstance(v, list) and v):
             raise SpecError(f"splits.holdout.{k}", f"must be a non-empty list of values, got {v!r}")
         holdout[k] = tuple(v)
+    _check_cross_fields(factors, points, holdout)
     return DatasetSpec(name=name, seed=seed, base_test=test, base_config=config, engine=engine,
                        duration_s=float(duration), program=program, base_set=dict(base_set), profile=profile,
                        design=kind, runs=runs, repeats=repeats, factors=factors,
@@ -351,22 +352,74 @@ def parse_spec(data: Mapping[str, Any], source: str = "") -> DatasetSpec:
                        splits=Splits(tuple(float(x) for x in fr), holdout), source=source, base_preset=base_preset)
 
 
+def _factor_bounds(f: FactorSpec) -> tuple[float, float] | None:
+    if f.values is not None:
+        nums = [v for v in f.values if _num(v)]
+        return (min(nums), max(nums)) if nums and len(nums) == len(f.values) else None
+    return (float(f.range[0]), float(f.range[1])) if f.range is not None else None
+
+
+def _check_cross_fields(factors: tuple[FactorSpec, ...], points: Any, holdout: dict[str, tuple[Any, ...]]) -> None:
+    """Factors that contradict each other, and hold-outs that hold out nothing or everything."""
+    by = {f.name: f for f in factors}
+    fault = by.get("fault")
+    if fault is not None and fault.values is not None and not points:
+        for j in "BC":
+            size = by.get(f"clearance_{j.lower()}_mm")
+            bounds = _factor_bounds(size) if size is not None else None
+            if bounds is None:
+                continue
+            with_j = [v for v in fault.values if isinstance(v, str) and j in v]
+            if not with_j and bounds[1] > 0:
+                raise SpecError(f"factors.clearance_{j.lower()}_mm",
+                                f"varies the clearance at {j}, but no fault value has one (fault = "
+                                f"{list(fault.values)!r}): the runs' label would say none; add {j} or BC to fault, "
+                                "or drop the factor")
+            if with_j and bounds[0] <= 0:
+                raise SpecError(f"factors.clearance_{j.lower()}_mm",
+                                f"holds 0 (no clearance) while fault {with_j[0]!r} puts a clearance at {j}: "
+                                "sizes of a faulty joint must be > 0 mm (fault none says 'no clearance')")
+    for k, held in holdout.items():
+        f = by.get(k)
+        if f is None or f.values is None and f.range is None:
+            continue
+        if f.values is not None:
+            def has(h: Any, vals=f.values) -> bool:
+                return any(h == v or (_num(h) and _num(v) and math.isclose(float(h), float(v), rel_tol=1e-9))
+                           for v in vals)
+            missing = [h for h in held if not has(h)]
+            if missing:
+                raise SpecError(f"splits.holdout.{k}", f"holds {missing[0]!r}, which factor {k} does not take "
+                                                       f"(values {list(f.values)!r})")
+            if all(any(h == v or (_num(h) and _num(v) and math.isclose(float(h), float(v), rel_tol=1e-9))
+                       for h in held) for v in f.values):
+                raise SpecError(f"splits.holdout.{k}", "holds out every value of the factor: the train and val "
+                                                       "splits would be empty")
+        else:
+            lo, hi = f.range  # type: ignore[misc]
+            bad = [h for h in held if not (_num(h) and lo <= h <= hi)]
+            if bad:
+                raise SpecError(f"splits.holdout.{k}", f"holds {bad[0]!r}, outside factor {k}'s range [{lo:g}, {hi:g}]")
+
+
 def read_spec_toml(p: Path, what: str = "a dataset spec") -> dict[str, Any]:
     """The TOML of a spec file, or a one-line :class:`SpecError` naming the file."""
     if p.suffix != ".toml":
         raise SpecError(str(p), f"{what} is a .toml file")
+    from twin.util import check_input_file, read_input_bytes, show, toml_loads
+
     try:
-        text = p.read_bytes().decode("utf-8")
-    except IsADirectoryError:
-        raise SpecError(str(p), "is a directory, not a spec file") from None
-    except OSError as err:
-        raise SpecError(str(p), f"cannot read ({err.strerror})") from None
+        check_input_file(p, show(p))
+    except TwinError as err:  # a FIFO or /dev/zero would hang: refused before any read
+        raise SpecError(show(p), str(err).split(": ", 1)[1]) from None
+    try:
+        text = read_input_bytes(p, show(p)).decode("utf-8")
     except UnicodeDecodeError:
         raise SpecError(str(p), "is not UTF-8 text (TOML)") from None
     try:
-        data = tomllib.loads(text)
+        data = toml_loads(text)
     except tomllib.TOMLDecodeError as err:
-        raise SpecError(str(p), f"is not valid TOML: {err}") from None
+        raise SpecError(show(p), f"is not valid TOML: {err}") from None
     return data
 
 

@@ -233,6 +233,10 @@ def sweep_restitution(path: str | Path, opts: SweepOptions = SweepOptions(), pro
                                          "'twin import' records it)")
     n = rec.size
     i0 = int(round(opts.start_s * rate))
+    if opts.stop_s > n / rate + 1e-9:
+        raise ConfigError("--stop", f"{opts.stop_s:g} s lies beyond the recording's end ({n / rate:.3f} s)")
+    if opts.start_s >= n / rate:
+        raise ConfigError("--start", f"{opts.start_s:g} s lies at or beyond the recording's end ({n / rate:.3f} s)")
     i1 = n if opts.stop_s == 0 else min(n, int(round(opts.stop_s * rate)))
     if i1 - i0 < 10:
         raise ConfigError("--start", f"the window holds {max(i1 - i0, 0)} samples of the {n / rate:.3f} s recording; "

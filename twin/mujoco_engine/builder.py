@@ -506,7 +506,9 @@ def _compile(spec: mujoco.MjSpec, cfg: BenchConfig) -> mujoco.MjModel:
     try:
         model = spec.compile()
     except Exception as err:
-        raise ModelError(f"MuJoCo could not compile the model of {cfg.name}: {err}") from None
+        why = " ".join(str(err).split())  # MuJoCo's message spans lines: one line
+        raise ModelError(f"MuJoCo could not compile the model of {cfg.name} (check bodies.*, joints.*, "
+                         f"mechanism.*): {why}") from None
     if cfg.drive.mode == "prescribed":
         # the solver scales its tolerance by 1/meaninertia (mean of M's diagonal at qpos0): the
         # flywheel's armature would make every improvement look negligible

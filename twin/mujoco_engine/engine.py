@@ -30,6 +30,22 @@ from mujoco import rollout
 from twin import names as N
 from twin.config import BenchConfig
 from twin.errors import SimulationError
+
+#: MuJoCo's own warnings of this process (its default handler prints them to stdout and appends them
+#: to MUJOCO_LOG.TXT in the working folder): kept here, the last few, for the divergence message
+MUJOCO_WARNINGS: list[str] = []
+
+
+def _on_mujoco_warning(message: str) -> None:
+    MUJOCO_WARNINGS.append(" ".join(str(message).split()))
+    del MUJOCO_WARNINGS[:-5]
+
+
+mujoco.set_mju_user_warning(_on_mujoco_warning)
+
+#: largest speed of any degree of freedom [m/s or rad/s] before a run counts as exploding: 100 times
+#: the fastest crank of any preset (6000 rpm = 628 rad/s) and far beyond any body speed of the bench
+MAX_DOF_SPEED = 1.0e5
 from twin.kinematics import initial_pose, rot2
 from twin.mujoco_engine.accel import PosthocAccelerometers, posthoc_applies
 from twin.mujoco_engine.builder import build
@@ -207,6 +223,12 @@ class MujocoEngine:
         if not math.isclose(d.time, t_end, rel_tol=0, abs_tol=h * 0.5) or \
                 not (np.all(np.isfinite(d.qpos)) and np.all(np.isfinite(d.qvel)) and np.all(np.isfinite(sd))):
             raise SimulationError(self._divergence_message(d.time, t_start, t_end))
+        top = float(np.max(np.abs(d.qvel))) if d.qvel.size else 0.0
+        if top > MAX_DOF_SPEED:
+            dof = int(np.argmax(np.abs(d.qvel)))
+            raise SimulationError(f"{self.cfg.name}: the run explodes by t = {t_end:.6f} s: the speed of "
+                                  f"{self._dof_name(dof)} reaches {top:.3g} (m/s or rad/s, limit {MAX_DOF_SPEED:g}); "
+                                  f"{self._suspects()}")
         self._k += nstep
         self.meta["warnings"] = self.warnings()
         sens = sd[0, ::stride]
@@ -224,12 +246,32 @@ class MujocoEngine:
         return {mujoco.mjtWarning(i).name: int(self.data.warning[i].number)
                 for i in range(len(self.data.warning)) if self.data.warning[i].number}
 
+    def _dof_name(self, dof: int) -> str:
+        m = self.model
+        j = int(m.dof_jntid[dof])
+        return f"joint {m.joint(j).name or j} (dof {dof})"
+
+    def _suspects(self) -> str:
+        cfg = self.cfg
+        return (f"likely responsible: simulation.timestep_s ({cfg.simulation.timestep_s:g} s), contact.stiffness, "
+                f"joints.clearance_*_mm (B {cfg.joints.clearance_b_mm:g}, C {cfg.joints.clearance_c_mm:g} mm), "
+                "bodies.*.mass_kg and inertia_kgm2")
+
     def _divergence_message(self, t_reached: float, t_start: float, t_expected: float) -> str:
+        import re
+
         warn = [f"{mujoco.mjtWarning(i).name}({int(self.data.warning[i].number)})"
                 for i in range(len(self.data.warning)) if self.data.warning[i].number]
-        return (f"{self.cfg.name}: MuJoCo run diverged or stopped in the chunk {t_start:.4f}-{t_expected:.4f} s "
-                f"(time reached {t_reached:.6f} s; warnings: {', '.join(warn) or 'none'}; NaN or Inf in the state "
-                "or sensors); try a smaller timestep or stiffer settings")
+        what, when = "the state or sensors", f"in the chunk {t_start:.4f}-{t_expected:.4f} s"
+        for text in reversed(MUJOCO_WARNINGS):  # "Nan, Inf or huge value in QACC at DOF 0 ... Time = 0.0007."
+            m = re.search(r"in (\w+) at DOF (\d+).*?Time = (\d+(?:\.\d+)?(?:[eE][+-]?\d+)?)", text)
+            if m:
+                dof = int(m[2])
+                what = f"{m[1].lower()} of {self._dof_name(dof) if dof < self.model.nv else f'dof {dof}'}"
+                when = f"at t = {float(m[3]):.6f} s"  # MuJoCo's time: the run's
+                break
+        return (f"{self.cfg.name}: the run diverged {when}: {what} became NaN, infinite or huge (MuJoCo warnings: "
+                f"{', '.join(warn) or 'none'}); {self._suspects()}")
 
     def _train_channels(self, sens: np.ndarray, col) -> dict[str, np.ndarray]:
         """Channels of the drive train (groups drive, motor, drive_energy)."""

@@ -183,8 +183,11 @@ class ReferenceEngine:
         if status != M.OK:
             why = "the position projection did not converge" if status == M.NEWTON_FAILED \
                 else "NaN or Inf in the state"
-            raise SimulationError(f"{self.cfg.name}: reference run failed at t = {(self._k + steps) * h:.6f} s "
-                                  f"({why}); try a smaller timestep")
+            c = self.cfg
+            raise SimulationError(f"{c.name}: reference run failed at t = {(self._k + steps) * h:.6f} s ({why}); "
+                                  f"likely responsible: simulation.timestep_s ({h:g} s), contact.stiffness, "
+                                  f"joints.clearance_*_mm (B {c.joints.clearance_b_mm:g}, C {c.joints.clearance_c_mm:g} "
+                                  "mm), bodies.*.mass_kg and inertia_kgm2; try a smaller timestep")
         self._k += nstep
         return self._channels(self._buf[:n_out])
 
