@@ -154,7 +154,6 @@ BAD_SPECS = [
     ('[dataset]\nname = "x"\n[base]\ntest = 3\nset = { "drive.ramp_s" = -1 }\n', "drive.ramp_s"),
     ('[dataset]\nname = "x"\n[outputs]\ntruth = []\ninstrumented = false\n', "outputs: stores nothing"),
     ('[dataset]\nname = "x"\n[outputs]\ntruth = ["accel", "gps"]\n', "sensors.channels"),
-    ('[dataset]\nname = "x"\n[base]\nengine = "reference"\n[outputs]\ntruth = ["energy"]\n', "mujoco engine only"),
     ('[dataset]\nname = "x"\n[splits]\ntrain = 0.5\nval = 0.1\ntest = 0.1\n', "summing to 1"),
     ('[dataset]\nname = "x"\n[splits]\nholdout = { orientation = ["z"] }\n', "is not a varied factor"),
     ('[dataset]\nname = "x"\n[extra]\na = 1\n', "extra: unknown section"),

@@ -180,3 +180,40 @@ def test_chunking_does_not_change_the_guide(engine):
     assert np.abs(a["fn_guide_front"]).max() > 0
     for name in ("crank_angle", "slider_y", "slider_tilt", "fn_guide_front", "fn_guide_rear", "ft_guide_rear"):
         np.testing.assert_array_equal(a[name], b[name], err_msg=name)
+
+
+def test_r_matrix_with_guide_play_against_finite_differences():
+    """With a guide clearance and C ideal, the pair equation at C reads y_C = d_off + y_g: Φ_q R = 0
+    for every constraint row (rows 0–6, by central differences), ż = (θ̇, ẏ_g, φ̇) maps to
+    q̇ with ẏ_g, φ̇ on q[10], q[11], and Ṙż = (dR/dt) ż."""
+    from twin import natural_coordinates as natural
+
+    cfg = BenchConfig().replace(**{"joints.clearance_c_mm": 0.0, "joints.clearance_guide_mm": 0.1,
+                                   "mechanism.d_off_m": 0.01})
+    P = natural.mechanism_params(cfg)
+    P[natural.P_NEWTON_TOL], P[natural.P_NEWTON_MAXIT] = 1e-12, 20
+    N_Q, N_Z = natural.N_Q, natural.N_Z
+    q = natural.initial_state(cfg, 1.1)[:N_Q].copy()
+    q[10:12] = [-3e-5, 1e-3]
+    assert natural.project(P, q, np.zeros(N_Q), math.sin(q[7]), math.cos(q[7]),
+                           np.zeros(N_Q), np.zeros(N_Q), np.zeros(N_Q)) > 0
+    R, S = np.zeros((N_Q, N_Z)), np.zeros(N_Q)
+    assert natural.r_matrix(P, q, np.zeros(N_Q), R, S) == 3
+    zd = np.array([12.0, 0.04, -0.5])
+    qd = R[:, :3] @ zd
+    assert qd[10] == zd[1] and qd[11] == zd[2]
+    natural.r_matrix(P, q, qd, R, S)
+
+    def phi(x):
+        res = np.zeros(N_Q)
+        natural.residual(P, x, math.sin(x[7]), math.cos(x[7]), res)
+        return res[:10]                 # rows 0–9: constraints (A and B ideal, C ideal with y_g)
+
+    eps = 1e-6
+    for j in range(3):
+        d = (phi(q + eps * R[:, j]) - phi(q - eps * R[:, j])) / (2 * eps)
+        assert np.max(np.abs(d)) < 1e-9, j
+    Rp, Rm = np.zeros((N_Q, N_Z)), np.zeros((N_Q, N_Z))
+    natural.r_matrix(P, q + eps * qd, qd, Rp, np.zeros(N_Q))
+    natural.r_matrix(P, q - eps * qd, qd, Rm, np.zeros(N_Q))
+    np.testing.assert_allclose((Rp - Rm)[:, :3] / (2 * eps) @ zd, S, atol=1e-6 * max(1, np.abs(S).max()))

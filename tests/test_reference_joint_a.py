@@ -248,7 +248,7 @@ def test_r_matrix_with_a_clearance_at_a_against_finite_differences():
     R, S = np.zeros((M.N_Q, M.N_Z)), np.zeros(M.N_Q)
     assert natural.r_matrix(P, q, np.zeros(M.N_Q), R, S) == 7
     zd = np.array([10.0, 0.05, -0.03, 0.02, 0.04, -0.01, 0.03])
-    qd = R @ zd
+    qd = R[:, :7] @ zd
     natural.r_matrix(P, q, qd, R, S)
 
     def phi(x):
@@ -264,4 +264,4 @@ def test_r_matrix_with_a_clearance_at_a_against_finite_differences():
     Rp, Rm = np.zeros((M.N_Q, M.N_Z)), np.zeros((M.N_Q, M.N_Z))
     natural.r_matrix(P, q + eps * qd, qd, Rp, np.zeros(M.N_Q))
     natural.r_matrix(P, q - eps * qd, qd, Rm, np.zeros(M.N_Q))
-    np.testing.assert_allclose((Rp - Rm) / (2 * eps) @ zd, S, atol=1e-6 * max(1, np.abs(S).max()))
+    np.testing.assert_allclose((Rp - Rm)[:, :7] / (2 * eps) @ zd, S, atol=1e-6 * max(1, np.abs(S).max()))

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from twin.config import preset
+from twin.natural_coordinates import P_INTEGRATOR
 from twin.errors import ConfigError
 from twin.studies import formulations as F
 from twin.reference.engine import ReferenceEngine, ReferenceOptions
@@ -45,7 +46,7 @@ def test_reference_engine_midpoint_option_on_an_ideal_scene():
         return eng, keep.run
 
     eng, mid = run(1e-5, "midpoint")
-    assert "midpoint" in eng.meta["integrator"] and eng.P[-1] == 1.0
+    assert "midpoint" in eng.meta["integrator"] and eng.P[P_INTEGRATOR] == 1.0
     _, eul = run(1e-5, "euler")
     _, fine = run(1e-6, "euler")
     assert eul.meta["options"]["integrator"] == "euler"
