@@ -22,7 +22,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from test_guide import _closed_form, _static_cfg  # noqa: E402
 
 from twin.config import preset  # noqa: E402
-from twin.simulate import simulate_run  # noqa: E402
+from twin.simulation import simulate_run  # noqa: E402
 
 NAMES = ("fn_guide_front", "fn_guide_rear", "slider_y", "slider_tilt")
 

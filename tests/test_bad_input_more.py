@@ -143,7 +143,7 @@ def snapshot(root: Path) -> dict[str, tuple]:
 def ws(tmp_path_factory) -> Path:
     ws = tmp_path_factory.mktemp("bad_input_more")
     from twin.mcapfile import write_run
-    from twin.simulate import simulate_run
+    from twin.simulation import simulate_run
 
     from conftest import short
     from twin.config import preset
@@ -567,7 +567,7 @@ def test_replay_into_the_recordings_own_folder_deletes_nothing(tmp_path, capsys,
 
 def test_replay_may_replace_its_own_earlier_folder(tmp_path, capsys):
     """A folder holding only what a replay writes (an earlier replay) is replaced as before."""
-    from twin.replay import REPLAY_FILES, replay  # noqa: F401
+    from twin.bench_replay import REPLAY_FILES, replay  # noqa: F401
 
     from twin.util import check_output_dir
 
