@@ -280,11 +280,19 @@ DEFAULT = ROOT / "twin" / "data" / "identify_default.npz"
 @pytest.mark.parametrize("rec, fault, c_mm", [("test3_synthetic.mcap", "none", 0.0), ("test6_synthetic.mcap", "C", 0.1)])
 def test_the_shipped_model_identifies_the_sample_recordings(rec, fault, c_mm, tmp_path, capsys):
     """The sample recordings (reference engine and sensor chain: an engine the model was not trained
-    on) of Table 4 test 3 (ball bearings) and test 6 (0.1 mm at C)."""
+    on) of Table 4 test 3 (ball bearings) and test 6 (0.1 mm at C). Their crank speed ripples within a
+    turn by 1.5 % at the crank rate and 2.5 % at twice it (recordings/make_samples.py), which no training
+    run of the shipped model has: the answer says so, harmonic by harmonic, and widens its intervals to
+    every clearance trained on (0.02-1.0 mm)."""
     js = tmp_path / "a.json"
     assert main(["identify", "clearance", str(REC / rec), "--json", str(js)]) == 0
     a = json.loads(js.read_text())
-    assert a["fault"] == fault and a["warnings"] == []
+    assert a["fault"] == fault
+    assert [w.split(" % at ")[1][:2] for w in a["warnings"]] == ["1x", "2x"]
+    assert all(w.startswith("within-turn speed ripple") for w in a["warnings"])
+    check = a["evidence"]["training_data_check"]
+    assert check["outside_training_data"] and check["measured"]["ripple_pct"][:2] == pytest.approx([1.5, 2.5], abs=0.05)
+    assert a["clearance_c_if_faulty_mm"]["interval_90"] == [0.02, 1.0]
     if not c_mm:  # no clearance found means no size at either joint
         assert a["clearance_c_mm"] == 0.0 and a["clearance_b_mm"] == 0.0
     # the size of the 0.1 mm clearance at C is held to its target in the strict xfail below
@@ -303,10 +311,11 @@ def test_the_shipped_model_identifies_the_sample_recordings(rec, fault, c_mm, tm
 
 @pytest.mark.skipif(not DEFAULT.is_file(), reason="no default model committed yet")
 @pytest.mark.xfail(strict=True, reason="known gap (model card, 'The sample recordings'): on the sample recordings "
-                   "(reference engine, encoder-trace drive) the size at C reads 0.27-0.44 mm for the true 0.1 mm; the "
-                   "90 % interval of test6_synthetic, [0.28, 0.67] mm, misses it. The cause is the samples' speed "
-                   "ripple within a turn, which no training run has: analysis/identify/ripple_check.py, the same "
-                   "recordings without it are held by every interval, with it by 33-50 %")
+                   "(reference engine, encoder-trace drive) the size at C reads 0.27-0.44 mm for the true 0.1 mm. The "
+                   "cause is the samples' speed ripple within a turn (1.5 % and 2.5 %), which no training run of the "
+                   "shipped model has (analysis/identify/ripple_check.py): the answer now warns that the recording is "
+                   "outside the training data and widens its interval to 0.02-1.0 mm, which holds 0.1 mm, but the size "
+                   "itself is still off by more than a factor 1.5; a model trained on rippled runs is needed")
 def test_the_shipped_model_sizes_the_clearance_of_the_test6_sample(tmp_path):
     js = tmp_path / "a.json"
     assert main(["identify", "clearance", str(REC / "test6_synthetic.mcap"), "--json", str(js)]) == 0
