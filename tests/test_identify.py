@@ -272,6 +272,80 @@ def test_an_evaluation_pools_datasets_and_keeps_each_ones_figures(small):
     assert "by_dataset" not in one
 
 
+def test_a_trained_model_stores_its_training_ranges_and_sizes_intervals_by_difficulty(small):
+    """``twin identify train`` measures, on every training run, the crank rate, the within-turn ripple from the
+    encoder and the noise level, and stores their ranges, the orientations and the training windows' feature
+    quartiles; its intervals are normalized conformal ones: half width q (spread + beta), the spread of the
+    recording's per-window answers (interquartile range / 1.349)."""
+    from twin.identification.model import ClearanceModel, pooled_features, resolution, window_spread
+
+    d, model = small
+    m = ClearanceModel.load(model)
+    r = m.trained_on["ranges"]
+    assert r["crank_hz"][0] == pytest.approx(500 / 3.97 / 60, rel=0.01)  # 500 and 600 motor rpm, belt 1:3.97
+    assert r["crank_hz"][1] == pytest.approx(600 / 3.97 / 60, rel=0.01)
+    assert r["orientations"] == ["y"] and r["runs"] == 48 and "training run" in r["source"]
+    assert len(r["ripple_pct"]) == 4 and all(hi < 0.05 for lo, hi in r["ripple_pct"])  # no ripple imposed: PID residual
+    assert 25.0 < r["noise_ug_rthz"][0] <= r["noise_ug_rthz"][1] < 35.0  # the ADXL100x's 25-30 ug/rtHz
+    assert len(m.trained_on["feature_reference"]["q25"]) == len(m.feature_names)
+    norm = m.trained_on["interval"]["normalized"]
+    X, rows, owner, _, _ = pooled_features([d / "small-test"], ("train",), 1)
+    owner = np.asarray(owner)
+    widths, held = set(), 0
+    for i, row in enumerate(rows):
+        Xr = X[owner == i]
+        a = m.identify(Xr, resolution(row["orientation"], row["crank_hz"]))
+        for j in ("B", "C"):
+            lo, hi = a[f"clearance_{j.lower()}_if_faulty_mm"]["interval_90"]
+            mid = a[f"clearance_{j.lower()}_if_faulty_mm"]["median"]
+            w = norm[j]["q"] * (window_spread(m.size[j], Xr) + norm[j]["beta"])
+            assert math.log10(hi / mid) == pytest.approx(w, abs=1e-9) and math.log10(mid / lo) == pytest.approx(w, abs=1e-9)
+            widths.add(round(w, 9))
+            truth = row[f"clearance_{j.lower()}_mm"]
+            held += truth > 0 and lo <= truth <= hi
+    assert len(widths) > 2  # one width per recording's difficulty, not one for all
+    # the runs of the other seed, each with 0.5 mm at one joint or both: 16 sizes; a 90 % interval holds
+    # at least 12 of 16 exchangeable answers with probability 0.98
+    assert held >= 12, held
+
+
+def test_out_of_range_warnings_fire_outside_each_range_and_not_inside(small):
+    """Short simulated recordings through the sensor chain (reference engine, as the small model's training):
+    inside every range (550 motor rpm, y vertical, no ripple, datasheet noise) no warning and the conformal
+    interval; a 3 % ripple at the crank rate, noise x4 and x vertical each give their own warning and the
+    interval widened to the clearances trained on (0.5 mm: the interval is the hull with it); speed outside:
+    the test above on the 750 rpm sample."""
+    from twin.config import preset
+    from twin.identification.model import ClearanceModel, identify_inputs, simulated_inputs
+    from twin.simulation import simulate_run
+
+    d, model = small
+    m = ClearanceModel.load(model)
+    base = preset(1).replace(**{"simulation.engine": "reference", "simulation.duration_s": 1.25, "drive.ramp_s": 0.2,
+                                "drive.motor_rpm": 550.0, "joints.clearance_b_mm": 0.0, "joints.clearance_c_mm": 0.5,
+                                "joints.allow_noncatalogue": True, "sensors.channels": ("accel", "encoder")})
+
+    def answer(cfg, orientation="y", run=None):
+        run = run if run is not None else simulate_run(cfg)
+        return identify_inputs(m, *simulated_inputs(run, cfg), orientation, "sim"), run
+
+    a, run = answer(base)
+    assert a["warnings"] == [] and not a["evidence"]["training_data_check"]["outside_training_data"]
+    assert a["evidence"]["training_data_check"]["feature_distance"]["beyond_far_out_fences"] < 0.05 * len(m.feature_names)
+    noisy = base.replace(**{"instrumentation.noise_scale": 4.0})
+    b, _ = answer(noisy, run=run)  # the same motion, four times the noise density
+    assert len(b["warnings"]) >= 1 and "sensor noise level" in b["warnings"][0]
+    c, _ = answer(base, "x", run=run)
+    assert any(w.startswith("orientation x was not in the training data") for w in c["warnings"])
+    rip, _ = answer(base.replace(**{"drive.ripple_pct": (3.0,), "drive.ripple_phase_rad": (0.5,)}))
+    assert rip["warnings"][0].startswith("within-turn speed ripple ") and " % at 1x" in rip["warnings"][0]
+    got = rip["evidence"]["training_data_check"]["measured"]["ripple_pct"][0]
+    assert got == pytest.approx(3.0, abs=0.3)  # the PID tracks the rippled reference closely
+    for x in (b, c, rip):
+        lo, hi = x["clearance_c_if_faulty_mm"]["interval_90"]
+        assert lo <= 0.5 <= hi and x["evidence"]["training_data_check"]["outside_training_data"]
+
+
 # ------------------------------------------------------------- the shipped model
 DEFAULT = ROOT / "twin" / "data" / "identify_default.npz"
 
