@@ -291,7 +291,7 @@ def test_a_trained_model_stores_its_training_ranges_and_sizes_intervals_by_diffi
     norm = m.trained_on["interval"]["normalized"]
     X, rows, owner, _, _ = pooled_features([d / "small-test"], ("train",), 1)
     owner = np.asarray(owner)
-    widths, held = set(), 0
+    held = 0
     for i, row in enumerate(rows):
         Xr = X[owner == i]
         a = m.identify(Xr, resolution(row["orientation"], row["crank_hz"]))
@@ -300,13 +300,41 @@ def test_a_trained_model_stores_its_training_ranges_and_sizes_intervals_by_diffi
             mid = a[f"clearance_{j.lower()}_if_faulty_mm"]["median"]
             w = norm[j]["q"] * (window_spread(m.size[j], Xr) + norm[j]["beta"])
             assert math.log10(hi / mid) == pytest.approx(w, abs=1e-9) and math.log10(mid / lo) == pytest.approx(w, abs=1e-9)
-            widths.add(round(w, 9))
             truth = row[f"clearance_{j.lower()}_mm"]
             held += truth > 0 and lo <= truth <= hi
-    assert len(widths) > 2  # one width per recording's difficulty, not one for all
     # the runs of the other seed, each with 0.5 mm at one joint or both: 16 sizes; a 90 % interval holds
     # at least 12 of 16 exchangeable answers with probability 0.98
     assert held >= 12, held
+
+
+def test_normalized_intervals_hold_their_coverage_at_every_difficulty():
+    """Answers whose error spread is known (log10 errors normal with standard deviation s, the windows'
+    spread an unbiased noisy reading of s): calibrated on 2000 runs and checked on 20000 others, the
+    normalized interval holds 90 % +- 1.5 % overall, and in each third of the difficulty it is closer to
+    90 % than the fixed-width interval of the same data (which holds nearly all easy answers and too few
+    hard ones). The offset beta (the median spread) keeps one-window answers (spread 0) from a zero width
+    and makes the adaptation partial: the hardest third is held at about 82 %, not 90 %."""
+    from twin.identification.model import conformal_half_width, normalized_scale
+
+    rng = np.random.default_rng(5)
+
+    def draw(n):
+        s = rng.uniform(0.02, 0.3, n)
+        spread = s * rng.uniform(0.8, 1.2, n)
+        return np.abs(s * rng.standard_normal(n)), spread
+
+    sc, sp = draw(2000)
+    k = normalized_scale(sc, sp)
+    fixed = conformal_half_width(sc)
+    err, spread = draw(20000)
+    held_norm = err <= k["q"] * (spread + k["beta"])
+    held_fixed = err <= fixed
+    assert held_norm.mean() == pytest.approx(0.90, abs=0.015)
+    third = np.digitize(spread, np.quantile(spread, [1 / 3, 2 / 3]))
+    per = np.array([held_norm[third == t].mean() for t in range(3)])
+    per_fixed = np.array([held_fixed[third == t].mean() for t in range(3)])
+    assert np.all(np.abs(per - 0.9) < np.abs(per_fixed - 0.9)), (per, per_fixed)
+    assert per.min() > 0.78, per
 
 
 def test_out_of_range_warnings_fire_outside_each_range_and_not_inside(small):

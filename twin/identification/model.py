@@ -230,6 +230,17 @@ def resolution(orientation: str, crank_hz: float) -> dict[str, bool]:
     return {j: size_resolved(j, orientation, crank_hz) for j in ("B", "C")}
 
 
+def normalized_scale(scores: np.ndarray, spread: np.ndarray, beta: float | None = None) -> dict[str, float]:
+    """Normalized split-conformal scale from runs' out-of-fold scores |log10 answer − log10 truth| and
+    difficulties (:func:`window_spread`) [log10]: beta (default: the median difficulty, at least
+    :data:`SPREAD_FLOOR_LOG10`) and q, the conformal rank of score / (difficulty + beta); an answer's half
+    width is then q (difficulty + beta)."""
+    spread = np.asarray(spread, float)
+    if beta is None:
+        beta = max(float(np.median(spread)), SPREAD_FLOOR_LOG10)
+    return {"q": conformal_half_width(np.asarray(scores, float) / (spread + beta)), "beta": float(beta)}
+
+
 def window_spread(reg: Any, X: np.ndarray) -> float:
     """Difficulty of a recording for a size regressor: the spread of its per-window answers, their
     interquartile range over 1.349 (the standard deviation of a normal sample) [log10]; 0 for one window."""
@@ -434,15 +445,15 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
                 held_runs.append(rows[int(r)])
         scores, spread = np.array(scores), np.array(spread)
         half_width[j] = conformal_half_width(scores)
-        beta = max(float(np.median(spread)), SPREAD_FLOOR_LOG10)
-        normalized[j] = {"q": conformal_half_width(scores / (spread + beta)), "beta": beta}
+        normalized[j] = normalized_scale(scores, spread)
+        beta = normalized[j]["beta"]
         # Mondrian split by the joint's size-resolution map, where each side has enough runs
         on = np.array([size_resolved(j, row["orientation"], row["crank_hz"]) for row in held_runs], bool)
         if on.sum() >= MONDRIAN_MIN_RUNS and (~on).sum() >= MONDRIAN_MIN_RUNS:
             half_width[j] = conformal_half_width(scores[on])
             half_width[f"{j}_unresolved"] = conformal_half_width(scores[~on])
             for side, m in ((j, on), (f"{j}_unresolved", ~on)):
-                normalized[side] = {"q": conformal_half_width(scores[m] / (spread[m] + beta)), "beta": beta}
+                normalized[side] = normalized_scale(scores[m], spread[m], beta)
     import sklearn
 
     from twin import __version__
