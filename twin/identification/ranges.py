@@ -77,12 +77,12 @@ def measure_ripple(counts: np.ndarray, rate_hz: float, counts_per_rev: float, st
     t = np.arange(n) / rate_hz
     T = t[-1]
     omega = (phi[-1] - phi[0]) / T
-    tc = t - T / 2.0
+    tc = (t - T / 2.0) / T  # in [-1/2, 1/2]: the normal equations stay well conditioned
     cols = [np.ones(n), tc, tc * tc]
     for k in range(1, harmonics + 1):
         cols += [np.cos(k * omega * t), np.sin(k * omega * t)]
     A = np.stack(cols, axis=1)
-    coef, *_ = np.linalg.lstsq(A, phi - phi[0], rcond=None)
+    coef = np.linalg.solve(A.T @ A, A.T @ (phi - phi[0]))
     out = []
     for k in range(1, harmonics + 1):
         c, s = coef[3 + 2 * (k - 1)], coef[4 + 2 * (k - 1)]
