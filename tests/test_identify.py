@@ -299,7 +299,8 @@ def test_a_trained_model_stores_its_training_ranges_and_sizes_intervals_by_diffi
             lo, hi = a[f"clearance_{j.lower()}_if_faulty_mm"]["interval_90"]
             mid = a[f"clearance_{j.lower()}_if_faulty_mm"]["median"]
             w = norm[j]["q"] * (window_spread(m.size[j], Xr) + norm[j]["beta"])
-            assert math.log10(hi / mid) == pytest.approx(w, abs=1e-9) and math.log10(mid / lo) == pytest.approx(w, abs=1e-9)
+            assert math.log10(hi / mid) == pytest.approx(w, abs=1e-9)
+            assert math.log10(mid / lo) == pytest.approx(w, abs=1e-9)
             truth = row[f"clearance_{j.lower()}_mm"]
             held += truth > 0 and lo <= truth <= hi
     # the runs of the other seed, each with 0.5 mm at one joint or both: 16 sizes; a 90 % interval holds

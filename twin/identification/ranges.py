@@ -66,7 +66,8 @@ def measure_ripple(counts: np.ndarray, rate_hz: float, counts_per_rev: float, st
     """Within-turn speed ripple of samples [start, stop) (whole revolutions) from the encoder [% of the mean
     speed], harmonics 1..``harmonics`` of the crank rate.
 
-    A speed ω(t) = Ω (1 + Σ a_k sin(kΩt + p_k)) turns the crank by φ(t) = φ0 + Ω t − Σ (a_k/k) cos(kΩt + p_k):
+    A speed ω(t) = Ω (1 + Σ a_k sin(kΩt + p_k)) turns the crank by
+    φ(t) = φ0 + Ω t − Σ (a_k/k) cos(kΩt + p_k):
     least squares fit φ (counts → rad) to a quadratic in t (the mean speed and a slow drift) and the cosine and
     sine at kΩ, Ω the mean rate over the span; a_k = k · (harmonic amplitude [rad]). Ripple tied to the crank
     angle instead of time (``crank_trace``, the drive's ``ripple_pct``) reads the same to first order in a_k."""
