@@ -129,6 +129,8 @@ def _evaluate(args: argparse.Namespace) -> int:
         print(f"  size at {J}: interval coverage {g['interval_coverage'] * 100:.0f} %; "
               + ", ".join(f"{c} mm: {v['median_abs_error_mm']:.3g} mm ({'ok' if v['meets_target'] else 'over'})"
                           for c, v in g["values"].items()))
+    o = r["outside_training_data"]
+    print(f"  outside the training data (warned, intervals widened): {o['runs']} of {r['runs']} runs")
     print(f"  wrote {out}/: {', '.join(files)}")
     return 0
 

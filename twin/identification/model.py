@@ -532,6 +532,30 @@ def simulated_inputs(run: Any, cfg: Any) -> tuple[dict[str, np.ndarray], np.ndar
     return acc, np.asarray(daq["encoder_counts"], float), daq.rate_hz, float(cfg.instrumentation.encoder_counts_per_rev)
 
 
+def training_check(model: ClearanceModel, ans: dict[str, Any], measures: dict[str, Any], orientation: str,
+                   X: np.ndarray) -> tuple[list[str], dict[str, Any]]:
+    """Check a recording's ``measures`` (:func:`twin.identification.ranges.recording_measures`), orientation and
+    window features ``X`` against the model's training data (:func:`twin.identification.ranges.out_of_range`);
+    outside, widen the intervals of the answer ``ans`` in place (:func:`twin.identification.ranges.widen`).
+    Returns the warnings (one per reason) and the check's evidence."""
+    tr = model.trained_on
+    warnings, checks = out_of_range(measures, orientation, tr.get("ranges"), np.median(X, axis=0),
+                                    tr.get("feature_reference"), model.feature_names)
+    outside = bool(warnings)
+    if outside:
+        for j in ("B", "C"):
+            key = f"clearance_{j.lower()}"
+            wide = widen(ans[f"{key}_if_faulty_mm"]["interval_90"], tr["clearances_mm"][j])
+            ans[f"{key}_if_faulty_mm"]["interval_90"] = wide
+            if j in ans["fault"]:
+                ans[f"{key}_interval_mm"] = wide
+    checks["outside_training_data"] = outside
+    checks["interval_rule"] = ("outside the training data: each interval widened to hold every clearance the model "
+                               "was trained on at that joint (no calibrated interval exists there)" if outside else
+                               "inside the training data: the conformal 90 % interval")
+    return warnings, checks
+
+
 def identify_recording(model: ClearanceModel, path: str | Path) -> dict[str, Any]:
     """The answer for a bench recording (see module docstring), with the evidence used."""
     t0 = time.perf_counter()
@@ -553,21 +577,7 @@ def identify_inputs(model: ClearanceModel, acc: dict[str, np.ndarray], counts: n
     X, w = features(acc, counts, rate, cpr, orientation=orientation)
     resolved = resolution(orientation, w.crank_hz)
     ans = model.identify(X, resolved)
-    measures = recording_measures(acc, counts, rate, cpr, w)
-    warnings, checks = out_of_range(measures, orientation, tr.get("ranges"), np.median(X, axis=0),
-                                    tr.get("feature_reference"), model.feature_names)
-    outside = bool(warnings)
-    if outside:
-        for j in ("B", "C"):
-            key = f"clearance_{j.lower()}"
-            wide = widen(ans[f"{key}_if_faulty_mm"]["interval_90"], tr["clearances_mm"][j])
-            ans[f"{key}_if_faulty_mm"]["interval_90"] = wide
-            if j in ans["fault"]:
-                ans[f"{key}_interval_mm"] = wide
-    checks["outside_training_data"] = outside
-    checks["interval_rule"] = ("outside the training data: each interval widened to hold every clearance the model "
-                               "was trained on at that joint (no calibrated interval exists there)" if outside else
-                               "inside the training data: the conformal 90 % interval")
+    warnings, checks = training_check(model, ans, recording_measures(acc, counts, rate, cpr, w), orientation, X)
     for j in ("B", "C"):
         ans[f"clearance_{j.lower()}_size_resolved"] = resolved[j]  # which also chose the interval's width
         if j in ans["fault"] and not resolved[j]:
