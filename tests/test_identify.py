@@ -272,6 +272,109 @@ def test_an_evaluation_pools_datasets_and_keeps_each_ones_figures(small):
     assert "by_dataset" not in one
 
 
+def test_a_trained_model_stores_its_training_ranges_and_sizes_intervals_by_difficulty(small):
+    """``twin identify train`` measures, on every training run, the crank rate, the within-turn ripple from the
+    encoder and the noise level, and stores their ranges, the orientations and the training windows' feature
+    quartiles; its intervals are normalized conformal ones: half width q (spread + beta), the spread of the
+    recording's per-window answers (interquartile range / 1.349)."""
+    from twin.identification.model import ClearanceModel, pooled_features, resolution, window_spread
+
+    d, model = small
+    m = ClearanceModel.load(model)
+    r = m.trained_on["ranges"]
+    assert r["crank_hz"][0] == pytest.approx(500 / 3.97 / 60, rel=0.01)  # 500 and 600 motor rpm, belt 1:3.97
+    assert r["crank_hz"][1] == pytest.approx(600 / 3.97 / 60, rel=0.01)
+    assert r["orientations"] == ["y"] and r["runs"] == 48 and "training run" in r["source"]
+    assert len(r["ripple_pct"]) == 4 and all(hi < 0.05 for lo, hi in r["ripple_pct"])  # no ripple imposed: PID residual
+    assert 25.0 < r["noise_ug_rthz"][0] <= r["noise_ug_rthz"][1] < 35.0  # the ADXL100x's 25-30 ug/rtHz
+    assert len(m.trained_on["feature_reference"]["q25"]) == len(m.feature_names)
+    norm = m.trained_on["interval"]["normalized"]
+    X, rows, owner, _, _ = pooled_features([d / "small-test"], ("train",), 1)
+    owner = np.asarray(owner)
+    held = 0
+    for i, row in enumerate(rows):
+        Xr = X[owner == i]
+        a = m.identify(Xr, resolution(row["orientation"], row["crank_hz"]))
+        for j in ("B", "C"):
+            lo, hi = a[f"clearance_{j.lower()}_if_faulty_mm"]["interval_90"]
+            mid = a[f"clearance_{j.lower()}_if_faulty_mm"]["median"]
+            w = norm[j]["q"] * (window_spread(m.size[j], Xr) + norm[j]["beta"])
+            assert math.log10(hi / mid) == pytest.approx(w, abs=1e-9)
+            assert math.log10(mid / lo) == pytest.approx(w, abs=1e-9)
+            truth = row[f"clearance_{j.lower()}_mm"]
+            held += truth > 0 and lo <= truth <= hi
+    # the runs of the other seed, each with 0.5 mm at one joint or both: 16 sizes; a 90 % interval holds
+    # at least 12 of 16 exchangeable answers with probability 0.98
+    assert held >= 12, held
+
+
+def test_normalized_intervals_hold_their_coverage_at_every_difficulty():
+    """Answers whose error spread is known (log10 errors normal with standard deviation s, the windows'
+    spread an unbiased noisy reading of s): calibrated on 2000 runs and checked on 20000 others, the
+    normalized interval holds 90 % +- 1.5 % overall, and in each third of the difficulty it is closer to
+    90 % than the fixed-width interval of the same data (which holds nearly all easy answers and too few
+    hard ones). The offset beta (the median spread) keeps one-window answers (spread 0) from a zero width
+    and makes the adaptation partial: the hardest third is held at about 82 %, not 90 %."""
+    from twin.identification.model import conformal_half_width, normalized_scale
+
+    rng = np.random.default_rng(5)
+
+    def draw(n):
+        s = rng.uniform(0.02, 0.3, n)
+        spread = s * rng.uniform(0.8, 1.2, n)
+        return np.abs(s * rng.standard_normal(n)), spread
+
+    sc, sp = draw(2000)
+    k = normalized_scale(sc, sp)
+    fixed = conformal_half_width(sc)
+    err, spread = draw(20000)
+    held_norm = err <= k["q"] * (spread + k["beta"])
+    held_fixed = err <= fixed
+    assert held_norm.mean() == pytest.approx(0.90, abs=0.015)
+    third = np.digitize(spread, np.quantile(spread, [1 / 3, 2 / 3]))
+    per = np.array([held_norm[third == t].mean() for t in range(3)])
+    per_fixed = np.array([held_fixed[third == t].mean() for t in range(3)])
+    assert np.all(np.abs(per - 0.9) < np.abs(per_fixed - 0.9)), (per, per_fixed)
+    assert per.min() > 0.78, per
+
+
+def test_out_of_range_warnings_fire_outside_each_range_and_not_inside(small):
+    """Short simulated recordings through the sensor chain (reference engine, as the small model's training):
+    inside every range (550 motor rpm, y vertical, no ripple, datasheet noise) no warning and the conformal
+    interval; a 3 % ripple at the crank rate, noise x4 and x vertical each give their own warning and the
+    interval widened to the clearances trained on (0.5 mm: the interval is the hull with it); speed outside:
+    the test above on the 750 rpm sample."""
+    from twin.config import preset
+    from twin.identification.model import ClearanceModel, identify_inputs, simulated_inputs
+    from twin.simulation import simulate_run
+
+    d, model = small
+    m = ClearanceModel.load(model)
+    base = preset(1).replace(**{"simulation.engine": "reference", "simulation.duration_s": 1.25, "drive.ramp_s": 0.2,
+                                "drive.motor_rpm": 550.0, "joints.clearance_b_mm": 0.0, "joints.clearance_c_mm": 0.5,
+                                "joints.allow_noncatalogue": True, "sensors.channels": ("accel", "encoder")})
+
+    def answer(cfg, orientation="y", run=None):
+        run = run if run is not None else simulate_run(cfg)
+        return identify_inputs(m, *simulated_inputs(run, cfg), orientation, "sim"), run
+
+    a, run = answer(base)
+    assert a["warnings"] == [] and not a["evidence"]["training_data_check"]["outside_training_data"]
+    assert a["evidence"]["training_data_check"]["feature_distance"]["beyond_far_out_fences"] < 0.05 * len(m.feature_names)
+    noisy = base.replace(**{"instrumentation.noise_scale": 4.0})
+    b, _ = answer(noisy, run=run)  # the same motion, four times the noise density
+    assert len(b["warnings"]) >= 1 and "sensor noise level" in b["warnings"][0]
+    c, _ = answer(base, "x", run=run)
+    assert any(w.startswith("orientation x was not in the training data") for w in c["warnings"])
+    rip, _ = answer(base.replace(**{"drive.ripple_pct": (3.0,), "drive.ripple_phase_rad": (0.5,)}))
+    assert rip["warnings"][0].startswith("within-turn speed ripple ") and " % at 1x" in rip["warnings"][0]
+    got = rip["evidence"]["training_data_check"]["measured"]["ripple_pct"][0]
+    assert got == pytest.approx(3.0, abs=0.3)  # the PID tracks the rippled reference closely
+    for x in (b, c, rip):
+        lo, hi = x["clearance_c_if_faulty_mm"]["interval_90"]
+        assert lo <= 0.5 <= hi and x["evidence"]["training_data_check"]["outside_training_data"]
+
+
 # ------------------------------------------------------------- the shipped model
 DEFAULT = ROOT / "twin" / "data" / "identify_default.npz"
 
@@ -280,11 +383,19 @@ DEFAULT = ROOT / "twin" / "data" / "identify_default.npz"
 @pytest.mark.parametrize("rec, fault, c_mm", [("test3_synthetic.mcap", "none", 0.0), ("test6_synthetic.mcap", "C", 0.1)])
 def test_the_shipped_model_identifies_the_sample_recordings(rec, fault, c_mm, tmp_path, capsys):
     """The sample recordings (reference engine and sensor chain: an engine the model was not trained
-    on) of Table 4 test 3 (ball bearings) and test 6 (0.1 mm at C)."""
+    on) of Table 4 test 3 (ball bearings) and test 6 (0.1 mm at C). Their crank speed ripples within a
+    turn by 1.5 % at the crank rate and 2.5 % at twice it (recordings/make_samples.py), which no training
+    run of the shipped model has: the answer says so, harmonic by harmonic, and widens its intervals to
+    every clearance trained on (0.02-1.0 mm)."""
     js = tmp_path / "a.json"
     assert main(["identify", "clearance", str(REC / rec), "--json", str(js)]) == 0
     a = json.loads(js.read_text())
-    assert a["fault"] == fault and a["warnings"] == []
+    assert a["fault"] == fault
+    assert [w.split(" % at ")[1][:2] for w in a["warnings"]] == ["1x", "2x"]
+    assert all(w.startswith("within-turn speed ripple") for w in a["warnings"])
+    check = a["evidence"]["training_data_check"]
+    assert check["outside_training_data"] and check["measured"]["ripple_pct"][:2] == pytest.approx([1.5, 2.5], abs=0.05)
+    assert a["clearance_c_if_faulty_mm"]["interval_90"] == [0.02, 1.0]
     if not c_mm:  # no clearance found means no size at either joint
         assert a["clearance_c_mm"] == 0.0 and a["clearance_b_mm"] == 0.0
     # the size of the 0.1 mm clearance at C is held to its target in the strict xfail below
@@ -303,10 +414,11 @@ def test_the_shipped_model_identifies_the_sample_recordings(rec, fault, c_mm, tm
 
 @pytest.mark.skipif(not DEFAULT.is_file(), reason="no default model committed yet")
 @pytest.mark.xfail(strict=True, reason="known gap (model card, 'The sample recordings'): on the sample recordings "
-                   "(reference engine, encoder-trace drive) the size at C reads 0.27-0.44 mm for the true 0.1 mm; the "
-                   "90 % interval of test6_synthetic, [0.28, 0.67] mm, misses it. The cause is the samples' speed "
-                   "ripple within a turn, which no training run has: analysis/identify/ripple_check.py, the same "
-                   "recordings without it are held by every interval, with it by 33-50 %")
+                   "(reference engine, encoder-trace drive) the size at C reads 0.27-0.44 mm for the true 0.1 mm. The "
+                   "cause is the samples' speed ripple within a turn (1.5 % and 2.5 %), which no training run of the "
+                   "shipped model has (analysis/identify/ripple_check.py): the answer now warns that the recording is "
+                   "outside the training data and widens its interval to 0.02-1.0 mm, which holds 0.1 mm, but the size "
+                   "itself is still off by more than a factor 1.5; a model trained on rippled runs is needed")
 def test_the_shipped_model_sizes_the_clearance_of_the_test6_sample(tmp_path):
     js = tmp_path / "a.json"
     assert main(["identify", "clearance", str(REC / "test6_synthetic.mcap"), "--json", str(js)]) == 0
@@ -394,13 +506,25 @@ def test_regression_guard_the_size_resolution_map_is_the_committed_studies(joint
         assert not size_resolved("B", "y", hz(275))
 
 
+def _without_the_ripple_check(m):
+    """The model with its training ripple range stretched to 5 % per harmonic, so that the sample recordings'
+    ripple (1.5 %, 2.5 %) is not out of range: what the answer says about the size-resolution map is then
+    seen alone, not under the out-of-range widening."""
+    import copy
+    import dataclasses
+
+    tr = copy.deepcopy(m.trained_on)
+    tr["ranges"]["ripple_pct"] = [[0.0, 5.0]] * len(tr["ranges"]["ripple_pct"])
+    return dataclasses.replace(m, trained_on=tr)
+
+
 def test_an_answer_at_C_where_the_size_is_not_resolved_says_so(tmp_path, monkeypatch):
     """The test-6 sample (C, y vertical, 751 motor rpm) is resolved by the measured map; with the
     threshold for y put over its speed the same answer carries the flag and a warning."""
     import twin.identification.model as M
     from twin.commands.identify import default_model_path
 
-    m = M.ClearanceModel.load(default_model_path())
+    m = _without_the_ripple_check(M.ClearanceModel.load(default_model_path()))
     a = M.identify_recording(m, REC / "test6_synthetic.mcap")
     assert a["fault"] == "C" and a["clearance_c_size_resolved"] and a["warnings"] == []
     assert a["clearance_b_size_resolved"]
@@ -426,7 +550,7 @@ def test_an_answer_at_B_below_its_map_says_so_and_takes_the_wide_interval(monkey
         def predict_proba(self, X):
             return np.tile([0.9, 0.05, 0.05, 0.0], (len(X), 1))
 
-    shipped = M.ClearanceModel.load(default_model_path())
+    shipped = _without_the_ripple_check(M.ClearanceModel.load(default_model_path()))
     m = dataclasses.replace(shipped, classifier=BC())
     assert "B_unresolved" in m.interval_log10 and m.interval_log10["B_unresolved"] > m.interval_log10["B"]
     a = M.identify_recording(m, REC / "test6_synthetic.mcap")

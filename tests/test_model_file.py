@@ -22,6 +22,7 @@ import pytest
 from twin.cli import main
 from twin.identification.features import feature_names
 from twin.identification.model import MODEL_FORMAT, ClearanceModel, ModelError
+from twin.identification.ranges import feature_reference
 from twin.identification.trees import TreeEnsemble, from_sklearn
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -160,6 +161,8 @@ def test_the_shipped_model_of_format_2_exports_as_scikit_learn_answers(tmp_path)
 
 
 # ------------------------------------------------------------------ small model files
+RANGES = {"source": "random", "runs": 160, "crank_hz": [1.0, 3.0], "ripple_pct": [[0.0, 0.5], [0.0, 0.25]],
+          "noise_ug_rthz": [28.0, 33.0], "orientations": ["y", "z"]}
 @pytest.fixture(scope="module")
 def small_model(tmp_path_factory) -> Path:
     """A model file of tiny trees on this twin's features (random data: its answers mean nothing)."""
@@ -172,7 +175,8 @@ def small_model(tmp_path_factory) -> Path:
     clf = C(max_iter=3, max_leaf_nodes=4, random_state=0).fit(X, y)
     reg = R(loss="quantile", quantile=0.5, max_iter=3, max_leaf_nodes=4).fit(X, X[:, 2] - 1)
     m = ClearanceModel(clf, {"B": reg, "C": reg}, {"B": 0.2, "C": 0.3},
-                       trained_on={"rate_hz": 100000.0, "crank_hz_range": [1.0, 3.0], "dataset": "random"})
+                       trained_on={"rate_hz": 100000.0, "crank_hz_range": [1.0, 3.0], "dataset": "random",
+                                   "ranges": RANGES, "feature_reference": feature_reference(X)})
     p = tmp_path_factory.mktemp("model") / "small.npz"
     m.save(p)
     return p
@@ -214,7 +218,36 @@ def test_a_saved_model_loads_back_with_the_same_answers_and_is_plain_arrays(smal
         for name in z.namelist():
             arr = np.lib.format.read_array(io.BytesIO(z.read(name)), allow_pickle=False)
             assert arr.dtype.kind in "fiubU" and not arr.dtype.hasobject, name
-    assert json.loads(str(np.load(small_model)["model.json"][()]))["format"] == MODEL_FORMAT == "twin-identify-model/3"
+    assert json.loads(str(np.load(small_model)["model.json"][()]))["format"] == MODEL_FORMAT == "twin-identify-model/4"
+
+
+def test_the_training_ranges_and_feature_quartiles_load_back_and_malformed_ones_are_refused(small_model, tmp_path):
+    m = ClearanceModel.load(small_model)
+    assert m.trained_on["ranges"] == RANGES
+    ref = m.trained_on["feature_reference"]
+    assert len(ref["q25"]) == len(ref["q75"]) == len(feature_names())
+    for bad in ({"crank_hz": [3.0, 1.0]}, {"ripple_pct": [[0.0]]}, {"noise_ug_rthz": [float("nan"), 1.0]},
+                {"orientations": [1]}):
+        m.trained_on["ranges"] = dict(RANGES, **bad)
+        m.save(tmp_path / "bad.npz")
+        _refused(tmp_path / "bad.npz", "not a readable identification model", "ranges")
+    m.trained_on["ranges"] = RANGES
+    m.trained_on["feature_reference"] = {"q25": [0.0], "q75": [1.0]}
+    m.save(tmp_path / "bad.npz")
+    _refused(tmp_path / "bad.npz", "feature_reference")
+
+
+def test_the_shipped_model_states_its_ranges_and_where_they_come_from():
+    """The shipped model was trained before the ranges were measured: its file (format 4, converted by
+    analysis/identify/convert_model_ranges.py) holds the training runs' crank rates and orientations, the
+    ripple and noise of runs made like them (no imposed ripple), and no feature reference."""
+    tr = ClearanceModel.load(SHIPPED).trained_on
+    r = tr["ranges"]
+    assert r["crank_hz"] == tr["crank_hz_range"] and r["orientations"] == ["x", "y", "z"]
+    assert "convert_model_ranges.py" in r["source"] and "not on the training runs themselves" in r["source"]
+    assert len(r["ripple_pct"]) == 4 and all(lo == 0.0 and hi < 0.05 for lo, hi in r["ripple_pct"])
+    assert 25.0 < r["noise_ug_rthz"][0] <= r["noise_ug_rthz"][1] < 35.0  # the ADXL100x datasheets' 25-30 ug/rtHz
+    assert tr["feature_reference"] is None
 
 
 def test_a_hostile_pickle_is_refused_unopened(tmp_path, capsys):
@@ -288,8 +321,8 @@ def test_another_format_other_members_and_unsafe_trees_are_refused_in_one_line(s
         return f
 
     cases = [
-        (meta_of(lambda m: m.update(format="twin-identify-model/4")),
-         ("a model of format 'twin-identify-model/4', this twin reads 'twin-identify-model/3'", "retrain")),
+        (meta_of(lambda m: m.update(format="twin-identify-model/3")),
+         ("a model of format 'twin-identify-model/3', this twin reads 'twin-identify-model/4'", "retrain")),
         (meta_of(lambda m: m.update(feature_version="twin-identify-features/0")), ("made for features", "retrain")),
         (meta_of(lambda m: m.pop("interval_log10")), ("metadata: KeyError",)),
         (lambda n, d: None if n == "size_B.value.npy" else d, ("size_B.value missing or unexpected",)),

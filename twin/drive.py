@@ -156,7 +156,43 @@ class DriveReference:
         self.trace_duration_s = float(tt[-1])
         return spline, spline.derivative()
 
+    # -- within-turn ripple (drive.ripple_pct)
+    def _ripple_terms(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """(D, S, C) of the ripple at the base reference angle θ_b: the encoder-angle shift
+        D = Σ (a_k/k)[cos(k φ_b(0) + p_k) − cos(k φ_b + p_k)], the speed factor S = Σ a_k sin(k φ_b + p_k)
+        and its derivative in φ_b, C = Σ a_k k cos(k φ_b + p_k); None without ripple."""
+        d = self.cfg.drive
+        if not any(d.ripple_pct):
+            return None
+        phases = d.ripple_phase_rad or (0.0,) * len(d.ripple_pct)
+        phi = self.direction * (np.asarray(theta, dtype=np.float64) + np.pi / 2.0)  # encoder angle
+        phi0 = self.direction * (self._base_start_theta + np.pi / 2.0)
+        D, S, C = np.zeros_like(phi), np.zeros_like(phi), np.zeros_like(phi)
+        for k, (pct, p) in enumerate(zip(d.ripple_pct, phases), start=1):
+            a = pct / 100.0
+            D += a / k * (math.cos(k * phi0 + p) - np.cos(k * phi + p))
+            S += a * np.sin(k * phi + p)
+            C += a * k * np.cos(k * phi + p)
+        return D, S, C
+
+    @property
+    def _base_start_theta(self) -> float:
+        """θ_b(0) [rad], computed once."""
+        if not hasattr(self, "_theta_b0"):
+            self._theta_b0 = float(self._base(np.zeros(1))[0][0])
+        return self._theta_b0
+
     def __call__(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """θ_ref(t) [rad] and ω_ref(t) [rad/s], with the ripple of ``drive.ripple_pct``:
+        θ = θ_b + direction·D, ω = ω_b (1 + S) (:meth:`_ripple_terms`)."""
+        theta, omega = self._base(t)
+        r = self._ripple_terms(theta)
+        if r is None:
+            return theta, omega
+        D, S, _ = r
+        return theta + self.direction * D, omega * (1.0 + S)
+
+    def _base(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         t = np.asarray(t, dtype=np.float64)
         if self._trace is not None:
             spline, dspline = self._trace
@@ -167,7 +203,16 @@ class DriveReference:
 
     def acceleration(self, t: np.ndarray) -> np.ndarray:
         """Reference crank acceleration α_ref(t) = dω_ref/dt [rad/s²] (the prescribed drive's
-        feed-forward; a ramp of ``ramp_s = 0`` contributes nothing: its jump is at t = 0 only)."""
+        feed-forward; a ramp of ``ramp_s = 0`` contributes nothing: its jump is at t = 0 only); with
+        ripple, α_b (1 + S) + direction·ω_b² C (:meth:`_ripple_terms`)."""
+        alpha = self._base_acceleration(t)
+        if not any(self.cfg.drive.ripple_pct):
+            return alpha
+        theta, omega = self._base(t)
+        _, S, C = self._ripple_terms(theta)
+        return alpha * (1.0 + S) + self.direction * omega * omega * C
+
+    def _base_acceleration(self, t: np.ndarray) -> np.ndarray:
         t = np.asarray(t, dtype=np.float64)
         if self._trace is not None:
             spline, _ = self._trace
@@ -196,7 +241,9 @@ class DriveReference:
         if d.ramp_s > 0:
             return float(self(np.zeros(1))[1][0])
         at0 = [rpm for t_ev, rpm in self.events if t_ev == 0.0]  # the last command at t = 0 holds
-        return self.direction * (at0[-1] if at0 else 0.0) / d.belt_ratio * RPM_TO_RAD_S
+        w0 = self.direction * (at0[-1] if at0 else 0.0) / d.belt_ratio * RPM_TO_RAD_S
+        r = self._ripple_terms(np.array([self._base_start_theta]))
+        return w0 if r is None else w0 * (1.0 + float(r[1][0]))
 
     def command_rpm(self, t: np.ndarray) -> np.ndarray:
         """Motor speed command [rpm] (the DAQ's analog output, ±10 V ↔ ±1000 rpm)."""

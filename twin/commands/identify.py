@@ -129,6 +129,8 @@ def _evaluate(args: argparse.Namespace) -> int:
         print(f"  size at {J}: interval coverage {g['interval_coverage'] * 100:.0f} %; "
               + ", ".join(f"{c} mm: {v['median_abs_error_mm']:.3g} mm ({'ok' if v['meets_target'] else 'over'})"
                           for c, v in g["values"].items()))
+    o = r["outside_training_data"]
+    print(f"  outside the training data (warned, intervals widened): {o['runs']} of {r['runs']} runs")
     print(f"  wrote {out}/: {', '.join(files)}")
     return 0
 
@@ -167,6 +169,11 @@ def _clearance(args: argparse.Namespace) -> int:
           f"steady running at a crank rate of {ev['crank_hz']:.3f} Hz")
     print(f"  model: trained on dataset {ev['model']['dataset']} at crank rates {lo_hz:.2f}-{hi_hz:.2f} Hz; "
           f"identification time {a['seconds']:.2f} s")
+    check = ev["training_data_check"]
+    if check["outside_training_data"]:
+        n = sum("extrapolation" in w or "unlike the training data" in w for w in a["warnings"])
+        print(f"  outside the training data: {n} reason{'s' if n != 1 else ''} (warnings below); the intervals are "
+              "widened to every clearance the model was trained on at that joint")
     for w in a["warnings"]:
         print(f"  WARNING: {w}", file=sys.stderr)
     if js is not None:

@@ -64,6 +64,16 @@ class Drive:
             motor and the belt (the papers give crank speeds; S000 runs 50–5000 rpm);
             0 = ``motor_rpm`` / ``belt_ratio`` (the bench). When nonzero, ``motor_rpm`` is not
             used and the motor command channel reads crank_rpm × belt_ratio. |crank_rpm| ≤ 6000.
+        ripple_pct: within-turn speed ripple imposed on the reference (``pid`` and ``prescribed``
+            drives, any program, traces included): amplitude of harmonic k = 1, 2, ... of the crank
+            rate, in percent of the speed [%], each in [0, 10]; () = none. The reference's encoder
+            angle φ_b(t) becomes φ(t) = φ_b + Σ_k (a_k/k) [cos(k φ_b(0) + p_k) − cos(k φ_b + p_k)],
+            so dφ/dt = dφ_b/dt · (1 + Σ_k a_k sin(k φ_b + p_k)) (a_k = ripple_pct[k-1]/100): the
+            speed fluctuates with the crank position, as a belt drive's does (S003 §4.3: "not
+            constant within a turn"); amplitudes are not measured on the bench (PLACEHOLDER: none).
+            The motor command channel is the program's (unrippled). The ``motor`` and ``torque``
+            drives make their own ripple (drive train) and refuse this field.
+        ripple_phase_rad: phase p_k of each harmonic [rad], one per ``ripple_pct`` entry (() = all 0).
     """
 
     program: str = "constant"
@@ -81,6 +91,8 @@ class Drive:
     steps_rpm: tuple[float, ...] = ()
     mode: str = "pid"
     crank_rpm: float = 0.0
+    ripple_pct: tuple[float, ...] = ()
+    ripple_phase_rad: tuple[float, ...] = ()
 
     MODES: typing.ClassVar[tuple[str, ...]] = ("pid", "prescribed", "motor", "torque")
 
@@ -125,6 +137,18 @@ class Drive:
                f"must be times >= 0 s in increasing order, got {list(self.steps_s)!r}")
         _check(all(isinstance(r, (int, float)) and math.isfinite(r) and abs(r) <= 1000 for r in self.steps_rpm),
                "steps_rpm", f"must be motor speeds within ±1000 rpm, got {list(self.steps_rpm)!r}")
+        _check(len(self.ripple_pct) <= 8 and all(isinstance(a, (int, float)) and not isinstance(a, bool)
+                                                 and math.isfinite(a) and 0 <= a <= 10 for a in self.ripple_pct),
+               "ripple_pct", f"must hold at most 8 amplitudes in [0, 10] % (harmonics 1, 2, ... of the crank rate), "
+                             f"got {list(self.ripple_pct)!r}")
+        _check(len(self.ripple_phase_rad) in (0, len(self.ripple_pct))
+               and all(isinstance(p, (int, float)) and math.isfinite(p) for p in self.ripple_phase_rad),
+               "ripple_phase_rad", f"must hold one finite phase [rad] per ripple_pct entry ({len(self.ripple_pct)}) "
+                                   f"or none, got {list(self.ripple_phase_rad)!r}")
+        if any(self.ripple_pct):
+            _check(self.mode in ("pid", "prescribed"), "ripple_pct",
+                   f"applies to the pid and prescribed drives; drive.mode = {self.mode!r} makes its own ripple "
+                   "(drive train): use ()")
 
     @property
     def crank_rad_s(self) -> float:

@@ -120,6 +120,8 @@ class Instrumentation:
         resonance_q: quality factor of the sensor resonance for ``response = "datasheet"`` [-].
             PLACEHOLDER: the datasheets plot the peak but do not tabulate Q; 10.
         noise: add white sensor noise of the model's density [g/√Hz] over the DAQ band.
+        noise_scale: factor on that density [-], in [0, 100] (1 = the datasheet's; a noisier
+            installation, cabling or a worn sensor read more).
         saturation: clip at the model's range (±100 g / ±50 g) and at the output rails.
         daq_rate_hz: simultaneous sample rate of all DAQ channels [Hz] (S003: 100 kHz). The
             simulated run must be at this rate or an integer multiple of it (decimated).
@@ -145,6 +147,7 @@ class Instrumentation:
     response: str = "datasheet"
     resonance_q: float = 10.0
     noise: bool = True
+    noise_scale: float = 1.0
     saturation: bool = True
     daq_rate_hz: float = 100_000.0
     daq_range: str = "+-10"
@@ -172,6 +175,9 @@ class Instrumentation:
         _check(isinstance(self.rail_margin_v, (int, float)) and 0 <= self.rail_margin_v < self.supply_v / 2,
                "rail_margin_v", f"must lie in [0, supply_v/2) V, got {self.rail_margin_v!r}")
         _choice(self.response, "response", ACCEL_RESPONSES)
+        _check(isinstance(self.noise_scale, (int, float)) and not isinstance(self.noise_scale, bool)
+               and math.isfinite(self.noise_scale) and 0 <= self.noise_scale <= 100,
+               "noise_scale", f"must lie in [0, 100], got {self.noise_scale!r}")
         _check(isinstance(self.resonance_q, (int, float)) and 0.5 <= self.resonance_q <= 1000,
                "resonance_q", f"must lie in [0.5, 1000], got {self.resonance_q!r}")
         _positive(self.daq_rate_hz, "daq_rate_hz", "Hz")

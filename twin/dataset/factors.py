@@ -111,6 +111,21 @@ def _mount_offset(v, ov, rng, base):  # noqa: ARG001
     ov["sensors.accelerometers"] = mounts
 
 
+def _ripple(k: int):
+    """Harmonic ``k`` of the within-turn speed ripple (drive.ripple_pct, drive.ripple_phase_rad): its
+    amplitude is the value [%], its phase drawn uniformly over a turn from the run's generator."""
+    def apply(v, ov, rng, base):  # noqa: ARG001
+        n = max(k, len(ov.get("drive.ripple_pct", ())), len(base.drive.ripple_pct))
+        pct = list(ov.get("drive.ripple_pct", base.drive.ripple_pct)) + [0.0] * n
+        ph = list(ov.get("drive.ripple_phase_rad", base.drive.ripple_phase_rad or (0.0,) * len(base.drive.ripple_pct)))
+        ph += [0.0] * n
+        pct[k - 1] = float(v)
+        ph[k - 1] = float(rng.uniform(0.0, 2.0 * np.pi))
+        ov["drive.ripple_pct"] = pct[:n]
+        ov["drive.ripple_phase_rad"] = ph[:n]
+    return apply
+
+
 #: the named factors, in the order they are applied (``fault`` is applied last, after the sizes)
 NAMED: dict[str, Factor] = {f.name: f for f in (
     Factor("fault", "joints with a clearance: none, B, C or BC (size: clearance_b_mm/_c_mm, else 0.1 mm)",
@@ -144,6 +159,14 @@ NAMED: dict[str, Factor] = {f.name: f for f in (
     Factor("mount_offset_m", "accelerometer mounting error: uniform ±value in x and y [m] (drawn per run)",
            None, (0.0, 0.02), _mount_offset),
     Factor("noise", "sensor noise on or off", (True, False), None, _set("instrumentation.noise")),
+    Factor("noise_scale", "factor on the sensors' noise density [-] (instrumentation.noise_scale; 1 = datasheet)",
+           None, (0.0, 100.0), _set("instrumentation.noise_scale")),
+    Factor("start_angle_rad", "crank encoder angle at t = 0 [rad] (drive.initial_encoder_angle_rad; 0 = crank "
+           "along -y)", None, (0.0, 6.283185307179586), _set("drive.initial_encoder_angle_rad")),
+    # within-turn speed ripple of the pid/prescribed drive (drive.ripple_pct): harmonic k of the crank rate
+    *(Factor(f"ripple{k}_pct", f"within-turn speed ripple at {k}x the crank rate [% of the speed], phase drawn "
+             "per run (drive.ripple_pct; pid and prescribed drives)", None, (0.0, 10.0), _ripple(k))
+      for k in (1, 2, 3, 4)),
     Factor("drive_mode", "how the crank is driven: pid, prescribed, motor (motor speed loop and V-belt), torque "
            "(motor torque program, release)", ("pid", "prescribed", "motor", "torque"), None, _set("drive.mode")),
     # the drive train's placeholders (twin.config.drivetrain; with drive_mode motor/torque): bounds are the

@@ -18,7 +18,8 @@ from typing import Any
 import numpy as np
 
 from twin.config import CATALOGUE_DIAMETRAL_MM
-from twin.identification.model import CLASSES, SIZE_RESOLVED_FROM_RPM, ClearanceModel, pooled_features, resolution
+from twin.identification.model import (CLASSES, SIZE_RESOLVED_FROM_RPM, ClearanceModel, pooled_features, resolution,
+                                       training_check)
 
 
 def half_gap_mm(c: float) -> float:
@@ -52,7 +53,9 @@ def evaluate(model: ClearanceModel, dataset_dir: str | Path | list[str | Path], 
     for i, r in enumerate(rows):
         resolved = resolution(r["orientation"], r["crank_hz"])
         a = model.identify(X[owner == i], resolved)
-        preds.append({"run_id": r["run_id"], "true_fault": r["fault"], "fault": a["fault"],
+        # the checks against the training data, as a recording's answer makes them (intervals widened outside)
+        warned, _ = training_check(model, a, r["measures"], r["orientation"], X[owner == i])
+        preds.append({"warnings": warned, "outside_training_data": bool(warned), "measures": r["measures"],"run_id": r["run_id"], "true_fault": r["fault"], "fault": a["fault"],
                       "true_b_mm": r["clearance_b_mm"], "true_c_mm": r["clearance_c_mm"],
                       "b_mm": a["clearance_b_if_faulty_mm"]["median"], "b_int": a["clearance_b_if_faulty_mm"]["interval_90"],
                       "c_mm": a["clearance_c_if_faulty_mm"]["median"], "c_int": a["clearance_c_if_faulty_mm"]["interval_90"],
@@ -89,6 +92,8 @@ def evaluate(model: ClearanceModel, dataset_dir: str | Path | list[str | Path], 
     # the healthy runs: how often a joint without clearance is called faulty, by speed
     report["false_alarms"] = {J: float(np.mean([J in p["fault"] for p in preds if p[f"true_{J.lower()}_mm"] == 0]))
                               for J in ("B", "C")}
+    warned = [p["outside_training_data"] for p in preds]
+    report["outside_training_data"] = {"runs": int(sum(warned)), "share": float(np.mean(warned)) if preds else float("nan")}
     report["seconds"] = {"features_and_predictions": t_pred}
     report["predictions"] = preds
     return report

@@ -22,21 +22,34 @@
   format 1 took the 5 % and 95 % quantile regressors instead: their window medians stayed at the
   catalogue's ends (0.02–0.5 mm for almost every answer), covering the truth while saying nothing.
   A joint the classifier finds healthy reports 0 (ball bearing).
+  Models trained by this version also store **normalized** conformal scales (``interval.normalized``): a run's
+  score is divided by its difficulty, the spread of its per-window answers (:func:`window_spread`) plus an
+  offset beta (the median spread of the out-of-fold runs, at least :data:`SPREAD_FLOOR_LOG10`); the half width
+  of an answer is then q·(spread + beta), wide where the windows disagree, narrow where they agree, with the
+  same 90 % guarantee over recordings like the training runs. Where a model has them they replace the fixed
+  half widths.
+* **Outside the training data** (:mod:`twin.identification.ranges`): an answer checks the recording's crank
+  rate, within-turn speed ripple (from the encoder), noise level, orientation and, where the model stores the
+  training features' quartiles, its distance in feature space, against the training runs' ranges; each reason
+  gives a warning and the intervals are widened to every clearance trained on at that joint.
 * The model is saved with its feature definition (version and names), what it was trained on
   (dataset name, identity digest, rate, speed range, clearances and orientations seen) and the
   library versions; loading checks the format and the feature version, and identifying checks the
   recording's rate and speed against the training data (a speed outside the training range is
   answered with a warning, never silently).
 
-Model file (format ``twin-identify-model/3``, suffix ``.npz``; :meth:`ClearanceModel.save`,
+Model file (format ``twin-identify-model/4``, suffix ``.npz``; :meth:`ClearanceModel.save`,
 :meth:`ClearanceModel.load`): a NumPy ``.npz`` archive (a zip of ``.npy`` members, each with its
 CRC-32) of plain arrays and one JSON text, read with ``allow_pickle=False``: loading it runs no code
 from the file, and answering needs no scikit-learn. Members:
 
-* ``model.json``: a 0-d unicode array holding JSON: ``format`` (``twin-identify-model/3``),
+* ``model.json``: a 0-d unicode array holding JSON: ``format`` (``twin-identify-model/4``),
   ``feature_version`` and ``feature_names`` (:mod:`twin.identification.features`), ``interval_log10`` (the
   conformal half widths [log10], see above), ``trained_on`` (the training data, with ``versions``:
-  twin, scikit-learn and numpy of the training), and ``estimators``: per estimator (``classifier``,
+  twin, scikit-learn and numpy of the training; ``ranges``: the training runs' ranges of crank rate,
+  within-turn ripple per harmonic, noise level and orientations, with their ``source``; ``feature_reference``:
+  the training windows' feature quartiles, or null where unknown; ``interval.normalized``: the normalized
+  conformal scale per joint, where trained; see below), and ``estimators``: per estimator (``classifier``,
   ``size_B``, ``size_C``) its kind (link: ``softmax`` for the classifier, ``identity`` for the size
   regressors), number of features, trees per iteration, classes and source
   (:meth:`twin.identification.trees.TreeEnsemble.meta`);
@@ -46,7 +59,8 @@ from the file, and answering needs no scikit-learn. Members:
 
 Loading refuses, in one line naming the file: anything but a zip archive (a pickle or ``.joblib``
 file, as model format 2 was, is named as such and never unpickled), a damaged archive (CRC, truncation),
-another format version, other members, an array of another dtype (object arrays included: never
+another format version (format 3 lacked the training ranges: ``analysis/identify/convert_model_ranges.py``
+adds them), other members, an array of another dtype (object arrays included: never
 unpickled), trees that a walk could not use safely, and a feature version this twin does not compute.
 The scikit-learn estimators of the training are exported by :func:`twin.identification.trees.from_sklearn`,
 whose answers are checked equal bit for bit on the training windows.
@@ -66,6 +80,7 @@ import numpy as np
 
 from twin.config import Drive
 from twin.identification.features import FEATURE_VERSION, REVS_PER_WINDOW, IdentifyError, feature_names, features
+from twin.identification.ranges import feature_reference, out_of_range, recording_measures, training_ranges, widen
 from twin.identification.trees import ModelError, TreeEnsemble, from_sklearn
 
 CLASSES = ("none", "B", "C", "BC")
@@ -91,7 +106,9 @@ BELT_RATIO = Drive.belt_ratio  # motor turns per crank turn of the bench's V-bel
 COVERAGE = 0.90  # nominal coverage of the reported intervals
 CONFORMAL_FOLDS = 5
 MONDRIAN_MIN_RUNS = 20  # out-of-fold runs each side needs before the interval at C is split by resolution
-MODEL_FORMAT = "twin-identify-model/3"
+MODEL_FORMAT = "twin-identify-model/4"
+#: floor of the normalized intervals' difficulty offset beta [log10] (runs of one window have no spread)
+SPREAD_FLOOR_LOG10 = 0.01
 MODEL_SUFFIX = ".npz"
 ESTIMATORS = ("classifier", "size_B", "size_C")
 
@@ -115,7 +132,7 @@ class ClearanceModel:
 
     # ------------------------------------------------------------------ io
     def save(self, path: str | Path) -> Path:
-        """Write the model file (module docstring: format ``twin-identify-model/3``) atomically;
+        """Write the model file (module docstring: format ``twin-identify-model/4``) atomically;
         scikit-learn estimators are exported first (:func:`twin.identification.trees.from_sklearn`)."""
         from twin.identification.modelfile import write_model
 
@@ -128,7 +145,7 @@ class ClearanceModel:
 
     @staticmethod
     def load(path: str | Path) -> "ClearanceModel":
-        """Read a model file, refusing in one line anything but a ``twin-identify-model/3`` file of this
+        """Read a model file, refusing in one line anything but a ``twin-identify-model/4`` file of this
         twin's features (module docstring); nothing in the file is run."""
         from twin.identification.modelfile import read_model
 
@@ -142,6 +159,10 @@ class ClearanceModel:
             if len(hz) != 3 or not isinstance(names, list) or not all(isinstance(n, str) for n in names) or \
                     not {"B", "C"} <= set(half) or not all(math.isfinite(v) and v >= 0 for v in half.values()):
                 raise ValueError("feature_names or interval_log10 malformed")
+            _check_ranges(trained_on["ranges"], trained_on.get("feature_reference"), len(names))
+            for v in (trained_on.get("interval", {}).get("normalized") or {}).values():
+                if not (math.isfinite(float(v["q"])) and float(v["q"]) >= 0 and float(v["beta"]) > 0):
+                    raise ValueError("interval.normalized malformed")
         except (KeyError, TypeError, ValueError, AttributeError) as err:
             raise ModelError(f"{p}: not a readable identification model (metadata: {type(err).__name__}: "
                              f"{err})") from None
@@ -169,17 +190,31 @@ class ClearanceModel:
         p = {c: float(proba[classes.index(c)]) if c in classes else 0.0 for c in CLASSES}
         fault = max(p, key=p.get)
         out: dict[str, Any] = {"fault": fault, "probabilities": p}
+        norm = self.trained_on.get("interval", {}).get("normalized") or {}
         for j in ("B", "C"):
             mid = size_answer(self.size[j], X)
-            w = self.interval_log10[j]
-            if not resolved[j]:
-                w = self.interval_log10.get(f"{j}_unresolved", w)
+            side = j if resolved[j] or f"{j}_unresolved" not in self.interval_log10 else f"{j}_unresolved"
+            w = self.interval_log10[side]
+            if side in norm:  # normalized conformal: the half width scales with the recording's difficulty
+                w = norm[side]["q"] * (window_spread(self.size[j], X) + norm[side]["beta"])
             lo, hi = (float(f"{mid * 10 ** sign:.12g}") for sign in (-w, w))
             has = j in fault
             out[f"clearance_{j.lower()}_mm"] = mid if has else 0.0
             out[f"clearance_{j.lower()}_interval_mm"] = [lo, hi] if has else [0.0, 0.0]
             out[f"clearance_{j.lower()}_if_faulty_mm"] = {"median": mid, "interval_90": [lo, hi]}
         return out
+
+
+def _check_ranges(ranges: Any, ref: Any, n_features: int) -> None:
+    """Raise ValueError unless ``ranges`` (training ranges, :func:`twin.identification.ranges.training_ranges`)
+    and ``ref`` (None, or the features' quartiles) are well formed."""
+    pairs = [ranges["crank_hz"], ranges["noise_ug_rthz"], *ranges["ripple_pct"]]
+    if not all(len(p) == 2 and all(math.isfinite(float(x)) for x in p) and float(p[0]) <= float(p[1]) for p in pairs):
+        raise ValueError("ranges malformed")
+    if not all(isinstance(o, str) for o in ranges["orientations"]) or not isinstance(ranges["source"], str):
+        raise ValueError("ranges.orientations or ranges.source malformed")
+    if ref is not None and not (len(ref["q25"]) == len(ref["q75"]) == n_features):
+        raise ValueError("feature_reference malformed")
 
 
 def size_resolved(joint: str, orientation: str, crank_hz: float) -> bool:
@@ -193,6 +228,26 @@ def size_resolved(joint: str, orientation: str, crank_hz: float) -> bool:
 def resolution(orientation: str, crank_hz: float) -> dict[str, bool]:
     """:func:`size_resolved` at both joints: {"B": bool, "C": bool}."""
     return {j: size_resolved(j, orientation, crank_hz) for j in ("B", "C")}
+
+
+def normalized_scale(scores: np.ndarray, spread: np.ndarray, beta: float | None = None) -> dict[str, float]:
+    """Normalized split-conformal scale from runs' out-of-fold scores |log10 answer − log10 truth| and
+    difficulties (:func:`window_spread`) [log10]: beta (default: the median difficulty, at least
+    :data:`SPREAD_FLOOR_LOG10`) and q, the conformal rank of score / (difficulty + beta); an answer's half
+    width is then q (difficulty + beta)."""
+    spread = np.asarray(spread, float)
+    if beta is None:
+        beta = max(float(np.median(spread)), SPREAD_FLOOR_LOG10)
+    return {"q": conformal_half_width(np.asarray(scores, float) / (spread + beta)), "beta": float(beta)}
+
+
+def window_spread(reg: Any, X: np.ndarray) -> float:
+    """Difficulty of a recording for a size regressor: the spread of its per-window answers, their
+    interquartile range over 1.349 (the standard deviation of a normal sample) [log10]; 0 for one window."""
+    if len(X) < 2:
+        return 0.0
+    q1, q3 = np.quantile(np.asarray(reg.predict(X), float), [0.25, 0.75])
+    return float(q3 - q1) / 1.349
 
 
 def size_answer(reg: Any, X: np.ndarray) -> float:
@@ -213,8 +268,11 @@ def conformal_half_width(scores: np.ndarray, coverage: float = COVERAGE) -> floa
 
 # ------------------------------------------------------------------ training data
 def run_features(path: str, skip_s: float, counts_per_rev: float, orientation: str = "y"
-                 ) -> tuple[np.ndarray, float] | str:
-    """Window features of one dataset run file (or the reason it has none)."""
+                 ) -> tuple[np.ndarray, float, dict[str, Any]] | str:
+    """Window features of one dataset run file, its crank rate [Hz] and its measures
+    (:func:`twin.identification.ranges.recording_measures`), or the reason it has none."""
+    from twin.identification.ranges import recording_measures
+
     from twin.dataset.storage import read_columns, read_meta
 
     meta = read_meta(path)
@@ -224,7 +282,7 @@ def run_features(path: str, skip_s: float, counts_per_rev: float, orientation: s
         X, w = features(acc, cols["encoder_counts"], float(meta["rate_hz"]), counts_per_rev, skip_s, orientation)
     except IdentifyError as err:
         return str(err)
-    return X, w.crank_hz
+    return X, w.crank_hz, recording_measures(acc, cols["encoder_counts"], float(meta["rate_hz"]), counts_per_rev, w)
 
 
 def dataset_features(ds, splits: tuple[str, ...], workers: int = 1
@@ -256,8 +314,8 @@ def dataset_features(ds, splits: tuple[str, ...], workers: int = 1
         if isinstance(res, str):
             skipped.append({"run_id": r["run_id"], "reason": res})
             continue
-        Xr, hz = res
-        r = dict(r, crank_hz=hz)
+        Xr, hz, measures = res
+        r = dict(r, crank_hz=hz, measures=measures)
         owner += [len(kept)] * len(Xr)
         kept.append(r)
         X.append(Xr)
@@ -352,6 +410,7 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
     classifier = from_sklearn(clf, check=X)  # what the file holds: answers equal bit for bit, checked
     size: dict[str, Any] = {}
     half_width: dict[str, float] = {}
+    normalized: dict[str, dict[str, float]] = {}
     n_folds: dict[str, int] = {}
     owner_a = np.asarray(owner)
     for j in ("B", "C"):
@@ -373,22 +432,28 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
         # out-of-fold scores of whole runs (see module docstring)
         fold = _conformal_folds(rows, np.unique(owner_a[sel]), interval_folds, seed)
         n_folds[j] = int(fold.max()) + 1
-        scores, held_runs = [], []
+        scores, held_runs, spread = [], [], []
         for k in range(n_folds[j]):
             held = sel & (fold[owner_a] == k)
             if not held.any() or (sel & ~held).sum() < 10:
                 continue
             reg = fit(sel & ~held)
             for r in np.unique(owner_a[held]):
-                scores.append(abs(math.log10(size_answer(reg, X[owner_a == r])) - math.log10(rows[int(r)][key])))
+                Xr = X[owner_a == r]
+                scores.append(abs(math.log10(size_answer(reg, Xr)) - math.log10(rows[int(r)][key])))
+                spread.append(window_spread(reg, Xr))
                 held_runs.append(rows[int(r)])
-        scores = np.array(scores)
+        scores, spread = np.array(scores), np.array(spread)
         half_width[j] = conformal_half_width(scores)
+        normalized[j] = normalized_scale(scores, spread)
+        beta = normalized[j]["beta"]
         # Mondrian split by the joint's size-resolution map, where each side has enough runs
         on = np.array([size_resolved(j, row["orientation"], row["crank_hz"]) for row in held_runs], bool)
         if on.sum() >= MONDRIAN_MIN_RUNS and (~on).sum() >= MONDRIAN_MIN_RUNS:
             half_width[j] = conformal_half_width(scores[on])
             half_width[f"{j}_unresolved"] = conformal_half_width(scores[~on])
+            for side, m in ((j, on), (f"{j}_unresolved", ~on)):
+                normalized[side] = normalized_scale(scores[m], spread[m], beta)
     import sklearn
 
     from twin import __version__
@@ -412,7 +477,13 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
         "versions": {"twin": __version__, "sklearn": sklearn.__version__, "numpy": np.__version__},
         "interval": {"method": "split-conformal, out of fold", "folds_by": interval_folds, "folds": n_folds,
                      "coverage": COVERAGE,
-                     "half_width_log10": half_width},
+                     "half_width_log10": half_width,
+                     "normalized": normalized,
+                     "difficulty": "spread of the per-window answers: interquartile range of the windows' log10 "
+                                   "answers / 1.349 [log10]"},
+        "ranges": training_ranges([r["measures"] for r in rows], [r["orientation"] for r in rows],
+                                  "measured on every training run (twin identify train)"),
+        "feature_reference": feature_reference(X),
         "feature_seconds": t_feat, "fit_seconds": time.perf_counter() - t0 - t_feat,
     }
     return ClearanceModel(classifier, size, half_width, trained_on=trained_on), trained_on
@@ -461,24 +532,52 @@ def simulated_inputs(run: Any, cfg: Any) -> tuple[dict[str, np.ndarray], np.ndar
     return acc, np.asarray(daq["encoder_counts"], float), daq.rate_hz, float(cfg.instrumentation.encoder_counts_per_rev)
 
 
+def training_check(model: ClearanceModel, ans: dict[str, Any], measures: dict[str, Any], orientation: str,
+                   X: np.ndarray) -> tuple[list[str], dict[str, Any]]:
+    """Check a recording's ``measures`` (:func:`twin.identification.ranges.recording_measures`), orientation and
+    window features ``X`` against the model's training data (:func:`twin.identification.ranges.out_of_range`);
+    outside, widen the intervals of the answer ``ans`` in place (:func:`twin.identification.ranges.widen`).
+    Returns the warnings (one per reason) and the check's evidence."""
+    tr = model.trained_on
+    warnings, checks = out_of_range(measures, orientation, tr.get("ranges"), np.median(X, axis=0),
+                                    tr.get("feature_reference"), model.feature_names)
+    outside = bool(warnings)
+    if outside:
+        for j in ("B", "C"):
+            key = f"clearance_{j.lower()}"
+            wide = widen(ans[f"{key}_if_faulty_mm"]["interval_90"], tr["clearances_mm"][j])
+            ans[f"{key}_if_faulty_mm"]["interval_90"] = wide
+            if j in ans["fault"]:
+                ans[f"{key}_interval_mm"] = wide
+    checks["outside_training_data"] = outside
+    checks["interval_rule"] = ("outside the training data: each interval widened to hold every clearance the model "
+                               "was trained on at that joint (no calibrated interval exists there)" if outside else
+                               "inside the training data: the conformal 90 % interval")
+    return warnings, checks
+
+
 def identify_recording(model: ClearanceModel, path: str | Path) -> dict[str, Any]:
     """The answer for a bench recording (see module docstring), with the evidence used."""
     t0 = time.perf_counter()
     acc, counts, rate, cpr, cfg = recording_inputs(path)
+    orientation = cfg.mechanism.orientation if cfg is not None else "y"
+    return identify_inputs(model, acc, counts, rate, cpr, orientation, str(path), t0)
+
+
+def identify_inputs(model: ClearanceModel, acc: dict[str, np.ndarray], counts: np.ndarray, rate: float, cpr: float,
+                    orientation: str, source: str = "", t0: float | None = None) -> dict[str, Any]:
+    """The answer for calibrated accelerations and encoder counts (:func:`recording_inputs`,
+    :func:`simulated_inputs`) of a bench with ``orientation`` vertical: location, sizes, intervals, and
+    the checks against the training data (:mod:`twin.identification.ranges`): one warning per reason a
+    recording is outside, and then each joint's interval widened to every clearance trained on there."""
+    t0 = time.perf_counter() if t0 is None else t0
     tr = model.trained_on
     if abs(rate - tr["rate_hz"]) > 1e-6 * rate:
-        raise ModelError(f"{path}: recorded at {rate:g} Hz, the model was trained at {tr['rate_hz']:g} Hz")
-    orientation = cfg.mechanism.orientation if cfg is not None else "y"
+        raise ModelError(f"{source}: recorded at {rate:g} Hz, the model was trained at {tr['rate_hz']:g} Hz")
     X, w = features(acc, counts, rate, cpr, orientation=orientation)
     resolved = resolution(orientation, w.crank_hz)
     ans = model.identify(X, resolved)
-    lo, hi = tr["crank_hz_range"]
-    warnings = []
-    if not (lo * 0.97 <= w.crank_hz <= hi * 1.03):
-        warnings.append(f"crank rate {w.crank_hz:.3f} Hz is outside the training range {lo:.3f}-{hi:.3f} Hz: "
-                        "the answer is an extrapolation")
-    if cfg is not None and cfg.mechanism.orientation not in tr.get("orientations", []):
-        warnings.append(f"orientation {cfg.mechanism.orientation} was not in the training data")
+    warnings, checks = training_check(model, ans, recording_measures(acc, counts, rate, cpr, w), orientation, X)
     for j in ("B", "C"):
         ans[f"clearance_{j.lower()}_size_resolved"] = resolved[j]  # which also chose the interval's width
         if j in ans["fault"] and not resolved[j]:
@@ -487,12 +586,13 @@ def identify_recording(model: ClearanceModel, path: str | Path) -> dict[str, Any
                             f"{SIZE_RESOLVED_FROM_RPM[j].get(orientation, float('nan')):g} rpm on (model card); "
                             "trust the location and the interval, not the size")
     ans.update({
-        "recording": str(path),
+        "recording": source,
         "warnings": warnings,
         "evidence": {"windows": len(w.windows), "revolutions": round(w.revolutions, 2),
                      "crank_hz": w.crank_hz, "motor_rpm_if_belt_3_97": w.crank_hz * 60 * BELT_RATIO,
                      "steady_s": (w.steady[1] - w.steady[0]) / rate, "features": len(model.feature_names),
                      "feature_version": model.feature_version,
+                     "training_data_check": checks,
                      "model": {k: tr[k] for k in ("dataset", "identity_sha256", "engine", "crank_hz_range")}},
         "seconds": time.perf_counter() - t0,
     })

@@ -156,6 +156,8 @@ class AccelStream:
         if inst.noise and rng is None:
             raise ValueError("accel_to_volts: noise is on but no random generator was given")
         self.sigma = self.model.noise_g_rthz * self.model.sensitivity_v_per_g * math.sqrt(rate_hz / 2.0)
+        if inst.noise_scale != 1.0:  # (the default leaves sigma as it was, bit for bit)
+            self.sigma *= inst.noise_scale
         self._zi: np.ndarray | None = None  # response filter state; None until the first sample
 
     def process(self, a_mps2: np.ndarray) -> np.ndarray:

@@ -1,0 +1,225 @@
+"""What a recording is, measured, against what the identification model was trained on.
+
+An answer is only calibrated for recordings like the training runs. These are the quantities a recording
+shows by itself, measured the same way on every training run (``twin identify train`` stores their ranges
+in the model file) and on every recording answered:
+
+* **crank rate** [Hz]: the steady rate of :func:`twin.identification.features.steady_windows`;
+* **within-turn speed ripple** [% of the mean speed], harmonics 1 to :data:`RIPPLE_HARMONICS` of the crank
+  rate, from the encoder alone (:func:`measure_ripple`);
+* **noise level** [µg/√Hz]: the accelerometers' noise floor above the sensors' resonance
+  (:func:`measure_noise`);
+* **orientation**: the bench axis that points up (the recording's configuration);
+* **distance in feature space**: how many of the recording's features lie beyond Tukey's far-out fences
+  (quartiles ± 3 interquartile ranges) of the training windows' (:func:`feature_outliers`), where the model
+  stores those quartiles.
+
+**Rules** (:func:`out_of_range`). A quantity is outside when it lies beyond the training range widened by a
+margin for its measurement, stated here and never tuned on an answer:
+
+* crank rate: ±:data:`SPEED_MARGIN` (3 %, the allowance the model has always given the measured rate);
+* ripple: above the trained maximum of that harmonic by more than :data:`RIPPLE_MARGIN_PCT` (0.25 percentage
+  points: the estimator reads a known imposed ripple to within 0.05 points, test; the rest allows for the PID
+  tracking a rippled reference a little above or below it);
+* noise: beyond the trained range by more than a factor :data:`NOISE_MARGIN` (1.5: the level is a median over
+  short segments of six sensors, whose spread between recordings of one configuration is a few tens of per
+  cent, and the mechanism's own high-frequency content adds to it);
+* orientation: not among the training runs';
+* features: at least :data:`FEATURE_OUTLIER_SHARE` (5 %) of the features beyond the far-out fences (a
+  training window has each feature beyond them rarely: Tukey's "far out").
+
+**What an answer outside says.** One warning per reason, and, at each joint, the interval widened to hold every
+clearance the model was trained on at that joint (:func:`widen`): outside the training data the conformal
+guarantee (exchangeability with the training runs) no longer holds, and nothing the model stores tells how far
+its answer may stray, save that a tree ensemble answers within the values it was trained on. The widened
+interval is honest and says little; the fault location is still given, with the warnings.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+#: harmonics of the crank rate whose ripple is measured
+RIPPLE_HARMONICS = 4
+#: relative allowance on the crank rate's training range [-]
+SPEED_MARGIN = 0.03
+#: allowance above a harmonic's trained ripple [percentage points]
+RIPPLE_MARGIN_PCT = 0.25
+#: factor of allowance on the noise level's training range [-]
+NOISE_MARGIN = 1.5
+#: share of features beyond the training windows' far-out fences that makes a recording outside [-]
+FEATURE_OUTLIER_SHARE = 0.05
+#: Tukey's far-out fences: quartiles ± this many interquartile ranges
+FENCE_IQR = 3.0
+#: noise band [Hz]: above the accelerometers' 21 kHz resonance, below the 50 kHz Nyquist rate of the DAQ
+NOISE_BAND_HZ = (30_000.0, 48_000.0)
+#: samples per segment of the noise floor's median
+NOISE_SEGMENT = 1024
+STANDARD_G = 9.80665
+
+
+def measure_ripple(counts: np.ndarray, rate_hz: float, counts_per_rev: float, start: int, stop: int,
+                   harmonics: int = RIPPLE_HARMONICS) -> list[float]:
+    """Within-turn speed ripple of samples [start, stop) (whole revolutions) from the encoder [% of the mean
+    speed], harmonics 1..``harmonics`` of the crank rate.
+
+    A speed ω(t) = Ω (1 + Σ a_k sin(kΩt + p_k)) turns the crank by
+    φ(t) = φ0 + Ω t − Σ (a_k/k) cos(kΩt + p_k):
+    least squares fit φ (counts → rad) to a quadratic in t (the mean speed and a slow drift) and the cosine and
+    sine at kΩ, Ω the mean rate over the span; a_k = k · (harmonic amplitude [rad]). Ripple tied to the crank
+    angle instead of time (``crank_trace``, the drive's ``ripple_pct``) reads the same to first order in a_k."""
+    phi = np.asarray(counts[start:stop], dtype=np.float64) * (2.0 * math.pi / counts_per_rev)
+    n = phi.size
+    if n < 8:
+        return [0.0] * harmonics
+    t = np.arange(n) / rate_hz
+    T = t[-1]
+    omega = (phi[-1] - phi[0]) / T
+    tc = (t - T / 2.0) / T  # in [-1/2, 1/2]: the normal equations stay well conditioned
+    cols = [np.ones(n), tc, tc * tc]
+    for k in range(1, harmonics + 1):
+        cols += [np.cos(k * omega * t), np.sin(k * omega * t)]
+    A = np.stack(cols, axis=1)
+    coef = np.linalg.solve(A.T @ A, A.T @ (phi - phi[0]))
+    out = []
+    for k in range(1, harmonics + 1):
+        c, s = coef[3 + 2 * (k - 1)], coef[4 + 2 * (k - 1)]
+        out.append(float(100.0 * k * math.hypot(c, s)))
+    return out
+
+
+def measure_noise(acc: dict[str, np.ndarray], rate_hz: float, start: int, stop: int) -> float:
+    """Noise floor of the calibrated accelerations over samples [start, stop) [µg/√Hz]: per sensor, the
+    median over segments of :data:`NOISE_SEGMENT` samples of the root mean one-sided power density in
+    :data:`NOISE_BAND_HZ` (Hann window), the median over the sensors. Above the sensors' resonance the
+    mechanism's content is attenuated; the median over segments leaves the impacts' bursts out."""
+    hi = min(NOISE_BAND_HZ[1], 0.48 * rate_hz)
+    lo = min(NOISE_BAND_HZ[0], 0.6 * hi)
+    win = np.hanning(NOISE_SEGMENT)
+    f = np.fft.rfftfreq(NOISE_SEGMENT, 1.0 / rate_hz)
+    sel = (f >= lo) & (f < hi)
+    levels = []
+    for x in acc.values():
+        x = np.asarray(x[start:stop], dtype=np.float64)
+        m = x.size // NOISE_SEGMENT
+        if m < 1 or not sel.any():
+            continue
+        seg = x[:m * NOISE_SEGMENT].reshape(m, NOISE_SEGMENT)
+        seg = (seg - seg.mean(axis=1, keepdims=True)) * win
+        p = np.abs(np.fft.rfft(seg, axis=1)) ** 2 * (2.0 / (rate_hz * np.sum(win * win)))
+        levels.append(math.sqrt(float(np.median(p[:, sel].mean(axis=1)))))
+    if not levels:
+        return float("nan")
+    return float(np.median(levels)) / STANDARD_G * 1e6
+
+
+#: windows whose mean rate differs from the last window's by more than this share are left out of the
+#: ripple's span (the tail of a spin-up is a slow speed change, not a ripple) [-]
+RIPPLE_SPAN_TOL = 0.005
+
+
+def ripple_span(counts: np.ndarray, windows: Any) -> tuple[int, int]:
+    """Samples [start, stop) over which the ripple is measured: the steady windows, from the last one back
+    while each window's mean rate stays within :data:`RIPPLE_SPAN_TOL` of the last one's."""
+    ws = windows.windows
+    rate = [abs(float(counts[b - 1]) - float(counts[a])) / max(b - 1 - a, 1) for a, b in ws]
+    first = len(ws) - 1
+    while first > 0 and abs(rate[first - 1] / rate[-1] - 1.0) <= RIPPLE_SPAN_TOL:
+        first -= 1
+    return ws[first][0], ws[-1][1]
+
+
+def recording_measures(acc: dict[str, np.ndarray], counts: np.ndarray, rate_hz: float, counts_per_rev: float,
+                       windows: Any) -> dict[str, Any]:
+    """The measured quantities of a recording's steady windows (module docstring): crank rate [Hz], ripple
+    per harmonic [%] and noise level [µg/√Hz]."""
+    a, b = ripple_span(counts, windows)
+    return {"crank_hz": float(windows.crank_hz),
+            "ripple_pct": [round(v, 4) for v in measure_ripple(counts, rate_hz, counts_per_rev, a, b)],
+            "noise_ug_rthz": round(measure_noise(acc, rate_hz, a, b), 3)}
+
+
+def training_ranges(measures: list[dict[str, Any]], orientations: list[str], source: str) -> dict[str, Any]:
+    """Ranges of the training runs' measures (``ranges`` of a model's ``trained_on``)."""
+    r = np.array([m["ripple_pct"] for m in measures], float)
+    nz = np.array([m["noise_ug_rthz"] for m in measures], float)
+    hz = np.array([m["crank_hz"] for m in measures], float)
+    return {"source": source, "runs": len(measures),
+            "crank_hz": [float(hz.min()), float(hz.max())],
+            "ripple_pct": [[float(r[:, k].min()), float(r[:, k].max())] for k in range(r.shape[1])],
+            "noise_ug_rthz": [float(np.nanmin(nz)), float(np.nanmax(nz))],
+            "orientations": sorted(set(orientations))}
+
+
+def feature_reference(X: np.ndarray) -> dict[str, list[float]]:
+    """Quartiles of every feature over the training windows (the far-out fences' basis)."""
+    q1, q3 = np.quantile(np.asarray(X, float), [0.25, 0.75], axis=0)
+    return {"q25": [float(v) for v in q1], "q75": [float(v) for v in q3]}
+
+
+def feature_outliers(x: np.ndarray, ref: dict[str, list[float]]) -> tuple[int, list[int]]:
+    """Number of features of ``x`` (a recording's median feature vector) beyond the far-out fences of
+    ``ref``, and their indices."""
+    q1, q3 = np.asarray(ref["q25"], float), np.asarray(ref["q75"], float)
+    iqr = q3 - q1
+    out = (x < q1 - FENCE_IQR * iqr) | (x > q3 + FENCE_IQR * iqr)
+    # a feature constant over the training windows (iqr 0) is outside only where it differs
+    idx = [int(i) for i in np.flatnonzero(out)]
+    return len(idx), idx
+
+
+def out_of_range(measures: dict[str, Any], orientation: str, ranges: dict[str, Any] | None,
+                 x_median: np.ndarray | None = None, features_ref: dict[str, list[float]] | None = None,
+                 feature_names: list[str] | None = None) -> tuple[list[str], dict[str, Any]]:
+    """Warnings (one per reason) and the check's evidence for a recording's ``measures`` against the
+    model's training ``ranges`` (module docstring's rules). ``ranges`` None: only the crank rate and the
+    orientation can be checked (by the caller); nothing else is claimed."""
+    warnings: list[str] = []
+    ev: dict[str, Any] = {"measured": measures}
+    if ranges is None:
+        ev["ranges"] = "unavailable (the model stores no training ranges)"
+        return warnings, ev
+    lo, hi = ranges["crank_hz"]
+    hz = measures["crank_hz"]
+    if not (lo * (1 - SPEED_MARGIN) <= hz <= hi * (1 + SPEED_MARGIN)):
+        warnings.append(f"crank rate {hz:.3f} Hz is outside the training range {lo:.3f}-{hi:.3f} Hz: "
+                        "the answer is an extrapolation")
+    tr = ranges["ripple_pct"]
+    for k, v in enumerate(measures["ripple_pct"], start=1):
+        top = tr[k - 1][1] if k <= len(tr) else 0.0
+        if v > top + RIPPLE_MARGIN_PCT:
+            warnings.append(f"within-turn speed ripple {v:.2f} % at {k}x the crank rate (measured from the encoder) "
+                            f"is outside the training range 0-{top:.2f} % of that harmonic: the answer is an "
+                            "extrapolation")
+    nlo, nhi = ranges["noise_ug_rthz"]
+    nz = measures["noise_ug_rthz"]
+    if math.isfinite(nz) and not (nlo / NOISE_MARGIN <= nz <= nhi * NOISE_MARGIN):
+        warnings.append(f"sensor noise level {nz:.1f} ug/rtHz is outside the training range {nlo:.1f}-{nhi:.1f} "
+                        "ug/rtHz: the answer is an extrapolation")
+    if orientation not in ranges["orientations"]:
+        warnings.append(f"orientation {orientation} was not in the training data: the answer is an extrapolation")
+    if features_ref is None:
+        ev["feature_distance"] = "unavailable (the model stores no reference of its training features)"
+    elif x_median is not None:
+        n, idx = feature_outliers(x_median, features_ref)
+        ev["feature_distance"] = {"beyond_far_out_fences": n, "of": int(x_median.size)}
+        if n >= FEATURE_OUTLIER_SHARE * x_median.size:
+            names = [feature_names[i] for i in idx[:3]] if feature_names else []
+            warnings.append(f"{n} of {x_median.size} features lie beyond the training windows' far-out fences "
+                            f"(e.g. {', '.join(names)}): the recording is unlike the training data")
+    return warnings, ev
+
+
+def widen(interval: list[float], seen: Any) -> list[float]:
+    """The interval widened to hold every clearance the model was trained on at that joint [mm] (``seen``:
+    ``trained_on["clearances_mm"][joint]``, a list of values or {min, max, ...}); see the module docstring."""
+    if isinstance(seen, dict):
+        vals = [float(seen["min"]), float(seen["max"])]
+    else:
+        vals = [float(v) for v in seen if float(v) > 0]
+    if not vals:
+        return list(interval)
+    return [min(interval[0], min(vals)), max(interval[1], max(vals))]
