@@ -334,7 +334,6 @@ def taguchi_grade() -> dict:
         rows = {r["source"]: r for r in a["anova"]["rows"]}
         p = a["prediction"]
         fc = float(f_dist.ppf(0.95, 1, a["anova"]["error_dof"]))
-        ve = a["anova"]["error_ms"]
         out[name] = {
             "grand_mean": float(y.mean()), "main_effects": a["main_effects"], "delta": a["delta"], "rank": a["rank"],
             "T8_max_abs_diff": float(max(np.max(np.abs(np.array(a["main_effects"][i]) - np.array(T8[f][:3])))

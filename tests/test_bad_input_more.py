@@ -18,7 +18,6 @@ metadata.
 from __future__ import annotations
 
 import hashlib
-import json
 import os
 import shlex
 import shutil
@@ -26,7 +25,6 @@ import signal
 import stat
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -567,7 +565,7 @@ def test_replay_into_the_recordings_own_folder_deletes_nothing(tmp_path, capsys,
 
 def test_replay_may_replace_its_own_earlier_folder(tmp_path, capsys):
     """A folder holding only what a replay writes (an earlier replay) is replaced as before."""
-    from twin.bench_replay import REPLAY_FILES, replay  # noqa: F401
+    from twin.bench_replay import REPLAY_FILES  # noqa: F401
 
     from twin.util import check_output_dir
 

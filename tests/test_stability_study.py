@@ -10,7 +10,6 @@ import pytest
 from twin.channels import channel_specs
 from twin.cli import main
 from twin.config import CHANNEL_GROUPS, preset
-from twin.errors import ConfigError
 from twin.simulation import simulate_run
 from twin.studies import stability as S
 

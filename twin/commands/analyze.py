@@ -8,7 +8,6 @@ this module parses the arguments and prints its table.
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
 from twin.errors import TwinError
 

@@ -41,7 +41,7 @@ from twin.dataset.spec import SPLITS, DatasetSpec
 from twin.dataset.worker import column_specs
 from twin.errors import MissingExtraError, TwinError
 from twin.util import (_TMP_RE, FolderLock, atomic_write_json, atomic_write_bytes, check_output_dir,
-                       remove_stale_temps, remove_stale_temps_in)
+                       remove_stale_temps_in)
 
 FORMAT = "twin-dataset/2"
 #: formats this version reads: twin-dataset/1 (data files hold the channels only, no ``run_id``,

@@ -255,7 +255,7 @@ def forces(P, jon, Qg, q, v, st, Q, jout):
         torque = 0.0  # about x, on the crank
         if jj == 0:
             # journal surface at the contact point moves with v_A + ω x̂ × R n; tangent t = x̂ × n
-            tx_, ty_, tz_ = 0.0, -nz, ny
+            ty_, tz_ = -nz, ny  # tangent x-component 0
             vt = v[IA + 1] * ty_ + v[IA + 2] * tz_ + wx * P[b + J_R]
             ft = friction_force(vt, fn, P[b + J_MU], P[P_V0], P[P_V1])
             fy += ft * ty_
