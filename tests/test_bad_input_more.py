@@ -504,9 +504,9 @@ CASES: list[tuple[str, str]] = [
     ("identify clearance {ws}/rec.mcap --model {ws}/fifo.toml", "fifo.toml"),
     ("identify clearance {ws}/rec.mcap --json ''", "--json"),
     ("identify clearance {ws}/rec.mcap --json {ws}/loop1/a.json", "--json"),
-    ("identify train {ws}/info_list_ds --out {ws}/m.joblib", "JSON object"),
+    ("identify train {ws}/info_list_ds --out {ws}/m.npz", "JSON object"),
     ("identify train {ws}/missing_ds --out ''", "--out"),
-    ("identify train {ws}/missing_ds --out {ws}/{LONG}.joblib", "--out"),
+    ("identify train {ws}/missing_ds --out {ws}/{LONG}.npz", "--out"),
     ("identify evaluate {ws}/afile {ws}/missing_ds --out ''", "--out"),
     ("identify evaluate {ws}/afile {ws}/missing_ds --out {ws}/loop1", "--out"),
     # ---- study, check, calibrate

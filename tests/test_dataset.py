@@ -661,6 +661,7 @@ def test_info_lists_the_runs_with_their_labels_and_as_json(tiny, capsys, tmp_pat
     assert main(["dataset", "info", str(tiny), "--json", str(tmp_path / "i.txt")]) == 2
 
 
+@pytest.mark.long  # a few seconds: run by CI and with -m long
 def test_workers_of_a_killed_driver_do_not_outlive_it(tmp_path):
     """SIGKILL leaves the pool's workers without a driver: they stop within seconds, not linger
     (Linux: the processes are found through /proc)."""

@@ -146,6 +146,7 @@ def small(tmp_path_factory):
     return d, model
 
 
+@pytest.mark.long  # trains on the module's small dataset: run by CI and with -m long
 def test_a_model_finds_large_clearances_in_runs_it_never_saw(small, capsys):
     """0.5 mm at B, C or both against ball bearings, runs with other seeds (contact restitution,
     sensor offsets, noise): every class is told apart (a large clearance makes the mechanism knock
@@ -171,6 +172,7 @@ def test_a_model_finds_large_clearances_in_runs_it_never_saw(small, capsys):
         assert sum(c["runs"] for v in r["by_clearance"][J]["by_speed"].values() for c in v.values()) == len(j_runs)
 
 
+@pytest.mark.long  # trains on the module's small dataset: run by CI and with -m long
 def test_identify_refuses_what_it_cannot_answer(small, tmp_path, capsys):
     d, model = small
     # too little motion: the first 0.7 s of the test-6 sample (1.2 crank revolutions at speed)
@@ -207,6 +209,7 @@ def test_identify_refuses_what_it_cannot_answer(small, tmp_path, capsys):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.json", "bad.npz", "old.npz", "short.mcap"]
 
 
+@pytest.mark.long  # trains on the module's small dataset: run by CI and with -m long
 def test_several_datasets_pool_into_one_model_and_must_agree(small, tmp_path, capsys):
     """``twin identify train DS1 DS2`` pools the runs of both (the shipped model pools catalogue and
     continuous clearances); datasets of another engine, sample rate or encoder resolution are
@@ -235,6 +238,7 @@ def test_several_datasets_pool_into_one_model_and_must_agree(small, tmp_path, ca
     assert not (tmp_path / "x.npz").exists()
 
 
+@pytest.mark.long  # trains on the module's small dataset: run by CI and with -m long
 def test_a_location_only_dataset_leaves_the_size_regressors_as_they_were(small, tmp_path):
     """``--location-only DS``: its runs join the location model's training, not the size regressors'
     nor their intervals: the size answers are bit for bit those of a model trained without it."""
@@ -254,6 +258,7 @@ def test_a_location_only_dataset_leaves_the_size_regressors_as_they_were(small, 
     assert b.trained_on["windows"] == a.trained_on["windows"] + len(X) == sum(b.trained_on["classes"].values())
 
 
+@pytest.mark.long  # trains on the module's small dataset: run by CI and with -m long
 def test_an_evaluation_pools_datasets_and_keeps_each_ones_figures(small):
     """``twin identify evaluate MODEL DS1 DS2`` (a test set and its extension): the pooled report holds
     every run of both, each run answered as alone, and the location accuracy of each dataset."""
@@ -272,6 +277,7 @@ def test_an_evaluation_pools_datasets_and_keeps_each_ones_figures(small):
     assert "by_dataset" not in one
 
 
+@pytest.mark.long  # trains on the module's small dataset: run by CI and with -m long
 def test_a_trained_model_stores_its_training_ranges_and_sizes_intervals_by_difficulty(small):
     """``twin identify train`` measures, on every training run, the crank rate, the within-turn ripple from the
     encoder and the noise level, and stores their ranges, the orientations and the training windows' feature
@@ -338,6 +344,7 @@ def test_normalized_intervals_hold_their_coverage_at_every_difficulty():
     assert per.min() > 0.78, per
 
 
+@pytest.mark.long  # trains on the module's small dataset: run by CI and with -m long
 def test_out_of_range_warnings_fire_outside_each_range_and_not_inside(small):
     """Short simulated recordings through the sensor chain (reference engine, as the small model's training):
     inside every range (550 motor rpm, y vertical, no ripple, datasheet noise) no warning and the conformal

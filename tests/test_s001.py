@@ -194,6 +194,7 @@ def _recover(tmp_path, e_true: float, engine: str = "mujoco") -> float:
     return res.restitution
 
 
+@pytest.mark.long  # a few seconds: run by CI and with -m long
 def test_restitution_recovered_from_a_synthetic_noisy_recording(tmp_path):
     """Issue 18: twin identify restitution recovers a known e = 0.55 within ±0.03 from a synthetic
     recording (the twin at e = 0.55, 5 m/s² RMS white noise on the slider accelerometer, the sensor
@@ -335,6 +336,7 @@ def test_adams_impact_run_agrees_between_engines():
         assert 0.5e-5 < run["pen_C"].max() < 2e-5
 
 
+@pytest.mark.long  # a few seconds: run by CI and with -m long
 def test_impact_damping_recovered_from_a_synthetic_noisy_recording(tmp_path):
     """S001's own procedure (Table IV): sweep the IMPACT law's c_max until the slider acceleration
     matches; a noisy synthetic recording at the paper's 27 960 N s/m gives it back within 5 %

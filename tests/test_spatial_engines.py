@@ -29,6 +29,7 @@ def test_mujoco_ideal_slider_follows_closed_form():
     assert np.ptp(run["slider_position"]) > 0.002  # millimetres of stroke within the window
 
 
+@pytest.mark.long  # a few seconds: run by CI and with -m long
 def test_mujoco_first_impacts_match_reference():
     """0.1 mm radial clearance at A, B, C (S002 level 1): both engines start at speed with every joint
     centred; the joints' first contacts begin within a step of each other."""
