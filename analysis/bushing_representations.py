@@ -43,7 +43,7 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
-from twin import names as N
+from twin import names
 from twin.config import preset
 from twin.mujoco_engine.builder import build
 from twin.drive import DriveReference
@@ -76,8 +76,8 @@ def variant(kind: str, n_ring: int = 0):
 
 def n_constraints(model: mujoco.MjModel, joint: str) -> int:
     """Pairs (or tendon limits) that represent the bushing of ``joint``."""
-    pairs = sum(1 for i in range(model.npair) if model.pair(i).name.startswith(N.pair(joint)))
-    return pairs or sum(1 for i in range(model.ntendon) if model.tendon(i).name == N.pair(joint))
+    pairs = sum(1 for i in range(model.npair) if model.pair(i).name.startswith(names.pair(joint)))
+    return pairs or sum(1 for i in range(model.ntendon) if model.tendon(i).name == names.pair(joint))
 
 
 def geometric_error(model: mujoco.MjModel, kind: str) -> float:
@@ -88,10 +88,10 @@ def geometric_error(model: mujoco.MjModel, kind: str) -> float:
     d = mujoco.MjData(model)
     c = cfg.joints.radial_m("C")
     model.pair_margin[:] = 2 * c  # report distances of near, non-touching surfaces too
-    slide = model.jnt_qposadr[model.joint(N.SLIDER_SLIDE).id]
-    pin = model.geom(N.pin("C")).id
-    tendon = model.tendon(N.pair("C")).id if kind == "tendon" else None
-    site = model.site(N.pin("C")).id  # the tendon's end on the pin
+    slide = model.jnt_qposadr[model.joint(names.SLIDER_SLIDE).id]
+    pin = model.geom(names.pin("C")).id
+    tendon = model.tendon(names.pair("C")).id if kind == "tendon" else None
+    site = model.site(names.pin("C")).id  # the tendon's end on the pin
     model.geom_sameframe[pin] = 0  # geom_pos is edited below: do not reuse the body frame
     model.site_sameframe[site] = 0
     worst = 0.0

@@ -32,7 +32,7 @@ import mujoco
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_mujoco import prepare, step_time  # noqa: E402
 
-from twin import names as N  # noqa: E402
+from twin import names  # noqa: E402
 from twin.config import CHANNEL_GROUPS, preset  # noqa: E402
 from twin.mujoco_engine.builder import build  # noqa: E402
 
@@ -85,7 +85,7 @@ def main() -> None:
         b, d, ln, f = (best[(lab, k)] for k in ("before", "default", "lean", "floor"))
         print(f"| {lab} | {b:.2f} | {d:.2f} | {1 - d / b:.0%} | {ln:.2f} | {f:.2f} | {d / f:.2f} |")
     print(f"(sensors in the default B+C scene: {variants['B+C (test 12)']['default'][0].nsensor}; "
-          f"before: {variants['B+C (test 12)']['before'][0].nsensor}; pair names e.g. {N.pair('C', 1)})")
+          f"before: {variants['B+C (test 12)']['before'][0].nsensor}; pair names e.g. {names.pair('C', 1)})")
 
 
 if __name__ == "__main__":

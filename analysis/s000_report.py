@@ -37,16 +37,16 @@ PAPER_HOLDOUT = {"s000_example1": (3.2e4, 3.0e4), "s000_example2": (4.5e4, 4.4e4
 
 
 def run(name: str, work: Path, workers: int, engine: str | None = None) -> dict:
-    from twin.studies import doe as D
+    from twin.studies import doe as doe_study
 
-    spec = D.load_doe(SPECS / f"{name}.toml")
+    spec = doe_study.load_doe(SPECS / f"{name}.toml")
     tag = name
     if engine is not None and engine != spec.dataset.engine:
         spec = dataclasses.replace(spec, dataset=dataclasses.replace(spec.dataset, engine=engine,
                                                                      name=spec.dataset.name + "-" + engine))
         tag = f"{name}_{engine}"
     out = work / tag
-    res = D.run_study(spec, out, workers, progress=False, log=lambda m: print(f"[{tag}] {m}", file=sys.stderr))
+    res = doe_study.run_study(spec, out, workers, progress=False, log=lambda m: print(f"[{tag}] {m}", file=sys.stderr))
     dst = RES / tag
     dst.mkdir(parents=True, exist_ok=True)
     for f in ["doe.md", "doe.json", *res["figures"]]:

@@ -8,31 +8,31 @@ import numpy as np
 import pytest
 
 from twin.cli import main
-from twin.studies import accuracy as A
+from twin.studies import accuracy as accuracy_study
 
 
 def test_pareto_front_by_hand():
     # (cost, error): (1, 5) and (2, 2) and (4, 1) trade; (3, 3) is dominated by (2, 2);
     # (2, 2.5) is dominated by (2, 2) (same cost, worse)
     pts = [(1, 5), (2, 2), (3, 3), (4, 1), (2, 2.5)]
-    assert A.pareto_front(pts) == [True, True, False, True, False]
+    assert accuracy_study.pareto_front(pts) == [True, True, False, True, False]
     # more than one error: a point better in one error survives
-    assert A.pareto_front([(1, 1, 5), (1, 2, 1), (2, 2, 5)]) == [True, True, False]
+    assert accuracy_study.pareto_front([(1, 1, 5), (1, 2, 1), (2, 2, 5)]) == [True, True, False]
 
 
 def test_score_is_the_worst_ratio_to_target():
-    m = {k: 0.0 for k in A.METRICS}
-    assert A.score(m) == 0.0
+    m = {k: 0.0 for k in accuracy_study.METRICS}
+    assert accuracy_study.score(m) == 0.0
     m["band_db"] = 3.0  # twice the 1.5 dB target
     m["rms_rod"] = 0.015  # half the 3 % target
-    assert A.score(m) == pytest.approx(2.0)
+    assert accuracy_study.score(m) == pytest.approx(2.0)
 
 
 def test_settings_reject_tests_without_clearance():
     with pytest.raises(Exception, match="--tests"):
-        A.StudySettings(tests=(1,))
+        accuracy_study.StudySettings(tests=(1,))
     with pytest.raises(Exception, match="window_s"):
-        A.StudySettings(window_s=0.01)
+        accuracy_study.StudySettings(window_s=0.01)
 
 
 @pytest.fixture(scope="module")
@@ -48,7 +48,7 @@ def test_quick_study_writes_table_json_and_plots(quick):
     assert "**mujoco default**" in md
     for name in data["figures"]:
         assert (out / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert {f"work_precision_{k}.png" for k in [*A.METRICS, "score"]} == set(data["figures"])
+    assert {f"work_precision_{k}.png" for k in [*accuracy_study.METRICS, "score"]} == set(data["figures"])
     assert data["settings"]["tests"] == [6, 12]
 
 
@@ -57,19 +57,19 @@ def test_the_reference_at_ten_times_the_truths_step_meets_every_target(quick):
     window within its stated target (``TARGETS``: impacts and peak force 10 %, RMS 3 %, band 1.5 dB)."""
     _, data = quick
     ref = next(r for r in data["summary"] if r["key"] == "reference h=1e-5")
-    for k, target in A.TARGETS.items():
+    for k, target in accuracy_study.TARGETS.items():
         assert ref["worst"][k] <= target, k
 
 
 def test_twin_default_meets_every_target_against_the_converged_reference(quick):
     """The twin's default against the converged reference (h = 1e-6), worst window of tests 6 and
     12: impact count and peak contact force within 10 %, accelerometer RMS within 3 %, band energy
-    0.5-5 kHz within 1.5 dB (the study's stated targets, ``A.TARGETS``), so its score is <= 1."""
+    0.5-5 kHz within 1.5 dB (the study's stated targets, ``accuracy_study.TARGETS``), so its score is <= 1."""
     _, data = quick
     d = next(r for r in data["summary"] if r["key"] == data["default"])
-    for k, target in A.TARGETS.items():
+    for k, target in accuracy_study.TARGETS.items():
         assert d["worst"][k] <= target, k
-    assert A.score(d["worst"]) <= 1.0
+    assert accuracy_study.score(d["worst"]) <= 1.0
     # timing is measured: per simulated second, positive and finite
     assert 0 < d["wall_per_sim_s"] < 60
 
@@ -77,7 +77,7 @@ def test_twin_default_meets_every_target_against_the_converged_reference(quick):
 def test_pareto_flags_are_consistent(quick):
     _, data = quick
     tw = [r for r in data["summary"] if r["engine"] == "mujoco"]
-    pts = np.array([(r["wall_per_sim_s"], *(r["mean"][k] for k in A.FRONT_METRICS)) for r in tw])
+    pts = np.array([(r["wall_per_sim_s"], *(r["mean"][k] for k in accuracy_study.FRONT_METRICS)) for r in tw])
     for i, r in enumerate(tw):
         others = np.delete(pts, i, axis=0)
         dominated = np.any(np.all(others <= pts[i], axis=1) & np.any(others < pts[i], axis=1))

@@ -379,8 +379,8 @@ def test_failed_runs_are_recorded_and_a_full_disk_stops_with_one_line(tmp_path, 
     refuses (full disk) stops the generation with one line, keeping what is done."""
     import errno
 
-    import twin.dataset.generate as G
-    import twin.dataset.storage as S
+    import twin.dataset.generate as dataset_generate
+    import twin.dataset.storage as storage
     from twin.dataset.worker import run_one
     from twin.errors import SimulationError
     from twin.simulation import simulate as real_simulate
@@ -396,16 +396,16 @@ def test_failed_runs_are_recorded_and_a_full_disk_stops_with_one_line(tmp_path, 
             raise SimulationError("diverged at t = 0.1 s (test)")
         return real_simulate(cfg, sinks, **kw)
 
-    real_write = S.ParquetRunWriter.write
+    real_write = storage.ParquetRunWriter.write
 
     def full_write(self, chunk):
         if self.run_id == full_id:
             raise OSError(errno.ENOSPC, "No space left on device")
         return real_write(self, chunk)
 
-    monkeypatch.setattr(G, "executor", inline)
+    monkeypatch.setattr(dataset_generate, "executor", inline)
     monkeypatch.setattr("twin.simulation.simulate", flaky_simulate)
-    monkeypatch.setattr(S.ParquetRunWriter, "write", full_write)
+    monkeypatch.setattr(storage.ParquetRunWriter, "write", full_write)
     out = tmp_path / "ds"
     rc = main(["dataset", "generate", str(TINY), "--out", str(out), "--workers", "1"])
     err = capsys.readouterr().err
@@ -417,7 +417,7 @@ def test_failed_runs_are_recorded_and_a_full_disk_stops_with_one_line(tmp_path, 
     info = json.loads((out / "info.json").read_text())
     assert not info["complete"] and info["runs"]["failed"] == 1
     # room again: the same command finishes the three missing runs, the failed one stays failed
-    monkeypatch.setattr(S.ParquetRunWriter, "write", real_write)
+    monkeypatch.setattr(storage.ParquetRunWriter, "write", real_write)
     assert main(["dataset", "generate", str(TINY), "--out", str(out), "--workers", "1"]) == 0
     info = json.loads((out / "info.json").read_text())
     assert info["complete"] and info["runs"] == {"planned": 8, "ok": 7, "failed": 1, "pending": 0}

@@ -18,7 +18,7 @@ import pytest
 from twin.cli import main
 from twin.config import named_preset
 from twin.dataset.design import design_points
-from twin.studies import doe as D
+from twin.studies import doe as doe_study
 
 SPEC = """
 [dataset]
@@ -40,10 +40,10 @@ settle_s = 0.01
 """
 
 
-def _doe(text: str = SPEC) -> D.DoeSpec:
+def _doe(text: str = SPEC) -> doe_study.DoeSpec:
     import tomllib
 
-    return D.parse_doe(tomllib.loads(text))
+    return doe_study.parse_doe(tomllib.loads(text))
 
 
 # ------------------------------------------------------------------------- design
@@ -61,17 +61,17 @@ def test_doe_design_is_a_latin_hypercube():
         frac = (np.log(x / lo) / math.log(hi / lo)) if f.scale == "log" else (x - lo) / (hi - lo)
         strata = np.minimum((frac * n).astype(int), n - 1)
         assert sorted(strata) == list(range(n)), f.name
-    assert D.is_latin_hypercube(D.to_unit(doe.factors, np.array([[p[f.name] for f in doe.factors] for p in pts])))
+    assert doe_study.is_latin_hypercube(doe_study.to_unit(doe.factors, np.array([[p[f.name] for f in doe.factors] for p in pts])))
     bad = np.random.default_rng(0).random((12, 3))
     bad[:, 0] = np.linspace(0.01, 0.49, 12)  # every point in the lower half of factor 0: not one per stratum
-    assert not D.is_latin_hypercube(bad)
+    assert not doe_study.is_latin_hypercube(bad)
 
 
 def test_unit_map_round_trip():
     doe = _doe()
     u = np.random.default_rng(1).random((20, 3))
-    assert np.allclose(D.to_unit(doe.factors, D.from_unit(doe.factors, u)), u, atol=1e-12)
-    x = D.from_unit(doe.factors, np.array([[0.5, 0.5, 0.5]]))[0]
+    assert np.allclose(doe_study.to_unit(doe.factors, doe_study.from_unit(doe.factors, u)), u, atol=1e-12)
+    x = doe_study.from_unit(doe.factors, np.array([[0.5, 0.5, 0.5]]))[0]
     assert x[1] == pytest.approx(math.sqrt(3.3e8 * 3.3e11))  # log factor: the geometric mean at the centre
 
 
@@ -90,7 +90,7 @@ def _lhs(n, d, seed):
 def test_kriging_interpolates_its_training_points():
     u = _lhs(15, 2, 4)
     y = _f(u)
-    k = D.Kriging(seed=0).fit(u, y)
+    k = doe_study.Kriging(seed=0).fit(u, y)
     assert np.max(np.abs(k.predict(u) - y)) < 1e-6 * np.ptp(y)
     _, s = k.predict(u, return_std=True)
     assert np.max(s) < 1e-3 * np.std(y)
@@ -100,7 +100,7 @@ def test_kriging_interpolates_its_training_points():
     assert len(k.length_scales) == 2  # anisotropic: one length scale per factor
     # the log transform (responses spanning decades) interpolates too and stays positive
     y3 = np.exp(4.0 * _f(u))
-    kl = D.Kriging(seed=0, log=True).fit(u, y3)
+    kl = doe_study.Kriging(seed=0, log=True).fit(u, y3)
     assert np.max(np.abs(kl.predict(u) / y3 - 1)) < 1e-6
     assert np.all(kl.predict(t) > 0)
 
@@ -111,7 +111,7 @@ def test_leave_one_out_is_computed_correctly():
     and, without normalisation, Dubrule's closed form y_i − [K⁻¹y]_i/[K⁻¹]_ii equals the refits."""
     u = _lhs(14, 2, 6)
     y = _f(u)
-    k = D.Kriging(seed=0).fit(u, y)
+    k = doe_study.Kriging(seed=0).fit(u, y)
     loo = k.loo()
     ker = k.kernel
     n = len(y)
@@ -123,7 +123,7 @@ def test_leave_one_out_is_computed_correctly():
         ref[i] = mu + sd * ker(u[i:i + 1], u[m])[0] @ np.linalg.solve(K, (y[m] - mu) / sd)
     assert np.allclose(loo, ref, rtol=1e-8, atol=1e-8 * np.ptp(y))
     # a smooth function: small LOO errors, larger than the (zero) training error
-    st = D.loo_stats(y, loo)
+    st = doe_study.loo_stats(y, loo)
     assert 0 < st["rmse_over_std"] < 0.1
     # closed form (zero-mean GP, fixed kernel) against explicit refits
     Kf = ker(u) + 1e-10 * np.eye(n)
@@ -131,19 +131,19 @@ def test_leave_one_out_is_computed_correctly():
     brute = np.array([ker(u[i:i + 1], u[np.arange(n) != i])[0]
                       @ np.linalg.solve(Kf[np.ix_(np.arange(n) != i, np.arange(n) != i)], z[np.arange(n) != i])
                       for i in range(n)])
-    assert np.allclose(D.loo_closed_form(Kf, z), brute, atol=1e-6 * np.ptp(z))
+    assert np.allclose(doe_study.loo_closed_form(Kf, z), brute, atol=1e-6 * np.ptp(z))
 
 
 # ---------------------------------------------------------------------- optimizer
 def test_optimizer_finds_the_known_optimum_of_a_function():
-    res = D.optimize(lambda u: (u[0] - 0.3) ** 2 + 2.0 * (u[1] - 0.7) ** 2 + 1.0, 2, "min", seed=0)
+    res = doe_study.optimize(lambda u: (u[0] - 0.3) ** 2 + 2.0 * (u[1] - 0.7) ** 2 + 1.0, 2, "min", seed=0)
     assert res["u"] == pytest.approx([0.3, 0.7], abs=1e-5)
     assert res["value"] == pytest.approx(1.0, abs=1e-9)
-    res = D.optimize(lambda u: -((u[0] - 0.2) ** 2) + 5.0, 1, "max", seed=0)
+    res = doe_study.optimize(lambda u: -((u[0] - 0.2) ** 2) + 5.0, 1, "max", seed=0)
     assert res["u"][0] == pytest.approx(0.2, abs=1e-5) and res["value"] == pytest.approx(5.0, abs=1e-9)
     # a multimodal function: the global minimum of Rastrigin on [-5.12, 5.12]² (the origin), not a local one
     ras = lambda u: float(np.sum((10.24 * u - 5.12) ** 2 - 10 * np.cos(2 * np.pi * (10.24 * u - 5.12))) + 20)  # noqa: E731
-    res = D.optimize(ras, 2, "min", seed=1)
+    res = doe_study.optimize(ras, 2, "min", seed=1)
     assert res["u"] == pytest.approx([0.5, 0.5], abs=1e-4) and res["value"] == pytest.approx(0.0, abs=1e-6)
 
 
@@ -153,15 +153,15 @@ def test_optimizer_finds_the_known_optimum_of_a_known_surrogate():
     g = np.linspace(0, 1, 6)
     u = np.array([[a, b] for a in g for b in g])
     y = (u[:, 0] - 0.3) ** 2 + 2.0 * (u[:, 1] - 0.7) ** 2 + 1.0
-    k = D.Kriging(seed=0).fit(u, y)
-    res = D.optimize(lambda v: k.predict(v)[0], 2, "min", seed=0)
+    k = doe_study.Kriging(seed=0).fit(u, y)
+    res = doe_study.optimize(lambda v: k.predict(v)[0], 2, "min", seed=0)
     assert res["u"] == pytest.approx([0.3, 0.7], abs=0.01)
     assert res["value"] == pytest.approx(1.0, abs=1e-3)
 
 
 def test_sobol_indices_of_a_known_function():
     """f = u0 + 0.1 u1: first-order indices 1/1.01 and 0.01/1.01 (variances 1/12 and 0.01/12)."""
-    s = D.sobol(lambda x: x[:, 0] + 0.1 * x[:, 1], 2, seed=0)
+    s = doe_study.sobol(lambda x: x[:, 0] + 0.1 * x[:, 1], 2, seed=0)
     assert s["first_order"][0] == pytest.approx(1 / 1.01, abs=0.01)
     assert s["first_order"][1] == pytest.approx(0.01 / 1.01, abs=0.01)
 

@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 from mujoco import rollout
 
-from twin import names as N
+from twin import names
 from twin.config import preset
 from twin.drive import DriveReference
 from twin.mujoco_engine.engine import MujocoEngine
@@ -60,7 +60,7 @@ def _sensor_runs(test_id: int, integrator: str, steps: int):
 def test_position_stage_friction_sensors_equal_the_velocity_stage_computation(integrator):
     model, old, out = _sensor_runs(12, integrator, 2000)
     user = [i for i in range(model.nsensor) if model.sensor_type[i] == mujoco.mjtSensor.mjSENS_USER]
-    assert [model.sensor(i).name for i in user] == [N.sensor_friction(j) for j in "ABC"]
+    assert [model.sensor(i).name for i in user] == [names.sensor_friction(j) for j in "ABC"]
     assert all(model.sensor_needstage[i] == mujoco.mjtStage.mjSTAGE_POS for i in user)
     assert all(old.sensor_needstage[i] == mujoco.mjtStage.mjSTAGE_VEL for i in user)
     for i in user:  # the pins slide with friction in these steps: the comparison is not of zeros

@@ -528,15 +528,15 @@ def _without_the_ripple_check(m):
 def test_an_answer_at_C_where_the_size_is_not_resolved_says_so(tmp_path, monkeypatch):
     """The test-6 sample (C, y vertical, 751 motor rpm) is resolved by the measured map; with the
     threshold for y put over its speed the same answer carries the flag and a warning."""
-    import twin.identification.model as M
+    import twin.identification.model as id_model
     from twin.commands.identify import default_model_path
 
-    m = _without_the_ripple_check(M.ClearanceModel.load(default_model_path()))
-    a = M.identify_recording(m, REC / "test6_synthetic.mcap")
+    m = _without_the_ripple_check(id_model.ClearanceModel.load(default_model_path()))
+    a = id_model.identify_recording(m, REC / "test6_synthetic.mcap")
     assert a["fault"] == "C" and a["clearance_c_size_resolved"] and a["warnings"] == []
     assert a["clearance_b_size_resolved"]
-    monkeypatch.setitem(M.SIZE_RESOLVED_FROM_RPM["C"], "y", 800.0)
-    b = M.identify_recording(m, REC / "test6_synthetic.mcap")
+    monkeypatch.setitem(id_model.SIZE_RESOLVED_FROM_RPM["C"], "y", 800.0)
+    b = id_model.identify_recording(m, REC / "test6_synthetic.mcap")
     assert not b["clearance_c_size_resolved"] and b["clearance_c_mm"] == a["clearance_c_mm"]
     assert len(b["warnings"]) == 1 and "not resolved at 751 motor rpm with y vertical" in b["warnings"][0]
 
@@ -548,7 +548,7 @@ def test_an_answer_at_B_below_its_map_says_so_and_takes_the_wide_interval(monkey
     of B's unresolved half width around the same size; C is untouched."""
     import dataclasses
 
-    import twin.identification.model as M
+    import twin.identification.model as id_model
     from twin.commands.identify import default_model_path
 
     class BC:
@@ -557,13 +557,13 @@ def test_an_answer_at_B_below_its_map_says_so_and_takes_the_wide_interval(monkey
         def predict_proba(self, X):
             return np.tile([0.9, 0.05, 0.05, 0.0], (len(X), 1))
 
-    shipped = _without_the_ripple_check(M.ClearanceModel.load(default_model_path()))
+    shipped = _without_the_ripple_check(id_model.ClearanceModel.load(default_model_path()))
     m = dataclasses.replace(shipped, classifier=BC())
     assert "B_unresolved" in m.interval_log10 and m.interval_log10["B_unresolved"] > m.interval_log10["B"]
-    a = M.identify_recording(m, REC / "test6_synthetic.mcap")
+    a = id_model.identify_recording(m, REC / "test6_synthetic.mcap")
     assert a["fault"] == "BC" and a["clearance_b_size_resolved"] and a["warnings"] == []
-    monkeypatch.setitem(M.SIZE_RESOLVED_FROM_RPM["B"], "y", 800.0)
-    b = M.identify_recording(m, REC / "test6_synthetic.mcap")
+    monkeypatch.setitem(id_model.SIZE_RESOLVED_FROM_RPM["B"], "y", 800.0)
+    b = id_model.identify_recording(m, REC / "test6_synthetic.mcap")
     assert not b["clearance_b_size_resolved"] and b["clearance_c_size_resolved"]
     assert len(b["warnings"]) == 1 and "size at B is not resolved at 751 motor rpm" in b["warnings"][0]
     size, w = a["clearance_b_mm"], m.interval_log10["B_unresolved"]

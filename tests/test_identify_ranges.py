@@ -16,7 +16,7 @@ import math
 import numpy as np
 import pytest
 
-from twin.identification import ranges as R
+from twin.identification import ranges as id_ranges
 
 RATE = 100_000.0
 CPR = 32768.0
@@ -32,7 +32,7 @@ def test_a_known_ripple_reads_back_from_quantized_encoder_counts(k, pct, phase):
     t = np.arange(n + 1) / RATE
     phi = W * t - (pct / 100.0 / k) * np.cos(k * W * t + phase) + 0.3
     counts = np.floor(phi / (2 * math.pi) * CPR)
-    got = R.measure_ripple(counts, RATE, CPR, 0, n)
+    got = id_ranges.measure_ripple(counts, RATE, CPR, 0, n)
     assert got[k - 1] == pytest.approx(pct, abs=0.05)
     assert all(v < 0.05 for i, v in enumerate(got) if i != k - 1)
 
@@ -47,7 +47,7 @@ def test_a_ripple_tied_to_the_crank_angle_reads_its_amplitudes_after_a_spin_up()
     t, phi = crank_trace(750, 3.97, 1.5, RATE, ramp_s=0.3, rest_s=0.0, ripple=(0.015, 0.025), ripple_phase=(0.4, 1.3))
     counts = np.floor(phi / (2 * math.pi) * CPR)
     w = steady_windows(counts, RATE, CPR)
-    got = R.measure_ripple(counts, RATE, CPR, *R.ripple_span(counts, w))
+    got = id_ranges.measure_ripple(counts, RATE, CPR, *id_ranges.ripple_span(counts, w))
     assert got[0] == pytest.approx(1.5, abs=0.05) and got[1] == pytest.approx(2.5, abs=0.05)
     assert got[2] < 0.1 and got[3] < 0.1
 
@@ -58,9 +58,9 @@ def test_white_noise_of_a_known_density_reads_that_density():
     under 1 %)."""
     rng = np.random.default_rng(3)
     D = 30e-6
-    sigma = D * math.sqrt(RATE / 2) * R.STANDARD_G
+    sigma = D * math.sqrt(RATE / 2) * id_ranges.STANDARD_G
     acc = {f"AC{i}": sigma * rng.standard_normal(100_000) for i in range(1, 7)}
-    assert R.measure_noise(acc, RATE, 0, 100_000) == pytest.approx(30.0, rel=0.05)
+    assert id_ranges.measure_noise(acc, RATE, 0, 100_000) == pytest.approx(30.0, rel=0.05)
 
 
 # ------------------------------------------------------------------ rules
@@ -81,7 +81,7 @@ def test_each_rule_warns_outside_its_range_and_not_inside(change, reason):
     m = {"crank_hz": 2.2, "ripple_pct": [0.0, 0.0, 0.0, 0.0], "noise_ug_rthz": 30.0}
     orient = change.pop("orientation", "y") if "orientation" in change else "y"
     m.update(change)
-    warnings, ev = R.out_of_range(m, orient, RANGES)
+    warnings, ev = id_ranges.out_of_range(m, orient, RANGES)
     if reason is None:
         assert warnings == []
     else:
@@ -91,20 +91,20 @@ def test_each_rule_warns_outside_its_range_and_not_inside(change, reason):
 
 def test_the_feature_distance_counts_features_beyond_the_far_out_fences():
     X = np.random.default_rng(0).normal(size=(400, 40))
-    ref = R.feature_reference(X)
+    ref = id_ranges.feature_reference(X)
     x = np.median(X[:20], axis=0)
     m = {"crank_hz": 2.2, "ripple_pct": [0.0] * 4, "noise_ug_rthz": 30.0}
-    assert R.out_of_range(m, "y", RANGES, x, ref)[0] == []
+    assert id_ranges.out_of_range(m, "y", RANGES, x, ref)[0] == []
     x[:2] += 100.0  # 2 of 40 features far out: 5 %
-    w, ev = R.out_of_range(m, "y", RANGES, x, ref, [f"f{i}" for i in range(40)])
+    w, ev = id_ranges.out_of_range(m, "y", RANGES, x, ref, [f"f{i}" for i in range(40)])
     assert ev["feature_distance"] == {"beyond_far_out_fences": 2, "of": 40}
     assert len(w) == 1 and "f0, f1" in w[0]
 
 
 def test_the_widened_interval_holds_every_clearance_trained_on():
-    assert R.widen([0.3, 0.6], {"min": 0.02, "max": 1.0, "distinct": 500, "ball_bearing": True}) == [0.02, 1.0]
-    assert R.widen([0.3, 0.6], [0.0, 0.1, 0.5]) == [0.1, 0.6]
-    assert R.widen([0.3, 0.6], [0.0]) == [0.3, 0.6]
+    assert id_ranges.widen([0.3, 0.6], {"min": 0.02, "max": 1.0, "distinct": 500, "ball_bearing": True}) == [0.02, 1.0]
+    assert id_ranges.widen([0.3, 0.6], [0.0, 0.1, 0.5]) == [0.1, 0.6]
+    assert id_ranges.widen([0.3, 0.6], [0.0]) == [0.3, 0.6]
 
 
 # ------------------------------------------------------------------ the drive's ripple program

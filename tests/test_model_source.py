@@ -44,7 +44,7 @@ import numpy as np
 import pytest
 
 from twin import model_xml
-from twin import names as N
+from twin import names as mjcf_names
 from twin.config import BenchConfig
 from twin.errors import EngineUnavailableError, ModelError
 from twin.mujoco_engine import collider
@@ -72,7 +72,7 @@ def ideal() -> mujoco.MjModel:
 
 def test_the_base_model_is_package_data():
     path = _shipped_xml()
-    assert path.is_file() and N.BASE_XML == path
+    assert path.is_file() and mjcf_names.BASE_XML == path
     assert model_xml.defaults().path == str(path)
 
 
@@ -84,7 +84,7 @@ def test_the_shipped_xml_compiles_and_steps_without_warnings(base):
     assert [data.warning[i].number for i in range(len(data.warning))] == [0] * len(data.warning)
     assert np.isfinite(data.qpos).all() and np.isfinite(data.sensordata).all()
     # the loop closure holds: the slider pin stays on the rod eye
-    gap = data.site_xpos[base.site(N.pin("C")).id] - data.site_xpos[base.site(N.bushing("C")).id]
+    gap = data.site_xpos[base.site(mjcf_names.pin("C")).id] - data.site_xpos[base.site(mjcf_names.bushing("C")).id]
     assert np.linalg.norm(gap) < 1e-8
 
 
@@ -106,7 +106,7 @@ def _dry_friction(model: mujoco.MjModel, joint: str) -> float:
     """A joint's dry friction force: MuJoCo's frictionloss, or the native guide friction's force
     (``mujoco.guide_friction = "native"``: joint user data, twin.names.GUIDE_USERDATA_FIELDS)."""
     j = model.joint(joint)
-    native = model.nuser_jnt and j.user[0] == N.GUIDE_MAGIC
+    native = model.nuser_jnt and j.user[0] == mjcf_names.GUIDE_MAGIC
     return float(model.dof_frictionloss[j.dofadr[0]] + (j.user[1] if native else 0.0))
 
 
@@ -129,11 +129,11 @@ def _compare(base: mujoco.MjModel, m: mujoco.MjModel, skip_geoms: tuple[str, ...
     _assert_same({n: np.array(_dry_friction(base, n)) for n in joints}, {n: np.array(_dry_friction(m, n)) for n in joints},
                  "dof dry friction (frictionloss or native guide friction)")
     if m.nuser_jnt:
-        assert m.nuser_jnt == len(N.GUIDE_USERDATA_FIELDS)
-        guide = m.joint(N.SLIDER_SLIDE)
-        assert m.dof_frictionloss[guide.dofadr[0]] == 0 and guide.user[0] == N.GUIDE_MAGIC
+        assert m.nuser_jnt == len(mjcf_names.GUIDE_USERDATA_FIELDS)
+        guide = m.joint(mjcf_names.SLIDER_SLIDE)
+        assert m.dof_frictionloss[guide.dofadr[0]] == 0 and guide.user[0] == mjcf_names.GUIDE_MAGIC
     geoms = [g for g in _names(base, "geom", base.ngeom) if g not in skip_geoms]
-    physical = [N.pin("B"), N.pin("C"), N.bushing("B"), N.bushing("C")]
+    physical = [mjcf_names.pin("B"), mjcf_names.pin("C"), mjcf_names.bushing("B"), mjcf_names.bushing("C")]
     for attr in ("size", "pos", "quat", "user", "type", "contype", "conaffinity", "group"):
         exact = {g: v for g, v in _by_name(base, "geom", geoms, attr).items() if g in physical}
         _assert_same(exact, {g: v for g, v in _by_name(m, "geom", geoms, attr).items() if g in physical},
@@ -154,7 +154,7 @@ def _compare(base: mujoco.MjModel, m: mujoco.MjModel, skip_geoms: tuple[str, ...
     # the builder switches contact off in scenes without a clearance joint; nothing else differs
     contact = int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
     assert base.opt.disableflags & ~contact == m.opt.disableflags & ~contact
-    assert base.nuser_geom == m.nuser_geom == len(N.BORE_USERDATA_FIELDS)
+    assert base.nuser_geom == m.nuser_geom == len(mjcf_names.BORE_USERDATA_FIELDS)
     if equality:
         eqs = _names(base, "equality", base.neq)
         assert eqs == _names(m, "equality", m.neq)
@@ -168,24 +168,24 @@ def test_the_base_xml_is_the_builders_ideal_default_model(base, ideal):
     # sensors too (computed after the rollout by default, mujoco.accelerometers = "posthoc")
     assert ideal.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_CONTACT
     assert set(_names(base, "sensor", base.nsensor)) - set(_names(ideal, "sensor", ideal.nsensor)) == {
-        n for jt in ("A", "B", "C") for n in (N.sensor_ecc(jt), N.sensor_contact(jt), N.sensor_friction(jt))} | \
-        set(N.ACCEL_SENSORS)
+        n for jt in ("A", "B", "C") for n in (mjcf_names.sensor_ecc(jt), mjcf_names.sensor_contact(jt), mjcf_names.sensor_friction(jt))} | \
+        set(mjcf_names.ACCEL_SENSORS)
     with_sensors = build(IDEAL.replace(**{"mujoco.accelerometers": "sensor"}))[1]
-    assert set(N.ACCEL_SENSORS) <= set(_names(with_sensors, "sensor", with_sensors.nsensor))
+    assert set(mjcf_names.ACCEL_SENSORS) <= set(_names(with_sensors, "sensor", with_sensors.nsensor))
 
 
 def test_the_default_clearance_variant_changes_only_joint_c(base):
     """Test 6 (C at 0.1 mm): the same model but for the items of the module docstring."""
     cfg = BenchConfig()
     m = build(cfg)[1]
-    _compare(base, m, skip_geoms=(N.bushing("C"), N.bushing_ring("C")), equality=False)
+    _compare(base, m, skip_geoms=(mjcf_names.bushing("C"), mjcf_names.bushing_ring("C")), equality=False)
     assert m.neq == 0 and m.npair == len(build(cfg)[2].contacts["C"].terms)
-    bush = m.geom(N.bushing("C"))
+    bush = m.geom(mjcf_names.bushing("C"))
     assert bush.size[0] == pytest.approx(cfg.joints.pin_radius_m + 0.05e-3, abs=1e-15)
-    user = N.read_bore_userdata(bush.user)
+    user = mjcf_names.read_bore_userdata(bush.user)
     assert {k: user[k] for k in ("marker", "mu0", "v0", "v1")} == {
-        k: v for k, v in N.read_bore_userdata(base.geom(N.bushing("C")).user).items() if k in ("marker", "mu0", "v0", "v1")}
-    assert user["law"] == N.BORE_LAWS["hysteresis"] and user["stiffness"] > 0 and user["slot"] == 0
+        k: v for k, v in mjcf_names.read_bore_userdata(base.geom(mjcf_names.bushing("C")).user).items() if k in ("marker", "mu0", "v0", "v1")}
+    assert user["law"] == mjcf_names.BORE_LAWS["hysteresis"] and user["stiffness"] > 0 and user["slot"] == 0
     assert m.nuserdata == 1
 
 
@@ -206,7 +206,7 @@ def test_config_defaults_are_the_parsed_xml():
     assert {k: (v.body, v.position_m, v.axis) for k, v in cfg.sensors.accelerometers.items()} == {
         k: (v.body, v.position_m, v.axis) for k, v in d.accelerometers}
     assert cfg.simulation.timestep_s == d.timestep_s
-    assert d.bushing_userdata == tuple(N.bore_userdata(mu0=d.mu0, v0=d.v0_mps, v1=d.v1_mps))
+    assert d.bushing_userdata == tuple(mjcf_names.bore_userdata(mu0=d.mu0, v0=d.v0_mps, v1=d.v1_mps))
 
 
 def test_mujoco_reads_the_xml_as_the_parser_does(base):
@@ -216,25 +216,25 @@ def test_mujoco_reads_the_xml_as_the_parser_does(base):
     for name in ("crank", "rod", "slider"):
         b, p = base.body(name), getattr(cfg.bodies, name)
         assert (b.mass[0], b.ipos[0], b.inertia[2]) == (p.mass_kg, p.x_g_m, p.inertia_kgm2)
-    assert base.geom(N.pin("B")).pos[0] == cfg.bodies.crank.length_m
-    assert base.geom(N.bushing("C")).pos[0] == cfg.bodies.rod.length_m
-    assert 2 * base.geom(N.SLIDER_BLOCK).size[0] == cfg.bodies.slider.length_m
-    assert 2 * base.geom(N.pin("C")).size[0] == cfg.joints.pin_diameter_m
-    assert 2 * base.geom(N.bushing("B")).size[1] == cfg.joints.bushing_length_m
+    assert base.geom(mjcf_names.pin("B")).pos[0] == cfg.bodies.crank.length_m
+    assert base.geom(mjcf_names.bushing("C")).pos[0] == cfg.bodies.rod.length_m
+    assert 2 * base.geom(mjcf_names.SLIDER_BLOCK).size[0] == cfg.bodies.slider.length_m
+    assert 2 * base.geom(mjcf_names.pin("C")).size[0] == cfg.joints.pin_diameter_m
+    assert 2 * base.geom(mjcf_names.bushing("B")).size[1] == cfg.joints.bushing_length_m
     assert tuple(base.opt.gravity) == cfg.mechanism.gravity_vector
-    assert base.geom(N.pin("C")).pos[1] == cfg.mechanism.d_off_m
-    dof = base.joint(N.SLIDER_SLIDE).dofadr[0]
+    assert base.geom(mjcf_names.pin("C")).pos[1] == cfg.mechanism.d_off_m
+    dof = base.joint(mjcf_names.SLIDER_SLIDE).dofadr[0]
     assert base.dof_frictionloss[dof] == cfg.mechanism.guide_friction_n
     assert tuple(base.dof_solref[dof]) == cfg.mujoco.guide_solreffriction
-    user = N.read_bore_userdata(base.geom(N.bushing("B")).user)
+    user = mjcf_names.read_bore_userdata(base.geom(mjcf_names.bushing("B")).user)
     assert (user["mu0"], user["v0"], user["v1"]) == (cfg.contact.mu0, cfg.contact.v0_mps, cfg.contact.v1_mps)
     assert base.opt.timestep == cfg.simulation.timestep_s
     assert base.opt.integrator == getattr(mujoco.mjtIntegrator, f"mjINT_{cfg.mujoco.integrator.upper()}")
     assert base.opt.solver == getattr(mujoco.mjtSolver, f"mjSOL_{cfg.mujoco.solver.upper()}")
     assert (base.opt.iterations, base.opt.tolerance) == (cfg.mujoco.iterations, cfg.mujoco.tolerance)
-    eq = base.equality(N.JOINT_C_CONNECT)
+    eq = base.equality(mjcf_names.JOINT_C_CONNECT)
     assert tuple(eq.solref) == cfg.mujoco.equality_solref and tuple(eq.solimp) == cfg.mujoco.equality_solimp
-    act = base.actuator(N.CRANK_PID)  # native <pid>: gainprm = ki, biasprm = [0, -kp, -kv], dynprm = imax
+    act = base.actuator(mjcf_names.CRANK_PID)  # native <pid>: gainprm = ki, biasprm = [0, -kp, -kv], dynprm = imax
     assert (act.gainprm[0], -act.biasprm[1], -act.biasprm[2], act.dynprm[0]) == (
         cfg.pid.ki, cfg.pid.kp, cfg.pid.kv, cfg.pid.imax)
     axes = {"+x": (1, 0), "-x": (-1, 0), "+y": (0, 1), "-y": (0, -1)}
@@ -257,22 +257,22 @@ def test_a_changed_config_value_reaches_the_compiled_model():
         "sensors.accelerometers.AC1.position_m": [0.1, 0.01], "sensors.accelerometers.AC1.axis": "-y",
     })
     m = build(cfg)[1]
-    assert m.body(N.CRANK).mass[0] == 6.0
-    assert m.geom(N.bushing("C")).pos[0] == 0.5 and m.site(N.bushing("C")).pos[0] == 0.5
-    assert m.body(N.SLIDER).inertia[2] == 0.003
-    assert m.geom(N.pin("B")).size[0] == 0.012
-    dof = m.joint(N.SLIDER_SLIDE).dofadr[0]
-    assert _dry_friction(m, N.SLIDER_SLIDE) == 3.0 and tuple(m.dof_solref[dof]) == (4e-5, 1.0)
+    assert m.body(mjcf_names.CRANK).mass[0] == 6.0
+    assert m.geom(mjcf_names.bushing("C")).pos[0] == 0.5 and m.site(mjcf_names.bushing("C")).pos[0] == 0.5
+    assert m.body(mjcf_names.SLIDER).inertia[2] == 0.003
+    assert m.geom(mjcf_names.pin("B")).size[0] == 0.012
+    dof = m.joint(mjcf_names.SLIDER_SLIDE).dofadr[0]
+    assert _dry_friction(m, mjcf_names.SLIDER_SLIDE) == 3.0 and tuple(m.dof_solref[dof]) == (4e-5, 1.0)
     assert tuple(m.opt.gravity) == (-cfg.mechanism.gravity_mps2, 0.0, 0.0)
-    assert tuple(m.equality(N.JOINT_C_CONNECT).solref) == (3e-5, 1.0)
+    assert tuple(m.equality(mjcf_names.JOINT_C_CONNECT).solref) == (3e-5, 1.0)
     assert m.opt.iterations == 30 and m.opt.timestep == 5e-6
-    act = m.actuator(N.CRANK_PID)
+    act = m.actuator(mjcf_names.CRANK_PID)
     assert -act.biasprm[1] == 2.0e5 and act.dynprm[0] == 1e-6
     assert tuple(m.site("AC1").pos) == (0.1, 0.01, 0.0)
     assert np.allclose(m.site("AC1").quat, [math.sqrt(0.5), 0, 0, -math.sqrt(0.5)])
     # the friction law travels in the bushing user data
     m2 = build(BenchConfig().replace(**{"contact.mu0": 0.1, "contact.v1_mps": 2e-3}))[1]
-    user = N.read_bore_userdata(m2.geom(N.bushing("C")).user)
+    user = mjcf_names.read_bore_userdata(m2.geom(mjcf_names.bushing("C")).user)
     assert (user["mu0"], user["v0"], user["v1"]) == (0.1, BenchConfig().contact.v0_mps, 2e-3)
 
 
@@ -313,31 +313,31 @@ def test_parser_follows_default_classes_and_mujoco_defaults(tmp_path):
     d = model_xml.read_defaults(p)
     assert d.pin_diameter_m == 0.024 and d.kv == 0.0
     m = mujoco.MjModel.from_xml_path(str(p))
-    assert 2 * m.geom(N.pin("C")).size[0] == 0.024 and m.actuator(N.CRANK_PID).biasprm[2] == 0.0
+    assert 2 * m.geom(mjcf_names.pin("C")).size[0] == 0.024 and m.actuator(mjcf_names.CRANK_PID).biasprm[2] == 0.0
 
 
 # ---------------------------------------------------------------- bore user data layout
 def test_bore_userdata_has_one_layout():
     from twin.mujoco_engine import _bore
 
-    assert tuple(_bore.userdata_fields()) == N.BORE_USERDATA_FIELDS
-    v = N.bore_userdata(mu0=0.05, v0=5e-4, v1=1e-3, slot=1)
-    assert len(v) == len(N.BORE_USERDATA_FIELDS) and v[0] == N.BORE_MAGIC == _bore.bore_magic()
-    assert N.read_bore_userdata(v)["slot"] == 1.0 and N.replace_bore_userdata(v, mu0=0)[1] == 0.0
+    assert tuple(_bore.userdata_fields()) == mjcf_names.BORE_USERDATA_FIELDS
+    v = mjcf_names.bore_userdata(mu0=0.05, v0=5e-4, v1=1e-3, slot=1)
+    assert len(v) == len(mjcf_names.BORE_USERDATA_FIELDS) and v[0] == mjcf_names.BORE_MAGIC == _bore.bore_magic()
+    assert mjcf_names.read_bore_userdata(v)["slot"] == 1.0 and mjcf_names.replace_bore_userdata(v, mu0=0)[1] == 0.0
     with pytest.raises(KeyError):
-        N.bore_userdata(mu0=0.05, v0=5e-4, v1=1e-3, typo=1)
+        mjcf_names.bore_userdata(mu0=0.05, v0=5e-4, v1=1e-3, typo=1)
     with pytest.raises(KeyError):
-        N.bore_userdata(mu0=0.05)
+        mjcf_names.bore_userdata(mu0=0.05)
 
 
 def test_collider_refuses_a_different_layout(monkeypatch):
     monkeypatch.setattr(collider, "_addresses", None)
-    monkeypatch.setattr(N, "BORE_USERDATA_FIELDS", N.BORE_USERDATA_FIELDS[:-1])
+    monkeypatch.setattr(mjcf_names, "BORE_USERDATA_FIELDS", mjcf_names.BORE_USERDATA_FIELDS[:-1])
     with pytest.raises(EngineUnavailableError, match="user data"):
         collider.ensure_installed()
 
 
 def test_builder_checks_nuser_geom(tmp_path, monkeypatch):
-    monkeypatch.setattr(N, "BASE_XML", _edited(tmp_path, 'nuser_geom="13"', 'nuser_geom="14"'))
+    monkeypatch.setattr(mjcf_names, "BASE_XML", _edited(tmp_path, 'nuser_geom="13"', 'nuser_geom="14"'))
     with pytest.raises(ModelError, match="nuser_geom = 14"):
         build(IDEAL)

@@ -28,7 +28,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from twin import names as N
+from twin import names
 from twin.config import BenchConfig, ln_stiffness, preset
 from twin.drive import DriveReference
 from twin.kinematics import static_pin_forces
@@ -64,34 +64,34 @@ def _id(model: mujoco.MjModel, kind: str, name: str) -> int:
 # ------------------------------------------------------------------------------------ names
 def test_every_new_name_resolves_in_an_a_clearance_model():
     m = build(a_only().replace(**{"joints.clearance_b_mm": 0.1, "joints.clearance_c_mm": 0.1}))[1]
-    for j in (N.ECC_A_X, N.ECC_A_Y, N.CRANK_HINGE):
-        assert m.jnt_bodyid[_id(m, "joint", j)] == _id(m, "body", N.CRANK)
+    for j in (names.ECC_A_X, names.ECC_A_Y, names.CRANK_HINGE):
+        assert m.jnt_bodyid[_id(m, "joint", j)] == _id(m, "body", names.CRANK)
     # the slides come first (translate, then rotate): the hinge is the absolute crank angle
-    assert _id(m, "joint", N.ECC_A_X) < _id(m, "joint", N.ECC_A_Y) < _id(m, "joint", N.CRANK_HINGE)
-    assert [m.jnt_type[_id(m, "joint", j)] for j in (N.ECC_A_X, N.ECC_A_Y, N.CRANK_HINGE)] == [
+    assert _id(m, "joint", names.ECC_A_X) < _id(m, "joint", names.ECC_A_Y) < _id(m, "joint", names.CRANK_HINGE)
+    assert [m.jnt_type[_id(m, "joint", j)] for j in (names.ECC_A_X, names.ECC_A_Y, names.CRANK_HINGE)] == [
         mujoco.mjtJoint.mjJNT_SLIDE, mujoco.mjtJoint.mjJNT_SLIDE, mujoco.mjtJoint.mjJNT_HINGE]
-    assert m.actuator_trnid[_id(m, "actuator", N.CRANK_PID), 0] == _id(m, "joint", N.CRANK_HINGE)
-    assert m.sensor_objid[_id(m, "sensor", N.SENSOR_CRANK_ANGLE)] == _id(m, "joint", N.CRANK_HINGE)
-    assert m.geom_bodyid[_id(m, "geom", N.pin("A"))] == _id(m, "body", N.CRANK)
-    assert m.geom_bodyid[_id(m, "geom", N.bushing("A"))] == 0  # the frame: the world body
-    assert m.geom_bodyid[_id(m, "geom", N.bushing_ring("A"))] == 0
-    assert m.site_bodyid[_id(m, "site", N.pin("A"))] == _id(m, "body", N.CRANK)
-    assert m.site_bodyid[_id(m, "site", N.bushing("A"))] == 0
-    _id(m, "pair", N.pair("A"))
-    for s in (N.sensor_ecc("A"), N.sensor_contact("A"), N.sensor_friction("A")):
+    assert m.actuator_trnid[_id(m, "actuator", names.CRANK_PID), 0] == _id(m, "joint", names.CRANK_HINGE)
+    assert m.sensor_objid[_id(m, "sensor", names.SENSOR_CRANK_ANGLE)] == _id(m, "joint", names.CRANK_HINGE)
+    assert m.geom_bodyid[_id(m, "geom", names.pin("A"))] == _id(m, "body", names.CRANK)
+    assert m.geom_bodyid[_id(m, "geom", names.bushing("A"))] == 0  # the frame: the world body
+    assert m.geom_bodyid[_id(m, "geom", names.bushing_ring("A"))] == 0
+    assert m.site_bodyid[_id(m, "site", names.pin("A"))] == _id(m, "body", names.CRANK)
+    assert m.site_bodyid[_id(m, "site", names.bushing("A"))] == 0
+    _id(m, "pair", names.pair("A"))
+    for s in (names.sensor_ecc("A"), names.sensor_contact("A"), names.sensor_friction("A")):
         _id(m, "sensor", s)
-    assert m.geom_user[_id(m, "geom", N.bushing("A")), 0] == N.BORE_MAGIC
+    assert m.geom_user[_id(m, "geom", names.bushing("A")), 0] == names.BORE_MAGIC
     # one impact-speed slot per clearance joint, in the order A, B, C
     assert m.nuserdata == 3
-    assert [N.read_bore_userdata(m.geom_user[_id(m, "geom", N.bushing(j))])["slot"] for j in "ABC"] == [0, 1, 2]
+    assert [names.read_bore_userdata(m.geom_user[_id(m, "geom", names.bushing(j))])["slot"] for j in "ABC"] == [0, 1, 2]
     # an ideal A keeps the base model's crank hinge alone: no slides, pair or A sensors
     ideal = build(preset(12))[1]
-    for kind, name in (("joint", N.ECC_A_X), ("joint", N.ECC_A_Y), ("pair", N.pair("A")),
-                       ("sensor", N.sensor_ecc("A")), ("sensor", N.sensor_contact("A")),
-                       ("sensor", N.sensor_friction("A"))):
+    for kind, name in (("joint", names.ECC_A_X), ("joint", names.ECC_A_Y), ("pair", names.pair("A")),
+                       ("sensor", names.sensor_ecc("A")), ("sensor", names.sensor_contact("A")),
+                       ("sensor", names.sensor_friction("A"))):
         with pytest.raises(KeyError):
             _id(ideal, kind, name)
-    for kind, name in (("geom", N.pin("A")), ("geom", N.bushing("A")), ("site", N.pin("A")), ("site", N.bushing("A"))):
+    for kind, name in (("geom", names.pin("A")), ("geom", names.bushing("A")), ("site", names.pin("A")), ("site", names.bushing("A"))):
         _id(ideal, kind, name)
 
 
@@ -103,11 +103,11 @@ def test_exported_a_clearance_variant_compiles_to_the_same_model():
     ref = build(cfg.replace(**{"mujoco.accelerometers": "sensor"}))[1]
     assert (m.nq, m.nv, m.nu, m.npair, m.nsensor) == (ref.nq, ref.nv, ref.nu, ref.npair, ref.nsensor) == (5, 5, 2, 1, 13)
     np.testing.assert_allclose(m.geom_size, ref.geom_size)
-    assert m.joint(N.ECC_A_X).id < m.joint(N.CRANK_HINGE).id
+    assert m.joint(names.ECC_A_X).id < m.joint(names.CRANK_HINGE).id
     # the bores' user data exactly (MuJoCo's writer alone zeroes μ0, v0, v1 and the speed floor
     # beside K ~ 1e11), and the impact-speed slots
     assert np.array_equal(m.geom_user, ref.geom_user) and m.nuserdata == ref.nuserdata == 1
-    assert N.read_bore_userdata(m.geom_user[m.geom(N.bushing("A")).id])["mu0"] == cfg.contact.mu0
+    assert names.read_bore_userdata(m.geom_user[m.geom(names.bushing("A")).id])["mu0"] == cfg.contact.mu0
 
 
 # ------------------------------------------------------------------------- per-joint sizes
@@ -121,16 +121,16 @@ def test_each_joint_has_its_own_pin_and_bushing():
     sizes = {"A": (0.015, 0.025), "B": (0.008, 0.010), "C": (0.010, 0.012)}  # (R_j, L/2) as configured
     for j, (rj, half) in sizes.items():
         c = cfg.joints.diametral_mm(j) * 1e-3 / 2
-        assert m.geom_size[_id(m, "geom", N.pin(j)), :2] == pytest.approx([rj, half], rel=1e-15)
-        assert m.geom_size[_id(m, "geom", N.bushing(j)), :2] == pytest.approx([rj + c, half], rel=1e-15)
-        user = N.read_bore_userdata(m.geom_user[_id(m, "geom", N.bushing(j))])
+        assert m.geom_size[_id(m, "geom", names.pin(j)), :2] == pytest.approx([rj, half], rel=1e-15)
+        assert m.geom_size[_id(m, "geom", names.bushing(j)), :2] == pytest.approx([rj + c, half], rel=1e-15)
+        user = names.read_bore_userdata(m.geom_user[_id(m, "geom", names.bushing(j))])
         assert user["stiffness"] == pytest.approx(eq18(cfg, j), rel=1e-12)
         assert user["stiffness"] == pytest.approx(ln_stiffness(cfg.joints, cfg.materials, j), rel=1e-15)
     # the three joints do differ (materials and sizes reach K)
     assert len({round(eq18(cfg, j)) for j in "ABC"}) == 3
     # an ideal joint's pin and (closed) bushing take its own size too
     m2 = build(cfg.replace(**{"joints.clearance_b_mm": 0.0}))[1]
-    for g in (N.pin("B"), N.bushing("B")):
+    for g in (names.pin("B"), names.bushing("B")):
         assert m2.geom_size[_id(m2, "geom", g), :2] == pytest.approx([0.008, 0.010], rel=1e-15)
 
 
@@ -228,11 +228,11 @@ def test_contact_law_and_friction_at_the_frame_bore_step_by_step():
     chi = 3 * (1 - cfg.contact.restitution ** 2) / 4
     assert (law.stiffness, law.exponent, law.damping) == pytest.approx((eq18(cfg, "A"), 1.5, chi), rel=1e-12)
     mu0, v0, v1 = cfg.contact.mu0, cfg.contact.v0_mps, cfg.contact.v1_mps
-    dofs = [m.jnt_dofadr[m.joint(j).id] for j in (N.ECC_A_X, N.ECC_A_Y, N.CRANK_HINGE)]
-    other = [i for i in range(m.nv) if i not in dofs and i != m.jnt_dofadr[m.joint(N.SLIDER_SLIDE).id]]
-    crank = m.body(N.CRANK).id
-    pin, bore = m.geom(N.pin("A")).id, m.geom(N.bushing("A")).id
-    fsens = eng._sensor_slices[N.sensor_friction("A")].start
+    dofs = [m.jnt_dofadr[m.joint(j).id] for j in (names.ECC_A_X, names.ECC_A_Y, names.CRANK_HINGE)]
+    other = [i for i in range(m.nv) if i not in dofs and i != m.jnt_dofadr[m.joint(names.SLIDER_SLIDE).id]]
+    crank = m.body(names.CRANK).id
+    pin, bore = m.geom(names.pin("A")).id, m.geom(names.bushing("A")).id
+    fsens = eng._sensor_slices[names.sensor_friction("A")].start
     checked, sliding, errs = 0, 0, []
     for _ in range(15_000):
         th, om = ref(np.array([d.time]))

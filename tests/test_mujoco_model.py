@@ -6,7 +6,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from twin import names as N
+from twin import names
 from twin.config import preset
 from twin.errors import ConfigError
 from twin.mujoco_engine.builder import build, export_xml
@@ -25,33 +25,33 @@ def test_every_python_name_resolves_in_the_compiled_models():
     ideal = build(preset(3).replace(**sensor))[1]
     both = build(preset(12).replace(**sensor))[1]
     for m in (ideal, both):
-        for b in N.BODIES:
+        for b in names.BODIES:
             _resolve(m, "body", b)
-        for j in (N.CRANK_HINGE, N.ROD_HINGE, N.SLIDER_SLIDE):
+        for j in (names.CRANK_HINGE, names.ROD_HINGE, names.SLIDER_SLIDE):
             _resolve(m, "joint", j)
-        for g in (N.CRANK_ARM, N.ROD_BEAM, N.SLIDER_BLOCK, N.GUIDE_RAIL):
+        for g in (names.CRANK_ARM, names.ROD_BEAM, names.SLIDER_BLOCK, names.GUIDE_RAIL):
             _resolve(m, "geom", g)
         for jt in ("B", "C"):
-            _resolve(m, "geom", N.pin(jt))
-            _resolve(m, "geom", N.bushing(jt))
-            _resolve(m, "geom", N.bushing_ring(jt))
-            _resolve(m, "site", N.pin(jt))
-            _resolve(m, "site", N.bushing(jt))
-        _resolve(m, "actuator", N.CRANK_PID)
-        for s in (*N.ACCEL_SENSORS, N.SENSOR_CRANK_ANGLE, N.SENSOR_CRANK_SPEED, N.SENSOR_SLIDER_POSITION,
-                  N.SENSOR_CRANK_TORQUE):
+            _resolve(m, "geom", names.pin(jt))
+            _resolve(m, "geom", names.bushing(jt))
+            _resolve(m, "geom", names.bushing_ring(jt))
+            _resolve(m, "site", names.pin(jt))
+            _resolve(m, "site", names.bushing(jt))
+        _resolve(m, "actuator", names.CRANK_PID)
+        for s in (*names.ACCEL_SENSORS, names.SENSOR_CRANK_ANGLE, names.SENSOR_CRANK_SPEED, names.SENSOR_SLIDER_POSITION,
+                  names.SENSOR_CRANK_TORQUE):
             _resolve(m, "sensor", s)
-    _resolve(ideal, "equality", N.JOINT_C_CONNECT)
+    _resolve(ideal, "equality", names.JOINT_C_CONNECT)
     for jt in ("B", "C"):
-        _resolve(both, "pair", N.pair(jt))
-        for s in (N.sensor_ecc(jt), N.sensor_contact(jt), N.sensor_friction(jt)):
+        _resolve(both, "pair", names.pair(jt))
+        for s in (names.sensor_ecc(jt), names.sensor_contact(jt), names.sensor_friction(jt)):
             _resolve(both, "sensor", s)
-    for j in (N.ECC_B_X, N.ECC_B_Y):
+    for j in (names.ECC_B_X, names.ECC_B_Y):
         _resolve(both, "joint", j)
-    assert both.geom_user[both.geom(N.bushing("B")).id, 0] == N.BORE_MAGIC
+    assert both.geom_user[both.geom(names.bushing("B")).id, 0] == names.BORE_MAGIC
     # sensors the builder adds for the optional "energy" channel group
     energy = build(preset(12).replace(**{"sensors.channels": ["energy"]}))[1]
-    for s in (N.SENSOR_ENERGY_KINETIC, N.SENSOR_ENERGY_POTENTIAL, N.SENSOR_SLIDER_SPEED):
+    for s in (names.SENSOR_ENERGY_KINETIC, names.SENSOR_ENERGY_POTENTIAL, names.SENSOR_SLIDER_SPEED):
         _resolve(energy, "sensor", s)
     assert energy.opt.enableflags & mujoco.mjtEnableBit.mjENBL_ENERGY
 
@@ -71,7 +71,7 @@ def test_channel_groups_select_sensors():
     full = build(preset(12).replace(**{"mujoco.accelerometers": "sensor"}))[1]
     posthoc = build(preset(12))[1]  # accelerometers from the recorded state, no sensors
     lean = build(preset(12).replace(**{"sensors.channels": ["encoder"]}))[1]
-    assert lean.nsensor == 1 and lean.sensor(0).name == N.SENSOR_CRANK_ANGLE
+    assert lean.nsensor == 1 and lean.sensor(0).name == names.SENSOR_CRANK_ANGLE
     assert full.nsensor == 6 + 4 + 2 * 3
     assert posthoc.nsensor == 4 + 2 * 3
     run = simulate_run(short(preset(12), 0.02, **{"sensors.channels": ["encoder", "accel"]}))

@@ -9,7 +9,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from twin import names as N
+from twin import names
 from twin.config import BenchConfig, preset
 from twin.drive import DriveReference
 from twin.kinematics import slider_position
@@ -69,9 +69,9 @@ def test_bore_collider_is_an_exact_circle():
     model.pair_margin[:] = 1e-3
     d = mujoco.MjData(model)
     c = cfg.joints.radial_m("C")
-    pin = model.geom(N.pin("C")).id
+    pin = model.geom(names.pin("C")).id
     model.geom_sameframe[pin] = 0  # geom_pos is edited below: do not reuse the body frame
-    slide = model.jnt_qposadr[model.joint(N.SLIDER_SLIDE).id]
+    slide = model.jnt_qposadr[model.joint(names.SLIDER_SLIDE).id]
     x_bush = cfg.bodies.crank.length_m + cfg.bodies.rod.length_m   # all joint angles 0
     rng = np.random.default_rng(1)
     for alpha, rho in zip(rng.uniform(0, 2 * np.pi, 200), rng.uniform(0.2, 1.3, 200)):
@@ -115,7 +115,7 @@ def test_soft_first_guess_is_the_linear_law_and_friction_is_regularized_coulomb(
             mujoco.mj_jac(m, d, jp, None, con.pos, m.geom_bodyid[con.geom[0]])
             mujoco.mj_jac(m, d, jb, None, con.pos, m.geom_bodyid[con.geom[1]])
             vt = ((jp - jb) @ d.qvel) @ np.cross([0, 0, 1], con.frame[:3])
-            ft = d.sensordata[sens[N.sensor_friction(j)].start]
+            ft = d.sensordata[sens[names.sensor_friction(j)].start]
             if abs(vt) > 2 * cfg.contact.v1_mps:
                 mu.append(abs(ft) / d.efc_force[a])
                 sign.append(np.sign(ft * vt))
@@ -215,7 +215,7 @@ def test_contact_force_in_the_mechanism_is_the_reference_law(law):
     ref = DriveReference(cfg)
     h = cfg.simulation.timestep_s
     sens = eng._sensor_slices
-    slot = {j: int(N.read_bore_userdata(m.geom_user[m.geom(N.bushing(j)).id])["slot"]) for j in "BC"}
+    slot = {j: int(names.read_bore_userdata(m.geom_user[m.geom(names.bushing(j)).id])["slot"]) for j in "BC"}
     prev_in = {"B": True, "C": True}  # the loaded start begins in contact
     checked, events, mu, errs = 0, 0, [], []
     for _ in range(20_000):
@@ -247,7 +247,7 @@ def test_contact_force_in_the_mechanism_is_the_reference_law(law):
             gamma = theta * c * h
             r = 1 / gamma if gamma * r0 > 1 else r0
             assert d.efc_R[a] == pytest.approx(r, rel=1e-9)
-            pin_g, bore_g = (con.geom[0], con.geom[1]) if m.geom(con.geom[1]).name == N.bushing(j) \
+            pin_g, bore_g = (con.geom[0], con.geom[1]) if m.geom(con.geom[1]).name == names.bushing(j) \
                 else (con.geom[1], con.geom[0])
             b = bore_bias_acceleration(m, d, pin_g, bore_g, d.qvel - h * d.qacc) if c > 0 else 0.0
             expected = max(F + acc / r + c * h * (theta - 0.5) * b, 0.0)
@@ -261,7 +261,7 @@ def test_contact_force_in_the_mechanism_is_the_reference_law(law):
             # the state moved on: d.qvel is the step's end; the friction sensor is from its start,
             # so compare magnitudes only where sliding is fast (|v_t| well above v1 either way)
             vt = ((jp - jb) @ d.qvel) @ np.cross([0, 0, 1], con.frame[:3])
-            ft = d.sensordata[sens[N.sensor_friction(j)].start]
+            ft = d.sensordata[sens[names.sensor_friction(j)].start]
             fn = F - c * h * b / 2
             if abs(vt) > 20 * cfg.contact.v1_mps and fn > 1.0:
                 mu.append(abs(ft) / fn)
@@ -329,17 +329,17 @@ def test_native_law_is_set_where_the_bore_applies_it(bushing, friction, native):
 
     cfg = preset(6).replace(**{"mujoco.bushing": bushing, "mujoco.friction": friction})
     _, m, info = build(cfg)
-    user = N.read_bore_userdata(m.geom_user[m.geom(N.bushing("C")).id])
+    user = names.read_bore_userdata(m.geom_user[m.geom(names.bushing("C")).id])
     K = ln_stiffness(cfg.joints, cfg.materials, "C")
     if native:
         chi = DAMPING_FACTOR["lankarani-nikravesh"](cfg.contact.restitution)
-        assert user["law"] == N.BORE_LAWS["hysteresis"] and user["stiffness"] == pytest.approx(K)
+        assert user["law"] == names.BORE_LAWS["hysteresis"] and user["stiffness"] == pytest.approx(K)
         assert user["exponent"] == 1.5 and user["damping"] == pytest.approx(chi)
         assert user["speed_floor"] == 1e-3 and 0 <= user["slot"] < m.nuserdata
         assert info.contacts["C"].source == "law" and m.npair == 1
         # the stress studies' factors perturb the law
         m2 = build(cfg.replace(**{"mujoco.contact_damping_scale": 1.3, "mujoco.contact_stiffness_scale": 0.8}))[1]
-        u2 = N.read_bore_userdata(m2.geom_user[m2.geom(N.bushing("C")).id])
+        u2 = names.read_bore_userdata(m2.geom_user[m2.geom(names.bushing("C")).id])
         assert u2["damping"] == pytest.approx(1.3 * chi) and u2["stiffness"] == pytest.approx(0.8 * K)
     else:
         assert user["law"] == 0 and m.nuserdata == 0
@@ -359,13 +359,13 @@ def test_native_law_follows_the_configured_reference_law(law):
     refe = ReferenceEngine(cfg)
     refe.reset()
     for j in "BC":
-        user = N.read_bore_userdata(m.geom_user[m.geom(N.bushing(j)).id])
+        user = names.read_bore_userdata(m.geom_user[m.geom(names.bushing(j)).id])
         if law == "linear":
-            assert user["law"] == N.BORE_LAWS["linear"] and user["exponent"] == 1.0
+            assert user["law"] == names.BORE_LAWS["linear"] and user["exponent"] == 1.0
             assert user["stiffness"] == pytest.approx(refe.contacts[j].stiffness, rel=1e-12)
             assert user["damping"] == pytest.approx(refe.contacts[j].damping_ns_per_m, rel=1e-12)
         else:
-            assert user["law"] == N.BORE_LAWS["hysteresis"]
+            assert user["law"] == names.BORE_LAWS["hysteresis"]
             assert user["stiffness"] == pytest.approx(ln_stiffness(cfg.joints, cfg.materials, j))
             assert user["damping"] == pytest.approx(DAMPING_FACTOR[law](cfg.contact.restitution))
 
@@ -382,7 +382,7 @@ def test_guide_friction_is_the_reference_regularized_law():
     m, d = eng.model, eng.data
     eng.reset()
     ref = DriveReference(cfg)
-    dof = m.joint(N.SLIDER_SLIDE).dofadr[0]
+    dof = m.joint(names.SLIDER_SLIDE).dofadr[0]
     assert m.dof_frictionloss[dof] == 0
     F, v0, v1 = cfg.mechanism.guide_friction_n, cfg.contact.v0_mps, cfg.contact.v1_mps
     seen = {"slow": 0, "ramp": 0, "full": 0}
@@ -395,4 +395,4 @@ def test_guide_friction_is_the_reference_regularized_law():
         seen["slow" if abs(v) <= v0 else "ramp" if abs(v) < v1 else "full"] += 1
     assert min(seen.values()) > 0, seen  # reversals crossed
     m2 = build(cfg.replace(**{"mujoco.guide_friction": "frictionloss"}))[1]
-    assert m2.dof_frictionloss[m2.joint(N.SLIDER_SLIDE).dofadr[0]] == F and m2.nuser_jnt == 0
+    assert m2.dof_frictionloss[m2.joint(names.SLIDER_SLIDE).dofadr[0]] == F and m2.nuser_jnt == 0

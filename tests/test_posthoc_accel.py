@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from conftest import short
-from twin import names as N
+from twin import names
 from twin.config import preset
 from twin.errors import ConfigError
 from twin.mujoco_engine.builder import build
@@ -61,14 +61,14 @@ def _compare(cfg):
     b, eb, qv = _run(cfg, "posthoc")
     assert ea.meta["accelerometers"] == "sensor" and eb.meta["accelerometers"] == "posthoc"
     # the posthoc model has no accelerometer sensor (no mj_rnePostConstraint for them)
-    assert not set(N.ACCEL_SENSORS) & {eb.model.sensor(i).name for i in range(eb.model.nsensor)}
-    assert set(N.ACCEL_SENSORS) <= {ea.model.sensor(i).name for i in range(ea.model.nsensor)}
+    assert not set(names.ACCEL_SENSORS) & {eb.model.sensor(i).name for i in range(eb.model.nsensor)}
+    assert set(names.ACCEL_SENSORS) <= {ea.model.sensor(i).name for i in range(ea.model.nsensor)}
     assert _bound(qv, cfg.simulation.timestep_s) < TOL / 10, "the tolerance no longer covers the round-off bound"
     assert list(a) == list(b)
     # live channels (a slider axis across the guide reads exactly 0 unless gravity acts along it)
-    assert sum(np.max(np.abs(a[k])) > 1.0 for k in N.ACCEL_SENSORS) >= 4
+    assert sum(np.max(np.abs(a[k])) > 1.0 for k in names.ACCEL_SENSORS) >= 4
     for k in a:
-        if k in N.ACCEL_SENSORS:
+        if k in names.ACCEL_SENSORS:
             np.testing.assert_allclose(b[k], a[k], rtol=0, atol=TOL, err_msg=k)
         else:
             assert np.array_equal(a[k], b[k]), f"{k} changed"
@@ -98,8 +98,8 @@ def test_posthoc_honours_mounts_and_moved_sites():
             "sensors.accelerometers.AC2.axis": "-x"}
     cfg = short(preset(12), 0.25, **over)
     m = build(cfg.replace(**{"mujoco.accelerometers": "sensor"}))[1]
-    assert m.site_bodyid[m.site("AC5").id] == m.body(N.ROD).id
-    assert m.site_bodyid[m.site("AC2").id] == m.body(N.SLIDER).id
+    assert m.site_bodyid[m.site("AC5").id] == m.body(names.ROD).id
+    assert m.site_bodyid[m.site("AC2").id] == m.body(names.SLIDER).id
     _compare(cfg)
 
 
@@ -117,7 +117,7 @@ def test_other_integrators_keep_the_sensors():
     cfg = short(preset(12), 0.01, **{"mujoco.integrator": "implicitfast"})
     eng = MujocoEngine(cfg)
     assert cfg.mujoco.accelerometers == "posthoc" and eng.meta["accelerometers"] == "sensor"
-    assert set(N.ACCEL_SENSORS) <= {eng.model.sensor(i).name for i in range(eng.model.nsensor)}
+    assert set(names.ACCEL_SENSORS) <= {eng.model.sensor(i).name for i in range(eng.model.nsensor)}
     run = next(run_chunks(cfg, engine=eng))
     assert np.all(np.isfinite(run.channels["AC1"].data))
 
@@ -128,7 +128,7 @@ def test_accel_only_and_no_accel_groups():
     only = cfg.replace(**{"sensors.channels": ["accel"]})
     a, _, _ = _run(only, "sensor")
     b, eb, _ = _run(only, "posthoc")
-    assert eb.model.nsensor == 0 and list(a) == list(b) == list(N.ACCEL_SENSORS)
+    assert eb.model.nsensor == 0 and list(a) == list(b) == list(names.ACCEL_SENSORS)
     for k in a:
         np.testing.assert_allclose(b[k], a[k], rtol=0, atol=TOL, err_msg=k)
     none = cfg.replace(**{"sensors.channels": ["encoder"]})

@@ -36,13 +36,13 @@ def run_with_velocity(cfg: BenchConfig):
         chunks.append(ch)
         t_end = ch.t0 + ch.duration_s
         if cfg.simulation.engine == "reference":
-            from twin.reference import model as M
+            from twin.reference import model as ref_model
 
-            v = float(eng._st[M.S_QD + 6])
+            v = float(eng._st[ref_model.S_QD + 6])
         else:
-            from twin import names as N
+            from twin import names
 
-            v = float(eng.data.qvel[eng.model.jnt_dofadr[eng.model.joint(N.SLIDER_SLIDE).id]])
+            v = float(eng.data.qvel[eng.model.jnt_dofadr[eng.model.joint(names.SLIDER_SLIDE).id]])
         vel.append((t_end, v))
     cols = {k: np.concatenate([np.asarray(c[k].data, dtype=float) for c in chunks]) for k in chunks[0].channels}
     return cols, vel

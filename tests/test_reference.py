@@ -14,7 +14,7 @@ from twin.channels import channel_specs
 from twin.config import BenchConfig, preset
 from twin.errors import ConfigError
 from twin import natural_coordinates as natural
-from twin.reference import model as M
+from twin.reference import model as ref_model
 from twin.reference.engine import ReferenceEngine, ReferenceOptions
 from twin.run import Run
 from twin.drive import DriveReference
@@ -31,8 +31,8 @@ def _ideal(**ov) -> BenchConfig:
 
 
 def _free_params(cfg: BenchConfig, h: float) -> np.ndarray:
-    P = M.build_params(cfg, drive=False, guide_friction=False, joint_friction=False)
-    P[M.P_H] = h
+    P = ref_model.build_params(cfg, drive=False, guide_friction=False, joint_friction=False)
+    P[ref_model.P_H] = h
     return P
 
 
@@ -42,8 +42,8 @@ def _free_run(cfg: BenchConfig, h: float, duration: float, theta0: float = math.
     n = int(round(duration / h))
     every = max(1, int(round(every_s / h)))
     bufs = [np.zeros(n // every + 2) for _ in range(4)]
-    status, steps, m = M.free_motion(P, st, n, every, *bufs)
-    assert status == M.OK and steps == n
+    status, steps, m = ref_model.free_motion(P, st, n, every, *bufs)
+    assert status == ref_model.OK and steps == n
     t = np.arange(m) * every * h
     return (t, *(b[:m] for b in bufs))
 
@@ -53,8 +53,8 @@ def _state(clear_b: float, clear_c: float, theta: float, e_b=(0.0, 0.0), e_c=(0.
     """A consistent (q, q̇) with the given eccentricities (bench frame) and random ż."""
     cfg = BenchConfig().replace(**{"joints.clearance_b_mm": clear_b, "joints.clearance_c_mm": clear_c,
                                    "joints.initial_eccentricity": "centred", "mechanism.d_off_m": d_off})
-    P = M.build_params(cfg)
-    q = natural.initial_state(cfg, theta)[:M.N_Q].copy()
+    P = ref_model.build_params(cfg)
+    q = natural.initial_state(cfg, theta)[:ref_model.N_Q].copy()
     if clear_b:
         q[2:4] = q[0:2] - np.asarray(e_b)
     if clear_c:
@@ -62,8 +62,8 @@ def _state(clear_b: float, clear_c: float, theta: float, e_b=(0.0, 0.0), e_c=(0.
     q = _project(P, q)
     if clear_c:
         q[6] = q[4] + e_c[0]
-    R, S = np.zeros((M.N_Q, M.N_Z)), np.zeros(M.N_Q)
-    nz = natural.r_matrix(P, q, np.zeros(M.N_Q), R, S)
+    R, S = np.zeros((ref_model.N_Q, ref_model.N_Z)), np.zeros(ref_model.N_Q)
+    nz = natural.r_matrix(P, q, np.zeros(ref_model.N_Q), R, S)
     zd = np.random.default_rng(1).normal(size=nz) * np.array([10.0, 0.05, -0.03, 0.02, 0.04])[:nz]
     qd = R[:, :nz] @ zd
     return P, q, qd, zd, nz
@@ -71,14 +71,14 @@ def _state(clear_b: float, clear_c: float, theta: float, e_b=(0.0, 0.0), e_c=(0.
 
 def _project(P, q):
     q = q.copy()
-    res, dq, b = np.zeros(M.N_Q), np.zeros(M.N_Q), np.zeros(M.N_Q)
-    qd = np.zeros(M.N_Q)
-    assert M.project(P, q, qd, math.sin(q[7]), math.cos(q[7]), res, dq, b) > 0
+    res, dq, b = np.zeros(ref_model.N_Q), np.zeros(ref_model.N_Q), np.zeros(ref_model.N_Q)
+    qd = np.zeros(ref_model.N_Q)
+    assert ref_model.project(P, q, qd, math.sin(q[7]), math.cos(q[7]), res, dq, b) > 0
     return q
 
 
 def _phi(P, q):
-    res = np.zeros(M.N_Q)
+    res = np.zeros(ref_model.N_Q)
     natural.residual(P, q, math.sin(q[7]), math.cos(q[7]), res)
     return res
 
@@ -86,10 +86,10 @@ def _phi(P, q):
 def _z(P, q):
     """Independent coordinates of q: θ, then e_B, e_C where the joint has a clearance."""
     z = [q[7]]
-    if P[M.P_CLR_B] > 0.5:
+    if P[ref_model.P_CLR_B] > 0.5:
         z += [q[0] - q[2], q[1] - q[3]]
-    if P[M.P_CLR_C] > 0.5:
-        z += [q[6] - q[4], P[M.P_DOFF] - q[5]]
+    if P[ref_model.P_CLR_C] > 0.5:
+        z += [q[6] - q[4], P[ref_model.P_DOFF] - q[5]]
     return np.array(z)
 
 
@@ -105,7 +105,7 @@ SCENES = [
 @pytest.mark.parametrize("scene", SCENES)
 def test_r_matrix_against_finite_differences_of_the_constraints(scene):
     P, q, qd, zd, nz = _state(*scene)
-    R, S = np.zeros((M.N_Q, M.N_Z)), np.zeros(M.N_Q)
+    R, S = np.zeros((ref_model.N_Q, ref_model.N_Z)), np.zeros(ref_model.N_Q)
     assert natural.r_matrix(P, q, qd, R, S) == nz
     R = R[:, :nz]
     eps = 1e-6
@@ -125,25 +125,25 @@ def test_r_matrix_against_finite_differences_of_the_constraints(scene):
         assert np.max(np.abs(phi_dd[constraint_rows])) < 1e-6 * max(1.0, np.abs(qd).max() ** 2)
     # and Ṙż = (dR/dt) ż, from R at q ± δ q̇
     d = 1e-6
-    Rp, Rm = np.zeros((M.N_Q, M.N_Z)), np.zeros((M.N_Q, M.N_Z))
-    natural.r_matrix(P, q + d * qd, qd, Rp, np.zeros(M.N_Q))
-    natural.r_matrix(P, q - d * qd, qd, Rm, np.zeros(M.N_Q))
+    Rp, Rm = np.zeros((ref_model.N_Q, ref_model.N_Z)), np.zeros((ref_model.N_Q, ref_model.N_Z))
+    natural.r_matrix(P, q + d * qd, qd, Rp, np.zeros(ref_model.N_Q))
+    natural.r_matrix(P, q - d * qd, qd, Rm, np.zeros(ref_model.N_Q))
     np.testing.assert_allclose((Rp[:, :nz] - Rm[:, :nz]) / (2 * d) @ zd, S, atol=1e-6 * max(1, np.abs(S).max()))
 
 
 def _is_constraint(P, row):
     if row in (3, 4):
-        return P[M.P_CLR_B] < 0.5
+        return P[ref_model.P_CLR_B] < 0.5
     if row in (5, 6):
-        return P[M.P_CLR_C] < 0.5
+        return P[ref_model.P_CLR_C] < 0.5
     return True
 
 
 def _move_z(P, q, j, eps):
     """Configuration with independent coordinate j moved by eps (others held), projected."""
     q = q.copy()
-    rows = np.zeros(M.N_Z, dtype=np.int64)
-    M.independent_rows(P, rows)
+    rows = np.zeros(ref_model.N_Z, dtype=np.int64)
+    ref_model.independent_rows(P, rows)
     row = rows[j]
     if row == 7:
         q[7] += eps
@@ -176,16 +176,16 @@ def test_constraints_stay_at_round_off_with_clearances():
     eng.reset()
     st = eng.state0.copy()
     h = cfg.simulation.timestep_s
-    buf = np.empty((1000, M.N_OUT))
+    buf = np.empty((1000, ref_model.N_OUT))
     ref_t = np.arange(10000) * h
     th, om = DriveReference(cfg)(ref_t)
     for k in range(10):
         sl = slice(1000 * k, 1000 * (k + 1))
-        status, _ = M.run_steps(eng.P, st, th[sl].copy(), om[sl].copy(), 1, buf, True)
-        assert status == M.OK
-        q, qd = st[M.S_Q:M.S_Q + M.N_Q], st[M.S_QD:M.S_QD + M.N_Q]
-        assert M.constraint_norm(eng.P, q) <= 1e-12
-        assert M.velocity_constraint_norm(eng.P, q, qd) <= 1e-12
+        status, _ = ref_model.run_steps(eng.P, st, th[sl].copy(), om[sl].copy(), 1, buf, True)
+        assert status == ref_model.OK
+        q, qd = st[ref_model.S_Q:ref_model.S_Q + ref_model.N_Q], st[ref_model.S_QD:ref_model.S_QD + ref_model.N_Q]
+        assert ref_model.constraint_norm(eng.P, q) <= 1e-12
+        assert ref_model.velocity_constraint_norm(eng.P, q, qd) <= 1e-12
 
 
 def test_energy_drift_first_order():
@@ -255,13 +255,13 @@ def test_agrees_with_minimal_coordinate_solution(orientation, d_off):
         P = _free_params(cfg, h)
         st = natural.initial_state(cfg, theta0)
         every = int(round(1e-3 / h))
-        ths, ws = [st[7]], [st[M.S_QD + 7]]
+        ths, ws = [st[7]], [st[ref_model.S_QD + 7]]
         zero = np.zeros(every)
         for _ in range(len(t_eval) - 1):
-            status, _ = M.run_steps(P, st, zero, zero, every, np.empty((1, M.N_OUT)), False)
-            assert status == M.OK
+            status, _ = ref_model.run_steps(P, st, zero, zero, every, np.empty((1, ref_model.N_OUT)), False)
+            assert status == ref_model.OK
             ths.append(st[7])
-            ws.append(st[M.S_QD + 7])
+            ws.append(st[ref_model.S_QD + 7])
         errs.append((np.max(np.abs(np.array(ths) - sol.y[0])), np.max(np.abs(np.array(ws) - sol.y[1]))))
     assert np.max(np.abs(sol.y[1])) > 3          # a real swing
     th_err, w_err = errs[1]
@@ -283,9 +283,9 @@ def test_rmatrix_equals_euler_on_minimal_ode():
     P = _free_params(cfg, h)
     st = natural.initial_state(cfg, math.pi / 3)
     z = np.zeros(n)
-    assert M.run_steps(P, st, z, z, 1, np.empty((1, M.N_OUT)), False)[0] == M.OK
+    assert ref_model.run_steps(P, st, z, z, 1, np.empty((1, ref_model.N_OUT)), False)[0] == ref_model.OK
     assert st[7] == pytest.approx(th, abs=1e-7)
-    assert st[M.S_QD + 7] == pytest.approx(w, abs=1e-6)
+    assert st[ref_model.S_QD + 7] == pytest.approx(w, abs=1e-6)
 
 
 # ---------------------------------------------------------------- engine protocol

@@ -9,9 +9,9 @@ import pytest
 
 from twin.config import BenchConfig, ln_stiffness, preset
 from twin.impact import hysteresis_restitution, impact_hysteresis
-from twin.reference import contact as C
+from twin.reference import contact as ref_contact
 from twin import natural_coordinates as natural
-from twin.reference import model as M
+from twin.reference import model as ref_model
 from twin.simulation import simulate_run
 
 from conftest import short
@@ -22,13 +22,13 @@ def test_laws_follow_their_formulas():
     K, n, e, v = 1e10, 1.5, 0.4, 0.2
     d, dd = 2e-6, 0.05
     base = K * d**1.5
-    assert C.lankarani_nikravesh(d, dd, v, K, n, e, 0.0) == pytest.approx(base * (1 + 0.75 * (1 - e * e) * dd / v))
-    assert C.hunt_crossley(d, dd, v, K, n, e, 0.0) == pytest.approx(base * (1 + 1.5 * (1 - e) * dd / v))
-    assert C.flores(d, dd, v, K, n, e, 0.0) == pytest.approx(base * (1 + 8 * (1 - e) / (5 * e) * dd / v))
-    assert C.linear(d, dd, v, 3e7, n, e, 100.0) == pytest.approx(3e7 * d + 100.0 * dd)
-    assert C.lankarani_nikravesh(d, dd, v, K, 1.3, e, 0.0) == pytest.approx(K * d**1.3 * (1 + 0.63 * dd / v))
-    for code in C.LAW_CODES.values():  # no force without penetration
-        assert C.normal_force(code, -1e-9, -0.1, v, K, n, e, 100.0) == 0.0
+    assert ref_contact.lankarani_nikravesh(d, dd, v, K, n, e, 0.0) == pytest.approx(base * (1 + 0.75 * (1 - e * e) * dd / v))
+    assert ref_contact.hunt_crossley(d, dd, v, K, n, e, 0.0) == pytest.approx(base * (1 + 1.5 * (1 - e) * dd / v))
+    assert ref_contact.flores(d, dd, v, K, n, e, 0.0) == pytest.approx(base * (1 + 8 * (1 - e) / (5 * e) * dd / v))
+    assert ref_contact.linear(d, dd, v, 3e7, n, e, 100.0) == pytest.approx(3e7 * d + 100.0 * dd)
+    assert ref_contact.lankarani_nikravesh(d, dd, v, K, 1.3, e, 0.0) == pytest.approx(K * d**1.3 * (1 + 0.63 * dd / v))
+    for code in ref_contact.LAW_CODES.values():  # no force without penetration
+        assert ref_contact.normal_force(code, -1e-9, -0.1, v, K, n, e, 100.0) == 0.0
 
 
 def test_separation_ratio_is_kept_above_minus_one():
@@ -36,20 +36,20 @@ def test_separation_ratio_is_kept_above_minus_one():
     d = 1e-6
     chi = 0.75 * (1 - e * e)
     # fast separation (δ̇/δ̇⁻ = −5): the ratio is clamped at −1, the force stays positive
-    f = C.lankarani_nikravesh(d, -5 * v, v, K, n, e, 0.0)
+    f = ref_contact.lankarani_nikravesh(d, -5 * v, v, K, n, e, 0.0)
     assert f == pytest.approx(K * d**1.5 * (1 - chi)) and f > 0
     # laws whose damping factor exceeds 1 never pull
-    assert C.flores(d, -5 * v, v, K, n, 0.2, 0.0) == 0.0
-    assert C.linear(d, -1.0, v, 1e6, n, e, 1e5) == 0.0
+    assert ref_contact.flores(d, -5 * v, v, K, n, 0.2, 0.0) == 0.0
+    assert ref_contact.linear(d, -1.0, v, 1e6, n, e, 1e5) == 0.0
 
 
 def test_friction_ramp_and_direction():
     mu0, v0, v1, fn = 0.05, 5e-4, 1e-3, 100.0
-    assert C.friction_force(4e-4, fn, mu0, v0, v1) == 0.0
-    assert C.friction_force(7.5e-4, fn, mu0, v0, v1) == pytest.approx(-0.5 * mu0 * fn)
-    assert C.friction_force(0.3, fn, mu0, v0, v1) == pytest.approx(-mu0 * fn)
-    assert C.friction_force(-0.3, fn, mu0, v0, v1) == pytest.approx(mu0 * fn)
-    assert C.ramp(-2e-3, v0, v1) == 1.0
+    assert ref_contact.friction_force(4e-4, fn, mu0, v0, v1) == 0.0
+    assert ref_contact.friction_force(7.5e-4, fn, mu0, v0, v1) == pytest.approx(-0.5 * mu0 * fn)
+    assert ref_contact.friction_force(0.3, fn, mu0, v0, v1) == pytest.approx(-mu0 * fn)
+    assert ref_contact.friction_force(-0.3, fn, mu0, v0, v1) == pytest.approx(mu0 * fn)
+    assert ref_contact.ramp(-2e-3, v0, v1) == 1.0
 
 
 # ---------------------------------------------------------------- single impact
@@ -60,21 +60,21 @@ def _impact(law: str, h: float, v: float = 0.1):
     cfg = BenchConfig().replace(**{
         "joints.clearance_c_mm": 0.1, "joints.initial_eccentricity": "centred", "mechanism.gravity_mps2": 0.0,
         "mechanism.guide_friction_n": 0.0, "contact.mu0": 0.0, "contact.law": law})
-    P = M.build_params(cfg, drive=False)
-    P[M.P_H] = h
+    P = ref_model.build_params(cfg, drive=False)
+    P[ref_model.P_H] = h
     st = natural.initial_state(cfg, 0.0)
     st[6] += 1e-9                      # contact normal along +x
-    M.contact_parameters(cfg, P, st)
-    R, S = np.zeros((M.N_Q, M.N_Z)), np.zeros(M.N_Q)
-    nz = natural.r_matrix(P, st[:M.N_Q], np.zeros(M.N_Q), R, S)
-    st[M.S_QD:M.S_QD + M.N_Q] = R[:, :nz] @ np.array([0.0, v, 0.0])   # ż = (θ̇, ė_Cx, ė_Cy)
+    ref_model.contact_parameters(cfg, P, st)
+    R, S = np.zeros((ref_model.N_Q, ref_model.N_Z)), np.zeros(ref_model.N_Q)
+    nz = natural.r_matrix(P, st[:ref_model.N_Q], np.zeros(ref_model.N_Q), R, S)
+    st[ref_model.S_QD:ref_model.S_QD + ref_model.N_Q] = R[:, :nz] @ np.array([0.0, v, 0.0])   # ż = (θ̇, ė_Cx, ė_Cy)
     c = cfg.joints.radial_m("C")
     n = int(round(2.5 * c / v / h))
-    out = np.zeros((n, M.N_OUT))
+    out = np.zeros((n, ref_model.N_OUT))
     z = np.zeros(n)
-    assert M.run_steps(P, st, z, z, 1, out, True)[0] == M.OK
-    e = np.hypot(out[:, M.O_JOINT_C], out[:, M.O_JOINT_C + 1])
-    pen = out[:, M.O_JOINT_C + 2]
+    assert ref_model.run_steps(P, st, z, z, 1, out, True)[0] == ref_model.OK
+    e = np.hypot(out[:, ref_model.O_JOINT_C], out[:, ref_model.O_JOINT_C + 1])
+    pen = out[:, ref_model.O_JOINT_C + 2]
     inside = np.flatnonzero(pen > 0)
     first, last = inside[0], inside[-1]
     assert np.all(pen[first:last + 1] > 0)   # one contact event, no chatter
@@ -82,7 +82,7 @@ def _impact(law: str, h: float, v: float = 0.1):
     v_in = (e[first - 1] - e[first - 1 - m]) / (m * h)
     v_out = (e[last + 1 + m] - e[last + 1]) / (m * h)
     assert v_in == pytest.approx(v, rel=1e-6)
-    return -v_out / v_in, out[:, M.O_JOINT_C + 3].max(), (last + 1 - first) * h, cfg
+    return -v_out / v_in, out[:, ref_model.O_JOINT_C + 3].max(), (last + 1 - first) * h, cfg
 
 
 @pytest.mark.parametrize("law", ["lankarani-nikravesh", "hunt-crossley", "flores"])

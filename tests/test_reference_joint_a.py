@@ -16,7 +16,7 @@ from twin.config import ACCELEROMETERS, BenchConfig, preset
 from twin.drive import DriveReference
 from twin.kinematics import static_pin_forces
 from twin import natural_coordinates as natural
-from twin.reference import model as M
+from twin.reference import model as ref_model
 from twin.reference.engine import ReferenceEngine
 from twin.simulation import simulate_run
 
@@ -114,18 +114,18 @@ def test_constraints_stay_at_round_off_with_a_clearance_at_every_joint():
     eng.reset()
     st = eng.state0.copy()
     h = cfg.simulation.timestep_s
-    buf = np.empty((500, M.N_OUT))
+    buf = np.empty((500, ref_model.N_OUT))
     th, om = DriveReference(cfg)(np.arange(5000) * h)
     moved = 0.0
     for k in range(10):
         sl = slice(500 * k, 500 * (k + 1))
-        status, _ = M.run_steps(eng.P, st, th[sl].copy(), om[sl].copy(), 1, buf, True)
-        assert status == M.OK
-        q, qd = st[M.S_Q:M.S_Q + M.N_Q], st[M.S_QD:M.S_QD + M.N_Q]
-        assert M.constraint_norm(eng.P, q) <= 1e-12
-        assert M.velocity_constraint_norm(eng.P, q, qd) <= 1e-12
+        status, _ = ref_model.run_steps(eng.P, st, th[sl].copy(), om[sl].copy(), 1, buf, True)
+        assert status == ref_model.OK
+        q, qd = st[ref_model.S_Q:ref_model.S_Q + ref_model.N_Q], st[ref_model.S_QD:ref_model.S_QD + ref_model.N_Q]
+        assert ref_model.constraint_norm(eng.P, q) <= 1e-12
+        assert ref_model.velocity_constraint_norm(eng.P, q, qd) <= 1e-12
         assert math.hypot(q[8], q[9]) < 1.1 * cfg.joints.radial_m("A")
-        moved = max(moved, float(np.ptp(buf[:, M.O_JOINT_A])))
+        moved = max(moved, float(np.ptp(buf[:, ref_model.O_JOINT_A])))
     assert moved > 1e-7        # the journal does move in its bore
 
 
@@ -156,27 +156,27 @@ def test_contact_power_at_a_and_b_is_that_of_the_material_contact_points(theta):
     cfg = BenchConfig().replace(**{
         "joints.clearance_a_mm": 0.1, "joints.clearance_b_mm": 0.1, "joints.clearance_c_mm": 0.0,
         "joints.initial_eccentricity": "centred", "joints.pin_diameters_m": {"A": 0.03, "B": 0.015}})
-    P = M.build_params(cfg)
+    P = ref_model.build_params(cfg)
     st = natural.initial_state(cfg, theta)
-    M.contact_parameters(cfg, P, st)
-    assert P[M.P_RPIN_A] == 0.015 and P[M.P_RPIN_B] == 0.0075
-    q = st[:M.N_Q].copy()
+    ref_model.contact_parameters(cfg, P, st)
+    assert P[ref_model.P_RPIN_A] == 0.015 and P[ref_model.P_RPIN_B] == 0.0075
+    q = st[:ref_model.N_Q].copy()
     nA, nB = np.array([math.cos(1.0), math.sin(1.0)]), np.array([math.cos(-2.0), math.sin(-2.0)])
     q[8:10] = (cfg.joints.radial_m("A") + 2e-6) * nA
     q[2:4] = q[0:2] - (cfg.joints.radial_m("B") + 1e-6) * nB
-    assert M.project(P, q, np.zeros(M.N_Q), math.sin(q[7]), math.cos(q[7]),
-                     np.zeros(M.N_Q), np.zeros(M.N_Q), np.zeros(M.N_Q)) > 0
-    R, S = np.zeros((M.N_Q, M.N_Z)), np.zeros(M.N_Q)
-    nz = natural.r_matrix(P, q, np.zeros(M.N_Q), R, S)
+    assert ref_model.project(P, q, np.zeros(ref_model.N_Q), math.sin(q[7]), math.cos(q[7]),
+                     np.zeros(ref_model.N_Q), np.zeros(ref_model.N_Q), np.zeros(ref_model.N_Q)) > 0
+    R, S = np.zeros((ref_model.N_Q, ref_model.N_Z)), np.zeros(ref_model.N_Q)
+    nz = natural.r_matrix(P, q, np.zeros(ref_model.N_Q), R, S)
     assert nz == 5
     qd = R[:, :nz] @ np.array([30.0, 0.02, -0.05, 0.03, 0.04])   # θ̇, ė_A, ė_B
-    Q = np.zeros(M.N_Q)
+    Q = np.zeros(ref_model.N_Q)
     jo = [np.zeros(5) for _ in range(3)]
-    M.generalized_forces(P, q, qd, 0.0, np.zeros(2), np.zeros(2), np.zeros(2), Q, *jo)
+    ref_model.generalized_forces(P, q, qd, 0.0, np.zeros(2), np.zeros(2), np.zeros(2), Q, *jo)
     P0 = P.copy()
-    P0[M.P_K_A] = P0[M.P_K_B] = 0.0
-    Q0 = np.zeros(M.N_Q)
-    M.generalized_forces(P0, q, qd, 0.0, np.zeros(2), np.zeros(2), np.zeros(2), Q0, *[np.zeros(5) for _ in range(3)])
+    P0[ref_model.P_K_A] = P0[ref_model.P_K_B] = 0.0
+    Q0 = np.zeros(ref_model.N_Q)
+    ref_model.generalized_forces(P0, q, qd, 0.0, np.zeros(2), np.zeros(2), np.zeros(2), Q0, *[np.zeros(5) for _ in range(3)])
     power = (Q - Q0) @ qd
     eps = 1e-7
     expected = 0.0
@@ -230,8 +230,8 @@ def test_per_joint_pin_radius_sets_that_joints_stiffness_and_geometry():
     assert eng0.contacts["C"].stiffness == pytest.approx(_eq18(0.01, c, mat.pin, mat.bushing), rel=1e-12)
     assert eng.contacts["C"].stiffness < 0.99 * eng0.contacts["C"].stiffness
     assert eng.contacts["B"].stiffness == eng0.contacts["B"].stiffness
-    assert eng.P[M.P_RPIN_C] == 0.0075 and eng.P[M.P_RBUSH_C] == pytest.approx(0.0075 + c, rel=1e-15)
-    assert eng.P[M.P_RPIN_B] == 0.01 and eng.P[M.P_RBUSH_B] == pytest.approx(0.01 + cfg.joints.radial_m("B"), rel=1e-15)
+    assert eng.P[ref_model.P_RPIN_C] == 0.0075 and eng.P[ref_model.P_RBUSH_C] == pytest.approx(0.0075 + c, rel=1e-15)
+    assert eng.P[ref_model.P_RPIN_B] == 0.01 and eng.P[ref_model.P_RBUSH_B] == pytest.approx(0.01 + cfg.joints.radial_m("B"), rel=1e-15)
 
 
 def test_r_matrix_with_a_clearance_at_a_against_finite_differences():
@@ -239,20 +239,20 @@ def test_r_matrix_with_a_clearance_at_a_against_finite_differences():
     C all clearance joints (z = θ, e_A, e_B, e_C)."""
     cfg = BenchConfig().replace(**{"joints.clearance_a_mm": 0.1, "joints.clearance_b_mm": 0.1,
                                    "joints.clearance_c_mm": 0.1, "joints.initial_eccentricity": "centred"})
-    P = M.build_params(cfg)
-    q = natural.initial_state(cfg, 1.1)[:M.N_Q].copy()
+    P = ref_model.build_params(cfg)
+    q = natural.initial_state(cfg, 1.1)[:ref_model.N_Q].copy()
     q[8:10] = [3e-5, -2e-5]
     q[2:4] = q[0:2] - np.array([1e-5, 4e-5])
-    assert M.project(P, q, np.zeros(M.N_Q), math.sin(q[7]), math.cos(q[7]),
-                     np.zeros(M.N_Q), np.zeros(M.N_Q), np.zeros(M.N_Q)) > 0
-    R, S = np.zeros((M.N_Q, M.N_Z)), np.zeros(M.N_Q)
-    assert natural.r_matrix(P, q, np.zeros(M.N_Q), R, S) == 7
+    assert ref_model.project(P, q, np.zeros(ref_model.N_Q), math.sin(q[7]), math.cos(q[7]),
+                     np.zeros(ref_model.N_Q), np.zeros(ref_model.N_Q), np.zeros(ref_model.N_Q)) > 0
+    R, S = np.zeros((ref_model.N_Q, ref_model.N_Z)), np.zeros(ref_model.N_Q)
+    assert natural.r_matrix(P, q, np.zeros(ref_model.N_Q), R, S) == 7
     zd = np.array([10.0, 0.05, -0.03, 0.02, 0.04, -0.01, 0.03])
     qd = R[:, :7] @ zd
     natural.r_matrix(P, q, qd, R, S)
 
     def phi(x):
-        res = np.zeros(M.N_Q)
+        res = np.zeros(ref_model.N_Q)
         natural.residual(P, x, math.sin(x[7]), math.cos(x[7]), res)
         return res[:3]                 # rows 0–2: the only constraints here
 
@@ -261,7 +261,7 @@ def test_r_matrix_with_a_clearance_at_a_against_finite_differences():
         d = (phi(q + eps * R[:, j]) - phi(q - eps * R[:, j])) / (2 * eps)
         assert np.max(np.abs(d)) < 1e-9, j
     assert np.allclose(R[8:10, 1:3], np.eye(2)) and np.allclose(R[8:10, [0, 3, 4, 5, 6]], 0)
-    Rp, Rm = np.zeros((M.N_Q, M.N_Z)), np.zeros((M.N_Q, M.N_Z))
-    natural.r_matrix(P, q + eps * qd, qd, Rp, np.zeros(M.N_Q))
-    natural.r_matrix(P, q - eps * qd, qd, Rm, np.zeros(M.N_Q))
+    Rp, Rm = np.zeros((ref_model.N_Q, ref_model.N_Z)), np.zeros((ref_model.N_Q, ref_model.N_Z))
+    natural.r_matrix(P, q + eps * qd, qd, Rp, np.zeros(ref_model.N_Q))
+    natural.r_matrix(P, q - eps * qd, qd, Rm, np.zeros(ref_model.N_Q))
     np.testing.assert_allclose((Rp - Rm)[:, :7] / (2 * eps) @ zd, S, atol=1e-6 * max(1, np.abs(S).max()))

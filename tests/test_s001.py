@@ -9,7 +9,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from twin import names as N
+from twin import names
 from twin.cli import build_parser, config_from_args
 from twin.config import BenchConfig, config_from_toml, ln_stiffness, load_config, named_preset
 from twin.drive import DriveReference
@@ -119,14 +119,14 @@ def test_adams_friction_of_the_native_module():
             if a < 0 or d.efc_force[a] < 1.0:
                 continue
             g0 = m.geom(con.geom[0]).name
-            pin_first = g0 == N.pin("C")
+            pin_first = g0 == names.pin("C")
             gp, gb = (con.geom[0], con.geom[1]) if pin_first else (con.geom[1], con.geom[0])
             jp, jb = np.zeros((3, m.nv)), np.zeros((3, m.nv))
             mujoco.mj_jac(m, d, jp, None, con.pos, m.geom_bodyid[gp])
             mujoco.mj_jac(m, d, jb, None, con.pos, m.geom_bodyid[gb])
             n_bp = (1.0 if pin_first else -1.0) * con.frame[:3]  # bore centre -> pin side
             vt = ((jp - jb) @ d.qvel) @ np.cross([0, 0, 1], n_bp)
-            ft = d.sensordata[sens[N.sensor_friction("C")].start]
+            ft = d.sensordata[sens[names.sensor_friction("C")].start]
             # the law's normal force at this state (Lankarani-Nikravesh with the stored impact
             # speed) at the step's secant rate: the rate less h b/2, b = -J'q' of the row
             delta, ddelta = -(d.efc_pos[a] - d.efc_margin[a]), -d.efc_vel[a]

@@ -11,14 +11,14 @@ from twin.channels import channel_specs
 from twin.cli import main
 from twin.config import CHANNEL_GROUPS, preset
 from twin.simulation import simulate_run
-from twin.studies import stability as S
+from twin.studies import stability as stability_study
 
 
 @pytest.fixture(scope="module")
 def ci(tmp_path_factory):
     """The CI version (``--scenes 20 --seed 1 --quick``), written to a directory."""
     out = tmp_path_factory.mktemp("stability")
-    return out, S.run_study(out, S.quick(20, 1))
+    return out, stability_study.run_study(out, stability_study.quick(20, 1))
 
 
 def test_ci_campaign_is_stable(ci):
@@ -35,7 +35,7 @@ def test_ci_campaign_is_stable(ci):
     # default impact-speed damping (the reference engine's Lankarani-Nikravesh contact: 0.245 at B);
     # with the fixed damping it read 0.264 and failed the 0.25 criterion
     assert s["failed_scenes"] == s["pen_exceeded_scenes"] == []
-    assert s["max_pen_over_c_scene"] == 6 and 0.2 < s["max_pen_over_c"] < S.PEN_LIMIT
+    assert s["max_pen_over_c_scene"] == 6 and 0.2 < s["max_pen_over_c"] < stability_study.PEN_LIMIT
 
 
 def test_ci_outputs(ci):
@@ -46,15 +46,15 @@ def test_ci_outputs(ci):
     assert "scenes passed: **20 / 20**" in md and md.count("\n| ") == 21
     assert (out / "stability.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert not list(out.glob(".*tmp"))
-    assert S.one_line(data).startswith("stability PASS: 20/20 scenes passed, 0 diverged")
+    assert stability_study.one_line(data).startswith("stability PASS: 20/20 scenes passed, 0 diverged")
 
 
 def test_sampler_covers_the_space(ci):
     _, data = ci
     scenes = [r["scene"] for r in data["scenes"]]
     assert {s["orientation"] for s in scenes} == {"x", "y", "z"}
-    assert {s["drive"]["program"] for s in scenes} == set(S.PROGRAMS)
-    assert {s["timestep_s"] for s in scenes} == set(S.TIMESTEPS)
+    assert {s["drive"]["program"] for s in scenes} == set(stability_study.PROGRAMS)
+    assert {s["timestep_s"] for s in scenes} == set(stability_study.TIMESTEPS)
     modes = {(s["clearance_b_mm"] > 0, s["clearance_c_mm"] > 0) for s in scenes}
     assert modes == {(True, False), (False, True), (True, True)}
     for s in scenes:
@@ -65,25 +65,25 @@ def test_sampler_covers_the_space(ci):
         if s["drive"]["program"] == "constant":
             assert 100 <= s["drive"]["motor_rpm"] <= 800
         if s["drive"]["program"] != "startstop":  # no trace file needed: the configuration validates
-            assert S.scene_config(s, None).duration_s == pytest.approx(s["duration_s"])
+            assert stability_study.scene_config(s, None).duration_s == pytest.approx(s["duration_s"])
 
 
 def test_determinism(ci, tmp_path):
     _, data = ci
     # scene i depends on (seed, i) only, not on N
-    assert [S.sample_scene(1, i, (0.3, 1.0)) for i in range(20)] == [r["scene"] for r in data["scenes"]]
-    assert S.sample_scene(1, 7, (0.3, 1.0)) == data["scenes"][7]["scene"]
+    assert [stability_study.sample_scene(1, i, (0.3, 1.0)) for i in range(20)] == [r["scene"] for r in data["scenes"]]
+    assert stability_study.sample_scene(1, 7, (0.3, 1.0)) == data["scenes"][7]["scene"]
     # re-running scenes gives identical metrics (wall time aside)
     for i in (1, 4, 9):
-        again = S.run_scene(data["scenes"][i]["scene"], tmp_path)
+        again = stability_study.run_scene(data["scenes"][i]["scene"], tmp_path)
         first = dict(data["scenes"][i]["metrics"])
         again.pop("wall_s"), first.pop("wall_s")
         assert again == first
 
 
 def test_different_seeds_differ():
-    a = [S.sample_scene(1, i) for i in range(20)]
-    b = [S.sample_scene(2, i) for i in range(20)]
+    a = [stability_study.sample_scene(1, i) for i in range(20)]
+    b = [stability_study.sample_scene(2, i) for i in range(20)]
     strip = lambda sc: {k: v for k, v in sc.items() if k != "seed"}  # noqa: E731
     assert all(strip(x) != strip(y) for x, y in zip(a, b))
 
@@ -94,13 +94,13 @@ def test_ideal_scene_energy_balance(tmp_path):
              "drive": {"program": "constant", "motor_rpm": 600.0, "ramp_s": 0.1}, "initial_encoder_angle_rad": 0.3,
              "timestep_s": 1e-5, "contact_stiffness_scale": 1.0, "contact_damping_scale": 1.0,
              "duration_s": 0.5, "settle_s": 0.1}
-    m = S.run_scene(scene, tmp_path)
+    m = stability_study.run_scene(scene, tmp_path)
     assert m["passed"] and m["joints"] == {} and m["max_pen_over_c"] == 0.0
     assert m["work_pos_J"] > 5.0  # spin-up and lifting: a balance with something in it
     assert abs(m["residual_rel"]) < 1e-3 and abs(m["residual_min_rel"]) < 1e-3, m
     assert abs(m["delta_energy_J"] + m["guide_dissipation_J"] - m["work_in_J"]) < 1e-3 * m["work_pos_J"]
     # the same scene with a 0.1 mm clearance at B and C dissipates (contact damping, joint friction)
-    m2 = S.run_scene({**scene, "clearance_b_mm": 0.1, "clearance_c_mm": 0.1}, tmp_path)
+    m2 = stability_study.run_scene({**scene, "clearance_b_mm": 0.1, "clearance_c_mm": 0.1}, tmp_path)
     assert m2["residual_rel"] > 5e-3 and not m2["energy_created"]
 
 
@@ -163,10 +163,10 @@ def test_the_reference_re_run_deflects_under_the_twins_perturbed_stiffness(monke
     monkeypatch.setattr(twin.simulation, "simulate_run", fake_simulate_run)
     cfg = preset(6).replace(**{"mujoco.contact_stiffness_scale": 0.81, "contact.stiffness_scale": 1.1,
                                "mujoco.contact_damping_scale": 0.94})
-    out = S.reference_check(cfg)
+    out = stability_study.reference_check(cfg)
     (ref,) = seen
     assert ref.simulation.engine == "reference" and ref.contact.stiffness_scale == pytest.approx(0.81 * 1.1)
-    assert ref.simulation.timestep_s == S.REFERENCE_TIMESTEP_S == 1e-6
+    assert ref.simulation.timestep_s == stability_study.REFERENCE_TIMESTEP_S == 1e-6
     # the damping factor as the restitution of the same LN law: 3(1 - e'^2)/4 = 0.94 x 3(1 - e^2)/4
     e = cfg.contact.restitution
     assert ref.contact.restitution == pytest.approx(np.sqrt(1 - 0.94 * (1 - e ** 2)), rel=1e-12)
@@ -176,10 +176,10 @@ def test_the_reference_re_run_deflects_under_the_twins_perturbed_stiffness(monke
 def test_an_exceedance_is_physical_only_where_the_converged_reference_exceeds_the_limit_too():
     met = {"joints": {"B": {"pen_over_c": 0.27}, "C": {"pen_over_c": 0.02}},
            "reference": {"pen_over_c": {"B": 0.237, "C": 0.02}}}
-    S._mark_agreement(met)
+    stability_study._mark_agreement(met)
     assert met["reference"]["agrees"] and met["reference"]["cause"] == "numerical"
     met["reference"]["pen_over_c"]["B"] = 0.26
-    S._mark_agreement(met)
+    stability_study._mark_agreement(met)
     assert met["reference"]["cause"] == "physical"
 
 
@@ -189,9 +189,9 @@ def test_carried_restitution_inverts_each_hysteresis_law():
     for law, chi in DAMPING_FACTOR.items():
         for scale in (0.7, 1.15):
             cfg = preset(6).replace(**{"contact.law": law, "mujoco.contact_damping_scale": scale})
-            e2 = S.carried_restitution(cfg)
+            e2 = stability_study.carried_restitution(cfg)
             assert 0 < e2 < 1 and chi(e2) == pytest.approx(scale * chi(cfg.contact.restitution), rel=1e-9), law
-    assert S.carried_restitution(preset(6)) == pytest.approx(preset(6).contact.restitution, rel=1e-12)
-    assert S.carried_restitution(preset(6).replace(**{"contact.law": "linear"})) is None
+    assert stability_study.carried_restitution(preset(6)) == pytest.approx(preset(6).contact.restitution, rel=1e-12)
+    assert stability_study.carried_restitution(preset(6).replace(**{"contact.law": "linear"})) is None
     # LN's χ is at most 3/4 (e -> 0): 1.3 x χ(0.4) = 0.82 is no restitution's damping
-    assert S.carried_restitution(preset(6).replace(**{"mujoco.contact_damping_scale": 1.3})) is None
+    assert stability_study.carried_restitution(preset(6).replace(**{"mujoco.contact_damping_scale": 1.3})) is None

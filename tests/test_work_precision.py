@@ -12,15 +12,15 @@ import pytest
 from twin.config import preset
 from twin.natural_coordinates import P_INTEGRATOR
 from twin.errors import ConfigError
-from twin.studies import formulations as F
+from twin.studies import formulations as formulations_study
 from twin.reference.engine import ReferenceEngine, ReferenceOptions
 
 
 
 def _theta_error(h: float, integrator: str, duration: float = 0.5) -> float:
-    cfg = F.study_config(None)
-    th, _ = F._rmatrix_theta(cfg, h, duration, integrator)
-    exact, _ = F.MinimalModel(cfg).solve(F.THETA0, np.array([0.0, duration]))
+    cfg = formulations_study.study_config(None)
+    th, _ = formulations_study._rmatrix_theta(cfg, h, duration, integrator)
+    exact, _ = formulations_study.MinimalModel(cfg).solve(formulations_study.THETA0, np.array([0.0, duration]))
     return abs(th - exact[-1])
 
 
@@ -69,7 +69,7 @@ def test_unknown_integrator_is_refused():
 def test_work_precision_rows_and_front(tmp_path):
     methods = {"R-matrix, symplectic Euler": (1e-4,), "R-matrix, explicit midpoint": (1e-3, 1e-4),
                "MuJoCo twin, Euler": (1e-4,)}
-    data = F.run_study(tmp_path, duration_s=0.2, cases=(F.Case("R-matrix", 1e-4),), progress=False,
+    data = formulations_study.run_study(tmp_path, duration_s=0.2, cases=(formulations_study.Case("R-matrix", 1e-4),), progress=False,
                        work_precision_methods=methods)
     rows = data["work_precision"]
     assert [r["method"] for r in rows] == ["R-matrix, symplectic Euler", "R-matrix, explicit midpoint",
@@ -85,7 +85,7 @@ def test_work_precision_rows_and_front(tmp_path):
 
 
 def test_exudyn_rows_are_skipped_cleanly_when_it_is_not_installed(monkeypatch):
-    monkeypatch.setattr(F, "exudyn_available", lambda: False)
-    rows = F.work_precision(None, 0.05, 0.0, {"Exudyn, generalized-α": (1e-3,), "R-matrix, explicit midpoint": (1e-3,)})
+    monkeypatch.setattr(formulations_study, "exudyn_available", lambda: False)
+    rows = formulations_study.work_precision(None, 0.05, 0.0, {"Exudyn, generalized-α": (1e-3,), "R-matrix, explicit midpoint": (1e-3,)})
     assert [r["method"] for r in rows] == ["R-matrix, explicit midpoint"]
-    assert "not installed" in F.work_precision_markdown(rows, 0.05, exudyn=False)
+    assert "not installed" in formulations_study.work_precision_markdown(rows, 0.05, exudyn=False)

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 
-from twin import names as N
+from twin import names
 from twin.errors import ModelError
 
 #: MuJoCo's own defaults of the attributes read here (MJCF reference), used when neither the
@@ -249,18 +249,18 @@ def read_defaults(path: Path) -> ModelDefaults:
     size = r.find("size", "<size>")
 
     # geometry: lengths and the pin/bushing
-    pin_b, pin_c = r.named("geom", N.pin("B")), r.named("geom", N.pin("C"))
-    bush_b, bush_c = r.named("geom", N.bushing("B")), r.named("geom", N.bushing("C"))
-    pin_a, bush_a = r.named("geom", N.pin("A")), r.named("geom", N.bushing("A"))  # crank journal, frame bore
-    rod_body = r.named("body", N.ROD)
+    pin_b, pin_c = r.named("geom", names.pin("B")), r.named("geom", names.pin("C"))
+    bush_b, bush_c = r.named("geom", names.bushing("B")), r.named("geom", names.bushing("C"))
+    pin_a, bush_a = r.named("geom", names.pin("A")), r.named("geom", names.bushing("A"))  # crank journal, frame bore
+    rod_body = r.named("body", names.ROD)
     crank_len = _same(r, r.numbers(pin_b, "pos", 3)[0],
-                      [(r.named("site", N.pin("B")), r.numbers(r.named("site", N.pin("B")), "pos", 3)[0]),
+                      [(r.named("site", names.pin("B")), r.numbers(r.named("site", names.pin("B")), "pos", 3)[0]),
                        (rod_body, r.numbers(rod_body, "pos", 3)[0])], "the crank length (x of pin B)")
     rod_len = _same(r, r.numbers(bush_c, "pos", 3)[0],
-                    [(e, r.numbers(e, "pos", 3)[0]) for e in (r.named("site", N.bushing("C")),
-                                                              r.named("geom", N.bushing_ring("C")))],
+                    [(e, r.numbers(e, "pos", 3)[0]) for e in (r.named("site", names.bushing("C")),
+                                                              r.named("geom", names.bushing_ring("C")))],
                     "the rod length (x of bushing C)")
-    slider_len = 2 * r.numbers(r.named("geom", N.SLIDER_BLOCK), "size", 3)[0]
+    slider_len = 2 * r.numbers(r.named("geom", names.SLIDER_BLOCK), "size", 3)[0]
     pin_r, half = r.numbers(pin_b, "size", 2)
     for g in (pin_a, bush_a, pin_c, bush_b, bush_c):  # the base model is ideal: bore radius = pin radius
         _same(r, pin_r, [(g, r.numbers(g, "size", 2)[0])], "the pin radius")
@@ -268,9 +268,9 @@ def read_defaults(path: Path) -> ModelDefaults:
 
     # d_off: C' above the slider's reference point
     d_off = _same(r, r.numbers(pin_c, "pos", 3)[1],
-                  [(r.named("site", N.pin("C")), r.numbers(r.named("site", N.pin("C")), "pos", 3)[1]),
-                   (r.find(f".//body[@name='{N.SLIDER}']/inertial", "slider inertial"),
-                    r.numbers(r.find(f".//body[@name='{N.SLIDER}']/inertial", "slider inertial"), "pos", 3)[1])],
+                  [(r.named("site", names.pin("C")), r.numbers(r.named("site", names.pin("C")), "pos", 3)[1]),
+                   (r.find(f".//body[@name='{names.SLIDER}']/inertial", "slider inertial"),
+                    r.numbers(r.find(f".//body[@name='{names.SLIDER}']/inertial", "slider inertial"), "pos", 3)[1])],
                   "d_off (y of pin C)")
 
     # gravity -> vertical axis and magnitude
@@ -282,34 +282,34 @@ def read_defaults(path: Path) -> ModelDefaults:
 
     # the bushing's friction law (geom user data, layout twin.names.BORE_USERDATA_FIELDS)
     nuser = r.integer(size, "nuser_geom")
-    if nuser != len(N.BORE_USERDATA_FIELDS):
+    if nuser != len(names.BORE_USERDATA_FIELDS):
         raise ModelError(f"{r.where(size)}: nuser_geom={nuser} but the bore user data layout has "
-                         f"{len(N.BORE_USERDATA_FIELDS)} fields {N.BORE_USERDATA_FIELDS} (twin.names)")
+                         f"{len(names.BORE_USERDATA_FIELDS)} fields {names.BORE_USERDATA_FIELDS} (twin.names)")
     user = r.numbers(bush_b, "user", nuser)
     _same(r, 0.0, [(g, max(abs(a - b) for a, b in zip(user, r.numbers(g, "user", nuser)))) for g in (bush_a, bush_c)],
           "the bushing user data (difference to bushing B)")
-    fields = N.read_bore_userdata(user)
-    if fields["marker"] != N.BORE_MAGIC:
-        raise ModelError(f"{r.where(bush_b)}: user data marker {fields['marker']:g} is not {N.BORE_MAGIC:g}")
+    fields = names.read_bore_userdata(user)
+    if fields["marker"] != names.BORE_MAGIC:
+        raise ModelError(f"{r.where(bush_b)}: user data marker {fields['marker']:g} is not {names.BORE_MAGIC:g}")
 
-    slide = r.named("joint", N.SLIDER_SLIDE)
-    connect = r.find(f".//equality/connect[@name='{N.JOINT_C_CONNECT}']", f"connect {N.JOINT_C_CONNECT!r}")
-    pid = r.find(f".//actuator/pid[@name='{N.CRANK_PID}']", f"<pid name={N.CRANK_PID!r}>")
+    slide = r.named("joint", names.SLIDER_SLIDE)
+    connect = r.find(f".//equality/connect[@name='{names.JOINT_C_CONNECT}']", f"connect {names.JOINT_C_CONNECT!r}")
+    pid = r.find(f".//actuator/pid[@name='{names.CRANK_PID}']", f"<pid name={names.CRANK_PID!r}>")
 
     accels = []
-    for name in N.ACCEL_SENSORS:
+    for name in names.ACCEL_SENSORS:
         site = r.named("site", name)
         body = r.parent[site]
-        if body.tag != "body" or body.get("name") not in (N.ROD, N.SLIDER):
-            raise ModelError(f"{r.where(site)} must sit in body {N.ROD!r} or {N.SLIDER!r}")
+        if body.tag != "body" or body.get("name") not in (names.ROD, names.SLIDER):
+            raise ModelError(f"{r.where(site)} must sit in body {names.ROD!r} or {names.SLIDER!r}")
         x, y, _ = r.numbers(site, "pos", 3)
-        if body.get("name") == N.SLIDER:
+        if body.get("name") == names.SLIDER:
             y -= d_off
         accels.append((name, AccelDefaults(body.get("name"), (x, y), _axis(r, site))))
 
     return ModelDefaults(
         path=str(path),
-        crank=_body(r, N.CRANK, crank_len), rod=_body(r, N.ROD, rod_len), slider=_body(r, N.SLIDER, slider_len),
+        crank=_body(r, names.CRANK, crank_len), rod=_body(r, names.ROD, rod_len), slider=_body(r, names.SLIDER, slider_len),
         pin_diameter_m=2 * pin_r, bushing_length_m=2 * half,
         orientation="xyz"[nonzero[0]], gravity_mps2=-g[nonzero[0]], d_off_m=d_off,
         guide_friction_n=r.number(slide, "frictionloss"),
@@ -333,4 +333,4 @@ def _cached(path: str) -> ModelDefaults:
 def defaults(path: Path | str | None = None) -> ModelDefaults:
     """Configuration defaults of the packaged base model (``twin.names.BASE_XML``) or of
     ``path``; parsed once per path."""
-    return _cached(str(path if path is not None else N.BASE_XML))
+    return _cached(str(path if path is not None else names.BASE_XML))

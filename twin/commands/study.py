@@ -110,15 +110,15 @@ def _run_accuracy(args: argparse.Namespace) -> int:
     import sys
 
     from twin.errors import ConfigError
-    from twin.studies import accuracy as A
+    from twin.studies import accuracy as accuracy_study
     from twin.util import check_output_dir
 
-    settings = A.QUICK if args.quick else A.StudySettings()
+    settings = accuracy_study.QUICK if args.quick else accuracy_study.StudySettings()
     if args.tests is not None:
         try:
             tests = tuple(int(x) for x in args.tests.split(",") if x.strip())
         except ValueError:
-            raise ConfigError("--tests", f"must be comma-separated integers from {list(A.CLEARANCE_TESTS)}, "
+            raise ConfigError("--tests", f"must be comma-separated integers from {list(accuracy_study.CLEARANCE_TESTS)}, "
                                          f"got {args.tests!r}") from None
         settings = dataclasses.replace(settings, tests=tests)
     if args.window is not None:
@@ -126,7 +126,7 @@ def _run_accuracy(args: argparse.Namespace) -> int:
             raise ConfigError("--window", f"must lie in [0.05, 60] s, got {args.window!r}")
         settings = dataclasses.replace(settings, window_s=args.window)
     out = check_output_dir(args.out)
-    data = A.run_study(out, settings, quick=args.quick, progress=not args.no_progress and sys.stderr.isatty(),
+    data = accuracy_study.run_study(out, settings, quick=args.quick, progress=not args.no_progress and sys.stderr.isatty(),
                        log=lambda m: print(m, file=sys.stderr, flush=True))
     print(f"wrote {out / 'accuracy.md'}, {out / 'accuracy.json'} and {len(data['figures'])} PNG plots")
     for r in data["summary"]:

@@ -36,7 +36,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from twin import names as N
+from twin import names as mjcf_names
 from twin.config import BenchConfig
 from twin.errors import ModelError
 
@@ -61,7 +61,7 @@ def _quat_x_axis(q: np.ndarray) -> np.ndarray:
 class PosthocAccelerometers:
     """The six accelerometer readings of a compiled bench model from its recorded states."""
 
-    def __init__(self, model: mujoco.MjModel, names: tuple[str, ...] = N.ACCEL_SENSORS):
+    def __init__(self, model: mujoco.MjModel, names: tuple[str, ...] = mjcf_names.ACCEL_SENSORS):
         m = model
         self.names = tuple(names)
         if m.opt.integrator != mujoco.mjtIntegrator.mjINT_EULER:
@@ -69,7 +69,7 @@ class PosthocAccelerometers:
         if not (m.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_EULERDAMP) and np.any(m.dof_damping > 0):
             raise ModelError("posthoc accelerometers need eulerdamp disabled (or no joint damping): "
                              "Euler's implicit damping makes qvel_{k+1} - qvel_k differ from h qacc_k")
-        crank, rod, slider = (m.body(b).id for b in (N.CRANK, N.ROD, N.SLIDER))
+        crank, rod, slider = (m.body(b).id for b in (mjcf_names.CRANK, mjcf_names.ROD, mjcf_names.SLIDER))
         if m.body_parentid[crank] != 0 or m.body_parentid[rod] != crank or m.body_parentid[slider] != 0:
             raise ModelError("posthoc accelerometers: unexpected body tree (crank and slider on the world, rod on the crank)")
         for b in (crank, rod, slider):
@@ -77,17 +77,17 @@ class PosthocAccelerometers:
                 raise ModelError(f"posthoc accelerometers: body {m.body(b).name} has a rotated frame")
         nq = m.nq
         idx = np.full(2 * _NIDX, -1, dtype=np.int64)
-        expect = {N.ECC_A_X: (_QAX, mujoco.mjtJoint.mjJNT_SLIDE, (1, 0, 0), crank),
-                  N.ECC_A_Y: (_QAY, mujoco.mjtJoint.mjJNT_SLIDE, (0, 1, 0), crank),
-                  N.CRANK_HINGE: (_QTH, mujoco.mjtJoint.mjJNT_HINGE, (0, 0, 1), crank),
-                  N.ECC_B_X: (_QBX, mujoco.mjtJoint.mjJNT_SLIDE, (1, 0, 0), rod),
-                  N.ECC_B_Y: (_QBY, mujoco.mjtJoint.mjJNT_SLIDE, (0, 1, 0), rod),
-                  N.ROD_HINGE: (_QPS, mujoco.mjtJoint.mjJNT_HINGE, (0, 0, 1), rod),
-                  N.SLIDER_SLIDE: (_QXS, mujoco.mjtJoint.mjJNT_SLIDE, (1, 0, 0), slider)}
+        expect = {mjcf_names.ECC_A_X: (_QAX, mujoco.mjtJoint.mjJNT_SLIDE, (1, 0, 0), crank),
+                  mjcf_names.ECC_A_Y: (_QAY, mujoco.mjtJoint.mjJNT_SLIDE, (0, 1, 0), crank),
+                  mjcf_names.CRANK_HINGE: (_QTH, mujoco.mjtJoint.mjJNT_HINGE, (0, 0, 1), crank),
+                  mjcf_names.ECC_B_X: (_QBX, mujoco.mjtJoint.mjJNT_SLIDE, (1, 0, 0), rod),
+                  mjcf_names.ECC_B_Y: (_QBY, mujoco.mjtJoint.mjJNT_SLIDE, (0, 1, 0), rod),
+                  mjcf_names.ROD_HINGE: (_QPS, mujoco.mjtJoint.mjJNT_HINGE, (0, 0, 1), rod),
+                  mjcf_names.SLIDER_SLIDE: (_QXS, mujoco.mjtJoint.mjJNT_SLIDE, (1, 0, 0), slider)}
         seen = set()
         for j in range(m.njnt):
             name = m.joint(j).name
-            if name == N.MOTOR_HINGE and m.body_parentid[m.jnt_bodyid[j]] == 0:
+            if name == mjcf_names.MOTOR_HINGE and m.body_parentid[m.jnt_bodyid[j]] == 0:
                 continue  # the drive train's rotor, on the world: no sensor on it
             if name not in expect:
                 raise ModelError(f"posthoc accelerometers: unexpected joint {name!r}")
@@ -99,7 +99,7 @@ class PosthocAccelerometers:
             idx[slot] = 1 + m.jnt_qposadr[j]
             idx[_NIDX + slot] = 1 + nq + m.jnt_dofadr[j]
             seen.add(name)
-        for name in (N.CRANK_HINGE, N.ROD_HINGE, N.SLIDER_SLIDE):
+        for name in (mjcf_names.CRANK_HINGE, mjcf_names.ROD_HINGE, mjcf_names.SLIDER_SLIDE):
             if name not in seen:
                 raise ModelError(f"posthoc accelerometers: the model has no joint {name!r}")
         sites = np.zeros((len(self.names), 6))

@@ -51,7 +51,7 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
-from twin import names as N
+from twin import names as mjcf_names
 from twin.config import JOINTS, BenchConfig
 from twin.contact_params import (cylindrical_stiffness, first_guess_contact, initial_linear_law, johnson_elastic_force,
                                  law_stiffness)
@@ -71,11 +71,11 @@ FLAT_SOLIMP = (1e-4, 1e-4, 1e-3, 0.5, 2.0)
 _CONDIM = 1
 
 _SENSORS_BY_GROUP = {
-    "accel": list(N.ACCEL_SENSORS),
-    "encoder": [N.SENSOR_CRANK_ANGLE],
-    "crank": [N.SENSOR_CRANK_ANGLE, N.SENSOR_CRANK_SPEED],
-    "slider": [N.SENSOR_SLIDER_POSITION],
-    "drive": [N.SENSOR_CRANK_TORQUE],
+    "accel": list(mjcf_names.ACCEL_SENSORS),
+    "encoder": [mjcf_names.SENSOR_CRANK_ANGLE],
+    "crank": [mjcf_names.SENSOR_CRANK_ANGLE, mjcf_names.SENSOR_CRANK_SPEED],
+    "slider": [mjcf_names.SENSOR_SLIDER_POSITION],
+    "drive": [mjcf_names.SENSOR_CRANK_TORQUE],
 }
 
 _AXIS_QUAT = {  # site orientation whose x axis is the sensitive axis (rotation about z)
@@ -143,7 +143,7 @@ class NativeLaw:
     @property
     def code(self) -> int:
         """The ``law`` field of the bore user data (:data:`twin.names.BORE_LAWS`)."""
-        return N.BORE_LAWS[{"linear": "linear", "adams-impact": "impact",
+        return mjcf_names.BORE_LAWS[{"linear": "linear", "adams-impact": "impact",
                             "johnson-cylindrical": "cylinder"}.get(self.law, "hysteresis")]
 
     def userdata(self, slot: int) -> dict[str, float]:
@@ -317,9 +317,9 @@ def _set_inertial(body: mujoco.MjsBody, mass: float, ipos, izz: float) -> None:
 def build_spec(cfg: BenchConfig) -> mujoco.MjSpec:
     """Edited (uncompiled) spec of the configuration; contact pairs without final solref."""
     try:
-        spec = mujoco.MjSpec.from_file(str(N.BASE_XML))
+        spec = mujoco.MjSpec.from_file(str(mjcf_names.BASE_XML))
     except Exception as err:  # mujoco raises ValueError with the parser message
-        raise ModelError(f"cannot load base model {N.BASE_XML}: {err}") from None
+        raise ModelError(f"cannot load base model {mjcf_names.BASE_XML}: {err}") from None
     spec.modelname = f"slider_crank_bench_{cfg.name}"
     b, j, mech = cfg.bodies, cfg.joints, cfg.mechanism
     r, l = b.crank.length_m, b.rod.length_m
@@ -336,58 +336,58 @@ def build_spec(cfg: BenchConfig) -> mujoco.MjSpec:
         opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT
 
     # crank
-    crank = spec.body(N.CRANK)
+    crank = spec.body(mjcf_names.CRANK)
     _set_inertial(crank, b.crank.mass_kg, (b.crank.x_g_m, 0, 0), b.crank.inertia_kgm2)
-    arm = spec.geom(N.CRANK_ARM)
+    arm = spec.geom(mjcf_names.CRANK_ARM)
     arm.size = [r / 2 + 0.015, arm.size[1], arm.size[2]]
     arm.pos = [r / 2 - 0.01, 0, 0]
-    z = spec.geom(N.pin("B")).pos[2]
-    for obj in (spec.geom(N.pin("B")), spec.site(N.pin("B"))):
+    z = spec.geom(mjcf_names.pin("B")).pos[2]
+    for obj in (spec.geom(mjcf_names.pin("B")), spec.site(mjcf_names.pin("B"))):
         obj.pos = [r, 0, z]
 
     # rod (frame at the bushing centre B', x towards C)
-    rod = spec.body(N.ROD)
+    rod = spec.body(mjcf_names.ROD)
     rod.pos = [r, 0, z]
     _set_inertial(rod, b.rod.mass_kg, (b.rod.x_g_m, 0, 0), b.rod.inertia_kgm2)
-    beam = spec.geom(N.ROD_BEAM)
+    beam = spec.geom(mjcf_names.ROD_BEAM)
     beam.size = [l / 2 - 0.03, beam.size[1], beam.size[2]]
     beam.pos = [l / 2, 0, 0]
-    for name in (N.bushing("C"), N.bushing_ring("C")):
+    for name in (mjcf_names.bushing("C"), mjcf_names.bushing_ring("C")):
         spec.geom(name).pos = [l, 0, 0]
-    spec.site(N.bushing("C")).pos = [l, 0, 0]
+    spec.site(mjcf_names.bushing("C")).pos = [l, 0, 0]
 
     # slider (frame at Cs on the guide line; C' is d_off above it)
-    slider = spec.body(N.SLIDER)
+    slider = spec.body(mjcf_names.SLIDER)
     _set_inertial(slider, b.slider.mass_kg, (b.slider.x_g_m, mech.d_off_m, 0), b.slider.inertia_kgm2)
-    guide = spec.joint(N.SLIDER_SLIDE)
+    guide = spec.joint(mjcf_names.SLIDER_SLIDE)
     guide.solref_friction = list(cfg.mujoco.guide_solreffriction)
     if cfg.mujoco.guide_friction == "native":
         # the reference's regularized Coulomb guide friction, a passive force of the native module
         guide.frictionloss = 0.0
-        spec.nuser_jnt = len(N.GUIDE_USERDATA_FIELDS)
-        guide.userdata = N.guide_userdata(mech.guide_friction_n, cfg.contact.v0_mps, cfg.contact.v1_mps)
+        spec.nuser_jnt = len(mjcf_names.GUIDE_USERDATA_FIELDS)
+        guide.userdata = mjcf_names.guide_userdata(mech.guide_friction_n, cfg.contact.v0_mps, cfg.contact.v1_mps)
     else:
         guide.frictionloss = mech.guide_friction_n
-    for obj in (spec.geom(N.pin("C")), spec.site(N.pin("C"))):
+    for obj in (spec.geom(mjcf_names.pin("C")), spec.site(mjcf_names.pin("C"))):
         obj.pos = [0, mech.d_off_m, 0]
-    block = spec.geom(N.SLIDER_BLOCK)
+    block = spec.geom(mjcf_names.SLIDER_BLOCK)
     block.size = [b.slider.length_m / 2, block.size[1], block.size[2]]
 
-    # pins, bushings (user data: bore marker and friction law, layout N.BORE_USERDATA_FIELDS)
+    # pins, bushings (user data: bore marker and friction law, layout mjcf_names.BORE_USERDATA_FIELDS)
     # and their visual rings; the contact law is MuJoCo's solref/solimp unless build() writes
     # the native law
     con = cfg.contact
-    if con.friction_law == "adams":  # Adams/COSMOS: mu_d = mu0, v_s, v_d in v0, v1 (N.BORE_USERDATA_FIELDS)
-        friction_law = N.bore_userdata(mu0=con.mu0, v0=con.v_static_mps, v1=con.v_kinetic_mps,
-                                       friction=N.BORE_FRICTION_LAWS["adams"], mus=con.mu_static)
+    if con.friction_law == "adams":  # Adams/COSMOS: mu_d = mu0, v_s, v_d in v0, v1 (mjcf_names.BORE_USERDATA_FIELDS)
+        friction_law = mjcf_names.bore_userdata(mu0=con.mu0, v0=con.v_static_mps, v1=con.v_kinetic_mps,
+                                       friction=mjcf_names.BORE_FRICTION_LAWS["adams"], mus=con.mu_static)
     else:
-        friction_law = N.bore_userdata(mu0=con.mu0, v0=con.v0_mps, v1=con.v1_mps)
+        friction_law = mjcf_names.bore_userdata(mu0=con.mu0, v0=con.v0_mps, v1=con.v1_mps)
     for jt in JOINTS:  # each joint's own pin radius and bushing length
         half_len = j.bushing_length(jt) / 2
-        spec.geom(N.pin(jt)).size = [j.pin_radius(jt), half_len, 0]
-        spec.geom(N.bushing(jt)).size = [j.bushing_radius_m(jt), half_len, 0]
-        spec.geom(N.bushing(jt)).userdata = friction_law
-        spec.geom(N.bushing_ring(jt)).size = [j.bushing_radius_m(jt) + 0.006, half_len * 1.05, 0]
+        spec.geom(mjcf_names.pin(jt)).size = [j.pin_radius(jt), half_len, 0]
+        spec.geom(mjcf_names.bushing(jt)).size = [j.bushing_radius_m(jt), half_len, 0]
+        spec.geom(mjcf_names.bushing(jt)).userdata = friction_law
+        spec.geom(mjcf_names.bushing_ring(jt)).size = [j.bushing_radius_m(jt) + 0.006, half_len * 1.05, 0]
 
     # accelerometer sites
     for name, mount in cfg.sensors.accelerometers.items():
@@ -406,25 +406,25 @@ def build_spec(cfg: BenchConfig) -> mujoco.MjSpec:
     # before the hinge (re-added last), so the crank frame is translate(e_A) rotate(θ) and the
     # hinge angle stays the absolute crank angle the PID, the encoder and crank_angle read
     if j.diametral_mm("A") > 0:
-        spec.delete(spec.joint(N.CRANK_HINGE))
-        crank.add_joint(name=N.ECC_A_X, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1, 0, 0])
-        crank.add_joint(name=N.ECC_A_Y, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 1, 0])
-        crank.add_joint(name=N.CRANK_HINGE, type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1])
+        spec.delete(spec.joint(mjcf_names.CRANK_HINGE))
+        crank.add_joint(name=mjcf_names.ECC_A_X, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1, 0, 0])
+        crank.add_joint(name=mjcf_names.ECC_A_Y, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 1, 0])
+        crank.add_joint(name=mjcf_names.CRANK_HINGE, type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1])
     # clearance joint B: rod eye free in the plane relative to the crank pin
     if j.diametral_mm("B") > 0:
-        spec.delete(spec.joint(N.ROD_HINGE))
-        rod.add_joint(name=N.ECC_B_X, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1, 0, 0])
-        rod.add_joint(name=N.ECC_B_Y, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 1, 0])
-        rod.add_joint(name=N.ROD_HINGE, type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1])
+        spec.delete(spec.joint(mjcf_names.ROD_HINGE))
+        rod.add_joint(name=mjcf_names.ECC_B_X, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1, 0, 0])
+        rod.add_joint(name=mjcf_names.ECC_B_Y, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 1, 0])
+        rod.add_joint(name=mjcf_names.ROD_HINGE, type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1])
     # clearance joint C: no loop-closure constraint, the contact holds the rod on the pin
-    eq = spec.equality(N.JOINT_C_CONNECT)
+    eq = spec.equality(mjcf_names.JOINT_C_CONNECT)
     if j.diametral_mm("C") > 0:
         spec.delete(eq)
     else:
         eq.solref = list(cfg.mujoco.equality_solref)
         eq.solimp = list(cfg.mujoco.equality_solimp)
     for jt in j.clearance_joints:
-        spec.add_pair(name=N.pair(jt), geomname1=N.pin(jt), geomname2=N.bushing(jt), condim=_CONDIM)
+        spec.add_pair(name=mjcf_names.pair(jt), geomname1=mjcf_names.pin(jt), geomname2=mjcf_names.bushing(jt), condim=_CONDIM)
 
     # sensors: keep only what the channel groups need
     keep: set[str] = set()
@@ -432,24 +432,24 @@ def build_spec(cfg: BenchConfig) -> mujoco.MjSpec:
         keep.update(_SENSORS_BY_GROUP.get(g, []))
         if g == "joints":
             for jt in j.clearance_joints:
-                keep.update((N.sensor_ecc(jt), N.sensor_contact(jt), N.sensor_friction(jt)))
+                keep.update((mjcf_names.sensor_ecc(jt), mjcf_names.sensor_contact(jt), mjcf_names.sensor_friction(jt)))
     if posthoc_applies(cfg):
         # accelerometers from the recorded state after the rollout (twin.mujoco_engine.accel):
         # no sensor asks for mj_rnePostConstraint every step; their sites stay
-        keep.difference_update(N.ACCEL_SENSORS)
+        keep.difference_update(mjcf_names.ACCEL_SENSORS)
     for s in list(spec.sensors):
         if s.name not in keep:
             spec.delete(s)
     if "energy" in cfg.sensors.channels:
         # optional energy group: MuJoCo computes energies only with the energy flag on
         opt.enableflags |= mujoco.mjtEnableBit.mjENBL_ENERGY
-        spec.add_sensor(name=N.SENSOR_ENERGY_KINETIC, type=mujoco.mjtSensor.mjSENS_E_KINETIC)
-        spec.add_sensor(name=N.SENSOR_ENERGY_POTENTIAL, type=mujoco.mjtSensor.mjSENS_E_POTENTIAL)
-        spec.add_sensor(name=N.SENSOR_SLIDER_SPEED, type=mujoco.mjtSensor.mjSENS_JOINTVEL,
-                        objtype=mujoco.mjtObj.mjOBJ_JOINT, objname=N.SLIDER_SLIDE)
+        spec.add_sensor(name=mjcf_names.SENSOR_ENERGY_KINETIC, type=mujoco.mjtSensor.mjSENS_E_KINETIC)
+        spec.add_sensor(name=mjcf_names.SENSOR_ENERGY_POTENTIAL, type=mujoco.mjtSensor.mjSENS_E_POTENTIAL)
+        spec.add_sensor(name=mjcf_names.SENSOR_SLIDER_SPEED, type=mujoco.mjtSensor.mjSENS_JOINTVEL,
+                        objtype=mujoco.mjtObj.mjOBJ_JOINT, objname=mjcf_names.SLIDER_SLIDE)
 
     # crank PID (native <pid>: gainprm = ki, biasprm = [0, -kp, -kv], dynprm = imax)
-    act = spec.actuator(N.CRANK_PID)
+    act = spec.actuator(mjcf_names.CRANK_PID)
     act.gainprm[0] = cfg.pid.ki
     act.biasprm[1], act.biasprm[2] = -cfg.pid.kp, -cfg.pid.kv
     act.dynprm[0] = cfg.pid.imax
@@ -492,14 +492,14 @@ def _prescribed_drive(spec: mujoco.MjSpec, cfg: BenchConfig) -> None:
     mean of M's diagonal) is set back to the mechanism's own in :func:`_compile`."""
     A = prescribed_armature(cfg)
     h = cfg.simulation.timestep_s
-    spec.joint(N.CRANK_HINGE).armature = A
-    act = spec.actuator(N.CRANK_PID)
+    spec.joint(mjcf_names.CRANK_HINGE).armature = A
+    act = spec.actuator(mjcf_names.CRANK_PID)
     act.gainprm[0] = 0.0
     act.biasprm[1], act.biasprm[2] = -A / h ** 2, -A / h
     act.dyntype = mujoco.mjtDyn.mjDYN_NONE  # no integral state (MuJoCo refuses a stateful pid with ki = 0)
     if "drive" in cfg.sensors.channels:
-        spec.add_sensor(name=N.SENSOR_CRANK_ANGACC, type=mujoco.mjtSensor.mjSENS_FRAMEANGACC,
-                        objtype=mujoco.mjtObj.mjOBJ_BODY, objname=N.CRANK)
+        spec.add_sensor(name=mjcf_names.SENSOR_CRANK_ANGACC, type=mujoco.mjtSensor.mjSENS_FRAMEANGACC,
+                        objtype=mujoco.mjtObj.mjOBJ_BODY, objname=mjcf_names.CRANK)
 
 
 def _compile(spec: mujoco.MjSpec, cfg: BenchConfig) -> mujoco.MjModel:
@@ -513,10 +513,10 @@ def _compile(spec: mujoco.MjSpec, cfg: BenchConfig) -> mujoco.MjModel:
         # the solver scales its tolerance by 1/meaninertia (mean of M's diagonal at qpos0): the
         # flywheel's armature would make every improvement look negligible
         model.stat.meaninertia -= prescribed_armature(cfg) / model.nv
-    if model.nuser_geom != len(N.BORE_USERDATA_FIELDS):  # _bore.c reads the user data by this layout
+    if model.nuser_geom != len(mjcf_names.BORE_USERDATA_FIELDS):  # _bore.c reads the user data by this layout
         raise ModelError(f"the model of {cfg.name} has nuser_geom = {model.nuser_geom}, the bore user data layout "
-                         f"{len(N.BORE_USERDATA_FIELDS)} fields {N.BORE_USERDATA_FIELDS} (twin.names); "
-                         f"fix <size nuser_geom> in {N.BASE_XML}")
+                         f"{len(mjcf_names.BORE_USERDATA_FIELDS)} fields {mjcf_names.BORE_USERDATA_FIELDS} (twin.names); "
+                         f"fix <size nuser_geom> in {mjcf_names.BASE_XML}")
     return model
 
 
@@ -524,7 +524,7 @@ def _ring(spec: mujoco.MjSpec, cfg: BenchConfig, jt: str) -> list[str]:
     """Replace the bore of ``jt`` by ``mujoco.ring_boxes`` boxes on the bushing's body (the rod;
     the world body at A); returns the box names."""
     n = cfg.mujoco.ring_boxes
-    bush = spec.geom(N.bushing(jt))
+    bush = spec.geom(mjcf_names.bushing(jt))
     centre = np.array(bush.pos)
     ri = cfg.joints.bushing_radius_m(jt)
     half_w, t = ri * math.tan(math.pi / n), 1e-3
@@ -532,7 +532,7 @@ def _ring(spec: mujoco.MjSpec, cfg: BenchConfig, jt: str) -> list[str]:
     for k in range(n):
         beta = 2 * math.pi * k / n
         g = bush.parent.add_geom(
-            name=f"{N.bushing(jt)}_box{k}", type=mujoco.mjtGeom.mjGEOM_BOX, size=[t, half_w, cfg.joints.bushing_length(jt) / 2],
+            name=f"{mjcf_names.bushing(jt)}_box{k}", type=mujoco.mjtGeom.mjGEOM_BOX, size=[t, half_w, cfg.joints.bushing_length(jt) / 2],
             pos=list(centre + (ri + t) * np.array([math.cos(beta), math.sin(beta), 0.0])),
             quat=[math.cos(beta / 2), 0.0, 0.0, math.sin(beta / 2)], contype=0, conaffinity=0, mass=0, group=3)
         names.append(g.name)
@@ -568,59 +568,59 @@ def build(cfg: BenchConfig) -> tuple[mujoco.MjSpec, mujoco.MjModel, BuildInfo]:
         spec.option.ccd_iterations = 100
     for jt in cfg.joints.clearance_joints:
         if ms.bushing == "ring":
-            spec.delete(spec.pair(N.pair(jt)))
+            spec.delete(spec.pair(mjcf_names.pair(jt)))
             rings[jt] = _ring(spec, cfg, jt)
             for k, box in enumerate(rings[jt]):
-                spec.add_pair(name=f"{N.pair(jt)}_{k}", geomname1=N.pin(jt), geomname2=box, condim=3,
+                spec.add_pair(name=f"{mjcf_names.pair(jt)}_{k}", geomname1=mjcf_names.pin(jt), geomname2=box, condim=3,
                               friction=[cfg.contact.mu0, cfg.contact.mu0, 0, 0, 0])
-            if spec.sensor(N.sensor_contact(jt)) is not None:
-                sc = spec.sensor(N.sensor_contact(jt))
-                sc.reftype, sc.refname = mujoco.mjtObj.mjOBJ_BODY, spec.geom(N.bushing(jt)).parent.name
+            if spec.sensor(mjcf_names.sensor_contact(jt)) is not None:
+                sc = spec.sensor(mjcf_names.sensor_contact(jt))
+                sc.reftype, sc.refname = mujoco.mjtObj.mjOBJ_BODY, spec.geom(mjcf_names.bushing(jt)).parent.name
                 sc.intprm = [3, 3, 1]  # found + force, reduce = netforce (global frame), one slot
         elif ms.bushing == "tendon":
-            spec.delete(spec.pair(N.pair(jt)))
-            t = spec.add_tendon(name=N.pair(jt), limited=True, range=[0.0, cfg.joints.radial_m(jt)])
-            t.wrap_site(N.pin(jt))
-            t.wrap_site(N.bushing(jt))
-            if spec.sensor(N.sensor_contact(jt)) is not None:
-                sc = spec.sensor(N.sensor_contact(jt))
-                sc.type, sc.objtype, sc.objname = mujoco.mjtSensor.mjSENS_TENDONLIMITFRC, mujoco.mjtObj.mjOBJ_TENDON, N.pair(jt)
+            spec.delete(spec.pair(mjcf_names.pair(jt)))
+            t = spec.add_tendon(name=mjcf_names.pair(jt), limited=True, range=[0.0, cfg.joints.radial_m(jt)])
+            t.wrap_site(mjcf_names.pin(jt))
+            t.wrap_site(mjcf_names.bushing(jt))
+            if spec.sensor(mjcf_names.sensor_contact(jt)) is not None:
+                sc = spec.sensor(mjcf_names.sensor_contact(jt))
+                sc.type, sc.objtype, sc.objname = mujoco.mjtSensor.mjSENS_TENDONLIMITFRC, mujoco.mjtObj.mjOBJ_TENDON, mjcf_names.pair(jt)
                 sc.reftype, sc.refname, sc.intprm = mujoco.mjtObj.mjOBJ_UNKNOWN, "", [0, 0, 0]
         elif ms.friction == "cone":
-            p = spec.pair(N.pair(jt))
+            p = spec.pair(mjcf_names.pair(jt))
             p.condim = 3
             p.friction = [cfg.contact.mu0, cfg.contact.mu0, 0, 0, 0]
         if ms.bushing != "bore" or ms.friction == "cone":
-            bush = spec.geom(N.bushing(jt))
-            bush.userdata = N.replace_bore_userdata(list(bush.userdata), mu0=0.0, mus=0.0)  # native friction off
-            if spec.sensor(N.sensor_friction(jt)) is not None:
-                spec.delete(spec.sensor(N.sensor_friction(jt)))
+            bush = spec.geom(mjcf_names.bushing(jt))
+            bush.userdata = mjcf_names.replace_bore_userdata(list(bush.userdata), mu0=0.0, mus=0.0)  # native friction off
+            if spec.sensor(mjcf_names.sensor_friction(jt)) is not None:
+                spec.delete(spec.sensor(mjcf_names.sensor_friction(jt)))
     model = _compile(spec, cfg)
     native = native_law_applies(cfg)
     if native:
         spec.nuserdata = len(cfg.joints.clearance_joints)  # one slot per joint: v_imp of its contact event
     for slot, jt in enumerate(cfg.joints.clearance_joints):
         if ms.bushing == "tendon":
-            a_hat = float(model.tendon_invweight0[model.tendon(N.pair(jt)).id])
+            a_hat = float(model.tendon_invweight0[model.tendon(mjcf_names.pair(jt)).id])
         else:
-            a_hat = float(model.body_invweight0[model.geom_bodyid[model.geom(N.pin(jt)).id], 0] +
-                          model.body_invweight0[model.geom_bodyid[model.geom(N.bushing(jt)).id], 0])
+            a_hat = float(model.body_invweight0[model.geom_bodyid[model.geom(mjcf_names.pin(jt)).id], 0] +
+                          model.body_invweight0[model.geom_bodyid[model.geom(mjcf_names.bushing(jt)).id], 0])
         setting = contact_setting(cfg, jt, a_hat, native=native)
         if ms.bushing == "tendon":
-            t = spec.tendon(N.pair(jt))
+            t = spec.tendon(mjcf_names.pair(jt))
             t.solref_limit, t.solimp_limit = list(setting.solref), list(setting.solimp)
         elif jt in rings:
             for k in range(len(rings[jt])):
-                p = spec.pair(f"{N.pair(jt)}_{k}")
+                p = spec.pair(f"{mjcf_names.pair(jt)}_{k}")
                 p.solref, p.solimp = list(setting.solref), list(setting.solimp)
         else:
-            p = spec.pair(N.pair(jt))
+            p = spec.pair(mjcf_names.pair(jt))
             p.solref, p.solimp = list(setting.solref), list(setting.solimp)
-            if spec.sensor(N.sensor_contact(jt)) is not None:
-                spec.sensor(N.sensor_contact(jt)).intprm = [3, 0, 1]  # [found, force], one slot
+            if spec.sensor(mjcf_names.sensor_contact(jt)) is not None:
+                spec.sensor(mjcf_names.sensor_contact(jt)).intprm = [3, 0, 1]  # [found, force], one slot
             if setting.law is not None:
-                bush = spec.geom(N.bushing(jt))
-                bush.userdata = N.replace_bore_userdata(list(bush.userdata), **setting.law.userdata(slot))
+                bush = spec.geom(mjcf_names.bushing(jt))
+                bush.userdata = mjcf_names.replace_bore_userdata(list(bush.userdata), **setting.law.userdata(slot))
         info.contacts[jt] = setting
         info.a_hat[jt] = a_hat
     info.sensors = [x.name for x in spec.sensors]

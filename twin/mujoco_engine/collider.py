@@ -16,7 +16,7 @@ import os
 import mujoco
 
 from twin.errors import EngineUnavailableError
-from twin import names as N
+from twin import names
 
 _addresses: tuple[int, int, int, int] | None = None
 
@@ -49,28 +49,28 @@ def ensure_installed() -> None:
         raise EngineUnavailableError(
             f"the bushing collider was compiled against MuJoCo {_bore.header_version()} but "
             f"{mujoco.mj_version()} is installed; reinstall twin ('pip install -e .')")
-    if _bore.bore_magic() != N.BORE_MAGIC:
+    if _bore.bore_magic() != names.BORE_MAGIC:
         raise EngineUnavailableError("twin.names.BORE_MAGIC and _bore.c disagree")
     fields = tuple(_bore.userdata_fields()) if hasattr(_bore, "userdata_fields") else None
-    if fields != N.BORE_USERDATA_FIELDS:
+    if fields != names.BORE_USERDATA_FIELDS:
         raise EngineUnavailableError(
             f"the bushing collider reads the bore user data as {fields} but twin.names.BORE_USERDATA_FIELDS "
-            f"is {N.BORE_USERDATA_FIELDS}; rebuild the extension ('pip install -e .') after changing either")
+            f"is {names.BORE_USERDATA_FIELDS}; rebuild the extension ('pip install -e .') after changing either")
     guide = (tuple(_bore.guide_fields()), _bore.guide_magic()) if hasattr(_bore, "guide_fields") else None
-    if guide != (N.GUIDE_USERDATA_FIELDS, N.GUIDE_MAGIC):
+    if guide != (names.GUIDE_USERDATA_FIELDS, names.GUIDE_MAGIC):
         raise EngineUnavailableError(
             f"the native module reads the guide joint's user data as {guide} but twin.names has "
-            f"{(N.GUIDE_USERDATA_FIELDS, N.GUIDE_MAGIC)}; rebuild the extension ('pip install -e .')")
+            f"{(names.GUIDE_USERDATA_FIELDS, names.GUIDE_MAGIC)}; rebuild the extension ('pip install -e .')")
     train = (tuple(_bore.drivetrain_fields()), *_bore.drivetrain_layout()[0:1], *_bore.drivetrain_layout()[2:4]) \
         if hasattr(_bore, "drivetrain_fields") else None
-    if train != (N.DRIVETRAIN_FIELDS, N.DRIVETRAIN_MAGIC, len(N.DRIVETRAIN_SENSOR_FIELDS),
-                 len(N.DRIVETRAIN_ENERGY_FIELDS)):
+    if train != (names.DRIVETRAIN_FIELDS, names.DRIVETRAIN_MAGIC, len(names.DRIVETRAIN_SENSOR_FIELDS),
+                 len(names.DRIVETRAIN_ENERGY_FIELDS)):
         raise EngineUnavailableError(
             "the native module's drive-train layout differs from twin.names (DRIVETRAIN_FIELDS, DRIVETRAIN_MAGIC, "
             "DRIVETRAIN_SENSOR_FIELDS, DRIVETRAIN_ENERGY_FIELDS); rebuild the extension ('pip install -e .')")
     gc = (tuple(_bore.guide_clearance_fields()), _bore.guide_clearance_layout()[0], _bore.guide_clearance_layout()[2]) \
         if hasattr(_bore, "guide_clearance_fields") else None
-    if gc != (N.GUIDE_CLEARANCE_FIELDS, N.GUIDE_CLEARANCE_MAGIC, len(N.GUIDE_SENSOR_FIELDS)):
+    if gc != (names.GUIDE_CLEARANCE_FIELDS, names.GUIDE_CLEARANCE_MAGIC, len(names.GUIDE_SENSOR_FIELDS)):
         raise EngineUnavailableError(
             "the native module's guide-clearance layout differs from twin.names (GUIDE_CLEARANCE_FIELDS, "
             "GUIDE_CLEARANCE_MAGIC, GUIDE_SENSOR_FIELDS); rebuild the extension ('pip install -e .')")

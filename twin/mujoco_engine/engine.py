@@ -27,7 +27,7 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
-from twin import names as N
+from twin import names
 from twin.config import BenchConfig
 from twin.errors import SimulationError
 
@@ -136,36 +136,36 @@ class MujocoEngine:
         mujoco.mj_resetData(m, d)
         d.userdata[:] = 0.0  # no contact event under way (mj_resetData clears it too; the rollout never does)
         pose = initial_pose(cfg, theta0)
-        d.qpos[m.jnt_qposadr[m.joint(N.CRANK_HINGE).id]] = pose.theta
-        d.qpos[m.jnt_qposadr[m.joint(N.ROD_HINGE).id]] = pose.phi - pose.theta
+        d.qpos[m.jnt_qposadr[m.joint(names.CRANK_HINGE).id]] = pose.theta
+        d.qpos[m.jnt_qposadr[m.joint(names.ROD_HINGE).id]] = pose.phi - pose.theta
         if cfg.joints.diametral_mm("A") > 0:
             # slide joints: crank journal relative to the frame's bore, bench frame (ė_A = 0 at
             # start, so their velocities stay 0 below)
-            d.qpos[m.jnt_qposadr[m.joint(N.ECC_A_X).id]] = pose.e_a[0]
-            d.qpos[m.jnt_qposadr[m.joint(N.ECC_A_Y).id]] = pose.e_a[1]
+            d.qpos[m.jnt_qposadr[m.joint(names.ECC_A_X).id]] = pose.e_a[0]
+            d.qpos[m.jnt_qposadr[m.joint(names.ECC_A_Y).id]] = pose.e_a[1]
         if cfg.joints.diametral_mm("B") > 0:
             # slide joints: bushing centre relative to the pin, in the crank frame
             rel = rot2(pose.theta).T @ (pose.b_bush - pose.b_pin)
-            d.qpos[m.jnt_qposadr[m.joint(N.ECC_B_X).id]] = rel[0]
-            d.qpos[m.jnt_qposadr[m.joint(N.ECC_B_Y).id]] = rel[1]
-        d.qpos[m.jnt_qposadr[m.joint(N.SLIDER_SLIDE).id]] = pose.slider_x
+            d.qpos[m.jnt_qposadr[m.joint(names.ECC_B_X).id]] = rel[0]
+            d.qpos[m.jnt_qposadr[m.joint(names.ECC_B_Y).id]] = rel[1]
+        d.qpos[m.jnt_qposadr[m.joint(names.SLIDER_SLIDE).id]] = pose.slider_x
         if cfg.joints.guide_play:  # the slider's frame Cs: y_g from the guide's start (tilt 0)
-            d.qpos[m.jnt_qposadr[m.joint(N.SLIDER_Y).id]] = pose.c_pin[1] - cfg.mechanism.d_off_m
+            d.qpos[m.jnt_qposadr[m.joint(names.SLIDER_Y).id]] = pose.c_pin[1] - cfg.mechanism.d_off_m
         omega = self._drive.start_rate() if self._drive is not None else 0.0
         if omega != 0.0:
             # a prescribed drive at speed from t = 0: every velocity consistent with it (ė = 0)
             from twin.kinematics import pose_rates
 
             phid, xd = pose_rates(cfg, pose, omega)
-            d.qvel[m.jnt_dofadr[m.joint(N.CRANK_HINGE).id]] = omega
-            d.qvel[m.jnt_dofadr[m.joint(N.ROD_HINGE).id]] = phid - omega
+            d.qvel[m.jnt_dofadr[m.joint(names.CRANK_HINGE).id]] = omega
+            d.qvel[m.jnt_dofadr[m.joint(names.ROD_HINGE).id]] = phid - omega
             if cfg.joints.diametral_mm("B") > 0:
                 # rel = R(θ)ᵀ (B' − B) = −R(θ)ᵀ e_B with e_B fixed: d/dt = −ω (dR/dθ)ᵀ e_B
                 s_, c_ = math.sin(pose.theta), math.cos(pose.theta)
                 e = pose.e_b
-                d.qvel[m.jnt_dofadr[m.joint(N.ECC_B_X).id]] = -omega * (-s_ * e[0] + c_ * e[1])
-                d.qvel[m.jnt_dofadr[m.joint(N.ECC_B_Y).id]] = -omega * (-c_ * e[0] - s_ * e[1])
-            d.qvel[m.jnt_dofadr[m.joint(N.SLIDER_SLIDE).id]] = xd
+                d.qvel[m.jnt_dofadr[m.joint(names.ECC_B_X).id]] = -omega * (-s_ * e[0] + c_ * e[1])
+                d.qvel[m.jnt_dofadr[m.joint(names.ECC_B_Y).id]] = -omega * (-c_ * e[0] - s_ * e[1])
+            d.qvel[m.jnt_dofadr[m.joint(names.SLIDER_SLIDE).id]] = xd
         mujoco.mj_forward(m, d)
         self._k = 0
 
@@ -278,20 +278,20 @@ class MujocoEngine:
         from twin.motor_drive import command_voltage
 
         groups, out = self.cfg.sensors.channels, {}
-        f = {name: i for i, name in enumerate(N.DRIVETRAIN_SENSOR_FIELDS)}
+        f = {name: i for i, name in enumerate(names.DRIVETRAIN_SENSOR_FIELDS)}
         if "drive" in groups:
-            out["crank_torque"] = col(N.SENSOR_DRIVETRAIN, f["belt_torque"])
+            out["crank_torque"] = col(names.SENSOR_DRIVETRAIN, f["belt_torque"])
         if "motor" in groups:
-            out["motor_angle"] = col(N.SENSOR_MOTOR_ANGLE)
-            out["motor_speed"] = col(N.SENSOR_MOTOR_SPEED)
+            out["motor_angle"] = col(names.SENSOR_MOTOR_ANGLE)
+            out["motor_speed"] = col(names.SENSOR_MOTOR_SPEED)
             for name in ("motor_torque", "belt_torque", "belt_slip"):
-                out[name] = col(N.SENSOR_DRIVETRAIN, f[name])
+                out[name] = col(names.SENSOR_DRIVETRAIN, f[name])
             n, stride = sens.shape[0], self.cfg.output_stride
             t = (self._chunk_k0 + stride * np.arange(n)) * self.cfg.simulation.timestep_s
             out["command_voltage"] = command_voltage(self.cfg, t)
         if "drive_energy" in groups:
-            for i, name in enumerate(N.DRIVETRAIN_ENERGY_FIELDS):
-                out[name] = col(N.SENSOR_DRIVETRAIN_ENERGY, i)
+            for i, name in enumerate(names.DRIVETRAIN_ENERGY_FIELDS):
+                out[name] = col(names.SENSOR_DRIVETRAIN_ENERGY, i)
         return out
 
     def _channels(self, sens: np.ndarray, accel: np.ndarray | None = None) -> dict[str, np.ndarray]:
@@ -303,19 +303,19 @@ class MujocoEngine:
 
         groups = cfg.sensors.channels
         if "accel" in groups:
-            for i, a in enumerate(N.ACCEL_SENSORS):
+            for i, a in enumerate(names.ACCEL_SENSORS):
                 # site x axis = sensitive axis; posthoc: rows of the readings computed from the state
                 out[a] = col(a, 0) if accel is None else accel[i]
         if "encoder" in groups or "crank" in groups:
-            out["crank_angle"] = col(N.SENSOR_CRANK_ANGLE)
+            out["crank_angle"] = col(names.SENSOR_CRANK_ANGLE)
         if "crank" in groups:
-            out["crank_speed"] = col(N.SENSOR_CRANK_SPEED)
+            out["crank_speed"] = col(names.SENSOR_CRANK_SPEED)
         if "slider" in groups:
-            out["slider_position"] = col(N.SENSOR_SLIDER_POSITION)
+            out["slider_position"] = col(names.SENSOR_SLIDER_POSITION)
         if "joints" in groups:
             for jt in cfg.joints.clearance_joints:
-                ex, ey = col(N.sensor_ecc(jt), 0), col(N.sensor_ecc(jt), 1)
-                found = col(N.sensor_contact(jt), 0) > 0 if cfg.mujoco.bushing != "tendon" else None
+                ex, ey = col(names.sensor_ecc(jt), 0), col(names.sensor_ecc(jt), 1)
+                found = col(names.sensor_contact(jt), 0) > 0 if cfg.mujoco.bushing != "tendon" else None
                 out[f"ecc_{jt}_x"] = ex
                 out[f"ecc_{jt}_y"] = ey
                 out[f"pen_{jt}"] = np.maximum(np.hypot(ex, ey) - cfg.joints.radial_m(jt), 0.0)
@@ -324,38 +324,38 @@ class MujocoEngine:
                     # contact sensor: one slot per term of the law, each [found, force in the
                     # contact frame (normal, t1, axis)]; the terms act at the same point and add
                     nterm = len(self.info.contacts[jt].terms)
-                    slot = [col(N.sensor_contact(jt), 4 * i) > 0 for i in range(nterm)]
-                    out[f"fn_{jt}"] = sum(np.where(slot[i], col(N.sensor_contact(jt), 4 * i + 1), 0.0)
+                    slot = [col(names.sensor_contact(jt), 4 * i) > 0 for i in range(nterm)]
+                    out[f"fn_{jt}"] = sum(np.where(slot[i], col(names.sensor_contact(jt), 4 * i + 1), 0.0)
                                           for i in range(nterm))
                     if friction == "native":
-                        out[f"ft_{jt}"] = col(N.sensor_friction(jt))  # native module's user sensor
+                        out[f"ft_{jt}"] = col(names.sensor_friction(jt))  # native module's user sensor
                     else:
                         # force on geom2 (bushing) along t1 = axis x normal: the pin feels minus that
-                        out[f"ft_{jt}"] = -sum(np.where(slot[i], col(N.sensor_contact(jt), 4 * i + 2), 0.0)
+                        out[f"ft_{jt}"] = -sum(np.where(slot[i], col(names.sensor_contact(jt), 4 * i + 2), 0.0)
                                                for i in range(nterm))
                 elif bushing == "ring":
                     # netforce of all pin/box contacts in the global frame: its in-plane magnitude
-                    out[f"fn_{jt}"] = np.where(found, np.hypot(col(N.sensor_contact(jt), 1),
-                                                               col(N.sensor_contact(jt), 2)), 0.0)
+                    out[f"fn_{jt}"] = np.where(found, np.hypot(col(names.sensor_contact(jt), 1),
+                                                               col(names.sensor_contact(jt), 2)), 0.0)
                 else:  # tendon limit force (the sensor is the tendon's limit force)
-                    out[f"fn_{jt}"] = np.abs(col(N.sensor_contact(jt), 0))
+                    out[f"fn_{jt}"] = np.abs(col(names.sensor_contact(jt), 0))
             if cfg.joints.guide_play:
                 # C' from the frame Cs: y_g = y_Cs − d_off (1 − cos φ) (twin.reference.guide)
-                tilt = col(N.SENSOR_SLIDER_TILT)
-                out["slider_y"] = col(N.SENSOR_SLIDER_Y) - cfg.mechanism.d_off_m * (1.0 - np.cos(tilt))
+                tilt = col(names.SENSOR_SLIDER_TILT)
+                out["slider_y"] = col(names.SENSOR_SLIDER_Y) - cfg.mechanism.d_off_m * (1.0 - np.cos(tilt))
                 out["slider_tilt"] = tilt
-                for i, name in enumerate(N.GUIDE_SENSOR_FIELDS):
-                    out[name] = col(N.SENSOR_GUIDE, i)
+                for i, name in enumerate(names.GUIDE_SENSOR_FIELDS):
+                    out[name] = col(names.SENSOR_GUIDE, i)
         if "energy" in groups:
-            out["energy_kinetic"] = col(N.SENSOR_ENERGY_KINETIC)
-            out["energy_potential"] = col(N.SENSOR_ENERGY_POTENTIAL)
-            out["slider_speed"] = col(N.SENSOR_SLIDER_SPEED)
+            out["energy_kinetic"] = col(names.SENSOR_ENERGY_KINETIC)
+            out["energy_potential"] = col(names.SENSOR_ENERGY_POTENTIAL)
+            out["slider_speed"] = col(names.SENSOR_SLIDER_SPEED)
         if self.cfg.drive.mode in ("motor", "torque"):
             out.update(self._train_channels(sens, col))
         elif "drive" in groups:
             if self._drive is not None:
                 # the torque the mechanism receives: the actuator's minus the flywheel's share A θ̈
-                out["crank_torque"] = col(N.SENSOR_CRANK_TORQUE) - self._armature * col(N.SENSOR_CRANK_ANGACC, 2)
+                out["crank_torque"] = col(names.SENSOR_CRANK_TORQUE) - self._armature * col(names.SENSOR_CRANK_ANGACC, 2)
             else:
-                out["crank_torque"] = col(N.SENSOR_CRANK_TORQUE)
+                out["crank_torque"] = col(names.SENSOR_CRANK_TORQUE)
         return out

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import mujoco
 
-from twin import names as N
+from twin import names
 from twin.config import BenchConfig
 from twin.config.mechanism import guide_stiffness
 from twin.impact import DAMPING_FACTOR
@@ -36,16 +36,16 @@ def guide_law(cfg: BenchConfig) -> str:
 
 def add_guide(spec: mujoco.MjSpec, cfg: BenchConfig) -> None:
     """Spec edits: the two joints, the numeric (filled by :func:`finish`) and the sensors."""
-    body = spec.body(N.SLIDER)
-    body.add_joint(name=N.SLIDER_Y, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 1, 0])
-    body.add_joint(name=N.SLIDER_TILT, type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1])
-    spec.add_numeric(name=N.GUIDE_CLEARANCE_NUMERIC, data=[0.0] * len(N.GUIDE_CLEARANCE_FIELDS))
+    body = spec.body(names.SLIDER)
+    body.add_joint(name=names.SLIDER_Y, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 1, 0])
+    body.add_joint(name=names.SLIDER_TILT, type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1])
+    spec.add_numeric(name=names.GUIDE_CLEARANCE_NUMERIC, data=[0.0] * len(names.GUIDE_CLEARANCE_FIELDS))
     if "joints" in cfg.sensors.channels:
-        for name, joint in ((N.SENSOR_SLIDER_Y, N.SLIDER_Y), (N.SENSOR_SLIDER_TILT, N.SLIDER_TILT)):
+        for name, joint in ((names.SENSOR_SLIDER_Y, names.SLIDER_Y), (names.SENSOR_SLIDER_TILT, names.SLIDER_TILT)):
             spec.add_sensor(name=name, type=mujoco.mjtSensor.mjSENS_JOINTPOS, objtype=mujoco.mjtObj.mjOBJ_JOINT,
                             objname=joint)
-        spec.add_sensor(name=N.SENSOR_GUIDE, type=mujoco.mjtSensor.mjSENS_USER, objtype=mujoco.mjtObj.mjOBJ_JOINT,
-                        objname=N.SLIDER_TILT, dim=len(N.GUIDE_SENSOR_FIELDS), needstage=mujoco.mjtStage.mjSTAGE_POS)
+        spec.add_sensor(name=names.SENSOR_GUIDE, type=mujoco.mjtSensor.mjSENS_USER, objtype=mujoco.mjtObj.mjOBJ_JOINT,
+                        objname=names.SLIDER_TILT, dim=len(names.GUIDE_SENSOR_FIELDS), needstage=mujoco.mjtStage.mjSTAGE_POS)
 
 
 def finish(spec: mujoco.MjSpec, cfg: BenchConfig, model: mujoco.MjModel) -> None:
@@ -60,10 +60,10 @@ def finish(spec: mujoco.MjSpec, cfg: BenchConfig, model: mujoco.MjModel) -> None
         return int(model.jnt_dofadr[model.joint(name).id])
 
     vals = dict(
-        marker=N.GUIDE_CLEARANCE_MAGIC, dof_x=dof(N.SLIDER_SLIDE), dof_y=dof(N.SLIDER_Y), dof_r=dof(N.SLIDER_TILT),
+        marker=names.GUIDE_CLEARANCE_MAGIC, dof_x=dof(names.SLIDER_SLIDE), dof_y=dof(names.SLIDER_Y), dof_r=dof(names.SLIDER_TILT),
         slot=slot, c=j.guide_radial_m, a=j.guide_span_m / 2.0, k=guide_stiffness(j, cfg.materials),
         n=con.exponent, chi=DAMPING_FACTOR[guide_law(cfg)](con.restitution), v_min=MIN_IMPACT_SPEED_MPS,
         friction_law=1.0 if con.friction_law == "adams" else 0.0, mu0=con.mu0, v0=con.v0_mps, v1=con.v1_mps,
         mu_static=con.mu_static, v_static=con.v_static_mps, v_kinetic=con.v_kinetic_mps)
-    spec.numeric(N.GUIDE_CLEARANCE_NUMERIC).data = [float(vals[f]) for f in N.GUIDE_CLEARANCE_FIELDS]
+    spec.numeric(names.GUIDE_CLEARANCE_NUMERIC).data = [float(vals[f]) for f in names.GUIDE_CLEARANCE_FIELDS]
     spec.nuserdata = slot + _bore.guide_clearance_layout()[1]

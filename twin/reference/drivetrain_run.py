@@ -8,7 +8,7 @@ import numpy as np
 
 from twin.natural_coordinates import initial_state as mechanism_state
 from twin.reference import drivetrain as DT
-from twin.reference import model as M
+from twin.reference import model as ref_model
 
 _WARM = False
 
@@ -37,9 +37,9 @@ class ReferenceTrain:
         import time
 
         t0 = time.perf_counter()
-        P = M.build_params(self.cfg)
+        P = ref_model.build_params(self.cfg)
         st = mechanism_state(self.cfg, 0.0)
-        M.run_motor(P, self.D.copy(), st, DT.initial_state(), np.zeros(1), 1, np.empty((1, M.N_OUT)),
+        ref_model.run_motor(P, self.D.copy(), st, DT.initial_state(), np.zeros(1), 1, np.empty((1, ref_model.N_OUT)),
                     np.empty((1, DT.N_DO)), True)
         _WARM = True
         return time.perf_counter() - t0
@@ -55,7 +55,7 @@ class ReferenceTrain:
             self._dbuf = np.empty((n_out, DT.N_DO))
         sp = motor_input(self.cfg, k0, nstep, omega_ref)
         self._last = (k0, n_out, stride)
-        return M.run_motor(P, self.D, st, self.ds, sp, stride, buf, self._dbuf, True)
+        return ref_model.run_motor(P, self.D, st, self.ds, sp, stride, buf, self._dbuf, True)
 
     def channels(self, n: int) -> dict[str, np.ndarray]:
         from twin.motor_drive import command_voltage

@@ -31,7 +31,7 @@ from twin.channels import GUIDE_CHANNELS
 from twin.config import ACCELEROMETERS, BenchConfig
 from twin.errors import ConfigError, SimulationError
 from twin.natural_coordinates import initial_state
-from twin.reference import model as M
+from twin.reference import model as ref_model
 
 ENGINE_VERSION = "1"
 
@@ -65,8 +65,8 @@ class ReferenceOptions:
         n = self.newton_max_iter
         if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= 100:
             raise ConfigError("reference.newton_max_iter", f"must be an integer in [1, 100], got {n!r}")
-        if self.integrator not in M.INTEGRATORS:
-            raise ConfigError("reference.integrator", f"must be one of {', '.join(M.INTEGRATORS)}, "
+        if self.integrator not in ref_model.INTEGRATORS:
+            raise ConfigError("reference.integrator", f"must be one of {', '.join(ref_model.INTEGRATORS)}, "
                                                       f"got {self.integrator!r}")
 
 
@@ -75,7 +75,7 @@ def engine_params(cfg: BenchConfig, options: ReferenceOptions = ReferenceOptions
     """Parameter vector of a configuration (contact stiffness still unresolved: see
     :func:`twin.reference.model.contact_parameters`); ``switches`` are the ``drive``,
     ``guide_friction``, ``joint_friction`` flags of :func:`twin.reference.model.build_params`."""
-    return M.build_params(cfg, min_impact_speed_mps=cfg.contact.impact_speed_floor_mps,
+    return ref_model.build_params(cfg, min_impact_speed_mps=cfg.contact.impact_speed_floor_mps,
                           newton_tol_m=options.newton_tol_m, newton_max_iter=options.newton_max_iter,
                           integrator=options.integrator, **switches)
 
@@ -121,7 +121,7 @@ class ReferenceEngine:
         self.state0: np.ndarray | None = None
         self.contacts: dict[str, Any] = {}
         self._st: np.ndarray | None = None
-        self._buf = np.empty((0, M.N_OUT))
+        self._buf = np.empty((0, ref_model.N_OUT))
         self._k = 0
         self._drive = None
         self._train = None
@@ -151,7 +151,7 @@ class ReferenceEngine:
             self.state0 = initial_state(self.cfg, theta0, omega0, self.P)
         except ValueError as err:
             raise ConfigError("bodies", str(err)) from None
-        self.contacts = M.contact_parameters(self.cfg, self.P, self.state0)
+        self.contacts = ref_model.contact_parameters(self.cfg, self.P, self.state0)
         self.meta["contact"] = {j: {"law": self.cfg.contact.law, **asdict(c)} for j, c in self.contacts.items()}
         self._st = self.state0.copy()
         self._k = 0
@@ -167,7 +167,7 @@ class ReferenceEngine:
         nstep = len(theta_ref)
         n_out = -(-nstep // stride)
         if self._buf.shape[0] < n_out:
-            self._buf = np.empty((n_out, M.N_OUT))
+            self._buf = np.empty((n_out, ref_model.N_OUT))
         if self._train is not None:
             status, steps = self._train.run(self.P, self._st, self._k, omega_ref, stride, self._buf, n_out)
         elif self._drive is not None:
@@ -175,13 +175,13 @@ class ReferenceEngine:
             t = (self._k + np.arange(nstep + 1)) * h
             th, om = self._drive(t)
             al = self._drive.acceleration(t[:-1])
-            status, steps = M.run_prescribed(self.P, self._st, np.ascontiguousarray(th), np.ascontiguousarray(om),
+            status, steps = ref_model.run_prescribed(self.P, self._st, np.ascontiguousarray(th), np.ascontiguousarray(om),
                                              np.ascontiguousarray(al), stride, self._buf, True)
         else:
-            status, steps = M.run_steps(self.P, self._st, np.ascontiguousarray(theta_ref, dtype=np.float64),
+            status, steps = ref_model.run_steps(self.P, self._st, np.ascontiguousarray(theta_ref, dtype=np.float64),
                                         np.ascontiguousarray(omega_ref, dtype=np.float64), stride, self._buf, True)
-        if status != M.OK:
-            why = "the position projection did not converge" if status == M.NEWTON_FAILED \
+        if status != ref_model.OK:
+            why = "the position projection did not converge" if status == ref_model.NEWTON_FAILED \
                 else "NaN or Inf in the state"
             c = self.cfg
             raise SimulationError(f"{c.name}: reference run failed at t = {(self._k + steps) * h:.6f} s ({why}); "
@@ -197,27 +197,27 @@ class ReferenceEngine:
         groups = cfg.sensors.channels
         if "accel" in groups:
             for i, a in enumerate(ACCELEROMETERS):
-                cols[a] = out[:, M.O_ACC + i]
+                cols[a] = out[:, ref_model.O_ACC + i]
         if "encoder" in groups or "crank" in groups:
-            cols["crank_angle"] = out[:, M.O_THETA]
+            cols["crank_angle"] = out[:, ref_model.O_THETA]
         if "crank" in groups:
-            cols["crank_speed"] = out[:, M.O_OMEGA]
+            cols["crank_speed"] = out[:, ref_model.O_OMEGA]
         if "slider" in groups:
-            cols["slider_position"] = out[:, M.O_SLIDER]
+            cols["slider_position"] = out[:, ref_model.O_SLIDER]
         if "joints" in groups:
             for jt in cfg.joints.clearance_joints:
-                base = {"A": M.O_JOINT_A, "B": M.O_JOINT_B, "C": M.O_JOINT_C}[jt]  # A: bench frame
+                base = {"A": ref_model.O_JOINT_A, "B": ref_model.O_JOINT_B, "C": ref_model.O_JOINT_C}[jt]  # A: bench frame
                 for k, name in enumerate((f"ecc_{jt}_x", f"ecc_{jt}_y", f"pen_{jt}", f"fn_{jt}", f"ft_{jt}")):
                     cols[name] = out[:, base + k]
             if cfg.joints.guide_play:
                 for k, (name, *_) in enumerate(GUIDE_CHANNELS):
-                    cols[name] = out[:, M.O_GUIDE + k]
+                    cols[name] = out[:, ref_model.O_GUIDE + k]
         if "energy" in groups:
-            cols["energy_kinetic"] = out[:, M.O_EKIN]
-            cols["energy_potential"] = out[:, M.O_EPOT]
-            cols["slider_speed"] = out[:, M.O_VSLIDER]
+            cols["energy_kinetic"] = out[:, ref_model.O_EKIN]
+            cols["energy_potential"] = out[:, ref_model.O_EPOT]
+            cols["slider_speed"] = out[:, ref_model.O_VSLIDER]
         if "drive" in groups:
-            cols["crank_torque"] = out[:, M.O_TORQUE]
+            cols["crank_torque"] = out[:, ref_model.O_TORQUE]
         if self._train is not None:
             cols.update(self._train.channels(out.shape[0]))
         # copies: the output buffer is reused by the next chunk
@@ -233,10 +233,10 @@ def warm_up() -> float:
         return 0.0
     t0 = time.perf_counter()
     cfg = BenchConfig()
-    P = M.build_params(cfg)
+    P = ref_model.build_params(cfg)
     st = initial_state(cfg, 0.0)
     z = np.zeros(0)
-    M.run_steps(P, st, z, z, 1, np.empty((1, M.N_OUT)), True)
+    ref_model.run_steps(P, st, z, z, 1, np.empty((1, ref_model.N_OUT)), True)
     _WARM = True
     return time.perf_counter() - t0
 
@@ -247,10 +247,10 @@ def warm_up_prescribed() -> float:
     if _WARM_PRESCRIBED:
         return 0.0
     t0 = time.perf_counter()
-    P = M.build_params(BenchConfig())
+    P = ref_model.build_params(BenchConfig())
     st = initial_state(BenchConfig(), 0.0)
     z1 = np.zeros(1)
-    M.run_prescribed(P, st, z1, z1, np.zeros(0), 1, np.empty((1, M.N_OUT)), True)
+    ref_model.run_prescribed(P, st, z1, z1, np.zeros(0), 1, np.empty((1, ref_model.N_OUT)), True)
     _WARM_PRESCRIBED = True
     return time.perf_counter() - t0
 

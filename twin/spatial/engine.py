@@ -19,7 +19,7 @@ import numpy as np
 
 from twin import __version__ as twin_version
 from twin.errors import ConfigError, SimulationError
-from twin.spatial import geometry as G
+from twin.spatial import geometry as spatial_geometry
 from twin.spatial import model as SM
 
 ENGINE_VERSION = "1"
@@ -72,7 +72,7 @@ def build(cfg: Any, options: SpatialOptions = SpatialOptions()) -> tuple[np.ndar
                                                   f"got {con.friction_law!r}")
     P = np.zeros(SM.N_P)
     P[SM.P_R], P[SM.P_L] = cfg.bodies.crank.length_m, cfg.bodies.rod.length_m
-    p0, g = G.guide(cfg)
+    p0, g = spatial_geometry.guide(cfg)
     e1 = np.array([0.0, 1.0, 0.0]) if cfg.spatial.guide_axis == "x" else np.array([0.0, 0.0, 1.0])
     e2 = np.cross(g, e1)
     P[SM.P_G:SM.P_G + 3], P[SM.P_P0:SM.P_P0 + 3] = g, p0
@@ -111,8 +111,8 @@ def initial_state(cfg: Any, theta0: float, omega0: float) -> np.ndarray:
     """State at crank angle θ0 [rad] turning at ω0 [rad/s], every clearance joint centred (S002 §2.1:
     "the journal's and bearing's initial centers were concentric, and the ball's and socket's")."""
     st = np.zeros(SM.N_STATE)
-    st[SM.S_Q:SM.S_Q + G.NQ] = G.ideal_coordinates(cfg, theta0)
-    st[SM.S_V:SM.S_V + G.NQ] = G.ideal_velocities(cfg, theta0, omega0)
+    st[SM.S_Q:SM.S_Q + spatial_geometry.NQ] = spatial_geometry.ideal_coordinates(cfg, theta0)
+    st[SM.S_V:SM.S_V + spatial_geometry.NQ] = spatial_geometry.ideal_velocities(cfg, theta0, omega0)
     st[SM.S_THETA] = theta0
     return st
 
@@ -127,9 +127,9 @@ class SpatialReferenceEngine:
         self.options = options or SpatialOptions()
         t0 = time.perf_counter()
         self.P, self.jon, contacts = build(cfg, self.options)
-        self.M = G.mass_matrix(cfg)
+        self.M = spatial_geometry.mass_matrix(cfg)
         self.Minv = np.linalg.inv(self.M)
-        self.Qg = G.gravity_forces(cfg)
+        self.Qg = spatial_geometry.gravity_forces(cfg)
         self.build_s = time.perf_counter() - t0
         self.load_s = warm_up()
         from twin.drive import DriveReference
@@ -240,10 +240,10 @@ def warm_up() -> float:
     P[SM.P_R], P[SM.P_L], P[SM.P_G], P[SM.P_E1 + 1], P[SM.P_E2 + 2] = 0.1, 0.35, 1.0, 1.0, 1.0
     P[SM.P_TOL], P[SM.P_MAXIT], P[SM.P_H] = 1e-10, 20, 1e-5
     st = np.zeros(SM.N_STATE)
-    st[G.IBC + 1] = 0.1
-    st[G.IBR + 1] = 0.1
+    st[spatial_geometry.IBC + 1] = 0.1
+    st[spatial_geometry.IBR + 1] = 0.1
     z = np.zeros(1)
-    SM.run(P, np.zeros(3, dtype=np.int64), np.eye(G.NQ), np.eye(G.NQ), np.zeros(G.NQ), st, z, z, np.zeros(0), 1,
+    SM.run(P, np.zeros(3, dtype=np.int64), np.eye(spatial_geometry.NQ), np.eye(spatial_geometry.NQ), np.zeros(spatial_geometry.NQ), st, z, z, np.zeros(0), 1,
            np.empty((1, SM.N_OUT)))
     _WARM = True
     return time.perf_counter() - t0

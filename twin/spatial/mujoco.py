@@ -31,9 +31,9 @@ import numpy as np
 from mujoco import rollout
 
 from twin import __version__ as twin_version
-from twin import names as N
+from twin import names
 from twin.errors import ConfigError, ModelError, SimulationError
-from twin.spatial import geometry as G
+from twin.spatial import geometry as spatial_geometry
 
 _STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
 #: MJCF names of the spatial model
@@ -84,11 +84,11 @@ def _spec(cfg: Any, theta0: float) -> mujoco.MjSpec:
     o.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
     o.gravity = list(cfg.mechanism.gravity_vector)
     o.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_ISLAND) | int(mujoco.mjtDisableBit.mjDSBL_EULERDAMP)
-    spec.nuser_geom = len(N.BORE_USERDATA_FIELDS)
-    spec.nuser_jnt = len(N.GUIDE_USERDATA_FIELDS)
+    spec.nuser_geom = len(names.BORE_USERDATA_FIELDS)
+    spec.nuser_jnt = len(names.GUIDE_USERDATA_FIELDS)
     world = spec.worldbody
     geom_kw = dict(contype=0, conaffinity=0, mass=0.0)
-    q0 = G.ideal_coordinates(cfg, theta0)
+    q0 = spatial_geometry.ideal_coordinates(cfg, theta0)
     r, L = b.crank.length_m, b.rod.length_m
 
     # base bearing A
@@ -110,8 +110,8 @@ def _spec(cfg: Any, theta0: float) -> mujoco.MjSpec:
                    pos=[0, r, 0], **geom_kw)
     crank.add_site(name="spatial_crank_B", pos=[0, r, 0])
     # rod: a free body at the ball B, x along B -> C
-    u = (q0[G.ICR:G.ICR + 3] - q0[G.IBR:G.IBR + 3]) / L
-    rod = world.add_body(name=ROD, pos=list(q0[G.IBR:G.IBR + 3]), quat=_quat_x_to(u))
+    u = (q0[spatial_geometry.ICR:spatial_geometry.ICR + 3] - q0[spatial_geometry.IBR:spatial_geometry.IBR + 3]) / L
+    rod = world.add_body(name=ROD, pos=list(q0[spatial_geometry.IBR:spatial_geometry.IBR + 3]), quat=_quat_x_to(u))
     rod.add_freejoint(name=ROD_FREE)
     rod.explicitinertial = True
     rod.mass, rod.ipos = b.rod.mass_kg, [b.rod.x_g_m, 0.0, 0.0]
@@ -122,14 +122,14 @@ def _spec(cfg: Any, theta0: float) -> mujoco.MjSpec:
     rod.add_site(name="spatial_rod_B")
     rod.add_site(name="spatial_rod_C", pos=[L, 0, 0])
     # slider on the guide
-    p0, g = G.guide(cfg)
+    p0, g = spatial_geometry.guide(cfg)
     slider = world.add_body(name=SLIDER, pos=list(p0), quat=_quat_x_to(g))
     slider.explicitinertial = True
     slider.mass, slider.ipos = b.slider.mass_kg, [0.0, 0.0, 0.0]
     slider.inertia = [b.slider.inertia_kgm2] * 3
     sj = slider.add_joint(name=SLIDER_SLIDE, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1, 0, 0])
     if cfg.mechanism.guide_friction_n > 0:
-        sj.userdata = N.guide_userdata(cfg.mechanism.guide_friction_n, cfg.contact.v0_mps, cfg.contact.v1_mps)
+        sj.userdata = names.guide_userdata(cfg.mechanism.guide_friction_n, cfg.contact.v0_mps, cfg.contact.v1_mps)
     slider.add_geom(name=BUSH["C"], type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[j.bushing_radius_m("C"), 0, 0],
                     **geom_kw)
     slider.add_site(name="spatial_slider_C")
@@ -202,7 +202,7 @@ def build(cfg: Any, theta0: float) -> tuple[mujoco.MjSpec, mujoco.MjModel, dict[
         setting = contact_setting(cfg, jt, a_hat, native=True)
         p = spec.pair(f"spatial_pair_{jt}")
         p.solref, p.solimp = list(setting.solref), list(setting.solimp)
-        spec.geom(BUSH[jt]).userdata = N.bore_userdata(mu0=cfg.contact.mu0, v0=cfg.contact.v0_mps,
+        spec.geom(BUSH[jt]).userdata = names.bore_userdata(mu0=cfg.contact.mu0, v0=cfg.contact.v0_mps,
                                                        v1=cfg.contact.v1_mps, **setting.law.userdata(slot))
         contacts[jt] = {"kind": "journal in bearing" if jt == "A" else "ball in socket", **setting.to_json()}
     return spec, _compile(spec, cfg), contacts
@@ -245,27 +245,27 @@ class SpatialMujocoEngine:
         mujoco.mj_resetData(m, d)
         d.userdata[:] = 0.0
         omega = self._drive.start_rate()
-        q = G.ideal_coordinates(cfg, th)
-        v = G.ideal_velocities(cfg, th, omega)
+        q = spatial_geometry.ideal_coordinates(cfg, th)
+        v = spatial_geometry.ideal_velocities(cfg, th, omega)
         L = cfg.bodies.rod.length_m
         d.qpos[m.jnt_qposadr[m.joint(HINGE).id]] = th
         d.qvel[m.jnt_dofadr[m.joint(HINGE).id]] = omega
         # the rod's free joint: position of its frame (ball B), orientation x along B -> C (body quat at
         # build time is the same pose: qpos quaternion = the body's world orientation)
         fa, fv = m.jnt_qposadr[m.joint(ROD_FREE).id], m.jnt_dofadr[m.joint(ROD_FREE).id]
-        u = (q[G.ICR:G.ICR + 3] - q[G.IBR:G.IBR + 3]) / L
-        d.qpos[fa:fa + 3] = q[G.IBR:G.IBR + 3]
+        u = (q[spatial_geometry.ICR:spatial_geometry.ICR + 3] - q[spatial_geometry.IBR:spatial_geometry.IBR + 3]) / L
+        d.qpos[fa:fa + 3] = q[spatial_geometry.IBR:spatial_geometry.IBR + 3]
         d.qpos[fa + 3:fa + 7] = _quat_x_to(u)
-        vb, vc = v[G.IBR:G.IBR + 3], v[G.ICR:G.ICR + 3]
+        vb, vc = v[spatial_geometry.IBR:spatial_geometry.IBR + 3], v[spatial_geometry.ICR:spatial_geometry.ICR + 3]
         w = np.cross(u, (vc - vb) / L)  # the rod's angular velocity (no spin)
         R = np.empty(9)
         mujoco.mju_quat2Mat(R, d.qpos[fa + 3:fa + 7])
         d.qvel[fv:fv + 3] = vb
         d.qvel[fv + 3:fv + 6] = R.reshape(3, 3).T @ w  # free joint: angular velocity in the body frame
-        p0, g = G.guide(cfg)
+        p0, g = spatial_geometry.guide(cfg)
         sa, sv = m.jnt_qposadr[m.joint(SLIDER_SLIDE).id], m.jnt_dofadr[m.joint(SLIDER_SLIDE).id]
-        d.qpos[sa] = float((q[G.ICS:G.ICS + 3] - p0) @ g)
-        d.qvel[sv] = float(v[G.ICS:G.ICS + 3] @ g)
+        d.qpos[sa] = float((q[spatial_geometry.ICS:spatial_geometry.ICS + 3] - p0) @ g)
+        d.qvel[sv] = float(v[spatial_geometry.ICS:spatial_geometry.ICS + 3] @ g)
         # the first step's control (the dead-beat drive onto theta_ref(h)), so that the forward pass's
         # accelerations, the solver's warm start of the first step, are the drive's and not a jump to 0
         d.ctrl[0] = float(self._drive(np.array([self.cfg.simulation.timestep_s]))[0][0])
@@ -306,7 +306,7 @@ class SpatialMujocoEngine:
         if "slider" in groups:
             cols["slider_position"] = c(s, "s_slider")
         if "slider_accel" in groups:
-            _, g = G.guide(cfg)
+            _, g = spatial_geometry.guide(cfg)
             cols["slider_acceleration"] = c(s, "s_acc") + float(np.array(cfg.mechanism.gravity_vector) @ g)
         if "joints" in groups:
             for jt in cfg.joints.clearance_joints:

@@ -187,17 +187,17 @@ def static_penetration(cfg: BenchConfig, joint: str, m_eff: float, load_n: float
 # ------------------------------------------------------------------- effective masses
 def effective_masses(cfg: BenchConfig, joint: str, n_theta: int = 24, n_dir: int = 24) -> np.ndarray:
     """1/(J M⁻¹ Jᵀ) of the relative pin/bushing motion along in-plane normals, over a turn [kg]."""
-    from twin import names as N
+    from twin import names
     from twin.mujoco_engine.engine import MujocoEngine
 
     eng = MujocoEngine(cfg.replace(**{"simulation.duration_s": 0.01}))
     m, d = eng.model, eng.data
     out = []
-    pin_b = m.geom_bodyid[m.geom(N.pin(joint)).id]
-    bush_b = m.geom_bodyid[m.geom(N.bushing(joint)).id]
+    pin_b = m.geom_bodyid[m.geom(names.pin(joint)).id]
+    bush_b = m.geom_bodyid[m.geom(names.bushing(joint)).id]
     for theta in np.linspace(0, 2 * np.pi, n_theta, endpoint=False):
         eng.reset(float(theta))
-        p = d.site_xpos[m.site(N.bushing(joint)).id].copy()
+        p = d.site_xpos[m.site(names.bushing(joint)).id].copy()
         jp, jb = np.zeros((3, m.nv)), np.zeros((3, m.nv))
         mujoco.mj_jac(m, d, jp, None, p, pin_b)
         mujoco.mj_jac(m, d, jb, None, p, bush_b)

@@ -244,7 +244,7 @@ def _mujoco_theta(cfg: BenchConfig, h: float, duration_s: float, integrator: str
     import mujoco
     from mujoco import rollout
 
-    from twin import names as N
+    from twin import names
     from twin.mujoco_engine.engine import MujocoEngine
 
     c = cfg.replace(**{"mujoco.integrator": integrator, "simulation.timestep_s": h,
@@ -255,7 +255,7 @@ def _mujoco_theta(cfg: BenchConfig, h: float, duration_s: float, integrator: str
     m.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_ACTUATION  # no drive: free motion
     kind = mujoco.mjtState.mjSTATE_FULLPHYSICS
     state = np.empty((1, mujoco.mj_stateSize(m, kind)))
-    adr = m.jnt_qposadr[m.joint(N.CRANK_HINGE).id]
+    adr = m.jnt_qposadr[m.joint(names.CRANK_HINGE).id]
     n = int(round(duration_s / h))
 
     def once():
