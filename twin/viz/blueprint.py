@@ -72,6 +72,10 @@ class _Series:
 
 def _eye(cfg: BenchConfig) -> rrb.EyeControls3D:
     l = cfg.bodies.rod.length_m
+    if cfg.spatial.enabled:  # from the crank's side (−x), above and in front: both planes seen at an angle
+        cx = l / 2.0
+        return rrb.EyeControls3D(kind=rrb.Eye3DKind.Orbital, position=(cx - 0.21, 0.08, 0.27),
+                                 look_target=(cx - 0.04, -0.035, 0.0), eye_up=(0.0, 1.0, 0.0))
     cx = (l + 0.02) / 2.0  # the mechanism spans x = -r .. l + r (+ the guide)
     up = cfg.mechanism.orientation
     if up == "y":
@@ -140,7 +144,10 @@ def default_blueprint(cfg: BenchConfig, groups: dict[str, list[str]], channels: 
     if drive:
         tabs.append(rrb.Grid(*drive, grid_columns=2, name="Drive & encoder"))
     frame = "rod frame; A: bench frame" if "ecc_A_x" in channels else "rod frame"
-    ecc_xy = [(f"eccentricity {k} ({frame})", paths(*[f"ecc_{j}_{k}" for j in JOINTS])) for k in ("x", "y")]
+    axes: tuple[str, ...] = ("x", "y")
+    if cfg.spatial.enabled:
+        frame, axes = "spatial frame", ("x", "y", "z")
+    ecc_xy = [(f"eccentricity {k} ({frame})", paths(*[f"ecc_{j}_{k}" for j in JOINTS])) for k in axes]
     contact = [_series(n, p, window=win) for n, p in (("contact force", force), ("friction force", friction),
                                                        ("penetration", pen), *ecc_xy, *guide) if p]
     if contact:
@@ -166,12 +173,17 @@ def default_blueprint(cfg: BenchConfig, groups: dict[str, list[str]], channels: 
     right = rrb.Tabs(*tabs, active_tab=0)
 
     if has_pose:
-        mags = [(j, nice_magnification(cfg.joints.radial_m(j), opts.orbit_inset_radius_m)) for j in joints]
+        target = opts.orbit_inset_radius_m
+        if cfg.spatial.enabled:
+            from twin.viz.spatial_view import inset_radius
+
+            target = inset_radius(cfg, target)
+        mags = [(j, nice_magnification(cfg.joints.radial_m(j), target)) for j in joints]
         if mags and len({m for _, m in mags}) == 1:
             mag_text = f"×{mags[0][1]} ({', '.join(j for j, _ in mags)})"
         else:
             mag_text = ", ".join(f"{j} ×{m}" for j, m in mags)
-        title = "bench (true size)"
+        title = "spatial slider-crank (true size)" if cfg.spatial.enabled else "bench (true size)"
         if mags:
             title += f"; green circles: clearance, journal centre magnified {mag_text}"
         bench = rrb.Spatial3DView(origin="/bench", name=title,
@@ -181,12 +193,16 @@ def default_blueprint(cfg: BenchConfig, groups: dict[str, list[str]], channels: 
         orbits = []
         for j in joints:
             c_um = cfg.joints.radial_m(j) * 1e6
+            eye = rrb.EyeControls3D(kind=rrb.Eye3DKind.Orbital, position=(0.0, 0.0, 3.2 * c_um),
+                                    look_target=(0.0, 0.0, 0.0), eye_up=(0.0, 1.0, 0.0))
+            if cfg.spatial.enabled:  # A: the crank's plane seen from −x; B, C: the sphere at an angle
+                pos = (-3.2 * c_um, 0.0, 0.0) if j == "A" else (-1.6 * c_um, 1.3 * c_um, 2.5 * c_um)
+                eye = rrb.EyeControls3D(kind=rrb.Eye3DKind.Orbital, position=pos, look_target=(0.0, 0.0, 0.0),
+                                        eye_up=(0.0, 1.0, 0.0))
             orbits.append(rrb.Spatial3DView(
                 origin=f"/orbit/{j}",
                 name=f"{j} orbit [µm], c = {c_um:g} µm", time_ranges=[trail],
-                line_grid=rrb.LineGrid3D(visible=False),
-                eye_controls=rrb.EyeControls3D(kind=rrb.Eye3DKind.Orbital, position=(0.0, 0.0, 3.2 * c_um),
-                                               look_target=(0.0, 0.0, 0.0), eye_up=(0.0, 1.0, 0.0))))
+                line_grid=rrb.LineGrid3D(visible=False), eye_controls=eye))
         rows: list[rrb.Container | rrb.View] = [bench]
         shares = [3.0]
         if orbits:

@@ -45,6 +45,7 @@ from twin.util import remove_stale_temps, temp_path
 from twin.run import Channel, Run
 from twin.viz import blueprint as bp
 from twin.viz import scene
+from twin.viz import spatial_view
 from twin.viz.options import ViewOptions
 from twin.viz.pose import poses
 from twin.viz.spectrum import DB_REF_MPS2, amplitude_db, check_window, default_window
@@ -130,6 +131,7 @@ class RerunWriter:
         self._scene: scene.SceneInfo | None = None
         self._has_pose = False
         self._joints: tuple[str, ...] = ()
+        self._spatial = bool(self.cfg.spatial.enabled)  # S002's mechanism: twin.viz.spatial_view
         self._closed = False
         self._pending_rows = 0
 
@@ -166,13 +168,17 @@ class RerunWriter:
                                                        colors=[series_colour(c) for c in chans],
                                                        widths=[series_width(c) for c in chans]), static=True)
         if self._has_pose:
-            self._scene = scene.log_static_scene(rec, self.cfg, self.opts.orbit_inset_radius_m)
+            draw = spatial_view.log_static_scene if self._spatial else scene.log_static_scene
+            self._scene = draw(rec, self.cfg, self.opts.orbit_inset_radius_m)
             if self._joints:
                 rec.log("/orbit", rr.ViewCoordinates.RIGHT_HAND_Y_UP, static=True)
             for j in self._joints:
                 c = self.cfg.joints.radial_m(j)
                 if c <= 0:
                     raise TwinError(f"run has eccentricities at {j} but its configuration has no clearance there")
+                if self._spatial:
+                    spatial_view.log_orbit_clearance(rec, j, c * 1e6)
+                    continue
                 rec.log(f"/orbit/{j}/clearance", rr.LineStrips3D(
                     [scene.circle(c * 1e6)], colors=[scene.C_ORBIT], radii=[c * 1e6 / 150]), static=True)
                 rec.log(f"/orbit/{j}/axes", rr.Arrows3D(
@@ -227,8 +233,10 @@ class RerunWriter:
     # ------------------------------------------------------ decimated (poses)
     def _needed(self, chunk: Run) -> list[str]:
         names = [next(a for a in _ANGLE_SOURCES if a in chunk)]
+        if self._spatial:
+            names += [n for n in ("crank_angle", "slider_position") if n in chunk and n not in names]
         for j in self._joints:
-            names += [f"ecc_{j}_x", f"ecc_{j}_y"] + [f"{p}_{j}" for p in ("pen", "fn", "ft") if f"{p}_{j}" in chunk]
+            names += [f"ecc_{j}_x", f"ecc_{j}_y"] + [f"ecc_{j}_z"] * (self._spatial and f"ecc_{j}_z" in chunk) + [f"{p}_{j}" for p in ("pen", "fn", "ft") if f"{p}_{j}" in chunk]
         return names
 
     def _buffer(self, chunk: Run) -> None:
@@ -269,8 +277,13 @@ class RerunWriter:
         K = k_b - k_a
         gidx = np.arange(k_a, k_b, dtype=np.int64) * P
         local = gidx - g0
-        p = poses(self._buf_run(), local, self.cfg)
         tcol = _tcol(times_ns(self._t0, self._rate, gidx))
+        if self._spatial:
+            sp = spatial_view.spatial_poses(self._buf_run(), local, self.cfg)
+            spatial_view.emit_poses(rec, tcol, sp, self._scene, self._joints, self._buf, local, k_a * P - h - g0, P,
+                                    self.cfg, self.opts.force_scale_m_per_n)
+            return
+        p = poses(self._buf_run(), local, self.cfg)
         z = np.zeros(K)
         half = lambda a: np.stack([np.zeros(K), np.zeros(K), np.sin(a / 2), np.cos(a / 2)], axis=1)  # noqa: E731
         rec.send_columns("/bench/crank", indexes=[tcol], columns=rr.Transform3D.columns(
@@ -333,8 +346,9 @@ class RerunWriter:
             inc = (pen[local] > 0) if pen is not None else (fn[local] > 0) if fn is not None else np.zeros(len(local), bool)
             colours = np.where(inc[:, None], np.array(scene.C_CONTACT), np.array(scene.C_FREE)).astype(np.uint8)
             c_um = self.cfg.joints.radial_m(j) * 1e6
+            ez = self._buf[f"ecc_{j}_z"][local] if f"ecc_{j}_z" in self._buf else np.zeros(len(local))
             rec.send_columns(f"/orbit/{j}/journal", indexes=[tcol], columns=rr.Points3D.columns(
-                positions=np.stack([ex * 1e6, ey * 1e6, np.zeros(len(local))], axis=1), colors=colours,
+                positions=np.stack([ex * 1e6, ey * 1e6, ez * 1e6], axis=1), colors=colours,
                 radii=np.full(len(local), c_um / 40, dtype=np.float32)))
 
     # ------------------------------------------------------------------ close
