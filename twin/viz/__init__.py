@@ -5,6 +5,7 @@
 * :class:`RerunWriter`: the streaming sink behind both, also used by
   ``twin simulate --rerun`` to record a run while it is simulated;
 * :mod:`twin.viz.pose`: body poses reconstructed from the run's channels.
+* :mod:`twin.viz.spatial_view`: the same for the spatial slider–crank (``spatial.enabled``).
 
 The recording holds the 3-D bench moving in time, the clearance joints' journal orbits,
 contact force arrows, every channel as a time series, spectra of a window and the

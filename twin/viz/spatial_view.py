@@ -73,6 +73,15 @@ class SpatialPoses:
     c_socket: np.ndarray
 
 
+def take(arr: np.ndarray, start: int, length: int, fill: float) -> np.ndarray:
+    """arr[start:start+length] padded with ``fill`` where out of range."""
+    out = np.full(length, fill, dtype=float)
+    a, b = max(start, 0), min(start + length, len(arr))
+    if b > a:
+        out[a - start:b - start] = arr[a:b]
+    return out
+
+
 def eccentricity3(run: Run, joint: str, idx: np.ndarray | slice, n: int) -> np.ndarray:
     """Eccentricity of ``joint`` in the spatial frame, shape (n, 3) [m] (zeros if not recorded)."""
     keys = [f"ecc_{joint}_{k}" for k in "xyz"]
@@ -290,9 +299,7 @@ def emit_poses(rec: rr.RecordingStream, tcol: rr.TimeColumn, p: SpatialPoses, sc
             positions=centre + m * e, colors=colours, radii=np.full(K, 0.006, dtype=np.float32)))
         if fn is None:
             continue
-        from twin.viz.writer import _take
-
-        f_win = _take(fn, start, K * period, -np.inf).reshape(K, period)
+        f_win = take(fn, start, K * period, -np.inf).reshape(K, period)
         j_pk = np.argmax(f_win, axis=1)
         f_pk = f_win[np.arange(K), j_pk]
         idx_pk = np.clip(start + np.arange(K) * period + j_pk, 0, len(fn) - 1)

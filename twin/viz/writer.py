@@ -5,7 +5,9 @@ consecutive chunks of one run, then ``close(meta, summary)``; ``abort()`` on fai
 file is written under a temporary name beside the target and renamed once the recording is
 flushed and its footer written, so a failed conversion never leaves a partial ``.rrd``.
 
-Entity paths (see :mod:`twin.viz.scene` for ``/bench``):
+Entity paths (see :mod:`twin.viz.scene` for ``/bench``; a run of the spatial mechanism,
+``spatial.enabled``, draws it with :mod:`twin.viz.spatial_view` instead: its insets and arrows
+under the sockets' bodies, its orbits in 3-D):
 
 * ``/signals/<group>``: every channel of the run at its full rate, one ``Scalars`` series per
   channel of the group (MCAP topic) in run order, sent with ``send_columns`` in blocks of
@@ -77,13 +79,7 @@ def _tcol(ns: np.ndarray) -> rr.TimeColumn:
     return rr.TimeColumn(TIMELINE, duration=ns.astype("timedelta64[ns]"))
 
 
-def _take(arr: np.ndarray, start: int, length: int, fill: float) -> np.ndarray:
-    """arr[start:start+length] padded with ``fill`` where out of range."""
-    out = np.full(length, fill, dtype=float)
-    a, b = max(start, 0), min(start + length, len(arr))
-    if b > a:
-        out[a - start:b - start] = arr[a:b]
-    return out
+_take = spatial_view.take  # the pose windows' padded slices
 
 
 class RerunWriter:
