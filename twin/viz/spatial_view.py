@@ -255,7 +255,9 @@ def log_static_scene(rec: rr.RecordingStream, cfg: BenchConfig, orbit_radius_m: 
         if radial[j] > 0:
             m = mag[j]
             rec.log(f"{parent}/orbit_{j}/label", rr.Points3D(
-                [(centre[0], centre[1] - m * radial[j] - 0.018, centre[2])], radii=[0.0001], colors=[scene.C_ORBIT],
+                # A's label above its inset, B's below: apart whichever way the crank points
+                [(centre[0], centre[1] + (m * radial[j] + 0.012 if j == "A" else -m * radial[j] - 0.018), centre[2])],
+                radii=[0.0001], colors=[scene.C_ORBIT],
                 labels=[f"{j} ×{m}"], show_labels=True), static=True)
     return SpatialSceneInfo(centres, radial, mag)
 
