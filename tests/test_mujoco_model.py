@@ -122,3 +122,22 @@ def test_exported_xml_compiles_to_the_same_model(tmp_path):
     np.testing.assert_allclose(m.pair_solref, ref.pair_solref, rtol=1e-5)  # XML keeps 6 digits
     np.testing.assert_allclose(m.body_mass, ref.body_mass)
     np.testing.assert_allclose(m.geom_size, ref.geom_size)
+
+
+def test_exported_motor_drive_keeps_the_drive_train(tmp_path):
+    """``twin export-mjcf --drive-mode motor``: the rotor, its command actuator and the drive train's
+    numeric parameters (belt, controller) come out of the XML as compiled, the crank PID gone."""
+    cfg = preset(12).replace(**{"drive.mode": "motor"})
+    xml = export_xml(cfg)
+    assert "passive callback" in xml
+    m = mujoco.MjModel.from_xml_string(xml)
+    ref = build(cfg.replace(**{"mujoco.accelerometers": "sensor"}))[1]
+    assert (m.nq, m.nv, m.nu, m.nsensor) == (ref.nq, ref.nv, ref.nu, ref.nsensor)
+    assert mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, names.CRANK_PID) == -1
+    for kind, name in ((mujoco.mjtObj.mjOBJ_JOINT, names.MOTOR_HINGE), (mujoco.mjtObj.mjOBJ_ACTUATOR, names.MOTOR_COMMAND)):
+        assert mujoco.mj_name2id(m, kind, name) >= 0
+    b = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, names.MOTOR)
+    assert m.body_inertia[b][2] == pytest.approx(cfg.drivetrain.rotor_inertia_kgm2, rel=1e-6)
+    i, k = (mujoco.mj_name2id(x, mujoco.mjtObj.mjOBJ_NUMERIC, "drivetrain") for x in (m, ref))
+    a = m.numeric_data[m.numeric_adr[i]:m.numeric_adr[i] + m.numeric_size[i]]
+    np.testing.assert_allclose(a, ref.numeric_data[ref.numeric_adr[k]:ref.numeric_adr[k] + ref.numeric_size[k]], rtol=1e-5)

@@ -11,7 +11,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("export-mjcf", help="save a configuration's MuJoCo model as XML",
                        description="Build the MuJoCo variant of a configuration and save it as MJCF.")
     # what shapes the MuJoCo model: the bench, the step and the sensors the channel groups need
-    add_config_args(p, SELECT_OPTIONS + MODEL_OPTIONS + ("timestep", "channels"),
+    add_config_args(p, SELECT_OPTIONS + MODEL_OPTIONS + ("timestep", "channels", "drive_mode"),
                     refused_set=("simulation.engine", "simulation.duration_s", "drive."))
     p.add_argument("--out", metavar="MODEL.xml", required=True, help="XML file to write")
     p.set_defaults(func=run)
@@ -25,5 +25,6 @@ def run(args: argparse.Namespace) -> int:
     out = check_output_file(args.out, "--out", ".xml")
     cfg = config_from_args(args)
     atomic_write_text(out, export_xml(cfg))
-    print(f"wrote {out} ({cfg.name}: clearance joints {', '.join(cfg.joints.clearance_joints) or 'none'})")
+    drive = f"; drive {cfg.drive.mode}" if cfg.drive.mode in ("motor", "torque") else ""
+    print(f"wrote {out} ({cfg.name}: clearance joints {', '.join(cfg.joints.clearance_joints) or 'none'}{drive})")
     return 0

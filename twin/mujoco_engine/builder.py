@@ -646,7 +646,12 @@ def export_xml(cfg: BenchConfig) -> str:
             + "; ".join(f"{jt}: {s.law.law if s.law else s.source}" for jt, s in info.contacts.items())
             + ".\n     Bushing geoms (user=\"7301 ...\") need the twin's native bore collider, contact law and "
               "friction (twin/mujoco_engine/_bore.c):\n     a plain MuJoCo viewer shows and simulates ideal "
-              "variants faithfully; simulate clearance variants with 'twin simulate'. -->\n")
+              "variants faithfully; simulate clearance variants with 'twin simulate'."
+            + (f"\n     Drive train ({cfg.drive.mode}): the motor rotor, its command actuator and the numeric "
+               "'drivetrain' are in the model;\n     the speed controller and the V-belt's pull act only through "
+               "the twin's passive callback (twin/mujoco_engine/_drivetrain.h)."
+               if cfg.drive.mode in ("motor", "torque") else "")
+            + " -->\n")
     xml = _exact_geom_user(spec.to_xml(), _model)
     i = xml.find("<mujoco")
     return xml[:i] + head + xml[i:]
