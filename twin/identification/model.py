@@ -378,13 +378,15 @@ def _conformal_folds(rows: list[dict[str, Any]], runs: np.ndarray, how: str, see
 
 
 def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = ("train", "val"), workers: int = 1,
-          seed: int = 0, interval_folds: str = "runs", location_only: list[str | Path] = ()
-          ) -> tuple[ClearanceModel, dict[str, Any]]:
+          seed: int = 0, interval_folds: str = "runs", location_only: list[str | Path] = (),
+          features: tuple | None = None) -> tuple[ClearanceModel, dict[str, Any]]:
     """Train on the ok runs of ``splits`` of one dataset or several pooled (see module docstring);
     ``interval_folds`` groups the out-of-fold scores of the intervals (:func:`_conformal_folds`);
     the runs of the ``location_only`` datasets (pooled like the others) teach the location model
     only, not the size regressors nor their intervals (e.g. runs at one speed in a regime the others
-    lack, which would tilt the size regressors toward that speed)."""
+    lack, which would tilt the size regressors toward that speed). ``features``: what
+    :func:`pooled_features` returns for these datasets and splits, computed before (a study that trains
+    several variants on the same runs computes them once)."""
     if interval_folds not in INTERVAL_FOLDS:
         raise ModelError(f"interval_folds: {interval_folds!r}; allowed: {', '.join(INTERVAL_FOLDS)}")
     from sklearn.ensemble import HistGradientBoostingClassifier, HistGradientBoostingRegressor
@@ -395,7 +397,7 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
     n_size = len(dirs)
     dirs += list(location_only)
     t0 = time.perf_counter()
-    X, rows, owner, skipped, dss = pooled_features(dirs, splits, workers)
+    X, rows, owner, skipped, dss = features if features is not None else pooled_features(dirs, splits, workers)
     y = np.array([rows[i]["fault"] for i in owner])
     size_names = {d.info["name"] for d in dss[:n_size]}
     for_size = np.array([rows[i]["dataset"] in size_names for i in owner])

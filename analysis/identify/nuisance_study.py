@@ -1,0 +1,106 @@
+"""Development of the nuisance-robust identification model: variants trained on the nuisance training set,
+judged on the development sets only (analysis/identify/FRESH_TEST.md: the fresh test set is not looked at here).
+
+Method. The window features (:mod:`twin.identification.features`) of every run of each dataset are computed
+once and kept in ``WORK/features/NAME.npz`` (arrays) and ``NAME.json`` (the runs' rows; plain JSON). Each
+variant is a call of :func:`twin.identification.model.train` on those features (the same code as ``twin
+identify train``), evaluated by :func:`twin.identification.evaluate.evaluate` on the development sets. The
+figures printed are the fresh-test protocol's metrics on the in-range development set
+(``clearance_id_nuisance_dev``, reference engine) and the warning rate on the out-of-range one
+(``clearance_id_nuisance_dev_out``):
+
+* location accuracy and recall per class;
+* per joint, the share of runs where the size-resolution map resolves the size whose answer lies within a
+  factor 1.5 of the truth, and the catalogue values whose median error misses half the catalogue gap;
+* the 90 % interval's coverage for each catalogue value at each joint (the lowest);
+* the share of runs warned as outside the training data.
+
+Variants: ``default`` (``twin identify train --interval-folds speed`` on the nuisance set),
+``runs`` (conformal folds of random runs instead of speeds). Results: ``analysis/results/identify/
+nuisance_dev.json``.
+
+Run: ``python analysis/identify/nuisance_study.py [--work DIR] [--workers N] [--variants default,runs]``
+(the datasets generated first: ``twin dataset generate analysis/datasets/clearance_id_nuisance.toml --out
+WORK/clearance_id_nuisance`` and the same for ``clearance_id_nuisance_dev`` and ``clearance_id_nuisance_dev_out``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+
+from twin.identification.evaluate import evaluate
+from twin.identification.features import FEATURE_VERSION
+from twin.identification.model import pooled_features, train
+
+ROOT = Path(__file__).resolve().parents[2]
+OUT = ROOT / "analysis" / "results" / "identify" / "nuisance_dev.json"
+TRAIN = "clearance_id_nuisance"
+DEV = ("clearance_id_nuisance_dev", "clearance_id_nuisance_dev_out")
+
+
+def cached_features(work: Path, name: str, splits: tuple[str, ...], workers: int) -> tuple:
+    """:func:`pooled_features` of ``WORK/name`` (the splits given), from the cache when it holds them."""
+    from twin.dataset import open as open_dataset
+
+    cache = work / "features"
+    cache.mkdir(exist_ok=True)
+    npz, js = cache / f"{name}.npz", cache / f"{name}.json"
+    key = {"feature_version": FEATURE_VERSION, "splits": list(splits)}
+    if npz.is_file() and js.is_file():
+        meta = json.loads(js.read_text())
+        if meta["key"] == key:
+            z = np.load(npz, allow_pickle=False)
+            return z["X"], meta["rows"], list(z["owner"]), meta["skipped"], [open_dataset(work / name)]
+    t = time.perf_counter()
+    X, rows, owner, skipped, dss = pooled_features([work / name], splits, workers)
+    np.savez(npz, X=X, owner=np.asarray(owner))
+    js.write_text(json.dumps({"key": key, "rows": rows, "skipped": skipped}, default=float))
+    print(f"features of {name}: {len(rows)} runs, {len(X)} windows, {time.perf_counter() - t:.0f} s", flush=True)
+    return X, rows, owner, skipped, dss
+
+
+def figures(rep: dict) -> dict:
+    """The protocol's metrics of an evaluation report."""
+    out = {"runs": rep["runs"], "accuracy": rep["accuracy"], "recall": rep["recall"],
+           "warned": rep["outside_training_data"]["share"]}
+    for J, g in rep["by_clearance"].items():
+        res = g["resolved"]
+        out[J] = {"within_1_5_resolved": res.get("within_factor_1_5"), "resolved_runs": res["runs"],
+                  "median_misses": [c for c, v in res["values"].items() if not v["meets_target"]],
+                  "coverage_by_value": {c: v["interval_coverage"] for c, v in g["values"].items()},
+                  "coverage_min": min((v["interval_coverage"] for v in g["values"].values()), default=float("nan"))}
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--work", default=str(ROOT.parent / "identify_work"))
+    ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    ap.add_argument("--variants", default="default,runs")
+    args = ap.parse_args()
+    work = Path(args.work)
+    tr = cached_features(work, TRAIN, ("train", "val"), args.workers)
+    dev = {d: cached_features(work, d, ("train", "val", "test"), args.workers) for d in DEV if (work / d).is_dir()}
+    results = json.loads(OUT.read_text()) if OUT.is_file() else {}
+    for v in args.variants.split(","):
+        t = time.perf_counter()
+        folds = {"default": "speed", "runs": "runs"}[v]
+        model, info = train([work / TRAIN], workers=args.workers, interval_folds=folds, features=tr)
+        fit_s = time.perf_counter() - t
+        results[v] = {"fit_seconds": fit_s, "interval": info["interval"]["half_width_log10"]}
+        for d, f in dev.items():
+            rep = evaluate(model, [work / d], ("train", "val", "test"), features=f)
+            results[v][d] = figures(rep)
+            print(v, d, json.dumps(results[v][d], default=float), flush=True)
+    OUT.write_text(json.dumps(results, indent=1, default=float) + "\n")
+    print(f"wrote {OUT}")
+
+
+if __name__ == "__main__":
+    main()
