@@ -70,6 +70,22 @@ def test_steady_windows_skip_the_spin_up_and_need_two_revolutions():
         steady_windows(np.zeros(100_000), RATE, CPR)  # no motion at all
 
 
+def test_a_steady_rippled_recording_is_steady():
+    """A crank turning at a steady 2 Hz whose speed ripples within each turn by 6 % at 1x and 2x and 3 % at 4x
+    the crank rate (peaks 15 % off the mean): the rate over one turn is steady, the whole recording is used."""
+    t = np.arange(0.0, 3.0, 1.0 / RATE)
+    a = {1: 0.06, 2: 0.06, 4: 0.03}
+    phi = 2 * np.pi * 2.0 * t - sum(ak / k * np.cos(k * 2 * np.pi * 2.0 * t) for k, ak in a.items())
+    counts = np.floor(phi / (2 * np.pi) * CPR)
+    w = steady_windows(counts, RATE, CPR)
+    assert w.crank_hz == pytest.approx(2.0, rel=1e-3)
+    assert w.revolutions > 5.9 and len(w.windows) == 2
+    # over 50 ms the same recording leaves 10 % of its mean rate within each turn (the features/5 rule)
+    L = int(0.05 * RATE)
+    hz = (counts[L:] - counts[:-L]) / CPR * RATE / L
+    assert np.max(np.abs(hz / 2.0 - 1)) > 0.10
+
+
 def test_order_amplitudes_and_impact_counts_are_those_put_in():
     names = feature_names()
     acc, counts, a_ref = _synthetic(crank_hz=2.5, seconds=3.0, impacts=0)

@@ -74,7 +74,9 @@ RANGES = {"source": "test", "runs": 3, "crank_hz": [2.0, 2.5], "ripple_pct": [[0
     ({"crank_hz": 2.7}, "crank rate"), ({"crank_hz": 1.9}, "crank rate"),
     ({"ripple_pct": [0.2, 0.0, 0.0, 0.0]}, None),  # within the 0.25-point allowance
     ({"ripple_pct": [0.0, 0.3, 0.0, 0.0]}, "ripple 0.30 % at 2x"),
-    ({"noise_ug_rthz": 45.0}, None), ({"noise_ug_rthz": 50.0}, "noise"), ({"noise_ug_rthz": 18.0}, "noise"),
+    # the 1.15 allowance on the 29-31 range: 35.6 and 25.2 inside, 36 and 25 outside
+    ({"noise_ug_rthz": 35.6}, None), ({"noise_ug_rthz": 25.3}, None),
+    ({"noise_ug_rthz": 36.0}, "noise"), ({"noise_ug_rthz": 25.0}, "noise"),
     ({"orientation": "x"}, "orientation x"),
 ])
 def test_each_rule_warns_outside_its_range_and_not_inside(change, reason):
@@ -97,8 +99,26 @@ def test_the_feature_distance_counts_features_beyond_the_far_out_fences():
     assert id_ranges.out_of_range(m, "y", RANGES, x, ref)[0] == []
     x[:2] += 100.0  # 2 of 40 features far out: 5 %
     w, ev = id_ranges.out_of_range(m, "y", RANGES, x, ref, [f"f{i}" for i in range(40)])
-    assert ev["feature_distance"] == {"beyond_far_out_fences": 2, "of": 40}
+    assert ev["feature_distance"] == {"beyond_far_out_fences": 2, "of": 40, "training_runs_max": None}
     assert len(w) == 1 and "f0, f1" in w[0]
+
+
+def test_the_feature_distance_limit_is_what_the_training_runs_themselves_reach():
+    """With the windows' runs given, the limit is the conformal 99 % rank of the training runs' own counts:
+    here 200 runs whose first 5 features sit in one of two far-apart groups (a multimodal training set, as
+    orientations make it), so a run has none or 5 far-out features; the limit holds the runs' own worst."""
+    rng = np.random.default_rng(1)
+    X = rng.normal(size=(800, 40))
+    owner = np.repeat(np.arange(200), 4)
+    X[owner < 30, :5] += 50.0  # 30 runs of another group
+    ref = id_ranges.feature_reference(X, owner)
+    own = [id_ranges.feature_outliers(np.median(X[owner == r], axis=0), ref)[0] for r in range(200)]
+    assert max(own) == 5 and ref["max_outliers"] == 5
+    m = {"crank_hz": 2.2, "ripple_pct": [0.0] * 4, "noise_ug_rthz": 30.0}
+    assert id_ranges.out_of_range(m, "y", RANGES, np.median(X[owner == 0], axis=0), ref)[0] == []
+    x = np.median(X[owner == 100], axis=0)
+    x[5:11] += 100.0  # 6 features far out, more than any training run has
+    assert len(id_ranges.out_of_range(m, "y", RANGES, x, ref)[0]) == 1
 
 
 def test_the_widened_interval_holds_every_clearance_trained_on():

@@ -15,18 +15,27 @@ figures printed are the fresh-test protocol's metrics on the in-range developmen
 * the 90 % interval's coverage for each catalogue value at each joint (the lowest);
 * the share of runs warned as outside the training data.
 
-Variants: ``default`` (``twin identify train --interval-folds speed`` on the nuisance set),
-``runs`` (conformal folds of random runs instead of speeds). Results: ``analysis/results/identify/
-nuisance_dev.json``.
+Variants (``twin identify train --interval-folds speed`` each):
 
-Run: ``python analysis/identify/nuisance_study.py [--work DIR] [--workers N] [--variants default,runs]``
+* ``base``: the nuisance set alone (clearances 0.02-1.0 mm), intervals normalized by each run's spread of
+  per-window answers (what ``twin identify train`` stores);
+* ``base-fixed``: the same model with the fixed (Mondrian by the size-resolution map) half widths;
+* ``ends``: the nuisance set pooled with ``clearance_id_nuisance_ends`` (clearances beyond the catalogue's
+  ends, 0.0125-0.02 and 1.0-1.6 mm), normalized intervals;
+* ``ends-fixed``: the same with the fixed half widths.
+
+Results: ``analysis/results/identify/nuisance_dev.json``.
+
+Run: ``python analysis/identify/nuisance_study.py [--work DIR] [--workers N] [--variants base,ends-fixed]``
 (the datasets generated first: ``twin dataset generate analysis/datasets/clearance_id_nuisance.toml --out
-WORK/clearance_id_nuisance`` and the same for ``clearance_id_nuisance_dev`` and ``clearance_id_nuisance_dev_out``).
+WORK/clearance_id_nuisance`` and the same for ``clearance_id_nuisance_ends``, ``clearance_id_nuisance_dev`` and
+``clearance_id_nuisance_dev_out``).
 """
 
 from __future__ import annotations
 
 import argparse
+import copy
 import json
 import os
 import time
@@ -41,6 +50,7 @@ from twin.identification.model import pooled_features, train
 ROOT = Path(__file__).resolve().parents[2]
 OUT = ROOT / "analysis" / "results" / "identify" / "nuisance_dev.json"
 TRAIN = "clearance_id_nuisance"
+ENDS = "clearance_id_nuisance_ends"
 DEV = ("clearance_id_nuisance_dev", "clearance_id_nuisance_dev_out")
 
 
@@ -65,6 +75,23 @@ def cached_features(work: Path, name: str, splits: tuple[str, ...], workers: int
     return X, rows, owner, skipped, dss
 
 
+#: variant: (training datasets, fixed half widths instead of the normalized ones)
+VARIANTS = {"base": ((TRAIN,), False), "base-fixed": ((TRAIN,), True),
+            "ends": ((TRAIN, ENDS), False), "ends-fixed": ((TRAIN, ENDS), True)}
+
+
+def pool(parts: list[tuple]) -> tuple:
+    """Cached features of several datasets pooled as :func:`pooled_features` pools them."""
+    X, rows, owner, skipped, dss = [], [], [], [], []
+    for Xp, rp, op, sp, dp in parts:
+        owner += [len(rows) + int(i) for i in op]
+        rows += rp
+        X.append(Xp)
+        skipped += sp
+        dss += dp
+    return np.concatenate(X), rows, owner, skipped, dss
+
+
 def figures(rep: dict) -> dict:
     """The protocol's metrics of an evaluation report."""
     out = {"runs": rep["runs"], "accuracy": rep["accuracy"], "recall": rep["recall"],
@@ -82,18 +109,26 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--work", default=str(ROOT.parent / "identify_work"))
     ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
-    ap.add_argument("--variants", default="default,runs")
+    ap.add_argument("--variants", default="base,base-fixed,ends,ends-fixed")
     args = ap.parse_args()
     work = Path(args.work)
-    tr = cached_features(work, TRAIN, ("train", "val"), args.workers)
+    feats = {n: cached_features(work, n, ("train", "val"), args.workers) for n in (TRAIN, ENDS)}
     dev = {d: cached_features(work, d, ("train", "val", "test"), args.workers) for d in DEV if (work / d).is_dir()}
     results = json.loads(OUT.read_text()) if OUT.is_file() else {}
+    results = {k: v for k, v in results.items() if k in VARIANTS}
+    models: dict[str, object] = {}
     for v in args.variants.split(","):
+        sets, fixed = VARIANTS[v]
         t = time.perf_counter()
-        folds = {"default": "speed", "runs": "runs"}[v]
-        model, info = train([work / TRAIN], workers=args.workers, interval_folds=folds, features=tr)
-        fit_s = time.perf_counter() - t
-        results[v] = {"fit_seconds": fit_s, "interval": info["interval"]["half_width_log10"]}
+        if sets not in models:
+            models[sets] = train([work / n for n in sets], workers=args.workers, interval_folds="speed",
+                                 features=pool([feats[n] for n in sets]))
+        model, info = models[sets]
+        model = copy.deepcopy(model)
+        if fixed:
+            model.trained_on["interval"]["normalized"] = {}
+        results[v] = {"datasets": list(sets), "intervals": "fixed" if fixed else "normalized",
+                      "fit_seconds": time.perf_counter() - t, "interval": info["interval"]}
         for d, f in dev.items():
             rep = evaluate(model, [work / d], ("train", "val", "test"), features=f)
             results[v][d] = figures(rep)

@@ -44,7 +44,7 @@ import numpy as np
 
 from twin.errors import TwinError
 
-FEATURE_VERSION = "twin-identify-features/5"
+FEATURE_VERSION = "twin-identify-features/6"
 SENSORS = ("AC1", "AC2", "AC3", "AC4", "AC5", "AC6")
 #: whole crank revolutions per analysis window
 REVS_PER_WINDOW = 2
@@ -99,7 +99,7 @@ class Windows:
         steady: (start, stop) sample indices of the steady part used.
         windows: (start, stop) sample indices of each window of exactly REVS_PER_WINDOW turns.
         revolutions: crank turns in the steady part.
-        crank_hz: crank rate of the steady part (median over the recording's last half) [Hz].
+        crank_hz: crank rate of the windows (their whole turns over their duration) [Hz].
         direction: +1 or -1 (encoder counting direction of the motion).
     """
 
@@ -118,6 +118,9 @@ RATE_WINDOW_S = 0.05
 #: its speed within a few percent (the sample recordings' belt and motor model: ±3 %), a spin-up
 #: leaves it by far more
 SPEED_TOL = 0.10
+#: allowance above a rippled recording's own rate spread, and the largest tolerance a ripple may give [-]
+RIPPLE_ALLOWANCE = 0.05
+MAX_SPEED_TOL = 0.30
 
 
 def steady_windows(counts: np.ndarray, rate_hz: float, counts_per_rev: float, skip_s: float = 0.0,
@@ -125,8 +128,10 @@ def steady_windows(counts: np.ndarray, rate_hz: float, counts_per_rev: float, sk
     """Windows of exactly REVS_PER_WINDOW crank turns in the recording's steady part.
 
     The crank rate is the encoder's turns over 50 ms; the steady part is the longest stretch, after
-    ``skip_s``, where it stays within ``speed_tol`` of the median rate of the last half of the
-    recording (a spin-up or a stop is left out). Windows are cut back to back from the end of that
+    ``skip_s``, where it stays within a tolerance of the median rate of the last half of the recording
+    (a spin-up or a stop is left out): ``speed_tol``, or, where the speed ripples within a turn, the
+    last half's own spread (95th percentile of the rate's deviation) plus :data:`RIPPLE_ALLOWANCE`, at
+    most :data:`MAX_SPEED_TOL`. Windows are cut back to back from the end of that
     stretch (the most settled part), at any crank angle: order amplitudes do not depend on where a
     revolution starts. At least REVS_PER_WINDOW steady turns are needed.
     """
@@ -144,7 +149,13 @@ def steady_windows(counts: np.ndarray, rate_hz: float, counts_per_rev: float, sk
     ref = float(np.median(hz[len(hz) // 2:]))
     if abs(ref) <= 1e-6:
         raise IdentifyError("too little motion: the crank is at rest over the last half of the recording")
-    ok = np.abs(hz / ref - 1.0) <= speed_tol
+    # a within-turn speed ripple moves the 50 ms rate by as much as the ripple's peaks: the tolerance grows
+    # to hold the last half's own spread (its 95th percentile, plus RIPPLE_ALLOWANCE), up to MAX_SPEED_TOL
+    # (features/6; with the fixed tolerance of features/5 a rippled recording had short steady stretches, or
+    # none). A recording without ripple keeps speed_tol: its windows are those of features/5.
+    spread = float(np.quantile(np.abs(hz[len(hz) // 2:] / ref - 1.0), 0.95))
+    tol = max(speed_tol, min(spread + RIPPLE_ALLOWANCE, MAX_SPEED_TOL))
+    ok = np.abs(hz / ref - 1.0) <= tol
     # longest run of steady rate samples
     edges = np.flatnonzero(np.diff(np.concatenate([[0], ok.astype(np.int8), [0]])))
     runs = edges.reshape(-1, 2)
@@ -155,7 +166,7 @@ def steady_windows(counts: np.ndarray, rate_hz: float, counts_per_rev: float, sk
     steady_turns = float(pos[-1] - pos[0])
     if steady_turns < REVS_PER_WINDOW:
         raise IdentifyError(f"too little steady motion: {steady_turns:.2f} crank revolutions within "
-                            f"{speed_tol:.0%} of {abs(ref):.2f} Hz (at least {REVS_PER_WINDOW} are needed)")
+                            f"{tol:.0%} of {abs(ref):.2f} Hz (at least {REVS_PER_WINDOW} are needed)")
     run_min = np.minimum.accumulate(pos[::-1])[::-1]  # monotone from the end backwards
     wins: list[tuple[int, int]] = []
     stop = len(pos) - 1
@@ -168,7 +179,13 @@ def steady_windows(counts: np.ndarray, rate_hz: float, counts_per_rev: float, sk
         wins.append((start + a + k, start + a + stop))
         stop = k
     wins.reverse()
-    return Windows((start + a, start + b + 1), wins, steady_turns, abs(ref), direction)
+    # the windows' mean rate: whole turns over their duration (the median of a rippled 50 ms rate is not
+    # its mean; the steady part's edges may hold the end of a spin-up)
+    rate = abs(ref)
+    if wins:
+        w0, w1 = wins[0][0], wins[-1][1]
+        rate = abs(turns[w1 - start] - turns[w0 - start]) * rate_hz / max(w1 - w0, 1)
+    return Windows((start + a, start + b + 1), wins, steady_turns, rate, direction)
 
 
 def _kurtosis(x: np.ndarray) -> float:

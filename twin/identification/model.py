@@ -215,6 +215,9 @@ def _check_ranges(ranges: Any, ref: Any, n_features: int) -> None:
         raise ValueError("ranges.orientations or ranges.source malformed")
     if ref is not None and not (len(ref["q25"]) == len(ref["q75"]) == n_features):
         raise ValueError("feature_reference malformed")
+    if ref is not None and ref.get("max_outliers") is not None and not (
+            isinstance(ref["max_outliers"], int) and 0 <= ref["max_outliers"] <= n_features):
+        raise ValueError("feature_reference.max_outliers malformed")
 
 
 def size_resolved(joint: str, orientation: str, crank_hz: float) -> bool:
@@ -485,7 +488,7 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
                                    "answers / 1.349 [log10]"},
         "ranges": training_ranges([r["measures"] for r in rows], [r["orientation"] for r in rows],
                                   "measured on every training run (twin identify train)"),
-        "feature_reference": feature_reference(X),
+        "feature_reference": feature_reference(X, np.asarray(owner)),
         "feature_seconds": t_feat, "fit_seconds": time.perf_counter() - t0 - t_feat,
     }
     return ClearanceModel(classifier, size, half_width, trained_on=trained_on), trained_on
