@@ -22,7 +22,8 @@ Variants (``twin identify train --interval-folds speed`` each):
 * ``base-fixed``: the same model with the fixed (Mondrian by the size-resolution map) half widths;
 * ``ends``: the nuisance set pooled with ``clearance_id_nuisance_ends`` (clearances beyond the catalogue's
   ends, 0.0125-0.02 and 1.0-1.6 mm), normalized intervals;
-* ``ends-fixed``: the same with the fixed half widths.
+* ``ends-fixed``: the same with the fixed half widths;
+* ``ends-band``: the fixed half widths split again by the answer's size (below 0.2 mm or not): the shipped model.
 
 Results: ``analysis/results/identify/nuisance_dev.json``.
 
@@ -35,7 +36,6 @@ WORK/clearance_id_nuisance`` and the same for ``clearance_id_nuisance_ends``, ``
 from __future__ import annotations
 
 import argparse
-import copy
 import json
 import os
 import time
@@ -75,9 +75,12 @@ def cached_features(work: Path, name: str, splits: tuple[str, ...], workers: int
     return X, rows, owner, skipped, dss
 
 
-#: variant: (training datasets, fixed half widths instead of the normalized ones)
-VARIANTS = {"base": ((TRAIN,), False), "base-fixed": ((TRAIN,), True),
-            "ends": ((TRAIN, ENDS), False), "ends-fixed": ((TRAIN, ENDS), True)}
+#: variant: (training datasets, interval options of train())
+VARIANTS = {"base": ((TRAIN,), dict(normalized_intervals=True, size_band_mm=None)),
+            "base-fixed": ((TRAIN,), dict(normalized_intervals=False, size_band_mm=None)),
+            "ends": ((TRAIN, ENDS), dict(normalized_intervals=True, size_band_mm=None)),
+            "ends-fixed": ((TRAIN, ENDS), dict(normalized_intervals=False, size_band_mm=None)),
+            "ends-band": ((TRAIN, ENDS), dict(normalized_intervals=False))}
 
 
 def pool(parts: list[tuple]) -> tuple:
@@ -109,26 +112,20 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--work", default=str(ROOT.parent / "identify_work"))
     ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
-    ap.add_argument("--variants", default="base,base-fixed,ends,ends-fixed")
+    ap.add_argument("--variants", default="base,base-fixed,ends,ends-fixed,ends-band")
     args = ap.parse_args()
     work = Path(args.work)
     feats = {n: cached_features(work, n, ("train", "val"), args.workers) for n in (TRAIN, ENDS)}
     dev = {d: cached_features(work, d, ("train", "val", "test"), args.workers) for d in DEV if (work / d).is_dir()}
     results = json.loads(OUT.read_text()) if OUT.is_file() else {}
     results = {k: v for k, v in results.items() if k in VARIANTS}
-    models: dict[str, object] = {}
     for v in args.variants.split(","):
-        sets, fixed = VARIANTS[v]
+        sets, opts = VARIANTS[v]
         t = time.perf_counter()
-        if sets not in models:
-            models[sets] = train([work / n for n in sets], workers=args.workers, interval_folds="speed",
-                                 features=pool([feats[n] for n in sets]))
-        model, info = models[sets]
-        model = copy.deepcopy(model)
-        if fixed:
-            model.trained_on["interval"]["normalized"] = {}
-        results[v] = {"datasets": list(sets), "intervals": "fixed" if fixed else "normalized",
-                      "fit_seconds": time.perf_counter() - t, "interval": info["interval"]}
+        model, info = train([work / n for n in sets], workers=args.workers, interval_folds="speed",
+                            features=pool([feats[n] for n in sets]), **opts)
+        results[v] = {"datasets": list(sets), "intervals": opts, "fit_seconds": time.perf_counter() - t,
+                      "interval": info["interval"]}
         for d, f in dev.items():
             rep = evaluate(model, [work / d], ("train", "val", "test"), features=f)
             results[v][d] = figures(rep)

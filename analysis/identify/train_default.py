@@ -6,8 +6,11 @@ Steps (each is a plain ``twin`` command; a step whose output exists is skipped, 
    training data, MuJoCo twin, 1600 runs of 3 s with every nuisance of the bench drawn over its training range
    (within-turn speed ripple 0-4 % at 1-3x the crank rate, contact restitution, friction and stiffness, guide
    friction, sensor offsets, mounting and noise, start angle, speed 250-800 rpm and orientation);
-2. ``twin identify train WORK/clearance_id_nuisance --interval-folds speed --out twin/data/identify_default.npz``
-   (train and val splits; the intervals calibrated on answers at speeds left out);
+   and ``clearance_id_nuisance_ends.toml``: 400 more runs with the clearances beyond the catalogue's ends
+   (0.0125-0.02 and 1.0-1.6 mm), so that every catalogue value lies inside the trained sizes;
+2. ``twin identify train WORK/clearance_id_nuisance WORK/clearance_id_nuisance_ends --interval-folds speed --out
+   twin/data/identify_default.npz`` (train and val splits; the intervals calibrated on answers at speeds left out,
+   split by the size-resolution map and by the answer's size);
 3. the development sets ``clearance_id_nuisance_dev.toml`` and ``clearance_id_nuisance_dev_out.toml`` (reference
    engine), evaluated into ``analysis/results/identify/dev`` and ``dev_out`` (every choice of the model was made
    on these: ``analysis/identify/nuisance_study.py``);
@@ -17,9 +20,9 @@ Steps (each is a plain ``twin`` command; a step whose output exists is skipped, 
 5. the answers on the sample recordings in ``recordings/`` (``analysis/results/identify/samples.json``).
 
 Run: ``python analysis/identify/train_default.py [--work DIR] [--workers N] [--retrain] [--fresh]``: about
-25 min for the training data on two cores, 3 min to train, 12 min for the development sets and 25 min for the
-fresh test sets. The datasets stay in ``--work`` (default ``../identify_work`` beside the checkout; about 11 GB
-for the training set), not in the repository.
+33 min for the training data on two cores, 7 min to train, 5 min for the development sets and 12 min for the
+fresh test sets. The datasets stay in ``--work`` (default ``../identify_work`` beside the checkout; about 15 GB
+for the training sets), not in the repository.
 """
 
 from __future__ import annotations
@@ -35,7 +38,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[2]
 MODEL = ROOT / "twin" / "data" / "identify_default.npz"
 REPORT = ROOT / "analysis" / "results" / "identify"
-TRAIN = "clearance_id_nuisance"
+TRAIN = ("clearance_id_nuisance", "clearance_id_nuisance_ends")
 DEV = {"clearance_id_nuisance_dev": "dev", "clearance_id_nuisance_dev_out": "dev_out"}
 FRESH = {f"clearance_id_fresh_{k}": f"fresh_{k}" for k in ("in", "out_ripple", "out_speed", "out_noise",
                                                             "out_params", "motor")}
@@ -63,10 +66,10 @@ def main() -> None:
     work = Path(args.work)
     work.mkdir(parents=True, exist_ok=True)
     t = time.perf_counter()
-    train_ds = generate(work, TRAIN, args.workers)
+    train_ds = [generate(work, name, args.workers) for name in TRAIN]
     print(f"training data: {time.perf_counter() - t:.0f} s (0 if it existed)")
     if args.retrain or not MODEL.exists():
-        twin("identify", "train", str(train_ds), "--interval-folds", "speed", "--out", str(MODEL), "--workers",
+        twin("identify", "train", *map(str, train_ds), "--interval-folds", "speed", "--out", str(MODEL), "--workers",
              args.workers)
     sets = dict(DEV) | (FRESH if args.fresh else {})
     for name, sub in sets.items():

@@ -21,13 +21,16 @@
   a wider one (``"B_unresolved"``, ``"C_unresolved"``) for those below the map. Model
   format 1 took the 5 % and 95 % quantile regressors instead: their window medians stayed at the
   catalogue's ends (0.02–0.5 mm for almost every answer), covering the truth while saying nothing.
-  A joint the classifier finds healthy reports 0 (ball bearing).
-  Models trained by this version also store **normalized** conformal scales (``interval.normalized``): a run's
-  score is divided by its difficulty, the spread of its per-window answers (:func:`window_spread`) plus an
+  Each side of the map is split again by the answer's size (:data:`SIZE_BAND_MM`, ``"B_small"``, ...), where the
+  runs allow: an answer of a small clearance scatters more in log than one of a large clearance, so its
+  interval is wider. A joint the classifier finds healthy reports 0 (ball bearing).
+  ``train(normalized_intervals=True)`` also stores **normalized** conformal scales (``interval.normalized``): a
+  run's score is divided by its difficulty, the spread of its per-window answers (:func:`window_spread`) plus an
   offset beta (the median spread of the out-of-fold runs, at least :data:`SPREAD_FLOOR_LOG10`); the half width
-  of an answer is then q·(spread + beta), wide where the windows disagree, narrow where they agree, with the
-  same 90 % guarantee over recordings like the training runs. Where a model has them they replace the fixed
-  half widths.
+  of an answer is then q·(spread + beta). Where a model has them they replace the fixed half widths. Not the
+  default: a recording of one or two windows has no measurable spread, and on the development sets (reference
+  engine, fewer windows than the training runs) they covered the truth less often than the fixed widths
+  (``analysis/identify/nuisance_study.py``).
 * **Outside the training data** (:mod:`twin.identification.ranges`): an answer checks the recording's crank
   rate, within-turn speed ripple (from the encoder), noise level, orientation and, where the model stores the
   training features' quartiles, its distance in feature space, against the training runs' ranges; each reason
@@ -106,6 +109,10 @@ BELT_RATIO = Drive.belt_ratio  # motor turns per crank turn of the bench's V-bel
 COVERAGE = 0.90  # nominal coverage of the reported intervals
 CONFORMAL_FOLDS = 5
 MONDRIAN_MIN_RUNS = 20  # out-of-fold runs each side needs before the interval at C is split by resolution
+#: answers below this size [mm] get their own conformal half width (``"B_small"``, ...), where the training
+#: runs allow: small clearances scatter more in log than large ones (development: 0.26 against 0.13 at B).
+#: 0.2 mm lies between the catalogue's 0.1 and 0.5 mm
+SIZE_BAND_MM = 0.2
 MODEL_FORMAT = "twin-identify-model/4"
 #: floor of the normalized intervals' difficulty offset beta [log10] (runs of one window have no spread)
 SPREAD_FLOOR_LOG10 = 0.01
@@ -194,7 +201,10 @@ class ClearanceModel:
         for j in ("B", "C"):
             mid = size_answer(self.size[j], X)
             side = j if resolved[j] or f"{j}_unresolved" not in self.interval_log10 else f"{j}_unresolved"
+            band = self.trained_on.get("interval", {}).get("size_band_mm")
             w = self.interval_log10[side]
+            if band and mid < band and f"{side}_small" in self.interval_log10:
+                w = self.interval_log10[f"{side}_small"]
             if side in norm:  # normalized conformal: the half width scales with the recording's difficulty
                 w = norm[side]["q"] * (window_spread(self.size[j], X) + norm[side]["beta"])
             lo, hi = (float(f"{mid * 10 ** sign:.12g}") for sign in (-w, w))
@@ -382,14 +392,17 @@ def _conformal_folds(rows: list[dict[str, Any]], runs: np.ndarray, how: str, see
 
 def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = ("train", "val"), workers: int = 1,
           seed: int = 0, interval_folds: str = "runs", location_only: list[str | Path] = (),
-          features: tuple | None = None) -> tuple[ClearanceModel, dict[str, Any]]:
+          features: tuple | None = None, normalized_intervals: bool = False,
+          size_band_mm: float | None = SIZE_BAND_MM) -> tuple[ClearanceModel, dict[str, Any]]:
     """Train on the ok runs of ``splits`` of one dataset or several pooled (see module docstring);
     ``interval_folds`` groups the out-of-fold scores of the intervals (:func:`_conformal_folds`);
     the runs of the ``location_only`` datasets (pooled like the others) teach the location model
     only, not the size regressors nor their intervals (e.g. runs at one speed in a regime the others
     lack, which would tilt the size regressors toward that speed). ``features``: what
     :func:`pooled_features` returns for these datasets and splits, computed before (a study that trains
-    several variants on the same runs computes them once)."""
+    several variants on the same runs computes them once). ``normalized_intervals``: also store the
+    normalized conformal scales (module docstring); ``size_band_mm``: split each side of the
+    size-resolution map's intervals by the answer's size (None: no split)."""
     if interval_folds not in INTERVAL_FOLDS:
         raise ModelError(f"interval_folds: {interval_folds!r}; allowed: {', '.join(INTERVAL_FOLDS)}")
     from sklearn.ensemble import HistGradientBoostingClassifier, HistGradientBoostingRegressor
@@ -437,7 +450,7 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
         # out-of-fold scores of whole runs (see module docstring)
         fold = _conformal_folds(rows, np.unique(owner_a[sel]), interval_folds, seed)
         n_folds[j] = int(fold.max()) + 1
-        scores, held_runs, spread = [], [], []
+        scores, held_runs, spread, answers = [], [], [], []
         for k in range(n_folds[j]):
             held = sel & (fold[owner_a] == k)
             if not held.any() or (sel & ~held).sum() < 10:
@@ -445,20 +458,30 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
             reg = fit(sel & ~held)
             for r in np.unique(owner_a[held]):
                 Xr = X[owner_a == r]
-                scores.append(abs(math.log10(size_answer(reg, Xr)) - math.log10(rows[int(r)][key])))
+                answers.append(size_answer(reg, Xr))
+                scores.append(abs(math.log10(answers[-1]) - math.log10(rows[int(r)][key])))
                 spread.append(window_spread(reg, Xr))
                 held_runs.append(rows[int(r)])
-        scores, spread = np.array(scores), np.array(spread)
+        scores, spread, answers = np.array(scores), np.array(spread), np.array(answers)
         half_width[j] = conformal_half_width(scores)
-        normalized[j] = normalized_scale(scores, spread)
-        beta = normalized[j]["beta"]
-        # Mondrian split by the joint's size-resolution map, where each side has enough runs
+        if normalized_intervals:
+            normalized[j] = normalized_scale(scores, spread)
+        beta = normalized_scale(scores, spread)["beta"]
+        # Mondrian split by the joint's size-resolution map, where each side has enough runs, then each side by
+        # the answer's size band (below / from size_band_mm), where each part has enough runs
         on = np.array([size_resolved(j, row["orientation"], row["crank_hz"]) for row in held_runs], bool)
+        sides = [(j, np.ones(len(scores), bool))]
         if on.sum() >= MONDRIAN_MIN_RUNS and (~on).sum() >= MONDRIAN_MIN_RUNS:
-            half_width[j] = conformal_half_width(scores[on])
-            half_width[f"{j}_unresolved"] = conformal_half_width(scores[~on])
-            for side, m in ((j, on), (f"{j}_unresolved", ~on)):
+            sides = [(j, on), (f"{j}_unresolved", ~on)]
+        for side, m in sides:
+            half_width[side] = conformal_half_width(scores[m])
+            if normalized_intervals:
                 normalized[side] = normalized_scale(scores[m], spread[m], beta)
+            if size_band_mm:
+                small = m & (answers < size_band_mm)
+                if small.sum() >= MONDRIAN_MIN_RUNS and (m & ~small).sum() >= MONDRIAN_MIN_RUNS:
+                    half_width[f"{side}_small"] = conformal_half_width(scores[small])
+                    half_width[side] = conformal_half_width(scores[m & ~small])
     import sklearn
 
     from twin import __version__
@@ -481,7 +504,7 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
         "classes": {c: int(np.sum(y == c)) for c in CLASSES},
         "versions": {"twin": __version__, "sklearn": sklearn.__version__, "numpy": np.__version__},
         "interval": {"method": "split-conformal, out of fold", "folds_by": interval_folds, "folds": n_folds,
-                     "coverage": COVERAGE,
+                     "coverage": COVERAGE, "size_band_mm": size_band_mm,
                      "half_width_log10": half_width,
                      "normalized": normalized,
                      "difficulty": "spread of the per-window answers: interquartile range of the windows' log10 "
