@@ -62,7 +62,10 @@ def main() -> None:
     ap.add_argument("--workers", default=str(os.cpu_count() or 1))
     ap.add_argument("--retrain", action="store_true", help="train again even if the model exists")
     ap.add_argument("--fresh", action="store_true", help="also generate and evaluate the fresh test sets (the one look)")
+    ap.add_argument("--samples-only", action="store_true", help="only the answers on the sample recordings (step 5)")
     args = ap.parse_args()
+    if args.samples_only:
+        return samples()
     work = Path(args.work)
     work.mkdir(parents=True, exist_ok=True)
     t = time.perf_counter()
@@ -75,6 +78,11 @@ def main() -> None:
     for name, sub in sets.items():
         d = generate(work, name, args.workers)
         twin("identify", "evaluate", str(MODEL), str(d), "--out", str(REPORT / sub), "--workers", args.workers)
+    samples()
+
+
+def samples() -> None:
+    """The shipped model's answers on the sample recordings in ``recordings/`` (``samples.json``)."""
     samples = {}
     for rec in sorted((ROOT / "recordings").glob("*.mcap")):
         out = REPORT / f".{rec.stem}.json"
