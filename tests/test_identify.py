@@ -294,12 +294,12 @@ def test_an_evaluation_pools_datasets_and_keeps_each_ones_figures(small):
 
 
 @pytest.mark.long  # trains on the module's small dataset: run by CI and with -m long
-def test_a_trained_model_stores_its_training_ranges_and_sizes_intervals_by_difficulty(small):
+def test_a_trained_model_stores_its_training_ranges_and_its_interval_rule(small):
     """``twin identify train`` measures, on every training run, the crank rate, the within-turn ripple from the
-    encoder and the noise level, and stores their ranges, the orientations and the training windows' feature
-    quartiles; its intervals are normalized conformal ones: half width q (spread + beta), the spread of the
-    recording's per-window answers (interquartile range / 1.349)."""
-    from twin.identification.model import ClearanceModel, pooled_features, resolution, window_spread
+    encoder and the noise level, and stores their ranges, the orientations, the training windows' feature
+    quartiles and the runs' own far-out count; its intervals are the split-conformal half widths of the answer's
+    side of the size-resolution map and size band (no normalized scales unless asked for)."""
+    from twin.identification.model import ClearanceModel, pooled_features, resolution
 
     d, model = small
     m = ClearanceModel.load(model)
@@ -309,18 +309,21 @@ def test_a_trained_model_stores_its_training_ranges_and_sizes_intervals_by_diffi
     assert r["orientations"] == ["y"] and r["runs"] == 48 and "training run" in r["source"]
     assert len(r["ripple_pct"]) == 4 and all(hi < 0.05 for lo, hi in r["ripple_pct"])  # no ripple imposed: PID residual
     assert 25.0 < r["noise_ug_rthz"][0] <= r["noise_ug_rthz"][1] < 35.0  # the ADXL100x's 25-30 ug/rtHz
-    assert len(m.trained_on["feature_reference"]["q25"]) == len(m.feature_names)
-    norm = m.trained_on["interval"]["normalized"]
+    ref = m.trained_on["feature_reference"]
+    assert len(ref["q25"]) == len(m.feature_names) and 0 <= ref["max_outliers"] <= len(m.feature_names)
+    assert not m.trained_on["interval"]["normalized"]
     X, rows, owner, _, _ = pooled_features([d / "small-test"], ("train",), 1)
     owner = np.asarray(owner)
     held = 0
     for i, row in enumerate(rows):
         Xr = X[owner == i]
-        a = m.identify(Xr, resolution(row["orientation"], row["crank_hz"]))
+        res = resolution(row["orientation"], row["crank_hz"])
+        a = m.identify(Xr, res)
         for j in ("B", "C"):
             lo, hi = a[f"clearance_{j.lower()}_if_faulty_mm"]["interval_90"]
             mid = a[f"clearance_{j.lower()}_if_faulty_mm"]["median"]
-            w = norm[j]["q"] * (window_spread(m.size[j], Xr) + norm[j]["beta"])
+            side = j if res[j] or f"{j}_unresolved" not in m.interval_log10 else f"{j}_unresolved"
+            w = _half_width(m, side, mid)
             assert math.log10(hi / mid) == pytest.approx(w, abs=1e-9)
             assert math.log10(mid / lo) == pytest.approx(w, abs=1e-9)
             truth = row[f"clearance_{j.lower()}_mm"]
