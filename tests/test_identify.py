@@ -705,3 +705,22 @@ def test_markdown_flags_cells_the_runs_do_not_settle():
     assert _meets({"meets_target": True, "target_mm": 0.01, "median_abs_error_ci90_mm": [0.006, 0.013]}) == "yes*"
     assert _meets({"meets_target": False, "target_mm": 0.01, "median_abs_error_ci90_mm": [0.008, 0.02]}) == "no*"
     assert _meets({"meets_target": False, "target_mm": 0.01, "median_abs_error_ci90_mm": [0.011, 0.02]}) == "no"
+
+
+def test_pooled_features_shift_run_indices_and_refuse_datasets_that_disagree():
+    """Features kept per dataset pool as pooled_features pools them: windows concatenated, each window's run
+    index shifted past the runs before it; datasets of another engine or rate are refused in one line."""
+    from types import SimpleNamespace
+
+    from twin.identification.model import ModelError, pool_features
+
+    def ds(engine, rate, name):
+        return SimpleNamespace(info={"identity": {"engine": engine}, "name": name}, rate_hz=rate, path=name)
+
+    a = (np.zeros((3, 2)), [{"run": 0}, {"run": 1}], [0, 1, 1], [], [ds("mujoco", 1e5, "a")])
+    b = (np.ones((2, 2)), [{"run": 0}], [0, 0], [{"run_id": "x"}], [ds("mujoco", 1e5, "b")])
+    X, rows, owner, skipped, dss = pool_features([a, b])
+    assert X.shape == (5, 2) and owner == [0, 1, 1, 2, 2] and len(rows) == 3 and len(skipped) == 1 and len(dss) == 2
+    c = (np.ones((1, 2)), [{"run": 0}], [0], [], [ds("reference", 1e5, "c")])
+    with pytest.raises(ModelError, match="engine is 'reference'.*must agree"):
+        pool_features([a, c])

@@ -68,7 +68,9 @@ def _turn_statistics(clearance_mm: float) -> tuple[dict, dict]:
                                             "joints.clearance_c_mm": c, "simulation.duration_s": AGREE_S}))
         th = np.unwrap(np.asarray(run["crank_angle"], float))
         turn = np.floor((th - th[0]) / (2 * np.pi)).astype(int)
-        stats = {j: float(np.mean([np.max(np.asarray(run[f"fn_{j}"])[turn == k]) for k in range(1, turn.max())]))
+        # whole turns 1 .. last-1 (the crank turns one way): each one's samples [edges[k], edges[k + 1])
+        edges = np.searchsorted(turn, np.arange(1, turn.max() + 1))
+        stats = {j: float(np.mean(np.maximum.reduceat(np.asarray(run[f"fn_{j}"]), edges)[:-1]))
                  for j in "ABC"}
         a = np.asarray(run["slider_acceleration"], float)[turn >= 1]
         stats["rms"] = float(np.sqrt(np.mean(a * a)))

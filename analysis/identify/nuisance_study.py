@@ -45,7 +45,7 @@ import numpy as np
 
 from twin.identification.evaluate import evaluate
 from twin.identification.features import FEATURE_VERSION
-from twin.identification.model import pooled_features, train
+from twin.identification.model import pool_features, pooled_features, train
 
 ROOT = Path(__file__).resolve().parents[2]
 OUT = ROOT / "analysis" / "results" / "identify" / "nuisance_dev.json"
@@ -83,18 +83,6 @@ VARIANTS = {"base": ((TRAIN,), dict(normalized_intervals=True, size_band_mm=None
             "ends-band": ((TRAIN, ENDS), dict(normalized_intervals=False))}
 
 
-def pool(parts: list[tuple]) -> tuple:
-    """Cached features of several datasets pooled as :func:`pooled_features` pools them."""
-    X, rows, owner, skipped, dss = [], [], [], [], []
-    for Xp, rp, op, sp, dp in parts:
-        owner += [len(rows) + int(i) for i in op]
-        rows += rp
-        X.append(Xp)
-        skipped += sp
-        dss += dp
-    return np.concatenate(X), rows, owner, skipped, dss
-
-
 def figures(rep: dict) -> dict:
     """The protocol's metrics of an evaluation report."""
     out = {"runs": rep["runs"], "accuracy": rep["accuracy"], "recall": rep["recall"],
@@ -123,7 +111,7 @@ def main() -> None:
         sets, opts = VARIANTS[v]
         t = time.perf_counter()
         model, info = train([work / n for n in sets], workers=args.workers, interval_folds="speed",
-                            features=pool([feats[n] for n in sets]), **opts)
+                            features=pool_features([feats[n] for n in sets]), **opts)
         results[v] = {"datasets": list(sets), "intervals": opts, "fit_seconds": time.perf_counter() - t,
                       "interval": info["interval"]}
         for d, f in dev.items():

@@ -340,29 +340,48 @@ def dataset_features(ds, splits: tuple[str, ...], workers: int = 1
 def pooled_features(dataset_dirs: list[str | Path], splits: tuple[str, ...], workers: int
                      ) -> tuple[np.ndarray, list[dict[str, Any]], list[int], list[dict[str, Any]], list[Any]]:
     """Features of several datasets pooled (runs keep their rows, with the dataset's name); the
-    datasets must agree on engine, sample rate and encoder resolution."""
+    datasets must agree on engine, sample rate and encoder resolution (checked before any feature is
+    computed)."""
     from twin.dataset import open as open_dataset
 
-    Xs, rows, owner, skipped, infos = [], [], [], [], []
+    dss = [open_dataset(d) for d in dataset_dirs]
+    _check_poolable(dss)
+    parts = []
+    for ds in dss:
+        X, r, o, sk = dataset_features(ds, splits, workers)
+        parts.append((X, [dict(x, dataset=ds.info["name"]) for x in r], o, sk, [ds]))
+    return pool_features(parts)
+
+
+def pool_features(parts: list[tuple]) -> tuple[np.ndarray, list[dict[str, Any]], list[int], list[dict[str, Any]],
+                                               list[Any]]:
+    """Pool what :func:`pooled_features` returns for datasets taken one by one (e.g. features computed
+    before and kept): rows and windows concatenated, each window's run index shifted; the datasets must
+    agree as :func:`pooled_features` requires."""
+    _check_poolable([ds for part in parts for ds in part[4]])
+    Xs, rows, owner, skipped, dss = [], [], [], [], []
+    for X, r, o, sk, d in parts:
+        owner += [len(rows) + int(i) for i in o]
+        rows += r
+        Xs.append(X)
+        skipped += sk
+        dss += d
+    return np.concatenate(Xs), rows, owner, skipped, dss
+
+
+def _check_poolable(dss: list[Any]) -> None:
+    """Raise ModelError unless the datasets agree on engine, sample rate and encoder resolution."""
     first = None
-    for d in dataset_dirs:
-        ds = open_dataset(d)
+    for ds in dss:
         key = {"engine": ds.info["identity"]["engine"], "rate_hz": ds.rate_hz,
                "encoder_counts_per_rev": float(ds.info.get("encoder_counts_per_rev") or 32768)}
         if first is None:
-            first = (d, key)
-        else:
-            for k, v in key.items():
-                if v != first[1][k]:
-                    raise ModelError(f"{d}: {k} is {v!r}, {first[0]} has {first[1][k]!r}: datasets pooled together "
-                                     "must agree on engine, sample rate and encoder resolution")
-        X, r, o, sk = dataset_features(ds, splits, workers)
-        owner += [len(rows) + i for i in o]
-        rows += [dict(x, dataset=ds.info["name"]) for x in r]
-        Xs.append(X)
-        skipped += sk
-        infos.append(ds)
-    return np.concatenate(Xs), rows, owner, skipped, infos
+            first = (ds.path, key)
+            continue
+        for k, v in key.items():
+            if v != first[1][k]:
+                raise ModelError(f"{ds.path}: {k} is {v!r}, {first[0]} has {first[1][k]!r}: datasets pooled together "
+                                 "must agree on engine, sample rate and encoder resolution")
 
 
 INTERVAL_FOLDS = ("runs", "speed")
@@ -466,7 +485,6 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
         half_width[j] = conformal_half_width(scores)
         if normalized_intervals:
             normalized[j] = normalized_scale(scores, spread)
-        beta = normalized_scale(scores, spread)["beta"]
         # Mondrian split by the joint's size-resolution map, where each side has enough runs, then each side by
         # the answer's size band (below / from size_band_mm), where each part has enough runs
         on = np.array([size_resolved(j, row["orientation"], row["crank_hz"]) for row in held_runs], bool)
@@ -476,7 +494,7 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
         for side, m in sides:
             half_width[side] = conformal_half_width(scores[m])
             if normalized_intervals:
-                normalized[side] = normalized_scale(scores[m], spread[m], beta)
+                normalized[side] = normalized_scale(scores[m], spread[m], normalized[j]["beta"])
             if size_band_mm:
                 small = m & (answers < size_band_mm)
                 if small.sum() >= MONDRIAN_MIN_RUNS and (m & ~small).sum() >= MONDRIAN_MIN_RUNS:
