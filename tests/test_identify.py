@@ -709,7 +709,8 @@ def test_markdown_flags_cells_the_runs_do_not_settle():
 
 def test_pooled_features_shift_run_indices_and_refuse_datasets_that_disagree():
     """Features kept per dataset pool as pooled_features pools them: windows concatenated, each window's run
-    index shifted past the runs before it; datasets of another engine or rate are refused in one line."""
+    index shifted past the runs before it; datasets of another engine pool (the engine is a nuisance the model
+    may span), datasets of another sample rate or encoder resolution are refused in one line."""
     from types import SimpleNamespace
 
     from twin.identification.model import ModelError, pool_features
@@ -722,5 +723,7 @@ def test_pooled_features_shift_run_indices_and_refuse_datasets_that_disagree():
     X, rows, owner, skipped, dss = pool_features([a, b])
     assert X.shape == (5, 2) and owner == [0, 1, 1, 2, 2] and len(rows) == 3 and len(skipped) == 1 and len(dss) == 2
     c = (np.ones((1, 2)), [{"run": 0}], [0], [], [ds("reference", 1e5, "c")])
-    with pytest.raises(ModelError, match="engine is 'reference'.*must agree"):
-        pool_features([a, c])
+    assert pool_features([a, c])[0].shape == (4, 2)
+    d = (np.ones((1, 2)), [{"run": 0}], [0], [], [ds("mujoco", 5e4, "d")])
+    with pytest.raises(ModelError, match="rate_hz is 50000.0.*must agree"):
+        pool_features([a, d])

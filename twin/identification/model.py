@@ -340,8 +340,9 @@ def dataset_features(ds, splits: tuple[str, ...], workers: int = 1
 def pooled_features(dataset_dirs: list[str | Path], splits: tuple[str, ...], workers: int
                      ) -> tuple[np.ndarray, list[dict[str, Any]], list[int], list[dict[str, Any]], list[Any]]:
     """Features of several datasets pooled (runs keep their rows, with the dataset's name); the
-    datasets must agree on engine, sample rate and encoder resolution (checked before any feature is
-    computed)."""
+    datasets must agree on sample rate and encoder resolution (checked before any feature is computed).
+    They may come from different engines: the engines' contact laws differ as a bench's differs from both,
+    and a model trained on both spans that difference as one more nuisance."""
     from twin.dataset import open as open_dataset
 
     dss = [open_dataset(d) for d in dataset_dirs]
@@ -370,10 +371,11 @@ def pool_features(parts: list[tuple]) -> tuple[np.ndarray, list[dict[str, Any]],
 
 
 def _check_poolable(dss: list[Any]) -> None:
-    """Raise ModelError unless the datasets agree on engine, sample rate and encoder resolution."""
+    """Raise ModelError unless the datasets agree on sample rate and encoder resolution (not the engine:
+    :func:`pooled_features`)."""
     first = None
     for ds in dss:
-        key = {"engine": ds.info["identity"]["engine"], "rate_hz": ds.rate_hz,
+        key = {"rate_hz": ds.rate_hz,
                "encoder_counts_per_rev": float(ds.info.get("encoder_counts_per_rev") or 32768)}
         if first is None:
             first = (ds.path, key)
@@ -381,7 +383,7 @@ def _check_poolable(dss: list[Any]) -> None:
         for k, v in key.items():
             if v != first[1][k]:
                 raise ModelError(f"{ds.path}: {k} is {v!r}, {first[0]} has {first[1][k]!r}: datasets pooled together "
-                                 "must agree on engine, sample rate and encoder resolution")
+                                 "must agree on sample rate and encoder resolution")
 
 
 INTERVAL_FOLDS = ("runs", "speed")
@@ -513,7 +515,7 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
         "datasets": [{"name": i["name"], "runs": sum(1 for r in rows if r["dataset"] == i["name"])}
                      | ({} if i["name"] in size_names else {"use": "location only"}) for i in infos],
         "identity_sha256": digest,
-        "engine": infos[0]["identity"]["engine"], "rate_hz": dss[0].rate_hz,
+        "engine": "+".join(dict.fromkeys(i["identity"]["engine"] for i in infos)), "rate_hz": dss[0].rate_hz,
         "counts_per_rev": float(infos[0].get("encoder_counts_per_rev") or 32768),
         "splits": list(splits), "runs": len(rows), "windows": int(len(X)), "runs_left_out": skipped,
         "crank_hz_range": [float(hz.min()), float(hz.max())],
