@@ -239,10 +239,10 @@ def test_the_training_ranges_and_feature_quartiles_load_back_and_malformed_ones_
 
 def test_the_shipped_model_states_its_ranges_and_where_they_come_from():
     """The shipped model (trained on the nuisance sets, analysis/identify/train_default.py) holds the ranges
-    measured on every training run: the crank rates of 250-800 motor rpm, the imposed within-turn ripple of
-    0-4 % at 1-3x the crank rate read back from the encoder (and none at 4x), the noise of 0.7-2x the
-    datasheet's 30 ug/rtHz, the three orientations, and its training features' reference with the runs' own
-    far-out count."""
+    measured on every training run: the crank rates of 250-800 motor rpm, the within-turn ripple read back from
+    the encoder (the crank PID's imposed 0-4 % at 1-3x the crank rate, and the drive train's own, 15-25 % at 2x
+    from 500 motor rpm by docs/drivetrain.md's ripple study), the noise of 0.7-2x the datasheet's 30 ug/rtHz,
+    the three orientations, and its training features' reference with the runs' own far-out count."""
     m = ClearanceModel.load(SHIPPED)
     tr = m.trained_on
     r = tr["ranges"]
@@ -250,7 +250,8 @@ def test_the_shipped_model_states_its_ranges_and_where_they_come_from():
     assert r["source"].startswith("measured on every training run") and r["runs"] == tr["runs"]
     belt = 3.97
     assert r["crank_hz"][0] == pytest.approx(250 / belt / 60, rel=0.01) and r["crank_hz"][1] == pytest.approx(800 / belt / 60, rel=0.01)
-    assert [hi for _, hi in r["ripple_pct"][:3]] == pytest.approx([4.0, 4.0, 4.0], abs=0.05) and r["ripple_pct"][3][1] < 0.05
+    hi = [h for _, h in r["ripple_pct"]]
+    assert len(hi) == 4 and min(hi[:3]) >= 4.0 - 0.05 and hi[1] > 15.0
     assert r["noise_ug_rthz"] == pytest.approx([0.7 * 30.1, 2.0 * 30.1], rel=0.03)
     ref = tr["feature_reference"]
     assert len(ref["q25"]) == len(m.feature_names) and 0 < ref["max_outliers"] < len(ref["q25"])

@@ -53,7 +53,7 @@ def evaluate(model: ClearanceModel, dataset_dir: str | Path | list[str | Path], 
     preds = []
     for i, r in enumerate(rows):
         resolved = resolution(r["orientation"], r["crank_hz"])
-        a = model.identify(X[owner == i], resolved)
+        a = model.identify(X[owner == i], resolved, r["measures"]["ripple_pct"])
         # the checks against the training data, as a recording's answer makes them (intervals widened outside)
         warned, _ = training_check(model, a, r["measures"], r["orientation"], X[owner == i])
         preds.append({"warnings": warned, "outside_training_data": bool(warned), "measures": r["measures"],"run_id": r["run_id"], "true_fault": r["fault"], "fault": a["fault"],

@@ -7,8 +7,9 @@
   50 % (the median) on log10 of the diametral clearance, trained on the windows of the runs where
   that joint has a clearance; a recording's size is the median over its windows.
 * **Training data**: one dataset or several (``train([DIR, DIR])``, ``twin identify train DS1 DS2``)
-  made by the same engine at the same sample rate and encoder resolution (e.g. datasets generated
-  in batches, or catalogue clearances beside clearances drawn between them); their runs are pooled.
+  at the same sample rate and encoder resolution (e.g. datasets generated in batches, catalogue
+  clearances beside clearances drawn between them, or the same nuisances simulated by both engines);
+  their runs are pooled.
 * **Interval**: split-conformal (CV+-like) at the level of recordings. The training runs with a
   clearance at the joint are split into ``CONFORMAL_FOLDS`` groups; each group's runs are answered
   by a regressor fitted on the other groups; a run's score is |log10(answer) − log10(truth)|; the
@@ -23,7 +24,10 @@
   catalogue's ends (0.02–0.5 mm for almost every answer), covering the truth while saying nothing.
   Each side of the map is split again by the answer's size (:data:`SIZE_BAND_MM`, ``"B_small"``, ...), where the
   runs allow: an answer of a small clearance scatters more in log than one of a large clearance, so its
-  interval is wider. A joint the classifier finds healthy reports 0 (ball bearing).
+  interval is wider. Before that split, each side is split by the recording's measured within-turn speed ripple
+  (:data:`RIPPLE_BAND_PCT`, ``"B_rippled"``, ``"B_unresolved_rippled_small"``, ...), where the runs allow: a
+  motor driving through the V-belt ripples far more than a crank PID, and its runs' sizes scatter more.
+  A joint the classifier finds healthy reports 0 (ball bearing).
   ``train(normalized_intervals=True)`` also stores **normalized** conformal scales (``interval.normalized``): a
   run's score is divided by its difficulty, the spread of its per-window answers (:func:`window_spread`) plus an
   offset beta (the median spread of the out-of-fold runs, at least :data:`SPREAD_FLOOR_LOG10`); the half width
@@ -113,6 +117,13 @@ MONDRIAN_MIN_RUNS = 20  # out-of-fold runs each side needs before the interval a
 #: runs allow: small clearances scatter more in log than large ones (development: 0.26 against 0.13 at B).
 #: 0.2 mm lies between the catalogue's 0.1 and 0.5 mm
 SIZE_BAND_MM = 0.2
+#: recordings whose largest within-turn speed ripple (harmonics 1-4 of the crank rate, measured from the encoder)
+#: exceeds this [% of the speed] get their own conformal half widths (``"B_rippled"``, ...), where the training
+#: runs allow: a motor driving through the V-belt ripples by 10-20 % at twice the crank rate (docs/drivetrain.md),
+#: and the sizes of such runs scatter more than those of a crank PID's 0-4 % (development: 90 % intervals
+#: calibrated on all runs together held 29-67 % of the drive train's B sizes). 4.5 % lies above the PID-driven
+#: training runs' imposed 0-4 %
+RIPPLE_BAND_PCT = 4.5
 MODEL_FORMAT = "twin-identify-model/4"
 #: floor of the normalized intervals' difficulty offset beta [log10] (runs of one window have no spread)
 SPREAD_FLOOR_LOG10 = 0.01
@@ -185,11 +196,15 @@ class ClearanceModel:
                               feature_version=version, feature_names=names, trained_on=trained_on)
 
     # ------------------------------------------------------------- predict
-    def identify(self, X: np.ndarray, resolved: dict[str, bool]) -> dict[str, Any]:
+    def identify(self, X: np.ndarray, resolved: dict[str, bool], ripple_pct: list[float] | None = None
+                 ) -> dict[str, Any]:
         """Answer for one recording from its window features [windows, features]; ``resolved``: per
         joint ("B", "C"), whether its speed and orientation are on that joint's size-resolution map
         (:func:`size_resolved`), which picks the interval's half width where the model has one for
-        each side (no default: a caller that forgot it would get the narrow interval below the map)."""
+        each side (no default: a caller that forgot it would get the narrow interval below the map);
+        ``ripple_pct``: the recording's measured within-turn ripple (harmonics of the crank rate, % of
+        the speed; :func:`twin.identification.ranges.recording_measures`), which picks the half widths of
+        rippled recordings (:data:`RIPPLE_BAND_PCT`) where the model has them."""
         if set(resolved) != {"B", "C"}:
             raise ModelError(f"resolved: {sorted(resolved)}; needs a flag for each of B and C")
         proba = self.classifier.predict_proba(X).mean(axis=0)
@@ -201,6 +216,8 @@ class ClearanceModel:
         for j in ("B", "C"):
             mid = size_answer(self.size[j], X)
             side = j if resolved[j] or f"{j}_unresolved" not in self.interval_log10 else f"{j}_unresolved"
+            if rippled(ripple_pct) and f"{side}_rippled" in self.interval_log10:
+                side = f"{side}_rippled"
             band = self.trained_on.get("interval", {}).get("size_band_mm")
             w = self.interval_log10[side]
             if band and mid < band and f"{side}_small" in self.interval_log10:
@@ -241,6 +258,12 @@ def size_resolved(joint: str, orientation: str, crank_hz: float) -> bool:
 def resolution(orientation: str, crank_hz: float) -> dict[str, bool]:
     """:func:`size_resolved` at both joints: {"B": bool, "C": bool}."""
     return {j: size_resolved(j, orientation, crank_hz) for j in ("B", "C")}
+
+
+def rippled(ripple_pct: list[float] | None) -> bool:
+    """Whether a recording's measured within-turn ripple [% of the speed, per harmonic] exceeds
+    :data:`RIPPLE_BAND_PCT` at some harmonic (False where it was not measured)."""
+    return ripple_pct is not None and len(ripple_pct) > 0 and max(float(v) for v in ripple_pct) > RIPPLE_BAND_PCT
 
 
 def normalized_scale(scores: np.ndarray, spread: np.ndarray, beta: float | None = None) -> dict[str, float]:
@@ -414,7 +437,8 @@ def _conformal_folds(rows: list[dict[str, Any]], runs: np.ndarray, how: str, see
 def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = ("train", "val"), workers: int = 1,
           seed: int = 0, interval_folds: str = "runs", location_only: list[str | Path] = (),
           features: tuple | None = None, normalized_intervals: bool = False,
-          size_band_mm: float | None = SIZE_BAND_MM) -> tuple[ClearanceModel, dict[str, Any]]:
+          size_band_mm: float | None = SIZE_BAND_MM, ripple_split: bool = True
+          ) -> tuple[ClearanceModel, dict[str, Any]]:
     """Train on the ok runs of ``splits`` of one dataset or several pooled (see module docstring);
     ``interval_folds`` groups the out-of-fold scores of the intervals (:func:`_conformal_folds`);
     the runs of the ``location_only`` datasets (pooled like the others) teach the location model
@@ -423,7 +447,8 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
     :func:`pooled_features` returns for these datasets and splits, computed before (a study that trains
     several variants on the same runs computes them once). ``normalized_intervals``: also store the
     normalized conformal scales (module docstring); ``size_band_mm``: split each side of the
-    size-resolution map's intervals by the answer's size (None: no split)."""
+    size-resolution map's intervals by the answer's size (None: no split); ``ripple_split``: split each side
+    first by the runs' measured ripple (:data:`RIPPLE_BAND_PCT`)."""
     if interval_folds not in INTERVAL_FOLDS:
         raise ModelError(f"interval_folds: {interval_folds!r}; allowed: {', '.join(INTERVAL_FOLDS)}")
     from sklearn.ensemble import HistGradientBoostingClassifier, HistGradientBoostingRegressor
@@ -493,7 +518,15 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
         sides = [(j, np.ones(len(scores), bool))]
         if on.sum() >= MONDRIAN_MIN_RUNS and (~on).sum() >= MONDRIAN_MIN_RUNS:
             sides = [(j, on), (f"{j}_unresolved", ~on)]
+        # then each side by the recording's measured ripple (RIPPLE_BAND_PCT), where both parts have enough runs
+        rip = np.array([rippled(row.get("measures", {}).get("ripple_pct")) for row in held_runs], bool)
+        split = []
         for side, m in sides:
+            if ripple_split and (m & rip).sum() >= MONDRIAN_MIN_RUNS and (m & ~rip).sum() >= MONDRIAN_MIN_RUNS:
+                split += [(side, m & ~rip), (f"{side}_rippled", m & rip)]
+            else:
+                split.append((side, m))
+        for side, m in split:
             half_width[side] = conformal_half_width(scores[m])
             if normalized_intervals:
                 normalized[side] = normalized_scale(scores[m], spread[m], normalized[j]["beta"])
@@ -525,6 +558,7 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
         "versions": {"twin": __version__, "sklearn": sklearn.__version__, "numpy": np.__version__},
         "interval": {"method": "split-conformal, out of fold", "folds_by": interval_folds, "folds": n_folds,
                      "coverage": COVERAGE, "size_band_mm": size_band_mm,
+                     "ripple_band_pct": RIPPLE_BAND_PCT if ripple_split else None,
                      "half_width_log10": half_width,
                      "normalized": normalized,
                      "difficulty": "spread of the per-window answers: interquartile range of the windows' log10 "
@@ -624,8 +658,9 @@ def identify_inputs(model: ClearanceModel, acc: dict[str, np.ndarray], counts: n
         raise ModelError(f"{source}: recorded at {rate:g} Hz, the model was trained at {tr['rate_hz']:g} Hz")
     X, w = features(acc, counts, rate, cpr, orientation=orientation)
     resolved = resolution(orientation, w.crank_hz)
-    ans = model.identify(X, resolved)
-    warnings, checks = training_check(model, ans, recording_measures(acc, counts, rate, cpr, w), orientation, X)
+    measures = recording_measures(acc, counts, rate, cpr, w)
+    ans = model.identify(X, resolved, measures["ripple_pct"])
+    warnings, checks = training_check(model, ans, measures, orientation, X)
     for j in ("B", "C"):
         ans[f"clearance_{j.lower()}_size_resolved"] = resolved[j]  # which also chose the interval's width
         if j in ans["fault"] and not resolved[j]:
