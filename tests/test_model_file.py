@@ -232,6 +232,13 @@ def test_the_training_ranges_and_feature_quartiles_load_back_and_malformed_ones_
         m.save(tmp_path / "bad.npz")
         _refused(tmp_path / "bad.npz", "not a readable identification model", "ranges")
     m.trained_on["ranges"] = RANGES
+    for bad in ("4.5", -1.0, float("inf")):  # the ripple band of the intervals' split
+        m.trained_on["interval"] = {"ripple_band_pct": bad}
+        m.save(tmp_path / "bad.npz")
+        _refused(tmp_path / "bad.npz", "ripple_band_pct")
+    m.trained_on["interval"] = {"ripple_band_pct": 4.5}
+    m.save(tmp_path / "ok.npz")
+    assert ClearanceModel.load(tmp_path / "ok.npz").trained_on["interval"]["ripple_band_pct"] == 4.5
     m.trained_on["feature_reference"] = {"q25": [0.0], "q75": [1.0]}
     m.save(tmp_path / "bad.npz")
     _refused(tmp_path / "bad.npz", "feature_reference")

@@ -178,6 +178,9 @@ class ClearanceModel:
                     not {"B", "C"} <= set(half) or not all(math.isfinite(v) and v >= 0 for v in half.values()):
                 raise ValueError("feature_names or interval_log10 malformed")
             _check_ranges(trained_on["ranges"], trained_on.get("feature_reference"), len(names))
+            rb = trained_on.get("interval", {}).get("ripple_band_pct")
+            if rb is not None and not (isinstance(rb, (int, float)) and math.isfinite(rb) and rb > 0):
+                raise ValueError("interval.ripple_band_pct malformed")
             for v in (trained_on.get("interval", {}).get("normalized") or {}).values():
                 if not (math.isfinite(float(v["q"])) and float(v["q"]) >= 0 and float(v["beta"]) > 0):
                     raise ValueError("interval.normalized malformed")
@@ -216,7 +219,8 @@ class ClearanceModel:
         for j in ("B", "C"):
             mid = size_answer(self.size[j], X)
             side = j if resolved[j] or f"{j}_unresolved" not in self.interval_log10 else f"{j}_unresolved"
-            if rippled(ripple_pct) and f"{side}_rippled" in self.interval_log10:
+            if rippled(ripple_pct, self.trained_on.get("interval", {}).get("ripple_band_pct") or RIPPLE_BAND_PCT) \
+                    and f"{side}_rippled" in self.interval_log10:
                 side = f"{side}_rippled"
             band = self.trained_on.get("interval", {}).get("size_band_mm")
             w = self.interval_log10[side]
@@ -260,10 +264,11 @@ def resolution(orientation: str, crank_hz: float) -> dict[str, bool]:
     return {j: size_resolved(j, orientation, crank_hz) for j in ("B", "C")}
 
 
-def rippled(ripple_pct: list[float] | None) -> bool:
-    """Whether a recording's measured within-turn ripple [% of the speed, per harmonic] exceeds
-    :data:`RIPPLE_BAND_PCT` at some harmonic (False where it was not measured)."""
-    return ripple_pct is not None and len(ripple_pct) > 0 and max(float(v) for v in ripple_pct) > RIPPLE_BAND_PCT
+def rippled(ripple_pct: list[float] | None, band_pct: float = RIPPLE_BAND_PCT) -> bool:
+    """Whether a recording's measured within-turn ripple [% of the speed, per harmonic] exceeds ``band_pct``
+    (:data:`RIPPLE_BAND_PCT`; a model uses the value it was trained with) at some harmonic (False where it was
+    not measured)."""
+    return ripple_pct is not None and len(ripple_pct) > 0 and max(float(v) for v in ripple_pct) > band_pct
 
 
 def normalized_scale(scores: np.ndarray, spread: np.ndarray, beta: float | None = None) -> dict[str, float]:
