@@ -132,6 +132,11 @@ def main() -> None:
     args = ap.parse_args()
     work = Path(args.work)
     wanted = args.variants.split(",")
+    unknown = [v for v in wanted if v not in VARIANTS]
+    if unknown:
+        ap.error(f"--variants: unknown {', '.join(unknown)}; allowed: {', '.join(VARIANTS)}")
+    if args.save and (":" not in args.save or args.save.split(":", 1)[0] not in wanted):
+        ap.error(f"--save: VARIANT:PATH with VARIANT one of the variants run ({', '.join(wanted)}), got {args.save!r}")
     feats = {n: cached_features(work, n, ("train", "val"), args.workers)
              for n in dict.fromkeys(n for v in wanted for n in VARIANTS[v][0])}
     dev = {d: cached_features(work, d, ("train", "val", "test"), args.workers) for d in DEV if (work / d).is_dir()}
