@@ -30,7 +30,7 @@ Steps (each is a plain ``twin`` command; a step whose output exists is skipped, 
 5. the answers on the sample recordings in ``recordings/`` (``analysis/results/identify/samples.json``).
 
 Run: ``python analysis/identify/train_default.py [--work DIR] [--workers N] [--retrain] [--fresh2]``: about
-55 min for the training data on two cores, 15 min to train, 6 min for the development sets and 15 min for the
+55 min for the training data on two cores, 12 min to train, 6 min for the development sets and 15 min for the
 second fresh test's sets. The datasets stay in ``--work`` (default ``../identify_work`` beside the checkout; about 35 GB
 for the training sets), not in the repository.
 """
