@@ -41,14 +41,27 @@ import numpy as np
 CPR = 32768.0  # encoder counts per crank turn used to build the counts (any fine resolution)
 
 
-def draws(n: int, seed: int = 17, start_angles: bool = False) -> list[dict[str, float]]:
+def draws(n: int, seed: int = 17, start_angles: bool = False, nuisance: bool = False) -> list[dict[str, float]]:
     """The nominal parameters and ``n`` random draws over the datasets' ranges; with ``start_angles``
     each draw also gets a start angle of the crank [rad], uniform over a turn, from a generator of its
-    own (seed + 1), so that the other draws are those without it."""
+    own (seed + 1), so that the other draws are those without it. With ``nuisance`` the draws span the
+    nuisance training ranges of ``analysis/datasets/clearance_id_nuisance.toml`` instead (restitution
+    0.3-0.6, mu0 0.02-0.10, stiffness x0.5-2 log-uniform, the twin's contact damping and impact gain x0.5-2,
+    guide friction 1-6 N, sensor noise x0.7-2)."""
     rng = np.random.default_rng(seed)
     angles = np.random.default_rng(seed + 1).uniform(0.0, 2 * math.pi, n)
     out = [{}]
     for i in range(n):
+        if nuisance:
+            out.append({"contact.restitution": float(rng.uniform(0.3, 0.6)),
+                        "contact.mu0": float(rng.uniform(0.02, 0.10)),
+                        "contact.stiffness_scale": float(np.exp(rng.uniform(np.log(0.5), np.log(2.0)))),
+                        "mujoco.contact_damping_scale": float(rng.uniform(0.5, 2.0)),
+                        "mujoco.impact_damping_gain": float(rng.uniform(0.5, 2.0)),
+                        "mechanism.guide_friction_n": float(rng.uniform(1.0, 6.0)),
+                        "instrumentation.noise_scale": float(rng.uniform(0.7, 2.0))}
+                       | ({"drive.initial_encoder_angle_rad": float(angles[i])} if start_angles else {}))
+            continue
         out.append({"contact.restitution": float(rng.uniform(0.32, 0.48)),
                     "contact.mu0": float(rng.uniform(0.04, 0.06)),
                     "contact.stiffness_scale": float(rng.uniform(0.8, 1.2)),
@@ -127,11 +140,13 @@ def main() -> None:
                     help="noise-free accelerations (an upper bound) instead of the bench's sensor chain")
     ap.add_argument("--start-angles", action="store_true",
                     help="each draw also starts the crank at an angle drawn over a turn (the nominal run at 0)")
+    ap.add_argument("--nuisance", action="store_true",
+                    help="draw the contact, guide and noise parameters over the nuisance training ranges")
     ap.add_argument("--json", metavar="FILE")
     args = ap.parse_args()
     scenes = [(s.split(":")[0], float(s.split(":")[1])) for s in args.scenes.split(",")]
     sizes = [float(v) for v in args.sizes.split(",")]
-    params = draws(args.draws, start_angles=args.start_angles)
+    params = draws(args.draws, start_angles=args.start_angles, nuisance=args.nuisance)
     jobs = [(o, rpm, c, k, p, args.duration, not args.truth, args.joint) for o, rpm in scenes for c in sizes
             for k, p in enumerate(params)]
     print(f"{len(jobs)} runs ({len(scenes)} scenes x {len(sizes)} sizes x {len(params)} parameter sets)",
@@ -139,7 +154,7 @@ def main() -> None:
     with ProcessPoolExecutor(args.workers) as ex:
         rows = list(ex.map(one_run, jobs))
     out = {"joint": args.joint, "sizes_mm": sizes, "draws": params, "sensed": not args.truth,
-           "start_angles": args.start_angles, "scenes": []}
+           "start_angles": args.start_angles, "nuisance": args.nuisance, "scenes": []}
     print(f"accelerations: {'noise-free truth' if args.truth else 'the bench sensor chain (noise, DAQ, calibration)'}")
     print("| scene | size [mm] | contact share (min-max) | impacts per turn (min-max) |")
     print("|---|---:|---:|---:|")
