@@ -43,7 +43,7 @@ def half_gap_mm(c: float) -> float:
 def evaluate(model: ClearanceModel, dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...],
              workers: int = 1, features: tuple | None = None) -> dict[str, Any]:
     """The report of ``model`` on the runs of ``splits`` of one dataset, or of several pooled (one
-    engine, sample rate and encoder resolution; e.g. a test set and its extension by another seed),
+    sample rate and encoder resolution; e.g. a test set and its extension by another seed),
     with the location accuracy of each beside the pooled figures. ``features``: what
     :func:`twin.identification.model.pooled_features` returns for them, computed before."""
     t0 = time.perf_counter()

@@ -215,14 +215,15 @@ class ClearanceModel:
         p = {c: float(proba[classes.index(c)]) if c in classes else 0.0 for c in CLASSES}
         fault = max(p, key=p.get)
         out: dict[str, Any] = {"fault": fault, "probabilities": p}
-        norm = self.trained_on.get("interval", {}).get("normalized") or {}
+        interval = self.trained_on.get("interval", {})
+        norm = interval.get("normalized") or {}
+        band = interval.get("size_band_mm")
+        wavy = rippled(ripple_pct, interval.get("ripple_band_pct") or RIPPLE_BAND_PCT)
         for j in ("B", "C"):
             mid = size_answer(self.size[j], X)
             side = j if resolved[j] or f"{j}_unresolved" not in self.interval_log10 else f"{j}_unresolved"
-            if rippled(ripple_pct, self.trained_on.get("interval", {}).get("ripple_band_pct") or RIPPLE_BAND_PCT) \
-                    and f"{side}_rippled" in self.interval_log10:
+            if wavy and f"{side}_rippled" in self.interval_log10:
                 side = f"{side}_rippled"
-            band = self.trained_on.get("interval", {}).get("size_band_mm")
             w = self.interval_log10[side]
             if band and mid < band and f"{side}_small" in self.interval_log10:
                 w = self.interval_log10[f"{side}_small"]
