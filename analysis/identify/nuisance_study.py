@@ -34,12 +34,19 @@ Variants (``twin identify train --interval-folds speed`` each):
 * ``engines-motor-split``: the same, the intervals split also by the runs' measured ripple (above
   ``RIPPLE_BAND_PCT``, the drive train's, or not);
 * ``engines-motor2``: ``engines-motor-split`` with ``clearance_id_nuisance_motor_yz`` pooled in (a second
-  drive-train set, y or z vertical): the shipped model.
+  drive-train set, y or z vertical): the second round's model;
+* ``small``: ``engines-motor2`` with ``clearance_id_nuisance_ref_small`` pooled in (third round: 1200
+  reference-engine runs with clearances 0.0125-0.25 mm at B, C or both, no hole around 0.07 mm);
+* ``small-mean``: ``small`` with the size regressors of squared error, 1000 trees of 31 leaves
+  (``SIZE_REGRESSORS["mean"]`` of :mod:`twin.identification.model`; the variants above take ``"median"``, the
+  quantile loss at 50 %, 300 trees of 15 leaves): the shipped model.
 
 Development sets: ``clearance_id_nuisance_dev`` (in range), ``clearance_id_nuisance_dev_out`` (out of range) and,
 from the second round on, ``clearance_id_nuisance_dev_motor`` (the drive train; reference engine) and
 ``clearance_id_fresh_in``: the first fresh test's in-range part, looked at once with the ``ends-band`` model and
-development data since (never training data: it holds the catalogue's 0.07 mm, which training leaves out).
+development data since (never training data: it holds the catalogue's 0.07 mm, which training leaves out); from
+the third round on ``clearance_id_fresh2_in``, the second fresh test's in-range part (looked at once with
+``engines-motor2``).
 
 Results: ``analysis/results/identify/nuisance_dev.json``.
 
@@ -70,8 +77,9 @@ ENDS = "clearance_id_nuisance_ends"
 REF = "clearance_id_nuisance_ref"
 MOTOR = "clearance_id_nuisance_motor"
 MOTOR_YZ = "clearance_id_nuisance_motor_yz"
+REF_SMALL = "clearance_id_nuisance_ref_small"
 DEV = ("clearance_id_nuisance_dev", "clearance_id_nuisance_dev_out", "clearance_id_nuisance_dev_motor",
-       "clearance_id_fresh_in")
+       "clearance_id_fresh_in", "clearance_id_fresh2_in")
 
 
 def cached_features(work: Path, name: str, splits: tuple[str, ...], workers: int) -> tuple:
@@ -105,7 +113,13 @@ VARIANTS = {"base": ((TRAIN,), dict(normalized_intervals=True, size_band_mm=None
             "engines": ((TRAIN, ENDS, REF), dict(normalized_intervals=False, ripple_split=False)),
             "engines-motor": ((TRAIN, ENDS, REF, MOTOR), dict(normalized_intervals=False, ripple_split=False)),
             "engines-motor-split": ((TRAIN, ENDS, REF, MOTOR), dict(normalized_intervals=False)),
-            "engines-motor2": ((TRAIN, ENDS, REF, MOTOR, MOTOR_YZ), dict(normalized_intervals=False))}
+            "engines-motor2": ((TRAIN, ENDS, REF, MOTOR, MOTOR_YZ), dict(normalized_intervals=False)),
+            "small": ((TRAIN, ENDS, REF, MOTOR, MOTOR_YZ, REF_SMALL), dict(normalized_intervals=False)),
+            "small-mean": ((TRAIN, ENDS, REF, MOTOR, MOTOR_YZ, REF_SMALL),
+                           dict(normalized_intervals=False, size_regressor="mean"))}
+# the first two rounds' variants keep the size regressor they were measured with
+for _v in VARIANTS.values():
+    _v[1].setdefault("size_regressor", "median")
 
 
 def figures(rep: dict) -> dict:
@@ -125,9 +139,9 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--work", default=str(ROOT.parent / "identify_work"))
     ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
-    ap.add_argument("--variants", default="engines-motor-split,engines-motor2")
+    ap.add_argument("--variants", default="engines-motor2,small,small-mean")
     ap.add_argument("--save", default=None, metavar="VARIANT:PATH",
-                    help="also write the model of one variant (e.g. the shipped model: engines-motor2:twin/data/"
+                    help="also write the model of one variant (e.g. the shipped model: small-mean:twin/data/"
                          "identify_default.npz); the same train() on the same features as 'twin identify train'")
     args = ap.parse_args()
     work = Path(args.work)

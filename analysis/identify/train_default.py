@@ -11,27 +11,31 @@ Steps (each is a plain ``twin`` command; a step whose output exists is skipped, 
    ``clearance_id_nuisance_ref.toml``: 1600 runs of the same nuisances simulated by the reference engine
    (clearances 0.0125-1.6 mm), so that the model spans two contact laws; ``clearance_id_nuisance_motor.toml`` and
    ``clearance_id_nuisance_motor_yz.toml``: 480 + 480 reference-engine runs of the drive train (motor speed loop
-   and V-belt, placeholders drawn; the second with y or z vertical only);
+   and V-belt, placeholders drawn; the second with y or z vertical only); ``clearance_id_nuisance_ref_small.toml``:
+   1200 reference-engine runs with B, C or both faulty, clearances 0.0125-0.25 mm and no hole around 0.07 mm;
 2. ``twin identify train WORK/clearance_id_nuisance WORK/clearance_id_nuisance_ends WORK/clearance_id_nuisance_ref
-   WORK/clearance_id_nuisance_motor WORK/clearance_id_nuisance_motor_yz --interval-folds speed --out
+   WORK/clearance_id_nuisance_motor WORK/clearance_id_nuisance_motor_yz WORK/clearance_id_nuisance_ref_small
+   --interval-folds speed --out
    twin/data/identify_default.npz`` (train and val splits; the intervals calibrated on answers at speeds left out,
    split by the size-resolution map, by the measured ripple and by the answer's size). The same ``train()`` on the
-   same features is the development study's variant ``engines-motor2``
-   (``analysis/identify/nuisance_study.py --save engines-motor2:twin/data/identify_default.npz``, which reuses
+   same features is the development study's variant ``small-mean``
+   (``analysis/identify/nuisance_study.py --save small-mean:twin/data/identify_default.npz``, which reuses
    the features it keeps);
 3. the development sets ``clearance_id_nuisance_dev.toml``, ``clearance_id_nuisance_dev_out.toml`` and
    ``clearance_id_nuisance_dev_motor.toml`` (reference engine), evaluated into ``analysis/results/identify/dev``,
    ``dev_out`` and ``dev_motor`` (every choice of the model was made on these:
    ``analysis/identify/nuisance_study.py``);
-4. with ``--fresh2`` only, after the model is committed (``analysis/identify/FRESH_TEST.md``, "Second round", the
-   one look): the seven sets of the second fresh test ``clearance_id_fresh2_*.toml`` (seeds never used), each
-   evaluated into ``analysis/results/identify/fresh2_*`` (the first round's six sets, ``clearance_id_fresh_*.toml``,
-   were looked at once with the model before this one: their reports, ``fresh_*``, are history);
+4. with ``--fresh3`` only, after the model is committed (``analysis/identify/FRESH_TEST.md``, "Third round", the
+   one look): the seven sets of the third fresh test ``clearance_id_fresh3_*.toml`` (seeds never used), each
+   evaluated into ``analysis/results/identify/fresh3_*`` (``--fresh2``: the second round's seven sets,
+   ``clearance_id_fresh2_*.toml``, looked at once with the model before this one; the first round's six sets,
+   ``clearance_id_fresh_*.toml``, with the one before that: their reports, ``fresh2_*`` and ``fresh_*``, are
+   history);
 5. the answers on the sample recordings in ``recordings/`` (``analysis/results/identify/samples.json``).
 
-Run: ``python analysis/identify/train_default.py [--work DIR] [--workers N] [--retrain] [--fresh2]``: about
-55 min for the training data on two cores, 12 min to train, 6 min for the development sets and 15 min for the
-second fresh test's sets. The datasets stay in ``--work`` (default ``../identify_work`` beside the checkout; about 35 GB
+Run: ``python analysis/identify/train_default.py [--work DIR] [--workers N] [--retrain] [--fresh3]``: about
+65 min for the training data on two cores, 15 min to train, 6 min for the development sets and 15 min for the
+third fresh test's sets. The datasets stay in ``--work`` (default ``../identify_work`` beside the checkout; about 45 GB
 for the training sets), not in the repository.
 """
 
@@ -49,11 +53,12 @@ ROOT = Path(__file__).resolve().parents[2]
 MODEL = ROOT / "twin" / "data" / "identify_default.npz"
 REPORT = ROOT / "analysis" / "results" / "identify"
 TRAIN = ("clearance_id_nuisance", "clearance_id_nuisance_ends", "clearance_id_nuisance_ref",
-         "clearance_id_nuisance_motor", "clearance_id_nuisance_motor_yz")
+         "clearance_id_nuisance_motor", "clearance_id_nuisance_motor_yz", "clearance_id_nuisance_ref_small")
 DEV = {"clearance_id_nuisance_dev": "dev", "clearance_id_nuisance_dev_out": "dev_out",
        "clearance_id_nuisance_dev_motor": "dev_motor"}
 FRESH2 = {f"clearance_id_fresh2_{k}": f"fresh2_{k}" for k in ("in", "in_mujoco", "out_ripple", "out_speed",
                                                               "out_noise", "out_params", "motor")}
+FRESH3 = {k.replace("fresh2", "fresh3"): v.replace("fresh2", "fresh3") for k, v in FRESH2.items()}
 
 
 def twin(*args: str) -> None:
@@ -74,7 +79,9 @@ def main() -> None:
     ap.add_argument("--workers", default=str(os.cpu_count() or 1))
     ap.add_argument("--retrain", action="store_true", help="train again even if the model exists")
     ap.add_argument("--fresh2", action="store_true",
-                    help="also generate and evaluate the second fresh test's sets (the one look)")
+                    help="also generate and evaluate the second fresh test's sets (looked at once with the model before)")
+    ap.add_argument("--fresh3", action="store_true",
+                    help="also generate and evaluate the third fresh test's sets (the one look)")
     ap.add_argument("--samples-only", action="store_true", help="only the answers on the sample recordings (step 5)")
     args = ap.parse_args()
     if args.samples_only:
@@ -87,7 +94,7 @@ def main() -> None:
     if args.retrain or not MODEL.exists():
         twin("identify", "train", *map(str, train_ds), "--interval-folds", "speed", "--out", str(MODEL), "--workers",
              args.workers)
-    sets = dict(DEV) | (FRESH2 if args.fresh2 else {})
+    sets = dict(DEV) | (FRESH2 if args.fresh2 else {}) | (FRESH3 if args.fresh3 else {})
     for name, sub in sets.items():
         d = generate(work, name, args.workers)
         twin("identify", "evaluate", str(MODEL), str(d), "--out", str(REPORT / sub), "--workers", args.workers)

@@ -3,9 +3,10 @@
 * **Fault location**: scikit-learn's ``HistGradientBoostingClassifier`` (none, B, C, BC) on the
   window features (:mod:`twin.identification.features`), classes weighted to balance; a recording's
   class probabilities are the mean over its windows.
-* **Clearance size**: per joint, a ``HistGradientBoostingRegressor`` with the quantile loss at
-  50 % (the median) on log10 of the diametral clearance, trained on the windows of the runs where
-  that joint has a clearance; a recording's size is the median over its windows.
+* **Clearance size**: per joint, a ``HistGradientBoostingRegressor`` on log10 of the diametral clearance
+  (:data:`SIZE_REGRESSORS`: squared error, the mean; the first two rounds' models took the quantile loss at 50 %,
+  the median), trained on the windows of the runs where that joint has a clearance; a recording's size is the
+  median over its windows.
 * **Training data**: one dataset or several (``train([DIR, DIR])``, ``twin identify train DS1 DS2``)
   at the same sample rate and encoder resolution (e.g. datasets generated in batches, catalogue
   clearances beside clearances drawn between them, or the same nuisances simulated by both engines);
@@ -138,7 +139,7 @@ class ClearanceModel:
     # the location classifier: a TreeEnsemble (as trained and as loaded), or anything with predict_proba
     # and classes_ (a scikit-learn estimator is exported on save)
     classifier: Any
-    size: dict[str, Any]  # per joint, the median regressor of log10 clearance [log10 mm] (likewise, predict)
+    size: dict[str, Any]  # per joint, the size regressor of log10 clearance [log10 mm] (likewise, predict)
     # per joint, the conformal half width w [log10]; "B_unresolved" / "C_unresolved", where present, the
     # half width of answers at that joint below its size-resolution map (SIZE_RESOLVED_FROM_RPM), "B" / "C"
     # then that of the others
@@ -416,6 +417,16 @@ def _check_poolable(dss: list[Any]) -> None:
 
 
 INTERVAL_FOLDS = ("runs", "speed")
+#: settings of the per-joint size regressor (scikit-learn's ``HistGradientBoostingRegressor`` on log10 of the
+#: clearance; leaves of at most 20 windows, fewer on small datasets). ``mean`` (the default from the third round on):
+#: squared error, 1000 trees of 31 leaves at a learning rate of 0.05; ``median``: the quantile loss at 50 %, 300
+#: trees of 15 leaves at 0.08 (the first two rounds' models). On the development sets ``mean`` read B's size
+#: within x1.5 in 84-92 % of the resolved runs against 72-85 % (``analysis/identify/nuisance_study.py``)
+SIZE_REGRESSORS = {
+    "mean": dict(loss="squared_error", max_iter=1000, learning_rate=0.05, max_leaf_nodes=31, l2_regularization=1.0),
+    "median": dict(loss="quantile", quantile=0.5, max_iter=300, learning_rate=0.08, max_leaf_nodes=15,
+                   l2_regularization=1.0),
+}
 
 
 def _conformal_folds(rows: list[dict[str, Any]], runs: np.ndarray, how: str, seed: int) -> np.ndarray:
@@ -443,7 +454,7 @@ def _conformal_folds(rows: list[dict[str, Any]], runs: np.ndarray, how: str, see
 def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = ("train", "val"), workers: int = 1,
           seed: int = 0, interval_folds: str = "runs", location_only: list[str | Path] = (),
           features: tuple | None = None, normalized_intervals: bool = False,
-          size_band_mm: float | None = SIZE_BAND_MM, ripple_split: bool = True
+          size_band_mm: float | None = SIZE_BAND_MM, ripple_split: bool = True, size_regressor: str = "mean"
           ) -> tuple[ClearanceModel, dict[str, Any]]:
     """Train on the ok runs of ``splits`` of one dataset or several pooled (see module docstring);
     ``interval_folds`` groups the out-of-fold scores of the intervals (:func:`_conformal_folds`);
@@ -454,9 +465,12 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
     several variants on the same runs computes them once). ``normalized_intervals``: also store the
     normalized conformal scales (module docstring); ``size_band_mm``: split each side of the
     size-resolution map's intervals by the answer's size (None: no split); ``ripple_split``: split each side
-    first by the runs' measured ripple (:data:`RIPPLE_BAND_PCT`)."""
+    first by the runs' measured ripple (:data:`RIPPLE_BAND_PCT`); ``size_regressor``: a key of
+    :data:`SIZE_REGRESSORS`."""
     if interval_folds not in INTERVAL_FOLDS:
         raise ModelError(f"interval_folds: {interval_folds!r}; allowed: {', '.join(INTERVAL_FOLDS)}")
+    if size_regressor not in SIZE_REGRESSORS:
+        raise ModelError(f"size_regressor: {size_regressor!r}; allowed: {', '.join(SIZE_REGRESSORS)}")
     from sklearn.ensemble import HistGradientBoostingClassifier, HistGradientBoostingRegressor
 
     dirs = [dataset_dir] if isinstance(dataset_dir, (str, Path)) else list(dataset_dir)
@@ -492,8 +506,7 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
                              "learn its size")
 
         def fit(use: np.ndarray) -> Any:
-            reg = HistGradientBoostingRegressor(loss="quantile", quantile=0.5, max_iter=300, learning_rate=0.08,
-                                                max_leaf_nodes=15, l2_regularization=1.0,
+            reg = HistGradientBoostingRegressor(**SIZE_REGRESSORS[size_regressor],
                                                 min_samples_leaf=int(min(20, max(3, int(use.sum()) // 48))),
                                                 random_state=seed)
             return reg.fit(X[use], np.log10(truth[use]))
@@ -562,6 +575,7 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
         "orientations": sorted({r["orientation"] for r in rows}),
         "classes": {c: int(np.sum(y == c)) for c in CLASSES},
         "versions": {"twin": __version__, "sklearn": sklearn.__version__, "numpy": np.__version__},
+        "size_regressor": size_regressor,
         "interval": {"method": "split-conformal, out of fold", "folds_by": interval_folds, "folds": n_folds,
                      "coverage": COVERAGE, "size_band_mm": size_band_mm,
                      "ripple_band_pct": RIPPLE_BAND_PCT if ripple_split else None,
