@@ -12,14 +12,16 @@ Steps (each is a plain ``twin`` command; a step whose output exists is skipped, 
    (clearances 0.0125-1.6 mm), so that the model spans two contact laws; ``clearance_id_nuisance_motor.toml`` and
    ``clearance_id_nuisance_motor_yz.toml``: 480 + 480 reference-engine runs of the drive train (motor speed loop
    and V-belt, placeholders drawn; the second with y or z vertical only); ``clearance_id_nuisance_ref_small.toml``:
-   1200 reference-engine runs with B, C or both faulty, clearances 0.0125-0.25 mm and no hole around 0.07 mm;
+   1200 reference-engine runs with B, C or both faulty, clearances 0.0125-0.25 mm and no hole around 0.07 mm, and
+   ``clearance_id_nuisance_ref_small_b.toml``: 800 more with B's clearance 0.0125-0.25 mm (B or BC faulty);
 2. ``twin identify train WORK/clearance_id_nuisance WORK/clearance_id_nuisance_ends WORK/clearance_id_nuisance_ref
    WORK/clearance_id_nuisance_motor WORK/clearance_id_nuisance_motor_yz WORK/clearance_id_nuisance_ref_small
-   --interval-folds speed --out
+   WORK/clearance_id_nuisance_ref_small_b --interval-folds speed --out
    twin/data/identify_default.npz`` (train and val splits; the intervals calibrated on answers at speeds left out,
-   split by the size-resolution map, by the measured ripple and by the answer's size). The same ``train()`` on the
-   same features is the development study's variant ``small-mean``
-   (``analysis/identify/nuisance_study.py --save small-mean:twin/data/identify_default.npz``, which reuses
+   split by the size-resolution map, by the measured ripple and by the answer's size, each the largest over the
+   engines). The same ``train()`` on the
+   same features is the development study's variant ``small-b-mean-engine``
+   (``analysis/identify/nuisance_study.py --save small-b-mean-engine:twin/data/identify_default.npz``, which reuses
    the features it keeps);
 3. the development sets ``clearance_id_nuisance_dev.toml``, ``clearance_id_nuisance_dev_out.toml`` and
    ``clearance_id_nuisance_dev_motor.toml`` (reference engine), evaluated into ``analysis/results/identify/dev``,
@@ -34,8 +36,8 @@ Steps (each is a plain ``twin`` command; a step whose output exists is skipped, 
 5. the answers on the sample recordings in ``recordings/`` (``analysis/results/identify/samples.json``).
 
 Run: ``python analysis/identify/train_default.py [--work DIR] [--workers N] [--retrain] [--fresh3]``: about
-65 min for the training data on two cores, 15 min to train, 6 min for the development sets and 15 min for the
-third fresh test's sets. The datasets stay in ``--work`` (default ``../identify_work`` beside the checkout; about 45 GB
+70 min for the training data on two cores, 15 min to train, 6 min for the development sets and 15 min for the
+third fresh test's sets. The datasets stay in ``--work`` (default ``../identify_work`` beside the checkout; about 50 GB
 for the training sets), not in the repository.
 """
 
@@ -53,7 +55,8 @@ ROOT = Path(__file__).resolve().parents[2]
 MODEL = ROOT / "twin" / "data" / "identify_default.npz"
 REPORT = ROOT / "analysis" / "results" / "identify"
 TRAIN = ("clearance_id_nuisance", "clearance_id_nuisance_ends", "clearance_id_nuisance_ref",
-         "clearance_id_nuisance_motor", "clearance_id_nuisance_motor_yz", "clearance_id_nuisance_ref_small")
+         "clearance_id_nuisance_motor", "clearance_id_nuisance_motor_yz", "clearance_id_nuisance_ref_small",
+         "clearance_id_nuisance_ref_small_b")
 DEV = {"clearance_id_nuisance_dev": "dev", "clearance_id_nuisance_dev_out": "dev_out",
        "clearance_id_nuisance_dev_motor": "dev_motor"}
 FRESH2 = {f"clearance_id_fresh2_{k}": f"fresh2_{k}" for k in ("in", "in_mujoco", "out_ripple", "out_speed",

@@ -28,6 +28,10 @@
   interval is wider. Before that split, each side is split by the recording's measured within-turn speed ripple
   (:data:`RIPPLE_BAND_PCT`, ``"B_rippled"``, ``"B_unresolved_rippled_small"``, ...), where the runs allow: a
   motor driving through the V-belt ripples far more than a crank PID, and its runs' sizes scatter more.
+  Where the training runs come from several engines, each half width is the largest of the pooled runs' and each
+  engine's runs' alone (``train(interval_by_engine=True)``, the default from the third round on): the bench's
+  contact law is neither engine's, and a half width calibrated on the pooled runs covers the engine the regressor
+  reads more easily more often than the other.
   A joint the classifier finds healthy reports 0 (ball bearing).
   ``train(normalized_intervals=True)`` also stores **normalized** conformal scales (``interval.normalized``): a
   run's score is divided by its difficulty, the spread of its per-window answers (:func:`window_spread`) plus an
@@ -451,11 +455,62 @@ def _conformal_folds(rows: list[dict[str, Any]], runs: np.ndarray, how: str, see
     return fold
 
 
+def _interval_parts(j: str, held_runs: list[dict[str, Any]], answers: np.ndarray, size_band_mm: float | None,
+                    ripple_split: bool) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """The out-of-fold runs of each half width at joint ``j`` (key -> mask; see the module docstring): all runs
+    (key ``j``); split (Mondrian) by the joint's size-resolution map where each side has MONDRIAN_MIN_RUNS runs
+    (``j``, ``j_unresolved``), each side by the runs' measured ripple (``_rippled``) where both parts have enough,
+    and each part by the answer's size (``_small``, below ``size_band_mm``) where both have enough. Also the
+    parts before the split by size (those of the normalized scales)."""
+    everything = np.ones(len(held_runs), bool)
+    parts = {j: everything}
+    on = np.array([size_resolved(j, row["orientation"], row["crank_hz"]) for row in held_runs], bool)
+    sides = [(j, everything)]
+    if on.sum() >= MONDRIAN_MIN_RUNS and (~on).sum() >= MONDRIAN_MIN_RUNS:
+        sides = [(j, on), (f"{j}_unresolved", ~on)]
+    rip = np.array([rippled(row.get("measures", {}).get("ripple_pct")) for row in held_runs], bool)
+    split = []
+    for side, m in sides:
+        if ripple_split and (m & rip).sum() >= MONDRIAN_MIN_RUNS and (m & ~rip).sum() >= MONDRIAN_MIN_RUNS:
+            split += [(side, m & ~rip), (f"{side}_rippled", m & rip)]
+        else:
+            split.append((side, m))
+    for side, m in split:
+        parts[side] = m
+        if size_band_mm:
+            small = m & (answers < size_band_mm)
+            if small.sum() >= MONDRIAN_MIN_RUNS and (m & ~small).sum() >= MONDRIAN_MIN_RUNS:
+                parts[f"{side}_small"] = small
+                parts[side] = m & ~small
+    return parts, dict(split)
+
+
+def _half_widths(j: str, scores: np.ndarray, held_runs: list[dict[str, Any]], answers: np.ndarray,
+                 size_band_mm: float | None, ripple_split: bool, by_engine: bool) -> dict[str, float]:
+    """Conformal half width [log10] of each part of :func:`_interval_parts` from the out-of-fold scores; with
+    ``by_engine``, where the runs come from several engines (the rows' ``engine``), each half width is the largest
+    of the pooled runs' and of each engine's runs' alone (an engine of MONDRIAN_MIN_RUNS runs or more, split the
+    same way where its runs allow): the bench's contact law is neither engine's, and an interval calibrated on
+    the pooled runs holds the engine that is easier for the regressor more often than the other."""
+    half = {key: conformal_half_width(scores[m])
+            for key, m in _interval_parts(j, held_runs, answers, size_band_mm, ripple_split)[0].items()}
+    engine = np.array([str(row.get("engine", "")) for row in held_runs])
+    for e in sorted(set(engine)) if by_engine else []:
+        idx = np.flatnonzero(engine == e)
+        if len(idx) < MONDRIAN_MIN_RUNS or len(idx) == len(engine):
+            continue
+        sub, _ = _interval_parts(j, [held_runs[i] for i in idx], answers[idx], size_band_mm, ripple_split)
+        for key, m in sub.items():
+            if key in half:
+                half[key] = max(half[key], conformal_half_width(scores[idx][m]))
+    return half
+
+
 def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = ("train", "val"), workers: int = 1,
           seed: int = 0, interval_folds: str = "runs", location_only: list[str | Path] = (),
           features: tuple | None = None, normalized_intervals: bool = False,
-          size_band_mm: float | None = SIZE_BAND_MM, ripple_split: bool = True, size_regressor: str = "mean"
-          ) -> tuple[ClearanceModel, dict[str, Any]]:
+          size_band_mm: float | None = SIZE_BAND_MM, ripple_split: bool = True, size_regressor: str = "mean",
+          interval_by_engine: bool = True) -> tuple[ClearanceModel, dict[str, Any]]:
     """Train on the ok runs of ``splits`` of one dataset or several pooled (see module docstring);
     ``interval_folds`` groups the out-of-fold scores of the intervals (:func:`_conformal_folds`);
     the runs of the ``location_only`` datasets (pooled like the others) teach the location model
@@ -466,7 +521,9 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
     normalized conformal scales (module docstring); ``size_band_mm``: split each side of the
     size-resolution map's intervals by the answer's size (None: no split); ``ripple_split``: split each side
     first by the runs' measured ripple (:data:`RIPPLE_BAND_PCT`); ``size_regressor``: a key of
-    :data:`SIZE_REGRESSORS`."""
+    :data:`SIZE_REGRESSORS`; ``interval_by_engine``: where the runs come from several engines, each half width is
+    the largest of the pooled runs' and each engine's runs' (those with MONDRIAN_MIN_RUNS runs or more), so that
+    it holds for each contact law alone."""
     if interval_folds not in INTERVAL_FOLDS:
         raise ModelError(f"interval_folds: {interval_folds!r}; allowed: {', '.join(INTERVAL_FOLDS)}")
     if size_regressor not in SIZE_REGRESSORS:
@@ -528,32 +585,12 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
                 spread.append(window_spread(reg, Xr))
                 held_runs.append(rows[int(r)])
         scores, spread, answers = np.array(scores), np.array(spread), np.array(answers)
-        half_width[j] = conformal_half_width(scores)
         if normalized_intervals:
             normalized[j] = normalized_scale(scores, spread)
-        # Mondrian split by the joint's size-resolution map, where each side has enough runs, then each side by
-        # the answer's size band (below / from size_band_mm), where each part has enough runs
-        on = np.array([size_resolved(j, row["orientation"], row["crank_hz"]) for row in held_runs], bool)
-        sides = [(j, np.ones(len(scores), bool))]
-        if on.sum() >= MONDRIAN_MIN_RUNS and (~on).sum() >= MONDRIAN_MIN_RUNS:
-            sides = [(j, on), (f"{j}_unresolved", ~on)]
-        # then each side by the recording's measured ripple (RIPPLE_BAND_PCT), where both parts have enough runs
-        rip = np.array([rippled(row.get("measures", {}).get("ripple_pct")) for row in held_runs], bool)
-        split = []
-        for side, m in sides:
-            if ripple_split and (m & rip).sum() >= MONDRIAN_MIN_RUNS and (m & ~rip).sum() >= MONDRIAN_MIN_RUNS:
-                split += [(side, m & ~rip), (f"{side}_rippled", m & rip)]
-            else:
-                split.append((side, m))
-        for side, m in split:
-            half_width[side] = conformal_half_width(scores[m])
-            if normalized_intervals:
-                normalized[side] = normalized_scale(scores[m], spread[m], normalized[j]["beta"])
-            if size_band_mm:
-                small = m & (answers < size_band_mm)
-                if small.sum() >= MONDRIAN_MIN_RUNS and (m & ~small).sum() >= MONDRIAN_MIN_RUNS:
-                    half_width[f"{side}_small"] = conformal_half_width(scores[small])
-                    half_width[side] = conformal_half_width(scores[m & ~small])
+        half_width |= _half_widths(j, scores, held_runs, answers, size_band_mm, ripple_split, interval_by_engine)
+        if normalized_intervals:
+            for key, m in _interval_parts(j, held_runs, answers, size_band_mm, ripple_split)[1].items():
+                normalized[key] = normalized_scale(scores[m], spread[m], normalized[j]["beta"])
     import sklearn
 
     from twin import __version__
@@ -579,6 +616,7 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
         "interval": {"method": "split-conformal, out of fold", "folds_by": interval_folds, "folds": n_folds,
                      "coverage": COVERAGE, "size_band_mm": size_band_mm,
                      "ripple_band_pct": RIPPLE_BAND_PCT if ripple_split else None,
+                     "by_engine": interval_by_engine,
                      "half_width_log10": half_width,
                      "normalized": normalized,
                      "difficulty": "spread of the per-window answers: interquartile range of the windows' log10 "
