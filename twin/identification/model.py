@@ -424,8 +424,9 @@ INTERVAL_FOLDS = ("runs", "speed")
 #: settings of the per-joint size regressor (scikit-learn's ``HistGradientBoostingRegressor`` on log10 of the
 #: clearance; leaves of at most 20 windows, fewer on small datasets). ``mean`` (the default from the third round on):
 #: squared error, 1000 trees of 31 leaves at a learning rate of 0.05; ``median``: the quantile loss at 50 %, 300
-#: trees of 15 leaves at 0.08 (the first two rounds' models). On the development sets ``mean`` read B's size
-#: within x1.5 in 84-92 % of the resolved runs against 72-85 % (``analysis/identify/nuisance_study.py``)
+#: trees of 15 leaves at 0.08 (the first two rounds' models). On the development sets, trained on the same runs,
+#: ``mean`` read B's size within x1.5 in 84-92 % of the resolved runs against 78-89 % (``analysis/identify/
+#: nuisance_study.py``, variants ``small-mean`` and ``small``)
 SIZE_REGRESSORS = {
     "mean": dict(loss="squared_error", max_iter=1000, learning_rate=0.05, max_leaf_nodes=31, l2_regularization=1.0),
     "median": dict(loss="quantile", quantile=0.5, max_iter=300, learning_rate=0.08, max_leaf_nodes=15,
