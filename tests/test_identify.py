@@ -782,3 +782,4 @@ def test_half_widths_by_engine_hold_each_engines_runs_alone():
     few = runs[:n] + runs[n:n + 10]
     assert _half_widths("B", scores[:n + 10], few, answers[:n + 10], 0.2, True, True) == \
         _half_widths("B", scores[:n + 10], few, answers[:n + 10], 0.2, True, False)
+    assert _half_widths("B", scores[n:], runs[n:], answers[n:], 0.2, True, True) == {"B": ref}  # one engine
