@@ -19,8 +19,7 @@ Steps (each is a plain ``twin`` command; a step whose output exists is skipped, 
    WORK/clearance_id_nuisance_ref_small_b --interval-folds speed --out
    twin/data/identify_default.npz`` (train and val splits; the intervals calibrated on answers at speeds left out,
    split by the size-resolution map, by the measured ripple and by the answer's size, each the largest over the
-   engines). The same ``train()`` on the
-   same features is the development study's variant ``small-b-mean-engine``
+   engines). The same ``train()`` on the same features is the development study's variant ``small-b-mean-engine``
    (``analysis/identify/nuisance_study.py --save small-b-mean-engine:twin/data/identify_default.npz``, which reuses
    the features it keeps);
 3. the development sets ``clearance_id_nuisance_dev.toml``, ``clearance_id_nuisance_dev_out.toml`` and
@@ -59,9 +58,10 @@ TRAIN = ("clearance_id_nuisance", "clearance_id_nuisance_ends", "clearance_id_nu
          "clearance_id_nuisance_ref_small_b")
 DEV = {"clearance_id_nuisance_dev": "dev", "clearance_id_nuisance_dev_out": "dev_out",
        "clearance_id_nuisance_dev_motor": "dev_motor"}
-FRESH2 = {f"clearance_id_fresh2_{k}": f"fresh2_{k}" for k in ("in", "in_mujoco", "out_ripple", "out_speed",
-                                                              "out_noise", "out_params", "motor")}
-FRESH3 = {k.replace("fresh2", "fresh3"): v.replace("fresh2", "fresh3") for k, v in FRESH2.items()}
+#: the parts of the second and third fresh tests (the same seven parts each round)
+FRESH_PARTS = ("in", "in_mujoco", "out_ripple", "out_speed", "out_noise", "out_params", "motor")
+FRESH2 = {f"clearance_id_fresh2_{k}": f"fresh2_{k}" for k in FRESH_PARTS}
+FRESH3 = {f"clearance_id_fresh3_{k}": f"fresh3_{k}" for k in FRESH_PARTS}
 
 
 def twin(*args: str) -> None:
