@@ -556,11 +556,10 @@ def test_regression_guard_the_size_resolution_map_is_the_committed_studies(joint
 
 def _half_width(m, side: str, size_mm: float) -> float:
     """The conformal half width [log10] the model gives an answer of ``size_mm`` on ``side`` ("B",
-    "B_unresolved", ...): that side's answers below the size band have their own (model.SIZE_BAND_MM)."""
-    band = m.trained_on["interval"].get("size_band_mm")
-    if band and size_mm < band and f"{side}_small" in m.interval_log10:
-        return m.interval_log10[f"{side}_small"]
-    return m.interval_log10[side]
+    "B_unresolved", ...): that of the answer's size band (model.band_half_width)."""
+    from twin.identification.model import band_half_width
+
+    return band_half_width(m.interval_log10, side, size_mm, m.trained_on["interval"].get("size_band_mm"))
 
 
 def test_an_answer_at_C_where_the_size_is_not_resolved_says_so(tmp_path, monkeypatch):
@@ -783,3 +782,37 @@ def test_half_widths_by_engine_hold_each_engines_runs_alone():
     assert _half_widths("B", scores[:n + 10], few, answers[:n + 10], 0.2, True, True) == \
         _half_widths("B", scores[:n + 10], few, answers[:n + 10], 0.2, True, False)
     assert _half_widths("B", scores[n:], runs[n:], answers[n:], 0.2, True, True) == {"B": ref}  # one engine
+
+
+def test_size_bands_give_each_band_its_own_conformal_half_width():
+    """Answers of three sizes whose out-of-fold scores scatter differently (0.02 mm tight, 0.05 mm wide, 0.5 mm
+    between): one boundary pools 0.02 and 0.05 mm, whose half width then covers 0.05 mm's answers below the nominal
+    rate; the catalogue's bands calibrate each on its own runs, so every size is covered at the nominal rate (the
+    conformal rank of its own scores). A band of too few runs stays with the band above it, and an answer is
+    given the half width of the deepest band the model has."""
+    from twin.identification.model import (CATALOGUE_BANDS_MM, COVERAGE, _half_widths, band_half_width,
+                                           conformal_half_width)
+
+    # the geometric means of the catalogue's neighbours at least a factor 2 apart: 0.02|0.05, 0.1|0.5, 0.5|1.0 mm
+    assert CATALOGUE_BANDS_MM == (0.0316, 0.2236, 0.7071)
+    rng = np.random.default_rng(5)
+    n = 300
+    answers = np.repeat([0.02, 0.05, 0.5], n)
+    scores = np.abs(np.concatenate([rng.normal(0, 0.03, n), rng.normal(0, 0.2, n), rng.normal(0, 0.1, n)]))
+    runs = [{"orientation": "z", "crank_hz": 3.0, "measures": {"ripple_pct": [1.0, 0.0, 0.0, 0.0]},
+             "engine": "reference"} for _ in range(3 * n)]
+    one = _half_widths("B", scores, runs, answers, 0.2, True, False)
+    assert set(one) == {"B", "B_small"} and one["B"] == conformal_half_width(scores[2 * n:])
+    assert np.mean(scores[n:2 * n] <= one["B_small"]) < COVERAGE  # 0.05 mm under-covered when pooled with 0.02
+    cat = _half_widths("B", scores, runs, answers, CATALOGUE_BANDS_MM, True, False)
+    # no answer above 0.71 mm: that boundary is not used, 0.22 and 0.032 mm are
+    assert cat["B"] == conformal_half_width(scores[2 * n:])
+    for size, s in ((0.02, scores[:n]), (0.05, scores[n:2 * n]), (0.5, scores[2 * n:])):
+        w = band_half_width(cat, "B", size, CATALOGUE_BANDS_MM)
+        assert w == conformal_half_width(s) and np.mean(s <= w) >= COVERAGE
+    assert band_half_width(cat, "B", 0.01, CATALOGUE_BANDS_MM) == band_half_width(cat, "B", 0.02, CATALOGUE_BANDS_MM)
+    few = np.concatenate([scores[:10], scores[n:]])  # ten answers at 0.02 mm: too few for a band of their own
+    f = _half_widths("B", few, runs[:10] + runs[n:], np.concatenate([answers[:10], answers[n:]]),
+                     CATALOGUE_BANDS_MM, True, False)
+    assert band_half_width(f, "B", 0.02, CATALOGUE_BANDS_MM) == band_half_width(f, "B", 0.05, CATALOGUE_BANDS_MM) \
+        == conformal_half_width(np.concatenate([scores[:10], scores[n:2 * n]]))

@@ -239,6 +239,14 @@ def test_the_training_ranges_and_feature_quartiles_load_back_and_malformed_ones_
     m.trained_on["interval"] = {"ripple_band_pct": 4.5}
     m.save(tmp_path / "ok.npz")
     assert ClearanceModel.load(tmp_path / "ok.npz").trained_on["interval"]["ripple_band_pct"] == 4.5
+    for bad in ("0.2", [0.2, -0.03], [float("nan")], {"b": 0.2}):  # the size bands of the intervals' split
+        m.trained_on["interval"] = {"size_band_mm": bad}
+        m.save(tmp_path / "bad.npz")
+        _refused(tmp_path / "bad.npz", "size_band_mm")
+    for good in (None, 0.2, [0.7071, 0.2236, 0.0316]):
+        m.trained_on["interval"] = {"size_band_mm": good}
+        m.save(tmp_path / "ok.npz")
+        assert ClearanceModel.load(tmp_path / "ok.npz").trained_on["interval"]["size_band_mm"] == good
     m.trained_on["feature_reference"] = {"q25": [0.0], "q75": [1.0]}
     m.save(tmp_path / "bad.npz")
     _refused(tmp_path / "bad.npz", "feature_reference")

@@ -43,12 +43,22 @@ Variants (``twin identify train --interval-folds speed`` each):
 * ``small-mean-engine``: ``small-mean`` with every half width the largest of the pooled runs' and each engine's
   runs' (``train(interval_by_engine=True)``; the variants above calibrate on the pooled runs);
 * ``small-b-mean-engine``: ``small-mean-engine`` with ``clearance_id_nuisance_ref_small_b`` pooled in (800 more
-  reference-engine runs with a clearance at B of 0.0125-0.25 mm): the shipped model;
+  reference-engine runs with a clearance at B of 0.0125-0.25 mm): the third round's model;
 * ``soft`` (after the third look, for a next round; not shipped): ``small-b-mean-engine`` with
   ``clearance_id_nuisance_ref_soft`` pooled in (1200 reference-engine runs with the contact ranges widened toward
   soft, lossless contacts: stiffness x0.25-2, restitution 0.3-0.85, friction 0.005-0.10, guide friction 0.2-6 N).
   Not adopted: it found 21 of the 30 small clearances at B that the third fresh test's soft contacts hid (20
-  before), was no better at B's 0.07 mm median, and its intervals missed 0.1 mm on two of the test-6 repeats.
+  before), was no better at B's 0.07 mm median, and its intervals missed 0.1 mm on two of the test-6 repeats;
+* ``catalogue-bands-all`` (fourth round): ``small-b-mean-engine`` with one interval band per catalogue value
+  (``ALL_MIDPOINTS_MM``: boundaries 0.032, 0.059, 0.084, 0.22, 0.71 mm) instead of one boundary at 0.2 mm; the
+  same estimators, re-calibrated (:func:`recalibrated`);
+* ``slow-b`` (fourth round): ``small-b-mean-engine`` with ``clearance_id_nuisance_ref_slow_b`` pooled in (800
+  reference-engine runs with a clearance at B of 0.0125-0.25 mm at the slow speeds 250-425 rpm);
+* ``slow-b-bands-all``: ``slow-b`` with a band per catalogue value. Not adopted: its bands at 0.059 and
+  0.084 mm lie closer than the answers' scatter (x1.4 against half widths of x1.3-1.6), gave answers near 0.07 mm
+  at C x2.4 and near 0.1 mm x1.41, and missed 0.1 mm on a test-6 repeat (0.1445 mm, interval from 0.1027);
+* ``slow-b-bands``: ``slow-b`` with the bands of ``CATALOGUE_BANDS_MM`` (boundaries between catalogue values at
+  least a factor 2 apart: 0.032, 0.22, 0.71 mm): the shipped model from the fourth round on.
 
 Development sets: ``clearance_id_nuisance_dev`` (in range), ``clearance_id_nuisance_dev_out`` (out of range) and,
 from the second round on, ``clearance_id_nuisance_dev_motor`` (the drive train; reference engine) and
@@ -56,7 +66,8 @@ from the second round on, ``clearance_id_nuisance_dev_motor`` (the drive train; 
 development data since (never training data: it holds the catalogue's 0.07 mm, which training leaves out); from
 the third round on ``clearance_id_fresh2_in``, the second fresh test's in-range part (looked at once with
 ``engines-motor2``); after the third look, ``clearance_id_fresh3_in`` and ``clearance_id_fresh3_out_params``
-(looked at once with ``small-b-mean-engine``: development data for a next round).
+(looked at once with ``small-b-mean-engine``: development data since; the fourth round was chosen on the
+in-range sets among these).
 
 Results: ``analysis/results/identify/nuisance_dev.json``.
 
@@ -70,6 +81,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import time
 from pathlib import Path
@@ -77,9 +89,11 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from twin.config import CATALOGUE_DIAMETRAL_MM
 from twin.identification.evaluate import evaluate
 from twin.identification.features import FEATURE_VERSION
-from twin.identification.model import pool_features, pooled_features, train
+from twin.identification.model import (CATALOGUE_BANDS_MM, SIZE_BAND_MM, ClearanceModel, _half_widths, pool_features, pooled_features,
+                                       train)
 
 ROOT = Path(__file__).resolve().parents[2]
 OUT = ROOT / "analysis" / "results" / "identify" / "nuisance_dev.json"
@@ -91,6 +105,7 @@ MOTOR_YZ = "clearance_id_nuisance_motor_yz"
 REF_SMALL = "clearance_id_nuisance_ref_small"
 REF_SMALL_B = "clearance_id_nuisance_ref_small_b"
 REF_SOFT = "clearance_id_nuisance_ref_soft"
+REF_SLOW_B = "clearance_id_nuisance_ref_slow_b"
 DEV = ("clearance_id_nuisance_dev", "clearance_id_nuisance_dev_out", "clearance_id_nuisance_dev_motor",
        "clearance_id_fresh_in", "clearance_id_fresh2_in", "clearance_id_fresh3_in", "clearance_id_fresh3_out_params")
 
@@ -122,6 +137,9 @@ def cached_features(work: Path, name: str, splits: tuple[str, ...], workers: int
     return X, rows, owner, skipped, dss
 
 
+#: a size-band boundary between every two neighbouring catalogue values [mm] (the first version of the fourth round's
+#: bands; CATALOGUE_BANDS_MM keeps those between values at least a factor 2 apart)
+ALL_MIDPOINTS_MM = tuple(round(math.sqrt(a * b), 4) for a, b in zip(CATALOGUE_DIAMETRAL_MM, CATALOGUE_DIAMETRAL_MM[1:]))
 #: variant: (training datasets, interval options of train())
 VARIANTS = {"base": ((TRAIN,), dict(normalized_intervals=True, size_band_mm=None, ripple_split=False)),
             "base-fixed": ((TRAIN,), dict(normalized_intervals=False, size_band_mm=None, ripple_split=False)),
@@ -141,11 +159,40 @@ VARIANTS = {"base": ((TRAIN,), dict(normalized_intervals=True, size_band_mm=None
             "small-b-mean-engine": ((TRAIN, ENDS, REF, MOTOR, MOTOR_YZ, REF_SMALL, REF_SMALL_B),
                                     dict(normalized_intervals=False, size_regressor="mean", interval_by_engine=True)),
             "soft": ((TRAIN, ENDS, REF, MOTOR, MOTOR_YZ, REF_SMALL, REF_SMALL_B, REF_SOFT),
-                     dict(normalized_intervals=False, size_regressor="mean", interval_by_engine=True))}
+                     dict(normalized_intervals=False, size_regressor="mean", interval_by_engine=True)),
+            "catalogue-bands-all": ((TRAIN, ENDS, REF, MOTOR, MOTOR_YZ, REF_SMALL, REF_SMALL_B),
+                                    dict(normalized_intervals=False, size_regressor="mean", interval_by_engine=True,
+                                         size_band_mm=ALL_MIDPOINTS_MM)),
+            "slow-b": ((TRAIN, ENDS, REF, MOTOR, MOTOR_YZ, REF_SMALL, REF_SMALL_B, REF_SLOW_B),
+                       dict(normalized_intervals=False, size_regressor="mean", interval_by_engine=True)),
+            "slow-b-bands-all": ((TRAIN, ENDS, REF, MOTOR, MOTOR_YZ, REF_SMALL, REF_SMALL_B, REF_SLOW_B),
+                                 dict(normalized_intervals=False, size_regressor="mean", interval_by_engine=True,
+                                      size_band_mm=ALL_MIDPOINTS_MM)),
+            "slow-b-bands": ((TRAIN, ENDS, REF, MOTOR, MOTOR_YZ, REF_SMALL, REF_SMALL_B, REF_SLOW_B),
+                             dict(normalized_intervals=False, size_regressor="mean", interval_by_engine=True,
+                                  size_band_mm=CATALOGUE_BANDS_MM))}
 # the variants before keep the size regressor and the intervals they were measured with
 for _v in VARIANTS.values():
     _v[1].setdefault("size_regressor", "median")
     _v[1].setdefault("interval_by_engine", False)
+    _v[1].setdefault("size_band_mm", SIZE_BAND_MM)  # one boundary, 0.2 mm (train()'s default from the fourth round
+    # on is one band per catalogue value)
+
+
+def recalibrated(model: ClearanceModel, info: dict, oof: dict, opts: dict) -> tuple[ClearanceModel, dict]:
+    """``model`` with the half widths of other interval options (``opts``: size bands, ripple split, by engine),
+    calibrated on the same out-of-fold answers as :func:`train` would (the same estimators: a variant that differs
+    from one already fitted only in its intervals needs no second fit)."""
+    half: dict[str, float] = {}
+    for j in ("B", "C"):
+        half |= _half_widths(j, oof[j]["scores"], oof[j]["runs"], oof[j]["answers"],
+                             opts.get("size_band_mm", SIZE_BAND_MM), opts.get("ripple_split", True),
+                             opts["interval_by_engine"])
+    info = json.loads(json.dumps(info, default=float))
+    band = opts.get("size_band_mm", SIZE_BAND_MM)
+    info["interval"] |= {"half_width_log10": half, "by_engine": opts["interval_by_engine"],
+                         "size_band_mm": band if band is None or isinstance(band, float) else sorted(band, reverse=True)}
+    return ClearanceModel(model.classifier, model.size, half, trained_on=info), info
 
 
 def figures(rep: dict) -> dict:
@@ -165,9 +212,9 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--work", default=str(ROOT.parent / "identify_work"))
     ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
-    ap.add_argument("--variants", default="small-b-mean-engine,soft")
+    ap.add_argument("--variants", default="small-b-mean-engine,catalogue-bands-all,slow-b,slow-b-bands-all,slow-b-bands")
     ap.add_argument("--save", default=None, metavar="VARIANT:PATH",
-                    help="also write the model of one variant (e.g. the shipped model: small-b-mean-engine:twin/data/"
+                    help="also write the model of one variant (e.g. the shipped model: slow-b-bands:twin/data/"
                          "identify_default.npz); the same train() on the same features as 'twin identify train'")
     args = ap.parse_args()
     work = Path(args.work)
@@ -183,11 +230,18 @@ def main() -> None:
            if (work / d).is_dir() or (work / "features" / f"{d}.npz").is_file()}
     results = json.loads(OUT.read_text()) if OUT.is_file() else {}
     results = {k: v for k, v in results.items() if k in VARIANTS}  # a variant not re-run keeps its figures
+    fitted: dict[tuple, tuple] = {}  # (datasets, size regressor) -> (model, trained_on, out-of-fold answers)
     for v in wanted:
         sets, opts = VARIANTS[v]
         t = time.perf_counter()
-        model, info = train([work / n for n in sets], workers=args.workers, interval_folds="speed",
-                            features=pool_features([feats[n] for n in sets]), **opts)
+        key = (sets, opts["size_regressor"])
+        if key in fitted and not opts["normalized_intervals"]:
+            model, info = recalibrated(*fitted[key], opts)
+        else:
+            oof: dict = {}
+            model, info = train([work / n for n in sets], workers=args.workers, interval_folds="speed",
+                                features=pool_features([feats[n] for n in sets]), out_of_fold=oof, **opts)
+            fitted[key] = (model, info, oof)
         if args.save and args.save.split(":", 1)[0] == v:
             model.save(ROOT / args.save.split(":", 1)[1])
             print(f"wrote the model of {v} to {args.save.split(':', 1)[1]}", flush=True)

@@ -23,9 +23,15 @@
   a wider one (``"B_unresolved"``, ``"C_unresolved"``) for those below the map. Model
   format 1 took the 5 % and 95 % quantile regressors instead: their window medians stayed at the
   catalogue's ends (0.02–0.5 mm for almost every answer), covering the truth while saying nothing.
-  Each side of the map is split again by the answer's size (:data:`SIZE_BAND_MM`, ``"B_small"``, ...), where the
-  runs allow: an answer of a small clearance scatters more in log than one of a large clearance, so its
-  interval is wider. Before that split, each side is split by the recording's measured within-turn speed ripple
+  Each side of the map is split again by the answer's size, where the runs allow: the scatter in log differs
+  from one size to another (development: small clearances scatter more than large ones, and 0.05-0.07 mm more
+  than 0.02 mm). From the fourth round on the split has one band per group of catalogue values
+  (:data:`CATALOGUE_BANDS_MM`, boundaries at the geometric means of neighbouring values at least
+  :data:`BAND_MIN_RATIO` apart: 0.02 | 0.05-0.1 | 0.5 | 1.0 mm; ``"B"`` above the largest boundary used,
+  ``"B_small"``, ``"B_small2"``, ... below each further one, :func:`band_half_width`), so that the coverage holds
+  value by value; a boundary is used where both its sides have ``MONDRIAN_MIN_RUNS`` runs. The models before split
+  once, at :data:`SIZE_BAND_MM` (``"B_small"``).
+  Before that split, each side is split by the recording's measured within-turn speed ripple
   (:data:`RIPPLE_BAND_PCT`, ``"B_rippled"``, ``"B_unresolved_rippled_small"``, ...), where the runs allow: a
   motor driving through the V-belt ripples far more than a crank PID, and its runs' sizes scatter more.
   Where the training runs come from several engines, each half width is the largest of the pooled runs' and each
@@ -90,7 +96,7 @@ from typing import Any
 
 import numpy as np
 
-from twin.config import Drive
+from twin.config import CATALOGUE_DIAMETRAL_MM, Drive
 from twin.identification.features import FEATURE_VERSION, REVS_PER_WINDOW, IdentifyError, feature_names, features
 from twin.identification.ranges import feature_reference, out_of_range, recording_measures, training_ranges, widen
 from twin.identification.trees import ModelError, TreeEnsemble, from_sklearn
@@ -122,6 +128,17 @@ MONDRIAN_MIN_RUNS = 20  # out-of-fold runs each side needs before the interval a
 #: runs allow: small clearances scatter more in log than large ones (development: 0.26 against 0.13 at B).
 #: 0.2 mm lies between the catalogue's 0.1 and 0.5 mm
 SIZE_BAND_MM = 0.2
+#: neighbouring catalogue values at least this factor apart get a size-band boundary between them [-]: the 90 %
+#: half widths are x1.3-1.6, so the answers of 0.05, 0.07 and 0.1 mm (x1.4 apart) overlap and a band each would
+#: split answers by their error rather than by the size (development: bands at 0.059 and 0.084 mm too gave 0.07 mm
+#: answers at C x2.4 and 0.1 mm ones x1.41, which missed 0.1 mm on a test-6 repeat)
+BAND_MIN_RATIO = 2.0
+#: size bands of the intervals, one per group of catalogue values: boundaries at the geometric means of neighbouring
+#: catalogue values at least BAND_MIN_RATIO apart [mm] (0.032, 0.22, 0.71: 0.02 | 0.05-0.1 | 0.5 | 1.0 mm);
+#: ``train(size_band_mm=CATALOGUE_BANDS_MM)`` calibrates a half width for the answers of each group, where the
+#: training runs allow, so that the coverage holds value by value and not only over all answers together
+CATALOGUE_BANDS_MM = tuple(round(math.sqrt(a * b), 4) for a, b in zip(CATALOGUE_DIAMETRAL_MM, CATALOGUE_DIAMETRAL_MM[1:])
+                           if b / a >= BAND_MIN_RATIO)
 #: recordings whose largest within-turn speed ripple (harmonics 1-4 of the crank rate, measured from the encoder)
 #: exceeds this [% of the speed] get their own conformal half widths (``"B_rippled"``, ...), where the training
 #: runs allow: a motor driving through the V-belt ripples by 10-20 % at twice the crank rate (docs/drivetrain.md),
@@ -183,6 +200,10 @@ class ClearanceModel:
                     not {"B", "C"} <= set(half) or not all(math.isfinite(v) and v >= 0 for v in half.values()):
                 raise ValueError("feature_names or interval_log10 malformed")
             _check_ranges(trained_on["ranges"], trained_on.get("feature_reference"), len(names))
+            sb = trained_on.get("interval", {}).get("size_band_mm")
+            if sb is not None and not all(isinstance(b, (int, float)) and math.isfinite(b) and b > 0
+                                          for b in ([sb] if isinstance(sb, (int, float)) else sb)):
+                raise ValueError("interval.size_band_mm malformed")
             rb = trained_on.get("interval", {}).get("ripple_band_pct")
             if rb is not None and not (isinstance(rb, (int, float)) and math.isfinite(rb) and rb > 0):
                 raise ValueError("interval.ripple_band_pct malformed")
@@ -229,9 +250,7 @@ class ClearanceModel:
             side = j if resolved[j] or f"{j}_unresolved" not in self.interval_log10 else f"{j}_unresolved"
             if wavy and f"{side}_rippled" in self.interval_log10:
                 side = f"{side}_rippled"
-            w = self.interval_log10[side]
-            if band and mid < band and f"{side}_small" in self.interval_log10:
-                w = self.interval_log10[f"{side}_small"]
+            w = band_half_width(self.interval_log10, side, mid, band)
             if side in norm:  # normalized conformal: the half width scales with the recording's difficulty
                 w = norm[side]["q"] * (window_spread(self.size[j], X) + norm[side]["beta"])
             lo, hi = (float(f"{mid * 10 ** sign:.12g}") for sign in (-w, w))
@@ -456,12 +475,14 @@ def _conformal_folds(rows: list[dict[str, Any]], runs: np.ndarray, how: str, see
     return fold
 
 
-def _interval_parts(j: str, held_runs: list[dict[str, Any]], answers: np.ndarray, size_band_mm: float | None,
+def _interval_parts(j: str, held_runs: list[dict[str, Any]], answers: np.ndarray,
+                    size_band_mm: float | list[float] | None,
                     ripple_split: bool) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
     """The out-of-fold runs of each half width at joint ``j`` (key -> mask; see the module docstring): all runs
     (key ``j``); split (Mondrian) by the joint's size-resolution map where each side has MONDRIAN_MIN_RUNS runs
     (``j``, ``j_unresolved``), each side by the runs' measured ripple (``_rippled``) where both parts have enough,
-    and each part by the answer's size (``_small``, below ``size_band_mm``) where both have enough. Also the
+    and each part by the answer's size (``_small``, ``_small2``, ...: below each boundary of ``size_band_mm``,
+    largest first) where both sides of a boundary have enough. Also the
     parts before the split by size (those of the normalized scales)."""
     everything = np.ones(len(held_runs), bool)
     parts = {j: everything}
@@ -478,16 +499,46 @@ def _interval_parts(j: str, held_runs: list[dict[str, Any]], answers: np.ndarray
             split.append((side, m))
     for side, m in split:
         parts[side] = m
-        if size_band_mm:
-            small = m & (answers < size_band_mm)
-            if small.sum() >= MONDRIAN_MIN_RUNS and (m & ~small).sum() >= MONDRIAN_MIN_RUNS:
-                parts[f"{side}_small"] = small
-                parts[side] = m & ~small
+        rest, upper = m, side  # answers below the last boundary used, and their key
+        for i, band in enumerate(size_bands(size_band_mm), start=1):
+            small = rest & (answers < band)
+            if small.sum() < MONDRIAN_MIN_RUNS or (rest & ~small).sum() < MONDRIAN_MIN_RUNS:
+                continue  # too few runs on a side: this boundary is not used, its band stays with the one above
+            parts[upper], parts[_band_key(side, i)] = rest & ~small, small
+            rest, upper = small, _band_key(side, i)
     return parts, dict(split)
 
 
+def size_bands(size_band_mm: float | list[float] | tuple[float, ...] | None) -> list[float]:
+    """The answer-size boundaries of the intervals' Mondrian split [mm], largest first (``size_band_mm``: one
+    boundary, several, or None for no split)."""
+    if not size_band_mm:
+        return []
+    if isinstance(size_band_mm, (int, float)):
+        return [float(size_band_mm)]
+    return sorted((float(b) for b in size_band_mm), reverse=True)
+
+
+def _band_key(side: str, i: int) -> str:
+    """Key of the half width of answers below the i-th largest size boundary on ``side`` (0: above them all), down
+    to the next boundary used: ``side``, ``side_small``, ``side_small2``, ..."""
+    return side if i == 0 else f"{side}_small" if i == 1 else f"{side}_small{i}"
+
+
+def band_half_width(half: dict[str, float], side: str, answer_mm: float,
+                    size_band_mm: float | list[float] | None) -> float:
+    """Half width [log10] for an answer of ``answer_mm`` on ``side``: that of the band of the smallest boundary
+    above the answer that the model used (a boundary with too few training runs on a side is not used: its
+    answers belong to the band above it)."""
+    depth = sum(answer_mm < b for b in size_bands(size_band_mm))
+    for i in range(depth, 0, -1):
+        if _band_key(side, i) in half:
+            return half[_band_key(side, i)]
+    return half[side]
+
+
 def _half_widths(j: str, scores: np.ndarray, held_runs: list[dict[str, Any]], answers: np.ndarray,
-                 size_band_mm: float | None, ripple_split: bool, by_engine: bool) -> dict[str, float]:
+                 size_band_mm: float | list[float] | None, ripple_split: bool, by_engine: bool) -> dict[str, float]:
     """Conformal half width [log10] of each part of :func:`_interval_parts` from the out-of-fold scores; with
     ``by_engine``, where the runs come from several engines (the rows' ``engine``), each half width is the largest
     of the pooled runs' and of each engine's runs' alone (an engine of MONDRIAN_MIN_RUNS runs or more, split the
@@ -510,8 +561,9 @@ def _half_widths(j: str, scores: np.ndarray, held_runs: list[dict[str, Any]], an
 def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = ("train", "val"), workers: int = 1,
           seed: int = 0, interval_folds: str = "runs", location_only: list[str | Path] = (),
           features: tuple | None = None, normalized_intervals: bool = False,
-          size_band_mm: float | None = SIZE_BAND_MM, ripple_split: bool = True, size_regressor: str = "mean",
-          interval_by_engine: bool = True) -> tuple[ClearanceModel, dict[str, Any]]:
+          size_band_mm: float | list[float] | tuple[float, ...] | None = CATALOGUE_BANDS_MM, ripple_split: bool = True, size_regressor: str = "mean",
+          interval_by_engine: bool = True, out_of_fold: dict[str, Any] | None = None
+          ) -> tuple[ClearanceModel, dict[str, Any]]:
     """Train on the ok runs of ``splits`` of one dataset or several pooled (see module docstring);
     ``interval_folds`` groups the out-of-fold scores of the intervals (:func:`_conformal_folds`);
     the runs of the ``location_only`` datasets (pooled like the others) teach the location model
@@ -520,11 +572,14 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
     :func:`pooled_features` returns for these datasets and splits, computed before (a study that trains
     several variants on the same runs computes them once). ``normalized_intervals``: also store the
     normalized conformal scales (module docstring); ``size_band_mm``: split each side of the
-    size-resolution map's intervals by the answer's size (None: no split); ``ripple_split``: split each side
+    size-resolution map's intervals by the answer's size at these boundaries (default: one band per group of
+    catalogue values, :data:`CATALOGUE_BANDS_MM`; one number: below and above it, the models before the fourth round; None: no split); ``ripple_split``: split each side
     first by the runs' measured ripple (:data:`RIPPLE_BAND_PCT`); ``size_regressor``: a key of
     :data:`SIZE_REGRESSORS`; ``interval_by_engine``: where the runs come from several engines, each half width is
     the largest of the pooled runs' and each engine's runs' (those with MONDRIAN_MIN_RUNS runs or more), so that
-    it holds for each contact law alone."""
+    it holds for each contact law alone. ``out_of_fold``: a dict that receives, per joint, the out-of-fold
+    ``scores``, ``runs`` (rows) and ``answers`` the half widths are calibrated on (a study that compares interval
+    options re-calibrates from them with :func:`_half_widths` without fitting again)."""
     if interval_folds not in INTERVAL_FOLDS:
         raise ModelError(f"interval_folds: {interval_folds!r}; allowed: {', '.join(INTERVAL_FOLDS)}")
     if size_regressor not in SIZE_REGRESSORS:
@@ -586,6 +641,8 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
                 spread.append(window_spread(reg, Xr))
                 held_runs.append(rows[int(r)])
         scores, spread, answers = np.array(scores), np.array(spread), np.array(answers)
+        if out_of_fold is not None:
+            out_of_fold[j] = {"scores": scores, "runs": held_runs, "answers": answers}
         if normalized_intervals:
             normalized[j] = normalized_scale(scores, spread)
         half_width |= _half_widths(j, scores, held_runs, answers, size_band_mm, ripple_split, interval_by_engine)
@@ -615,7 +672,9 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
         "versions": {"twin": __version__, "sklearn": sklearn.__version__, "numpy": np.__version__},
         "size_regressor": size_regressor,
         "interval": {"method": "split-conformal, out of fold", "folds_by": interval_folds, "folds": n_folds,
-                     "coverage": COVERAGE, "size_band_mm": size_band_mm,
+                     "coverage": COVERAGE,
+                     "size_band_mm": (size_band_mm if size_band_mm is None or isinstance(size_band_mm, (int, float))
+                                      else size_bands(size_band_mm)),
                      "ripple_band_pct": RIPPLE_BAND_PCT if ripple_split else None,
                      "by_engine": interval_by_engine,
                      "half_width_log10": half_width,
