@@ -92,8 +92,8 @@ import numpy as np
 from twin.config import CATALOGUE_DIAMETRAL_MM
 from twin.identification.evaluate import evaluate
 from twin.identification.features import FEATURE_VERSION
-from twin.identification.model import (CATALOGUE_BANDS_MM, SIZE_BAND_MM, ClearanceModel, _half_widths, pool_features, pooled_features,
-                                       train)
+from twin.identification.model import (CATALOGUE_BANDS_MM, SIZE_BAND_MM, ClearanceModel, _half_widths, pool_features,
+                                       pooled_features, train)
 
 ROOT = Path(__file__).resolve().parents[2]
 OUT = ROOT / "analysis" / "results" / "identify" / "nuisance_dev.json"

@@ -137,8 +137,9 @@ BAND_MIN_RATIO = 2.0
 #: catalogue values at least BAND_MIN_RATIO apart [mm] (0.032, 0.22, 0.71: 0.02 | 0.05-0.1 | 0.5 | 1.0 mm);
 #: ``train(size_band_mm=CATALOGUE_BANDS_MM)`` calibrates a half width for the answers of each group, where the
 #: training runs allow, so that the coverage holds value by value and not only over all answers together
-CATALOGUE_BANDS_MM = tuple(round(math.sqrt(a * b), 4) for a, b in zip(CATALOGUE_DIAMETRAL_MM, CATALOGUE_DIAMETRAL_MM[1:])
-                           if b / a >= BAND_MIN_RATIO)
+CATALOGUE_BANDS_MM = tuple(round(math.sqrt(lo * hi), 4)
+                           for lo, hi in zip(CATALOGUE_DIAMETRAL_MM, CATALOGUE_DIAMETRAL_MM[1:])
+                           if hi / lo >= BAND_MIN_RATIO)
 #: recordings whose largest within-turn speed ripple (harmonics 1-4 of the crank rate, measured from the encoder)
 #: exceeds this [% of the speed] get their own conformal half widths (``"B_rippled"``, ...), where the training
 #: runs allow: a motor driving through the V-belt ripples by 10-20 % at twice the crank rate (docs/drivetrain.md),
@@ -561,8 +562,8 @@ def _half_widths(j: str, scores: np.ndarray, held_runs: list[dict[str, Any]], an
 def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = ("train", "val"), workers: int = 1,
           seed: int = 0, interval_folds: str = "runs", location_only: list[str | Path] = (),
           features: tuple | None = None, normalized_intervals: bool = False,
-          size_band_mm: float | list[float] | tuple[float, ...] | None = CATALOGUE_BANDS_MM, ripple_split: bool = True, size_regressor: str = "mean",
-          interval_by_engine: bool = True, out_of_fold: dict[str, Any] | None = None
+          size_band_mm: float | list[float] | tuple[float, ...] | None = CATALOGUE_BANDS_MM, ripple_split: bool = True,
+          size_regressor: str = "mean", interval_by_engine: bool = True, out_of_fold: dict[str, Any] | None = None
           ) -> tuple[ClearanceModel, dict[str, Any]]:
     """Train on the ok runs of ``splits`` of one dataset or several pooled (see module docstring);
     ``interval_folds`` groups the out-of-fold scores of the intervals (:func:`_conformal_folds`);
@@ -573,7 +574,8 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
     several variants on the same runs computes them once). ``normalized_intervals``: also store the
     normalized conformal scales (module docstring); ``size_band_mm``: split each side of the
     size-resolution map's intervals by the answer's size at these boundaries (default: one band per group of
-    catalogue values, :data:`CATALOGUE_BANDS_MM`; one number: below and above it, the models before the fourth round; None: no split); ``ripple_split``: split each side
+    catalogue values, :data:`CATALOGUE_BANDS_MM`; one number: below and above it, as the models before the fourth
+    round; None: no split); ``ripple_split``: split each side
     first by the runs' measured ripple (:data:`RIPPLE_BAND_PCT`); ``size_regressor``: a key of
     :data:`SIZE_REGRESSORS`; ``interval_by_engine``: where the runs come from several engines, each half width is
     the largest of the pooled runs' and each engine's runs' (those with MONDRIAN_MIN_RUNS runs or more), so that
