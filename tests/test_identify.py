@@ -816,3 +816,48 @@ def test_size_bands_give_each_band_its_own_conformal_half_width():
                      CATALOGUE_BANDS_MM, True, False)
     assert band_half_width(f, "B", 0.02, CATALOGUE_BANDS_MM) == band_half_width(f, "B", 0.05, CATALOGUE_BANDS_MM) \
         == conformal_half_width(np.concatenate([scores[:10], scores[n:2 * n]]))
+
+
+@pytest.mark.long  # ten small fits: run by CI and with -m long
+def test_train_calibrates_the_bands_on_its_out_of_fold_answers_and_hands_them_out(tmp_path):
+    """``train`` on synthetic features whose first column carries log10 of the clearance (plus noise): the
+    out-of-fold answers it hands out (``out_of_fold``) re-calibrate to exactly its half widths, with a key per band
+    of ``CATALOGUE_BANDS_MM`` that holds enough runs; an answer's interval is the band's; the file records the
+    boundaries and loads back with the same intervals."""
+    from types import SimpleNamespace
+
+    from twin.identification.model import CATALOGUE_BANDS_MM, ClearanceModel, _half_widths, band_half_width, train
+
+    rng = np.random.default_rng(11)
+    nf = len(feature_names())
+    rows, owner, X = [], [], []
+    speeds = (300.0, 450.0, 600.0, 750.0)
+    for i in range(240):  # clearances 0.01-0.63 mm: the bands at 0.22 and 0.032 mm hold 20 runs and more each side
+        fault = ("B", "C", "BC", "none")[i % 4]
+        size = {j: (10 ** rng.uniform(-2.0, -0.2) if j in fault else 0.0) for j in "BC"}
+        rpm = speeds[(i // 4) % 4]
+        rows.append({"fault": fault, "clearance_b_mm": size["B"], "clearance_c_mm": size["C"], "dataset": "synthetic",
+                     "orientation": "z", "crank_hz": rpm / 60 / 3.97, "motor_rpm": rpm, "engine": "reference",
+                     "measures": {"crank_hz": rpm / 60 / 3.97, "ripple_pct": [1.0, 0.5, 0.2, 0.0], "noise_ug_rthz": 30.0}})
+        x = rng.normal(size=nf)
+        x[0] = math.log10(size["B"]) + rng.normal(0, 0.05) if size["B"] else -3.0
+        x[1] = math.log10(size["C"]) + rng.normal(0, 0.05) if size["C"] else -3.0
+        X.append(x)
+        owner.append(i)
+    ds = SimpleNamespace(info={"name": "synthetic", "identity": {"engine": "reference"}}, rate_hz=100000.0, path=tmp_path)
+    oof: dict = {}
+    m, info = train([tmp_path], interval_folds="speed", size_regressor="median",
+                    features=(np.array(X), rows, owner, [], [ds]), out_of_fold=oof)
+    assert info["interval"]["size_band_mm"] == sorted(CATALOGUE_BANDS_MM, reverse=True)
+    for j in "BC":
+        again = _half_widths(j, oof[j]["scores"], oof[j]["runs"], oof[j]["answers"], CATALOGUE_BANDS_MM, True, True)
+        assert again == {k: v for k, v in m.interval_log10.items() if k.split("_")[0] == j}
+        assert len(oof[j]["runs"]) == 120 and {f"{j}_small2", f"{j}_small3"} <= set(again) and f"{j}_small" not in again
+    m.save(tmp_path / "m.npz")
+    back = ClearanceModel.load(tmp_path / "m.npz")
+    assert back.interval_log10 == m.interval_log10
+    Xr = np.array(X[:1])  # run 0: B faulty
+    a = back.identify(Xr, {"B": True, "C": True})
+    size = a["clearance_b_if_faulty_mm"]["median"]
+    w = band_half_width(back.interval_log10, "B", size, back.trained_on["interval"]["size_band_mm"])
+    assert a["clearance_b_if_faulty_mm"]["interval_90"] == pytest.approx([size / 10 ** w, size * 10 ** w])
