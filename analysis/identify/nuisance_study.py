@@ -176,7 +176,7 @@ for _v in VARIANTS.values():
     _v[1].setdefault("size_regressor", "median")
     _v[1].setdefault("interval_by_engine", False)
     _v[1].setdefault("size_band_mm", SIZE_BAND_MM)  # one boundary, 0.2 mm (train()'s default from the fourth round
-    # on is one band per catalogue value)
+    # on is one band per group of catalogue values)
 
 
 def recalibrated(model: ClearanceModel, info: dict, oof: dict, opts: dict) -> tuple[ClearanceModel, dict]:
@@ -212,7 +212,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--work", default=str(ROOT.parent / "identify_work"))
     ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
-    ap.add_argument("--variants", default="small-b-mean-engine,catalogue-bands-all,slow-b,slow-b-bands-all,slow-b-bands")
+    ap.add_argument("--variants",
+                    default="small-b-mean-engine,catalogue-bands-all,slow-b,slow-b-bands-all,slow-b-bands")
     ap.add_argument("--save", default=None, metavar="VARIANT:PATH",
                     help="also write the model of one variant (e.g. the shipped model: slow-b-bands:twin/data/"
                          "identify_default.npz); the same train() on the same features as 'twin identify train'")
