@@ -107,7 +107,8 @@ REF_SMALL_B = "clearance_id_nuisance_ref_small_b"
 REF_SOFT = "clearance_id_nuisance_ref_soft"
 REF_SLOW_B = "clearance_id_nuisance_ref_slow_b"
 DEV = ("clearance_id_nuisance_dev", "clearance_id_nuisance_dev_out", "clearance_id_nuisance_dev_motor",
-       "clearance_id_fresh_in", "clearance_id_fresh2_in", "clearance_id_fresh3_in", "clearance_id_fresh3_out_params")
+       "clearance_id_fresh_in", "clearance_id_fresh2_in", "clearance_id_fresh3_in", "clearance_id_fresh3_out_params",
+       "clearance_id_fresh4_in", "clearance_id_fresh4_out_params")
 
 
 def cached_features(work: Path, name: str, splits: tuple[str, ...], workers: int) -> tuple:
