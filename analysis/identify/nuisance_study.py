@@ -67,7 +67,9 @@ development data since (never training data: it holds the catalogue's 0.07 mm, w
 the third round on ``clearance_id_fresh2_in``, the second fresh test's in-range part (looked at once with
 ``engines-motor2``); after the third look, ``clearance_id_fresh3_in`` and ``clearance_id_fresh3_out_params``
 (looked at once with ``small-b-mean-engine``: development data since; the fourth round was chosen on the
-in-range sets among these).
+in-range sets among these); after the fourth look, ``clearance_id_fresh4_in`` and ``clearance_id_fresh4_out_params``
+(looked at once with ``slow-b-bands``: development data for a next round; the figures in ``nuisance_dev.json`` were
+computed before they joined).
 
 Results: ``analysis/results/identify/nuisance_dev.json``.
 
