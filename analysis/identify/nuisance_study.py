@@ -83,7 +83,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import os
 import time
 from pathlib import Path
@@ -91,11 +90,10 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from twin.config import CATALOGUE_DIAMETRAL_MM
 from twin.identification.evaluate import evaluate
 from twin.identification.features import FEATURE_VERSION
-from twin.identification.model import (CATALOGUE_BANDS_MM, SIZE_BAND_MM, ClearanceModel, _half_widths, pool_features,
-                                       pooled_features, train)
+from twin.identification.model import (CATALOGUE_BANDS_MM, SIZE_BAND_MM, ClearanceModel, _half_widths, catalogue_bands,
+                                       pool_features, pooled_features, recorded_size_bands, train)
 
 ROOT = Path(__file__).resolve().parents[2]
 OUT = ROOT / "analysis" / "results" / "identify" / "nuisance_dev.json"
@@ -142,7 +140,7 @@ def cached_features(work: Path, name: str, splits: tuple[str, ...], workers: int
 
 #: a size-band boundary between every two neighbouring catalogue values [mm] (the first version of the fourth round's
 #: bands; CATALOGUE_BANDS_MM keeps those between values at least a factor 2 apart)
-ALL_MIDPOINTS_MM = tuple(round(math.sqrt(a * b), 4) for a, b in zip(CATALOGUE_DIAMETRAL_MM, CATALOGUE_DIAMETRAL_MM[1:]))
+ALL_MIDPOINTS_MM = catalogue_bands(1.0)
 #: variant: (training datasets, interval options of train())
 VARIANTS = {"base": ((TRAIN,), dict(normalized_intervals=True, size_band_mm=None, ripple_split=False)),
             "base-fixed": ((TRAIN,), dict(normalized_intervals=False, size_band_mm=None, ripple_split=False)),
@@ -186,15 +184,14 @@ def recalibrated(model: ClearanceModel, info: dict, oof: dict, opts: dict) -> tu
     """``model`` with the half widths of other interval options (``opts``: size bands, ripple split, by engine),
     calibrated on the same out-of-fold answers as :func:`train` would (the same estimators: a variant that differs
     from one already fitted only in its intervals needs no second fit)."""
+    band = opts.get("size_band_mm", SIZE_BAND_MM)
     half: dict[str, float] = {}
     for j in ("B", "C"):
-        half |= _half_widths(j, oof[j]["scores"], oof[j]["runs"], oof[j]["answers"],
-                             opts.get("size_band_mm", SIZE_BAND_MM), opts.get("ripple_split", True),
-                             opts["interval_by_engine"])
+        half |= _half_widths(j, oof[j]["scores"], oof[j]["runs"], oof[j]["answers"], band,
+                             opts.get("ripple_split", True), opts["interval_by_engine"])
     info = json.loads(json.dumps(info, default=float))
-    band = opts.get("size_band_mm", SIZE_BAND_MM)
     info["interval"] |= {"half_width_log10": half, "by_engine": opts["interval_by_engine"],
-                         "size_band_mm": band if band is None or isinstance(band, float) else sorted(band, reverse=True)}
+                         "size_band_mm": recorded_size_bands(band)}
     return ClearanceModel(model.classifier, model.size, half, trained_on=info), info
 
 

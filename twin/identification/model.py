@@ -133,13 +133,20 @@ SIZE_BAND_MM = 0.2
 #: split answers by their error rather than by the size (development: bands at 0.059 and 0.084 mm too gave 0.07 mm
 #: answers at C x2.4 and 0.1 mm ones x1.41, which missed 0.1 mm on a test-6 repeat)
 BAND_MIN_RATIO = 2.0
+
+
+def catalogue_bands(min_ratio: float) -> tuple[float, ...]:
+    """Size-band boundaries [mm] at the geometric means of neighbouring catalogue values at least ``min_ratio``
+    apart (1: one between every two), to 4 decimals."""
+    cat = CATALOGUE_DIAMETRAL_MM
+    return tuple(round(math.sqrt(lo * hi), 4) for lo, hi in zip(cat, cat[1:]) if hi / lo >= min_ratio)
+
+
 #: size bands of the intervals, one per group of catalogue values: boundaries at the geometric means of neighbouring
 #: catalogue values at least BAND_MIN_RATIO apart [mm] (0.032, 0.22, 0.71: 0.02 | 0.05-0.1 | 0.5 | 1.0 mm);
 #: ``train(size_band_mm=CATALOGUE_BANDS_MM)`` calibrates a half width for the answers of each group, where the
 #: training runs allow, so that the coverage holds value by value and not only over all answers together
-CATALOGUE_BANDS_MM = tuple(round(math.sqrt(lo * hi), 4)
-                           for lo, hi in zip(CATALOGUE_DIAMETRAL_MM, CATALOGUE_DIAMETRAL_MM[1:])
-                           if hi / lo >= BAND_MIN_RATIO)
+CATALOGUE_BANDS_MM = catalogue_bands(BAND_MIN_RATIO)
 #: recordings whose largest within-turn speed ripple (harmonics 1-4 of the crank rate, measured from the encoder)
 #: exceeds this [% of the speed] get their own conformal half widths (``"B_rippled"``, ...), where the training
 #: runs allow: a motor driving through the V-belt ripples by 10-20 % at twice the crank rate (docs/drivetrain.md),
@@ -520,6 +527,12 @@ def size_bands(size_band_mm: float | list[float] | tuple[float, ...] | None) -> 
     return sorted((float(b) for b in size_band_mm), reverse=True)
 
 
+def recorded_size_bands(size_band_mm: float | list[float] | tuple[float, ...] | None) -> float | list[float] | None:
+    """``size_band_mm`` as a model file records it (``trained_on.interval.size_band_mm``): None or one number as
+    given, several boundaries as a list, largest first."""
+    return size_band_mm if size_band_mm is None or isinstance(size_band_mm, (int, float)) else size_bands(size_band_mm)
+
+
 def _band_key(side: str, i: int) -> str:
     """Key of the half width of answers below the i-th largest size boundary on ``side`` (0: above them all), down
     to the next boundary used: ``side``, ``side_small``, ``side_small2``, ..."""
@@ -675,8 +688,7 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
         "size_regressor": size_regressor,
         "interval": {"method": "split-conformal, out of fold", "folds_by": interval_folds, "folds": n_folds,
                      "coverage": COVERAGE,
-                     "size_band_mm": (size_band_mm if size_band_mm is None or isinstance(size_band_mm, (int, float))
-                                      else size_bands(size_band_mm)),
+                     "size_band_mm": recorded_size_bands(size_band_mm),
                      "ripple_band_pct": RIPPLE_BAND_PCT if ripple_split else None,
                      "by_engine": interval_by_engine,
                      "half_width_log10": half_width,
