@@ -70,6 +70,28 @@ def test_steady_windows_skip_the_spin_up_and_need_two_revolutions():
         steady_windows(np.zeros(100_000), RATE, CPR)  # no motion at all
 
 
+def test_overlapping_windows_end_every_hop_and_hold_two_turns_each():
+    """With a hop below two turns the windows still hold exactly two turns to a count, their ends lie one hop
+    apart from the recording's end back, and they cover what the back-to-back windows cover and more; a hop of two
+    turns gives the back-to-back windows; a hop outside (0, 2] is refused in one line naming it."""
+    _, counts, _ = _synthetic(crank_hz=2.0, seconds=3.0)
+    turns = counts / CPR
+    back = steady_windows(counts, RATE, CPR)
+    assert steady_windows(counts, RATE, CPR, hop_revs=2.0).windows == back.windows
+    for hop in (1.0, 0.5, 0.3):
+        w = steady_windows(counts, RATE, CPR, hop_revs=hop)
+        ends = np.array([turns[b] for _, b in w.windows])
+        assert all(abs((turns[b] - turns[a]) - 2.0) < 2e-3 for a, b in w.windows)
+        assert np.allclose(np.diff(ends), hop, atol=2e-3)  # one hop apart (a count's rounding)
+        assert w.windows[-1] == back.windows[-1]
+        assert w.windows[0][0] <= back.windows[0][0] + 1 and len(w.windows) >= 2 * len(back.windows) - 1
+        # turns steady after the ramp: (steady turns - 2) / hop + 1 windows, whole
+        assert len(w.windows) == int(np.floor((back.revolutions - 2.0) / hop + 1e-6)) + 1
+    for bad in (0.0, -1.0, 2.5, float("nan")):
+        with pytest.raises(IdentifyError, match="hop_revs"):
+            steady_windows(counts, RATE, CPR, hop_revs=bad)
+
+
 def test_a_steady_rippled_recording_is_steady():
     """A crank turning at a steady 2 Hz whose speed ripples within each turn by 6 % at 1x and 2x and 3 % at 4x
     the crank rate (peaks 15 % off the mean): the rate over one turn is steady, the whole recording is used."""
@@ -279,7 +301,7 @@ def test_an_evaluation_pools_datasets_and_keeps_each_ones_figures(small):
     """``twin identify evaluate MODEL DS1 DS2`` (a test set and its extension): the pooled report holds
     every run of both, each run answered as alone, and the location accuracy of each dataset."""
     from twin.identification.evaluate import evaluate
-    from twin.identification.model import ClearanceModel
+    from twin.identification.model import ClearanceModel, held_out_at
 
     d, model = small
     m = ClearanceModel.load(model)
@@ -291,6 +313,12 @@ def test_an_evaluation_pools_datasets_and_keeps_each_ones_figures(small):
     assert [tuple(p[k] for k in key) for p in both["predictions"] if p["dataset"] == "small-test"] == \
         [tuple(p[k] for k in key) for p in one["predictions"]]
     assert "by_dataset" not in one
+    for J in "BC":  # each run's held-out share is the model's table read at its speed; the check bins them
+        table = m.trained_on["held_out_size_accuracy"][J]
+        runs = [p for p in one["predictions"] if p[f"true_{J.lower()}_mm"] > 0]
+        assert all(p[f"{J.lower()}_held_out"] == held_out_at(table, p["orientation"], p["crank_hz"])["share"]
+                   for p in runs)
+        assert sum(b["runs"] for b in one["by_clearance"][J]["held_out_check"]) == len(runs)
 
 
 @pytest.mark.long  # trains on the module's small dataset: run by CI and with -m long
@@ -578,6 +606,51 @@ def test_an_answer_at_C_where_the_size_is_not_resolved_says_so(tmp_path, monkeyp
     assert len(b["warnings"]) == 1 and "not resolved at 750 motor rpm with y vertical" in b["warnings"][0]
 
 
+def test_an_answer_takes_the_windows_of_its_models_hop():
+    """A recording's answer is made from the windows its model says (``answer_hop_revs``): the shipped model (none
+    recorded) cuts them back to back; the same model told to end one every half turn answers the test-6 sample from
+    as many windows as :func:`steady_windows` cuts at that hop, more, and its size is the median of its regressor's
+    answers over exactly those windows."""
+    import dataclasses
+
+    import twin.identification.model as id_model
+    from twin.commands.identify import default_model_path
+
+    m = id_model.ClearanceModel.load(default_model_path())
+    acc, counts, rate, cpr, cfg = id_model.recording_inputs(REC / "test6_synthetic.mcap")
+    a = id_model.identify_recording(m, REC / "test6_synthetic.mcap")
+    assert m.hop_revs == 2.0 and a["evidence"]["windows"] == len(steady_windows(counts, rate, cpr).windows)
+    half = dataclasses.replace(m, trained_on=m.trained_on | {"answer_hop_revs": 0.5})
+    b = id_model.identify_recording(half, REC / "test6_synthetic.mcap")
+    n = len(steady_windows(counts, rate, cpr, hop_revs=0.5).windows)
+    assert b["evidence"]["windows"] == n > a["evidence"]["windows"]
+    X, _ = features(acc, counts, rate, cpr, orientation=cfg.mechanism.orientation, hop_revs=0.5)
+    assert len(X) == n and b["clearance_c_if_faulty_mm"]["median"] == id_model.size_answer(m.size["C"], X)
+
+
+def test_an_answer_says_how_often_the_models_sizes_held_at_its_speed_and_orientation():
+    """The shipped model keeps its held-out size accuracy for both joints and the three orientations; the test-6
+    sample's answer (y vertical) reads, at each joint, the table's line between the two training speeds around its
+    crank rate; a model without the table answers None there and is otherwise unchanged."""
+    import dataclasses
+
+    import twin.identification.model as id_model
+    from twin.commands.identify import default_model_path
+
+    m = id_model.ClearanceModel.load(default_model_path())
+    table = m.trained_on["held_out_size_accuracy"]
+    assert all(set(table[j]) == {"x", "y", "z"} for j in "BC")
+    a = id_model.identify_recording(m, REC / "test6_synthetic.mcap")
+    for j in "BC":
+        held = a[f"clearance_{j.lower()}_size_held_out"]
+        assert held == id_model.held_out_at(table[j], "y", a["evidence"]["crank_hz"])
+        lo, hi = held["training_crank_hz"]
+        assert lo <= a["evidence"]["crank_hz"] <= hi and 0.0 <= held["share"] <= 1.0 and held["runs"] >= 40
+    bare = dataclasses.replace(m, trained_on={k: v for k, v in m.trained_on.items() if k != "held_out_size_accuracy"})
+    b = id_model.identify_recording(bare, REC / "test6_synthetic.mcap")
+    assert b["clearance_c_size_held_out"] is None and b["clearance_c_interval_mm"] == a["clearance_c_interval_mm"]
+
+
 def test_an_answer_at_B_below_its_map_says_so_and_takes_the_wide_interval(monkeypatch):
     """The shipped model's regressors and intervals with a classifier that answers BC, on the test-6
     sample (y vertical, 750 motor rpm, resolved at both joints by the measured maps): with B's threshold
@@ -818,6 +891,44 @@ def test_size_bands_give_each_band_its_own_conformal_half_width():
         == conformal_half_width(np.concatenate([scores[:10], scores[n:2 * n]]))
 
 
+def test_the_held_out_check_bins_runs_by_the_share_they_read_and_counts_what_held():
+    """Six runs reading held-out shares 0.5, 0.6, 0.8, 0.9, 0.95 and 1.0 with sizes within x1.5 or not: the bins
+    0-70, 70-85, 85-92 and 92-100 % (the last holding 1.0) hold 2, 1, 1 and 2 runs with their mean share and the
+    share within x1.5; runs without a share (a model without the table) are left out."""
+    from twin.identification.evaluate import held_out_check
+
+    runs = [{"c_held_out": h, "c_mm": a, "true_c_mm": 0.1} for h, a in
+            ((0.5, 0.2), (0.6, 0.1), (0.8, 0.14), (0.9, 0.06), (0.95, 0.1), (1.0, 0.149))]
+    runs.append({"c_held_out": None, "c_mm": 0.1, "true_c_mm": 0.1})
+    check = held_out_check(runs, "c")
+    assert [b["runs"] for b in check] == [2, 1, 1, 2]
+    assert [b["mean_held_out"] for b in check] == pytest.approx([0.55, 0.8, 0.9, 0.975])
+    assert [b["within_factor_1_5"] for b in check] == [0.5, 1.0, 0.0, 1.0]
+    assert held_out_check([{"b_held_out": None, "b_mm": 1, "true_b_mm": 1}], "b") == []
+
+
+def test_held_out_accuracy_is_the_share_within_the_factor_per_speed_and_reads_between_speeds():
+    """Out-of-fold scores of runs at two speeds with y vertical and one with z: per orientation and speed the share
+    of scores within log10(1.5) and the runs; a recording between two speeds reads the line between their shares,
+    one beyond them the nearest speed's, an orientation without runs nothing."""
+    from twin.identification.model import held_out_accuracy, held_out_at
+
+    lim = math.log10(1.5)
+    rows = ([{"orientation": "y", "crank_hz": 1.00 + 0.002 * i, "motor_rpm": 240.0} for i in range(4)]
+            + [{"orientation": "y", "crank_hz": 3.00, "motor_rpm": 715.0}] * 5
+            + [{"orientation": "z", "crank_hz": 2.0, "motor_rpm": 476.0}] * 2)
+    scores = np.array([0.5 * lim, 2 * lim, lim, 3 * lim] + [0.1] * 4 + [1.0] + [0.0, 0.9])
+    t = held_out_accuracy(scores, rows)
+    assert t == {"y": {"crank_hz": [1.003, 3.0], "within": [0.5, 0.8], "runs": [4, 5]},
+                 "z": {"crank_hz": [2.0], "within": [0.5], "runs": [2]}}
+    mid = held_out_at(t, "y", 2.0015)  # halfway between the two speeds
+    assert mid["share"] == pytest.approx(0.65, abs=1e-3) and mid["runs"] == 9
+    assert mid["training_crank_hz"] == [1.003, 3.0]
+    assert held_out_at(t, "y", 0.5)["share"] == 0.5 and held_out_at(t, "y", 9.0)["share"] == 0.8
+    assert held_out_at(t, "z", 1.0)["runs"] == 2 and held_out_at(t, "x", 2.0) is None
+    assert held_out_at(None, "y", 2) is None
+
+
 @pytest.mark.long  # ten small fits: run by CI and with -m long
 def test_train_calibrates_the_bands_on_its_out_of_fold_answers_and_hands_them_out(tmp_path):
     """``train`` on synthetic features whose first column carries log10 of the clearance (plus noise): the
@@ -853,9 +964,18 @@ def test_train_calibrates_the_bands_on_its_out_of_fold_answers_and_hands_them_ou
         again = _half_widths(j, oof[j]["scores"], oof[j]["runs"], oof[j]["answers"], CATALOGUE_BANDS_MM, True, True)
         assert again == {k: v for k, v in m.interval_log10.items() if k.split("_")[0] == j}
         assert len(oof[j]["runs"]) == 120 and {f"{j}_small2", f"{j}_small3"} <= set(again) and f"{j}_small" not in again
+    for j in "BC":  # the held-out size accuracy: per training speed, the share of answers within x1.5 of the truth
+        truth = np.array([r[f"clearance_{j.lower()}_mm"] for r in oof[j]["runs"]])
+        ok = np.abs(np.log10(oof[j]["answers"]) - np.log10(truth)) <= math.log10(1.5)
+        rpm = np.array([r["motor_rpm"] for r in oof[j]["runs"]])
+        table = info["held_out_size_accuracy"][j]["z"]
+        assert table["crank_hz"] == pytest.approx([s / 60 / 3.97 for s in speeds], abs=1e-4)
+        assert table["within"] == pytest.approx([ok[rpm == s].mean() for s in speeds], abs=1e-4)
+        assert table["runs"] == [int((rpm == s).sum()) for s in speeds] and sum(table["runs"]) == 120
     m.save(tmp_path / "m.npz")
     back = ClearanceModel.load(tmp_path / "m.npz")
     assert back.interval_log10 == m.interval_log10
+    assert back.trained_on["held_out_size_accuracy"] == json.loads(json.dumps(info["held_out_size_accuracy"]))
     Xr = np.array(X[:1])  # run 0: B faulty
     a = back.identify(Xr, {"B": True, "C": True})
     size = a["clearance_b_if_faulty_mm"]["median"]

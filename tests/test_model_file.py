@@ -247,6 +247,29 @@ def test_the_training_ranges_and_feature_quartiles_load_back_and_malformed_ones_
         m.trained_on["interval"] = {"size_band_mm": good}
         m.save(tmp_path / "ok.npz")
         assert ClearanceModel.load(tmp_path / "ok.npz").trained_on["interval"]["size_band_mm"] == good
+    for bad in (0, -0.5, 2.5, "0.5", None):  # where an answer's windows end, in crank turns: (0, 2]
+        m.trained_on["answer_hop_revs"] = bad
+        m.save(tmp_path / "bad.npz")
+        _refused(tmp_path / "bad.npz", "answer_hop_revs")
+    for good in (0.5, 1, 2.0):
+        m.trained_on["answer_hop_revs"] = good
+        m.save(tmp_path / "ok.npz")
+        assert ClearanceModel.load(tmp_path / "ok.npz").hop_revs == good
+    good = {"y": {"crank_hz": [1.05, 2.1], "within": [0.5, 0.95], "runs": [40, 60]}}
+    for bad in ({"B": good}, {"B": good, "C": {"y": good["y"] | {"within": [0.5, 1.2]}}},
+                {"B": good, "C": {"y": good["y"] | {"crank_hz": [2.1, 1.05]}}},
+                {"B": good, "C": {"y": good["y"] | {"runs": [40]}}},
+                {"B": good, "C": {"y": good["y"] | {"runs": [0, 1]}}}):
+        m.trained_on["held_out_size_accuracy"] = bad  # the held-out size accuracy per orientation and speed
+        m.save(tmp_path / "bad.npz")
+        _refused(tmp_path / "bad.npz", "held_out_size_accuracy")
+    m.trained_on["held_out_size_accuracy"] = {"B": good, "C": good, "method": "out of fold"}
+    m.save(tmp_path / "ok.npz")
+    assert ClearanceModel.load(tmp_path / "ok.npz").trained_on["held_out_size_accuracy"]["C"] == good
+    del m.trained_on["held_out_size_accuracy"]
+    del m.trained_on["answer_hop_revs"]  # a model made before the hop was recorded: windows back to back
+    m.save(tmp_path / "ok.npz")
+    assert ClearanceModel.load(tmp_path / "ok.npz").hop_revs == 2.0
     m.trained_on["feature_reference"] = {"q25": [0.0], "q75": [1.0]}
     m.save(tmp_path / "bad.npz")
     _refused(tmp_path / "bad.npz", "feature_reference")

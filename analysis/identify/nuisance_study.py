@@ -58,7 +58,12 @@ Variants (``twin identify train --interval-folds speed`` each):
   0.084 mm lie closer than the answers' scatter (x1.4 against half widths of x1.3-1.6), gave answers near 0.07 mm
   at C x2.4 and near 0.1 mm x1.41, and missed 0.1 mm on a test-6 repeat (0.1445 mm, interval from 0.1027);
 * ``slow-b-bands``: ``slow-b`` with the bands of ``CATALOGUE_BANDS_MM`` (boundaries between catalogue values at
-  least a factor 2 apart: 0.032, 0.22, 0.71 mm): the shipped model from the fourth round on.
+  least a factor 2 apart: 0.032, 0.22, 0.71 mm): the fourth round's model;
+* ``overlap`` (fifth round; not adopted): ``slow-b-bands`` answering each recording from windows that end every
+  half turn (``train(answer_hop_revs=0.5)``) instead of back to back; the same estimators and half widths. Its
+  development figures are those of the sets whose runs are kept (features at that hop cannot be computed from a
+  cache of back-to-back windows): the others are left out of its entry. Better on the fourth fresh test's
+  in-range part, worse on ``clearance_id_nuisance_dev`` (``ANSWER_HOP_REVS`` of :mod:`twin.identification.model`).
 
 Development sets: ``clearance_id_nuisance_dev`` (in range), ``clearance_id_nuisance_dev_out`` (out of range) and,
 from the second round on, ``clearance_id_nuisance_dev_motor`` (the drive train; reference engine) and
@@ -71,7 +76,8 @@ in-range sets among these); after the fourth look, ``clearance_id_fresh4_in`` an
 (looked at once with ``slow-b-bands``: development data for a next round; the figures in ``nuisance_dev.json`` were
 computed before they joined).
 
-Results: ``analysis/results/identify/nuisance_dev.json``.
+Results: ``analysis/results/identify/nuisance_dev.json`` (each variant's figures on each development set it was
+evaluated on, with the windows' hop its answers take).
 
 Run: ``python analysis/identify/nuisance_study.py [--work DIR] [--workers N] [--variants base,ends-fixed]``
 (the datasets generated first: ``twin dataset generate analysis/datasets/clearance_id_nuisance.toml --out
@@ -91,9 +97,9 @@ from types import SimpleNamespace
 import numpy as np
 
 from twin.identification.evaluate import evaluate
-from twin.identification.features import FEATURE_VERSION
-from twin.identification.model import (CATALOGUE_BANDS_MM, SIZE_BAND_MM, ClearanceModel, _half_widths, catalogue_bands,
-                                       pool_features, pooled_features, recorded_size_bands, train)
+from twin.identification.features import FEATURE_VERSION, REVS_PER_WINDOW
+from twin.identification.model import (CATALOGUE_BANDS_MM, SIZE_BAND_MM, ClearanceModel, _half_widths,
+                                       catalogue_bands, pool_features, pooled_features, recorded_size_bands, train)
 
 ROOT = Path(__file__).resolve().parents[2]
 OUT = ROOT / "analysis" / "results" / "identify" / "nuisance_dev.json"
@@ -111,14 +117,17 @@ DEV = ("clearance_id_nuisance_dev", "clearance_id_nuisance_dev_out", "clearance_
        "clearance_id_fresh4_in", "clearance_id_fresh4_out_params")
 
 
-def cached_features(work: Path, name: str, splits: tuple[str, ...], workers: int) -> tuple:
-    """:func:`pooled_features` of ``WORK/name`` (the splits given), from the cache when it holds them."""
+def cached_features(work: Path, name: str, splits: tuple[str, ...], workers: int,
+                    hop_revs: float = REVS_PER_WINDOW) -> tuple | None:
+    """:func:`pooled_features` of ``WORK/name`` (the splits given, windows ending every ``hop_revs`` turns), from
+    the cache when it holds them; None where neither the cache nor the runs are there."""
     from twin.dataset import open as open_dataset
 
     cache = work / "features"
     cache.mkdir(exist_ok=True)
-    npz, js = cache / f"{name}.npz", cache / f"{name}.json"
-    key = {"feature_version": FEATURE_VERSION, "splits": list(splits)}
+    tag = "" if hop_revs == REVS_PER_WINDOW else f"_hop{hop_revs:g}"  # back to back: the caches made before
+    npz, js = cache / f"{name}{tag}.npz", cache / f"{name}{tag}.json"
+    key = {"feature_version": FEATURE_VERSION, "splits": list(splits)} | ({"hop_revs": hop_revs} if tag else {})
     if npz.is_file() and js.is_file():
         meta = json.loads(js.read_text())
         if meta["key"] == key:
@@ -130,11 +139,13 @@ def cached_features(work: Path, name: str, splits: tuple[str, ...], workers: int
                 ds = SimpleNamespace(path=work / name, rate_hz=float(r0["rows"]) / float(r0["duration_s"]),
                                      info={"name": r0["dataset"], "identity": {"engine": r0["engine"]}})
             return z["X"], meta["rows"], list(z["owner"]), meta["skipped"], [ds]
+    if not (work / name / "data").is_dir() or not any((work / name / "data").iterdir()):
+        return None  # neither cached at this hop nor kept (a set whose runs were deleted keeps its metadata)
     t = time.perf_counter()
-    X, rows, owner, skipped, dss = pooled_features([work / name], splits, workers)
+    X, rows, owner, skipped, dss = pooled_features([work / name], splits, workers, hop_revs)
     np.savez(npz, X=X, owner=np.asarray(owner))
     js.write_text(json.dumps({"key": key, "rows": rows, "skipped": skipped}, default=float))
-    print(f"features of {name}: {len(rows)} runs, {len(X)} windows, {time.perf_counter() - t:.0f} s", flush=True)
+    print(f"features of {name}{tag}: {len(rows)} runs, {len(X)} windows, {time.perf_counter() - t:.0f} s", flush=True)
     return X, rows, owner, skipped, dss
 
 
@@ -171,13 +182,18 @@ VARIANTS = {"base": ((TRAIN,), dict(normalized_intervals=True, size_band_mm=None
                                       size_band_mm=ALL_MIDPOINTS_MM)),
             "slow-b-bands": ((TRAIN, ENDS, REF, MOTOR, MOTOR_YZ, REF_SMALL, REF_SMALL_B, REF_SLOW_B),
                              dict(normalized_intervals=False, size_regressor="mean", interval_by_engine=True,
-                                  size_band_mm=CATALOGUE_BANDS_MM))}
+                                  size_band_mm=CATALOGUE_BANDS_MM)),
+            "overlap": ((TRAIN, ENDS, REF, MOTOR, MOTOR_YZ, REF_SMALL, REF_SMALL_B, REF_SLOW_B),
+                        dict(normalized_intervals=False, size_regressor="mean", interval_by_engine=True,
+                             size_band_mm=CATALOGUE_BANDS_MM, answer_hop_revs=0.5))}
 # the variants before keep the size regressor and the intervals they were measured with
 for _v in VARIANTS.values():
     _v[1].setdefault("size_regressor", "median")
     _v[1].setdefault("interval_by_engine", False)
     _v[1].setdefault("size_band_mm", SIZE_BAND_MM)  # one boundary, 0.2 mm (train()'s default from the fourth round
     # on is one band per group of catalogue values)
+    _v[1].setdefault("answer_hop_revs", REVS_PER_WINDOW)  # windows back to back (train()'s default from the fifth
+    # round on is ANSWER_HOP_REVS)
 
 
 def recalibrated(model: ClearanceModel, info: dict, oof: dict, opts: dict) -> tuple[ClearanceModel, dict]:
@@ -192,6 +208,7 @@ def recalibrated(model: ClearanceModel, info: dict, oof: dict, opts: dict) -> tu
     info = json.loads(json.dumps(info, default=float))
     info["interval"] |= {"half_width_log10": half, "by_engine": opts["interval_by_engine"],
                          "size_band_mm": recorded_size_bands(band)}
+    info["answer_hop_revs"] = float(opts["answer_hop_revs"])
     return ClearanceModel(model.classifier, model.size, half, trained_on=info), info
 
 
@@ -227,8 +244,16 @@ def main() -> None:
         ap.error(f"--save: VARIANT:PATH with VARIANT one of the variants run ({', '.join(wanted)}), got {args.save!r}")
     feats = {n: cached_features(work, n, ("train", "val"), args.workers)
              for n in dict.fromkeys(n for v in wanted for n in VARIANTS[v][0])}
-    dev = {d: cached_features(work, d, ("train", "val", "test"), args.workers) for d in DEV
-           if (work / d).is_dir() or (work / "features" / f"{d}.npz").is_file()}
+    lacking = [n for n, f in feats.items() if f is None]
+    if lacking:
+        ap.error(f"--work: {', '.join(lacking)} neither generated nor cached in {work}")
+    dev_cache: dict[tuple[str, float], tuple | None] = {}
+
+    def dev(d: str, hop: float) -> tuple | None:  # a development set's features at a hop, computed once
+        if (d, hop) not in dev_cache:
+            dev_cache[(d, hop)] = cached_features(work, d, ("train", "val", "test"), args.workers, hop)
+        return dev_cache[(d, hop)]
+
     results = json.loads(OUT.read_text()) if OUT.is_file() else {}
     results = {k: v for k, v in results.items() if k in VARIANTS}  # a variant not re-run keeps its figures
     fitted: dict[tuple, tuple] = {}  # (datasets, size regressor) -> (model, trained_on, out-of-fold answers)
@@ -247,8 +272,12 @@ def main() -> None:
             model.save(ROOT / args.save.split(":", 1)[1])
             print(f"wrote the model of {v} to {args.save.split(':', 1)[1]}", flush=True)
         results[v] = {"datasets": list(sets), "intervals": opts, "fit_seconds": time.perf_counter() - t,
-                      "interval": info["interval"]}
-        for d, f in dev.items():
+                      "interval": info["interval"], "answer_hop_revs": model.hop_revs}
+        for d in DEV:
+            f = dev(d, model.hop_revs)
+            if f is None:
+                print(v, d, f"left out: no runs kept to answer at a hop of {model.hop_revs:g} turns", flush=True)
+                continue
             rep = evaluate(model, [work / d], ("train", "val", "test"), features=f)
             results[v][d] = figures(rep) | {"refused": len(rep["runs_left_out"])}
             print(v, d, json.dumps(results[v][d], default=float), flush=True)

@@ -20,9 +20,10 @@ Steps (each is a plain ``twin`` command; a step whose output exists is skipped, 
    WORK/clearance_id_nuisance_ref_small_b WORK/clearance_id_nuisance_ref_slow_b --interval-folds speed --out
    twin/data/identify_default.npz`` (train and val splits; the intervals calibrated on answers at speeds left out,
    split by the size-resolution map, by the measured ripple and by the answer's size, one band per group of
-   catalogue values, each the largest over the engines). The same ``train()`` on the same features is the development
-   study's variant ``slow-b-bands`` (``analysis/identify/nuisance_study.py --save
-   slow-b-bands:twin/data/identify_default.npz``, which reuses the features it keeps);
+   catalogue values, each the largest over the engines; with the held-out size accuracy per orientation and
+   training speed). The same ``train()`` on the same features is the development study's variant ``slow-b-bands``
+   (``analysis/identify/nuisance_study.py --save slow-b-bands:twin/data/identify_default.npz``, which reuses the
+   features it keeps);
 3. the development sets ``clearance_id_nuisance_dev.toml``, ``clearance_id_nuisance_dev_out.toml`` and
    ``clearance_id_nuisance_dev_motor.toml`` (reference engine), evaluated into ``analysis/results/identify/dev``,
    ``dev_out`` and ``dev_motor`` (every choice of the model was made on these:

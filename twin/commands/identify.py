@@ -161,8 +161,11 @@ def _clearance(args: argparse.Namespace) -> int:
     for j in ("b", "c"):
         lo, hi = a[f"clearance_{j}_interval_mm"]
         v = a[f"clearance_{j}_mm"]
+        held = a.get(f"clearance_{j}_size_held_out")
         print(f"  clearance {j.upper()}: " + (f"{v:.3g} mm (90 % interval {lo:.3g}-{hi:.3g} mm)" if v > 0
-                                                else "none (ball bearing)"))
+                                                else "none (ball bearing)")
+              + (f"; at this speed and orientation the model's sizes held within x{held['within_factor']:g} in "
+                 f"{held['share'] * 100:.0f} % of {held['runs']} training runs left out" if v > 0 and held else ""))
     ev = a["evidence"]
     lo_hz, hi_hz = ev["model"]["crank_hz_range"]
     print(f"  evidence: {ev['windows']} window{'s' if ev['windows'] != 1 else ''}, {ev['revolutions']} crank revolutions, {ev['steady_s']:.2f} s of "

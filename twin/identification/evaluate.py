@@ -18,8 +18,8 @@ from typing import Any
 import numpy as np
 
 from twin.config import CATALOGUE_DIAMETRAL_MM
-from twin.identification.model import (CLASSES, SIZE_RESOLVED_FROM_RPM, ClearanceModel, pooled_features, resolution,
-                                       training_check)
+from twin.identification.model import (CLASSES, SIZE_RESOLVED_FROM_RPM, ClearanceModel, held_out_at, pooled_features,
+                                       resolution, training_check)
 
 
 def half_gap_mm(c: float) -> float:
@@ -44,15 +44,19 @@ def evaluate(model: ClearanceModel, dataset_dir: str | Path | list[str | Path], 
              workers: int = 1, features: tuple | None = None) -> dict[str, Any]:
     """The report of ``model`` on the runs of ``splits`` of one dataset, or of several pooled (one
     sample rate and encoder resolution; e.g. a test set and its extension by another seed),
-    with the location accuracy of each beside the pooled figures. ``features``: what
-    :func:`twin.identification.model.pooled_features` returns for them, computed before."""
+    with the location accuracy of each beside the pooled figures; each run answered from the windows a
+    recording's answer takes (``model.hop_revs``). ``features``: what
+    :func:`twin.identification.model.pooled_features` returns for them with that hop, computed before."""
     t0 = time.perf_counter()
     dirs = [dataset_dir] if isinstance(dataset_dir, (str, Path)) else list(dataset_dir)
-    X, rows, owner, skipped, dss = features if features is not None else pooled_features(dirs, splits, workers)
+    X, rows, owner, skipped, dss = features if features is not None else \
+        pooled_features(dirs, splits, workers, model.hop_revs)
     owner = np.asarray(owner)
     preds = []
+    table = model.trained_on.get("held_out_size_accuracy") or {}
     for i, r in enumerate(rows):
         resolved = resolution(r["orientation"], r["crank_hz"])
+        held = {j: held_out_at(table.get(j), r["orientation"], r["crank_hz"]) for j in ("B", "C")}
         a = model.identify(X[owner == i], resolved, r["measures"]["ripple_pct"])
         # the checks against the training data, as a recording's answer makes them (intervals widened outside)
         warned, _ = training_check(model, a, r["measures"], r["orientation"], X[owner == i])
@@ -62,6 +66,8 @@ def evaluate(model: ClearanceModel, dataset_dir: str | Path | list[str | Path], 
                       "c_mm": a["clearance_c_if_faulty_mm"]["median"], "c_int": a["clearance_c_if_faulty_mm"]["interval_90"],
                       "crank_hz": r["crank_hz"], "motor_rpm": r.get("motor_rpm"), "orientation": r["orientation"],
                       "b_resolved": resolved["B"], "c_resolved": resolved["C"], "dataset": r["dataset"],
+                      "b_held_out": held["B"]["share"] if held["B"] else None,
+                      "c_held_out": held["C"]["share"] if held["C"] else None,
                       "probabilities": a["probabilities"]})
     t_pred = time.perf_counter() - t0
     y = [p["true_fault"] for p in preds]
@@ -89,7 +95,8 @@ def evaluate(model: ClearanceModel, dataset_dir: str | Path | list[str | Path], 
         cover_all = float(np.mean([p[f"{j}_int"][0] <= p[f"true_{j}_mm"] <= p[f"{j}_int"][1] for p in faulty])) \
             if faulty else float("nan")
         report["by_clearance"][J] = {"values": groups, "interval_coverage": cover_all, "runs": len(faulty),
-                                     "by_speed": size_by_speed(faulty, j), "resolved": size_where_resolved(preds, j)}
+                                     "by_speed": size_by_speed(faulty, j), "resolved": size_where_resolved(preds, j),
+                                     "held_out_check": held_out_check(faulty, j)}
     # the healthy runs: how often a joint without clearance is called faulty, by speed
     report["false_alarms"] = {J: float(np.mean([J in p["fault"] for p in preds if p[f"true_{J.lower()}_mm"] == 0]))
                               for J in ("B", "C")}
@@ -127,6 +134,28 @@ def _size_cell(qs: list[dict[str, Any]], j: str, c: float) -> dict[str, Any]:
             "target_mm": half_gap_mm(c), "meets_target": bool(err <= half_gap_mm(c)),
             "interval_coverage": float(np.mean([q[f"{j}_int"][0] <= c <= q[f"{j}_int"][1] for q in qs])),
             "median_estimate_mm": float(np.median([q[f"{j}_mm"] for q in qs]))}
+
+
+#: bins of the held-out share an answer reads, for :func:`held_out_check`
+HELD_OUT_BINS = (0.0, 0.7, 0.85, 0.92, 1.0)
+
+
+def held_out_check(faulty: list[dict[str, Any]], j: str) -> list[dict[str, Any]]:
+    """Whether the held-out shares the answers read (``clearance_*_size_held_out``) say how often their sizes hold:
+    the runs with a clearance at ``j`` ("b" or "c") binned by that share (:data:`HELD_OUT_BINS`), each bin's
+    mean share beside the share of its runs whose size lies within a factor 1.5 of the truth. Empty where the
+    model holds no held-out table."""
+    runs = [p for p in faulty if p.get(f"{j}_held_out") is not None]
+    out = []
+    for k, (lo, hi) in enumerate(zip(HELD_OUT_BINS, HELD_OUT_BINS[1:])):
+        last = k == len(HELD_OUT_BINS) - 2
+        ps = [p for p in runs if lo <= p[f"{j}_held_out"] < hi or (last and p[f"{j}_held_out"] == hi)]
+        if ps:
+            out.append({"held_out_from": lo, "held_out_to": hi, "runs": len(ps),
+                        "mean_held_out": float(np.mean([p[f"{j}_held_out"] for p in ps])),
+                        "within_factor_1_5": float(np.mean([within_factor(p[f"{j}_mm"], p[f"true_{j}_mm"])
+                                                            for p in ps]))})
+    return out
 
 
 def size_by_speed(faulty: list[dict[str, Any]], j: str) -> dict[str, dict[str, dict[str, Any]]]:
@@ -268,6 +297,18 @@ def render_markdown(r: dict[str, Any]) -> str:
             lines.append(f"| {c} | {v['runs']} | {v['median_estimate_mm']:.3g} | {_err_ci(v)} | "
                          f"{v['target_mm']:.3g} | {_meets(v)} | {v['within_factor_1_5'] * 100:.0f} % | "
                          f"{v['interval_coverage'] * 100:.0f} % |")
+    for J, g in r["by_clearance"].items():
+        check = g.get("held_out_check")
+        if not check:
+            continue
+        lines += ["", f"## Size at {J}: the held-out share the answers read against what happened", "",
+                  "Each answer reads how often the model's sizes held at its speed and orientation in training runs "
+                  "left out (`clearance_*_size_held_out`); here the runs with a clearance at the joint, binned by "
+                  "that share, and the share of them whose size lies within a factor 1.5 of the truth.", "",
+                  "| held-out share read | runs | mean share read | within ×1.5 here |", "|---|---|---|---|"]
+        for b in check:
+            lines.append(f"| {b['held_out_from'] * 100:.0f}–{b['held_out_to'] * 100:.0f} % | {b['runs']} | "
+                         f"{b['mean_held_out'] * 100:.0f} % | {b['within_factor_1_5'] * 100:.0f} % |")
     lines += ["", "Bootstrap intervals: 90 % percentile intervals of each median over resampled runs; a * marks a "
                   "cell whose interval holds the target (the runs do not settle it either way)."]
     lines += ["", f"False alarms on healthy joints: B {r['false_alarms']['B'] * 100:.1f} %, "

@@ -124,7 +124,7 @@ MAX_SPEED_TOL = 0.30
 
 
 def steady_windows(counts: np.ndarray, rate_hz: float, counts_per_rev: float, skip_s: float = 0.0,
-                   speed_tol: float = SPEED_TOL) -> Windows:
+                   speed_tol: float = SPEED_TOL, hop_revs: float = REVS_PER_WINDOW) -> Windows:
     """Windows of exactly REVS_PER_WINDOW crank turns in the recording's steady part.
 
     The crank rate is the encoder's turns over 50 ms; the steady part is the longest stretch, after
@@ -133,8 +133,11 @@ def steady_windows(counts: np.ndarray, rate_hz: float, counts_per_rev: float, sk
     last half's own spread (95th percentile of the rate's deviation) plus :data:`RIPPLE_ALLOWANCE`, at
     most :data:`MAX_SPEED_TOL`. Windows are cut back to back from the end of that
     stretch (the most settled part), at any crank angle: order amplitudes do not depend on where a
-    revolution starts. At least REVS_PER_WINDOW steady turns are needed.
+    revolution starts; with ``hop_revs`` below REVS_PER_WINDOW [turns] each window ends that many turns before
+    the next one ends (overlapping windows). At least REVS_PER_WINDOW steady turns are needed.
     """
+    if not 0.0 < hop_revs <= REVS_PER_WINDOW:
+        raise IdentifyError(f"hop_revs: {hop_revs!r}; allowed: 0 < hop_revs <= {REVS_PER_WINDOW}")
     c = np.asarray(counts, dtype=np.float64)
     if c.size < 4 or not np.all(np.isfinite(c)):
         raise IdentifyError("the encoder counts are missing, too short or not finite")
@@ -177,7 +180,12 @@ def steady_windows(counts: np.ndarray, rate_hz: float, counts_per_rev: float, sk
         if k < 0:
             break
         wins.append((start + a + k, start + a + stop))
-        stop = k
+        # the next window ends hop_revs earlier (back to back: where this one starts)
+        nxt = k if hop_revs >= REVS_PER_WINDOW else \
+            int(np.searchsorted(run_min[:stop + 1], pos[stop] - hop_revs, side="right")) - 1
+        if not 0 <= nxt < stop:
+            break
+        stop = nxt
     wins.reverse()
     # the windows' mean rate: whole turns over their duration (the median of a rippled 50 ms rate is not
     # its mean; the steady part's edges may hold the end of a spin-up)
@@ -277,14 +285,16 @@ def _events(y: np.ndarray, threshold: float, gap: int) -> np.ndarray:
 
 
 def features(acc: dict[str, np.ndarray], counts: np.ndarray, rate_hz: float, counts_per_rev: float,
-             skip_s: float = 0.0, orientation: str = "y") -> tuple[np.ndarray, Windows]:
-    """Feature matrix [windows, features] of a recording and its windows (see module docstring)."""
+             skip_s: float = 0.0, orientation: str = "y", hop_revs: float = REVS_PER_WINDOW
+             ) -> tuple[np.ndarray, Windows]:
+    """Feature matrix [windows, features] of a recording and its windows (see module docstring; ``hop_revs``:
+    :func:`steady_windows`)."""
     from scipy.signal import butter
 
     missing = [s for s in SENSORS if s not in acc]
     if missing:
         raise IdentifyError(f"calibrated accelerations missing for {', '.join(missing)}")
-    w = steady_windows(counts, rate_hz, counts_per_rev, skip_s)
+    w = steady_windows(counts, rate_hz, counts_per_rev, skip_s, hop_revs=hop_revs)
     if not w.windows:
         raise IdentifyError("too little steady motion for one window")
     sos = butter(4, HIGHPASS_HZ, btype="highpass", fs=rate_hz, output="sos")

@@ -46,6 +46,12 @@
   default: a recording of one or two windows has no measurable spread, and on the development sets (reference
   engine, fewer windows than the training runs) they covered the truth less often than the fixed widths
   (``analysis/identify/nuisance_study.py``).
+* **Held-out size accuracy** (:func:`held_out_accuracy`, ``trained_on["held_out_size_accuracy"]``): the out-of-fold
+  answers the intervals are calibrated on also give, per joint, orientation and training speed, the share within a
+  factor 1.5 of the truth; an answer reads its own speed's (:func:`held_out_at`: ``clearance_b_size_held_out``,
+  ``clearance_c_size_held_out``), so that a size at a speed where the model's answers often miss says so.
+* **Windows of an answer**: back to back, as the estimators learn from them, unless the model records another hop
+  (``trained_on["answer_hop_revs"]``, :data:`ANSWER_HOP_REVS`).
 * **Outside the training data** (:mod:`twin.identification.ranges`): an answer checks the recording's crank
   rate, within-turn speed ripple (from the encoder), noise level, orientation and, where the model stores the
   training features' quartiles, its distance in feature space, against the training runs' ranges; each reason
@@ -67,7 +73,8 @@ from the file, and answering needs no scikit-learn. Members:
   twin, scikit-learn and numpy of the training; ``ranges``: the training runs' ranges of crank rate,
   within-turn ripple per harmonic, noise level and orientations, with their ``source``; ``feature_reference``:
   the training windows' feature quartiles, or null where unknown; ``interval.normalized``: the normalized
-  conformal scale per joint, where trained; see below), and ``estimators``: per estimator (``classifier``,
+  conformal scale per joint, where trained; ``held_out_size_accuracy`` and ``answer_hop_revs``, where recorded;
+  see below), and ``estimators``: per estimator (``classifier``,
   ``size_B``, ``size_C``) its kind (link: ``softmax`` for the classifier, ``identity`` for the size
   regressors), number of features, trees per iteration, classes and source
   (:meth:`twin.identification.trees.TreeEnsemble.meta`);
@@ -154,6 +161,15 @@ CATALOGUE_BANDS_MM = catalogue_bands(BAND_MIN_RATIO)
 #: calibrated on all runs together held 29-67 % of the drive train's B sizes). 4.5 % lies above the PID-driven
 #: training runs' imposed 0-4 %
 RIPPLE_BAND_PCT = 4.5
+#: an answer's windows end every this many crank turns [turns] (recorded in the model as
+#: ``trained_on["answer_hop_revs"]``; models without it: back to back). The regressors learn from windows cut back to
+#: back; a window starting anywhere is one of the same kind, so a model may answer from overlapping windows
+#: (``train(answer_hop_revs=0.5)``: windows ending every half turn, four where a 3 s recording at 340 motor rpm
+#: holds one). Tried in the fifth round and not adopted: on the fourth fresh test's in-range part B within x1.5
+#: 88.7 -> 90.1 %, C 91.7 -> 92.6 %, but on ``clearance_id_nuisance_dev`` B 87.1 -> 85.7 %, C 95.2 -> 93.7 %
+#: (``analysis/identify/nuisance_study.py --variants overlap``): a short recording's size error is a bias of its
+#: scene (contact parameters, ripple), which more windows over the same turns do not average out
+ANSWER_HOP_REVS = float(REVS_PER_WINDOW)
 MODEL_FORMAT = "twin-identify-model/4"
 #: floor of the normalized intervals' difficulty offset beta [log10] (runs of one window have no spread)
 SPREAD_FLOOR_LOG10 = 0.01
@@ -212,6 +228,10 @@ class ClearanceModel:
             if sb is not None and not all(isinstance(b, (int, float)) and math.isfinite(b) and b > 0
                                           for b in ([sb] if isinstance(sb, (int, float)) else sb)):
                 raise ValueError("interval.size_band_mm malformed")
+            _check_held_out(trained_on.get("held_out_size_accuracy"))
+            hop = trained_on.get("answer_hop_revs", REVS_PER_WINDOW)
+            if not (isinstance(hop, (int, float)) and 0 < hop <= REVS_PER_WINDOW):
+                raise ValueError(f"answer_hop_revs must lie in (0, {REVS_PER_WINDOW}]")
             rb = trained_on.get("interval", {}).get("ripple_band_pct")
             if rb is not None and not (isinstance(rb, (int, float)) and math.isfinite(rb) and rb > 0):
                 raise ValueError("interval.ripple_band_pct malformed")
@@ -231,6 +251,11 @@ class ClearanceModel:
                              f"{len(names)} features and classes {', '.join(CLASSES)})")
         return ClearanceModel(est["classifier"], {"B": est["size_B"], "C": est["size_C"]}, half,
                               feature_version=version, feature_names=names, trained_on=trained_on)
+
+    @property
+    def hop_revs(self) -> float:
+        """Where an answer's windows end, every this many crank turns [turns] (:data:`ANSWER_HOP_REVS`)."""
+        return float(self.trained_on.get("answer_hop_revs", REVS_PER_WINDOW))
 
     # ------------------------------------------------------------- predict
     def identify(self, X: np.ndarray, resolved: dict[str, bool], ripple_pct: list[float] | None = None
@@ -282,6 +307,23 @@ def _check_ranges(ranges: Any, ref: Any, n_features: int) -> None:
     if ref is not None and ref.get("max_outliers") is not None and not (
             isinstance(ref["max_outliers"], int) and 0 <= ref["max_outliers"] <= n_features):
         raise ValueError("feature_reference.max_outliers malformed")
+
+
+def _check_held_out(table: Any) -> None:
+    """Raise ValueError unless ``table`` (None, or :func:`train`'s ``held_out_size_accuracy``) is well formed."""
+    if table is None:
+        return
+    if not (isinstance(table, dict) and {"B", "C"} <= set(table)):
+        raise ValueError("held_out_size_accuracy malformed: needs a table for each of B and C")
+    for j in ("B", "C"):
+        for o, e in table[j].items():
+            hz, within, runs = e["crank_hz"], e["within"], e["runs"]
+            if not (isinstance(o, str) and len(hz) == len(within) == len(runs) > 0
+                    and all(isinstance(h, (int, float)) and math.isfinite(h) and h > 0 for h in hz)
+                    and all(a < b for a, b in zip(hz, hz[1:]))
+                    and all(isinstance(x, (int, float)) and 0 <= x <= 1 for x in within)
+                    and all(isinstance(n, int) and n > 0 for n in runs)):
+                raise ValueError(f"held_out_size_accuracy.{j}.{o} malformed")
 
 
 def size_resolved(joint: str, orientation: str, crank_hz: float) -> bool:
@@ -341,9 +383,10 @@ def conformal_half_width(scores: np.ndarray, coverage: float = COVERAGE) -> floa
 
 
 # ------------------------------------------------------------------ training data
-def run_features(path: str, skip_s: float, counts_per_rev: float, orientation: str = "y"
-                 ) -> tuple[np.ndarray, float, dict[str, Any]] | str:
-    """Window features of one dataset run file, its crank rate [Hz] and its measures
+def run_features(path: str, skip_s: float, counts_per_rev: float, orientation: str = "y",
+                 hop_revs: float = REVS_PER_WINDOW) -> tuple[np.ndarray, float, dict[str, Any]] | str:
+    """Window features of one dataset run file (windows ending every ``hop_revs`` turns:
+    :func:`twin.identification.features.steady_windows`), its crank rate [Hz] and its measures
     (:func:`twin.identification.ranges.recording_measures`), or the reason it has none."""
     from twin.identification.ranges import recording_measures
 
@@ -353,16 +396,17 @@ def run_features(path: str, skip_s: float, counts_per_rev: float, orientation: s
     cols = read_columns(path, [f"meas_{s}" for s in ("AC1", "AC2", "AC3", "AC4", "AC5", "AC6")] + ["encoder_counts"])
     acc = {k[5:]: v for k, v in cols.items() if k.startswith("meas_")}
     try:
-        X, w = features(acc, cols["encoder_counts"], float(meta["rate_hz"]), counts_per_rev, skip_s, orientation)
+        X, w = features(acc, cols["encoder_counts"], float(meta["rate_hz"]), counts_per_rev, skip_s, orientation,
+                        hop_revs=hop_revs)
     except IdentifyError as err:
         return str(err)
     return X, w.crank_hz, recording_measures(acc, cols["encoder_counts"], float(meta["rate_hz"]), counts_per_rev, w)
 
 
-def dataset_features(ds, splits: tuple[str, ...], workers: int = 1
+def dataset_features(ds, splits: tuple[str, ...], workers: int = 1, hop_revs: float = REVS_PER_WINDOW
                      ) -> tuple[np.ndarray, list[dict[str, Any]], list[int], list[dict[str, Any]]]:
-    """Features of every ok run of ``splits``: (X [windows, features], run rows, window -> row index,
-    runs left out with their reason)."""
+    """Features of every ok run of ``splits`` (windows ending every ``hop_revs`` turns): (X [windows, features],
+    run rows, window -> row index, runs left out with their reason)."""
     needed = [f"meas_AC{i}" for i in range(1, 7)] + ["encoder_counts"]
     missing = [c for c in needed if c not in ds.channels]
     if missing:
@@ -380,9 +424,9 @@ def dataset_features(ds, splits: tuple[str, ...], workers: int = 1
 
         with ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("spawn")) as ex:
             results = list(ex.map(run_features, paths, [0.0] * len(paths), [cpr] * len(paths),
-                                  [r["orientation"] for r in rows], chunksize=4))
+                                  [r["orientation"] for r in rows], [hop_revs] * len(paths), chunksize=4))
     else:
-        results = [run_features(p, 0.0, cpr, r["orientation"]) for p, r in zip(paths, rows)]
+        results = [run_features(p, 0.0, cpr, r["orientation"], hop_revs) for p, r in zip(paths, rows)]
     X, kept, owner, skipped = [], [], [], []
     for r, res in zip(rows, results):
         if isinstance(res, str):
@@ -398,9 +442,11 @@ def dataset_features(ds, splits: tuple[str, ...], workers: int = 1
     return np.concatenate(X), kept, owner, skipped
 
 
-def pooled_features(dataset_dirs: list[str | Path], splits: tuple[str, ...], workers: int
-                     ) -> tuple[np.ndarray, list[dict[str, Any]], list[int], list[dict[str, Any]], list[Any]]:
-    """Features of several datasets pooled (runs keep their rows, with the dataset's name); the
+def pooled_features(dataset_dirs: list[str | Path], splits: tuple[str, ...], workers: int,
+                    hop_revs: float = REVS_PER_WINDOW
+                    ) -> tuple[np.ndarray, list[dict[str, Any]], list[int], list[dict[str, Any]], list[Any]]:
+    """Features of several datasets pooled (runs keep their rows, with the dataset's name; windows ending every
+    ``hop_revs`` turns, :func:`twin.identification.features.steady_windows`); the
     datasets must agree on sample rate and encoder resolution (checked before any feature is computed).
     They may come from different engines: the engines' contact laws differ as a bench's differs from both,
     and a model trained on both spans that difference as one more nuisance."""
@@ -410,7 +456,7 @@ def pooled_features(dataset_dirs: list[str | Path], splits: tuple[str, ...], wor
     _check_poolable(dss)
     parts = []
     for ds in dss:
-        X, r, o, sk = dataset_features(ds, splits, workers)
+        X, r, o, sk = dataset_features(ds, splits, workers, hop_revs)
         parts.append((X, [dict(x, dataset=ds.info["name"]) for x in r], o, sk, [ds]))
     return pool_features(parts)
 
@@ -572,12 +618,56 @@ def _half_widths(j: str, scores: np.ndarray, held_runs: list[dict[str, Any]], an
     return half
 
 
+#: the factor of the truth within which an out-of-fold answer counts in the held-out size accuracy (the targets')
+HELD_OUT_FACTOR = 1.5
+
+
+def held_out_accuracy(scores: np.ndarray, held_runs: list[dict[str, Any]]) -> dict[str, dict[str, list]]:
+    """The held-out size accuracy of one joint from its out-of-fold scores (:func:`train`): per orientation, at
+    each training speed (the runs' motor speed; placed at the median of their crank rates [Hz]), the share of the
+    runs whose answer lies within a factor :data:`HELD_OUT_FACTOR` of the truth and the number of runs. With
+    ``interval_folds="speed"`` each answer was made by a regressor that never saw that speed, as a bench
+    recording's may be."""
+    lim = math.log10(HELD_OUT_FACTOR) + 1e-12
+    groups: dict[tuple[str, float], list[tuple[float, bool]]] = {}
+    for score, row in zip(np.asarray(scores, float), held_runs):
+        hz = float(row["crank_hz"])
+        rpm = row.get("motor_rpm")
+        key = (str(row["orientation"]), float(rpm) if rpm is not None else round(hz, 2))
+        groups.setdefault(key, []).append((hz, bool(score <= lim)))
+    at: dict[str, dict[float, list[bool]]] = {}  # orientation -> crank rate of a speed -> its runs' outcomes
+    for (o, _), v in groups.items():
+        at.setdefault(o, {}).setdefault(round(float(np.median([h for h, _ in v])), 4), []).extend(ok for _, ok in v)
+    return {o: {"crank_hz": sorted(by), "within": [round(float(np.mean(by[h])), 4) for h in sorted(by)],
+                "runs": [len(by[h]) for h in sorted(by)]} for o, by in sorted(at.items())}
+
+
+def held_out_at(table: dict[str, Any] | None, orientation: str, crank_hz: float) -> dict[str, Any] | None:
+    """What the held-out size accuracy (:func:`held_out_accuracy`) says of a recording at ``crank_hz`` [Hz] with
+    ``orientation`` vertical: the share within the factor, interpolated linearly in the crank rate between the two
+    training speeds around it (the nearest one outside them), the runs behind it and the training speeds' crank
+    rates used; None where the model holds no table or no run of that orientation."""
+    e = (table or {}).get(orientation)
+    if not e or not e["crank_hz"]:
+        return None
+    hz, within, runs = (np.asarray(e[k], float) for k in ("crank_hz", "within", "runs"))
+    k = int(np.searchsorted(hz, crank_hz))
+    if k == 0 or k == len(hz):
+        i = 0 if k == 0 else len(hz) - 1
+        share, n, used = within[i], runs[i], [hz[i]]
+    else:
+        t = (crank_hz - hz[k - 1]) / (hz[k] - hz[k - 1])
+        share, n, used = (1 - t) * within[k - 1] + t * within[k], runs[k - 1] + runs[k], [hz[k - 1], hz[k]]
+    return {"within_factor": HELD_OUT_FACTOR, "share": round(float(share), 3), "runs": int(n),
+            "training_crank_hz": [float(h) for h in used]}
+
+
 def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = ("train", "val"), workers: int = 1,
           seed: int = 0, interval_folds: str = "runs", location_only: list[str | Path] = (),
           features: tuple | None = None, normalized_intervals: bool = False,
           size_band_mm: float | list[float] | tuple[float, ...] | None = CATALOGUE_BANDS_MM, ripple_split: bool = True,
-          size_regressor: str = "mean", interval_by_engine: bool = True, out_of_fold: dict[str, Any] | None = None
-          ) -> tuple[ClearanceModel, dict[str, Any]]:
+          size_regressor: str = "mean", interval_by_engine: bool = True, out_of_fold: dict[str, Any] | None = None,
+          answer_hop_revs: float = ANSWER_HOP_REVS) -> tuple[ClearanceModel, dict[str, Any]]:
     """Train on the ok runs of ``splits`` of one dataset or several pooled (see module docstring);
     ``interval_folds`` groups the out-of-fold scores of the intervals (:func:`_conformal_folds`);
     the runs of the ``location_only`` datasets (pooled like the others) teach the location model
@@ -594,9 +684,13 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
     the largest of the pooled runs' and each engine's runs' (those with MONDRIAN_MIN_RUNS runs or more), so that
     it holds for each contact law alone. ``out_of_fold``: a dict that receives, per joint, the out-of-fold
     ``scores``, ``runs`` (rows) and ``answers`` the half widths are calibrated on (a study that compares interval
-    options re-calibrates from them with :func:`_half_widths` without fitting again)."""
+    options re-calibrates from them with :func:`_half_widths` without fitting again). ``answer_hop_revs``: where a
+    recording's answer windows end (:data:`ANSWER_HOP_REVS`); the estimators learn, and the out-of-fold answers are
+    made, from the training runs' windows cut back to back (``features``)."""
     if interval_folds not in INTERVAL_FOLDS:
         raise ModelError(f"interval_folds: {interval_folds!r}; allowed: {', '.join(INTERVAL_FOLDS)}")
+    if not 0 < answer_hop_revs <= REVS_PER_WINDOW:
+        raise ModelError(f"answer_hop_revs: {answer_hop_revs!r}; allowed: 0 < answer_hop_revs <= {REVS_PER_WINDOW}")
     if size_regressor not in SIZE_REGRESSORS:
         raise ModelError(f"size_regressor: {size_regressor!r}; allowed: {', '.join(SIZE_REGRESSORS)}")
     from sklearn.ensemble import HistGradientBoostingClassifier, HistGradientBoostingRegressor
@@ -622,6 +716,7 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
     classifier = from_sklearn(clf, check=X)  # what the file holds: answers equal bit for bit, checked
     size: dict[str, Any] = {}
     half_width: dict[str, float] = {}
+    held_out: dict[str, Any] = {}
     normalized: dict[str, dict[str, float]] = {}
     n_folds: dict[str, int] = {}
     owner_a = np.asarray(owner)
@@ -661,6 +756,7 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
         if normalized_intervals:
             normalized[j] = normalized_scale(scores, spread)
         half_width |= _half_widths(j, scores, held_runs, answers, size_band_mm, ripple_split, interval_by_engine)
+        held_out[j] = held_out_accuracy(scores, held_runs)
         if normalized_intervals:
             for key, m in _interval_parts(j, held_runs, answers, size_band_mm, ripple_split)[1].items():
                 normalized[key] = normalized_scale(scores[m], spread[m], normalized[j]["beta"])
@@ -686,6 +782,10 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
         "classes": {c: int(np.sum(y == c)) for c in CLASSES},
         "versions": {"twin": __version__, "sklearn": sklearn.__version__, "numpy": np.__version__},
         "size_regressor": size_regressor,
+        "answer_hop_revs": float(answer_hop_revs),
+        "held_out_size_accuracy": held_out | {
+            "method": f"out-of-fold answers of the training runs (folds by {interval_folds}), per orientation and "
+                      f"training speed: the share within a factor {HELD_OUT_FACTOR:g} of the truth"},
         "interval": {"method": "split-conformal, out of fold", "folds_by": interval_folds, "folds": n_folds,
                      "coverage": COVERAGE,
                      "size_band_mm": recorded_size_bands(size_band_mm),
@@ -788,13 +888,16 @@ def identify_inputs(model: ClearanceModel, acc: dict[str, np.ndarray], counts: n
     tr = model.trained_on
     if abs(rate - tr["rate_hz"]) > 1e-6 * rate:
         raise ModelError(f"{source}: recorded at {rate:g} Hz, the model was trained at {tr['rate_hz']:g} Hz")
-    X, w = features(acc, counts, rate, cpr, orientation=orientation)
+    X, w = features(acc, counts, rate, cpr, orientation=orientation, hop_revs=model.hop_revs)
     resolved = resolution(orientation, w.crank_hz)
     measures = recording_measures(acc, counts, rate, cpr, w)
     ans = model.identify(X, resolved, measures["ripple_pct"])
     warnings, checks = training_check(model, ans, measures, orientation, X)
+    table = tr.get("held_out_size_accuracy") or {}
     for j in ("B", "C"):
         ans[f"clearance_{j.lower()}_size_resolved"] = resolved[j]  # which also chose the interval's width
+        # how often the model's answers at this joint, speed and orientation held in training runs left out
+        ans[f"clearance_{j.lower()}_size_held_out"] = held_out_at(table.get(j), orientation, w.crank_hz)
         if j in ans["fault"] and not resolved[j]:
             warnings.append(f"the size at {j} is not resolved at {w.crank_hz * 60 * BELT_RATIO:.0f} motor rpm with "
                             f"{orientation} vertical: the bench's sensors tell 0.05-0.1 mm at {j} apart from "
