@@ -133,10 +133,12 @@ def identify(recording: str | Path, model: str | Path | None = None) -> dict[str
     twin). Returns a dict: ``"fault"`` (``"none"``, ``"B"``, ``"C"`` or ``"BC"``),
     ``"probabilities"`` per class, ``"clearance_b_mm"`` and ``"clearance_c_mm"`` (0 for a ball
     bearing) with their 90 % ``"clearance_b_interval_mm"`` / ``"clearance_c_interval_mm"``,
-    ``"warnings"`` (e.g. a size the bench's sensors do not resolve at that speed), ``"evidence"``
+    ``"clearance_b_size_held_out"`` / ``"clearance_c_size_held_out"`` (how often the model's sizes held
+    within x1.5 at this speed and orientation in training runs left out; None for a model without that
+    table), ``"warnings"`` (e.g. a size the bench's sensors do not resolve at that speed), ``"evidence"``
     (windows, revolutions, crank rate, model) and ``"seconds"``.
 
-    The shipped model is a joblib file: load only model files you trust.
+    A model file is plain arrays and JSON: loading one runs no code from it (a pickle is refused).
     """
     from twin.commands.identify import default_model_path
     from twin.identification.model import ClearanceModel, ModelError, identify_recording

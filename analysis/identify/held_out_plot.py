@@ -7,8 +7,8 @@ its regressor never saw) and keeps, per joint, orientation and training speed, t
 factor 1.5 of the truth and the number of runs (``trained_on["held_out_size_accuracy"]``; every recording's answer
 reads its own speed's from it). This script only reads the model file: nothing is fitted or simulated. The shares
 are those of the training population (sizes spread log-uniformly over 0.0125-1.6 mm, every nuisance drawn over
-its training range, both engines, 3 s runs), not of the catalogue values alone, and each rests on 50-140 runs
-(a binomial standard error of 3-6 points).
+its training range, both engines, 3 s runs), not of the catalogue values alone, and each rests on 45-139 runs of
+the shipped model (a binomial standard error of up to 7.5 points).
 
 Run: ``python analysis/identify/held_out_plot.py [--model twin/data/identify_default.npz] [--out
 analysis/results/identify/held_out_accuracy.png]``; prints the table in Markdown.
