@@ -192,8 +192,7 @@ for _v in VARIANTS.values():
     _v[1].setdefault("interval_by_engine", False)
     _v[1].setdefault("size_band_mm", SIZE_BAND_MM)  # one boundary, 0.2 mm (train()'s default from the fourth round
     # on is one band per group of catalogue values)
-    _v[1].setdefault("answer_hop_revs", REVS_PER_WINDOW)  # windows back to back (train()'s default from the fifth
-    # round on is ANSWER_HOP_REVS)
+    _v[1].setdefault("answer_hop_revs", REVS_PER_WINDOW)  # windows back to back, as train()'s default
 
 
 def recalibrated(model: ClearanceModel, info: dict, oof: dict, opts: dict) -> tuple[ClearanceModel, dict]:
