@@ -28,14 +28,15 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[2]
-TRAIN = ("clearance_id_nuisance", "clearance_id_nuisance_ends", "clearance_id_nuisance_ref",
-         "clearance_id_nuisance_motor", "clearance_id_nuisance_motor_yz", "clearance_id_nuisance_ref_small",
-         "clearance_id_nuisance_ref_small_b")
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from nuisance_study import ROOT, VARIANTS  # noqa: E402
+
+TRAIN = VARIANTS["small-b-mean-engine"][0]  # the seven training sets of the third round
 PROBED = ("clearance_id_nuisance_dev", "clearance_id_fresh3_in", "clearance_id_fresh3_out_params",
           "clearance_id_nuisance_ref_soft")
 #: parameter (a dataset factor) and the transform it is regressed in

@@ -146,10 +146,11 @@ def held_out_check(faulty: list[dict[str, Any]], j: str) -> list[dict[str, Any]]
     mean share beside the share of its runs whose size lies within a factor 1.5 of the truth. Empty where the
     model holds no held-out table."""
     runs = [p for p in faulty if p.get(f"{j}_held_out") is not None]
+    last = len(HELD_OUT_BINS) - 2
+    bins = [min(int(np.searchsorted(HELD_OUT_BINS, p[f"{j}_held_out"], side="right")) - 1, last) for p in runs]
     out = []
     for k, (lo, hi) in enumerate(zip(HELD_OUT_BINS, HELD_OUT_BINS[1:])):
-        last = k == len(HELD_OUT_BINS) - 2
-        ps = [p for p in runs if lo <= p[f"{j}_held_out"] < hi or (last and p[f"{j}_held_out"] == hi)]
+        ps = [p for p, b in zip(runs, bins) if b == k]
         if ps:
             out.append({"held_out_from": lo, "held_out_to": hi, "runs": len(ps),
                         "mean_held_out": float(np.mean([p[f"{j}_held_out"] for p in ps])),

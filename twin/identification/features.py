@@ -123,6 +123,12 @@ RIPPLE_ALLOWANCE = 0.05
 MAX_SPEED_TOL = 0.30
 
 
+def hop_ok(hop_revs: object) -> bool:
+    """Whether ``hop_revs`` is a hop between the ends of successive windows [turns] :func:`steady_windows` takes:
+    a number in (0, REVS_PER_WINDOW] (REVS_PER_WINDOW: back to back)."""
+    return isinstance(hop_revs, (int, float)) and 0.0 < hop_revs <= REVS_PER_WINDOW
+
+
 def steady_windows(counts: np.ndarray, rate_hz: float, counts_per_rev: float, skip_s: float = 0.0,
                    speed_tol: float = SPEED_TOL, hop_revs: float = REVS_PER_WINDOW) -> Windows:
     """Windows of exactly REVS_PER_WINDOW crank turns in the recording's steady part.
@@ -136,7 +142,7 @@ def steady_windows(counts: np.ndarray, rate_hz: float, counts_per_rev: float, sk
     revolution starts; with ``hop_revs`` below REVS_PER_WINDOW [turns] each window ends that many turns before
     the next one ends (overlapping windows). At least REVS_PER_WINDOW steady turns are needed.
     """
-    if not 0.0 < hop_revs <= REVS_PER_WINDOW:
+    if not hop_ok(hop_revs):
         raise IdentifyError(f"hop_revs: {hop_revs!r}; allowed: 0 < hop_revs <= {REVS_PER_WINDOW}")
     c = np.asarray(counts, dtype=np.float64)
     if c.size < 4 or not np.all(np.isfinite(c)):

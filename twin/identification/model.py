@@ -104,7 +104,8 @@ from typing import Any
 import numpy as np
 
 from twin.config import CATALOGUE_DIAMETRAL_MM, Drive
-from twin.identification.features import FEATURE_VERSION, REVS_PER_WINDOW, IdentifyError, feature_names, features
+from twin.identification.features import (FEATURE_VERSION, REVS_PER_WINDOW, IdentifyError, feature_names, features,
+                                          hop_ok)
 from twin.identification.ranges import feature_reference, out_of_range, recording_measures, training_ranges, widen
 from twin.identification.trees import ModelError, TreeEnsemble, from_sklearn
 
@@ -229,8 +230,7 @@ class ClearanceModel:
                                           for b in ([sb] if isinstance(sb, (int, float)) else sb)):
                 raise ValueError("interval.size_band_mm malformed")
             _check_held_out(trained_on.get("held_out_size_accuracy"))
-            hop = trained_on.get("answer_hop_revs", REVS_PER_WINDOW)
-            if not (isinstance(hop, (int, float)) and 0 < hop <= REVS_PER_WINDOW):
+            if not hop_ok(trained_on.get("answer_hop_revs", REVS_PER_WINDOW)):
                 raise ValueError(f"answer_hop_revs must lie in (0, {REVS_PER_WINDOW}]")
             rb = trained_on.get("interval", {}).get("ripple_band_pct")
             if rb is not None and not (isinstance(rb, (int, float)) and math.isfinite(rb) and rb > 0):
@@ -689,7 +689,7 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
     made, from the training runs' windows cut back to back (``features``)."""
     if interval_folds not in INTERVAL_FOLDS:
         raise ModelError(f"interval_folds: {interval_folds!r}; allowed: {', '.join(INTERVAL_FOLDS)}")
-    if not 0 < answer_hop_revs <= REVS_PER_WINDOW:
+    if not hop_ok(answer_hop_revs):
         raise ModelError(f"answer_hop_revs: {answer_hop_revs!r}; allowed: 0 < answer_hop_revs <= {REVS_PER_WINDOW}")
     if size_regressor not in SIZE_REGRESSORS:
         raise ModelError(f"size_regressor: {size_regressor!r}; allowed: {', '.join(SIZE_REGRESSORS)}")
