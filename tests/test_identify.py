@@ -297,6 +297,33 @@ def test_a_location_only_dataset_leaves_the_size_regressors_as_they_were(small, 
 
 
 @pytest.mark.long  # trains on the module's small dataset: run by CI and with -m long
+def test_a_dataset_for_one_joints_size_leaves_the_other_joints_regressor_as_it_was(small, tmp_path):
+    """``--b-size-only DS``: its runs join the location model's and B's size regressor's training, not C's: C's size
+    answers and half widths are bit for bit those of a model trained without it, B's are not."""
+    from twin.identification.model import ClearanceModel, pooled_features
+
+    d, model = small
+    at_b = tmp_path / "at_b.npz"
+    assert main(["identify", "train", str(d / "small-train"), "--b-size-only", str(d / "small-test"), "--out",
+                 str(at_b), "--splits", "train", "--workers", "1"]) == 0
+    a, b = ClearanceModel.load(model), ClearanceModel.load(at_b)
+    X = pooled_features([d / "small-test"], ("train",), 1)[0]
+    assert np.array_equal(a.size["C"].predict(X), b.size["C"].predict(X))
+    assert not np.array_equal(a.size["B"].predict(X), b.size["B"].predict(X))
+    c_widths = {k: v for k, v in a.interval_log10.items() if k.startswith("C")}
+    assert c_widths and c_widths == {k: v for k, v in b.interval_log10.items() if k.startswith("C")}
+    assert b.trained_on["datasets"] == [{"name": "small-train", "runs": 48},
+                                        {"name": "small-test", "runs": 16, "use": "location and the size at B"}]
+
+
+def test_a_dataset_for_the_size_of_an_unknown_joint_is_refused():
+    from twin.identification.model import ModelError, train
+
+    with pytest.raises(ModelError, match="size_only_at: joint 'A'; allowed: B, C"):
+        train("nowhere", size_only_at={"A": ["nowhere"]})
+
+
+@pytest.mark.long  # trains on the module's small dataset: run by CI and with -m long
 def test_an_evaluation_pools_datasets_and_keeps_each_ones_figures(small):
     """``twin identify evaluate MODEL DS1 DS2`` (a test set and its extension): the pooled report holds
     every run of both, each run answered as alone, and the location accuracy of each dataset."""

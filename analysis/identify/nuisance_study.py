@@ -64,6 +64,12 @@ Variants (``twin identify train --interval-folds speed`` each):
   development figures are those of the sets whose runs are kept (features at that hop cannot be computed from a
   cache of back-to-back windows): the others are left out of its entry. Better on the fourth fresh test's
   in-range part, worse on ``clearance_id_nuisance_dev`` (``ANSWER_HOP_REVS`` of :mod:`twin.identification.model`).
+* ``slow-b2`` (fifth round): ``slow-b-bands`` with ``clearance_id_nuisance_ref_slow_b2`` pooled in (2400
+  reference-engine runs with a clearance at B of 0.0125-1.6 mm at the slow speeds 250-425 rpm, y or z vertical).
+  B within x1.5 rose on every in-range development set, but C's regressor, taught the set's B+C runs too, read C's
+  0.07 and 0.1 mm worse at fast speeds (C 0.1 mm at 765 rpm: median error 0.0097 -> 0.0155 mm);
+* ``slow-b2-at-b``: the same set teaching the location and B's size only (``train(size_only_at={"B": ...})``,
+  ``twin identify train --b-size-only``): C's regressor is the fourth round's.
 
 Development sets: ``clearance_id_nuisance_dev`` (in range), ``clearance_id_nuisance_dev_out`` (out of range) and,
 from the second round on, ``clearance_id_nuisance_dev_motor`` (the drive train; reference engine) and
@@ -112,6 +118,7 @@ REF_SMALL = "clearance_id_nuisance_ref_small"
 REF_SMALL_B = "clearance_id_nuisance_ref_small_b"
 REF_SOFT = "clearance_id_nuisance_ref_soft"
 REF_SLOW_B = "clearance_id_nuisance_ref_slow_b"
+REF_SLOW_B2 = "clearance_id_nuisance_ref_slow_b2"
 DEV = ("clearance_id_nuisance_dev", "clearance_id_nuisance_dev_out", "clearance_id_nuisance_dev_motor",
        "clearance_id_fresh_in", "clearance_id_fresh2_in", "clearance_id_fresh3_in", "clearance_id_fresh3_out_params",
        "clearance_id_fresh4_in", "clearance_id_fresh4_out_params")
@@ -185,7 +192,13 @@ VARIANTS = {"base": ((TRAIN,), dict(normalized_intervals=True, size_band_mm=None
                                   size_band_mm=CATALOGUE_BANDS_MM)),
             "overlap": ((TRAIN, ENDS, REF, MOTOR, MOTOR_YZ, REF_SMALL, REF_SMALL_B, REF_SLOW_B),
                         dict(normalized_intervals=False, size_regressor="mean", interval_by_engine=True,
-                             size_band_mm=CATALOGUE_BANDS_MM, answer_hop_revs=0.5))}
+                             size_band_mm=CATALOGUE_BANDS_MM, answer_hop_revs=0.5)),
+            "slow-b2": ((TRAIN, ENDS, REF, MOTOR, MOTOR_YZ, REF_SMALL, REF_SMALL_B, REF_SLOW_B, REF_SLOW_B2),
+                        dict(normalized_intervals=False, size_regressor="mean", interval_by_engine=True,
+                             size_band_mm=CATALOGUE_BANDS_MM)),
+            "slow-b2-at-b": ((TRAIN, ENDS, REF, MOTOR, MOTOR_YZ, REF_SMALL, REF_SMALL_B, REF_SLOW_B, REF_SLOW_B2),
+                             dict(normalized_intervals=False, size_regressor="mean", interval_by_engine=True,
+                                  size_band_mm=CATALOGUE_BANDS_MM, size_only_at={"B": (REF_SLOW_B2,)}))}
 # the variants before keep the size regressor and the intervals they were measured with
 for _v in VARIANTS.values():
     _v[1].setdefault("size_regressor", "median")
@@ -193,6 +206,7 @@ for _v in VARIANTS.values():
     _v[1].setdefault("size_band_mm", SIZE_BAND_MM)  # one boundary, 0.2 mm (train()'s default from the fourth round
     # on is one band per group of catalogue values)
     _v[1].setdefault("answer_hop_revs", REVS_PER_WINDOW)  # windows back to back, as train()'s default
+    _v[1].setdefault("size_only_at", {})  # every dataset teaches both sizes
 
 
 def recalibrated(model: ClearanceModel, info: dict, oof: dict, opts: dict) -> tuple[ClearanceModel, dict]:
@@ -259,13 +273,17 @@ def main() -> None:
     for v in wanted:
         sets, opts = VARIANTS[v]
         t = time.perf_counter()
-        key = (sets, opts["size_regressor"])
+        key = (sets, opts["size_regressor"], json.dumps(opts["size_only_at"], sort_keys=True))
         if key in fitted and not opts["normalized_intervals"]:
             model, info = recalibrated(*fitted[key], opts)
         else:
             oof: dict = {}
-            model, info = train([work / n for n in sets], workers=args.workers, interval_folds="speed",
-                                features=pool_features([feats[n] for n in sets]), out_of_fold=oof, **opts)
+            only = opts["size_only_at"]  # datasets that teach one joint's size: pooled after the others, as train() takes them
+            only_sets = [n for j in ("B", "C") for n in only.get(j, ())]
+            both = [n for n in sets if n not in only_sets]
+            model, info = train([work / n for n in both], workers=args.workers, interval_folds="speed",
+                                features=pool_features([feats[n] for n in both + only_sets]), out_of_fold=oof,
+                                **(opts | {"size_only_at": {j: [work / n for n in v] for j, v in only.items()}}))
             fitted[key] = (model, info, oof)
         if args.save and args.save.split(":", 1)[0] == v:
             model.save(ROOT / args.save.split(":", 1)[1])

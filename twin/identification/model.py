@@ -662,9 +662,18 @@ def held_out_at(table: dict[str, Any] | None, orientation: str, crank_hz: float)
             "training_crank_hz": [float(h) for h in used]}
 
 
+def _dataset_use(b: bool, c: bool) -> dict[str, str]:
+    """What a training dataset taught (the model file's ``trained_on.datasets``): nothing said where it taught
+    the location and both sizes."""
+    if b and c:
+        return {}
+    return {"use": "location and the size at B" if b else "location and the size at C" if c else "location only"}
+
+
 def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = ("train", "val"), workers: int = 1,
           seed: int = 0, interval_folds: str = "runs", location_only: list[str | Path] = (),
-          features: tuple | None = None, normalized_intervals: bool = False,
+          size_only_at: dict[str, list[str | Path]] | None = None, features: tuple | None = None,
+          normalized_intervals: bool = False,
           size_band_mm: float | list[float] | tuple[float, ...] | None = CATALOGUE_BANDS_MM, ripple_split: bool = True,
           size_regressor: str = "mean", interval_by_engine: bool = True, out_of_fold: dict[str, Any] | None = None,
           answer_hop_revs: float = ANSWER_HOP_REVS) -> tuple[ClearanceModel, dict[str, Any]]:
@@ -672,8 +681,11 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
     ``interval_folds`` groups the out-of-fold scores of the intervals (:func:`_conformal_folds`);
     the runs of the ``location_only`` datasets (pooled like the others) teach the location model
     only, not the size regressors nor their intervals (e.g. runs at one speed in a regime the others
-    lack, which would tilt the size regressors toward that speed). ``features``: what
-    :func:`pooled_features` returns for these datasets and splits, computed before (a study that trains
+    lack, which would tilt the size regressors toward that speed); the runs of ``size_only_at[J]`` (J: ``"B"`` or
+    ``"C"``) teach the location model and the size at J only, not the other joint's regressor nor its intervals
+    (e.g. runs drawn to fill slow speeds at B, whose clearances at C would tilt C's regressor toward those speeds).
+    ``features``: what :func:`pooled_features` returns for these datasets and splits (in the order: the datasets,
+    then ``size_only_at["B"]``, ``size_only_at["C"]``, ``location_only``), computed before (a study that trains
     several variants on the same runs computes them once). ``normalized_intervals``: also store the
     normalized conformal scales (module docstring); ``size_band_mm``: split each side of the
     size-resolution map's intervals by the answer's size at these boundaries (default: one band per group of
@@ -698,13 +710,20 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
     dirs = [dataset_dir] if isinstance(dataset_dir, (str, Path)) else list(dataset_dir)
     if not dirs:
         raise ModelError("no dataset to train on")
+    only = dict(size_only_at or {})
+    bad = [j for j in only if j not in ("B", "C")]
+    if bad:
+        raise ModelError(f"size_only_at: joint {bad[0]!r}; allowed: B, C")
+    n_both, n_b = len(dirs), len(only.get("B", ()))
+    dirs += list(only.get("B", ())) + list(only.get("C", ()))
     n_size = len(dirs)
     dirs += list(location_only)
     t0 = time.perf_counter()
     X, rows, owner, skipped, dss = features if features is not None else pooled_features(dirs, splits, workers)
     y = np.array([rows[i]["fault"] for i in owner])
-    size_names = {d.info["name"] for d in dss[:n_size]}
-    for_size = np.array([rows[i]["dataset"] in size_names for i in owner])
+    names = [d.info["name"] for d in dss]
+    size_names = {"B": set(names[:n_both + n_b]), "C": set(names[:n_both] + names[n_both + n_b:n_size])}
+    for_size = {j: np.array([rows[i]["dataset"] in size_names[j] for i in owner]) for j in ("B", "C")}
     t_feat = time.perf_counter() - t0
     # leaves of at least 20 windows (scikit-learn's default) on datasets of a thousand windows and
     # more; smaller datasets (tests, first looks) get smaller leaves, and no early stopping below 500
@@ -723,7 +742,7 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
     for j in ("B", "C"):
         key = f"clearance_{j.lower()}_mm"
         truth = np.array([rows[i][key] for i in owner], float)
-        sel = (truth > 0) & for_size
+        sel = (truth > 0) & for_size[j]
         if sel.sum() < 10:
             raise ModelError(f"{', '.join(map(str, dirs))}: fewer than 10 windows with a clearance at {j}: cannot "
                              "learn its size")
@@ -771,7 +790,7 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
     trained_on = {
         "dataset": "+".join(i["name"] for i in infos), "dataset_dir": ", ".join(map(str, dirs)),
         "datasets": [{"name": i["name"], "runs": sum(1 for r in rows if r["dataset"] == i["name"])}
-                     | ({} if i["name"] in size_names else {"use": "location only"}) for i in infos],
+                     | _dataset_use(i["name"] in size_names["B"], i["name"] in size_names["C"]) for i in infos],
         "identity_sha256": digest,
         "engine": "+".join(dict.fromkeys(i["identity"]["engine"] for i in infos)), "rate_hz": dss[0].rate_hz,
         "counts_per_rev": float(infos[0].get("encoder_counts_per_rev") or 32768),
