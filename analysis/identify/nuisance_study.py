@@ -278,7 +278,7 @@ def main() -> None:
             model, info = recalibrated(*fitted[key], opts)
         else:
             oof: dict = {}
-            only = opts["size_only_at"]  # datasets that teach one joint's size: pooled after the others, as train() takes them
+            only = opts["size_only_at"]  # sets teaching one joint's size: pooled after the others, as train() takes them
             only_sets = [n for j in ("B", "C") for n in only.get(j, ())]
             both = [n for n in sets if n not in only_sets]
             model, info = train([work / n for n in both], workers=args.workers, interval_folds="speed",
