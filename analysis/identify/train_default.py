@@ -41,7 +41,7 @@ Steps (each is a plain ``twin`` command; a step whose output exists is skipped, 
 5. the answers on the sample recordings in ``recordings/`` (``analysis/results/identify/samples.json``).
 
 Run: ``python analysis/identify/train_default.py [--work DIR] [--workers N] [--retrain] [--fresh5]``: about
-95 min for the training data on two cores, 25 min to train, 6 min for the development sets and 20 min for the
+95 min for the training data on two cores, 30 min to train, 6 min for the development sets and 20 min for the
 fifth fresh test's sets. The datasets stay in ``--work`` (default ``../identify_work`` beside the checkout; about
 70 GB for the training sets), not in the repository.
 """
