@@ -784,6 +784,51 @@ def test_interval_folds_by_speed_leave_each_speed_out_and_each_joint_is_split_by
         [0.1 / 10 ** 0.8, 0.1 * 10 ** 0.8])
 
 
+def test_half_widths_split_by_the_fault_where_both_sides_have_enough_runs():
+    """``fault_split``: the out-of-fold runs of each part split by whether both joints are faulty (key ``_both``), the
+    split made only where each side holds MONDRIAN_MIN_RUNS runs; each half width is the conformal rank of its own
+    runs' scores; an answer located B+C takes its side's ``_both`` width where the model stores one and the model says
+    it split, the others (and a model that did not split) the one-joint width."""
+    from twin.identification.model import (MONDRIAN_MIN_RUNS, ClearanceModel, _half_widths, _interval_parts,
+                                           conformal_half_width)
+
+    n = 2 * MONDRIAN_MIN_RUNS + 4
+    rows = [{"fault": "BC" if i % 2 else "C", "orientation": "z", "crank_hz": 3.0} for i in range(n)]
+    answers = np.full(n, 0.1)
+    scores = np.where(np.arange(n) % 2, 0.3, 0.1) * (1 + np.arange(n) / n)
+    parts, _ = _interval_parts("C", rows, answers, None, False, fault_split=True)
+    both = np.arange(n) % 2 == 1
+    assert np.array_equal(parts["C_both"], both) and np.array_equal(parts["C"], ~both)
+    half = _half_widths("C", scores, rows, answers, None, False, False, fault_split=True)
+    assert half == {"C": conformal_half_width(scores[~both]), "C_both": conformal_half_width(scores[both])}
+    assert half["C_both"] > half["C"]
+    few = [dict(r, fault="C") for r in rows[:-MONDRIAN_MIN_RUNS]] + rows[-MONDRIAN_MIN_RUNS + 1:]  # too few B+C runs
+    assert set(_interval_parts("C", few, answers[:len(few)], None, False, fault_split=True)[0]) == {"C"}
+    assert set(_interval_parts("C", rows, answers, None, False)[0]) == {"C"}  # not asked: no split
+
+    class Clf:
+        classes_ = np.array(["none", "B", "C", "BC"])
+
+        def __init__(self, fault):
+            self.p = [1.0 if c == fault else 0.0 for c in self.classes_]
+
+        def predict_proba(self, X):
+            return np.tile(self.p, (len(X), 1))
+
+    class Reg:
+        def predict(self, X):
+            return np.full(len(X), -1.0)  # 0.1 mm
+
+    widths = {"B": 0.3, "C": 0.2, "C_both": 0.5}
+    X, on = np.zeros((2, 3)), {"B": True, "C": True}
+    split = {"interval": {"fault_split": True}}
+    for fault, w in (("BC", 0.5), ("C", 0.2)):
+        a = ClearanceModel(Clf(fault), {"B": Reg(), "C": Reg()}, widths, trained_on=split).identify(X, on)
+        assert a["fault"] == fault and a["clearance_c_interval_mm"] == pytest.approx([0.1 / 10 ** w, 0.1 * 10 ** w])
+    plain = ClearanceModel(Clf("BC"), {"B": Reg(), "C": Reg()}, widths).identify(X, on)
+    assert plain["clearance_c_interval_mm"] == pytest.approx([0.1 / 10 ** 0.2, 0.1 * 10 ** 0.2])
+
+
 def test_an_interval_ending_on_a_trained_value_holds_it():
     """The median regressor answers log10 of a trained clearance exactly; 10 ** log10(0.02) is
     0.020000000000000004 in floating point, which must not put 0.02 outside an interval ending on it."""

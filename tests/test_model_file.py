@@ -247,6 +247,13 @@ def test_the_training_ranges_and_feature_quartiles_load_back_and_malformed_ones_
         m.trained_on["interval"] = {"size_band_mm": good}
         m.save(tmp_path / "ok.npz")
         assert ClearanceModel.load(tmp_path / "ok.npz").trained_on["interval"]["size_band_mm"] == good
+    for bad in ("yes", 1, None):  # whether the half widths are split by the fault: a bool
+        m.trained_on["interval"] = {"fault_split": bad}
+        m.save(tmp_path / "bad.npz")
+        _refused(tmp_path / "bad.npz", "fault_split")
+    m.trained_on["interval"] = {"fault_split": True}
+    m.save(tmp_path / "ok.npz")
+    assert ClearanceModel.load(tmp_path / "ok.npz").trained_on["interval"]["fault_split"] is True
     for bad in (0, -0.5, 2.5, "0.5", None):  # where an answer's windows end, in crank turns: (0, 2]
         m.trained_on["answer_hop_revs"] = bad
         m.save(tmp_path / "bad.npz")

@@ -232,6 +232,8 @@ class ClearanceModel:
             _check_held_out(trained_on.get("held_out_size_accuracy"))
             if not hop_ok(trained_on.get("answer_hop_revs", REVS_PER_WINDOW)):
                 raise ValueError(f"answer_hop_revs must lie in (0, {REVS_PER_WINDOW}]")
+            if not isinstance(trained_on.get("interval", {}).get("fault_split", False), bool):
+                raise ValueError("interval.fault_split malformed")
             rb = trained_on.get("interval", {}).get("ripple_band_pct")
             if rb is not None and not (isinstance(rb, (int, float)) and math.isfinite(rb) and rb > 0):
                 raise ValueError("interval.ripple_band_pct malformed")
@@ -283,6 +285,8 @@ class ClearanceModel:
             side = j if resolved[j] or f"{j}_unresolved" not in self.interval_log10 else f"{j}_unresolved"
             if wavy and f"{side}_rippled" in self.interval_log10:
                 side = f"{side}_rippled"
+            if fault == "BC" and interval.get("fault_split") and f"{side}_both" in self.interval_log10:
+                side = f"{side}_both"  # both joints located faulty: the other joint's impacts reach this one's sensors
             w = band_half_width(self.interval_log10, side, mid, band)
             if side in norm:  # normalized conformal: the half width scales with the recording's difficulty
                 w = norm[side]["q"] * (window_spread(self.size[j], X) + norm[side]["beta"])
@@ -530,11 +534,12 @@ def _conformal_folds(rows: list[dict[str, Any]], runs: np.ndarray, how: str, see
 
 
 def _interval_parts(j: str, held_runs: list[dict[str, Any]], answers: np.ndarray,
-                    size_band_mm: float | list[float] | None,
-                    ripple_split: bool) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+                    size_band_mm: float | list[float] | None, ripple_split: bool,
+                    fault_split: bool = False) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
     """The out-of-fold runs of each half width at joint ``j`` (key -> mask; see the module docstring): all runs
     (key ``j``); split (Mondrian) by the joint's size-resolution map where each side has MONDRIAN_MIN_RUNS runs
     (``j``, ``j_unresolved``), each side by the runs' measured ripple (``_rippled``) where both parts have enough,
+    with ``fault_split`` each part by whether both joints are faulty (``_both``) where both parts have enough,
     and each part by the answer's size (``_small``, ``_small2``, ...: below each boundary of ``size_band_mm``,
     largest first) where both sides of a boundary have enough. Also the
     parts before the split by size (those of the normalized scales)."""
@@ -551,6 +556,11 @@ def _interval_parts(j: str, held_runs: list[dict[str, Any]], answers: np.ndarray
             split += [(side, m & ~rip), (f"{side}_rippled", m & rip)]
         else:
             split.append((side, m))
+    if fault_split:
+        both = np.array([row.get("fault") == "BC" for row in held_runs], bool)
+        split = [part for side, m in split for part in (
+            [(side, m & ~both), (f"{side}_both", m & both)]
+            if (m & both).sum() >= MONDRIAN_MIN_RUNS and (m & ~both).sum() >= MONDRIAN_MIN_RUNS else [(side, m)])]
     for side, m in split:
         parts[side] = m
         rest, upper = m, side  # answers below the last boundary used, and their key
@@ -598,20 +608,21 @@ def band_half_width(half: dict[str, float], side: str, answer_mm: float,
 
 
 def _half_widths(j: str, scores: np.ndarray, held_runs: list[dict[str, Any]], answers: np.ndarray,
-                 size_band_mm: float | list[float] | None, ripple_split: bool, by_engine: bool) -> dict[str, float]:
+                 size_band_mm: float | list[float] | None, ripple_split: bool, by_engine: bool,
+                 fault_split: bool = False) -> dict[str, float]:
     """Conformal half width [log10] of each part of :func:`_interval_parts` from the out-of-fold scores; with
     ``by_engine``, where the runs come from several engines (the rows' ``engine``), each half width is the largest
     of the pooled runs' and of each engine's runs' alone (an engine of MONDRIAN_MIN_RUNS runs or more, split the
     same way where its runs allow): the bench's contact law is neither engine's, and an interval calibrated on
     the pooled runs holds the engine that is easier for the regressor more often than the other."""
     half = {key: conformal_half_width(scores[m])
-            for key, m in _interval_parts(j, held_runs, answers, size_band_mm, ripple_split)[0].items()}
+            for key, m in _interval_parts(j, held_runs, answers, size_band_mm, ripple_split, fault_split)[0].items()}
     engine = np.array([str(row.get("engine", "")) for row in held_runs])
     for e in sorted(set(engine)) if by_engine else []:
         idx = np.flatnonzero(engine == e)
         if len(idx) < MONDRIAN_MIN_RUNS or len(idx) == len(engine):
             continue
-        sub, _ = _interval_parts(j, [held_runs[i] for i in idx], answers[idx], size_band_mm, ripple_split)
+        sub, _ = _interval_parts(j, [held_runs[i] for i in idx], answers[idx], size_band_mm, ripple_split, fault_split)
         for key, m in sub.items():
             if key in half:
                 half[key] = max(half[key], conformal_half_width(scores[idx][m]))
@@ -676,7 +687,7 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
           normalized_intervals: bool = False,
           size_band_mm: float | list[float] | tuple[float, ...] | None = CATALOGUE_BANDS_MM, ripple_split: bool = True,
           size_regressor: str = "mean", interval_by_engine: bool = True, out_of_fold: dict[str, Any] | None = None,
-          answer_hop_revs: float = ANSWER_HOP_REVS) -> tuple[ClearanceModel, dict[str, Any]]:
+          answer_hop_revs: float = ANSWER_HOP_REVS, fault_split: bool = False) -> tuple[ClearanceModel, dict[str, Any]]:
     """Train on the ok runs of ``splits`` of one dataset or several pooled (see module docstring);
     ``interval_folds`` groups the out-of-fold scores of the intervals (:func:`_conformal_folds`);
     the runs of the ``location_only`` datasets (pooled like the others) teach the location model
@@ -698,7 +709,10 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
     ``scores``, ``runs`` (rows) and ``answers`` the half widths are calibrated on (a study that compares interval
     options re-calibrates from them with :func:`_half_widths` without fitting again). ``answer_hop_revs``: where a
     recording's answer windows end (:data:`ANSWER_HOP_REVS`); the estimators learn, and the out-of-fold answers are
-    made, from the training runs' windows cut back to back (``features``)."""
+    made, from the training runs' windows cut back to back (``features``). ``fault_split``: split each part of the
+    intervals also by whether both joints are faulty (``_both``; the training runs' true fault, a recording's located
+    one), where both sides have MONDRIAN_MIN_RUNS runs: the other joint's impacts reach a joint's sensors and scatter
+    its size (recorded as ``trained_on.interval.fault_split``; off by default and in the shipped model)."""
     if interval_folds not in INTERVAL_FOLDS:
         raise ModelError(f"interval_folds: {interval_folds!r}; allowed: {', '.join(INTERVAL_FOLDS)}")
     if not hop_ok(answer_hop_revs):
@@ -774,10 +788,11 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
             out_of_fold[j] = {"scores": scores, "runs": held_runs, "answers": answers}
         if normalized_intervals:
             normalized[j] = normalized_scale(scores, spread)
-        half_width |= _half_widths(j, scores, held_runs, answers, size_band_mm, ripple_split, interval_by_engine)
+        half_width |= _half_widths(j, scores, held_runs, answers, size_band_mm, ripple_split, interval_by_engine,
+                                   fault_split)
         held_out[j] = held_out_accuracy(scores, held_runs)
         if normalized_intervals:
-            for key, m in _interval_parts(j, held_runs, answers, size_band_mm, ripple_split)[1].items():
+            for key, m in _interval_parts(j, held_runs, answers, size_band_mm, ripple_split, fault_split)[1].items():
                 normalized[key] = normalized_scale(scores[m], spread[m], normalized[j]["beta"])
     import sklearn
 
@@ -810,6 +825,7 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
                      "size_band_mm": recorded_size_bands(size_band_mm),
                      "ripple_band_pct": RIPPLE_BAND_PCT if ripple_split else None,
                      "by_engine": interval_by_engine,
+                     "fault_split": fault_split,
                      "half_width_log10": half_width,
                      "normalized": normalized,
                      "difficulty": "spread of the per-window answers: interquartile range of the windows' log10 "
