@@ -533,6 +533,18 @@ def _conformal_folds(rows: list[dict[str, Any]], runs: np.ndarray, how: str, see
     return fold
 
 
+def _mondrian(parts: list[tuple[str, np.ndarray]], mask: np.ndarray, suffix: str) -> list[tuple[str, np.ndarray]]:
+    """Each (key, runs) of ``parts`` split by ``mask`` into (key, runs outside it) and (key + ``suffix``, runs inside
+    it) where both sides hold MONDRIAN_MIN_RUNS runs; kept whole otherwise."""
+    out: list[tuple[str, np.ndarray]] = []
+    for key, m in parts:
+        if (m & mask).sum() >= MONDRIAN_MIN_RUNS and (m & ~mask).sum() >= MONDRIAN_MIN_RUNS:
+            out += [(key, m & ~mask), (f"{key}{suffix}", m & mask)]
+        else:
+            out.append((key, m))
+    return out
+
+
 def _interval_parts(j: str, held_runs: list[dict[str, Any]], answers: np.ndarray,
                     size_band_mm: float | list[float] | None, ripple_split: bool,
                     fault_split: bool = False) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
@@ -546,21 +558,12 @@ def _interval_parts(j: str, held_runs: list[dict[str, Any]], answers: np.ndarray
     everything = np.ones(len(held_runs), bool)
     parts = {j: everything}
     on = np.array([size_resolved(j, row["orientation"], row["crank_hz"]) for row in held_runs], bool)
-    sides = [(j, everything)]
-    if on.sum() >= MONDRIAN_MIN_RUNS and (~on).sum() >= MONDRIAN_MIN_RUNS:
-        sides = [(j, on), (f"{j}_unresolved", ~on)]
-    rip = np.array([rippled(row.get("measures", {}).get("ripple_pct")) for row in held_runs], bool)
-    split = []
-    for side, m in sides:
-        if ripple_split and (m & rip).sum() >= MONDRIAN_MIN_RUNS and (m & ~rip).sum() >= MONDRIAN_MIN_RUNS:
-            split += [(side, m & ~rip), (f"{side}_rippled", m & rip)]
-        else:
-            split.append((side, m))
+    split = _mondrian([(j, everything)], ~on, "_unresolved")
+    if ripple_split:
+        split = _mondrian(split, np.array([rippled(row.get("measures", {}).get("ripple_pct")) for row in held_runs],
+                                          bool), "_rippled")
     if fault_split:
-        both = np.array([row.get("fault") == "BC" for row in held_runs], bool)
-        split = [part for side, m in split for part in (
-            [(side, m & ~both), (f"{side}_both", m & both)]
-            if (m & both).sum() >= MONDRIAN_MIN_RUNS and (m & ~both).sum() >= MONDRIAN_MIN_RUNS else [(side, m)])]
+        split = _mondrian(split, np.array([row.get("fault") == "BC" for row in held_runs], bool), "_both")
     for side, m in split:
         parts[side] = m
         rest, upper = m, side  # answers below the last boundary used, and their key
