@@ -324,11 +324,16 @@ def test_a_dataset_for_one_joints_size_leaves_the_other_joints_regressor_as_it_w
                                         {"name": "small-test", "runs": 16, "use": "location and the size at B"}]
 
 
-def test_a_dataset_for_the_size_of_an_unknown_joint_is_refused():
+def test_a_size_only_set_of_an_unknown_joint_or_a_folder_named_twice_is_refused():
     from twin.identification.model import ModelError, train
 
     with pytest.raises(ModelError, match="size_only_at: joint 'A'; allowed: B, C"):
         train("nowhere", size_only_at={"A": ["nowhere"]})
+    # the same folder as a training set and a size-only set: refused before any feature is computed
+    with pytest.raises(ModelError, match="given twice"):
+        train("nowhere", size_only_at={"B": ["./nowhere"]})
+    with pytest.raises(ModelError, match="given twice"):
+        train(["a", "b"], location_only=["a"])
 
 
 @pytest.mark.long  # trains on the module's small dataset: run by CI and with -m long

@@ -735,6 +735,12 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
     dirs += list(only.get("B", ())) + list(only.get("C", ()))
     n_size = len(dirs)
     dirs += list(location_only)
+    seen: set[Path] = set()
+    for d in dirs:  # a folder named twice would put its runs in twice, and what it teaches is decided by its name
+        if Path(d).resolve() in seen:
+            raise ModelError(f"{d}: dataset folder given twice (training sets, size-only and location-only sets): "
+                             "give each once")
+        seen.add(Path(d).resolve())
     t0 = time.perf_counter()
     X, rows, owner, skipped, dss = features if features is not None else pooled_features(dirs, splits, workers)
     y = np.array([rows[i]["fault"] for i in owner])
