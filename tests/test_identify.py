@@ -263,6 +263,7 @@ def test_several_datasets_pool_into_one_model_and_must_agree(small, tmp_path, ca
     tr = ClearanceModel.load(pooled).trained_on
     assert tr["datasets"] == [{"name": "small-train", "runs": 48}, {"name": "small-test", "runs": 16}]
     assert tr["runs"] == 64 and tr["dataset"] == "small-train+small-test"
+    assert tr["interval"]["fault_split"] == ["C"]  # the command's default, recorded
     other = tmp_path / "other"
     shutil.copytree(d / "small-test", other)
     info = json.loads((other / "info.json").read_text())
@@ -324,6 +325,13 @@ def test_a_dataset_for_one_joints_size_leaves_the_other_joints_regressor_as_it_w
                                         {"name": "small-test", "runs": 16, "use": "location and the size at B"}]
 
 
+def test_train_refuses_an_unknown_fault_split_in_one_line(tmp_path, capsys):
+    assert main(["identify", "train", str(tmp_path), "--out", str(tmp_path / "m.npz"), "--fault-split", "A"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert "--fault-split" in err and "'none', 'B', 'C', 'BC'" in err
+    assert not (tmp_path / "m.npz").exists()
+
+
 def test_a_size_only_set_of_an_unknown_joint_or_a_folder_named_twice_is_refused():
     from twin.identification.model import ModelError, train
 
@@ -334,6 +342,8 @@ def test_a_size_only_set_of_an_unknown_joint_or_a_folder_named_twice_is_refused(
         train("nowhere", size_only_at={"B": ["./nowhere"]})
     with pytest.raises(ModelError, match="given twice"):
         train(["a", "b"], location_only=["a"])
+    with pytest.raises(ModelError, match="fault_split: \\['A'\\]; allowed: true, false, or a list of distinct joints"):
+        train("nowhere", fault_split=["A"])
 
 
 @pytest.mark.long  # trains on the module's small dataset: run by CI and with -m long
@@ -391,7 +401,7 @@ def test_a_trained_model_stores_its_training_ranges_and_its_interval_rule(small)
             lo, hi = a[f"clearance_{j.lower()}_if_faulty_mm"]["interval_90"]
             mid = a[f"clearance_{j.lower()}_if_faulty_mm"]["median"]
             side = j if res[j] or f"{j}_unresolved" not in m.interval_log10 else f"{j}_unresolved"
-            w = _half_width(m, side, mid)
+            w = _half_width(m, side, mid, len(Xr))
             assert math.log10(hi / mid) == pytest.approx(w, abs=1e-9)
             assert math.log10(mid / lo) == pytest.approx(w, abs=1e-9)
             truth = row[f"clearance_{j.lower()}_mm"]
@@ -622,12 +632,15 @@ def test_regression_guard_the_size_resolution_map_is_the_committed_studies(joint
         assert not size_resolved("B", "y", hz(275))
 
 
-def _half_width(m, side: str, size_mm: float) -> float:
-    """The conformal half width [log10] the model gives an answer of ``size_mm`` on ``side`` ("B",
-    "B_unresolved", ...): that of the answer's size band (model.band_half_width)."""
+def _half_width(m, side: str, size_mm: float, windows: int) -> float:
+    """The conformal half width [log10] the model gives an answer of ``size_mm`` from ``windows`` windows on
+    ``side`` ("B", "B_unresolved", ...): that of the answer's size band (model.band_half_width) in the table of
+    answers from that many windows where the model holds one for the joint, else in its main table."""
     from twin.identification.model import band_half_width
 
-    return band_half_width(m.interval_log10, side, size_mm, m.trained_on["interval"].get("size_band_mm"))
+    few = (m.trained_on["interval"].get("half_width_log10_by_windows") or {}).get(str(windows), {})
+    table = few if side[0] in few else m.interval_log10
+    return band_half_width(table, side, size_mm, m.trained_on["interval"].get("size_band_mm"))
 
 
 def test_an_answer_at_C_where_the_size_is_not_resolved_says_so(tmp_path, monkeypatch):
@@ -717,7 +730,8 @@ def test_an_answer_at_B_below_its_map_says_so_and_takes_the_wide_interval(monkey
     assert not b["clearance_b_size_resolved"] and b["clearance_c_size_resolved"]
     assert len(b["warnings"]) == 1 and "size at B is not resolved at 750 motor rpm" in b["warnings"][0]
     size = a["clearance_b_mm"]
-    w, w0 = _half_width(m, "B_unresolved", size), _half_width(m, "B", size)
+    n = a["evidence"]["windows"]
+    w, w0 = _half_width(m, "B_unresolved", size, n), _half_width(m, "B", size, n)
     assert w > w0
     assert b["clearance_b_mm"] == size and b["clearance_b_interval_mm"] == pytest.approx([size / 10 ** w, size * 10 ** w])
     assert a["clearance_b_interval_mm"] == pytest.approx([size / 10 ** w0, size * 10 ** w0])
@@ -824,14 +838,73 @@ def test_half_widths_split_by_the_fault_where_both_sides_have_enough_runs():
         def predict(self, X):
             return np.full(len(X), -1.0)  # 0.1 mm
 
-    widths = {"B": 0.3, "C": 0.2, "C_both": 0.5}
+    widths = {"B": 0.3, "B_both": 0.6, "C": 0.2, "C_both": 0.5}
     X, on = np.zeros((2, 3)), {"B": True, "C": True}
-    split = {"interval": {"fault_split": True}}
-    for fault, w in (("BC", 0.5), ("C", 0.2)):
-        a = ClearanceModel(Clf(fault), {"B": Reg(), "C": Reg()}, widths, trained_on=split).identify(X, on)
-        assert a["fault"] == fault and a["clearance_c_interval_mm"] == pytest.approx([0.1 / 10 ** w, 0.1 * 10 ** w])
+    for recorded in (True, ["B", "C"]):  # both joints split (a fifth-round development model recorded True)
+        split = {"interval": {"fault_split": recorded}}
+        for fault, wb, wc in (("BC", 0.6, 0.5), ("C", 0.3, 0.2)):
+            a = ClearanceModel(Clf(fault), {"B": Reg(), "C": Reg()}, widths, trained_on=split).identify(X, on)
+            assert a["fault"] == fault
+            assert a["clearance_c_if_faulty_mm"]["interval_90"] == pytest.approx([0.1 / 10 ** wc, 0.1 * 10 ** wc])
+            assert a["clearance_b_if_faulty_mm"]["interval_90"] == pytest.approx([0.1 / 10 ** wb, 0.1 * 10 ** wb])
+    only_c = ClearanceModel(Clf("BC"), {"B": Reg(), "C": Reg()}, widths,
+                            trained_on={"interval": {"fault_split": ["C"]}}).identify(X, on)  # the shipped rule
+    assert only_c["clearance_c_interval_mm"] == pytest.approx([0.1 / 10 ** 0.5, 0.1 * 10 ** 0.5])
+    assert only_c["clearance_b_interval_mm"] == pytest.approx([0.1 / 10 ** 0.3, 0.1 * 10 ** 0.3])  # B's not split
     plain = ClearanceModel(Clf("BC"), {"B": Reg(), "C": Reg()}, widths).identify(X, on)
     assert plain["clearance_c_interval_mm"] == pytest.approx([0.1 / 10 ** 0.2, 0.1 * 10 ** 0.2])
+
+
+def test_half_widths_by_windows_are_calibrated_on_as_many_windows():
+    """``_half_widths_by_windows``: for n = 1 .. (most windows of a run) - 1, the conformal half widths of the
+    out-of-fold runs' answers from their first n windows (the median of those windows' log10 answers; a run with
+    fewer windows answers from all of its own), split as :func:`_half_widths` splits; an answer from n windows takes
+    that table, one from more windows (or a count the model has no table for) the model's main table, per joint."""
+    from twin.identification.model import ClearanceModel, _half_widths, _half_widths_by_windows, conformal_half_width
+
+    rng = np.random.default_rng(3)
+    n = 60
+    rows = [{"fault": "C", "orientation": "z", "crank_hz": 3.0, "clearance_c_mm": 0.1} for _ in range(n)]
+    # four windows per run whose answers scatter about the truth; the median of more windows scatters less
+    logs = [-1.0 + rng.normal(0, 0.2, 4 if i % 3 else 2) for i in range(n)]
+    tables = _half_widths_by_windows("C", logs, rows, None, False, False)
+    assert sorted(tables) == ["1", "2", "3"]
+    for k in (1, 2, 3):
+        answers = np.array([10 ** np.median(w[:k]) for w in logs])
+        scores = np.abs(np.log10(answers) + 1.0)
+        assert tables[str(k)] == pytest.approx({"C": conformal_half_width(scores)}, rel=1e-9)
+        assert tables[str(k)] == pytest.approx(_half_widths("C", scores, rows, answers, None, False, False), rel=1e-9)
+    assert tables["1"]["C"] > conformal_half_width(np.abs(np.array([np.median(w) for w in logs]) + 1.0))
+
+    class Clf:
+        classes_ = np.array(["none", "B", "C", "BC"])
+
+        def predict_proba(self, X):
+            return np.tile([0.0, 0.0, 1.0, 0.0], (len(X), 1))
+
+    class Reg:
+        def predict(self, X):
+            return np.full(len(X), -1.0)  # 0.1 mm
+
+    trained = {"interval": {"half_width_log10_by_windows": {"1": {"C": 0.4}, "2": {"C": 0.3, "B": 0.35}}}}
+    m = ClearanceModel(Clf(), {"B": Reg(), "C": Reg()}, {"B": 0.1, "C": 0.2}, trained_on=trained)
+    on = {"B": True, "C": True}
+    for windows, wc, wb in ((1, 0.4, 0.1), (2, 0.3, 0.35), (3, 0.2, 0.1), (5, 0.2, 0.1)):
+        a = m.identify(np.zeros((windows, 3)), on)
+        assert a["clearance_c_interval_mm"] == pytest.approx([0.1 / 10 ** wc, 0.1 * 10 ** wc])
+        assert a["clearance_b_if_faulty_mm"]["interval_90"] == pytest.approx([0.1 / 10 ** wb, 0.1 * 10 ** wb])
+
+
+def test_fault_split_names_its_joints():
+    """``train(fault_split=...)`` and a model file's ``interval.fault_split``: True (both joints), False or None
+    (none), or a list of distinct joints; anything else refused, naming the allowed values."""
+    from twin.identification.model import FAULT_SPLIT_JOINTS, fault_split_joints
+
+    assert fault_split_joints(True) == ("B", "C") and fault_split_joints(False) == () == fault_split_joints(None)
+    assert fault_split_joints(["C", "B"]) == ("B", "C") and fault_split_joints(("C",)) == ("C",) == FAULT_SPLIT_JOINTS
+    for bad in ("C", ["A"], ["C", "C"], 1, [True]):
+        with pytest.raises(ValueError, match="allowed: true, false, or a list of distinct joints from B, C"):
+            fault_split_joints(bad)
 
 
 def test_an_interval_ending_on_a_trained_value_holds_it():
@@ -1022,13 +1095,14 @@ def test_train_calibrates_the_bands_on_its_out_of_fold_answers_and_hands_them_ou
     boundaries and loads back with the same intervals."""
     from types import SimpleNamespace
 
-    from twin.identification.model import CATALOGUE_BANDS_MM, ClearanceModel, _half_widths, band_half_width, train
+    from twin.identification.model import (CATALOGUE_BANDS_MM, FAULT_SPLIT_JOINTS, ClearanceModel, _half_widths,
+                                           band_half_width, train)
 
     rng = np.random.default_rng(11)
     nf = len(feature_names())
     rows, owner, X = [], [], []
     speeds = (300.0, 450.0, 600.0, 750.0)
-    for i in range(240):  # clearances 0.01-0.63 mm: the bands at 0.22 and 0.032 mm hold 20 runs and more each side
+    for i in range(240):  # clearances 0.01-0.63 mm
         fault = ("B", "C", "BC", "none")[i % 4]
         size = {j: (10 ** rng.uniform(-2.0, -0.2) if j in fault else 0.0) for j in "BC"}
         rpm = speeds[(i // 4) % 4]
@@ -1046,9 +1120,13 @@ def test_train_calibrates_the_bands_on_its_out_of_fold_answers_and_hands_them_ou
                     features=(np.array(X), rows, owner, [], [ds]), out_of_fold=oof)
     assert info["interval"]["size_band_mm"] == sorted(CATALOGUE_BANDS_MM, reverse=True)
     for j in "BC":
-        again = _half_widths(j, oof[j]["scores"], oof[j]["runs"], oof[j]["answers"], CATALOGUE_BANDS_MM, True, True)
+        again = _half_widths(j, oof[j]["scores"], oof[j]["runs"], oof[j]["answers"], CATALOGUE_BANDS_MM, True, True,
+                             j in FAULT_SPLIT_JOINTS)  # train()'s default: C's parts split by the fault
         assert again == {k: v for k, v in m.interval_log10.items() if k.split("_")[0] == j}
-        assert len(oof[j]["runs"]) == 120 and {f"{j}_small2", f"{j}_small3"} <= set(again) and f"{j}_small" not in again
+        assert len(oof[j]["runs"]) == 120 and (f"{j}_both" in again) == (j == "C")
+    # B's 120 runs, not split by the fault: the bands at 0.22 and 0.032 mm hold 20 runs and more each side
+    assert {"B_small2", "B_small3"} <= set(m.interval_log10) and "B_small" not in m.interval_log10
+    assert info["interval"]["half_width_log10_by_windows"] == {}  # every run one window: no table of fewer
     for j in "BC":  # the held-out size accuracy: per training speed, the share of answers within x1.5 of the truth
         truth = np.array([r[f"clearance_{j.lower()}_mm"] for r in oof[j]["runs"]])
         ok = np.abs(np.log10(oof[j]["answers"]) - np.log10(truth)) <= math.log10(1.5)
@@ -1064,5 +1142,6 @@ def test_train_calibrates_the_bands_on_its_out_of_fold_answers_and_hands_them_ou
     Xr = np.array(X[:1])  # run 0: B faulty
     a = back.identify(Xr, {"B": True, "C": True})
     size = a["clearance_b_if_faulty_mm"]["median"]
-    w = band_half_width(back.interval_log10, "B", size, back.trained_on["interval"]["size_band_mm"])
+    few = back.trained_on["interval"]["half_width_log10_by_windows"].get("1", {})
+    w = band_half_width(few if "B" in few else back.interval_log10, "B", size, back.trained_on["interval"]["size_band_mm"])
     assert a["clearance_b_if_faulty_mm"]["interval_90"] == pytest.approx([size / 10 ** w, size * 10 ** w])

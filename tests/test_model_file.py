@@ -247,13 +247,24 @@ def test_the_training_ranges_and_feature_quartiles_load_back_and_malformed_ones_
         m.trained_on["interval"] = {"size_band_mm": good}
         m.save(tmp_path / "ok.npz")
         assert ClearanceModel.load(tmp_path / "ok.npz").trained_on["interval"]["size_band_mm"] == good
-    for bad in ("yes", 1, None):  # whether the half widths are split by the fault: a bool
+    for bad in ("yes", 1, ["A"], ["C", "C"], "C"):  # the joints whose half widths are split by the fault
         m.trained_on["interval"] = {"fault_split": bad}
         m.save(tmp_path / "bad.npz")
         _refused(tmp_path / "bad.npz", "fault_split")
-    m.trained_on["interval"] = {"fault_split": True}
-    m.save(tmp_path / "ok.npz")
-    assert ClearanceModel.load(tmp_path / "ok.npz").trained_on["interval"]["fault_split"] is True
+    for good in (True, False, None, [], ["C"], ["B", "C"]):
+        m.trained_on["interval"] = {"fault_split": good}
+        m.save(tmp_path / "ok.npz")
+        assert ClearanceModel.load(tmp_path / "ok.npz").trained_on["interval"]["fault_split"] == good
+    for bad in ([0.2], {"one": {"C": 0.2}}, {"0": {"C": 0.2}}, {"1": {"A": 0.2}}, {"1": {"C": -0.1}},
+                {"1": {"C": float("nan")}}, {"1": [0.2]}):  # the half widths of answers from 1, 2, ... windows
+        m.trained_on["interval"] = {"half_width_log10_by_windows": bad}
+        m.save(tmp_path / "bad.npz")
+        _refused(tmp_path / "bad.npz", "half_width_log10_by_windows")
+    for good in ({}, {"1": {"C": 0.4, "C_small": 0.5}, "2": {"B": 0.3}}):
+        m.trained_on["interval"] = {"half_width_log10_by_windows": good}
+        m.save(tmp_path / "ok.npz")
+        assert ClearanceModel.load(tmp_path / "ok.npz").trained_on["interval"]["half_width_log10_by_windows"] == good
+    m.trained_on["interval"] = {}
     for bad in (0, -0.5, 2.5, "0.5", None):  # where an answer's windows end, in crank turns: (0, 2]
         m.trained_on["answer_hop_revs"] = bad
         m.save(tmp_path / "bad.npz")

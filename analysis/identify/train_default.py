@@ -22,27 +22,28 @@ Steps (each is a plain ``twin`` command; a step whose output exists is skipped, 
    WORK/clearance_id_nuisance_ref_small_b WORK/clearance_id_nuisance_ref_slow_b --b-size-only
    WORK/clearance_id_nuisance_ref_slow_b2 --interval-folds speed --out
    twin/data/identify_default.npz`` (train and val splits; the intervals calibrated on answers at speeds left out,
-   split by the size-resolution map, by the measured ripple and by the answer's size, one band per group of
-   catalogue values, each the largest over the engines; with the held-out size accuracy per orientation and
+   split by the size-resolution map, by the measured ripple, at C by whether both joints are located faulty
+   (``--fault-split C``, the default) and by the answer's size, one band per group of catalogue values, each the
+   largest over the engines; with the held-out size accuracy per orientation and
    training speed; the last set teaches the location and B's size only). The same ``train()`` on the same features
-   is the development study's variant ``slow-b2-at-b`` (``analysis/identify/nuisance_study.py --variants
-   slow-b2-at-b --save slow-b2-at-b:twin/data/identify_default.npz``, which reuses the features it keeps);
+   is the development study's variant ``slow-b2-at-b-fault-c`` (``analysis/identify/nuisance_study.py --variants
+   slow-b2-at-b-fault-c --save slow-b2-at-b-fault-c:twin/data/identify_default.npz``, which reuses the features it
+   keeps);
 3. the development sets ``clearance_id_nuisance_dev.toml``, ``clearance_id_nuisance_dev_out.toml`` and
    ``clearance_id_nuisance_dev_motor.toml`` (reference engine), evaluated into ``analysis/results/identify/dev``,
    ``dev_out`` and ``dev_motor`` (every choice of the model was made on these:
    ``analysis/identify/nuisance_study.py``);
-4. with ``--fresh5`` only, after the model is committed (``analysis/identify/FRESH_TEST.md``, "Fifth round",
-   the one look): the seven sets of the fifth fresh test ``clearance_id_fresh5_*.toml`` (seeds never used), each
-   evaluated into ``analysis/results/identify/fresh5_*`` (``--fresh4``, ``--fresh3``, ``--fresh2``: the fourth,
-   third and second rounds' seven sets, ``clearance_id_fresh4_*.toml``, ``clearance_id_fresh3_*.toml`` and
-   ``clearance_id_fresh2_*.toml``, each looked at once with the model of its round; the first round's six sets,
-   ``clearance_id_fresh_*.toml``, with the one before that: their reports, ``fresh4_*``, ``fresh3_*``,
-   ``fresh2_*`` and ``fresh_*``, are history);
+4. with ``--fresh6`` only, after the model is committed (``analysis/identify/FRESH_TEST.md``, "Sixth round",
+   the one look): the seven sets of the sixth fresh test ``clearance_id_fresh6_*.toml`` (seeds never used), each
+   evaluated into ``analysis/results/identify/fresh6_*`` (``--fresh5``, ``--fresh4``, ``--fresh3``, ``--fresh2``:
+   the fifth to second rounds' seven sets, ``clearance_id_fresh5_*.toml`` ... ``clearance_id_fresh2_*.toml``,
+   each looked at once with the model of its round; the first round's six sets, ``clearance_id_fresh_*.toml``,
+   with the one before that: their reports, ``fresh5_*`` ... ``fresh2_*`` and ``fresh_*``, are history);
 5. the answers on the sample recordings in ``recordings/`` (``analysis/results/identify/samples.json``).
 
-Run: ``python analysis/identify/train_default.py [--work DIR] [--workers N] [--retrain] [--fresh5]``: about
+Run: ``python analysis/identify/train_default.py [--work DIR] [--workers N] [--retrain] [--fresh6]``: about
 95 min for the training data on two cores, 30 min to train, 6 min for the development sets and 20 min for the
-fifth fresh test's sets. The datasets stay in ``--work`` (default ``../identify_work`` beside the checkout; about
+sixth fresh test's sets. The datasets stay in ``--work`` (default ``../identify_work`` beside the checkout; about
 70 GB for the training sets), not in the repository.
 """
 
@@ -66,12 +67,13 @@ TRAIN = ("clearance_id_nuisance", "clearance_id_nuisance_ends", "clearance_id_nu
 B_SIZE_ONLY = ("clearance_id_nuisance_ref_slow_b2",)
 DEV = {"clearance_id_nuisance_dev": "dev", "clearance_id_nuisance_dev_out": "dev_out",
        "clearance_id_nuisance_dev_motor": "dev_motor"}
-#: the parts of the second to fifth fresh tests (the same seven parts each round)
+#: the parts of the second to sixth fresh tests (the same seven parts each round)
 FRESH_PARTS = ("in", "in_mujoco", "out_ripple", "out_speed", "out_noise", "out_params", "motor")
 FRESH2 = {f"clearance_id_fresh2_{k}": f"fresh2_{k}" for k in FRESH_PARTS}
 FRESH3 = {f"clearance_id_fresh3_{k}": f"fresh3_{k}" for k in FRESH_PARTS}
 FRESH4 = {f"clearance_id_fresh4_{k}": f"fresh4_{k}" for k in FRESH_PARTS}
 FRESH5 = {f"clearance_id_fresh5_{k}": f"fresh5_{k}" for k in FRESH_PARTS}
+FRESH6 = {f"clearance_id_fresh6_{k}": f"fresh6_{k}" for k in FRESH_PARTS}
 
 
 def twin(*args: str) -> None:
@@ -98,7 +100,9 @@ def main() -> None:
     ap.add_argument("--fresh4", action="store_true",
                     help="also generate and evaluate the fourth fresh test's sets (looked at once with the model before)")
     ap.add_argument("--fresh5", action="store_true",
-                    help="also generate and evaluate the fifth fresh test's sets (the one look)")
+                    help="also generate and evaluate the fifth fresh test's sets (looked at once with the model before)")
+    ap.add_argument("--fresh6", action="store_true",
+                    help="also generate and evaluate the sixth fresh test's sets (the one look)")
     ap.add_argument("--samples-only", action="store_true", help="only the answers on the sample recordings (step 5)")
     args = ap.parse_args()
     if args.samples_only:
@@ -113,7 +117,7 @@ def main() -> None:
         twin("identify", "train", *map(str, train_ds), "--b-size-only", *map(str, b_only), "--interval-folds", "speed",
              "--out", str(MODEL), "--workers", args.workers)
     sets = dict(DEV) | (FRESH2 if args.fresh2 else {}) | (FRESH3 if args.fresh3 else {}) | (FRESH4 if args.fresh4 else {}) \
-        | (FRESH5 if args.fresh5 else {})
+        | (FRESH5 if args.fresh5 else {}) | (FRESH6 if args.fresh6 else {})
     for name, sub in sets.items():
         d = generate(work, name, args.workers)
         twin("identify", "evaluate", str(MODEL), str(d), "--out", str(REPORT / sub), "--workers", args.workers)

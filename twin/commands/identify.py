@@ -45,6 +45,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         t.add_argument(f"--{j.lower()}-size-only", metavar="DATASET", nargs="+", default=[],
                        help=f"dataset folder(s) pooled for the fault location and the size at {j} only, not for the "
                             f"other joint's size (runs drawn to fill a regime at {j} that would tilt the other's sizes)")
+    t.add_argument("--fault-split", choices=("none", "B", "C", "BC"), default="C",
+                   help="joints whose 90 %% intervals are calibrated apart for recordings located with both joints "
+                        "faulty (default C: the other joint's impacts scatter its size)")
     t.set_defaults(func=_train)
 
     e = ids.add_parser("evaluate", help="evaluate a model on a dataset, or several pooled: confusion matrix, "
@@ -109,7 +112,8 @@ def _train(args: argparse.Namespace) -> int:
     out = check_output_file(args.out, "--out", MODEL_SUFFIX)
     model, info = train(list(args.dataset), _splits(args.splits), resolve_workers(args.workers),
                         interval_folds=args.interval_folds, location_only=list(args.location_only),
-                        size_only_at={"B": list(args.b_size_only), "C": list(args.c_size_only)})
+                        size_only_at={"B": list(args.b_size_only), "C": list(args.c_size_only)},
+                        fault_split=[j for j in args.fault_split if j in "BC"] if args.fault_split != "none" else [])
     model.save(out)
     print(f"{out}: trained on {info['runs']} runs ({info['windows']} windows) of dataset {info['dataset']} "
           f"({info['engine']}); classes {info['classes']}; crank {info['crank_hz_range'][0]:.2f}-"

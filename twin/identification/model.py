@@ -34,6 +34,15 @@
   Before that split, each side is split by the recording's measured within-turn speed ripple
   (:data:`RIPPLE_BAND_PCT`, ``"B_rippled"``, ``"B_unresolved_rippled_small"``, ...), where the runs allow: a
   motor driving through the V-belt ripples far more than a crank PID, and its runs' sizes scatter more.
+  From the sixth round on, C's parts are split again by the located fault (``"C_both"``: both joints located faulty,
+  :data:`FAULT_SPLIT_JOINTS`, ``train(fault_split=...)``), where the runs allow: B's impacts reach the slider's
+  sensors, and on the development sets C's sizes scattered more with both joints loose (C 0.02 mm covered in 80 % of
+  the B+C runs against 94 % of the runs with C alone); at B the split did not help there and is not made.
+  From the sixth round on, the model also holds the half widths of answers from fewer windows than its training
+  runs (``interval.half_width_log10_by_windows``, ``train(by_windows=True)``): for n = 1, 2, ... the same parts
+  calibrated on the out-of-fold runs' answers from their first n windows; a recording answered from n windows takes
+  that table (a 3 s training run holds up to four windows of two turns, a 0.8 s recording at 750 rpm one, whose
+  answer scatters more), one from more windows the main table.
   Where the training runs come from several engines, each half width is the largest of the pooled runs' and each
   engine's runs' alone (``train(interval_by_engine=True)``, the default from the third round on): the bench's
   contact law is neither engine's, and a half width calibrated on the pooled runs covers the engine the regressor
@@ -232,8 +241,16 @@ class ClearanceModel:
             _check_held_out(trained_on.get("held_out_size_accuracy"))
             if not hop_ok(trained_on.get("answer_hop_revs", REVS_PER_WINDOW)):
                 raise ValueError(f"answer_hop_revs must lie in (0, {REVS_PER_WINDOW}]")
-            if not isinstance(trained_on.get("interval", {}).get("fault_split", False), bool):
-                raise ValueError("interval.fault_split malformed")
+            try:
+                fault_split_joints(trained_on.get("interval", {}).get("fault_split", False))
+            except ValueError:
+                raise ValueError("interval.fault_split malformed") from None
+            bw = trained_on.get("interval", {}).get("half_width_log10_by_windows") or {}
+            if not isinstance(bw, dict) or not all(
+                    isinstance(n, str) and n.isdigit() and int(n) >= 1 and isinstance(t, dict) and {"B", "C"} & set(t)
+                    and all(isinstance(v, (int, float)) and math.isfinite(v) and v >= 0 for v in t.values())
+                    for n, t in bw.items()):
+                raise ValueError("interval.half_width_log10_by_windows malformed")
             rb = trained_on.get("interval", {}).get("ripple_band_pct")
             if rb is not None and not (isinstance(rb, (int, float)) and math.isfinite(rb) and rb > 0):
                 raise ValueError("interval.ripple_band_pct malformed")
@@ -280,14 +297,18 @@ class ClearanceModel:
         norm = interval.get("normalized") or {}
         band = interval.get("size_band_mm")
         wavy = rippled(ripple_pct, interval.get("ripple_band_pct") or RIPPLE_BAND_PCT)
+        split_by_fault = fault_split_joints(interval.get("fault_split", False))
+        # answers from fewer windows than the training runs held: the half widths calibrated on as many windows
+        few = (interval.get("half_width_log10_by_windows") or {}).get(str(len(X)), {})
         for j in ("B", "C"):
             mid = size_answer(self.size[j], X)
-            side = j if resolved[j] or f"{j}_unresolved" not in self.interval_log10 else f"{j}_unresolved"
-            if wavy and f"{side}_rippled" in self.interval_log10:
+            half = few if j in few else self.interval_log10
+            side = j if resolved[j] or f"{j}_unresolved" not in half else f"{j}_unresolved"
+            if wavy and f"{side}_rippled" in half:
                 side = f"{side}_rippled"
-            if fault == "BC" and interval.get("fault_split") and f"{side}_both" in self.interval_log10:
+            if fault == "BC" and j in split_by_fault and f"{side}_both" in half:
                 side = f"{side}_both"  # both joints located faulty: the other joint's impacts reach this one's sensors
-            w = band_half_width(self.interval_log10, side, mid, band)
+            w = band_half_width(half, side, mid, band)
             if side in norm:  # normalized conformal: the half width scales with the recording's difficulty
                 w = norm[side]["q"] * (window_spread(self.size[j], X) + norm[side]["beta"])
             lo, hi = (float(f"{mid * 10 ** sign:.12g}") for sign in (-w, w))
@@ -341,6 +362,24 @@ def size_resolved(joint: str, orientation: str, crank_hz: float) -> bool:
 def resolution(orientation: str, crank_hz: float) -> dict[str, bool]:
     """:func:`size_resolved` at both joints: {"B": bool, "C": bool}."""
     return {j: size_resolved(j, orientation, crank_hz) for j in ("B", "C")}
+
+
+#: the joints whose interval half widths the shipped model splits by the located fault (sixth round on)
+FAULT_SPLIT_JOINTS = ("C",)
+
+
+def fault_split_joints(value: Any) -> tuple[str, ...]:
+    """The joints whose half widths are split by the fault, from ``train(fault_split=...)`` or a model file's
+    ``trained_on.interval.fault_split``: True (both joints, as the fifth round's development models recorded),
+    False or None (none), or a list of distinct joints ("B", "C"). Raises ValueError on anything else."""
+    if value is None or value is False:
+        return ()
+    if value is True:
+        return ("B", "C")
+    if isinstance(value, (list, tuple)) and all(isinstance(j, str) and j in ("B", "C") for j in value) \
+            and len(set(value)) == len(value):
+        return tuple(sorted(value))
+    raise ValueError(f"fault_split: {value!r}; allowed: true, false, or a list of distinct joints from B, C")
 
 
 def rippled(ripple_pct: list[float] | None, band_pct: float = RIPPLE_BAND_PCT) -> bool:
@@ -632,6 +671,25 @@ def _half_widths(j: str, scores: np.ndarray, held_runs: list[dict[str, Any]], an
     return half
 
 
+def _half_widths_by_windows(j: str, window_logs: list[np.ndarray], held_runs: list[dict[str, Any]],
+                            size_band_mm: float | list[float] | None, ripple_split: bool, by_engine: bool,
+                            fault_split: bool = False) -> dict[str, dict[str, float]]:
+    """Half widths [log10] of answers made from fewer windows than the training runs hold: for n = 1, 2, ... up to
+    one less than the most windows of a run, those of :func:`_half_widths` calibrated on each out-of-fold run's
+    answer from its first n windows (all of them where it has fewer; ``window_logs``: per run, the regressor's
+    per-window answers [log10]), keyed by str(n). A recording answered from n windows takes the n-window table: its
+    answer scatters as a training run's first n windows do, more than the run's answer from all of its windows (a
+    0.8 s recording at 750 rpm has one window of two turns, a 3 s training run four)."""
+    truth = np.array([math.log10(row[f"clearance_{j.lower()}_mm"]) for row in held_runs], float)
+    most = max((len(w) for w in window_logs), default=0)
+    out: dict[str, dict[str, float]] = {}
+    for n in range(1, most):
+        answers = np.array([float(f"{10 ** float(np.median(w[:n])):.12g}") for w in window_logs])
+        scores = np.abs(np.log10(answers) - truth)
+        out[str(n)] = _half_widths(j, scores, held_runs, answers, size_band_mm, ripple_split, by_engine, fault_split)
+    return out
+
+
 #: the factor of the truth within which an out-of-fold answer counts in the held-out size accuracy (the targets')
 HELD_OUT_FACTOR = 1.5
 
@@ -690,7 +748,8 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
           normalized_intervals: bool = False,
           size_band_mm: float | list[float] | tuple[float, ...] | None = CATALOGUE_BANDS_MM, ripple_split: bool = True,
           size_regressor: str = "mean", interval_by_engine: bool = True, out_of_fold: dict[str, Any] | None = None,
-          answer_hop_revs: float = ANSWER_HOP_REVS, fault_split: bool = False) -> tuple[ClearanceModel, dict[str, Any]]:
+          answer_hop_revs: float = ANSWER_HOP_REVS, fault_split: bool | list[str] | tuple[str, ...] = FAULT_SPLIT_JOINTS,
+          by_windows: bool = True) -> tuple[ClearanceModel, dict[str, Any]]:
     """Train on the ok runs of ``splits`` of one dataset or several pooled (see module docstring);
     ``interval_folds`` groups the out-of-fold scores of the intervals (:func:`_conformal_folds`);
     the runs of the ``location_only`` datasets (pooled like the others) teach the location model
@@ -712,10 +771,18 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
     ``scores``, ``runs`` (rows) and ``answers`` the half widths are calibrated on (a study that compares interval
     options re-calibrates from them with :func:`_half_widths` without fitting again). ``answer_hop_revs``: where a
     recording's answer windows end (:data:`ANSWER_HOP_REVS`); the estimators learn, and the out-of-fold answers are
-    made, from the training runs' windows cut back to back (``features``). ``fault_split``: split each part of the
-    intervals also by whether both joints are faulty (``_both``; the training runs' true fault, a recording's located
-    one), where both sides have MONDRIAN_MIN_RUNS runs: the other joint's impacts reach a joint's sensors and scatter
-    its size (recorded as ``trained_on.interval.fault_split``; off by default and in the shipped model)."""
+    made, from the training runs' windows cut back to back (``features``). ``fault_split``: the joints (a list, or
+    True for both, False for none) whose intervals' parts are split also by whether both joints are faulty
+    (``_both``; the training runs' true fault, a recording's located one), where both sides have MONDRIAN_MIN_RUNS
+    runs: the other joint's impacts reach a joint's sensors and scatter its size (recorded as
+    ``trained_on.interval.fault_split``, the list of joints; default :data:`FAULT_SPLIT_JOINTS`, C only).
+    ``by_windows`` (the default from the sixth round on; with windows back to back only): also the half widths of
+    answers from 1, 2, ... windows, calibrated on the out-of-fold runs' first windows
+    (:func:`_half_widths_by_windows`, ``trained_on.interval.half_width_log10_by_windows``)."""
+    try:
+        split_by_fault = fault_split_joints(fault_split)
+    except ValueError as err:
+        raise ModelError(str(err)) from None
     if interval_folds not in INTERVAL_FOLDS:
         raise ModelError(f"interval_folds: {interval_folds!r}; allowed: {', '.join(INTERVAL_FOLDS)}")
     if not hop_ok(answer_hop_revs):
@@ -760,6 +827,7 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
     half_width: dict[str, float] = {}
     held_out: dict[str, Any] = {}
     normalized: dict[str, dict[str, float]] = {}
+    by_windows: dict[str, dict[str, float]] = {}  # half widths of answers from 1, 2, ... windows
     n_folds: dict[str, int] = {}
     owner_a = np.asarray(owner)
     for j in ("B", "C"):
@@ -780,7 +848,7 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
         # out-of-fold scores of whole runs (see module docstring)
         fold = _conformal_folds(rows, np.unique(owner_a[sel]), interval_folds, seed)
         n_folds[j] = int(fold.max()) + 1
-        scores, held_runs, spread, answers = [], [], [], []
+        scores, held_runs, spread, answers, window_logs = [], [], [], [], []
         for k in range(n_folds[j]):
             held = sel & (fold[owner_a] == k)
             if not held.any() or (sel & ~held).sum() < 10:
@@ -788,20 +856,26 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
             reg = fit(sel & ~held)
             for r in np.unique(owner_a[held]):
                 Xr = X[owner_a == r]
-                answers.append(size_answer(reg, Xr))
+                window_logs.append(reg.predict(Xr))
+                answers.append(float(f"{10 ** float(np.median(window_logs[-1])):.12g}"))  # size_answer(reg, Xr)
                 scores.append(abs(math.log10(answers[-1]) - math.log10(rows[int(r)][key])))
                 spread.append(window_spread(reg, Xr))
                 held_runs.append(rows[int(r)])
         scores, spread, answers = np.array(scores), np.array(spread), np.array(answers)
         if out_of_fold is not None:
-            out_of_fold[j] = {"scores": scores, "runs": held_runs, "answers": answers}
+            out_of_fold[j] = {"scores": scores, "runs": held_runs, "answers": answers, "window_logs": window_logs}
         if normalized_intervals:
             normalized[j] = normalized_scale(scores, spread)
         half_width |= _half_widths(j, scores, held_runs, answers, size_band_mm, ripple_split, interval_by_engine,
-                                   fault_split)
+                                   j in split_by_fault)
+        if by_windows and float(answer_hop_revs) == REVS_PER_WINDOW:
+            for n, half in _half_widths_by_windows(j, window_logs, held_runs, size_band_mm, ripple_split,
+                                                   interval_by_engine, j in split_by_fault).items():
+                by_windows.setdefault(n, {}).update(half)
         held_out[j] = held_out_accuracy(scores, held_runs)
         if normalized_intervals:
-            for key, m in _interval_parts(j, held_runs, answers, size_band_mm, ripple_split, fault_split)[1].items():
+            for key, m in _interval_parts(j, held_runs, answers, size_band_mm, ripple_split,
+                                          j in split_by_fault)[1].items():
                 normalized[key] = normalized_scale(scores[m], spread[m], normalized[j]["beta"])
     import sklearn
 
@@ -834,8 +908,9 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
                      "size_band_mm": recorded_size_bands(size_band_mm),
                      "ripple_band_pct": RIPPLE_BAND_PCT if ripple_split else None,
                      "by_engine": interval_by_engine,
-                     "fault_split": fault_split,
+                     "fault_split": list(split_by_fault),
                      "half_width_log10": half_width,
+                     "half_width_log10_by_windows": by_windows,
                      "normalized": normalized,
                      "difficulty": "spread of the per-window answers: interquartile range of the windows' log10 "
                                    "answers / 1.349 [log10]"},
