@@ -24,11 +24,12 @@ Steps (each is a plain ``twin`` command; a step whose output exists is skipped, 
    twin/data/identify_default.npz`` (train and val splits; the intervals calibrated on answers at speeds left out,
    split by the size-resolution map, by the measured ripple, at C by whether both joints are located faulty
    (``--fault-split C``, the default) and by the answer's size, one band per group of catalogue values, each the
-   largest over the engines; with the held-out size accuracy per orientation and
+   largest over the engines, and the same for answers from one to three windows; with the held-out size accuracy
+   per orientation and
    training speed; the last set teaches the location and B's size only). The same ``train()`` on the same features
-   is the development study's variant ``slow-b2-at-b-fault-c`` (``analysis/identify/nuisance_study.py --variants
-   slow-b2-at-b-fault-c --save slow-b2-at-b-fault-c:twin/data/identify_default.npz``, which reuses the features it
-   keeps);
+   is the development study's variant ``slow-b2-at-b-fault-c-windows`` (``analysis/identify/nuisance_study.py
+   --variants slow-b2-at-b-fault-c-windows --save slow-b2-at-b-fault-c-windows:twin/data/identify_default.npz``,
+   which reuses the features it keeps);
 3. the development sets ``clearance_id_nuisance_dev.toml``, ``clearance_id_nuisance_dev_out.toml`` and
    ``clearance_id_nuisance_dev_motor.toml`` (reference engine), evaluated into ``analysis/results/identify/dev``,
    ``dev_out`` and ``dev_motor`` (every choice of the model was made on these:

@@ -285,7 +285,10 @@ class ClearanceModel:
         each side (no default: a caller that forgot it would get the narrow interval below the map);
         ``ripple_pct``: the recording's measured within-turn ripple (harmonics of the crank rate, % of
         the speed; :func:`twin.identification.ranges.recording_measures`), which picks the half widths of
-        rippled recordings (:data:`RIPPLE_BAND_PCT`) where the model has them."""
+        rippled recordings (:data:`RIPPLE_BAND_PCT`) where the model has them. The half widths are those of
+        answers from as many windows as ``X`` holds where the model has such a table for the joint
+        (``interval.half_width_log10_by_windows``), else the main ones; C's (or B's) those of recordings located
+        B+C where the model split them so (``interval.fault_split``)."""
         if set(resolved) != {"B", "C"}:
             raise ModelError(f"resolved: {sorted(resolved)}; needs a flag for each of B and C")
         proba = self.classifier.predict_proba(X).mean(axis=0)
@@ -768,8 +771,9 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
     :data:`SIZE_REGRESSORS`; ``interval_by_engine``: where the runs come from several engines, each half width is
     the largest of the pooled runs' and each engine's runs' (those with MONDRIAN_MIN_RUNS runs or more), so that
     it holds for each contact law alone. ``out_of_fold``: a dict that receives, per joint, the out-of-fold
-    ``scores``, ``runs`` (rows) and ``answers`` the half widths are calibrated on (a study that compares interval
-    options re-calibrates from them with :func:`_half_widths` without fitting again). ``answer_hop_revs``: where a
+    ``scores``, ``runs`` (rows), ``answers`` and per run its windows' answers ``window_logs`` [log10] the half widths
+    are calibrated on (a study that compares interval options re-calibrates from them with :func:`_half_widths` and
+    :func:`_half_widths_by_windows` without fitting again). ``answer_hop_revs``: where a
     recording's answer windows end (:data:`ANSWER_HOP_REVS`); the estimators learn, and the out-of-fold answers are
     made, from the training runs' windows cut back to back (``features``). ``fault_split``: the joints (a list, or
     True for both, False for none) whose intervals' parts are split also by whether both joints are faulty
