@@ -553,6 +553,8 @@ def test_the_short_repeats_of_test6_are_located_and_their_intervals_hold_the_tru
 
     assert check["measured"]["ripple_pct"][3] < ClearanceModel.load(DEFAULT).trained_on["ranges"]["ripple_pct"][3][1]
     assert lo <= 0.1 <= hi
+    # one window of two turns: the interval is that of answers from one window, and the answer says so
+    assert a["evidence"]["windows"] == 1 and "answers from their first 1 window " in check["interval_rule"]
 
 
 def test_the_size_target_is_half_the_catalogue_gap_there():

@@ -987,9 +987,12 @@ def training_check(model: ClearanceModel, ans: dict[str, Any], measures: dict[st
             if j in ans["fault"]:
                 ans[f"{key}_interval_mm"] = wide
     checks["outside_training_data"] = outside
+    tables = tr.get("interval", {}).get("half_width_log10_by_windows") or {}
+    few = f", calibrated on the training runs' answers from their first {len(X)} window{'s' * (len(X) > 1)} (as many " \
+          "as this recording has)" if str(len(X)) in tables else ""
     checks["interval_rule"] = ("outside the training data: each interval widened to hold every clearance the model "
                                "was trained on at that joint (no calibrated interval exists there)" if outside else
-                               "inside the training data: the conformal 90 % interval")
+                               f"inside the training data: the conformal 90 % interval{few}")
     return warnings, checks
 
 
