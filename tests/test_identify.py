@@ -634,6 +634,32 @@ def test_regression_guard_the_size_resolution_map_is_the_committed_studies(joint
         assert not size_resolved("B", "y", hz(275))
 
 
+class _FixedClassifier:
+    """A location classifier that answers the same class probabilities for every window."""
+
+    def __init__(self, probabilities, classes=("none", "B", "C", "BC")):
+        self.classes_ = np.array(classes)
+        self.p = list(probabilities)
+
+    @classmethod
+    def sure(cls, fault: str) -> "_FixedClassifier":
+        """Probability 1 for ``fault``."""
+        return cls([1.0 if c == fault else 0.0 for c in ("none", "B", "C", "BC")])
+
+    def predict_proba(self, X):
+        return np.tile(self.p, (len(X), 1))
+
+
+class _ConstantRegressor:
+    """A size regressor that answers the same log10 clearance for every window (default 0.1 mm)."""
+
+    def __init__(self, log10_mm: float = -1.0):
+        self.v = log10_mm
+
+    def predict(self, X):
+        return np.full(len(X), self.v)
+
+
 def _half_width(m, side: str, size_mm: float, windows: int) -> float:
     """The conformal half width [log10] the model gives an answer of ``size_mm`` from ``windows`` windows on
     ``side`` ("B", "B_unresolved", ...): that of the answer's size band (model.band_half_width) in the table of
@@ -716,14 +742,8 @@ def test_an_answer_at_B_below_its_map_says_so_and_takes_the_wide_interval(monkey
     import twin.identification.model as id_model
     from twin.commands.identify import default_model_path
 
-    class BC:
-        classes_ = np.array(["BC", "C", "B", "none"])
-
-        def predict_proba(self, X):
-            return np.tile([0.9, 0.05, 0.05, 0.0], (len(X), 1))
-
     shipped = id_model.ClearanceModel.load(default_model_path())
-    m = dataclasses.replace(shipped, classifier=BC())
+    m = dataclasses.replace(shipped, classifier=_FixedClassifier([0.9, 0.05, 0.05, 0.0], ("BC", "C", "B", "none")))
     assert "B_unresolved" in m.interval_log10 and m.interval_log10["B_unresolved"] > m.interval_log10["B"]
     a = id_model.identify_recording(m, REC / "test6_synthetic.mcap")
     assert a["fault"] == "BC" and a["clearance_b_size_resolved"] and a["warnings"] == []
@@ -759,16 +779,10 @@ def test_interval_folds_by_speed_leave_each_speed_out_and_each_joint_is_split_by
     with pytest.raises(ModelError, match="size_regressor: 'forest'; allowed: mean, median"):
         train("nowhere", interval_folds="speed", size_regressor="forest")
 
-    class Clf:
-        classes_ = np.array(["BC", "C", "B", "none"])
+    def Clf():  # located C (0.7), the classes in another order than CLASSES
+        return _FixedClassifier([0.1, 0.7, 0.1, 0.1], ("BC", "C", "B", "none"))
 
-        def predict_proba(self, X):
-            return np.tile([0.1, 0.7, 0.1, 0.1], (len(X), 1))
-
-    class Reg:
-        def predict(self, X):
-            return np.full(len(X), -1.0)  # 0.1 mm
-
+    Reg = _ConstantRegressor  # 0.1 mm
     m = ClearanceModel(Clf(), {"B": Reg(), "C": Reg()},
                        {"B": 0.3, "B_unresolved": 0.6, "C": 0.2, "C_unresolved": 0.8})
     X = np.zeros((2, 3))
@@ -827,19 +841,7 @@ def test_half_widths_split_by_the_fault_where_both_sides_have_enough_runs():
     assert set(_interval_parts("C", few, answers[:len(few)], None, False, fault_split=True)[0]) == {"C"}
     assert set(_interval_parts("C", rows, answers, None, False)[0]) == {"C"}  # not asked: no split
 
-    class Clf:
-        classes_ = np.array(["none", "B", "C", "BC"])
-
-        def __init__(self, fault):
-            self.p = [1.0 if c == fault else 0.0 for c in self.classes_]
-
-        def predict_proba(self, X):
-            return np.tile(self.p, (len(X), 1))
-
-    class Reg:
-        def predict(self, X):
-            return np.full(len(X), -1.0)  # 0.1 mm
-
+    Clf, Reg = _FixedClassifier.sure, _ConstantRegressor  # a sure location; 0.1 mm at both joints
     widths = {"B": 0.3, "B_both": 0.6, "C": 0.2, "C_both": 0.5}
     X, on = np.zeros((2, 3)), {"B": True, "C": True}
     for recorded in (True, ["B", "C"]):  # both joints split (a fifth-round development model recorded True)
@@ -878,18 +880,9 @@ def test_half_widths_by_windows_are_calibrated_on_as_many_windows():
         assert tables[str(k)] == pytest.approx(_half_widths("C", scores, rows, answers, None, False, False), rel=1e-9)
     assert tables["1"]["C"] > conformal_half_width(np.abs(np.array([np.median(w) for w in logs]) + 1.0))
 
-    class Clf:
-        classes_ = np.array(["none", "B", "C", "BC"])
-
-        def predict_proba(self, X):
-            return np.tile([0.0, 0.0, 1.0, 0.0], (len(X), 1))
-
-    class Reg:
-        def predict(self, X):
-            return np.full(len(X), -1.0)  # 0.1 mm
-
+    Reg = _ConstantRegressor  # 0.1 mm
     trained = {"interval": {"half_width_log10_by_windows": {"1": {"C": 0.4}, "2": {"C": 0.3, "B": 0.35}}}}
-    m = ClearanceModel(Clf(), {"B": Reg(), "C": Reg()}, {"B": 0.1, "C": 0.2}, trained_on=trained)
+    m = ClearanceModel(_FixedClassifier.sure("C"), {"B": Reg(), "C": Reg()}, {"B": 0.1, "C": 0.2}, trained_on=trained)
     on = {"B": True, "C": True}
     for windows, wc, wb in ((1, 0.4, 0.1), (2, 0.3, 0.35), (3, 0.2, 0.1), (5, 0.2, 0.1)):
         a = m.identify(np.zeros((windows, 3)), on)
@@ -914,22 +907,12 @@ def test_an_interval_ending_on_a_trained_value_holds_it():
     0.020000000000000004 in floating point, which must not put 0.02 outside an interval ending on it."""
     from twin.identification.model import ClearanceModel
 
-    class Const:
-        def __init__(self, v):
-            self.v = v
-
-        def predict(self, X):
-            return np.full(len(X), self.v)
-
-    class Clf:
-        classes_ = np.array(["none", "B", "C", "BC"])
-
-        def predict_proba(self, X):
-            return np.tile([0.0, 0.0, 0.0, 1.0], (len(X), 1))
+    Const = _ConstantRegressor
 
     assert 10 ** math.log10(0.02) != 0.02  # the floating-point fact this test is about
     w = math.log10(0.05 / 0.02)  # the interval of an answer of 0.05 mm starts at exactly 0.02 mm
-    m = ClearanceModel(Clf(), {"B": Const(math.log10(0.05)), "C": Const(math.log10(0.02))}, {"B": w, "C": 0.0})
+    m = ClearanceModel(_FixedClassifier.sure("BC"), {"B": Const(math.log10(0.05)), "C": Const(math.log10(0.02))},
+                       {"B": w, "C": 0.0})
     a = m.identify(np.zeros((3, 4)), {"B": True, "C": True})
     assert a["fault"] == "BC"
     assert a["clearance_b_mm"] == 0.05 and a["clearance_b_interval_mm"] == [0.02, 0.125]

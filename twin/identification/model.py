@@ -301,10 +301,10 @@ class ClearanceModel:
         band = interval.get("size_band_mm")
         wavy = rippled(ripple_pct, interval.get("ripple_band_pct") or RIPPLE_BAND_PCT)
         split_by_fault = fault_split_joints(interval.get("fault_split", False))
-        # answers from fewer windows than the training runs held: the half widths calibrated on as many windows
-        few = (interval.get("half_width_log10_by_windows") or {}).get(str(len(X)), {})
+        few = window_table(interval, len(X))
         for j in ("B", "C"):
-            mid = size_answer(self.size[j], X)
+            logs = self.size[j].predict(X)
+            mid = logs_answer(logs)
             half = few if j in few else self.interval_log10
             side = j if resolved[j] or f"{j}_unresolved" not in half else f"{j}_unresolved"
             if wavy and f"{side}_rippled" in half:
@@ -313,7 +313,7 @@ class ClearanceModel:
                 side = f"{side}_both"  # both joints located faulty: the other joint's impacts reach this one's sensors
             w = band_half_width(half, side, mid, band)
             if side in norm:  # normalized conformal: the half width scales with the recording's difficulty
-                w = norm[side]["q"] * (window_spread(self.size[j], X) + norm[side]["beta"])
+                w = norm[side]["q"] * (logs_spread(logs) + norm[side]["beta"])
             lo, hi = (float(f"{mid * 10 ** sign:.12g}") for sign in (-w, w))
             has = j in fault
             out[f"clearance_{j.lower()}_mm"] = mid if has else 0.0
@@ -404,19 +404,29 @@ def normalized_scale(scores: np.ndarray, spread: np.ndarray, beta: float | None 
 
 
 def window_spread(reg: Any, X: np.ndarray) -> float:
-    """Difficulty of a recording for a size regressor: the spread of its per-window answers, their
-    interquartile range over 1.349 (the standard deviation of a normal sample) [log10]; 0 for one window."""
-    if len(X) < 2:
+    """Difficulty of a recording for a size regressor: the spread of its per-window answers (:func:`logs_spread`)."""
+    return logs_spread(reg.predict(X)) if len(X) >= 2 else 0.0
+
+
+def logs_spread(logs: np.ndarray) -> float:
+    """The spread of per-window answers ``logs`` [log10]: their interquartile range over 1.349 (the standard
+    deviation of a normal sample) [log10]; 0 for one window."""
+    if len(logs) < 2:
         return 0.0
-    q1, q3 = np.quantile(np.asarray(reg.predict(X), float), [0.25, 0.75])
+    q1, q3 = np.quantile(np.asarray(logs, float), [0.25, 0.75])
     return float(q3 - q1) / 1.349
 
 
 def size_answer(reg: Any, X: np.ndarray) -> float:
-    """A recording's clearance [mm]: the median over its windows of the regressor's answers
-    (log10), to 12 significant digits (10 ** log10(0.02) is 0.020000000000000004, which would put
-    a trained value just outside an interval that ends on it)."""
-    return float(f"{10 ** float(np.median(reg.predict(X))):.12g}")
+    """A recording's clearance [mm] from its windows' features (:func:`logs_answer` of the regressor's answers)."""
+    return logs_answer(reg.predict(X))
+
+
+def logs_answer(logs: np.ndarray) -> float:
+    """A clearance [mm] from per-window answers ``logs`` [log10]: their median, to 12 significant digits
+    (10 ** log10(0.02) is 0.020000000000000004, which would put a trained value just outside an interval that
+    ends on it)."""
+    return float(f"{10 ** float(np.median(logs)):.12g}")
 
 
 def conformal_half_width(scores: np.ndarray, coverage: float = COVERAGE) -> float:
@@ -674,6 +684,13 @@ def _half_widths(j: str, scores: np.ndarray, held_runs: list[dict[str, Any]], an
     return half
 
 
+def window_table(interval: dict[str, Any], windows: int) -> dict[str, float]:
+    """The half widths [log10] of answers from ``windows`` windows in a model's ``interval`` record
+    (``half_width_log10_by_windows``, :func:`_half_widths_by_windows`); empty where it holds none for that count
+    (an answer then takes the main table)."""
+    return (interval.get("half_width_log10_by_windows") or {}).get(str(windows), {})
+
+
 def _half_widths_by_windows(j: str, window_logs: list[np.ndarray], held_runs: list[dict[str, Any]],
                             size_band_mm: float | list[float] | None, ripple_split: bool, by_engine: bool,
                             fault_split: bool = False) -> dict[str, dict[str, float]]:
@@ -687,7 +704,7 @@ def _half_widths_by_windows(j: str, window_logs: list[np.ndarray], held_runs: li
     most = max((len(w) for w in window_logs), default=0)
     out: dict[str, dict[str, float]] = {}
     for n in range(1, most):
-        answers = np.array([float(f"{10 ** float(np.median(w[:n])):.12g}") for w in window_logs])
+        answers = np.array([logs_answer(w[:n]) for w in window_logs])
         scores = np.abs(np.log10(answers) - truth)
         out[str(n)] = _half_widths(j, scores, held_runs, answers, size_band_mm, ripple_split, by_engine, fault_split)
     return out
@@ -860,10 +877,10 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
             reg = fit(sel & ~held)
             for r in np.unique(owner_a[held]):
                 Xr = X[owner_a == r]
-                window_logs.append(reg.predict(Xr))
-                answers.append(float(f"{10 ** float(np.median(window_logs[-1])):.12g}"))  # size_answer(reg, Xr)
+                window_logs.append(reg.predict(Xr))  # one prediction per run: its answer and spread
+                answers.append(logs_answer(window_logs[-1]))
                 scores.append(abs(math.log10(answers[-1]) - math.log10(rows[int(r)][key])))
-                spread.append(window_spread(reg, Xr))
+                spread.append(logs_spread(window_logs[-1]))
                 held_runs.append(rows[int(r)])
         scores, spread, answers = np.array(scores), np.array(spread), np.array(answers)
         if out_of_fold is not None:
@@ -987,9 +1004,8 @@ def training_check(model: ClearanceModel, ans: dict[str, Any], measures: dict[st
             if j in ans["fault"]:
                 ans[f"{key}_interval_mm"] = wide
     checks["outside_training_data"] = outside
-    tables = tr.get("interval", {}).get("half_width_log10_by_windows") or {}
     few = f", calibrated on the training runs' answers from their first {len(X)} window{'s' * (len(X) > 1)} (as many " \
-          "as this recording has)" if str(len(X)) in tables else ""
+          "as this recording has)" if window_table(tr.get("interval", {}), len(X)) else ""
     checks["interval_rule"] = ("outside the training data: each interval widened to hold every clearance the model "
                                "was trained on at that joint (no calibrated interval exists there)" if outside else
                                f"inside the training data: the conformal 90 % interval{few}")
