@@ -336,6 +336,33 @@ def test_a_hostile_pickle_is_refused_unopened(tmp_path, capsys):
     assert marker.exists()
 
 
+def test_a_file_that_is_not_a_model_is_named_by_what_its_first_bytes_are(tmp_path):
+    """The refusal says what a foreign file most likely is from its first bytes, and does not call a text
+    file starting with "x" (0x78, zlib's first byte) a compressed pickle: a zlib stream is 0x78 and a second
+    byte making the 16-bit header a multiple of 31 (RFC 1950; "x " is one, with a preset dictionary, which
+    joblib never writes); a pickle is 0x80 then its protocol, compressed or not."""
+    import bz2
+    import gzip
+    import zlib
+
+    cases = {"text.npz": (b"x = 1\n", "not a zip archive"),
+             "one_x.npz": (b"x\n", "not a zip archive"),
+             "zlib.npz": (zlib.compress(b"plain bytes"), "a zlib stream"),
+             "zlib_pickle.npz": (zlib.compress(pickle.dumps([1, 2], protocol=4)), "zlib-compressed"),
+             "protocol2.npz": (pickle.dumps([1, 2], protocol=2), "a pickle file"),
+             "highbyte.npz": (b"\x80\x00 not a pickle", "not a zip archive"),
+             "gzip.npz": (gzip.compress(b"plain"), "a gzip file"),
+             "bz2.npz": (bz2.compress(b"plain"), "a bz2 file")}
+    for name, (data, said) in cases.items():
+        (tmp_path / name).write_bytes(data)
+        with pytest.raises(ModelError) as e:
+            ClearanceModel.load(tmp_path / name)
+        msg = str(e.value)
+        assert said in msg and "\n" not in msg, (name, msg)
+        assert ("pickle" in msg.split(";")[0]) == (said in ("zlib-compressed", "a pickle file", "a gzip file",
+                                                           "a bz2 file")), (name, msg)
+
+
 def _rewrite(src: Path, dst: Path, change) -> Path:
     """A copy of a model file with its members changed by ``change(name, bytes) -> bytes | None``
     (None drops the member); the zip is written afresh, so every CRC is right."""

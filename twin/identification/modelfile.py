@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import zipfile
+import zlib
 from io import BytesIO
 from pathlib import Path
 from typing import Any
@@ -18,14 +19,34 @@ from twin.identification.trees import ARRAYS, ModelError, TreeEnsemble
 
 MAX_MODEL_BYTES = 256 << 20  # a model file's size, and its members' unpacked sizes together, at most [B]
 ZIP_MAGIC = b"PK\x03\x04"
-# what a file that is not a zip archive most likely is, by its first bytes (for the refusal's message)
 _PICKLE = "never unpickled, as unpickling can run code"
-_NOT_ZIP = ((b"\x80", f"a pickle file (as joblib and pickle write), {_PICKLE}"),
-            (b"\x78", f"a zlib-compressed joblib pickle, {_PICKLE}"),
-            (b"\x1f\x8b", f"a gzip file (a compressed joblib pickle?), {_PICKLE}"),
-            (b"BZh", f"a bz2 file (a compressed joblib pickle?), {_PICKLE}"),
-            (b"\xfd7zXZ", f"an xz file (a compressed joblib pickle?), {_PICKLE}"),
-            (b"\x93NUMPY", "a single .npy array"))
+
+
+def _is_pickle(head: bytes | None) -> bool:
+    """Whether bytes begin as a pickle of protocol 2-5 does (the PROTO opcode and its number)."""
+    return head is not None and head[:1] == b"\x80" and head[1:2] in (b"\x02", b"\x03", b"\x04", b"\x05")
+
+
+def _zlib_head(data: bytes) -> bytes | None:
+    """The first bytes a zlib stream at the start of ``data`` unpacks to (RFC 1950: 0x78 for deflate with
+    a 32 KiB window, no preset dictionary, a header that is a multiple of 31), or None where it is not one.
+    Only decompressed, never unpickled."""
+    if len(data) < 2 or data[0] != 0x78 or data[1] & 0x20 or (data[0] << 8 | data[1]) % 31:
+        return None
+    try:
+        return zlib.decompressobj().decompress(data[:4096], 16)
+    except zlib.error:
+        return None
+
+
+# what a file that is not a zip archive most likely is, by its first bytes (for the refusal's message)
+_NOT_ZIP = ((_is_pickle, f"a pickle file (as joblib and pickle write), {_PICKLE}"),
+            (lambda d: _is_pickle(_zlib_head(d)), f"a zlib-compressed joblib pickle, {_PICKLE}"),
+            (lambda d: _zlib_head(d) is not None, "a zlib stream"),
+            (lambda d: d.startswith(b"\x1f\x8b"), f"a gzip file (a compressed joblib pickle?), {_PICKLE}"),
+            (lambda d: d.startswith(b"BZh"), f"a bz2 file (a compressed joblib pickle?), {_PICKLE}"),
+            (lambda d: d.startswith(b"\xfd7zXZ"), f"an xz file (a compressed joblib pickle?), {_PICKLE}"),
+            (lambda d: d.startswith(b"\x93NUMPY"), "a single .npy array"))
 _DATE = (1980, 1, 1, 0, 0, 0)  # members' timestamp: the same model gives the same bytes
 
 
@@ -64,7 +85,7 @@ def read_model(path: Path, fmt: str, estimators: tuple[str, ...]) -> tuple[dict[
         raise ModelError(f"{no} ({p.stat().st_size} bytes, over {MAX_MODEL_BYTES}; {what})")
     data = p.read_bytes()
     if not data.startswith(ZIP_MAGIC):
-        kind = next((k for m, k in _NOT_ZIP if data.startswith(m)), "not a zip archive")
+        kind = next((k for is_it, k in _NOT_ZIP if is_it(data)), "not a zip archive")
         raise ModelError(f"{no} ({kind}; {what}: retrain it with 'twin identify train')")
     try:
         z = zipfile.ZipFile(BytesIO(data))
