@@ -210,33 +210,18 @@ VARIANTS = {"base": ((TRAIN,), dict(normalized_intervals=True, size_band_mm=None
                                   size_band_mm=CATALOGUE_BANDS_MM)),
             "overlap": ((TRAIN, ENDS, REF, MOTOR, MOTOR_YZ, REF_SMALL, REF_SMALL_B, REF_SLOW_B),
                         dict(normalized_intervals=False, size_regressor="mean", interval_by_engine=True,
-                             size_band_mm=CATALOGUE_BANDS_MM, answer_hop_revs=0.5)),
-            "slow-b2": ((TRAIN, ENDS, REF, MOTOR, MOTOR_YZ, REF_SMALL, REF_SMALL_B, REF_SLOW_B, REF_SLOW_B2),
-                        dict(normalized_intervals=False, size_regressor="mean", interval_by_engine=True,
-                             size_band_mm=CATALOGUE_BANDS_MM)),
-            "slow-b2-at-b": ((TRAIN, ENDS, REF, MOTOR, MOTOR_YZ, REF_SMALL, REF_SMALL_B, REF_SLOW_B, REF_SLOW_B2),
-                             dict(normalized_intervals=False, size_regressor="mean", interval_by_engine=True,
-                                  size_band_mm=CATALOGUE_BANDS_MM, size_only_at={"B": (REF_SLOW_B2,)})),
-            "slow-b2-at-b-fault": ((TRAIN, ENDS, REF, MOTOR, MOTOR_YZ, REF_SMALL, REF_SMALL_B, REF_SLOW_B, REF_SLOW_B2),
-                                   dict(normalized_intervals=False, size_regressor="mean", interval_by_engine=True,
-                                        size_band_mm=CATALOGUE_BANDS_MM, size_only_at={"B": (REF_SLOW_B2,)},
-                                        fault_split=True)),
-            "slow-b2-at-b-fault-c": ((TRAIN, ENDS, REF, MOTOR, MOTOR_YZ, REF_SMALL, REF_SMALL_B, REF_SLOW_B,
-                                      REF_SLOW_B2),
-                                     dict(normalized_intervals=False, size_regressor="mean", interval_by_engine=True,
-                                          size_band_mm=CATALOGUE_BANDS_MM, size_only_at={"B": (REF_SLOW_B2,)},
-                                          fault_split=("C",))),
-            "slow-b2-at-b-windows": ((TRAIN, ENDS, REF, MOTOR, MOTOR_YZ, REF_SMALL, REF_SMALL_B, REF_SLOW_B,
-                                      REF_SLOW_B2),
-                                     dict(normalized_intervals=False, size_regressor="mean", interval_by_engine=True,
-                                          size_band_mm=CATALOGUE_BANDS_MM, size_only_at={"B": (REF_SLOW_B2,)},
-                                          by_windows=True)),
-            "slow-b2-at-b-fault-c-windows": ((TRAIN, ENDS, REF, MOTOR, MOTOR_YZ, REF_SMALL, REF_SMALL_B, REF_SLOW_B,
-                                              REF_SLOW_B2),
-                                             dict(normalized_intervals=False, size_regressor="mean",
-                                                  interval_by_engine=True, size_band_mm=CATALOGUE_BANDS_MM,
-                                                  size_only_at={"B": (REF_SLOW_B2,)}, fault_split=("C",),
-                                                  by_windows=True))}
+                             size_band_mm=CATALOGUE_BANDS_MM, answer_hop_revs=0.5))}
+# the fifth and sixth rounds' variants: the same sets and estimator options, then what each changes
+SLOW_B2_SETS = (TRAIN, ENDS, REF, MOTOR, MOTOR_YZ, REF_SMALL, REF_SMALL_B, REF_SLOW_B, REF_SLOW_B2)
+_SLOW_B2 = dict(normalized_intervals=False, size_regressor="mean", interval_by_engine=True,
+                size_band_mm=CATALOGUE_BANDS_MM)
+_AT_B = _SLOW_B2 | dict(size_only_at={"B": (REF_SLOW_B2,)})
+VARIANTS |= {"slow-b2": (SLOW_B2_SETS, dict(_SLOW_B2)),
+             "slow-b2-at-b": (SLOW_B2_SETS, dict(_AT_B)),
+             "slow-b2-at-b-fault": (SLOW_B2_SETS, _AT_B | dict(fault_split=True)),
+             "slow-b2-at-b-fault-c": (SLOW_B2_SETS, _AT_B | dict(fault_split=("C",))),
+             "slow-b2-at-b-windows": (SLOW_B2_SETS, _AT_B | dict(by_windows=True)),
+             "slow-b2-at-b-fault-c-windows": (SLOW_B2_SETS, _AT_B | dict(fault_split=("C",), by_windows=True))}
 # the variants before keep the size regressor and the intervals they were measured with
 for _v in VARIANTS.values():
     _v[1].setdefault("size_regressor", "median")
@@ -256,8 +241,9 @@ def recalibrated(model: ClearanceModel, info: dict, oof: dict, opts: dict) -> tu
     band = opts.get("size_band_mm", SIZE_BAND_MM)
     half: dict[str, float] = {}
     by_windows: dict[str, dict[str, float]] = {}
+    split_by_fault = fault_split_joints(opts["fault_split"])
     for j in ("B", "C"):
-        split = j in fault_split_joints(opts["fault_split"])
+        split = j in split_by_fault
         half |= _half_widths(j, oof[j]["scores"], oof[j]["runs"], oof[j]["answers"], band,
                              opts.get("ripple_split", True), opts["interval_by_engine"], split)
         if opts["by_windows"] and float(opts["answer_hop_revs"]) == REVS_PER_WINDOW:
@@ -267,7 +253,7 @@ def recalibrated(model: ClearanceModel, info: dict, oof: dict, opts: dict) -> tu
                 by_windows.setdefault(n, {}).update(h)
     info = json.loads(json.dumps(info, default=float))
     info["interval"] |= {"half_width_log10": half, "by_engine": opts["interval_by_engine"],
-                         "size_band_mm": recorded_size_bands(band), "fault_split": list(fault_split_joints(opts["fault_split"])),
+                         "size_band_mm": recorded_size_bands(band), "fault_split": list(split_by_fault),
                          "half_width_log10_by_windows": by_windows}
     info["answer_hop_revs"] = float(opts["answer_hop_revs"])
     return ClearanceModel(model.classifier, model.size, half, trained_on=info), info

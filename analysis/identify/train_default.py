@@ -70,11 +70,10 @@ DEV = {"clearance_id_nuisance_dev": "dev", "clearance_id_nuisance_dev_out": "dev
        "clearance_id_nuisance_dev_motor": "dev_motor"}
 #: the parts of the second to sixth fresh tests (the same seven parts each round)
 FRESH_PARTS = ("in", "in_mujoco", "out_ripple", "out_speed", "out_noise", "out_params", "motor")
-FRESH2 = {f"clearance_id_fresh2_{k}": f"fresh2_{k}" for k in FRESH_PARTS}
-FRESH3 = {f"clearance_id_fresh3_{k}": f"fresh3_{k}" for k in FRESH_PARTS}
-FRESH4 = {f"clearance_id_fresh4_{k}": f"fresh4_{k}" for k in FRESH_PARTS}
-FRESH5 = {f"clearance_id_fresh5_{k}": f"fresh5_{k}" for k in FRESH_PARTS}
-FRESH6 = {f"clearance_id_fresh6_{k}": f"fresh6_{k}" for k in FRESH_PARTS}
+#: per round, its fresh test's sets (dataset name -> report folder); the last round's is the one look, the others
+#: were each looked at once with the model of their round
+FRESH = {r: {f"clearance_id_fresh{r}_{k}": f"fresh{r}_{k}" for k in FRESH_PARTS} for r in range(2, 7)}
+_ORDINAL = {2: "second", 3: "third", 4: "fourth", 5: "fifth", 6: "sixth"}
 
 
 def twin(*args: str) -> None:
@@ -94,16 +93,10 @@ def main() -> None:
     ap.add_argument("--work", default=str(ROOT.parent / "identify_work"), help="folder of the datasets")
     ap.add_argument("--workers", default=str(os.cpu_count() or 1))
     ap.add_argument("--retrain", action="store_true", help="train again even if the model exists")
-    ap.add_argument("--fresh2", action="store_true",
-                    help="also generate and evaluate the second fresh test's sets (looked at once with the model before)")
-    ap.add_argument("--fresh3", action="store_true",
-                    help="also generate and evaluate the third fresh test's sets (looked at once with the model before)")
-    ap.add_argument("--fresh4", action="store_true",
-                    help="also generate and evaluate the fourth fresh test's sets (looked at once with the model before)")
-    ap.add_argument("--fresh5", action="store_true",
-                    help="also generate and evaluate the fifth fresh test's sets (looked at once with the model before)")
-    ap.add_argument("--fresh6", action="store_true",
-                    help="also generate and evaluate the sixth fresh test's sets (the one look)")
+    for r in FRESH:
+        ap.add_argument(f"--fresh{r}", action="store_true",
+                        help=f"also generate and evaluate the {_ORDINAL[r]} fresh test's sets "
+                             + ("(the one look)" if r == max(FRESH) else "(looked at once with the model before)"))
     ap.add_argument("--samples-only", action="store_true", help="only the answers on the sample recordings (step 5)")
     args = ap.parse_args()
     if args.samples_only:
@@ -117,8 +110,10 @@ def main() -> None:
     if args.retrain or not MODEL.exists():
         twin("identify", "train", *map(str, train_ds), "--b-size-only", *map(str, b_only), "--interval-folds", "speed",
              "--out", str(MODEL), "--workers", args.workers)
-    sets = dict(DEV) | (FRESH2 if args.fresh2 else {}) | (FRESH3 if args.fresh3 else {}) | (FRESH4 if args.fresh4 else {}) \
-        | (FRESH5 if args.fresh5 else {}) | (FRESH6 if args.fresh6 else {})
+    sets = dict(DEV)
+    for r, parts in FRESH.items():
+        if getattr(args, f"fresh{r}"):
+            sets |= parts
     for name, sub in sets.items():
         d = generate(work, name, args.workers)
         twin("identify", "evaluate", str(MODEL), str(d), "--out", str(REPORT / sub), "--workers", args.workers)

@@ -113,7 +113,7 @@ def _train(args: argparse.Namespace) -> int:
     model, info = train(list(args.dataset), _splits(args.splits), resolve_workers(args.workers),
                         interval_folds=args.interval_folds, location_only=list(args.location_only),
                         size_only_at={"B": list(args.b_size_only), "C": list(args.c_size_only)},
-                        fault_split=[j for j in args.fault_split if j in "BC"] if args.fault_split != "none" else [])
+                        fault_split=[j for j in args.fault_split if j in "BC"])  # "none": no joint
     model.save(out)
     print(f"{out}: trained on {info['runs']} runs ({info['windows']} windows) of dataset {info['dataset']} "
           f"({info['engine']}); classes {info['classes']}; crank {info['crank_hz_range'][0]:.2f}-"

@@ -49,7 +49,7 @@
   reads more easily more often than the other.
   A joint the classifier finds healthy reports 0 (ball bearing).
   ``train(normalized_intervals=True)`` also stores **normalized** conformal scales (``interval.normalized``): a
-  run's score is divided by its difficulty, the spread of its per-window answers (:func:`window_spread`) plus an
+  run's score is divided by its difficulty, the spread of its per-window answers (:func:`logs_spread`) plus an
   offset beta (the median spread of the out-of-fold runs, at least :data:`SPREAD_FLOOR_LOG10`); the half width
   of an answer is then q·(spread + beta). Where a model has them they replace the fixed half widths. Not the
   default: a recording of one or two windows has no measurable spread, and on the development sets (reference
@@ -394,7 +394,7 @@ def rippled(ripple_pct: list[float] | None, band_pct: float = RIPPLE_BAND_PCT) -
 
 def normalized_scale(scores: np.ndarray, spread: np.ndarray, beta: float | None = None) -> dict[str, float]:
     """Normalized split-conformal scale from runs' out-of-fold scores |log10 answer − log10 truth| and
-    difficulties (:func:`window_spread`) [log10]: beta (default: the median difficulty, at least
+    difficulties (:func:`logs_spread`) [log10]: beta (default: the median difficulty, at least
     :data:`SPREAD_FLOOR_LOG10`) and q, the conformal rank of score / (difficulty + beta); an answer's half
     width is then q (difficulty + beta)."""
     spread = np.asarray(spread, float)
@@ -403,14 +403,9 @@ def normalized_scale(scores: np.ndarray, spread: np.ndarray, beta: float | None 
     return {"q": conformal_half_width(np.asarray(scores, float) / (spread + beta)), "beta": float(beta)}
 
 
-def window_spread(reg: Any, X: np.ndarray) -> float:
-    """Difficulty of a recording for a size regressor: the spread of its per-window answers (:func:`logs_spread`)."""
-    return logs_spread(reg.predict(X)) if len(X) >= 2 else 0.0
-
-
 def logs_spread(logs: np.ndarray) -> float:
-    """The spread of per-window answers ``logs`` [log10]: their interquartile range over 1.349 (the standard
-    deviation of a normal sample) [log10]; 0 for one window."""
+    """Difficulty of a recording for a size regressor: the spread of its per-window answers ``logs`` [log10], their
+    interquartile range over 1.349 (the standard deviation of a normal sample) [log10]; 0 for one window."""
     if len(logs) < 2:
         return 0.0
     q1, q3 = np.quantile(np.asarray(logs, float), [0.25, 0.75])
