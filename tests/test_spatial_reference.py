@@ -36,26 +36,63 @@ def test_ideal_slider_matches_closed_form_kinematics(axis, offset):
     assert np.ptp(run["slider_position"]) > 0.005  # the slider does move (a stroke of millimetres at least)
 
 
-def _energy_error(clearance_mm: float, h: float) -> tuple[float, float]:
+def _energy_run(clearance_mm: float, h: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Free fall of the released mechanism (no drive), μ = 0, e = 1 (the LN law without damping: its
+    elastic energy K δ^(n+1)/(n+1) counted), 0.1 s at step ``h`` [s]: the total energy's departure from
+    its initial value [J], the kinetic energy [J] and whether any joint is in contact, per step."""
     cfg = _s002(**{"simulation.duration_s": 0.1, "simulation.timestep_s": h, "sensors.output_rate_hz": 1.0 / h,
                    "joints.clearance_a_mm": clearance_mm, "joints.clearance_b_mm": clearance_mm,
                    "joints.clearance_c_mm": clearance_mm, "contact.mu0": 0.0, "contact.restitution": 1.0,
                    "drive.initial_encoder_angle_rad": math.pi / 2 + 1.0})
     out = run_raw(cfg, SpatialOptions(drive=False))
     energy = out[:, SM.O_EKIN] + out[:, SM.O_EPOT] + out[:, SM.O_EEL]
-    return float(np.max(np.abs(energy - energy[0]))), float(np.max(out[:, SM.O_EKIN]))
+    contact = np.any(out[:, [SM.O_JOINT + 6 * j + 4 for j in range(3)]] > 0.0, axis=1)
+    return energy - energy[0], out[:, SM.O_EKIN], contact
 
 
 @pytest.mark.parametrize("clearance_mm", [0.0, 0.2])
-def test_energy_conserved_without_friction_and_damping(clearance_mm):
-    """Free fall of the released mechanism (no drive), μ = 0, e = 1 (the LN law without damping: its
-    elastic energy K δ^(n+1)/(n+1) counted): the exact motion conserves energy, so the symplectic
-    Euler's error must be small and shrink in proportion to h (a first-order method)."""
-    err1, ekin = _energy_error(clearance_mm, 1e-5)
-    err2, _ = _energy_error(clearance_mm, 5e-6)
-    assert ekin > 0.1  # the mechanism does fall (J)
-    assert err1 < 1e-3 * ekin
+def test_energy_error_is_first_order_in_h_while_the_motion_is_smooth(clearance_mm):
+    """The exact motion (no drive, no friction, no damping) conserves energy. On a smooth stretch of it
+    the symplectic Euler's energy error is C h + O(h²) with C fixed by the motion (S003 Eq. 21 is a first
+    order method), so halving h halves the error (ratio 2; 1.5–2.6 leaves room for the O(h²) part).
+    Without clearance the whole 0.1 s is smooth; with 0.2 mm only the flight before the first contact
+    is: through impacts the pins' flights depend chaotically on every rounding (another CPU's BLAS
+    gives another sequence of impacts), and one pair of step sizes shows no order there (see the test
+    below for what does hold through impacts)."""
+    de1, ekin, c1 = _energy_run(clearance_mm, 1e-5)
+    de2, _, c2 = _energy_run(clearance_mm, 5e-6)
+    assert ekin.max() > 0.1  # the mechanism does fall (J)
+    # the smooth window: up to the first contact of either run (the whole run without clearance)
+    t1 = np.argmax(c1) if c1.any() else len(c1)
+    t2 = np.argmax(c2) if c2.any() else len(c2)
+    n1 = min(t1, t2 // 2)  # samples of the h = 1e-5 run in the window (the other run has twice as many)
+    assert n1 > 200  # a window of 2 ms at least (with clearance: the first impact comes after 4.5 ms)
+    if clearance_mm == 0.0:
+        assert n1 == len(c1)
+    err1, err2 = np.max(np.abs(de1[:n1])), np.max(np.abs(de2[:2 * n1]))
+    assert err1 < 1e-3 * ekin.max()
     assert 1.5 < err1 / err2 < 2.6
+
+
+def test_energy_error_through_impacts_is_bounded_by_h_times_the_power():
+    """Through impacts (0.2 mm clearance at A, B, C; elastic Hertz-type contact, e = 1, μ = 0) the energy
+    error of the symplectic Euler stays bounded by h times the forces' power, at every step size.
+
+    Basis (backward error analysis, Hairer, Lubich & Wanner, Geometric Numerical Integration, IX.3):
+    the symplectic Euler v ← v + h M⁻¹F(q), q ← q + h v conserves a modified energy
+    H̃ = H ± (h/2) F(q)·v + O(h²) — the error's first term is half a step of the power P = F·v, and it
+    does not grow with time (a non-symplectic first-order method's error grows as h t). So
+    |E_n − E_0| ≤ (h/2)(|P_n| + |P_0|) + O(h²) ≤ h max|P|. P is measured as dE_kin/dt of the run (the
+    power of all forces, by central differences of the kinetic energy). The bound is the theory's leading
+    term without a margin factor; the runs sit at 0.3–0.65 of it. It holds at each step size whatever the
+    (chaotic) sequence of impacts. Checked to fail: explicit Euler (q ← q + h v_old: the run diverges
+    through the first impacts) and a contact that is not quite conservative (e = 0.995: its loss does not
+    shrink with h, 1.6× the bound at h = 2.5 µs)."""
+    for h in (2e-5, 1e-5, 5e-6, 2.5e-6):
+        de, ekin, contact = _energy_run(0.2, h)
+        assert np.count_nonzero(np.diff(contact.astype(int)) == 1) >= 5  # impacts happen (contacts begun)
+        power = np.gradient(ekin, h)  # [W]
+        assert np.max(np.abs(de)) <= h * np.max(np.abs(power)), h
 
 
 @pytest.mark.parametrize("clearance_mm", [0.0, 0.2])
