@@ -98,7 +98,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from twin.jit import njit
 
 from twin.config import BenchConfig
 from twin.kinematics import guide_start, initial_pose

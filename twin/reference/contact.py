@@ -41,7 +41,7 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
+from twin.jit import njit
 
 from twin.contact_params import johnson_elastic_force as _johnson_elastic_force
 

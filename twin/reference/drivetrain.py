@@ -24,7 +24,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from twin.jit import njit
 
 from twin.reference.contact import ramp
 

@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
+from twin.jit import njit
 
 from twin.natural_coordinates import (P_C_G, P_DOFF, P_E, P_FRIC_LAW, P_GA, P_GX, P_GY, P_K_G, P_LAW, P_M3, P_MU0,
                                       P_MUS, P_N, P_S3D, P_S3X, P_V0, P_V1, P_VD, P_VMIN, P_VS)

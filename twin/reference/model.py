@@ -55,7 +55,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from twin.jit import njit
 
 from twin.config import ACCELEROMETERS, BenchConfig
 from twin.config.mechanism import guide_stiffness

@@ -40,7 +40,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from twin.jit import njit
 
 from twin.reference.contact import friction_force, normal_force, ramp
 from twin.spatial.geometry import IA, IBC, IBR, ICR, ICS, NQ

@@ -21,7 +21,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
+from twin.jit import njit
 
 from twin.errors import ConfigError
 from twin.natural_coordinates import N_Q, P_H, energy, mass_times, quadratic_terms, residual
