@@ -17,9 +17,9 @@ Measures in one run, the variants interleaved so that the machine's other work h
   measured under load says so.
 
 Writes the table between the markers ``<!-- speed-summary:begin -->`` and ``<!-- speed-summary:end -->``
-of docs/speed.md and the full results to analysis/results/speed/speed_table.md, stamped with twin's
-version and the commit. The processes run with Python's byte-code cache allowed (as an ordinary
-install has it) from a temporary folder.
+of docs/speed.md (stamped with twin's version) and the full results to
+analysis/results/speed/speed_table.md (version and commit). The processes run with Python's byte-code
+cache allowed (as an ordinary install has it) from a temporary folder.
 
 Run: ``python analysis/speed_table.py [--repeats 5] [--steps 50000] [--no-write]`` (2–4 minutes).
 """
@@ -127,7 +127,8 @@ def measure(repeats: int, steps: int) -> dict:
     import twin
 
     res: dict = {"version": twin.__version__, "commit": commit(), "mujoco": mujoco.__version__,
-                 "cpu": cpu_model(), "cores": os.cpu_count(), "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+                 "cpu": cpu_model(), "cores": os.cpu_count(),
+                 "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
                  "load_before": os.getloadavg()[0]}
     share = MachineShare()
     share.start()
@@ -150,11 +151,14 @@ def measure(repeats: int, steps: int) -> dict:
     return res
 
 
-def table(res: dict) -> str:
+def table(res: dict, with_commit: bool = False) -> str:
+    """The summary table with its measuring conditions (the commit only in the results file: the
+    user-facing page carries no commit hashes)."""
     reps = res["repeats"]
     lines = [
-        f"Measured by `python analysis/speed_table.py` on {res['date']}: twin {res['version']} "
-        f"(commit {res['commit']}), MuJoCo {res['mujoco']}, {res['cpu']}, {res['cores']} cores; 1-minute load "
+        f"Measured by `python analysis/speed_table.py` on {res['date']}: twin {res['version']}"
+        + (f" (commit {res['commit']})" if with_commit else "")
+        + f", MuJoCo {res['mujoco']}, {res['cpu']}, {res['cores']} cores; 1-minute load "
         f"average {res['load_before']:.1f} before and {res['load_after']:.1f} after, other work took "
         f"{100 * res['other_share']:.0f} % of the machine's CPU time while it measured"
         + (" (figures under load: on an idle machine they are lower)." if res["other_share"] > 0.15 else "."),
@@ -203,7 +207,7 @@ def main() -> None:
     if not args.no_write:
         write_page(text)
         raw = "\n".join(f"- {lab}: " + ", ".join(f"{x:.3f}" for x in w) + " s" for lab, w in res["walls"].items())
-        RESULTS.write_text(f"{text}\n\nEvery process's wall time:\n\n{raw}\n")
+        RESULTS.write_text(f"{table(res, with_commit=True)}\n\nEvery process's wall time:\n\n{raw}\n")
         print(f"wrote {PAGE.relative_to(ROOT)} and {RESULTS.relative_to(ROOT)}", file=sys.stderr)
 
 
