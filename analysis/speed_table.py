@@ -44,6 +44,9 @@ RESULTS = ROOT / "analysis" / "results" / "speed" / "speed_table.md"
 BEGIN, END = "<!-- speed-summary:begin -->", "<!-- speed-summary:end -->"
 TWIN = [sys.executable, "-m", "twin.cli"]
 
+sys.path.insert(0, str(ROOT / "analysis"))
+from bench_threads import machine_busy_s, own_cpu_s  # noqa: E402  (a sibling script)
+
 # (label, arguments of `twin`, simulated seconds)
 PROCESSES = [
     ("README's first command: test 6 (C), 2 s, MuJoCo", ["simulate"], 2.0),
@@ -70,28 +73,18 @@ def timed(args: list[str], cwd: str, **extra: str) -> float:
 
 
 class MachineShare:
-    """The share of the machine's CPU time taken by other work between start() and stop()."""
+    """The share of the machine's CPU time taken by other work between start() and stop()
+    (``analysis/bench_threads.py``'s counters: the machine's busy time less this script's)."""
 
     def __init__(self) -> None:
         self.busy0 = self.own0 = self.t0 = 0.0
 
-    @staticmethod
-    def _busy() -> float:
-        with open("/proc/stat") as f:
-            v = [float(x) for x in f.readline().split()[1:]]
-        return (sum(v) - v[3] - v[4]) / os.sysconf("SC_CLK_TCK")  # all but idle and iowait [s]
-
-    @staticmethod
-    def _own() -> float:
-        t = os.times()
-        return t.user + t.system + t.children_user + t.children_system
-
     def start(self) -> None:
-        self.busy0, self.own0, self.t0 = self._busy(), self._own(), time.perf_counter()
+        self.busy0, self.own0, self.t0 = machine_busy_s(), own_cpu_s(), time.perf_counter()
 
     def stop(self) -> float:
-        busy, own, wall = self._busy() - self.busy0, self._own() - self.own0, time.perf_counter() - self.t0
-        return max(0.0, busy - own) / ((os.cpu_count() or 1) * wall)
+        busy, own = machine_busy_s() - self.busy0, own_cpu_s() - self.own0
+        return max(0.0, busy - own) / ((os.cpu_count() or 1) * (time.perf_counter() - self.t0))
 
 
 def cpu_model() -> str:
@@ -110,7 +103,6 @@ def commit() -> str:
 
 def per_step(steps: int, repeats: int) -> dict[str, float]:
     """Best µs per step of each scene (posthoc accelerometers, the default), rollouts interleaved."""
-    sys.path.insert(0, str(ROOT / "analysis"))
     from bench_mujoco import SCENES, prepare_posthoc, step_time
 
     prepared = {lab: prepare_posthoc(tid, steps) for lab, tid in SCENES.items()}
