@@ -9,8 +9,9 @@ content hash and the CPU, so a changed module or another CPU compiles again. (nu
 its own file only: after editing a compiled function that another module's compiled function calls,
 clear the caller's cache, ``find twin -name '*.nb[ic]' -delete``.)
 
-Compiling the reference engine's loop takes 15–40 s on two cores, once after an install; a later
-process loads it in a fraction of a second. So that a first run does not sit silent, the first
+Compiling the reference engine's loop takes 18–47 s on two cores (measured from a quiet machine to
+one loaded by other work, docs/speed.md), once after an install; a later process loads it in a
+fraction of a second. So that a first run does not sit silent, the first
 compilation of a process prints one line to stderr (:data:`NOTICE`); a cache hit prints nothing.
 """
 
@@ -20,8 +21,8 @@ import os
 import sys
 from typing import Any
 
-NOTICE = ("twin: compiling the {what} with numba (once after an install, 15-40 s on two cores; "
-          "later runs load it from the cache)")
+NOTICE = ("twin: compiling the {what} with numba, once after an install (20-50 s; later runs load it "
+          "from the cache)")
 
 UNCACHED = ("twin: no folder to cache numba's compiled code in (the install, ~/.cache and the temporary "
             "directory are read-only): every run compiles; set NUMBA_CACHE_DIR to a writable folder")
