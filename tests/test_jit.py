@@ -35,3 +35,23 @@ def test_the_second_process_loads_the_compiled_code_and_only_the_first_says_it_c
     out, err = _fresh(str(tmp_path))
     assert out == "1 0"  # loaded from the cache, not compiled
     assert announce not in err
+
+
+@pytest.mark.skipif(not hasattr(os, "getuid"), reason="POSIX user ids")
+def test_the_fallback_cache_folder_is_used_only_when_it_is_this_users_alone(tmp_path, monkeypatch):
+    """Where neither the install nor ~/.cache can be written, numba's cache moves to a per-user folder of
+    the temporary directory; its files are loaded as code, so a folder others can write is refused."""
+    import tempfile
+
+    from numba.core import config
+
+    from twin import jit
+
+    monkeypatch.setattr(config, "CACHE_DIR", config.CACHE_DIR)  # restored after the test
+    monkeypatch.setattr(tempfile, "gettempdir", lambda: str(tmp_path))
+    assert jit._fallback_cache_dir()
+    folder = tmp_path / f"twin-numba-cache-{os.getuid()}"
+    assert config.CACHE_DIR == str(folder) and folder.stat().st_mode & 0o077 == 0
+    folder.chmod(0o777)  # as if another user had made it first
+    config.CACHE_DIR = ""
+    assert not jit._fallback_cache_dir() and config.CACHE_DIR == ""

@@ -74,14 +74,19 @@ def _register() -> None:
 def _fallback_cache_dir() -> bool:
     """Point numba's cache at a per-user folder of the temporary directory (``NUMBA_CACHE_DIR``'s
     slot) when neither the install's folders nor the user's cache folder can be written; False
-    where even that folder cannot be written."""
+    where that folder cannot be written or is not this user's alone."""
     import tempfile
 
     from numba.core import config
 
-    path = os.path.join(tempfile.gettempdir(), f"twin-numba-cache-{os.getuid() if hasattr(os, 'getuid') else 0}")
+    uid = os.getuid() if hasattr(os, "getuid") else None
+    path = os.path.join(tempfile.gettempdir(), f"twin-numba-cache-{uid if uid is not None else 'user'}")
     try:
-        os.makedirs(path, exist_ok=True)
+        os.makedirs(path, mode=0o700, exist_ok=True)
+        st = os.stat(path)
+        # numba's cache files are loaded as code: only a folder of this user that nobody else can write
+        if uid is not None and (st.st_uid != uid or st.st_mode & 0o022):
+            return False
         tempfile.TemporaryFile(dir=path).close()
     except OSError:
         return False
