@@ -20,12 +20,14 @@ if spec is None or not spec.submodule_search_locations:
 include = os.path.join(list(spec.submodule_search_locations)[0], "include")
 
 setup(
-    packages=find_namespace_packages(include=["twin*"]) + ["twin.mjcf"],
-    package_dir={"twin.mjcf": "mjcf"},
+    packages=find_namespace_packages(include=["twin*"]) + ["twin.mjcf", "twin.sample_recordings", "twin.dataset_specs"],
+    package_dir={"twin.mjcf": "mjcf", "twin.sample_recordings": "recordings", "twin.dataset_specs": "analysis/datasets"},
     package_data={
         "twin": ["data/*.toml", "data/*.json", "data/*.xml", "data/*.npz", "mujoco_engine/*.c", "mujoco_engine/*.h",
                  "dataset/*.md", "config/presets/*.toml"],
         "twin.mjcf": ["*.xml"],
+        "twin.sample_recordings": ["*.mcap"],
+        "twin.dataset_specs": ["*.toml"],
     },
     ext_modules=[
         Extension(

@@ -59,7 +59,11 @@ def run(args: argparse.Namespace) -> int:
 
     from twin.util import check_output_file, file_sha256
 
+    from twin.commands.inputs import recording
+
     cfg = config_from_args(args)
+    if args.calibration:
+        args.calibration = str(recording(args.calibration))
     inputs = [args.export] + ([args.calibration] if args.calibration else [])
     out = check_output_file(args.out, "--out", ".mcap", inputs=inputs)
     if args.calibration and args.zero_g is not None:

@@ -23,7 +23,7 @@ from typing import Any
 
 from twin.config.bench import BenchConfig
 from twin.config.convert import from_dict
-from twin.errors import ConfigError
+from twin.errors import ConfigError, did_you_mean
 
 
 @functools.lru_cache(maxsize=None)
@@ -77,5 +77,6 @@ def named_preset(name: str, field_name: str = "--preset") -> BenchConfig:
     mechanism), ``s002`` (S002's spatial slider–crank), ``torque_release`` (the bench's torque-driven release test),
     ``torque_release_protocol`` (three spin-ups and coast-downs); the sources of their numbers are in the files ``NAME.toml`` of this folder."""
     if not isinstance(name, str) or name.lower() not in NAMED_PRESETS:
-        raise ConfigError(field_name, f"must be one of {', '.join(NAMED_PRESETS)}, got {name!r}")
+        raise ConfigError(field_name, f"must be one of {', '.join(NAMED_PRESETS)}, got {name!r}"
+                                      f"{did_you_mean(name, NAMED_PRESETS)}")
     return NAMED_PRESETS[name.lower()]()
