@@ -57,7 +57,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     e.add_argument("dataset", metavar="DATASET", nargs="+",
                    help="dataset folder(s) of one engine, sample rate and encoder resolution; several are pooled "
                         "(e.g. a test set and its extension by another seed)")
-    e.add_argument("--out", metavar="REPORT_DIR", required=True)
+    e.add_argument("--out", metavar="REPORT_DIR", required=True,
+                   help="report folder to write (report.md, report.json, PNG plots)")
     e.add_argument("--splits", default="train,val,test", help="splits to evaluate (default: all)")
     e.add_argument("--workers", type=int, metavar="N", help="processes for the features (default: the cores)")
     e.set_defaults(func=_evaluate)

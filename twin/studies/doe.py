@@ -617,7 +617,7 @@ def register(studies: Any) -> None:
                     "surrogate of each (scikit-learn Gaussian process, anisotropic Matern kernel) with its "
                     "leave-one-out error; its global optimum (differential evolution), simulated; hold-out "
                     "predictions; Sobol sensitivities; a PNG of each surrogate. SPEC is a dataset spec with a "
-                    "[doe] table. See twin/studies/doe.py.")
+                    "[doe] table (the shipped s000_example1 is S000's Example 1).")
     p.add_argument("spec", metavar="SPEC", help="DOE spec: a dataset spec plus [doe], a .toml file or the name of one "
                    "that ships with twin (s000_example1)")
     p.add_argument("--out", metavar="DIR", required=True, help="output directory (created; a second call resumes)")

@@ -380,8 +380,7 @@ def register(studies: Any) -> None:
         description="S/N ratios (smaller- or larger-the-better), main effects, ANOVA with contributions, F and p "
                     "(raw responses and S/N; interactions and pooling on request) and the additive-model prediction "
                     "at the best levels with its confidence intervals, from a CSV with one row per run. Writes "
-                    "DIR/taguchi.json, DIR/report.md and per response main-effect and S/N PNG plots. See "
-                    "twin/studies/taguchi.py for the method.")
+                    "DIR/taguchi.json, DIR/report.md and per response main-effect and S/N PNG plots.")
     p.add_argument("responses_csv", metavar="RESPONSES.csv", help="CSV with a header row, one row per run")
     p.add_argument("--responses", required=True, metavar="COL,…",
                    help="response columns; COL1+COL2 names the replicates of one response")

@@ -158,10 +158,14 @@ def register(studies: Any) -> None:
     """Add ``twin study taguchi`` to the ``twin study`` group."""
     p = studies.add_parser(
         "taguchi", help="an orthogonal-array experiment (S002's L27) simulated, then its Taguchi analysis",
-        description="Runs the list design of SPEC (a dataset spec with a [taguchi] table) through the dataset "
-                    "generator, computes the responses of every run, writes DIR/responses.csv and the Taguchi "
-                    "analysis of twin study taguchi-analyze (S/N ratios, main effects, ANOVA, prediction at the "
-                    "optimum, PNGs). See twin/studies/taguchi_run.py.")
+        description="S002's Taguchi experiment: simulates every run of SPEC's orthogonal array (a dataset spec "
+                    "with a list design, one point per run, and a [taguchi] table naming the analysis factors and "
+                    "the responses; the shipped s002_l27 is S002's L27: crank length, clearance, friction and "
+                    "speed at three levels in 27 runs) through the dataset generator into DIR/dataset (a second "
+                    "call resumes), computes each run's responses after settle_s (the slider's largest "
+                    "acceleration, the largest contact force per joint), writes DIR/responses.csv and analyses "
+                    "it as twin study taguchi-analyze does: S/N ratios, main effects, ANOVA with contributions, "
+                    "the prediction at the optimum with its confidence intervals, PNG plots.")
     p.add_argument("spec", metavar="SPEC", help="Taguchi study spec: a dataset spec plus [taguchi], a .toml file or the "
                    "name of one that ships with twin (s002_l27)")
     p.add_argument("--out", required=True, metavar="DIR", help="output directory (created if missing)")
