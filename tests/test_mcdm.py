@@ -16,7 +16,7 @@ comments, done independently of the code) and against published numbers:
   7 criteria; Q = 0.8329, 0.7884, 0.6987, 0.8831, 0.7971, 0.7036, 0.8728, 0.5749), as transcribed in
   pymcdm's tests/test_methods.py; its printed weights sum to 1.0155 and are used as printed.
 * GRA, SAW, TOPSIS and S002's WASPAS variant: S002's own Tables 6, 11 and 13
-  (``../shared/seeds/002_…``), from their printed normalised inputs to their printed outputs.
+  from their printed normalised inputs to their printed outputs.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 r"""S004's continuous-contact model: the clearance at B as a virtual massless rod.
 
-S004 (``../shared/seeds/004_…``, Xiao, Song & Zhang 2019, §2.1) assumes that the journal of the
+S004 (Xiao, Song & Zhang 2019, §2.1) assumes that the journal of the
 clearance joint B never leaves the bushing wall: the pin centre B and the bushing (rod eye)
 centre B' are then a fixed distance c apart, a massless rigid "virtual rod" of length c at an
 angle ψ. With the crank prescribed (θ₁(t), S004: 30 rad/s) the mechanism has one degree of

@@ -1,6 +1,6 @@
 """Design of experiments with a Kriging surrogate (``twin study doe SPEC --out DIR``; S000's method).
 
-S000 (Zhang, Xu, Flores & Lankarani, ``../shared/seeds/000_…``) samples a few design points of a
+S000 (Zhang, Xu, Flores & Lankarani) samples a few design points of a
 slider–crank with a clearance joint by Latin hypercube, simulates each, builds a Kriging model of
 each response (the absolute maxima of slider acceleration, contact force and power), checks it at
 a point it was not built on, and searches its optimum with a genetic algorithm. This module does

@@ -1,6 +1,6 @@
 """Multi-criteria decision making over a table of responses (``twin study mcdm``; S002's methods).
 
-S002 (``../shared/seeds/002_…``) ranks the 27 runs of its Taguchi L27 by two smaller-the-better
+S002 ranks the 27 runs of its Taguchi L27 by two smaller-the-better
 responses (the slider's maximum acceleration and the contact force in the revolute clearance joint)
 with four methods, the criteria weighted by MEREC. This module implements them from their
 original definitions, as pure functions of a decision matrix ``x`` (m alternatives in rows,

@@ -1,6 +1,6 @@
 """Taguchi analysis of an orthogonal-array experiment (``twin study taguchi-analyze``; S002's method).
 
-S002 (``../shared/seeds/002_…``) varies four factors over three levels in a Taguchi L27 and
+S002 varies four factors over three levels in a Taguchi L27 and
 analyses the responses by signal-to-noise ratios, main effects, ANOVA and a prediction at the
 optimum. This module is that analysis, from a table of runs (factor levels and responses):
 
