@@ -18,6 +18,18 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 # ------------------------------------------------------------------ twin.samples
+def test_docstring_examples_run_and_import_twin_reaches_the_module(capsys):
+    import doctest
+    import subprocess
+    import sys
+
+    res = doctest.testmod(twin.samples)
+    assert res.attempted >= 3 and res.failed == 0, capsys.readouterr().out
+    code = "import twin; print(twin.samples.path('test6').name)"
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert r.stdout.strip() == "test6_synthetic.mcap", r.stderr
+
+
 def test_every_recording_and_spec_of_the_repository_is_named():
     assert twin.samples.names() == sorted(p.name[:-len("_synthetic.mcap")]
                                           for p in (ROOT / "recordings").glob("*_synthetic.mcap"))
