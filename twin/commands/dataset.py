@@ -15,7 +15,8 @@ from twin.util import resolve_workers
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("dataset", help="synthetic datasets: generate, plan, info, verify",
                        description="Synthetic datasets of the bench for clearance identification and observers: "
-                                   "a TOML spec (analysis/datasets/*.toml) varies clearances, orientation, speed, "
+                                   "a TOML spec (a file, or the name of one that ships with twin: tiny, ...) varies "
+                                   "clearances, orientation, speed, "
                                    "contact and sensor parameters; runs are simulated on all cores (or a Dask "
                                    "cluster) into Parquet files any ML tool reads.")
     ds = p.add_subparsers(dest="dataset_command", metavar="ACTION", parser_class=type(p))
