@@ -23,7 +23,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "range of the first run) and mean time shift [s] between runs or recordings of the same test. "
                     "Recordings are calibrated with their stored calibration (S003 Eq. 1-4); simulated runs use "
                     "the calibrated channel meas_ACi if present, else the simulated ACi.")
-    r.add_argument("runs", nargs="+", metavar="RUN", help="run files or bench recordings (.mcap; sample:NAME for a sample that ships with twin, e.g. "
+    r.add_argument("runs", nargs="+", metavar="RUN",
+                   help="run files or bench recordings (.mcap; sample:NAME for a sample that ships with twin, e.g. "
                         "sample:test6_repeat1), at least 2")
     r.add_argument("--channel", default="AC4", help="accelerometer (AC1..AC6) or an exact channel name (default AC4)")
     r.add_argument("--start", type=float, metavar="S", help="window start, run time [s] (default: start)")
@@ -43,10 +44,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run_repeatability(args: argparse.Namespace) -> int:
     import sys
 
+    from twin.commands.inputs import recording
     from twin.studies.repeatability import repeatability
     from twin.util import atomic_write_json
-
-    from twin.commands.inputs import recording
 
     runs = [recording(r) for r in args.runs]
     if len(runs) < 2:

@@ -44,7 +44,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "a rerun recording with a default layout: the 3-D bench moving in time, journal "
                                    "orbits, contact forces, every signal, spectra and the configuration. Writes "
                                    "RUN.rrd beside the input unless --save is given; no viewer is needed.")
-    p.add_argument("input", metavar="RUN_OR_RECORDING.mcap", help="twin run file or bench recording to view (sample:NAME for a sample recording that ships "
+    p.add_argument("input", metavar="RUN_OR_RECORDING.mcap",
+                   help="twin run file or bench recording to view (sample:NAME for a sample recording that ships "
                         "with twin), or a dataset folder with --run")
     p.add_argument("--run", metavar="RUN_ID", help="with a dataset folder: the run to view (twin dataset info lists them)")
     p.add_argument("--save", metavar="OUT.rrd", help="recording to write (default: beside the input, .rrd)")
@@ -69,10 +70,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from twin.commands.inputs import is_sample, recording
     from twin.util import check_output_file
     from twin.viz import ViewOptions, convert_file, default_output
-
-    from twin.commands.inputs import is_sample, recording
 
     src = recording(args.input)
     dataset_run = None
