@@ -4,9 +4,19 @@ Metadata and dependencies are declared in pyproject.toml. The collider is compil
 C headers shipped in the mujoco-core wheel (a build requirement), located without importing
 mujoco.
 
-Layout: the packages under twin/, plus the repository's top-level mjcf/ folder (the base MJCF
-model) installed as the package ``twin.mjcf``, so that the model ships in wheels and works in
-editable installs alike (twin.names.BASE_XML finds it with importlib.resources).
+Layout: the packages under twin/, plus three folders of the repository installed as packages, so
+that their files ship in wheels and are found the same way in editable installs (with
+importlib.resources) while they stay where the repository keeps them (one copy of each file):
+
+* mjcf/ (the base MJCF model) as ``twin.mjcf`` (twin.names.BASE_XML);
+* recordings/ (the synthetic sample recordings, *.mcap: 4.7 MB, with their format, FORMAT.md, and
+  the script that made them) as ``twin.sample_recordings``;
+* analysis/datasets/ (the dataset specs, *.toml) as ``twin.dataset_specs``.
+
+twin.samples looks the last two up by name (``twin.samples.path("test6")``, ``sample:test6`` and
+``twin dataset plan tiny`` on the command line), so the README's examples work after ``pip install``
+outside the repository. Each of the three folders holds an ``__init__.py`` (an editable install
+finds a mapped folder only as a regular package).
 """
 
 import importlib.util
@@ -19,13 +29,18 @@ if spec is None or not spec.submodule_search_locations:
     raise RuntimeError("building twin needs mujoco-core (for its headers) in the build environment")
 include = os.path.join(list(spec.submodule_search_locations)[0], "include")
 
+#: packages whose files live in a folder of the repository outside twin/ (see the docstring)
+MAPPED = {"twin.mjcf": "mjcf", "twin.sample_recordings": "recordings", "twin.dataset_specs": "analysis/datasets"}
+
 setup(
-    packages=find_namespace_packages(include=["twin*"]) + ["twin.mjcf"],
-    package_dir={"twin.mjcf": "mjcf"},
+    packages=find_namespace_packages(include=["twin*"]) + list(MAPPED),
+    package_dir=MAPPED,
     package_data={
         "twin": ["data/*.toml", "data/*.json", "data/*.xml", "data/*.npz", "mujoco_engine/*.c", "mujoco_engine/*.h",
                  "dataset/*.md", "config/presets/*.toml"],
         "twin.mjcf": ["*.xml"],
+        "twin.sample_recordings": ["*.mcap", "FORMAT.md"],
+        "twin.dataset_specs": ["*.toml"],
     },
     ext_modules=[
         Extension(

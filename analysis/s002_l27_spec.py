@@ -7,7 +7,7 @@ levels of S002 §2.1) as a list design over the ``s002`` preset. One run sets: t
 with it, the crank's placeholder mass distribution (centre of mass at mid-length, I_G = m r²/12 of a
 uniform bar); S002's clearance c = r_B − r_j (Eq. 1, radial) at A, B and C, i.e. 2c diametral in the
 configuration; μ0; the crank speed. Run: ``python analysis/s002_l27_spec.py``; then
-``twin study taguchi analysis/datasets/s002_l27.toml --out DIR``.
+``twin study taguchi s002_l27 --out DIR`` (the specs ship with twin, named).
 """
 
 from __future__ import annotations
@@ -29,8 +29,7 @@ def spec_text(engine: str) -> str:
         "# S002's Taguchi L27 (crank length x clearance x friction x speed), simulated: written by",
         "# analysis/s002_l27_spec.py (the method is in its docstring). The responses are the paper's: the",
         "# slider's maximum acceleration and the maximum contact force in the revolute clearance joint A.",
-        f"# `twin study taguchi analysis/datasets/{'s002_l27' if engine == 'mujoco' else 's002_l27_reference'}.toml "
-        "--out DIR`",
+        f"# `twin study taguchi {'s002_l27' if engine == 'mujoco' else 's002_l27_reference'} --out DIR`",
         "[dataset]",
         f'name = "s002-l27{"" if engine == "mujoco" else "-reference"}"',
         "seed = 2",

@@ -1,6 +1,6 @@
 """Re-derive S002's decision and Taguchi tables from its own printed numbers.
 
-S002 (``../shared/seeds/002_…``: "Optimization Acceleration and Contact Force of Space Slider-Crank
+S002 ("Optimization Acceleration and Contact Force of Space Slider-Crank
 Mechanism with Spherical Clearance Joints", Mathematical Modelling of Engineering Problems 11(10),
 2024, doi 10.18280/mmep.111017) ranks 27 simulated runs of an L27 by two smaller-the-better
 responses: the slider's maximum acceleration D [m/s²] and the contact force S in the revolute

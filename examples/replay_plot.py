@@ -9,7 +9,8 @@ folder (``replay.mcap``, ``report.json``, ...). This script then reads both sign
     python examples/replay_plot.py recordings/test3_synthetic.mcap --sensor AC4 --out ac4.png
     python examples/replay_plot.py --small --out replay_ac6.png              # a 0.8 s recording (a test)
 
-The sample recordings in recordings/ are SYNTHETIC (made by the reference engine), not bench data.
+The sample recordings ship with twin (``twin.samples.path(NAME)``, the files of recordings/); they are
+SYNTHETIC (made by the reference engine), not bench data.
 """
 
 from __future__ import annotations
@@ -20,20 +21,17 @@ from pathlib import Path
 
 import twin
 
-RECORDINGS = Path(__file__).resolve().parent.parent / "recordings"
-
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("recording", nargs="?", help="recording (.mcap; default: recordings/test6_synthetic.mcap)")
+    ap.add_argument("recording", nargs="?", help="recording (.mcap; default: the sample recording test6)")
     ap.add_argument("--sensor", default="AC6", help="accelerometer to plot, AC1..AC6 (default AC6)")
     ap.add_argument("--out", default="replay.png", help="PNG to write (default: replay.png)")
     ap.add_argument("--keep", metavar="DIR", help="keep the replay folder there (default: a temporary folder)")
     ap.add_argument("--small", action="store_true", help="the 0.8 s sample recording, no report plots (quick check)")
     args = ap.parse_args(argv)
 
-    rec = Path(args.recording) if args.recording else \
-        RECORDINGS / ("test6_repeat1_synthetic.mcap" if args.small else "test6_synthetic.mcap")
+    rec = Path(args.recording) if args.recording else twin.samples.path("test6_repeat1" if args.small else "test6")
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(args.keep) if args.keep else Path(tmp) / "replay"
         report = twin.replay(rec, folder, plots=not args.small)

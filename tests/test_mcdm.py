@@ -16,7 +16,7 @@ comments, done independently of the code) and against published numbers:
   7 criteria; Q = 0.8329, 0.7884, 0.6987, 0.8831, 0.7971, 0.7036, 0.8728, 0.5749), as transcribed in
   pymcdm's tests/test_methods.py; its printed weights sum to 1.0155 and are used as printed.
 * GRA, SAW, TOPSIS and S002's WASPAS variant: S002's own Tables 6, 11 and 13
-  (``../shared/seeds/002_…``), from their printed normalised inputs to their printed outputs.
+  from their printed normalised inputs to their printed outputs.
 """
 
 from __future__ import annotations
@@ -276,3 +276,43 @@ def test_cli_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys, name, te
 def test_cli_missing_file(tmp_path, capsys):
     assert main(["study", "mcdm", str(tmp_path / "none.csv"), "--criteria", "a:min", "--out", str(tmp_path / "o")]) == 2
     assert "none.csv" in capsys.readouterr().err and not (tmp_path / "o").exists()
+
+
+def test_alternatives_are_named_by_a_name_column_kept_in_the_output(tmp_path, capsys):
+    # "group" repeats a name and "run" is numbers: the first column of text naming every row once is "label"
+    src = _csv(tmp_path / "r.csv", "group,run,acc,force,label\nx,1,32.7,1345,a\nx,2,51.1,1756,b\n"
+                                   "y,3,73.6,1956,c\ny,4,54.8,1012,d\n")
+    out = tmp_path / "out"
+    assert main(["study", "mcdm", str(src), "--criteria", "acc:min,force:min", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    res = json.loads((out / "mcdm.json").read_text())
+    assert res["name_column"] == "label" and res["names"] == ["a", "b", "c", "d"]
+    best = [res["names"][i] for i, r in enumerate(res["methods"]["topsis"]["ranks"]) if r == 1]
+    assert f"topsis  best alternative {', '.join(best)}" in printed
+    report = (out / "report.md").read_text()
+    assert "| row | label | acc | force |" in report and "| 2 | b | 51.1 | 1756 |" in report
+    assert "named by the column `label`" in report and "Best alternative by method: " in report
+    # chosen explicitly: a column of numbers may name the rows too
+    assert main(["study", "mcdm", str(src), "--criteria", "acc:min,force:min", "--name-column", "run",
+                 "--out", str(out)]) == 0
+    assert json.loads((out / "mcdm.json").read_text())["names"] == ["1", "2", "3", "4"]
+
+
+def test_without_a_name_column_alternatives_are_numbered_by_row(tmp_path, capsys):
+    src = _csv(tmp_path / "r.csv", "run,acc,force\n1,32.7,1345\n2,51.1,1756\n3,73.6,1956\n")
+    res, _ = mcdm.run_mcdm(src, "acc:min,force:min", "equal")
+    assert res["name_column"] is None and res["names"] == ["1", "2", "3"]
+    assert "Best row by method: GRA 1," in mcdm.report_md(res, _)
+
+
+@pytest.mark.parametrize("column, fragment", [
+    ("lable", "--name-column: unknown column 'lable' (did you mean 'label'?)"),
+    ("group", "--name-column: column 'group' must name every row once"),
+])
+def test_a_bad_name_column_is_one_line(column, fragment, tmp_path, capsys):
+    src = _csv(tmp_path / "r.csv", "group,acc,force,label\nx,32.7,1345,a\nx,51.1,1756,b\n")
+    out = tmp_path / "out"
+    assert main(["study", "mcdm", str(src), "--criteria", "acc:min,force:min", "--name-column", column,
+                 "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert fragment in err and err.count("\n") == 1 and not out.exists()

@@ -12,6 +12,8 @@ The Python API (each name is imported on first use, so ``import twin`` stays qui
   signals, training windows as numpy arrays);
 * ``twin.identify(recording)``: locate and size the clearance faults of a recording; returns the
   answer (a dict);
+* ``twin.samples.path("test6")``, ``twin.samples.spec_path("tiny")``: the sample recordings and
+  dataset specs that ship with the package, by name;
 * ``twin.__version__``: the package version.
 
 >>> import twin
@@ -33,7 +35,7 @@ __version__ = "0.4.0"
 _CALLS = {"preset": "twin.api", "simulate": "twin.api", "replay": "twin.api", "identify": "twin.api",
           "BenchConfig": "twin.config", "Run": "twin.run"}
 #: subpackages and modules reached as attributes (``twin.dataset.open``) without importing them first
-_MODULES = ("api", "config", "dataset", "errors", "run", "simulation")
+_MODULES = ("api", "config", "dataset", "errors", "run", "samples", "simulation")
 
 __all__ = ["__version__", *sorted(_CALLS)]
 

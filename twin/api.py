@@ -28,9 +28,11 @@ def preset(which: int | str = 6) -> BenchConfig:
     """The configuration of a bench test or of a paper's mechanism.
 
     ``which``: a Table 4 test id of the bench paper, 1..12 (clearances at joints B and C, constant
-    motor speed), or the name of another mechanism of the seed papers: ``"s000"``, ``"s001"``,
-    ``"s004"`` (also ``"test6"`` for 6). Returns a :class:`twin.config.BenchConfig` (frozen; change
-    fields with ``cfg.replace(**{"dotted.name": value})``).
+    motor speed; also ``"test6"`` for 6), or a named preset: another mechanism of the seed papers,
+    ``"s000"``, ``"s001"``, ``"s002"`` (spatial), ``"s004"``, or the bench's torque-driven release
+    test, ``"torque_release"`` and ``"torque_release_protocol"`` (``twin.config.NAMED_PRESETS``; a
+    misspelt name gets the closest one in its error). Returns a :class:`twin.config.BenchConfig`
+    (frozen; change fields with ``cfg.replace(**{"dotted.name": value})``).
 
     >>> import twin
     >>> cfg = twin.preset(6)

@@ -85,13 +85,12 @@ def add_config_args(p: argparse.ArgumentParser, options: Sequence[str] = ALL_CON
         g.add_argument("--config", metavar="FILE", help="TOML configuration (partial files override the defaults)")
     if "test" in has:
         g.add_argument("--test", type=int, metavar="ID", help="Table 4 test preset, 1..12")
+        from twin.config.presets import NAMED_PRESETS, PRESET_SUMMARIES
+
         g.add_argument("--preset", metavar="NAME",
-                       help="another paper's mechanism: s001 (S001's rig, 0.5 mm radial clearance at C, "
-                            "0 -> 300 rpm in 0.2 s), s000 (S000's Flores slider-crank at 5000 rpm), s004 (S004's "
-                            "steel mechanism, 0.5 mm radial clearance at B, prescribed 30 rad/s, ADAMS IMPACT contact), "
-                            "torque_release (the bench's torque-driven release test: test 12's clearances, 1.2 N m "
-                            "on the motor for 0.5 s, then coast-down through the belt, 10 s), torque_release_protocol (three "
-                            "spin-ups of increasing length at 1.2 N m, each released, 34 s)")
+                       help="another paper's mechanism or a bench test: " + ", ".join(
+                           f"{n} ({PRESET_SUMMARIES.get(n, 'see twin/config/presets/' + n + '.toml')})"
+                           for n in NAMED_PRESETS))
     if "clearance_b" in has:
         g.add_argument("--clearance-b", type=float, metavar="MM",
                        help="diametral clearance at B [mm], 0 = ball bearing")

@@ -6,6 +6,8 @@ prints ``str(error)`` as one line and exits with status 2, never a traceback.
 
 from __future__ import annotations
 
+from typing import Iterable
+
 
 class TwinError(Exception):
     """Base of every error the twin raises on purpose."""
@@ -48,6 +50,33 @@ class EngineUnavailableError(TwinError):
 
 class MissingExtraError(TwinError, ImportError):
     """An optional dependency is not installed; the message names the pip command that adds it."""
+
+
+class NameNotFoundError(TwinError, LookupError):
+    """A sample recording or a dataset spec asked for by a name that does not ship with the package
+    (:mod:`twin.samples`); the message lists the names there are."""
+
+
+def did_you_mean(given: object, allowed: Iterable[object]) -> str:
+    """`` (did you mean 'x'?)`` for the entry of ``allowed`` closest to ``given`` (difflib's ratio
+    at least 0.6, compared without case), or ``""`` when none is close: the one suggestion every
+    "unknown name" error of the twin appends (preset names, configuration fields, ``--set`` keys,
+    dataset spec keys, sample names)."""
+    import difflib
+
+    if not isinstance(given, str) or not given:
+        return ""
+    names = [str(a) for a in allowed]
+    by_lower = {n.lower(): n for n in reversed(names)}  # the first spelling of a name wins
+    match = difflib.get_close_matches(given.lower(), list(by_lower), n=1, cutoff=0.6)
+    return f" (did you mean {by_lower[match[0]]!r}?)" if match and by_lower[match[0]] != given else ""
+
+
+def unknown(what: str, given: object, allowed: Iterable[object]) -> str:
+    """The message of a name that is not one of ``allowed``: ``unknown field (did you mean 'x'?);
+    allowed: a, b, c`` (``what`` = field, key, section...)."""
+    allowed = list(allowed)
+    return f"unknown {what}{did_you_mean(given, allowed)}; allowed: {', '.join(str(a) for a in allowed)}"
 
 
 class Terminated(KeyboardInterrupt):

@@ -23,7 +23,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "range of the first run) and mean time shift [s] between runs or recordings of the same test. "
                     "Recordings are calibrated with their stored calibration (S003 Eq. 1-4); simulated runs use "
                     "the calibrated channel meas_ACi if present, else the simulated ACi.")
-    r.add_argument("runs", nargs="+", metavar="RUN", help="run files or bench recordings (.mcap), at least 2")
+    r.add_argument("runs", nargs="+", metavar="RUN",
+                   help="run files or bench recordings (.mcap; sample:NAME for a sample that ships with twin, e.g. "
+                        "sample:test6_repeat1), at least 2")
     r.add_argument("--channel", default="AC4", help="accelerometer (AC1..AC6) or an exact channel name (default AC4)")
     r.add_argument("--start", type=float, metavar="S", help="window start, run time [s] (default: start)")
     r.add_argument("--stop", type=float, metavar="S", help="window stop, run time [s] (default: end)")
@@ -42,10 +44,12 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run_repeatability(args: argparse.Namespace) -> int:
     import sys
 
+    from twin.commands.inputs import recording
     from twin.studies.repeatability import repeatability
     from twin.util import atomic_write_json
 
-    if len(args.runs) < 2:
+    runs = [recording(r) for r in args.runs]
+    if len(runs) < 2:
         raise TwinError("repeatability: give at least 2 runs")
     if args.decimate < 1:
         raise TwinError(f"--decimate: must be an integer >= 1, got {args.decimate}")
@@ -65,8 +69,8 @@ def run_repeatability(args: argparse.Namespace) -> int:
     if args.align_angle is not None and not -360 <= args.align_angle <= 360:
         raise TwinError(f"--align-angle: must lie in [-360, 360] degrees, got {args.align_angle!r}")
     if args.json is not None:  # checked before the work, not after
-        check_output_file(args.json, "--json", ".json", inputs=args.runs)
-    rep = repeatability(args.runs, args.channel, args.start, args.stop, args.dtw_window, args.align_angle,
+        check_output_file(args.json, "--json", ".json", inputs=runs)
+    rep = repeatability(runs, args.channel, args.start, args.stop, args.dtw_window, args.align_angle,
                         args.decimate, progress=not args.no_progress and sys.stderr.isatty())
     result, lengths = rep.result, rep.window_samples
     if max(lengths) - min(lengths) > 1:

@@ -6,6 +6,8 @@ import argparse
 import sys
 import time
 
+from twin.commands.inputs import SPEC_HELP
+from twin.commands.inputs import spec as spec_arg
 from twin.errors import TwinError
 from twin.util import resolve_workers
 
@@ -13,7 +15,8 @@ from twin.util import resolve_workers
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("dataset", help="synthetic datasets: generate, plan, info, verify",
                        description="Synthetic datasets of the bench for clearance identification and observers: "
-                                   "a TOML spec (analysis/datasets/*.toml) varies clearances, orientation, speed, "
+                                   "a TOML spec (a file, or the name of one that ships with twin: tiny, ...) varies "
+                                   "clearances, orientation, speed, "
                                    "contact and sensor parameters; runs are simulated on all cores (or a Dask "
                                    "cluster) into Parquet files any ML tool reads.")
     ds = p.add_subparsers(dest="dataset_command", metavar="ACTION", parser_class=type(p))
@@ -22,7 +25,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     g = ds.add_parser("generate", help="simulate the runs of a spec into a dataset folder (resumes)",
                       description="Simulate every run of SPEC into --out (or finish an interrupted generation "
                                   "with the same command).")
-    g.add_argument("spec", metavar="SPEC.toml")
+    g.add_argument("spec", metavar="SPEC.toml", help=SPEC_HELP)
     g.add_argument("--out", metavar="DIR", required=True, help="dataset folder (new, empty, or this spec's)")
     g.add_argument("--workers", type=int, metavar="N",
                    help="runs at a time, on threads or worker processes (default: the number of cores)")
@@ -37,7 +40,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     g.set_defaults(func=_generate)
 
     pl = ds.add_parser("plan", help="print the runs of a spec and estimate the time, without writing anything")
-    pl.add_argument("spec", metavar="SPEC.toml")
+    pl.add_argument("spec", metavar="SPEC.toml", help=SPEC_HELP)
     pl.add_argument("--workers", type=int, metavar="N", help="workers of the estimate (default: the cores)")
     pl.add_argument("--show", type=int, default=20, metavar="K", help="runs listed (default 20; 0 = all)")
     pl.add_argument("--no-estimate", action="store_true", help="skip the short timing runs of the estimate")
@@ -46,7 +49,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     i = ds.add_parser("info", help="runs by status, class balance per split, channels, the runs with their labels",
                       description="Describe a dataset folder: runs by status, class balance per split, size, "
                                   "channels, and its runs with their ids and labels.")
-    i.add_argument("dir", metavar="DIR")
+    i.add_argument("dir", metavar="DIR", help="dataset folder (twin dataset generate --out DIR)")
     i.add_argument("--show", type=int, default=20, metavar="K", help="runs listed (default 20; 0 = all)")
     i.add_argument("--json", nargs="?", const="-", metavar="OUT.json",
                    help="the same as JSON, every run included: alone, printed instead of the text; with a file "
@@ -54,7 +57,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     i.set_defaults(func=_info)
 
     v = ds.add_parser("verify", help="check every file against the manifest (checksums, lengths, labels)")
-    v.add_argument("dir", metavar="DIR")
+    v.add_argument("dir", metavar="DIR", help="dataset folder (twin dataset generate --out DIR)")
     v.add_argument("--no-progress", action="store_true", help="no progress bar")
     v.set_defaults(func=_verify)
 
@@ -66,7 +69,7 @@ def _generate(args: argparse.Namespace) -> int:
 
     if args.limit is not None and args.limit < 0:
         raise TwinError(f"--limit: must be >= 0, got {args.limit}")
-    spec = load_spec(args.spec)
+    spec = load_spec(spec_arg(args.spec))
     t = time.perf_counter()
     info = generate(spec, args.out, workers=resolve_workers(args.workers), scheduler=args.scheduler, limit=args.limit,
                     progress=not args.no_progress and sys.stderr.isatty())
@@ -86,7 +89,7 @@ def _plan(args: argparse.Namespace) -> int:
     if args.show < 0:
         raise TwinError(f"--show: must be >= 0 (0 = all), got {args.show}")
     workers = resolve_workers(args.workers)
-    spec = load_spec(args.spec)
+    spec = load_spec(spec_arg(args.spec))
     runs = plan(spec)
     sim = sum(r.config.duration_s for r in runs)
     names = list(dict.fromkeys(k for r in runs for k in r.factors))

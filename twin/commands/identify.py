@@ -7,6 +7,7 @@ import json
 import sys
 from pathlib import Path
 
+from twin.commands.inputs import RECORDING_HELP, recording
 from twin.errors import TwinError
 from twin.util import resolve_workers
 
@@ -52,17 +53,18 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     e = ids.add_parser("evaluate", help="evaluate a model on a dataset, or several pooled: confusion matrix, "
                                         "recall, size errors")
-    e.add_argument("model", metavar="MODEL.npz")
+    e.add_argument("model", metavar="MODEL.npz", help="model file (twin identify train writes one)")
     e.add_argument("dataset", metavar="DATASET", nargs="+",
                    help="dataset folder(s) of one engine, sample rate and encoder resolution; several are pooled "
                         "(e.g. a test set and its extension by another seed)")
-    e.add_argument("--out", metavar="REPORT_DIR", required=True)
+    e.add_argument("--out", metavar="REPORT_DIR", required=True,
+                   help="report folder to write (report.md, report.json, PNG plots)")
     e.add_argument("--splits", default="train,val,test", help="splits to evaluate (default: all)")
     e.add_argument("--workers", type=int, metavar="N", help="processes for the features (default: the cores)")
     e.set_defaults(func=_evaluate)
 
     c = ids.add_parser("clearance", help="which joint has clearance in a bench recording, and how much")
-    c.add_argument("recording", metavar="REC.mcap")
+    c.add_argument("recording", metavar="REC.mcap", help=RECORDING_HELP)
     c.add_argument("--model", metavar="MODEL.npz", help="model file (default: the one shipped with twin)")
     c.add_argument("--json", metavar="OUT.json", help="also write the answer as JSON")
     c.set_defaults(func=_clearance)
@@ -73,7 +75,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "contact.restitution and keep the value whose calibrated accelerometer signal "
                                    "(sensor chain and calibration on both sides) is closest (RMS) to the recording's "
                                    "(twin.identification.restitution).")
-    r.add_argument("recording", metavar="REC.mcap")
+    r.add_argument("recording", metavar="REC.mcap", help=RECORDING_HELP)
     r.add_argument("--sensor", default="AC6", help="accelerometer compared (default AC6, the slider along the guide)")
     r.add_argument("--start", type=float, default=0.0, metavar="S", help="window start [s] (default 0)")
     r.add_argument("--stop", type=float, default=0.0, metavar="S", help="window end [s] (default 0 = the end)")
@@ -148,7 +150,7 @@ def _recording_and_json(args: argparse.Namespace) -> tuple[Path, Path | None]:
     """The recording argument (an .mcap file) and the checked --json output, before any work."""
     from twin.util import check_output_file
 
-    rec = Path(args.recording)
+    rec = recording(args.recording)
     if rec.suffix != ".mcap":
         raise TwinError(f"{rec}: a recording is an .mcap file; convert DAQ exports with 'twin import'")
     return rec, check_output_file(args.json, "--json", ".json") if args.json else None
@@ -165,7 +167,7 @@ def _clearance(args: argparse.Namespace) -> int:
     model = ClearanceModel.load(path)
     a = identify_recording(model, rec)
     p = a["probabilities"]
-    print(f"{rec}: fault {a['fault']}, probability {p[a['fault']]:.2f} (class probabilities: "
+    print(f"{args.recording}: fault {a['fault']}, probability {p[a['fault']]:.2f} (class probabilities: "
           + ", ".join(f"{k} {v:.2f}" for k, v in p.items()) + ")")
     for j in ("b", "c"):
         lo, hi = a[f"clearance_{j}_interval_mm"]
@@ -219,7 +221,7 @@ def _restitution(args: argparse.Namespace) -> int:
     res = sweep_restitution(rec, opts)
     found = (f"restitution e = {res.value:.3f}" if res.parameter == "restitution"
              else f"c_max = {res.value:.0f} N s/m")
-    print(f"{rec}: {found} ({res.sensor}, RMS mismatch {res.mismatch_mps2:.2f} m/s^2 of "
+    print(f"{args.recording}: {found} ({res.sensor}, RMS mismatch {res.mismatch_mps2:.2f} m/s^2 of "
           f"{res.recorded_rms_mps2:.1f} m/s^2 recorded, window {res.window_s[0]:.3f}-{res.window_s[1]:.3f} s; "
           f"{res.simulations} {res.engine} runs in {res.seconds:.1f} s)")
     for n in res.notes:

@@ -57,9 +57,12 @@ def run(args: argparse.Namespace) -> int:
     from twin.recording import (RecordingInfo, calibration_from_offsets, import_table,
                                 parse_mapping, static_calibration_from, write_recording)
 
+    from twin.commands.inputs import recording
     from twin.util import check_output_file, file_sha256
 
     cfg = config_from_args(args)
+    if args.calibration:
+        args.calibration = str(recording(args.calibration))
     inputs = [args.export] + ([args.calibration] if args.calibration else [])
     out = check_output_file(args.out, "--out", ".mcap", inputs=inputs)
     if args.calibration and args.zero_g is not None:

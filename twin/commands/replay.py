@@ -10,6 +10,7 @@ import tempfile
 from pathlib import Path
 
 from twin.cli import MODEL_OPTIONS, SELECT_OPTIONS, add_config_args, config_from_args
+from twin.commands.inputs import RECORDING_HELP, recording
 from twin.config import BenchConfig
 from twin.errors import TwinError
 
@@ -22,7 +23,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "for the ideal model on a clearance recording, as in S003 Fig. 16), put the virtual sensors "
                     "through the bench's sensor chain and calibration, and compare with the recorded "
                     "accelerations. Writes replay.mcap, report.json, report.md and PNG plots to --out.")
-    p.add_argument("recording", metavar="RECORDING.mcap", help="bench recording (see recordings/FORMAT.md)")
+    p.add_argument("recording", metavar="RECORDING.mcap", help=RECORDING_HELP)
     # the model to replay with; the drive, duration, channels and rate come from the recording
     add_config_args(p, SELECT_OPTIONS + MODEL_OPTIONS + ("engine", "timestep"),
                     refused_set=("drive.program", "drive.trace_file", "simulation.duration_s",
@@ -65,7 +66,7 @@ def run(args: argparse.Namespace) -> int:
 
     from twin.bench_replay import ReplayOptions, replay
 
-    rec = Path(args.recording)
+    rec = recording(args.recording)
     if rec.suffix != ".mcap":
         raise TwinError(f"{rec}: a recording is an .mcap file; convert DAQ exports with 'twin import'")
     if not rec.is_file():

@@ -94,8 +94,7 @@ def register_accuracy(studies: argparse._SubParsersAction) -> None:
         "accuracy", help="run time versus error of the twin's variants against the converged reference",
         description="Table 4 tests 4-12: every MuJoCo variant (timestep, integrator, solver, contact calibration, "
                     "bushing representation) and the reference at its default step, against the reference at "
-                    "h = 1e-6 s. Writes accuracy.md, accuracy.json and work-precision PNGs. See "
-                    "twin/studies/accuracy.py for the method.")
+                    "h = 1e-6 s. Writes accuracy.md, accuracy.json and work-precision PNGs.")
     p.add_argument("--out", metavar="DIR", required=True, help="output directory (created if missing)")
     p.add_argument("--quick", action="store_true",
                    help="reduced version (tests 6 and 12, 0.3 s windows, 4 variants; about a minute)")

@@ -44,7 +44,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "a rerun recording with a default layout: the 3-D bench moving in time, journal "
                                    "orbits, contact forces, every signal, spectra and the configuration. Writes "
                                    "RUN.rrd beside the input unless --save is given; no viewer is needed.")
-    p.add_argument("input", metavar="RUN_OR_RECORDING.mcap", help="twin run file to view, or a dataset folder with --run")
+    p.add_argument("input", metavar="RUN_OR_RECORDING.mcap",
+                   help="twin run file or bench recording to view (sample:NAME for a sample recording that ships "
+                        "with twin), or a dataset folder with --run")
     p.add_argument("--run", metavar="RUN_ID", help="with a dataset folder: the run to view (twin dataset info lists them)")
     p.add_argument("--save", metavar="OUT.rrd", help="recording to write (default: beside the input, .rrd)")
     p.add_argument("--spawn", action="store_true", help="open the rerun viewer on the recording")
@@ -68,10 +70,11 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from twin.commands.inputs import is_sample, recording
     from twin.util import check_output_file
     from twin.viz import ViewOptions, convert_file, default_output
 
-    src = Path(args.input)
+    src = recording(args.input)
     dataset_run = None
     if src.is_dir() and (src / "info.json").is_file():
         if not args.run:
@@ -90,7 +93,8 @@ def run(args: argparse.Namespace) -> int:
         if not src.is_file():
             raise TwinError(f"{src}: " + ("not a regular file (a folder, pipe or device)" if src.exists()
                                           else "no such file"))
-        default = default_output(src)
+        # beside the input, but a shipped sample's in the working folder (not inside the installation)
+        default = Path(default_output(src).name) if is_sample(args.input) else default_output(src)
     out = check_output_file(args.save if args.save else default, "--save", ".rrd", inputs=[src])
     wait = DEFAULT_WAIT_S if args.wait is None else args.wait
     if args.screenshot:

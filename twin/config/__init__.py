@@ -1,7 +1,7 @@
 """Bench configuration: one frozen dataclass per component, loadable from TOML.
 
 Every number of the physical bench is a field here with its source (``S003`` is the bench
-paper, ``../shared/seeds/003_...``; tables refer to it). Values the papers leave open are
+paper; tables refer to it). Values the papers leave open are
 marked PLACEHOLDER in the docstrings: they are configuration, documented, never hidden
 in code.
 

@@ -9,7 +9,7 @@ import re
 from typing import Any
 
 from twin import model_xml
-from twin.errors import ConfigError
+from twin.errors import ConfigError, did_you_mean
 
 #: defaults held by the base model mjcf/bench.xml (parsed once; ModelError if unreadable)
 XML_DEFAULTS = model_xml.defaults()
@@ -57,7 +57,7 @@ def _finite(value: float, name: str, unit: str) -> None:
 
 
 def _choice(value: str, name: str, allowed: tuple[str, ...]) -> None:
-    _check(value in allowed, name, f"must be one of {', '.join(allowed)}; got {value!r}")
+    _check(value in allowed, name, f"must be one of {', '.join(allowed)}; got {value!r}{did_you_mean(value, allowed)}")
 
 
 def _joint_table(obj: Any, name: str) -> list[tuple[str, Any]]:

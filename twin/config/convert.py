@@ -9,7 +9,7 @@ import typing
 from dataclasses import fields
 from typing import Any, Mapping, TypeVar
 
-from twin.errors import ConfigError
+from twin.errors import ConfigError, unknown
 
 #: a configuration dataclass (``BenchConfig``; this module does not import it)
 C = TypeVar("C")
@@ -77,7 +77,7 @@ def from_dict(cls: type, data: Mapping[str, Any], path: str = "") -> Any:
     prefix = f"{path}." if path else ""
     for key in data:
         if key not in names:
-            raise ConfigError(f"{prefix}{key}", f"unknown field; allowed: {', '.join(names)}")
+            raise ConfigError(f"{prefix}{key}", unknown("field", key, names))
     kwargs = {}
     base = cls() if all(f.default is not dataclasses.MISSING or f.default_factory is not dataclasses.MISSING
                         for f in fields(cls)) else None
@@ -114,9 +114,9 @@ def with_overrides(cfg: C, overrides: Mapping[str, Any]) -> C:
         node = data
         for k in keys[:-1]:
             if not isinstance(node.get(k), dict):
-                raise ConfigError(dotted, f"unknown section {k!r}; allowed: {', '.join(node)}")
+                raise ConfigError(dotted, unknown(f"section {k!r}", k, node))
             node = node[k]
         if keys[-1] not in node:
-            raise ConfigError(dotted, f"unknown field; allowed: {', '.join(node)}")
+            raise ConfigError(dotted, unknown("field", keys[-1], node))
         node[keys[-1]] = list(value) if isinstance(value, tuple) else value
     return from_dict(type(cfg), data)

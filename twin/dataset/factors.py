@@ -20,6 +20,7 @@ import numpy as np
 from twin.config import ACCELEROMETERS, CATALOGUE_DIAMETRAL_MM, BenchConfig
 from twin.config.drivetrain import EXPLORE_RANGES
 from twin.dataset.spec import SpecError
+from twin.errors import did_you_mean
 
 #: fault classes: which joints have a clearance
 FAULTS = ("none", "B", "C", "BC")
@@ -204,7 +205,8 @@ def resolve(name: str, engine: str) -> Factor:
         engines = ("mujoco",) if section == "mujoco" else ("mujoco", "reference")
         f = Factor(name, f"configuration field {name}", None, None, _set(name), engines)
     else:
-        raise SpecError(f"factors.{name}", f"unknown factor; named factors: {', '.join(NAMED)}, or any "
+        raise SpecError(f"factors.{name}", f"unknown factor{did_you_mean(name, NAMED)}; named factors: "
+                                           f"{', '.join(NAMED)}, or any "
                                            "configuration field by its dotted path (e.g. pid.kp)")
     if engine not in f.engines:
         raise SpecError(f"factors.{name}", f"is not supported by the {engine} engine (only {', '.join(f.engines)})")

@@ -57,7 +57,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
-from twin.errors import TwinError
+from twin.errors import TwinError, did_you_mean, unknown
 
 #: designs a spec may ask for
 DESIGNS = ("grid", "lhs", "sobol", "random", "list")
@@ -184,7 +184,7 @@ def _table(data: Mapping[str, Any], key: str, allowed: tuple[str, ...]) -> dict[
         raise SpecError(key, f"must be a table, got {t!r}")
     for k in t:
         if k not in allowed:
-            raise SpecError(f"{key}.{k}", f"unknown key; allowed: {', '.join(allowed)}")
+            raise SpecError(f"{key}.{k}", unknown("key", k, allowed))
     return dict(t)
 
 
@@ -203,7 +203,7 @@ def _factor(name: str, raw: Any) -> FactorSpec:
         raise SpecError(key, f"must be a list of values or a table {{ range = [lo, hi] }}, got {raw!r}")
     for k in raw:
         if k not in ("values", "range", "scale", "levels", "exclude"):
-            raise SpecError(f"{key}.{k}", "unknown key; allowed: values, range, scale, levels, exclude")
+            raise SpecError(f"{key}.{k}", unknown("key", k, ("values", "range", "scale", "levels", "exclude")))
     if "values" in raw:
         if set(raw) - {"values"}:
             raise SpecError(key, "give either values or range (with scale, levels, exclude), not both")
@@ -235,7 +235,7 @@ def parse_spec(data: Mapping[str, Any], source: str = "") -> DatasetSpec:
     """Validate a spec given as nested dicts (TOML)."""
     for k in data:
         if k not in _TOP:
-            raise SpecError(k, f"unknown section; allowed: {', '.join(_TOP)}")
+            raise SpecError(k, unknown("section", k, _TOP))
     ds = _table(data, "dataset", ("name", "seed", "description"))
     name = ds.get("name")
     if not (isinstance(name, str) and 0 < len(name) <= 40 and name.replace("-", "").replace("_", "").isalnum()):
@@ -252,7 +252,8 @@ def parse_spec(data: Mapping[str, Any], source: str = "") -> DatasetSpec:
         from twin.config import NAMED_PRESETS
 
         if not (isinstance(base_preset, str) and base_preset.lower() in NAMED_PRESETS):
-            raise SpecError("base.preset", f"must be one of {', '.join(NAMED_PRESETS)}, got {base_preset!r}")
+            raise SpecError("base.preset", f"must be one of {', '.join(NAMED_PRESETS)}, got {base_preset!r}"
+                                           f"{did_you_mean(base_preset, NAMED_PRESETS)}")
         base_preset = base_preset.lower()
     if test is not None and (isinstance(test, bool) or not isinstance(test, int) or not 1 <= test <= 12):
         raise SpecError("base.test", f"must be a Table 4 test id 1..12, got {test!r}")
@@ -275,7 +276,7 @@ def parse_spec(data: Mapping[str, Any], source: str = "") -> DatasetSpec:
         raise SpecError("base.profile", f"must be a table, got {prof_raw!r}")
     for k in prof_raw:
         if k not in ("rpm", "hold_s", "stop_probability"):
-            raise SpecError(f"base.profile.{k}", "unknown key; allowed: rpm, hold_s, stop_probability")
+            raise SpecError(f"base.profile.{k}", unknown("key", k, ("rpm", "hold_s", "stop_probability")))
     profile = Profile(**{k: tuple(v) if isinstance(v, list) else v for k, v in prof_raw.items()})
 
     des = _table(data, "design", ("kind", "runs", "repeats", "points"))

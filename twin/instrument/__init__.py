@@ -1,4 +1,4 @@
-"""The bench's sensor chain and calibration (S003 §2.3; numbers in ``../shared/BENCH.md``).
+"""The bench's sensor chain and calibration (S003 §2.3, Table 3; Eq. 1–4).
 
 * :mod:`twin.instrument.accel`: ADXL1001/ADXL1002 accelerometers (sensitivity, zero-g offset,
   frequency response with the 21 kHz resonance, noise, range and rail clipping);

@@ -1,6 +1,6 @@
 r"""S004's continuous-contact model: the clearance at B as a virtual massless rod.
 
-S004 (``../shared/seeds/004_…``, Xiao, Song & Zhang 2019, §2.1) assumes that the journal of the
+S004 (Xiao, Song & Zhang 2019, §2.1) assumes that the journal of the
 clearance joint B never leaves the bushing wall: the pin centre B and the bushing (rod eye)
 centre B' are then a fixed distance c apart, a massless rigid "virtual rod" of length c at an
 angle ψ. With the crank prescribed (θ₁(t), S004: 30 rad/s) the mechanism has one degree of
@@ -285,12 +285,12 @@ def register(studies) -> None:
     p = studies.add_parser(
         "continuous-contact", help="S004's continuous-contact model (clearance at B as a massless virtual rod)",
         description="S004 §2.1: the clearance at the crank-rod joint B as a massless rod of length c, the crank "
-                    "prescribed, one degree of freedom from Lagrange's equations (twin/studies/continuous_contact.py). Runs it "
+                    "prescribed, one degree of freedom from Lagrange's equations. Runs it "
                     "from the quasi-static start (the journal where the ideal pin force pushes it) and writes "
                     "continuous_contact.json (the crank angle up to which the journal stays on the wall, f_N >= 0, "
                     "and the slider's deviation from the ideal motion up to there), continuous_contact.npz (time "
-                    "series) and continuous_contact.png. The comparison with the contact model is "
-                    "analysis/s004_report.py.")
+                    "series) and continuous_contact.png. (In the repository, python analysis/s004_report.py compares "
+                    "it with the contact model.)")
     p.add_argument("--preset", default="s004", metavar="NAME", help="mechanism (default s004)")
     p.add_argument("--config", metavar="FILE", help="TOML configuration instead of a preset")
     p.add_argument("--clearance-b", type=float, metavar="MM", help="diametral clearance at B [mm] (S004: 0.5, 1.0)")

@@ -1,6 +1,6 @@
 """Design of experiments with a Kriging surrogate (``twin study doe SPEC --out DIR``; S000's method).
 
-S000 (Zhang, Xu, Flores & Lankarani, ``../shared/seeds/000_…``) samples a few design points of a
+S000 (Zhang, Xu, Flores & Lankarani) samples a few design points of a
 slider–crank with a clearance joint by Latin hypercube, simulates each, builds a Kriging model of
 each response (the absolute maxima of slider acceleration, contact force and power), checks it at
 a point it was not built on, and searches its optimum with a genetic algorithm. This module does
@@ -49,6 +49,7 @@ from typing import Any, Callable, Mapping, Sequence
 import numpy as np
 
 from twin.dataset.spec import DatasetSpec, FactorSpec, SpecError, parse_spec, read_spec_toml
+from twin.errors import unknown
 
 #: response name -> (unit, description)
 RESPONSES: dict[str, tuple[str, str]] = {
@@ -95,7 +96,7 @@ def parse_doe(data: Mapping[str, Any], source: str = "") -> DoeSpec:
         raise SpecError("doe", "a DOE spec needs a [doe] table (responses, settle_s, ...)")
     for k in raw:
         if k not in _DOE_KEYS:
-            raise SpecError(f"doe.{k}", f"unknown key; allowed: {', '.join(_DOE_KEYS)}")
+            raise SpecError(f"doe.{k}", unknown("key", k, _DOE_KEYS))
     out = data.get("outputs")
     if out is None:  # the responses' channels only, at the spec's default rate
         data["outputs"] = {"truth": list(NEEDED_GROUPS), "instrumented": False}
@@ -151,7 +152,7 @@ def parse_doe(data: Mapping[str, Any], source: str = "") -> DoeSpec:
         raise SpecError("doe.plot", f"must be a table {{ x, y, slices }}, got {plot!r}")
     for k in plot:
         if k not in ("x", "y", "slices"):
-            raise SpecError(f"doe.plot.{k}", "unknown key; allowed: x, y, slices")
+            raise SpecError(f"doe.plot.{k}", unknown("key", k, ("x", "y", "slices")))
     names = [f.name for f in spec.factors]
     px = plot.get("x", names[0])
     py = plot.get("y", names[1] if len(names) > 1 else "")
@@ -616,8 +617,9 @@ def register(studies: Any) -> None:
                     "surrogate of each (scikit-learn Gaussian process, anisotropic Matern kernel) with its "
                     "leave-one-out error; its global optimum (differential evolution), simulated; hold-out "
                     "predictions; Sobol sensitivities; a PNG of each surrogate. SPEC is a dataset spec with a "
-                    "[doe] table. See twin/studies/doe.py.")
-    p.add_argument("spec", metavar="SPEC", help="DOE spec (.toml): a dataset spec plus [doe]")
+                    "[doe] table (the shipped s000_example1 is S000's Example 1).")
+    p.add_argument("spec", metavar="SPEC", help="DOE spec: a dataset spec plus [doe], a .toml file or the name of one "
+                   "that ships with twin (s000_example1)")
     p.add_argument("--out", metavar="DIR", required=True, help="output directory (created; a second call resumes)")
     p.add_argument("--workers", type=int, metavar="N", help="simulations at a time (default: the cores)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -629,7 +631,9 @@ def _run(args: Any) -> int:
 
     from twin.util import check_output_dir
 
-    doe = load_doe(args.spec)
+    from twin.commands.inputs import spec
+
+    doe = load_doe(spec(args.spec))
     from twin.dataset.design import plan
 
     plan(doe.dataset)  # every configuration is valid before anything is written

@@ -1,6 +1,6 @@
 """Multi-criteria decision making over a table of responses (``twin study mcdm``; S002's methods).
 
-S002 (``../shared/seeds/002_…``) ranks the 27 runs of its Taguchi L27 by two smaller-the-better
+S002 ranks the 27 runs of its Taguchi L27 by two smaller-the-better
 responses (the slider's maximum acceleration and the contact force in the revolute clearance joint)
 with four methods, the criteria weighted by MEREC. This module implements them from their
 original definitions, as pure functions of a decision matrix ``x`` (m alternatives in rows,
@@ -37,8 +37,10 @@ to sum 1, the functions use them as given):
 
 Every score is larger-is-better; ranks are competition ranks (rank 1 = best, ties share the
 smallest rank). ``twin study mcdm RESPONSES.csv --criteria NAME:min|max,… --weights
-merec|equal|W1,… --out DIR`` reads the matrix from a CSV (one row per alternative, a header row;
-other columns are ignored) and writes ``DIR/mcdm.json`` and ``DIR/report.md``.
+merec|equal|W1,… --out DIR`` reads the matrix from a CSV (one row per alternative, a header row)
+and writes ``DIR/mcdm.json`` and ``DIR/report.md``. The alternatives are named by a name column
+(:func:`name_column`: ``--name-column COL``, or else the first column of text that names every row
+once, such as ``name`` or ``run``), else numbered by row; other columns are ignored.
 """
 
 from __future__ import annotations
@@ -50,7 +52,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from twin.errors import TwinError
+from twin.errors import TwinError, did_you_mean
 
 #: distinguishing coefficient of GRA (the customary value, S002's)
 GRA_XI = 0.5
@@ -95,7 +97,8 @@ def numeric_column(header: Sequence[str], rows: Sequence[Sequence[str]], name: s
     """Column ``name`` as floats; a one-line error naming ``flag``, the column and the first bad
     row for an unknown column or a cell that is not a finite number."""
     if name not in header:
-        raise TableError(f"{flag}: unknown column {name!r}; the file has {', '.join(header)}")
+        raise TableError(f"{flag}: unknown column {name!r}{did_you_mean(name, header)}; the file has "
+                         f"{', '.join(header)}")
     j = list(header).index(name)
     out = np.empty(len(rows))
     for i, r in enumerate(rows):
@@ -106,6 +109,35 @@ def numeric_column(header: Sequence[str], rows: Sequence[Sequence[str]], name: s
         if not math.isfinite(out[i]):
             raise TableError(f"{flag}: column {name!r}, data row {i + 1}: {r[j]!r} is not a finite number")
     return out
+
+
+def _is_number(text: str) -> bool:
+    try:
+        return math.isfinite(float(text))
+    except ValueError:
+        return False
+
+
+def name_column(header: Sequence[str], rows: Sequence[Sequence[str]], skip: Sequence[str] = (),
+                given: str | None = None, flag: str = "--name-column") -> str | None:
+    """The column that names the alternatives: ``given``, which must name every row once (a
+    one-line error otherwise), or else the first column not in ``skip`` whose cells are text (not
+    all numbers), none empty, none repeated; None when there is none (rows are then numbered)."""
+    def names_rows(j: int) -> bool:
+        cells = [r[j].strip() for r in rows]
+        return all(cells) and len(set(cells)) == len(cells)
+
+    if given is not None:
+        if given not in header:
+            raise TableError(f"{flag}: unknown column {given!r}{did_you_mean(given, header)}; the file has "
+                             f"{', '.join(header)}")
+        if not names_rows(list(header).index(given)):
+            raise TableError(f"{flag}: column {given!r} must name every row once (no empty or repeated cell)")
+        return given
+    for j, h in enumerate(header):
+        if h not in skip and names_rows(j) and not all(_is_number(r[j]) for r in rows):
+            return h
+    return None
 
 
 def parse_criteria(text: str) -> list[tuple[str, bool]]:
@@ -316,8 +348,9 @@ def evaluate(x: np.ndarray, benefit: Sequence[bool], w: Sequence[float], lam: fl
 
 # ------------------------------------------------------------------ study
 def run_mcdm(csv_path: str | Path, criteria: str, weights: str,
-             lam: float = WASPAS_LAMBDA) -> tuple[dict[str, Any], np.ndarray]:
-    """Read, validate and evaluate: the result that ``mcdm.json`` holds, and the decision matrix."""
+             lam: float = WASPAS_LAMBDA, names_from: str | None = None) -> tuple[dict[str, Any], np.ndarray]:
+    """Read, validate and evaluate: the result that ``mcdm.json`` holds, and the decision matrix.
+    ``names_from``: the column naming the alternatives (default: found by :func:`name_column`)."""
     lam = _check_lambda(lam)
     crit = parse_criteria(criteria)
     header, rows = read_csv_table(csv_path)
@@ -325,8 +358,13 @@ def run_mcdm(csv_path: str | Path, criteria: str, weights: str,
     benefit = [b for _, b in crit]
     x = check_matrix(np.column_stack([numeric_column(header, rows, n) for n in names]), names)
     w, source = parse_weights(weights, x, benefit, names)
+    col = name_column(header, rows, skip=names, given=names_from)
+    j = list(header).index(col) if col is not None else -1
     res: dict[str, Any] = {
         "input": str(csv_path), "alternatives": x.shape[0],
+        # the alternatives' names, in row order: the name column's cells, or the row numbers (from 1)
+        "name_column": col, "names": [r[j].strip() for r in rows] if col is not None else
+        [str(i + 1) for i in range(x.shape[0])],
         "criteria": [{"name": n, "goal": "max" if b else "min"} for n, b in crit],
         "weights": w.tolist(), "weights_source": source,
         "methods": evaluate(x, benefit, w, lam),
@@ -343,7 +381,8 @@ def report_md(res: dict[str, Any], x: np.ndarray) -> str:
     m = res["methods"]
     lines = [
         "# Multi-criteria decision making", "",
-        f"Input: `{res['input']}`, {res['alternatives']} alternatives (rows, numbered from 1 in file order).", "",
+        f"Input: `{res['input']}`, {res['alternatives']} alternatives (rows, numbered from 1 in file order"
+        + (f"; named by the column `{res['name_column']}`" if res["name_column"] else "") + ").", "",
         "| criterion | goal | weight |", "|---|---|---|",
         *[f"| {c['name']} | {c['goal']} | {w:.4f} |" for c, w in zip(res["criteria"], res["weights"])], "",
         f"Weights: {res['weights_source']}"
@@ -360,18 +399,25 @@ def report_md(res: dict[str, Any], x: np.ndarray) -> str:
         f"* WASPAS, S002's variant (its Eq. 28-31): the product is taken over the weighted values, "
         f"prod((w n)^w) = c * prod(n^w) with c = prod(w^w) = {m['waspas']['paper_variant']['c']:.4f}; "
         "the product part therefore weighs less than lambda says, and ranks can differ from the standard form.", "",
-        "| row | " + " | ".join(names) + " | GRA | rank | TOPSIS | rank | SAW | rank | WASPAS | rank | WASPAS (S002) | rank |",
-        "|" + "---|" * (len(names) + 11),
+        "| row | " + (f"{res['name_column']} | " if res["name_column"] else "") + " | ".join(names)
+        + " | GRA | rank | TOPSIS | rank | SAW | rank | WASPAS | rank | WASPAS (S002) | rank |",
+        "|" + "---|" * (len(names) + 11 + bool(res["name_column"])),
     ]
     pv = m["waspas"]["paper_variant"]
     for i in range(res["alternatives"]):
         vals = " | ".join(f"{v:.6g}" for v in x[i])
         cells = [f"{m[k]['scores'][i]:.4f} | {m[k]['ranks'][i]}" for k in METHODS]
-        lines.append(f"| {i + 1} | {vals} | " + " | ".join(cells) + f" | {pv['scores'][i]:.4f} | {pv['ranks'][i]} |")
-    best = {k: [i + 1 for i, r in enumerate(m[k]["ranks"]) if r == 1] for k in METHODS}
-    lines += ["", "Best row by method: " + ", ".join(f"{k.upper()} {best[k]}" for k in METHODS)
-              + f", WASPAS (S002) {[i + 1 for i, r in enumerate(pv['ranks']) if r == 1]}.", ""]
+        named = f"{res['names'][i]} | " if res["name_column"] else ""
+        lines.append(f"| {i + 1} | {named}{vals} | " + " | ".join(cells) + f" | {pv['scores'][i]:.4f} | {pv['ranks'][i]} |")
+    lines += ["", f"Best {'alternative' if res['name_column'] else 'row'} by method: "
+              + ", ".join(f"{k.upper()} {best_names(res, m[k]['ranks'])}" for k in METHODS)
+              + f", WASPAS (S002) {best_names(res, pv['ranks'])}.", ""]
     return "\n".join(lines)
+
+
+def best_names(res: dict[str, Any], ranks_: Sequence[int]) -> str:
+    """The alternatives ranked 1, by name (or row number), comma-separated."""
+    return ", ".join(res["names"][i] for i, r in enumerate(ranks_) if r == 1)
 
 
 def register(studies: Any) -> None:
@@ -380,9 +426,13 @@ def register(studies: Any) -> None:
         "mcdm", help="rank alternatives by several criteria: GRA, TOPSIS, SAW, WASPAS (S002's methods)",
         description="Rank the rows of a CSV of responses by several criteria with grey relational analysis "
                     "(xi = 0.5), TOPSIS, SAW and WASPAS (standard form and S002's variant), the criteria weighted "
-                    "by MEREC, equally or as given. Writes DIR/mcdm.json and DIR/report.md. See "
-                    "twin/studies/mcdm.py for the formulas.")
+                    "by MEREC, equally or as given, each by its original definition. The alternatives are named "
+                    "by a name column when the CSV has one (--name-column), else by row number. Writes "
+                    "DIR/mcdm.json and DIR/report.md (the formulas, the weights, every score and rank).")
     p.add_argument("responses", metavar="RESPONSES.csv", help="CSV with a header row, one row per alternative")
+    p.add_argument("--name-column", metavar="COL",
+                   help="column naming the alternatives (default: the first column of text that names every row "
+                        "once; without one, alternatives are numbered by row)")
     p.add_argument("--criteria", required=True, metavar="NAME:min|max,…",
                    help="criterion columns and whether smaller (min) or larger (max) is better")
     p.add_argument("--weights", default="merec", metavar="merec|equal|W1,W2,…",
@@ -396,7 +446,7 @@ def register(studies: Any) -> None:
 def _run(args: Any) -> int:
     from twin.util import atomic_write_json, atomic_write_text, check_output_dir
 
-    res, x = run_mcdm(args.responses, args.criteria, args.weights, args.waspas_lambda)
+    res, x = run_mcdm(args.responses, args.criteria, args.weights, args.waspas_lambda, args.name_column)
     out = check_output_dir(args.out)
     out.mkdir(exist_ok=True)
     atomic_write_json(out / "mcdm.json", res)
@@ -404,6 +454,6 @@ def _run(args: Any) -> int:
     w = ", ".join(f"{c['name']} {v:.4f}" for c, v in zip(res["criteria"], res["weights"]))
     print(f"wrote {out / 'mcdm.json'}, {out / 'report.md'}; weights ({res['weights_source']}): {w}")
     for k in METHODS:
-        r = res["methods"][k]["ranks"]
-        print(f"  {k:7s} best row {[i + 1 for i, v in enumerate(r) if v == 1]}")
+        print(f"  {k:7s} best {'alternative' if res['name_column'] else 'row'} "
+              f"{best_names(res, res['methods'][k]['ranks'])}")
     return 0

@@ -618,8 +618,7 @@ def register(studies: Any) -> None:
         description="N randomized scenes (clearances, orientation, drive program, timestep, contact parameters "
                     "within their calibrated uncertainty); per scene divergence, max penetration/clearance, "
                     "tracking error and an energy-balance residual. Writes stability.json, stability.md and "
-                    "stability.png; exit status 0 when every scene passes (no divergence, pen/c <= 0.25). "
-                    "See twin/studies/stability.py for the method.")
+                    "stability.png; exit status 0 when every scene passes (no divergence, pen/c <= 0.25).")
     p.add_argument("--scenes", type=int, required=True, metavar="N", help="number of scenes (>= 1)")
     p.add_argument("--seed", type=int, required=True, metavar="S", help="seed (>= 0); scene i depends on (S, i)")
     p.add_argument("--out", metavar="DIR", default="stability", help="output directory (default ./stability)")

@@ -1,6 +1,6 @@
 """Taguchi analysis of an orthogonal-array experiment (``twin study taguchi-analyze``; S002's method).
 
-S002 (``../shared/seeds/002_…``) varies four factors over three levels in a Taguchi L27 and
+S002 varies four factors over three levels in a Taguchi L27 and
 analyses the responses by signal-to-noise ratios, main effects, ANOVA and a prediction at the
 optimum. This module is that analysis, from a table of runs (factor levels and responses):
 
@@ -380,8 +380,7 @@ def register(studies: Any) -> None:
         description="S/N ratios (smaller- or larger-the-better), main effects, ANOVA with contributions, F and p "
                     "(raw responses and S/N; interactions and pooling on request) and the additive-model prediction "
                     "at the best levels with its confidence intervals, from a CSV with one row per run. Writes "
-                    "DIR/taguchi.json, DIR/report.md and per response main-effect and S/N PNG plots. See "
-                    "twin/studies/taguchi.py for the method.")
+                    "DIR/taguchi.json, DIR/report.md and per response main-effect and S/N PNG plots.")
     p.add_argument("responses_csv", metavar="RESPONSES.csv", help="CSV with a header row, one row per run")
     p.add_argument("--responses", required=True, metavar="COL,…",
                    help="response columns; COL1+COL2 names the replicates of one response")

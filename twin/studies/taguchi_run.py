@@ -33,6 +33,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from twin.dataset.spec import DatasetSpec, SpecError, parse_spec, read_spec_toml
+from twin.errors import unknown
 
 RESPONSES = ("max_slider_accel", "rms_slider_accel", "max_force_A", "max_force_B", "max_force_C", "max_force")
 
@@ -59,7 +60,7 @@ def parse_taguchi(data: Mapping[str, Any], source: str = "") -> TaguchiSpec:
     allowed = ("factors", "responses", "settle_s", "sn", "interactions", "alpha")
     for k in tg:
         if k not in allowed:
-            raise SpecError(f"taguchi.{k}", f"unknown key; allowed: {', '.join(allowed)}")
+            raise SpecError(f"taguchi.{k}", unknown("key", k, allowed))
     ds = parse_spec(data, source)
     if ds.design != "list":
         raise SpecError("design.kind", f"must be \"list\" for a Taguchi study (the array's runs), got {ds.design!r}")
@@ -157,11 +158,16 @@ def register(studies: Any) -> None:
     """Add ``twin study taguchi`` to the ``twin study`` group."""
     p = studies.add_parser(
         "taguchi", help="an orthogonal-array experiment (S002's L27) simulated, then its Taguchi analysis",
-        description="Runs the list design of SPEC (a dataset spec with a [taguchi] table) through the dataset "
-                    "generator, computes the responses of every run, writes DIR/responses.csv and the Taguchi "
-                    "analysis of twin study taguchi-analyze (S/N ratios, main effects, ANOVA, prediction at the "
-                    "optimum, PNGs). See twin/studies/taguchi_run.py.")
-    p.add_argument("spec", metavar="SPEC", help="Taguchi study spec (.toml): a dataset spec plus [taguchi]")
+        description="S002's Taguchi experiment: simulates every run of SPEC's orthogonal array (a dataset spec "
+                    "with a list design, one point per run, and a [taguchi] table naming the analysis factors and "
+                    "the responses; the shipped s002_l27 is S002's L27: crank length, clearance, friction and "
+                    "speed at three levels in 27 runs) through the dataset generator into DIR/dataset (a second "
+                    "call resumes), computes each run's responses after settle_s (the slider's largest "
+                    "acceleration, the largest contact force per joint), writes DIR/responses.csv and analyses "
+                    "it as twin study taguchi-analyze does: S/N ratios, main effects, ANOVA with contributions, "
+                    "the prediction at the optimum with its confidence intervals, PNG plots.")
+    p.add_argument("spec", metavar="SPEC", help="Taguchi study spec: a dataset spec plus [taguchi], a .toml file or the "
+                   "name of one that ships with twin (s002_l27)")
     p.add_argument("--out", required=True, metavar="DIR", help="output directory (created if missing)")
     p.add_argument("--workers", type=int, default=None, metavar="N", help="worker processes (default: all cores)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -176,7 +182,9 @@ def _run(args: Any) -> int:
     from twin.studies import taguchi
     from twin.util import atomic_write_text, check_output_dir
 
-    spec = load_taguchi(args.spec)
+    from twin.commands.inputs import spec as spec_arg
+
+    spec = load_taguchi(spec_arg(args.spec))
     out = check_output_dir(args.out)
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()

@@ -23,7 +23,7 @@ from typing import Any
 
 from twin.config.bench import BenchConfig
 from twin.config.convert import from_dict
-from twin.errors import ConfigError
+from twin.errors import ConfigError, did_you_mean
 
 
 @functools.lru_cache(maxsize=None)
@@ -64,18 +64,35 @@ def _named(name: str) -> BenchConfig:
 
 
 #: Named presets of the other mechanisms of the seed papers and of the bench's torque-release test:
-#: name -> builder (reads ``NAME.toml``).
+#: name -> builder (reads ``NAME.toml``): every TOML file of this folder but table4.toml, so a new
+#: file is a new preset.
 NAMED_PRESETS: dict[str, typing.Callable[[], BenchConfig]] = {
     name: functools.partial(_named, name)
-    for name in ("s001", "s000", "s004", "s002", "torque_release", "torque_release_protocol")
+    for name in sorted(p.name[:-len(".toml")] for p in resources.files(__name__).iterdir()
+                       if p.name.endswith(".toml") and p.name != "table4.toml")
+}
+
+#: One line per named preset, for ``--preset``'s help and the documentation (a test checks that every
+#: preset file has one and that the README, docs/commands.md and ``twin.preset`` name every preset).
+PRESET_SUMMARIES: dict[str, str] = {
+    "s000": "S000's Flores slider-crank at 5000 rpm, a radial clearance at C",
+    "s001": "S001's rig, 0.5 mm radial clearance at C, 0 -> 300 rpm in 0.2 s",
+    "s002": "S002's spatial slider-crank with spherical clearance joints, run 1 of its Taguchi L27",
+    "s004": "S004's steel mechanism, 0.5 mm radial clearance at B, prescribed 30 rad/s, ADAMS IMPACT contact",
+    "torque_release": "the bench's torque-driven release test: test 12's clearances, 1.2 N m on the motor for "
+                      "0.5 s, then coast-down through the belt, 10 s",
+    "torque_release_protocol": "three spin-ups of increasing length at 1.2 N m, each released, 34 s",
 }
 
 
 def named_preset(name: str, field_name: str = "--preset") -> BenchConfig:
-    """Configuration of a paper's mechanism (``--preset NAME``, ``preset = "NAME"`` in TOML):
-    ``s001`` (S001's rig), ``s000`` (S000's Flores slider–crank), ``s004`` (S004's large
-    mechanism), ``s002`` (S002's spatial slider–crank), ``torque_release`` (the bench's torque-driven release test),
-    ``torque_release_protocol`` (three spin-ups and coast-downs); the sources of their numbers are in the files ``NAME.toml`` of this folder."""
+    """Configuration of a named preset (``--preset NAME``, ``preset = "NAME"`` in TOML), one of
+    :data:`NAMED_PRESETS` (described in :data:`PRESET_SUMMARIES`): ``s000`` (S000's Flores
+    slider–crank), ``s001`` (S001's rig), ``s002`` (S002's spatial slider–crank), ``s004`` (S004's
+    large mechanism), ``torque_release`` (the bench's torque-driven release test),
+    ``torque_release_protocol`` (three spin-ups and coast-downs); the sources of their numbers are in
+    the files ``NAME.toml`` of this folder."""
     if not isinstance(name, str) or name.lower() not in NAMED_PRESETS:
-        raise ConfigError(field_name, f"must be one of {', '.join(NAMED_PRESETS)}, got {name!r}")
+        raise ConfigError(field_name, f"must be one of {', '.join(NAMED_PRESETS)}, got {name!r}"
+                                      f"{did_you_mean(name, NAMED_PRESETS)}")
     return NAMED_PRESETS[name.lower()]()
