@@ -12,6 +12,8 @@ The Python API (each name is imported on first use, so ``import twin`` stays qui
   signals, training windows as numpy arrays);
 * ``twin.identify(recording)``: locate and size the clearance faults of a recording; returns the
   answer (a dict);
+* ``twin.plot(source, "fig.png")``: draw a run file, recording, replay folder or run as a PNG
+  (channels, spectra, journal orbits; matplotlib, no GPU); returns what it drew;
 * ``twin.__version__``: the package version.
 
 >>> import twin
@@ -31,7 +33,7 @@ __version__ = "0.4.0"
 
 #: the API's calls, by the module that defines them
 _CALLS = {"preset": "twin.api", "simulate": "twin.api", "replay": "twin.api", "identify": "twin.api",
-          "BenchConfig": "twin.config", "Run": "twin.run"}
+          "plot": "twin.api", "BenchConfig": "twin.config", "Run": "twin.run"}
 #: subpackages and modules reached as attributes (``twin.dataset.open``) without importing them first
 _MODULES = ("api", "config", "dataset", "errors", "run", "simulation")
 

@@ -305,7 +305,7 @@ def draw(fig: Any, src: PlotSource, *, channels: Sequence[str] | None = None,
         if name in overlays:
             series.append((overlays[name], _SIM, "simulated"))
         for s, colour, label in series:
-            ax.plot(t, run[s][i0:i1], lw=0.6, color=colour, label=label)
+            ax.plot(t, run[s][i0:i1], lw=0.6, color=colour, label=label, alpha=0.8 if s != name else 1.0)
         ax.set_ylabel(_label(run, name), fontsize=8, rotation=0, ha="right", va="center")
         ax.tick_params(labelsize=7, labelbottom=last)
         ax.grid(alpha=0.3)
@@ -333,10 +333,10 @@ def draw(fig: Any, src: PlotSource, *, channels: Sequence[str] | None = None,
         if last:
             sx.set_xlabel("frequency [Hz]", fontsize=8)
         if row == 0:
-            what = f"crank {fc:.3f} Hz and its harmonics dashed" if harmonics else "crank at rest: no harmonics"
-            shaded = (", bands " + ", ".join(f"{lo / 1e3:g}–{hi / 1e3:g} kHz" for lo, hi in bands) + " shaded"
+            what = f"crank {fc:.3f} Hz × 1..{len(harmonics)} dashed" if harmonics else "crank at rest: no harmonics"
+            shaded = ("; " + ", ".join(f"{lo / 1e3:g}–{hi / 1e3:g}" for lo, hi in bands) + " kHz shaded"
                       if bands else "")
-            sx.set_title(f"Hann amplitude spectrum of the window ({what}{shaded})", fontsize=8)
+            sx.set_title(f"Hann amplitude spectrum ({what}{shaded})", fontsize=8)
     if orbits:
         ogrid = outer[0, len(cols) - 1].subgridspec(len(orbits), 1)
         for k, (j, radius) in enumerate(orbits.items()):
@@ -355,7 +355,7 @@ def draw(fig: Any, src: PlotSource, *, channels: Sequence[str] | None = None,
             ox.set_ylim(-lim, lim)
             ox.set_aspect("equal")
             ox.tick_params(labelsize=7)
-            ox.set_title(f"journal at {j} [µm]\ncircle: radial clearance {r_um:g} µm; red: contact", fontsize=8)
+            ox.set_title(f"journal at {j} [µm]{' (simulated)' if src.kind == 'replay' else ''}\ncircle: radial clearance {r_um:g} µm; red: contact", fontsize=8)
     if title is None:
         title = _title(src, (t0, t1), fc)
     if title:
