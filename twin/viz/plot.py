@@ -52,6 +52,9 @@ SPECTRUM_MAX_HZ = 5000.0
 MIN_TURNS = 0.25
 #: resolution of the PNG [dots per inch]; sizes are given in pixels
 DPI = 100
+#: most points a curve is drawn with; longer ones are reduced to the min and max of each group of
+#: samples (time series: every peak stays visible) or the peak of each group of bins (spectra)
+MAX_POINTS = 20_000
 #: the replay folder's run file
 REPLAY_RUN = "replay.mcap"
 
@@ -246,7 +249,9 @@ def crank_rate_hz(run: Run, i0: int, i1: int) -> float | None:
 def _orbits(src: PlotSource) -> tuple[dict[str, float], str]:
     """Joints with eccentricity channels -> radial clearance [m]; the note when there is none."""
     run, cfg = src.run, src.config
-    out = {}
+    out: dict[str, float] = {}
+    if cfg is not None and cfg.spatial.enabled:
+        return out, "no journal orbit: the spatial mechanism's eccentricities are 3-D ('twin view' shows them)"
     for j in JOINTS:
         if f"ecc_{j}_x" in run and f"ecc_{j}_y" in run and cfg is not None:
             c_mm = getattr(cfg.joints, f"clearance_{j.lower()}_mm", 0.0)
@@ -260,6 +265,22 @@ def _orbits(src: PlotSource) -> tuple[dict[str, float], str]:
 
 
 # ---------------------------------------------------------------------------------- drawing
+def envelope(t: np.ndarray, y: np.ndarray, max_points: int) -> tuple[np.ndarray, np.ndarray]:
+    """``(t, y)`` unchanged up to ``max_points`` samples; longer, the min and the max of each group
+    of k consecutive samples (k the smallest that fits), at the group's first time: the curve's
+    envelope at the figure's resolution, impacts included."""
+    y = np.asarray(y)
+    n = y.size
+    if n <= max_points:
+        return t, y
+    k = int(np.ceil(2 * n / max_points))
+    m = n // k * k
+    g = y[:m].reshape(-1, k)
+    tt = np.repeat(t[:m:k], 2)
+    yy = np.column_stack([g.min(axis=1), g.max(axis=1)]).ravel()
+    return tt, yy
+
+
 def _label(run: Run, name: str) -> str:
     from twin.viz.style import unit_text
 
@@ -274,6 +295,7 @@ def draw(fig: Any, src: PlotSource, *, channels: Sequence[str] | None = None,
     from matplotlib.ticker import NullLocator
 
     from twin.signals import hann_spectrum
+    from twin.viz.spectrum import peak_bins
 
     names = select_channels(src, channels)
     t0, t1 = choose_window(src, window, spectrum)
@@ -288,10 +310,11 @@ def draw(fig: Any, src: PlotSource, *, channels: Sequence[str] | None = None,
     bands = tuple(b for b in src.bands_hz if b[0] < fmax) if spectrum else ()
     orbits, note = _orbits(src)
 
-    cols = [2.2] + ([1.6] if spectrum else []) + ([0.9] if orbits else [])
-    # fixed margins (constrained layout measures every tick label: most of the drawing time)
-    outer = fig.add_gridspec(1, len(cols), width_ratios=cols, left=0.07, right=0.99, top=0.92, bottom=0.07,
-                             wspace=0.16)
+    cols = [2.2] + ([1.6] if spectrum else []) + ([1.0] if orbits else [])
+    # fixed margins in pixels (constrained layout measures every tick label: most of the drawing time)
+    w_px, h_px = fig.bbox.width, fig.bbox.height
+    outer = fig.add_gridspec(1, len(cols), width_ratios=cols, left=min(0.3, 105 / w_px), right=1 - 12 / w_px,
+                             top=1 - min(0.3, 52 / h_px), bottom=min(0.3, 50 / h_px), wspace=0.16)
     tgrid = outer[0, 0].subgridspec(len(names), 1, hspace=0.08)
     sgrid = outer[0, 1].subgridspec(len(names), 1, hspace=0.08) if spectrum else None
     t = run.t0 + np.arange(i0, i1) / rate
@@ -305,7 +328,8 @@ def draw(fig: Any, src: PlotSource, *, channels: Sequence[str] | None = None,
         if name in overlays:
             series.append((overlays[name], _SIM, "simulated"))
         for s, colour, label in series:
-            ax.plot(t, run[s][i0:i1], lw=0.6, color=colour, label=label, alpha=0.8 if s != name else 1.0)
+            ax.plot(*envelope(t, run[s][i0:i1], MAX_POINTS), lw=0.6, color=colour, label=label,
+                    alpha=0.8 if s != name else 1.0)
         ax.set_ylabel(_label(run, name), fontsize=8, rotation=0, ha="right", va="center")
         ax.tick_params(labelsize=7, labelbottom=last)
         ax.grid(alpha=0.3)
@@ -320,11 +344,12 @@ def draw(fig: Any, src: PlotSource, *, channels: Sequence[str] | None = None,
         for s, colour, _ in series:
             f, amp = hann_spectrum(np.asarray(run[s][i0:i1], dtype=np.float64), rate, remove_mean=True)
             keep = (f > 0) & (f <= fmax)
-            sx.loglog(f[keep], np.maximum(amp[keep], 1e-12), lw=0.5, color=colour)
+            f, amp = peak_bins(f[keep], amp[keep], MAX_POINTS)
+            sx.loglog(f, np.maximum(amp, 1e-12 * max(amp.max(initial=0.0), 1e-300)), lw=0.5, color=colour)
         for h in harmonics:
             sx.axvline(h, color="0.35", ls="--", lw=0.5)
         for lo, hi in bands:
-            sx.axvspan(lo, hi, color="tab:orange", alpha=0.15, lw=0)
+            sx.axvspan(lo, hi, color="tab:orange", alpha=0.25, lw=0)
         sx.set_xlim(rate / max(i1 - i0, 1), fmax)
         sx.tick_params(labelsize=7, labelbottom=last)
         sx.xaxis.set_minor_locator(NullLocator())  # log axes' minor ticks cost more than the curves
@@ -355,7 +380,8 @@ def draw(fig: Any, src: PlotSource, *, channels: Sequence[str] | None = None,
             ox.set_ylim(-lim, lim)
             ox.set_aspect("equal")
             ox.tick_params(labelsize=7)
-            ox.set_title(f"journal at {j} [µm]{' (simulated)' if src.kind == 'replay' else ''}\ncircle: radial clearance {r_um:g} µm; red: contact", fontsize=8)
+            sim = " (simulated)" if src.kind == "replay" else ""
+            ox.set_title(f"journal at {j} [µm]{sim}\nclearance {r_um:g} µm, red: contact", fontsize=8)
     if title is None:
         title = _title(src, (t0, t1), fc)
     if title:
