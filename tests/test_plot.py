@@ -203,3 +203,19 @@ def test_twin_plot_is_in_the_api(run_file, tmp_path):
     info = twin.plot(path, tmp_path / "api.png", channels=["AC3"], size_px=(640, 480))
     assert info.channels == ("AC3",) and png_size(tmp_path / "api.png") == (640, 480)
     assert math.isfinite(info.seconds)
+
+
+def test_long_curves_are_drawn_as_their_envelope():
+    """A 1 M-sample curve with one impact sample: at most MAX_POINTS points, every group's min and max
+    kept, so the impact's peak and the curve's range are drawn exactly."""
+    from twin.viz.plot import MAX_POINTS, envelope
+
+    t = np.arange(1_000_000) / 1e5
+    y = np.sin(2 * np.pi * 3.0 * t)
+    y[123_457] = 50.0
+    tt, yy = envelope(t, y, MAX_POINTS)
+    assert len(tt) == len(yy) <= MAX_POINTS
+    assert yy.max() == 50.0 and yy.min() == y.min()
+    assert np.all(np.diff(tt) >= 0) and tt[0] == t[0]
+    short_t, short_y = envelope(t[:100], y[:100], MAX_POINTS)
+    assert short_y is not None and np.array_equal(short_y, y[:100])  # short curves unchanged
