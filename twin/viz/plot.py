@@ -31,7 +31,7 @@ import fnmatch
 import io
 import json
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -108,6 +108,7 @@ class PlotInfo:
         path: the PNG written (:func:`plot`), None from :func:`draw`.
         size_px: its width and height [px].
         seconds: wall time of :func:`plot` [s] (read, draw, write).
+        spectrum: whether the spectra are drawn.
     """
 
     kind: str
@@ -122,7 +123,7 @@ class PlotInfo:
     path: Path | None = None
     size_px: tuple[int, int] | None = None
     seconds: float = 0.0
-    spectrum: bool = field(default=False)
+    spectrum: bool = False
 
 
 # ---------------------------------------------------------------------------------- sources
@@ -194,9 +195,11 @@ def select_channels(src: PlotSource, patterns: Sequence[str] | None) -> list[str
     """The channels named by ``patterns`` (names or shell-style globs, in order, each match once);
     the defaults (:func:`default_channels`) when None. One line naming the allowed channels when a
     pattern matches none."""
+    names = list(src.run.channels)
+    if not names:
+        raise TwinError(f"{src.name}: holds no channels to draw")
     if patterns is None:
         return default_channels(src)
-    names = list(src.run.channels)
     out: list[str] = []
     for pat in patterns:
         hits = [n for n in names if fnmatch.fnmatchcase(n, pat)]
@@ -363,17 +366,18 @@ def draw(fig: Any, src: PlotSource, *, channels: Sequence[str] | None = None,
                       if bands else "")
             sx.set_title(f"Hann amplitude spectrum ({what}{shaded})", fontsize=8)
     if orbits:
-        ogrid = outer[0, len(cols) - 1].subgridspec(len(orbits), 1)
+        ogrid = outer[0, len(cols) - 1].subgridspec(len(orbits), 1, hspace=0.4)
         for k, (j, radius) in enumerate(orbits.items()):
             ox = fig.add_subplot(ogrid[k, 0])
             r_um = radius * 1e6
             phi = np.linspace(0, 2 * np.pi, 361)
             ox.plot(r_um * np.cos(phi), r_um * np.sin(phi), color="tab:green", lw=1)
-            ex = np.asarray(run[f"ecc_{j}_x"][i0:i1], dtype=np.float64) * 1e6
-            ey = np.asarray(run[f"ecc_{j}_y"][i0:i1], dtype=np.float64) * 1e6
+            step = max(1, -(-(i1 - i0) // (5 * MAX_POINTS)))  # long windows: every step-th sample
+            ex = np.asarray(run[f"ecc_{j}_x"][i0:i1:step], dtype=np.float64) * 1e6
+            ey = np.asarray(run[f"ecc_{j}_y"][i0:i1:step], dtype=np.float64) * 1e6
             ox.plot(ex, ey, color=_SIM, lw=0.5)
             if f"pen_{j}" in run:
-                hit = np.asarray(run[f"pen_{j}"][i0:i1]) > 0
+                hit = np.asarray(run[f"pen_{j}"][i0:i1:step]) > 0
                 ox.plot(ex[hit], ey[hit], ".", color="tab:red", ms=1)
             lim = 1.15 * r_um
             ox.set_xlim(-lim, lim)
