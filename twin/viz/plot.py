@@ -317,7 +317,7 @@ def draw(fig: Any, src: PlotSource, *, channels: Sequence[str] | None = None,
     # fixed margins in pixels (constrained layout measures every tick label: most of the drawing time)
     w_px, h_px = fig.bbox.width, fig.bbox.height
     outer = fig.add_gridspec(1, len(cols), width_ratios=cols, left=min(0.3, 105 / w_px), right=1 - 12 / w_px,
-                             top=1 - min(0.3, 52 / h_px), bottom=min(0.3, 50 / h_px), wspace=0.16)
+                             top=1 - min(0.3, 62 / h_px), bottom=min(0.3, 50 / h_px), wspace=0.16)
     tgrid = outer[0, 0].subgridspec(len(names), 1, hspace=0.08)
     sgrid = outer[0, 1].subgridspec(len(names), 1, hspace=0.08) if spectrum else None
     t = run.t0 + np.arange(i0, i1) / rate
@@ -362,9 +362,9 @@ def draw(fig: Any, src: PlotSource, *, channels: Sequence[str] | None = None,
             sx.set_xlabel("frequency [Hz]", fontsize=8)
         if row == 0:
             what = f"crank {fc:.3f} Hz × 1..{len(harmonics)} dashed" if harmonics else "crank at rest: no harmonics"
-            shaded = ("; " + ", ".join(f"{lo / 1e3:g}–{hi / 1e3:g}" for lo, hi in bands) + " kHz shaded"
+            shaded = ("\nbands " + ", ".join(f"{lo / 1e3:g}–{hi / 1e3:g}" for lo, hi in bands) + " kHz shaded"
                       if bands else "")
-            sx.set_title(f"Hann amplitude spectrum ({what}{shaded})", fontsize=8)
+            sx.set_title(f"Hann amplitude spectrum; {what}{shaded}", fontsize=8)
     if orbits:
         ogrid = outer[0, len(cols) - 1].subgridspec(len(orbits), 1, hspace=0.4)
         for k, (j, radius) in enumerate(orbits.items()):
