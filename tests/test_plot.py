@@ -66,6 +66,12 @@ def test_a_run_is_drawn_without_a_gpu(run_file, tmp_path):
     # orbit circles: the radial clearance, half the 0.1 mm diametral clearance
     assert info.orbits == pytest.approx({"B": 50e-6, "C": 50e-6}) and info.note == ""
     assert sorted(p.name for p in tmp_path.iterdir()) == ["t12.png"]  # no temporary file left
+    from PIL import Image
+
+    import twin
+    with Image.open(out) as im:
+        assert im.size == (900, 700) and im.text["Software"] == f"twin {twin.__version__} (twin plot)"
+        assert im.text["Description"].startswith("run t12: AC1, AC2")
 
 
 def test_the_figure_draws_the_files_samples_and_marks(run_file):

@@ -419,7 +419,8 @@ def plot(source: str | Path | Run, out: str | Path, *, channels: Sequence[str] |
          window: tuple[float, float] | None = None, spectrum: bool = False,
          size_px: tuple[int, int] | None = None) -> PlotInfo:
     """Draw ``source`` (:func:`load`) and write the PNG ``out`` (temporary file, then renamed: an
-    error leaves no file and an existing one as it was). ``size_px``: (width, height) [px], default
+    error leaves no file and an existing one as it was); its text chunks name the twin's version
+    (``Software``) and what is drawn (``Description``). ``size_px``: (width, height) [px], default
     :func:`figure_size`. Returns what the figure shows (:class:`PlotInfo`)."""
     from matplotlib.figure import Figure
 
@@ -433,7 +434,12 @@ def plot(source: str | Path | Run, out: str | Path, *, channels: Sequence[str] |
     w, h = size_px
     fig = Figure(figsize=(w / DPI, h / DPI), dpi=DPI)
     info = draw(fig, src, channels=channels, window=window, spectrum=spectrum)
+    from twin import __version__
+
+    what = (f"{src.kind} {src.name}: {', '.join(info.channels)} over {info.window_s[0]:.6g}-{info.window_s[1]:.6g} s"
+            + (", spectra" if spectrum else "") + (", orbits " + ", ".join(info.orbits) if info.orbits else ""))
     buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=DPI)
+    fig.savefig(buf, format="png", dpi=DPI, metadata={"Software": f"twin {__version__} (twin plot)",
+                                                      "Description": what})
     path = atomic_write_bytes(out, buf.getvalue())
     return PlotInfo(**{**info.__dict__, "path": path, "size_px": (w, h), "seconds": time.perf_counter() - start})
