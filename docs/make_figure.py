@@ -1,12 +1,14 @@
 """Make docs/twin.png, the README's figure: the bench's geometry and what a run of it gives.
 
 Method: Table 4 test 12 (0.1 mm diametral clearance at B and C, 750 motor rpm, y vertical) is simulated by
-the MuJoCo twin for 1.5 s (0.5 s ramp, then steady); the figure shows
+the MuJoCo twin for 2 s (0.5 s ramp, then steady); the figure shows
 
 * left: the mechanism at crank angle 60° drawn from the configuration (crank, rod, slider, guide; the
   accelerometers AC1–AC6 at their mounts; the two clearances drawn 200 times their size);
-* right: over the last 0.4 s, the journal centre at C in the bushing (µm, inside the 50 µm clearance circle,
-  red where in contact), the slider's accelerometer AC6 and the rod's AC3, and the contact forces at B and C.
+* right: what ``twin plot RUN --spectrum --channels AC6,AC3,fn_C --window 1:2`` draws
+  (:func:`twin.viz.plot.draw`): over the last second, the slider's accelerometer AC6, the rod's AC3 and
+  the contact force at C, their Hann spectra with the crank harmonics and the bench paper's bands, and the
+  journal centres at B and C in their bushings (µm, inside the 50 µm clearance circles, red where in contact).
 
 Run: ``python docs/make_figure.py [--out docs/twin.png] [--engine mujoco|reference]`` (a few seconds).
 """
@@ -15,20 +17,23 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import io
 import math
 
-import matplotlib
+import matplotlib.patches as mpatches
+import numpy as np
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from twin.config import preset  # noqa: E402
-from twin.simulation import simulate_run  # noqa: E402
+from twin.config import preset
+from twin.simulation import simulate_run
+from twin.util import atomic_write_bytes
+from twin.viz.plot import DPI, draw, load
 
 MAGNIFY = 200.0          # clearance circles in the geometry sketch
 THETA_DEG = 60.0         # crank angle of the sketch
-WINDOW_S = 0.4           # the signals' window at the end of the run
+WINDOW_S = 1.0           # the signals' and spectra's window at the end of the run [s]
+DURATION_S = 2.0         # simulated time [s]
+CHANNELS = ["AC6", "AC3", "fn_C"]
 
 
 def geometry(ax, cfg) -> None:
@@ -41,13 +46,13 @@ def geometry(ax, cfg) -> None:
     u = (c - b) / l                                    # rod axis
     n = np.array([-u[1], u[0]])
     ax.plot([-0.05, xc + 0.15], [d_off - 0.03] * 2, color="0.6", lw=3, solid_capstyle="butt")   # guide
-    ax.add_patch(plt.Rectangle((xc - 0.04, d_off - 0.03), 0.08, 0.06, fc="0.85", ec="0.3", zorder=2))
+    ax.add_patch(mpatches.Rectangle((xc - 0.04, d_off - 0.03), 0.08, 0.06, fc="0.85", ec="0.3", zorder=2))
     ax.plot([0, b[0]], [0, b[1]], color="tab:blue", lw=6, solid_capstyle="round", zorder=3)
     ax.plot([b[0], c[0]], [b[1], c[1]], color="tab:gray", lw=5, solid_capstyle="round", zorder=3)
-    ax.add_patch(plt.Circle((0, 0), 0.012, fc="k", zorder=4))
+    ax.add_patch(mpatches.Circle((0, 0), 0.012, fc="k", zorder=4))
     for name, p, cl in (("B", b, cfg.joints.clearance_b_mm), ("C", c, cfg.joints.clearance_c_mm)):
         rad = cl / 2 * 1e-3 * MAGNIFY
-        ax.add_patch(plt.Circle(p, max(rad, 0.004), fc="white", ec="tab:green", lw=1.5, zorder=5))
+        ax.add_patch(mpatches.Circle(p, max(rad, 0.004), fc="white", ec="tab:green", lw=1.5, zorder=5))
         below = name == "C"
         ax.annotate(f"{name}: {cl:g} mm", p, xytext=(0, -26) if below else (-12, 10), textcoords="offset points",
                     ha="center" if below else "right",
@@ -80,53 +85,29 @@ def geometry(ax, cfg) -> None:
     ax.set_title(f"test 12 at crank angle {THETA_DEG:g}°; clearances drawn ×{MAGNIFY:g}", fontsize=10)
 
 
-def signals(axes, run) -> None:
-    t = np.asarray(run.time)
-    keep = t >= t[-1] - WINDOW_S
-    ch = {name: np.asarray(run.channels[name].data)[keep] for name in
-          ("AC3", "AC6", "ecc_C_x", "ecc_C_y", "pen_C", "fn_B", "fn_C")}
-    tt = t[keep] - t[keep][0]
-    orbit, acc, force = axes
-    c_um = run.config.joints.clearance_c_mm / 2 * 1e3
-    phi = np.linspace(0, 2 * np.pi, 200)
-    orbit.plot(c_um * np.cos(phi), c_um * np.sin(phi), color="tab:green", lw=1)
-    contact = ch["pen_C"] > 0
-    orbit.plot(ch["ecc_C_x"] * 1e6, ch["ecc_C_y"] * 1e6, color="tab:blue", lw=0.6)
-    orbit.plot(ch["ecc_C_x"][contact] * 1e6, ch["ecc_C_y"][contact] * 1e6, ".", color="tab:red", ms=1)
-    orbit.set_aspect("equal")
-    orbit.set_title("journal at C in its bushing [µm]\n(red: contact)", fontsize=10)
-    orbit.set_xlabel("x [µm]")
-    acc.plot(tt, ch["AC6"], lw=0.6, label="AC6 (slider, along the guide)")
-    acc.plot(tt, ch["AC3"], lw=0.6, label="AC3 (rod, near C)")
-    acc.set_ylabel("acceleration [m/s²]")
-    acc.legend(fontsize=8, loc="upper right")
-    acc.set_title("accelerometers at 100 kHz", fontsize=10)
-    force.plot(tt, ch["fn_B"], lw=0.7, label="B")
-    force.plot(tt, ch["fn_C"], lw=0.7, label="C")
-    force.set_ylabel("contact force [N]")
-    force.set_xlabel(f"time in the last {WINDOW_S:g} s [s]")
-    force.legend(fontsize=8, loc="upper right")
-
-
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", default="docs/twin.png")
     ap.add_argument("--engine", default="mujoco", choices=("mujoco", "reference"))
     args = ap.parse_args(argv)
     cfg = preset(12)
-    cfg = dataclasses.replace(cfg, simulation=dataclasses.replace(cfg.simulation, duration_s=1.5,
+    cfg = dataclasses.replace(cfg, simulation=dataclasses.replace(cfg.simulation, duration_s=DURATION_S,
                                                                   engine=args.engine))
     run = simulate_run(cfg)
-    fig = plt.figure(figsize=(13, 5.2), layout="constrained")
-    grid = fig.add_gridspec(2, 3, width_ratios=[1.6, 0.8, 1.3])
-    geometry(fig.add_subplot(grid[:, 0]), cfg)
-    orbit = fig.add_subplot(grid[:, 1])
-    acc = fig.add_subplot(grid[0, 2])
-    force = fig.add_subplot(grid[1, 2], sharex=acc)
-    signals((orbit, acc, force), run)
-    fig.suptitle(f"twin: the slider–crank bench with clearance joints ({args.engine} engine, 750 motor rpm)",
+    fig = Figure(figsize=(16, 6.2), dpi=DPI)
+    left, right = fig.subfigures(1, 2, width_ratios=[1.3, 2.4], wspace=0.0)
+    ax = left.add_subplot()
+    left.subplots_adjust(left=0.12, right=0.98, bottom=0.1, top=0.9)
+    geometry(ax, cfg)
+    # the signals, spectra and journal orbits: what `twin plot RUN --spectrum --channels AC6,AC3,fn_C` draws
+    info = draw(right, load(run), channels=CHANNELS, window=(DURATION_S - WINDOW_S, DURATION_S), spectrum=True,
+                title="")
+    fig.suptitle(f"twin: the slider–crank bench with clearance joints (Table 4 test 12, {args.engine} engine, "
+                 f"750 motor rpm; crank {info.crank_hz:.3f} Hz; the last {WINDOW_S:g} s of a {DURATION_S:g} s run)",
                  fontsize=12)
-    fig.savefig(args.out, dpi=110)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=DPI)
+    atomic_write_bytes(args.out, buf.getvalue())
     print(f"wrote {args.out}")
     return 0
 

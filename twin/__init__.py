@@ -14,6 +14,8 @@ The Python API (each name is imported on first use, so ``import twin`` stays qui
   answer (a dict);
 * ``twin.samples.path("test6")``, ``twin.samples.spec_path("tiny")``: the sample recordings and
   dataset specs that ship with the package, by name;
+* ``twin.plot(source, "fig.png")``: draw a run file, recording, replay folder or run as a PNG
+  (channels, spectra, journal orbits; matplotlib, no GPU); returns what it drew;
 * ``twin.__version__``: the package version.
 
 >>> import twin
@@ -33,7 +35,7 @@ __version__ = "0.4.0"
 
 #: the API's calls, by the module that defines them
 _CALLS = {"preset": "twin.api", "simulate": "twin.api", "replay": "twin.api", "identify": "twin.api",
-          "BenchConfig": "twin.config", "Run": "twin.run"}
+          "plot": "twin.api", "BenchConfig": "twin.config", "Run": "twin.run"}
 #: subpackages and modules reached as attributes (``twin.dataset.open``) without importing them first
 _MODULES = ("api", "config", "dataset", "errors", "run", "samples", "simulation")
 

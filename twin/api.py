@@ -1,5 +1,5 @@
 """The Python API of the twin: the calls ``import twin`` offers (``twin.preset``, ``twin.simulate``,
-``twin.replay``, ``twin.identify``), each a thin front of the module that does the work.
+``twin.replay``, ``twin.identify``, ``twin.plot``), each a thin front of the module that does the work.
 
 Every example below runs in the test suite (doctest), so it stays true:
 
@@ -17,7 +17,7 @@ dtype('float64')
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Mapping, Sequence
 
 from twin.config import BenchConfig
 from twin.errors import ConfigError
@@ -126,6 +126,23 @@ def replay(recording: str | Path, out_dir: str | Path, *, overrides: Mapping[str
     configure = (lambda c: c.replace(**changes)) if changes else None
     return bench_replay(recording, out_dir, configure,
                         ReplayOptions(window_s=window_s, plots=plots, progress=progress))
+
+
+def plot(source: str | Path | Run, out: str | Path, *, channels: Sequence[str] | None = None,
+         window: tuple[float, float] | None = None, spectrum: bool = False,
+         size_px: tuple[int, int] | None = None) -> Any:
+    """Draw a run file, a bench recording, a replay folder (or a :class:`~twin.run.Run`) as the PNG
+    ``out``, as ``twin plot`` does: matplotlib, no GPU, no display.
+
+    ``channels``: names or shell-style globs (default: accelerometers and contact forces);
+    ``window``: (start, stop) [s] (default: the last 0.4 s, with spectra the last second);
+    ``spectrum``: add Hann spectra with the crank harmonics and the bands; ``size_px``: (width,
+    height). Returns a :class:`twin.viz.plot.PlotInfo` (channels drawn, window, crank rate,
+    harmonics marked, orbits' clearance radii, ...).
+    """
+    from twin.viz.plot import plot as draw_png
+
+    return draw_png(source, out, channels=channels, window=window, spectrum=spectrum, size_px=size_px)
 
 
 def identify(recording: str | Path, model: str | Path | None = None) -> dict[str, Any]:

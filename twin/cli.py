@@ -32,6 +32,7 @@ COMMANDS: list[str] = [
     "twin.commands.simulate",
     "twin.commands.export_mjcf",
     "twin.commands.view",
+    "twin.commands.plot",
     "twin.commands.study",
     "twin.commands.check",
     "twin.commands.import_recording",

@@ -141,14 +141,14 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def parse_window_size(text: str) -> tuple[int, int]:
-    """``WxH`` (e.g. ``1600x900``) as pixels, each 64..8192; else a one-line TwinError."""
+def parse_window_size(text: str, flag: str = "--window-size") -> tuple[int, int]:
+    """``WxH`` (e.g. ``1600x900``) as pixels, each 64..8192; else a one-line TwinError naming ``flag``."""
     parts = text.lower().split("x")
     if len(parts) == 2 and all(p.strip().isdigit() for p in parts):
         w, h = (int(p) for p in parts)
         if 64 <= w <= 8192 and 64 <= h <= 8192:
             return w, h
-    raise TwinError(f"--window-size: must be WIDTHxHEIGHT in pixels, each 64..8192 (e.g. 1600x900), got {text!r}")
+    raise TwinError(f"{flag}: must be WIDTHxHEIGHT in pixels, each 64..8192 (e.g. 1600x900), got {text!r}")
 
 
 def has_display() -> bool:

@@ -5,7 +5,8 @@
 * :class:`RerunWriter`: the streaming sink behind both, also used by
   ``twin simulate --rerun`` to record a run while it is simulated;
 * :mod:`twin.viz.pose`: body poses reconstructed from the run's channels.
-* :mod:`twin.viz.spatial_view`: the same for the spatial slider–crank (``spatial.enabled``).
+* :mod:`twin.viz.spatial_view`: the same for the spatial slider–crank (``spatial.enabled``);
+* :mod:`twin.viz.plot`: static PNG figures with matplotlib (``twin plot``), no rerun, GPU or display.
 
 The recording holds the 3-D bench moving in time, the clearance joints' journal orbits,
 contact force arrows, every channel as a time series, spectra of a window and the
@@ -19,10 +20,21 @@ from pathlib import Path
 
 from twin.run import Run
 from twin.viz.options import ViewOptions
-from twin.viz.writer import RerunWriter
+
+# RerunWriter (and with it rerun, about 0.6 s to import) is loaded on first use: twin.viz.plot and
+# twin.viz.spectrum do not need it
 
 __all__ = ["RerunWriter", "ViewOptions", "convert_file", "default_output", "file_recording_id",
            "simulation_recording_id", "write_rrd"]
+
+
+def __getattr__(name: str) -> object:  # PEP 562
+    if name == "RerunWriter":
+        from twin.viz.writer import RerunWriter
+
+        globals()[name] = RerunWriter
+        return RerunWriter
+    raise AttributeError(f"module 'twin.viz' has no attribute {name!r}")
 
 
 def file_recording_id(path: str | Path) -> str:
@@ -44,6 +56,8 @@ def default_output(path: str | Path) -> Path:
 def write_rrd(run: Run, out: str | Path, *, recording_id: str, name: str, options: ViewOptions = ViewOptions(),
               source: str = "", summary: dict | None = None) -> Path:
     """Write ``run`` as a rerun recording ``out`` (temp file + rename)."""
+    from twin.viz.writer import RerunWriter
+
     w = RerunWriter(out, run.config, recording_id=recording_id, name=name, options=options,
                     t_start=run.t0, t_end=run.t0 + run.duration_s, source=source)
     try:

@@ -34,14 +34,26 @@ def default_window(cfg: BenchConfig | None, t_start: float, t_end: float) -> tup
     return (t_end - length, t_end)
 
 
-def check_window(window: tuple[float, float], t_start: float, t_end: float, rate_hz: float) -> None:
-    """Raise a one-line :class:`TwinError` unless ``window`` lies in the run and holds enough samples."""
+def check_window(window: tuple[float, float], t_start: float, t_end: float, rate_hz: float,
+                 flag: str = "--fft-window") -> None:
+    """Raise a one-line :class:`TwinError` naming ``flag`` unless ``window`` lies in the run and holds
+    enough samples."""
     t0, t1 = window
     eps = 0.5 / rate_hz
     if t0 < t_start - eps or t1 > t_end + eps:
-        raise TwinError(f"--fft-window: {t0:g}..{t1:g} s lies outside the run ({t_start:g}..{t_end:g} s)")
+        raise TwinError(f"{flag}: {t0:g}..{t1:g} s lies outside the run ({t_start:g}..{t_end:g} s)")
     if (t1 - t0) * rate_hz < MIN_SAMPLES:
-        raise TwinError(f"--fft-window: {t0:g}..{t1:g} s holds fewer than {MIN_SAMPLES} samples at {rate_hz:g} Hz")
+        raise TwinError(f"{flag}: {t0:g}..{t1:g} s holds fewer than {MIN_SAMPLES} samples at {rate_hz:g} Hz")
+
+
+def peak_bins(f: np.ndarray, amp: np.ndarray, max_bins: int) -> tuple[np.ndarray, np.ndarray]:
+    """At most ``max_bins`` bins: more are merged in groups of k, each keeping its first frequency
+    and its peak amplitude."""
+    if len(f) <= max_bins:
+        return f, amp
+    k = int(np.ceil(len(f) / max_bins))
+    m = len(f) // k * k
+    return f[:m].reshape(-1, k)[:, 0], amp[:m].reshape(-1, k).max(axis=1)
 
 
 def amplitude_db(x: np.ndarray, rate_hz: float, max_hz: float) -> tuple[np.ndarray, np.ndarray]:
@@ -54,11 +66,6 @@ def amplitude_db(x: np.ndarray, rate_hz: float, max_hz: float) -> tuple[np.ndarr
     """
     f, amp = hann_spectrum(np.asarray(x, dtype=float), rate_hz, remove_mean=True)
     keep = f <= max_hz
-    f, amp = f[keep], amp[keep]
-    if len(f) > MAX_BARS:
-        k = int(np.ceil(len(f) / MAX_BARS))
-        m = len(f) // k * k
-        f = f[:m].reshape(-1, k)[:, 0]
-        amp = amp[:m].reshape(-1, k).max(axis=1)
+    f, amp = peak_bins(f[keep], amp[keep], MAX_BARS)
     db = 20.0 * np.log10(np.maximum(amp, 1e-30) / DB_REF_MPS2)
     return f, np.maximum(db, 0.0)
