@@ -72,6 +72,8 @@ def from_dict(cls: type, data: Mapping[str, Any], path: str = "") -> Any:
     Unknown keys, wrong types and invalid values raise :class:`ConfigError` naming the
     dotted path.
     """
+    if not isinstance(data, Mapping):
+        raise ConfigError(path or cls.__name__, f"must be a table of {cls.__name__} fields, got {data!r}")
     hints = _hints(cls)
     names = [f.name for f in fields(cls)]
     prefix = f"{path}." if path else ""
@@ -108,8 +110,12 @@ def _deep_merge(a: Mapping[str, Any], b: Mapping[str, Any]) -> dict[str, Any]:
 def with_overrides(cfg: C, overrides: Mapping[str, Any]) -> C:
     """Apply dotted-path overrides (``{"joints.clearance_b_mm": 0.1}``) to a configuration
     (a :class:`~twin.config.BenchConfig`) and re-validate."""
+    if not isinstance(overrides, Mapping):
+        raise TypeError(f"overrides: must be a mapping of dotted field names to values, got {type(overrides).__name__}")
     data = _to_plain(cfg)
     for dotted, value in overrides.items():
+        if not isinstance(dotted, str):
+            raise TypeError(f"overrides: keys must be dotted field names (str), got {dotted!r}")
         keys = dotted.split(".")
         node = data
         for k in keys[:-1]:

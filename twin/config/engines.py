@@ -128,6 +128,9 @@ class MujocoSettings:
         for name, n in (("contact_solref", 2), ("contact_solimp", 5)):
             v = getattr(self, name)
             _check(len(v) in (0, n), name, f"must hold {n} numbers or be empty (contact_source), got {list(v)!r}")
+        for name in ("contact_solref", "contact_solimp", "equality_solref", "equality_solimp", "guide_solreffriction"):
+            v = getattr(self, name)
+            _check(all(math.isfinite(x) for x in v), name, f"must hold finite numbers, got {list(v)!r}")
         for name, n in (("equality_solref", 2), ("equality_solimp", 5), ("guide_solreffriction", 2)):
             v = getattr(self, name)
             _check(len(v) == n, name, f"must hold {n} numbers, got {list(v)!r}")
