@@ -80,8 +80,12 @@ def preset(which: int | str = 6) -> BenchConfig:
     from twin.config import named_preset
     from twin.config import preset as table4
 
-    if isinstance(which, bool) or not isinstance(which, (int, str)):
+    import numbers
+
+    if isinstance(which, bool) or not isinstance(which, (numbers.Integral, str)):
         raise TypeError(f"which: must be a Table 4 test id (int) or a preset name (str), got {type(which).__name__}")
+    if not isinstance(which, str):
+        which = int(which)
     if isinstance(which, str):
         name = which.strip().lower()
         if name.startswith("test") and name[4:].isdigit():

@@ -5,9 +5,12 @@ from __future__ import annotations
 
 import collections.abc
 import dataclasses
+import numbers
 import typing
 from dataclasses import fields
 from typing import Any, Mapping, TypeVar
+
+from numpy import bool_ as np_bool
 
 from twin.errors import ConfigError
 
@@ -47,14 +50,15 @@ def _convert(value: Any, tp: Any, path: str) -> Any:
             raise ConfigError(path, f"must be an array, got {value!r}")
         et = args[0]
         return tuple(_convert(v, et, f"{path}[{i}]") for i, v in enumerate(value))
+    # numbers of any real type (numpy's float32, int64... from an array in the Python API) are numbers
     if tp is float:
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
+        if isinstance(value, (bool, np_bool)) or not isinstance(value, numbers.Real):
             raise ConfigError(path, f"must be a number, got {value!r}")
         return float(value)
     if tp is int:
-        if isinstance(value, bool) or not isinstance(value, int):
+        if isinstance(value, (bool, np_bool)) or not isinstance(value, numbers.Integral):
             raise ConfigError(path, f"must be an integer, got {value!r}")
-        return value
+        return int(value)
     if tp is bool:
         if not isinstance(value, bool):
             raise ConfigError(path, f"must be true or false, got {value!r}")
