@@ -56,7 +56,7 @@ def test_presets_follow_table4(test_id):
     ({"joints.clearance_b_mm": 0.3}, "joints.clearance_b_mm", "catalogue"),
     ({"joints.clearance_c_mm": -0.1}, "joints.clearance_c_mm", "ball bearing"),
     ({"mechanism.orientation": "w"}, "mechanism.orientation", "x, y, z"),
-    ({"bodies.crank.mass_kg": 0.0}, "bodies.crank.mass_kg", "> 0"),
+    ({"bodies.crank.mass_kg": 0.0}, "bodies.crank.mass_kg", "[0.0001, 1000] kg"),
     ({"drive.motor_rpm": 1500.0}, "drive.motor_rpm", "±10 V"),
     ({"drive.program": "sine"}, "drive.program", "constant, protocol, trace"),
     ({"drive.program": "trace"}, "drive.trace_file", "trace file"),

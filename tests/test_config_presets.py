@@ -16,7 +16,7 @@ import pytest
 
 import twin.config
 from twin.config import (ENGINE_CLASSES, ENGINE_ONLY_GROUPS, ENGINES, NAMED_PRESETS, TABLE4, BenchConfig, BodyParams,
-                         Bodies, Material, Materials, load_config, named_preset, preset)
+                         Bodies, ConfigError, Material, Materials, load_config, named_preset, preset)
 
 # ------------------------------------------------------------------------------ papers
 #: S003 Table 4 as BENCH.md prints it: id -> (B [mm], C [mm], motor rpm), diametral clearances.
@@ -175,6 +175,10 @@ def test_a_copied_preset_file_is_a_configuration(name, tmp_path):
     f.write_text(_preset_text(name), encoding="utf-8")
     assert load_config(f) == named_preset(name)
     f.write_text(_preset_text(name) + "\n[pid]\nkp = 12.0\n", encoding="utf-8")  # an edit of the copy
+    if named_preset(name).drive.mode != "pid":  # a crank PID gain is refused where no crank PID runs
+        with pytest.raises(ConfigError, match="pid.kp: is not used with drive.mode"):
+            load_config(f)
+        return
     edited = load_config(f)
     assert edited.pid.kp == 12.0 and edited == named_preset(name).replace(**{"pid.kp": 12.0})
 

@@ -16,12 +16,46 @@ dtype('float64')
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 from twin.config import BenchConfig
 from twin.errors import ConfigError
 from twin.run import Run
+
+
+def _path(value: Any, name: str) -> Path:
+    """A file or folder argument: a str or os.PathLike, else TypeError naming ``name``; an empty one is refused
+    as a ConfigError naming it."""
+    import os
+
+    if isinstance(value, bool) or not isinstance(value, (str, os.PathLike)):
+        raise TypeError(f"{name}: must be a path (str or os.PathLike), got {type(value).__name__}")
+    if not str(value):
+        raise ConfigError(name, "is empty; give a path")
+    return Path(value)
+
+
+def _overrides(value: Any, name: str = "overrides") -> dict[str, Any]:
+    """Dotted-path overrides: a mapping of str keys, else TypeError naming ``name``."""
+    if value is None:
+        return {}
+    if not isinstance(value, Mapping):
+        raise TypeError(f"{name}: must be a mapping of dotted field names to values, got {type(value).__name__}")
+    for key in value:
+        if not isinstance(key, str):
+            raise TypeError(f"{name}: keys must be dotted field names (str), got {key!r}")
+    return dict(value)
+
+
+def _number(value: Any, name: str) -> float:
+    """A real number (not a bool), else TypeError naming ``name``."""
+    import numbers
+
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise TypeError(f"{name}: must be a number, got {type(value).__name__}")
+    return float(value)
 
 
 def preset(which: int | str = 6) -> BenchConfig:
@@ -48,6 +82,12 @@ def preset(which: int | str = 6) -> BenchConfig:
     from twin.config import named_preset
     from twin.config import preset as table4
 
+    import numbers
+
+    if isinstance(which, bool) or not isinstance(which, (numbers.Integral, str)):
+        raise TypeError(f"which: must be a Table 4 test id (int) or a preset name (str), got {type(which).__name__}")
+    if not isinstance(which, str):
+        which = int(which)
     if isinstance(which, str):
         name = which.strip().lower()
         if name.startswith("test") and name[4:].isdigit():
@@ -87,11 +127,15 @@ def simulate(cfg: BenchConfig | int | str | None = None, duration: float | None 
         cfg = preset(6 if cfg is None else cfg)
     if not isinstance(cfg, BenchConfig):
         raise ConfigError("cfg", f"must be a BenchConfig, a Table 4 test id or a preset name, got {type(cfg).__name__}")
-    changes = dict(overrides or {})
+    changes = _overrides(overrides)
     if duration is not None:
-        changes["simulation.duration_s"] = duration
+        changes["simulation.duration_s"] = _number(duration, "duration")
     if engine is not None:
+        if not isinstance(engine, str):
+            raise TypeError(f"engine: must be an engine name (str), got {type(engine).__name__}")
         changes["simulation.engine"] = engine
+    if not isinstance(progress, bool):
+        raise TypeError(f"progress: must be True or False, got {type(progress).__name__}")
     if changes:
         cfg = cfg.replace(**changes)
     sinks = []
@@ -99,7 +143,7 @@ def simulate(cfg: BenchConfig | int | str | None = None, duration: float | None 
         from twin.mcapfile import RunWriter
         from twin.util import check_output_file
 
-        sinks.append(ThreadedSink(RunWriter(check_output_file(out, "out", ".mcap"), cfg)))
+        sinks.append(ThreadedSink(RunWriter(check_output_file(_path(out, "out"), "out", ".mcap"), cfg)))
     return simulate_run(cfg, progress=progress, sinks=sinks)
 
 
@@ -122,7 +166,17 @@ def replay(recording: str | Path, out_dir: str | Path, *, overrides: Mapping[str
     from twin.bench_replay import ReplayOptions
     from twin.bench_replay import replay as bench_replay
 
-    changes = dict(overrides or {})
+    recording, out_dir = _path(recording, "recording"), _path(out_dir, "out_dir")
+    changes = _overrides(overrides)
+    if window_s is not None:
+        if isinstance(window_s, (str, bytes)) or not hasattr(window_s, "__len__") or len(window_s) != 2:
+            raise TypeError(f"window_s: must be a pair (start, stop) of times [s], got {window_s!r}")
+        window_s = (_number(window_s[0], "window_s"), _number(window_s[1], "window_s"))
+        if not (math.isfinite(window_s[0]) and math.isfinite(window_s[1]) and 0 <= window_s[0] < window_s[1]):
+            raise ConfigError("window_s", f"must be finite times 0 <= start < stop [s], got {window_s!r}")
+    for name, flag in (("plots", plots), ("progress", progress)):
+        if not isinstance(flag, bool):
+            raise TypeError(f"{name}: must be True or False, got {type(flag).__name__}")
     configure = (lambda c: c.replace(**changes)) if changes else None
     return bench_replay(recording, out_dir, configure,
                         ReplayOptions(window_s=window_s, plots=plots, progress=progress))
@@ -162,7 +216,8 @@ def identify(recording: str | Path, model: str | Path | None = None) -> dict[str
     from twin.commands.identify import default_model_path
     from twin.identification.model import ClearanceModel, ModelError, identify_recording
 
-    path = Path(model) if model is not None else default_model_path()
+    recording = _path(recording, "recording")
+    path = _path(model, "model") if model is not None else default_model_path()
     if model is None and not path.is_file():
         raise ModelError(f"no default model in this installation ({path}); give model=PATH")
     return identify_recording(ClearanceModel.load(path), recording)

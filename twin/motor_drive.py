@@ -31,7 +31,17 @@ def _command_trace(path: str, mtime_ns: int) -> tuple[np.ndarray, np.ndarray]:  
     if t.ndim != 1 or t.shape != v.shape or t.size < 2 or np.any(np.diff(t) <= 0) \
             or not (np.all(np.isfinite(t)) and np.all(np.isfinite(v))):
         raise ConfigError("drivetrain.command_file", f"{path}: 't' must increase and match 'volts', all finite")
+    worst = float(np.abs(v).max())
+    if worst > COMMAND_LIMIT_V:
+        raise ConfigError("drivetrain.command_file",
+                          f"{path}: 'volts' reaches {worst:g} V, outside the DAQ's ±10 V analog command (a command "
+                          f"beyond ±{COMMAND_LIMIT_V:g} V is no recording of it: volts, not rpm or mV?)")
     return t, v
+
+
+#: largest magnitude of a recorded motor command [V]: the DAQ's ±10 V analog output (S003 §2.3.1) with 2 % for
+#: its offset and gain error
+COMMAND_LIMIT_V = 10.2
 
 
 def command_trace(cfg: BenchConfig) -> tuple[np.ndarray, np.ndarray] | None:

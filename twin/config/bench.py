@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 from dataclasses import dataclass, field
 from typing import Any
 
 import tomli_w
 
-from twin.config.common import ENGINE_ONLY_GROUPS, _NAME_RE, _check
+from twin.config.common import ENGINE_ONLY_GROUPS, _NAME_RE, _check, check_types
 from twin.config.convert import _to_plain, with_overrides
 from twin.config.drive import PID, Drive
 from twin.config.drivetrain import Drivetrain
@@ -39,6 +40,8 @@ class BenchConfig:
     spatial: Spatial = Spatial()
 
     def __post_init__(self) -> None:
+
+        check_types(self)
         _check(isinstance(self.name, str) and 0 < len(self.name) <= 80 and _NAME_RE.fullmatch(self.name) is not None,
                "name", "must be 1-80 characters of letters, digits and . _ - + = @ , (it names the default output "
                f"file), not starting with '.'; got {self.name!r}")
@@ -49,6 +52,8 @@ class BenchConfig:
                               f"{rod:g} m must exceed the crank's length ({crank:g} m, bodies.crank.length_m) plus the "
                               f"guide offset (|mechanism.d_off_m| = {abs(self.mechanism.d_off_m):g} m): a shorter rod "
                               "cannot follow the crank round a full turn")
+        _check_bores_fit(self)
+        _check_options_used(self)
         sim, sen = self.simulation, self.sensors
         if sim.duration_s == 0 and self.drive.program != "protocol":
             raise ConfigError("simulation.duration_s",
@@ -153,6 +158,81 @@ class BenchConfig:
     def replace(self, **overrides: Any) -> "BenchConfig":
         """Copy with dotted-path overrides, e.g. ``replace(**{"drive.motor_rpm": 500})``."""
         return with_overrides(self, overrides)
+
+
+def _check_bores_fit(cfg: BenchConfig) -> None:
+    """The two bores of the crank (joints A and B) and of the rod (B and C) fit side by side in the body:
+    their radii (pin radius + radial clearance) add up to less than its length."""
+    j = cfg.joints
+    for body, (a, b) in (("crank", ("A", "B")), ("rod", ("B", "C"))):
+        length = getattr(cfg.bodies, body).length_m
+        reach = j.bushing_radius_m(a) + j.bushing_radius_m(b)
+        if reach >= length:
+            raise ConfigError(f"bodies.{body}.length_m",
+                              f"{length:g} m cannot hold the bores of joints {a} and {b} (radii {j.bushing_radius_m(a):g} "
+                              f"+ {j.bushing_radius_m(b):g} m, joints.pin_diameter_m and the clearances): the link must be "
+                              "longer than the two bore radii together")
+
+
+#: the fields each drive mode leaves unused, as (section, fields, modes that use them): a value other than the
+#: default in another mode is refused (it would be accepted and silently ignored)
+_MODE_FIELDS: tuple[tuple[str, tuple[str, ...], tuple[str, ...]], ...] = (
+    # (the motor speed of a Table 4 test switched to the torque drive is the test's, not the user's: the command
+    # line refuses --speed with the torque drive; crank_rpm is set only on purpose)
+    ("drive", ("crank_rpm",), ("pid", "prescribed", "motor")),
+    ("pid", ("kp", "kv", "ki", "imax"), ("pid",)),
+    ("drivetrain", tuple(f.name for f in dataclasses.fields(Drivetrain)
+                         if f.name not in ("torque_s", "torque_nm", "torque_ramp_s", "release_s", "command_file",
+                                           "controller_rate_hz", "encoder_counts", "speed_filter_hz", "speed_kp_nms",
+                                           "speed_ki_nm")), ("motor", "torque")),
+    ("drivetrain", ("controller_rate_hz", "encoder_counts", "speed_filter_hz", "speed_kp_nms", "speed_ki_nm",
+                    "command_file"), ("motor",)),
+    ("drivetrain", ("torque_s", "torque_nm", "torque_ramp_s", "release_s"), ("torque",)),
+)
+#: the fields each drive program leaves unused, as (fields of [drive], programs that use them)
+_PROGRAM_FIELDS: tuple[tuple[tuple[str, ...], tuple[str, ...]], ...] = (
+    (("trace_file", "trace_filter_hz"), ("trace",)),
+    (("protocol_rpm", "protocol_hold_s", "protocol_stop_s"), ("protocol",)),
+    (("steps_s", "steps_rpm"), ("steps",)),
+)
+
+
+def _check_options_used(cfg: BenchConfig) -> None:
+    """Every option is used or refused: a field set away from its default in a mode, program or mechanism that
+    does not read it is refused in one line naming the field and the mode (instead of being ignored)."""
+    mode, program = cfg.drive.mode, cfg.drive.program
+    for section, names, modes in _MODE_FIELDS:
+        if mode in modes:
+            continue
+        own, default = getattr(cfg, section), type(getattr(cfg, section))()
+        for name in names:
+            if getattr(own, name) != getattr(default, name):
+                raise ConfigError(f"{section}.{name}", f"is not used with drive.mode = {mode!r} (only with "
+                                  f"{' or '.join(repr(m) for m in modes)}); leave it out (default "
+                                  f"{getattr(default, name)!r}), got {getattr(own, name)!r}")
+    default = Drive()
+    for names, programs in _PROGRAM_FIELDS:
+        if program in programs:
+            continue
+        for name in names:
+            if getattr(cfg.drive, name) != getattr(default, name):
+                raise ConfigError(f"drive.{name}", f"is not used by drive.program = {program!r} (only by "
+                                  f"{' or '.join(repr(p) for p in programs)}); leave it out, got "
+                                  f"{getattr(cfg.drive, name)!r}")
+    j, sp = cfg.joints, cfg.spatial
+    if sp.enabled and j.clearance_guide_mm != 0:
+        raise ConfigError("joints.clearance_guide_mm", "is not used by the spatial mechanism (spatial.enabled = true: "
+                          f"its slider runs on an ideal guide); use 0, got {j.clearance_guide_mm!r}")
+    if j.clearance_guide_mm == 0:
+        for name in ("guide_span_m", "guide_edge_radius_m"):
+            if getattr(j, name) != Joints.GUIDE_DEFAULTS[name]:
+                raise ConfigError(f"joints.{name}", "is used only with a guide clearance (joints.clearance_guide_mm "
+                                  f"> 0); leave it out (default {Joints.GUIDE_DEFAULTS[name]!r}), got {getattr(j, name)!r}")
+    if not sp.enabled:
+        for f in dataclasses.fields(Spatial):
+            if f.name != "enabled" and getattr(sp, f.name) != f.default:
+                raise ConfigError(f"spatial.{f.name}", "is used only by the spatial mechanism (spatial.enabled = "
+                                  f"true); leave it out (default {f.default!r}), got {getattr(sp, f.name)!r}")
 
 
 def joint_stiffness(cfg: BenchConfig, joint: str) -> float:

@@ -67,3 +67,75 @@ def _joint_table(obj: Any, name: str) -> list[tuple[str, Any]]:
     for key, _ in items:
         _choice(key, f"{name}.{key}", JOINTS)
     return items
+
+
+def _bounded(value: Any, name: str, lo: float, hi: float, unit: str, reason: str,
+             lo_open: bool = False, hi_open: bool = False) -> None:
+    """A finite number in [lo, hi] (ends open as asked), else ConfigError naming ``name``, the range and
+    ``reason`` (why the range is what it is: the schema states its bounds where the field is declared)."""
+    ok = (isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+          and (value > lo if lo_open else value >= lo) and (value < hi if hi_open else value <= hi))
+    _check(ok, name, f"must lie in {'(' if lo_open else '['}{lo:g}, {hi:g}{')' if hi_open else ']'}"
+                     f"{' ' + unit if unit else ''} ({reason}), got {value!r}")
+
+
+_HINTS: dict[type, dict[str, Any]] = {}
+
+
+def _type_ok(value: Any, tp: Any) -> str | None:
+    """None if ``value`` fits the annotation ``tp`` of a configuration field, else what it must be."""
+    import collections.abc
+    import dataclasses
+    import numbers
+    import typing
+
+    origin = typing.get_origin(tp)
+    if tp is float:
+        return None if isinstance(value, numbers.Real) and not isinstance(value, bool) else "a number"
+    if tp is int:
+        return None if isinstance(value, numbers.Integral) and not isinstance(value, bool) else "an integer"
+    if tp is bool:
+        return None if isinstance(value, bool) else "true or false"
+    if tp is str:
+        return None if isinstance(value, str) else "a string"
+    if origin is tuple:
+        # a string is a sequence of characters: refused, never read as its characters
+        if isinstance(value, (str, bytes, collections.abc.Mapping)) or not isinstance(value, collections.abc.Iterable):
+            return "a list (array)"
+        et = typing.get_args(tp)[0]
+        for v in value:
+            what = _type_ok(v, et)
+            if what is not None:
+                return f"a list of {what.removeprefix('a ').removeprefix('an ')}s"
+        return None
+    if origin in (collections.abc.Mapping, dict):
+        if not isinstance(value, collections.abc.Mapping):
+            return "a table (mapping)"
+        _, vt = typing.get_args(tp)
+        for v in value.values():
+            what = _type_ok(v, vt)
+            if what is not None:
+                return f"a table of {what.removeprefix('a ').removeprefix('an ')} values"
+        return None
+    if dataclasses.is_dataclass(tp):
+        return None if isinstance(value, tp) else f"a {tp.__name__} (table of its fields)"
+    return None
+
+
+def check_types(obj: Any) -> None:
+    """ConfigError naming the field of the first field of the frozen dataclass ``obj`` whose value is not of
+    its declared type (a number, an integer, a string, a list, a table or a section): the configuration
+    built by the Python API gets the same one-line refusal as a TOML file, and a list field given as a
+    string is refused instead of being read as its characters."""
+    import dataclasses
+    import typing
+
+    cls = type(obj)
+    hints = _HINTS.get(cls)
+    if hints is None:
+        hints = _HINTS[cls] = typing.get_type_hints(cls)
+    for f in dataclasses.fields(obj):
+        value = getattr(obj, f.name)
+        what = _type_ok(value, hints[f.name])
+        if what is not None:
+            raise ConfigError(f.name, f"must be {what}, got {value!r}")

@@ -5,9 +5,12 @@ from __future__ import annotations
 
 import collections.abc
 import dataclasses
+import numbers
 import typing
 from dataclasses import fields
 from typing import Any, Mapping, TypeVar
+
+from numpy import bool_ as np_bool
 
 from twin.errors import ConfigError, unknown
 
@@ -47,14 +50,15 @@ def _convert(value: Any, tp: Any, path: str) -> Any:
             raise ConfigError(path, f"must be an array, got {value!r}")
         et = args[0]
         return tuple(_convert(v, et, f"{path}[{i}]") for i, v in enumerate(value))
+    # numbers of any real type (numpy's float32, int64... from an array in the Python API) are numbers
     if tp is float:
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
+        if isinstance(value, (bool, np_bool)) or not isinstance(value, numbers.Real):
             raise ConfigError(path, f"must be a number, got {value!r}")
         return float(value)
     if tp is int:
-        if isinstance(value, bool) or not isinstance(value, int):
+        if isinstance(value, (bool, np_bool)) or not isinstance(value, numbers.Integral):
             raise ConfigError(path, f"must be an integer, got {value!r}")
-        return value
+        return int(value)
     if tp is bool:
         if not isinstance(value, bool):
             raise ConfigError(path, f"must be true or false, got {value!r}")
@@ -72,6 +76,8 @@ def from_dict(cls: type, data: Mapping[str, Any], path: str = "") -> Any:
     Unknown keys, wrong types and invalid values raise :class:`ConfigError` naming the
     dotted path.
     """
+    if not isinstance(data, Mapping):
+        raise ConfigError(path or cls.__name__, f"must be a table of {cls.__name__} fields, got {data!r}")
     hints = _hints(cls)
     names = [f.name for f in fields(cls)]
     prefix = f"{path}." if path else ""
@@ -108,15 +114,19 @@ def _deep_merge(a: Mapping[str, Any], b: Mapping[str, Any]) -> dict[str, Any]:
 def with_overrides(cfg: C, overrides: Mapping[str, Any]) -> C:
     """Apply dotted-path overrides (``{"joints.clearance_b_mm": 0.1}``) to a configuration
     (a :class:`~twin.config.BenchConfig`) and re-validate."""
+    if not isinstance(overrides, Mapping):
+        raise TypeError(f"overrides: must be a mapping of dotted field names to values, got {type(overrides).__name__}")
     data = _to_plain(cfg)
     for dotted, value in overrides.items():
+        if not isinstance(dotted, str):
+            raise TypeError(f"overrides: keys must be dotted field names (str), got {dotted!r}")
         keys = dotted.split(".")
         node = data
         for k in keys[:-1]:
             if not isinstance(node.get(k), dict):
                 raise ConfigError(dotted, unknown(f"section {k!r}", k, node))
             node = node[k]
-        if keys[-1] not in node:
-            raise ConfigError(dotted, unknown("field", keys[-1], node))
+        # a key the node lacks is left to from_dict: an entry of a per-joint table (joints.pin_diameters_m.B, absent
+        # until set) is a field, a key unknown to a section is refused there naming it and the allowed fields
         node[keys[-1]] = list(value) if isinstance(value, tuple) else value
     return from_dict(type(cfg), data)

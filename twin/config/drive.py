@@ -6,7 +6,7 @@ import math
 import typing
 from dataclasses import dataclass
 
-from twin.config.common import PROGRAMS, XML_DEFAULTS, _check, _choice, _finite, _positive
+from twin.config.common import PROGRAMS, XML_DEFAULTS, _check, _choice, _finite, _positive, check_types
 
 
 # ---------------------------------------------------------------------------- drive
@@ -97,6 +97,8 @@ class Drive:
     MODES: typing.ClassVar[tuple[str, ...]] = ("pid", "prescribed", "motor", "torque")
 
     def __post_init__(self) -> None:
+
+        check_types(self)
         _choice(self.program, "program", PROGRAMS)
         _choice(self.mode, "mode", self.MODES)
         _check(isinstance(self.crank_rpm, (int, float)) and math.isfinite(self.crank_rpm)
@@ -186,6 +188,8 @@ class PID:
     imax: float = XML_DEFAULTS.imax
 
     def __post_init__(self) -> None:
+
+        check_types(self)
         _positive(self.kp, "kp", "N m/rad")
         for name in ("kv", "ki", "imax"):
             v = getattr(self, name)

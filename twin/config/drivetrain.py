@@ -46,6 +46,7 @@ import math
 import typing
 from dataclasses import dataclass
 
+from twin.config.common import check_types
 from twin.errors import ConfigError
 
 
@@ -134,6 +135,8 @@ class Drivetrain:
     command_file: str = ""
 
     def __post_init__(self) -> None:
+
+        check_types(self)
         _num(self.rotor_inertia_kgm2, "rotor_inertia_kgm2", 0.0, 1.0, "kg m^2", lo_open=True)
         _num(self.motor_pulley_radius_m, "motor_pulley_radius_m", 0.0, 0.5, "m", lo_open=True)
         _num(self.belt_ea_n, "belt_ea_n", 0.0, 1e8, "N", lo_open=True)

@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from twin.config.common import XML_DEFAULTS, _check, _choice
+from twin.config.common import XML_DEFAULTS, _check, _choice, check_types
 
 #: Engine name -> "module:class" of its implementation (imported on demand: the reference engine
 #: pulls in numba). The one list of engines: :data:`ENGINES` and the simulator read it.
@@ -103,6 +103,8 @@ class MujocoSettings:
     accelerometers: str = "posthoc"
 
     def __post_init__(self) -> None:
+
+        check_types(self)
         _choice(self.accelerometers, "accelerometers", ("sensor", "posthoc"))
         for name in ("contact_stiffness_scale", "contact_damping_scale"):
             v = getattr(self, name)
@@ -126,6 +128,9 @@ class MujocoSettings:
         for name, n in (("contact_solref", 2), ("contact_solimp", 5)):
             v = getattr(self, name)
             _check(len(v) in (0, n), name, f"must hold {n} numbers or be empty (contact_source), got {list(v)!r}")
+        for name in ("contact_solref", "contact_solimp", "equality_solref", "equality_solimp", "guide_solreffriction"):
+            v = getattr(self, name)
+            _check(all(math.isfinite(x) for x in v), name, f"must hold finite numbers, got {list(v)!r}")
         for name, n in (("equality_solref", 2), ("equality_solimp", 5), ("guide_solreffriction", 2)):
             v = getattr(self, name)
             _check(len(v) == n, name, f"must hold {n} numbers, got {list(v)!r}")
@@ -156,6 +161,8 @@ class Simulation:
     chunk_s: float = 0.5
 
     def __post_init__(self) -> None:
+
+        check_types(self)
         _choice(self.engine, "engine", ENGINES)
         _check(isinstance(self.duration_s, (int, float)) and 0 <= self.duration_s <= 3600,
                "duration_s", f"must lie in [0, 3600] s (0 = the protocol's length), got {self.duration_s!r}")

@@ -21,6 +21,10 @@ def load_config(path: str | Path) -> BenchConfig:
     A file with ``drive.program = "trace"`` and no duration (or 0) gets the trace's length: the
     loader reads the trace, the configuration never does.
     """
+    import os
+
+    if isinstance(path, bool) or not isinstance(path, (str, os.PathLike)):
+        raise TypeError(f"path: must be a path (str or os.PathLike), got {type(path).__name__}")
     if not str(path):
         raise ConfigError("--config", "is empty; give a TOML configuration file")
     from twin.util import read_input_bytes, show
@@ -67,6 +71,8 @@ def config_from_toml(text: str) -> BenchConfig:
     "calibration"`` (the retired calibration table) reads as "law" and the retired
     ``mujoco.contact_damping`` is dropped (the native law carries its own damping).
     """
+    if not isinstance(text, str):
+        raise TypeError(f"text: must be the TOML text (str), got {type(text).__name__}")
     try:
         data = toml_loads(text)
     except tomllib.TOMLDecodeError as err:

@@ -10,13 +10,18 @@ from dataclasses import dataclass, field
 from typing import Mapping
 
 from twin.config.common import (CATALOGUE_DIAMETRAL_MM, JOINTS, ORIENTATIONS, XML_DEFAULTS, _check, _choice,
-                                _finite, _joint_table, _positive)
+                                _bounded, _finite, _joint_table, _positive, check_types)
 from twin.errors import ConfigError
 
 
 # --------------------------------------------------------------------------- bodies
 #: smallest clearance accepted off the catalogue [mm diametral]
 MIN_CLEARANCE_MM = 1e-3
+#: pin (journal) diameter [m], upper end open, and bushing length [m] of a bench-sized joint
+PIN_DIAMETER_M = (1e-3, 0.5)
+BUSHING_LENGTH_M = (1e-3, 0.5)
+#: friction transition velocities of the contact laws [m/s]
+TRANSITION_MPS = (1e-9, 10.0)
 
 
 @dataclass(frozen=True)
@@ -37,17 +42,27 @@ class BodyParams:
     inertia_kgm2: float
 
     def __post_init__(self) -> None:
-        _positive(self.mass_kg, "mass_kg", "kg")
-        _positive(self.length_m, "length_m", "m")
-        _finite(self.x_g_m, "x_g_m", "m")
-        _positive(self.inertia_kgm2, "inertia_kgm2", "kg m^2")
-        # a body of a bench-top mechanism: beyond these the model is no slider-crank (and a mass of
-        # 1e300 kg overflows the contact forces)
-        _check(1e-6 <= self.mass_kg <= 1e4, "mass_kg", f"must lie in [1e-06, 10000] kg, got {self.mass_kg!r}")
-        _check(self.length_m <= 100, "length_m", f"must be at most 100 m, got {self.length_m!r}")
-        _check(1e-12 <= self.inertia_kgm2 <= 1e4, "inertia_kgm2",
-               f"must lie in [1e-12, 10000] kg m^2, got {self.inertia_kgm2!r}")
-        _check(abs(self.x_g_m) <= 100, "x_g_m", f"must lie within ±100 m, got {self.x_g_m!r}")
+
+        check_types(self)
+        # bounds of a body of a bench-sized mechanism (beyond these the model is no slider-crank, and a
+        # mass of 1e300 kg overflows the contact forces)
+        _bounded(self.mass_kg, "mass_kg", *MASS_KG, "kg", "a body of a bench-sized mechanism: 0.1 g to 1 t")
+        _bounded(self.length_m, "length_m", *LENGTH_M, "m", "a link of a bench-sized mechanism: 1 mm to 10 m")
+        _bounded(self.x_g_m, "x_g_m", -LENGTH_M[1], LENGTH_M[1], "m", "within a bench-sized mechanism")
+        _bounded(self.inertia_kgm2, "inertia_kgm2", 0.0, 1e3, "kg m^2", "a bench-sized body", lo_open=True)
+        # inertia consistent with the mass: the radius of gyration k = sqrt(I/m) of a rigid body of a
+        # bench-sized mechanism, between 0.1 mm (a 1 mm link is no thinner) and 10 m (the longest link)
+        k = math.sqrt(self.inertia_kgm2 / self.mass_kg)
+        _check(GYRATION_M[0] <= k <= GYRATION_M[1], "inertia_kgm2",
+               f"must give a radius of gyration sqrt(I/m) in [{GYRATION_M[0]:g}, {GYRATION_M[1]:g}] m with mass_kg = "
+               f"{self.mass_kg!r} (a rigid body of a bench-sized mechanism), got {self.inertia_kgm2!r} "
+               f"(sqrt(I/m) = {k:.3g} m)")
+
+
+#: bounds of the bodies: mass [kg], length [m] and radius of gyration about the centre of mass [m]
+MASS_KG = (1e-4, 1e3)
+LENGTH_M = (1e-3, 10.0)
+GYRATION_M = (1e-4, 10.0)
 
 
 @dataclass(frozen=True)
@@ -61,6 +76,9 @@ class Bodies:
     crank: BodyParams = BodyParams(**dataclasses.asdict(XML_DEFAULTS.crank))
     rod: BodyParams = BodyParams(**dataclasses.asdict(XML_DEFAULTS.rod))
     slider: BodyParams = BodyParams(**dataclasses.asdict(XML_DEFAULTS.slider))
+
+    def __post_init__(self) -> None:
+        check_types(self)
 
 
 # ------------------------------------------------------------------------ materials
@@ -79,10 +97,14 @@ class Material:
     density_kgm3: float
 
     def __post_init__(self) -> None:
-        _positive(self.youngs_modulus_pa, "youngs_modulus_pa", "Pa")
-        _check(isinstance(self.poisson, (int, float)) and -1.0 < self.poisson < 0.5,
-               "poisson", f"must lie in (-1, 0.5), got {self.poisson!r}")
-        _positive(self.density_kgm3, "density_kgm3", "kg/m^3")
+
+        check_types(self)
+        # real engineering materials: soft elastomers (~1 MPa) to diamond (1.05e12 Pa); the isotropic elastic
+        # range of Poisson's ratio; aerogel-like foams (~10 kg/m^3) to osmium (22 590 kg/m^3)
+        _bounded(self.youngs_modulus_pa, "youngs_modulus_pa", 1e6, 1.2e12, "Pa",
+                 "real engineering materials: soft elastomers 1 MPa to diamond 1.05e12 Pa")
+        _bounded(self.poisson, "poisson", -1.0, 0.5, "", "an isotropic elastic solid", lo_open=True, hi_open=True)
+        _bounded(self.density_kgm3, "density_kgm3", 10.0, 3e4, "kg/m^3", "real solids: foams to osmium 22 590 kg/m^3")
 
     @property
     def compliance_h(self) -> float:
@@ -109,6 +131,8 @@ class Materials:
     bushings: Mapping[str, Material] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
+
+        check_types(self)
         for name in ("pins", "bushings"):
             for key, value in _joint_table(self, name):
                 _check(isinstance(value, Material), f"{name}.{key}", f"must be a Material table, got {value!r}")
@@ -185,6 +209,8 @@ class Joints:
         "clearance_guide_mm": 0.0, "guide_span_m": 0.05, "guide_edge_radius_m": 0.01}
 
     def __post_init__(self) -> None:
+
+        check_types(self)
         for name in ("clearance_a_mm", "clearance_b_mm", "clearance_c_mm"):
             value = getattr(self, name)
             _check(isinstance(value, (int, float)) and math.isfinite(value) and value >= 0,
@@ -200,22 +226,26 @@ class Joints:
                 # clearance is no gap: the joint is a ball bearing (0)
                 _check(value >= MIN_CLEARANCE_MM, name, f"must be 0 (ball bearing) or at least {MIN_CLEARANCE_MM:g} mm "
                        f"(1 um) even off-catalogue, got {value!r}")
-        _positive(self.pin_diameter_m, "pin_diameter_m", "m")
-        _positive(self.bushing_length_m, "bushing_length_m", "m")
-        for name in ("pin_diameters_m", "bushing_lengths_m"):
+        why = "a journal of a bench-sized joint: 1 mm to 0.5 m"
+        _bounded(self.pin_diameter_m, "pin_diameter_m", *PIN_DIAMETER_M, "m", why, hi_open=True)
+        _bounded(self.bushing_length_m, "bushing_length_m", *BUSHING_LENGTH_M, "m", "a bushing of a bench-sized joint")
+        for name, (lo, hi) in (("pin_diameters_m", PIN_DIAMETER_M), ("bushing_lengths_m", BUSHING_LENGTH_M)):
             for key, value in _joint_table(self, name):
-                _positive(value, f"{name}.{key}", "m")
+                _bounded(value, f"{name}.{key}", lo, hi, "m", "a bench-sized joint", hi_open=name == "pin_diameters_m")
         for jt in JOINTS:
-            _check(self.pin_diameter(jt) < 0.5, "pin_diameters_m" if jt in self.pin_diameters_m else "pin_diameter_m",
-                   f"must be < 0.5 m, got {self.pin_diameter(jt)!r} at joint {jt}")
+            # the clearance a bushing can hold: its bore at most twice the pin (Eq. 18's conformal contact of a pin
+            # in a bore of nearly its size; a 1 mm pin in a 5 mm bore is no journal bearing)
+            d_mm = getattr(self, f"clearance_{jt.lower()}_mm")
+            _check(d_mm / 1000.0 < self.pin_diameter(jt), f"clearance_{jt.lower()}_mm",
+                   f"must be below the joint's pin diameter ({self.pin_diameter(jt) * 1000:g} mm: a bore at most twice "
+                   f"the pin), got {d_mm!r}")
         _choice(self.initial_eccentricity, "initial_eccentricity", ("loaded", "centred"))
         g = self.clearance_guide_mm
         _check(isinstance(g, (int, float)) and not isinstance(g, bool) and math.isfinite(g) and 0 <= g < 5.0,
                "clearance_guide_mm", f"must be 0 (ideal preloaded guide) or a clearance in (0, 5) mm, got {g!r}")
-        for name, hi in (("guide_span_m", 1.0), ("guide_edge_radius_m", 1.0)):
-            v = getattr(self, name)
-            _check(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and 0 < v <= hi,
-                   name, f"must be a length in (0, {hi:g}] m, got {v!r}")
+        _bounded(self.guide_span_m, "guide_span_m", 1e-3, 1.0, "m", "the shoes of a bench-sized slider")
+        _bounded(self.guide_edge_radius_m, "guide_edge_radius_m", 1e-4, 1.0, "m",
+                 "a crowned edge: 0.1 mm to a nearly flat 1 m")
 
     @property
     def guide_radial_m(self) -> float:
@@ -291,6 +321,8 @@ class Mechanism:
     crank_direction: int = 1
 
     def __post_init__(self) -> None:
+
+        check_types(self)
         _choice(self.orientation, "orientation", ORIENTATIONS)
         _check(isinstance(self.gravity_mps2, (int, float)) and 0 <= self.gravity_mps2 < 100,
                "gravity_mps2", f"must lie in [0, 100) m/s^2, got {self.gravity_mps2!r}")
@@ -397,34 +429,40 @@ class Contact:
     FRICTION_LAWS: typing.ClassVar[tuple[str, ...]] = ("regularized-coulomb", "adams")
 
     def __post_init__(self) -> None:
+
+        check_types(self)
         _choice(self.law, "law", self.LAWS)
         _check(isinstance(self.restitution, (int, float)) and 0 < self.restitution <= 1,
                "restitution", f"must lie in (0, 1], got {self.restitution!r}")
         _check(isinstance(self.exponent, (int, float)) and 1 <= self.exponent <= 3,
                "exponent", f"must lie in [1, 3], got {self.exponent!r}")
-        _check(isinstance(self.stiffness, (int, float)) and math.isfinite(self.stiffness)
-               and self.stiffness >= 0, "stiffness", f"must be >= 0 (0 = from Eq. 18), got {self.stiffness!r}")
-        for key, value in _joint_table(self, "stiffnesses"):
-            _check(isinstance(value, (int, float)) and math.isfinite(value) and value >= 0, f"stiffnesses.{key}",
-                   f"must be >= 0 (0 = from Eq. 18), got {value!r}")
+        # a given K must be a contact's: a load of 1 N penetrates between 1 pm and 1 mm (K in [1e3^n, 1e12^n]
+        # N/m^n; steel and bronze joints: 1e9-1e11 at n = 1.5); 1e-300 would let a pin sink through its bushing
+        n = 1.0 if self.law in ("linear", "johnson-cylindrical") else self.exponent
+        lo, hi = 1e3 ** n, 1e12 ** n
+        for name, value in (("stiffness", self.stiffness), *((f"stiffnesses.{k}", v)
+                                                             for k, v in _joint_table(self, "stiffnesses"))):
+            ok = isinstance(value, (int, float)) and math.isfinite(value) and (value == 0 or lo <= value <= hi)
+            _check(ok, name, f"must be 0 (from Eq. 18) or lie in [{lo:.3g}, {hi:.3g}] N/m^{n:g} (a contact that 1 N "
+                             f"presses between 1 pm and 1 mm deep), got {value!r}")
         _check(isinstance(self.stiffness_scale, (int, float)) and 0.1 <= self.stiffness_scale <= 10,
                "stiffness_scale", f"must lie in [0.1, 10], got {self.stiffness_scale!r}")
         _check(isinstance(self.mu0, (int, float)) and 0 <= self.mu0 <= 1,
                "mu0", f"must lie in [0, 1], got {self.mu0!r}")
-        _positive(self.v0_mps, "v0_mps", "m/s")
-        _positive(self.v1_mps, "v1_mps", "m/s")
+        why = "a friction transition velocity: 1 nm/s to 10 m/s"
+        _bounded(self.v0_mps, "v0_mps", *TRANSITION_MPS, "m/s", why)
+        _bounded(self.v1_mps, "v1_mps", *TRANSITION_MPS, "m/s", why)
         _check(self.v1_mps > self.v0_mps, "v1_mps", f"must exceed v0_mps ({self.v0_mps}), got {self.v1_mps!r}")
         _check(isinstance(self.impact_speed_floor_mps, (int, float)) and 1e-6 <= self.impact_speed_floor_mps <= 1,
                "impact_speed_floor_mps", f"must lie in [1e-6, 1] m/s, got {self.impact_speed_floor_mps!r}")
-        _check(isinstance(self.impact_c_max_nspm, (int, float)) and math.isfinite(self.impact_c_max_nspm)
-               and self.impact_c_max_nspm >= 0, "impact_c_max_nspm",
-               f"must be a finite number >= 0 [N s/m], got {self.impact_c_max_nspm!r}")
-        _positive(self.impact_d_max_m, "impact_d_max_m", "m")
+        _bounded(self.impact_c_max_nspm, "impact_c_max_nspm", 0.0, 1e9, "N s/m",
+                 "a contact's damping: S001's steel joint has 27 960 N s/m")
+        _bounded(self.impact_d_max_m, "impact_d_max_m", 1e-9, 1e-2, "m", "a contact penetration: 1 nm to 10 mm")
         _choice(self.friction_law, "friction_law", self.FRICTION_LAWS)
         _check(isinstance(self.mu_static, (int, float)) and 0 <= self.mu_static <= 1,
                "mu_static", f"must lie in [0, 1], got {self.mu_static!r}")
-        _positive(self.v_static_mps, "v_static_mps", "m/s")
-        _positive(self.v_kinetic_mps, "v_kinetic_mps", "m/s")
+        _bounded(self.v_static_mps, "v_static_mps", *TRANSITION_MPS, "m/s", why)
+        _bounded(self.v_kinetic_mps, "v_kinetic_mps", *TRANSITION_MPS, "m/s", why)
         _check(self.v_kinetic_mps > self.v_static_mps, "v_kinetic_mps",
                f"must exceed v_static_mps ({self.v_static_mps}), got {self.v_kinetic_mps!r}")
 

@@ -9,7 +9,7 @@ from dataclasses import dataclass, field, fields
 from typing import Mapping
 
 from twin.config.common import (ACCELEROMETERS, ALL_CHANNEL_GROUPS, CHANNEL_GROUPS, XML_DEFAULTS, _check, _choice,
-                                _positive)
+                                _positive, check_types)
 
 
 # -------------------------------------------------------------------------- sensors
@@ -31,6 +31,8 @@ class AccelMount:
     axis: str
 
     def __post_init__(self) -> None:
+
+        check_types(self)
         _choice(self.body, "body", ("rod", "slider"))
         _check(len(self.position_m) == 2 and all(math.isfinite(v) and abs(v) < 1 for v in self.position_m),
                "position_m", f"must be [x, y] within ±1 m, got {list(self.position_m)!r}")
@@ -61,6 +63,8 @@ class Sensors:
     output_rate_hz: float = 100_000.0
 
     def __post_init__(self) -> None:
+
+        check_types(self)
         _check(sorted(self.accelerometers) == list(ACCELEROMETERS), "accelerometers",
                f"must define exactly {', '.join(ACCELEROMETERS)}, got {', '.join(sorted(self.accelerometers))}")
         _check(len(self.channels) >= 1, "channels",
@@ -162,6 +166,8 @@ class Instrumentation:
     seed: int = 0
 
     def __post_init__(self) -> None:
+
+        check_types(self)
         _check(sorted(self.models) == list(ACCELEROMETERS), "models",
                f"must give a model for each of {', '.join(ACCELEROMETERS)}, got {', '.join(sorted(self.models))}")
         for k, v in self.models.items():

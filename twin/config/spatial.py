@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from twin.config.common import _check, _choice, _finite
+from twin.config.common import _bounded, _check, _choice, _finite, check_types
 
 
 @dataclass(frozen=True)
@@ -48,6 +48,8 @@ class Spatial:
     guide_offset_z_m: float = 0.019554
 
     def __post_init__(self) -> None:
+
+        check_types(self)
         _check(isinstance(self.enabled, bool), "enabled", f"must be true or false, got {self.enabled!r}")
         _choice(self.guide_axis, "guide_axis", ("x", "y"))
         for name in ("guide_offset_y_m", "guide_offset_z_m"):

@@ -196,6 +196,15 @@ def plan(spec: DatasetSpec) -> list[RunPlan]:
     base = base_config(spec)
     for f in spec.factors:  # names and engines first, so a bad factor is named even with 0 points
         resolve(f.name, spec.engine)
+        if f.range is not None and f.name not in NAMED:
+            # both ends of a configuration field's range within the field's bounds (the schema's physical
+            # plausibility): a range that reaches out of them is refused before any run, not only if a draw lands there
+            for end in f.range:
+                try:
+                    with_overrides(base, {f.name: end})
+                except ConfigError as err:
+                    raise SpecError(f"factors.{f.name}.range", f"reaches {end:g}, which the configuration refuses: "
+                                                               f"{err.field}: {err.message}") from None
     points = design_points(spec)
     if not points:
         raise SpecError("design", "has zero runs (a factor without values, or runs = 0)")

@@ -165,6 +165,10 @@ def _counts_per_rev(ds: Dataset) -> float:
 
 def open(path: str | Path) -> Dataset:  # noqa: A001 - twin.dataset.open(DIR), like datasets' API
     """Open a dataset folder for reading."""
+    import os
+
+    if isinstance(path, bool) or not isinstance(path, (str, os.PathLike)):
+        raise TypeError(f"path: must be a dataset folder (str or os.PathLike), got {type(path).__name__}")
     return Dataset(path)
 
 

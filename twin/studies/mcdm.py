@@ -173,7 +173,32 @@ def check_matrix(x: np.ndarray, names: Sequence[str], flag: str = "--criteria") 
                              "MEREC, SAW and WASPAS need every value > 0")
         if np.all(col == col[0]):
             raise TableError(f"{flag}: column {n!r} is constant ({col[0]:g}); it cannot rank the alternatives")
+        if col.min() / col.max() < MIN_RATIO:
+            raise TableError(f"{flag}: column {n!r} spans more than 300 decades ({col.min():g} to {col.max():g}); "
+                             "its ratios (min/x, x/max) are not representable in floating point")
     return x
+
+
+#: smallest ratio min/max of a column that the normalisations represent (10^-300, above the smallest normal
+#: double 2.2e-308: every normalised value stays a normal number)
+MIN_RATIO = 1e-300
+
+
+def _scaled(x: np.ndarray) -> np.ndarray:
+    """``x`` with every column divided by its largest magnitude: every method here is invariant to a positive
+    factor on a criterion (ratios and min-max normalisations), and on the scaled values its squares and sums
+    neither overflow (responses of 1e300) nor lose their digits to underflow (subnormal responses)."""
+    x = np.asarray(x, dtype=float)
+    top = np.abs(x).max(axis=0)
+    return x / np.where(top > 0, top, 1.0)
+
+
+def _finite_scores(name: str, scores: np.ndarray) -> np.ndarray:
+    """The scores of method ``name``, refused in one line if one is not finite (never ranked as ties)."""
+    if not np.all(np.isfinite(scores)):
+        raise TableError(f"{name}: a score is not finite (row {int(np.argmin(np.isfinite(scores))) + 1}); "
+                         "check the decision matrix and the weights")
+    return scores
 
 
 def parse_weights(text: str, x: np.ndarray, benefit: Sequence[bool], names: Sequence[str]) -> tuple[np.ndarray, str]:
@@ -195,8 +220,9 @@ def parse_weights(text: str, x: np.ndarray, benefit: Sequence[bool], names: Sequ
         raise TableError(f"--weights: {text!r} must be merec, equal or numbers W1,W2,…") from None
     if not np.all(np.isfinite(w)) or np.any(w < 0):
         raise TableError(f"--weights: every weight must be a finite number >= 0, got {text!r}")
-    if w.sum() <= 0:
+    if w.max() <= 0:
         raise TableError(f"--weights: the weights must not all be 0, got {text!r}")
+    w = w / w.max()  # scale-free: huge weights do not overflow their sum, subnormal ones keep their ratios
     return w / w.sum(), "given"
 
 
@@ -214,11 +240,14 @@ def _w(w: Sequence[float], n: int) -> np.ndarray:
     w = np.asarray(w, dtype=float)
     if w.shape != (n,) or not np.all(np.isfinite(w)) or np.any(w < 0):
         raise TableError(f"weights: need {n} finite values >= 0, got {w.tolist()}")
+    if not np.isfinite(w.sum()):
+        raise TableError(f"weights: their sum overflows ({w.tolist()}); scale them (e.g. to sum 1)")
     return w
 
 
 def merec_normalize(x: np.ndarray, benefit: Sequence[bool]) -> np.ndarray:
     """MEREC's normalisation: ``min/x`` for a benefit criterion, ``x/max`` for a cost criterion."""
+    x = _scaled(x)
     b = _benefit(benefit, x.shape[1])
     return np.where(b, x.min(axis=0) / x, x / x.max(axis=0))
 
@@ -249,6 +278,7 @@ def gra(x: np.ndarray, benefit: Sequence[bool], w: Sequence[float], xi: float = 
     w = _w(w, x.shape[1])
     if not 0 < xi <= 1:
         raise TableError(f"xi: the distinguishing coefficient must lie in (0, 1], got {xi}")
+    x = _scaled(x)
     lo, hi = x.min(axis=0), x.max(axis=0)
     xs = np.where(b, (x - lo) / (hi - lo), (hi - x) / (hi - lo))
     d = np.abs(1.0 - xs)
@@ -262,19 +292,27 @@ def topsis(x: np.ndarray, benefit: Sequence[bool], w: Sequence[float]) -> dict[s
     ``d_plus``, ``d_minus`` and ``scores`` (the closeness coefficients)."""
     b = _benefit(benefit, x.shape[1])
     w = _w(w, x.shape[1])
+    x = _scaled(x)
     r = x / np.sqrt((x ** 2).sum(axis=0))
     v = r * w
     best = np.where(b, v.max(axis=0), v.min(axis=0))
     worst = np.where(b, v.min(axis=0), v.max(axis=0))
-    dp = np.sqrt(((v - best) ** 2).sum(axis=1))
-    dm = np.sqrt(((v - worst) ** 2).sum(axis=1))
+    # the closeness S-/(S+ + S-) does not change with a common factor on the distances: they are computed
+    # on v / max|v - ideal| so that subnormal or huge weights neither underflow to 0/0 nor overflow
+    span = np.abs(best - worst).max()
+    if not span > 0:
+        raise TableError("topsis: every weighted criterion is constant (weights all 0 or constant columns)")
+    dps = np.sqrt((((v - best) / span) ** 2).sum(axis=1))
+    dms = np.sqrt((((v - worst) / span) ** 2).sum(axis=1))
+    dp, dm, close = dps * span, dms * span, dms / (dps + dms)
     return {"normalized": r, "weighted": v, "ideal": best, "anti_ideal": worst,
-            "d_plus": dp, "d_minus": dm, "scores": dm / (dp + dm)}
+            "d_plus": dp, "d_minus": dm, "scores": close}
 
 
 def linear_max_normalize(x: np.ndarray, benefit: Sequence[bool]) -> np.ndarray:
     """SAW's and WASPAS's normalisation: ``x/max`` for a benefit criterion, ``min/x`` for a cost
     criterion (1 for the best value of each criterion)."""
+    x = _scaled(x)
     b = _benefit(benefit, x.shape[1])
     return np.where(b, x / x.max(axis=0), x.min(axis=0) / x)
 
@@ -331,10 +369,13 @@ def evaluate(x: np.ndarray, benefit: Sequence[bool], w: Sequence[float], lam: fl
     ``waspas`` also carries ``lambda`` and S002's variant (``paper_variant``)."""
     out: dict[str, dict[str, Any]] = {}
     for name, res in (("gra", gra(x, benefit, w, xi)), ("topsis", topsis(x, benefit, w)), ("saw", saw(x, benefit, w))):
-        out[name] = {"scores": res["scores"].tolist(), "ranks": ranks(res["scores"]).tolist()}
+        sc = _finite_scores(name, res["scores"])
+        out[name] = {"scores": sc.tolist(), "ranks": ranks(sc).tolist()}
     out["gra"]["xi"] = xi
     std = waspas(x, benefit, w, lam)
     pap = waspas_paper(x, benefit, w, lam)
+    _finite_scores("waspas", std["scores"])
+    _finite_scores("waspas (S002's form)", pap["scores"])
     out["waspas"] = {
         "scores": std["scores"].tolist(), "ranks": ranks(std["scores"]).tolist(), "lambda": lam,
         "form": "standard (Zavadskas et al. 2012): lambda*sum(w*n) + (1-lambda)*prod(n**w)",

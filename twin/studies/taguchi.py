@@ -72,17 +72,28 @@ def s002_design() -> dict[str, np.ndarray]:
 
 
 # ------------------------------------------------------------------ S/N and main effects
+#: largest and smallest (nonzero) magnitude of a response column the ANOVA takes: its sums of squares of up to
+#: ~10^4 runs stay finite and normal (squares of 1e150 overflow near 1e300; of 1e-150 they underflow)
+MAX_RESPONSE, MIN_RESPONSE = 1e150, 1e-150
+
+
 def sn_ratio(y: np.ndarray, kind: str = "smaller") -> np.ndarray:
     """S/N ratio [dB] of each run (rows) over its replicates (columns; a 1-D array is one replicate
     per run): smaller-the-better −10 log10(mean y²), larger-the-better −10 log10(mean 1/y²)."""
     y = np.asarray(y, dtype=float)
     y = y[:, None] if y.ndim == 1 else y
+    # scale-free: each run's values are divided by their largest magnitude s before squaring, and 20 log10 s is
+    # added back, so that responses of 1e200 (squares overflow) or 1e-200 (squares underflow, 1/y^2 overflows)
+    # give the S/N ratio the formula defines
     if kind == "smaller":
-        return -10.0 * np.log10(np.mean(y ** 2, axis=1))
+        s = np.abs(y).max(axis=1, keepdims=True)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return -10.0 * np.log10(np.mean((y / s) ** 2, axis=1)) - 20.0 * np.log10(s[:, 0])
     if kind == "larger":
         if np.any(y == 0):
             raise TableError("--sn larger: a response of 0 has no larger-the-better S/N ratio")
-        return -10.0 * np.log10(np.mean(1.0 / y ** 2, axis=1))
+        s = np.abs(y).min(axis=1, keepdims=True)
+        return -10.0 * np.log10(np.mean((s / y) ** 2, axis=1)) + 20.0 * np.log10(s[:, 0])
     raise TableError(f"--sn: must be one of {', '.join(SN_KINDS)}, got {kind!r}")
 
 
@@ -344,6 +355,11 @@ def run_analysis(csv_path: str | Path, responses: str, factors: str, sn: str = "
         y = np.column_stack([numeric_column(header, rows, c, "--responses") for c in reps])
         if sn == "smaller" and np.all(y == 0):
             raise TableError(f"--responses: {spec!r} is 0 in every run")
+        top = float(np.abs(y).max())
+        if top > 0 and not MIN_RESPONSE <= top <= MAX_RESPONSE:
+            raise TableError(f"--responses: column {spec!r} has magnitudes up to {top:g}: outside "
+                             f"[{MIN_RESPONSE:g}, {MAX_RESPONSE:g}] its sums of squares (ANOVA) are not representable "
+                             "in floating point; give it in another unit")
         s = sn_ratio(y, sn)
         if not np.all(np.isfinite(s)):
             raise TableError(f"--responses: {spec!r} gives an S/N ratio that is not finite (a run of zeros)")
