@@ -213,8 +213,8 @@ def check_info(info: dict[str, Any], path: Path) -> None:
     if cpr is not None and not (_is_num(cpr) and cpr > 0):
         raise bad("encoder_counts_per_rev", "a positive number or null")
     ident = info.get("identity")
-    if ident is not None and not isinstance(ident, dict):
-        raise bad("identity", "an object")
+    if not isinstance(ident, dict) or not isinstance(ident.get("engine"), str):
+        raise bad("identity", "an object naming the dataset's engine")
 
 
 def check_manifest(table: Any, path: Path) -> None:
