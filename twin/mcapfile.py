@@ -375,6 +375,9 @@ class RunWriter:
             try:
                 if self._fh is not None:
                     self._fh.close()
+            except OSError:
+                pass  # the buffered rest cannot be written either (a full disk): the file is dropped anyway;
+                # raising here replaced the error naming the file with a bare one naming none
             finally:
                 self.tmp.unlink(missing_ok=True)
 

@@ -469,7 +469,7 @@ def check_writable(out: Path) -> None:
     folders. One line naming the place otherwise."""
     import stat as _stat
 
-    from twin.util import _probe_dir_writable, show
+    from twin.util import show
 
     for d in (out, out / "data", out / "results"):
         try:
@@ -479,7 +479,9 @@ def check_writable(out: Path) -> None:
         if not _stat.S_ISDIR(st.st_mode):
             raise DatasetError(f"--out: {show(d)} is not a folder (a file or link where the dataset keeps its "
                                "runs); move it away")
-        _probe_dir_writable(d, "--out", d)
+        # no probe file: a folder's modification time is the dataset's own (a refused run changes nothing)
+        if not os.access(d, os.W_OK | os.X_OK) or os.statvfs(d).f_flag & os.ST_RDONLY:
+            raise DatasetError(f"--out: cannot write in {show(d)} (permission denied or a read-only file system)")
     for name in OWN_FILES:
         f = out / name
         try:

@@ -370,6 +370,9 @@ class RerunWriter:
                 os.replace(self._tmp, self.path)
             except OSError as err:
                 raise TwinError(f"{self.path}: cannot write ({err.strerror})") from None
+        except RuntimeError as err:  # rerun's file writer stopped (a full disk): name the file, one line
+            self.abort()
+            raise TwinError(f"{self.path}: cannot write (rerun: {' '.join(str(err).split())[:200]})") from None
         except BaseException:
             self.abort()
             raise
