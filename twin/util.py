@@ -296,6 +296,9 @@ def check_output_file(path: str | Path, flag: str, suffixes: str | Iterable[str]
     if out.exists() and not out.is_file():
         raise TwinError(f"{flag}: {show(out)} exists and is not a regular file")
     check_not_input(out, flag, inputs)
+    if out.is_symlink():  # refused now, not after the work (the writers never replace a link: check_not_link)
+        raise TwinError(f"{flag}: {show(out)} is a symbolic link; the twin writes regular files, never through "
+                        "a link: name the file itself or another one")
     _probe_dir_writable(parent, flag, out)
     remove_stale_temps(out)
     return out

@@ -471,26 +471,20 @@ def check_writable(out: Path) -> None:
 
     from twin.util import show
 
-    for d in (out, out / "data", out / "results"):
+    places = [(d, _stat.S_ISDIR, "is not a folder (a file or link where the dataset keeps its runs)")
+              for d in (out, out / "data", out / "results")]
+    places += [(out / n, _stat.S_ISREG, "is not a regular file (a link or folder where the dataset writes its own "
+                                        "file)") for n in OWN_FILES]
+    for path, kind_ok, what in places:
         try:
-            st = os.lstat(d)
+            mode = os.lstat(path).st_mode
         except FileNotFoundError:
             continue
-        if not _stat.S_ISDIR(st.st_mode):
-            raise DatasetError(f"--out: {show(d)} is not a folder (a file or link where the dataset keeps its "
-                               "runs); move it away")
+        if not kind_ok(mode):
+            raise DatasetError(f"--out: {show(path)} {what}; move it away")
         # no probe file: a folder's modification time is the dataset's own (a refused run changes nothing)
-        if not os.access(d, os.W_OK | os.X_OK) or os.statvfs(d).f_flag & os.ST_RDONLY:
-            raise DatasetError(f"--out: cannot write in {show(d)} (permission denied or a read-only file system)")
-    for name in OWN_FILES:
-        f = out / name
-        try:
-            st = os.lstat(f)
-        except FileNotFoundError:
-            continue
-        if not _stat.S_ISREG(st.st_mode):
-            raise DatasetError(f"--out: {show(f)} is not a regular file (a link or folder where the dataset "
-                               "writes its own file); move it away")
+        if _stat.S_ISDIR(mode) and (not os.access(path, os.W_OK | os.X_OK) or os.statvfs(path).f_flag & os.ST_RDONLY):
+            raise DatasetError(f"--out: cannot write in {show(path)} (permission denied or a read-only file system)")
 
 
 def _target_of(tmp_name: str) -> str:
