@@ -49,15 +49,16 @@ PATH_OPTIONS = ("out", "save", "json", "summary_json", "rerun", "screenshot", "m
 
 #: arguments whose value is something the command reads (their ``dest``): registered with
 #: :func:`twin.util.reading` while the command runs, so that no output of any command can be one of
-#: them or lie inside one (a dataset folder)
+#: them or lie inside one read as a folder (:data:`FOLDER_INPUTS`: a dataset)
 INPUT_OPTIONS = ("config", "trace", "calibration", "model", "dataset", "dir", "recording", "spec", "export", "runs",
                  "input", "responses_csv", "responses")
+FOLDER_INPUTS = ("dataset", "dir", "input")
 
 
-def inputs_of(args: argparse.Namespace) -> list[str]:
-    """The input paths named on a parsed command line (:data:`INPUT_OPTIONS`)."""
+def inputs_of(args: argparse.Namespace, dests: Sequence[str] = INPUT_OPTIONS) -> list[str]:
+    """The input paths named on a parsed command line (those of ``dests``)."""
     out: list[str] = []
-    for dest in INPUT_OPTIONS:
+    for dest in dests:
         v = getattr(args, dest, None)
         for x in (v if isinstance(v, (list, tuple)) else [v]):
             if isinstance(x, str) and x.strip() and x != "-":
@@ -293,7 +294,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     from twin.util import reading
 
     try:
-        with reading(inputs_of(args)):
+        with reading(inputs_of(args, [d for d in INPUT_OPTIONS if d not in FOLDER_INPUTS]),
+                     inputs_of(args, FOLDER_INPUTS)):
             rc = int(args.func(args) or 0)
         sys.stdout.flush()  # a full disk under `> /dev/full` shows here, not as a traceback at exit
         return rc

@@ -216,35 +216,39 @@ def check_path_name(path: str | Path, flag: str) -> Path:
     return p
 
 
-#: inputs the running command reads (:func:`reading`): no output may alias them
-_READING: list[str] = []
+#: inputs the running command reads (:func:`reading`): (path, whether it is read as a folder)
+_READING: list[tuple[str, bool]] = []
 
 
 @contextmanager
-def reading(paths: Iterable[str | Path | None]) -> Iterator[None]:
+def reading(files: Iterable[str | Path | None], folders: Iterable[str | Path | None] = ()) -> Iterator[None]:
     """Register the files and folders a command reads while it runs: every output checked by
     :func:`check_output_file`, :func:`check_output_dir` or written by :func:`atomic_write_bytes`
-    meanwhile is refused when it is one of them or lies inside one (the command line registers the
-    input arguments of every command, so no command can forget one)."""
-    added = [os.fspath(p) for p in paths if p is not None and os.fspath(p).strip()]
+    meanwhile is refused when it is one of them or lies inside one of the ``folders`` (the command
+    line registers the input arguments of every command, so no command can forget one). A path
+    given where a file is read is only compared, never taken as a folder: a folder given there is
+    refused by its reader, naming the option."""
+    added = [(os.fspath(p), folder) for ps, folder in ((files, False), (folders, True)) for p in ps
+             if p is not None and os.fspath(p).strip()]
     _READING.extend(added)
     try:
         yield
     finally:
-        for p in added:
-            _READING.remove(p)
+        for a in added:
+            _READING.remove(a)
 
 
-def _aliases(out: Path, inputs: Iterable[str | Path], holds: bool) -> tuple[str, str] | None:
-    """(input, how) for the first of ``inputs`` (and of the registered :func:`reading` inputs) that
-    the output ``out`` would write over or into: the same file (through any link), a path inside an
-    input folder (a dataset being read), or (``holds``: a folder replaced whole) a folder holding
-    an input. None when the output touches no input."""
+def _aliases(out: Path, inputs: Iterable[str | Path], holds: bool, folders: Iterable[str | Path] = ()
+             ) -> tuple[str, str] | None:
+    """(input, how) for the first of ``inputs`` (files), ``folders`` and of the registered :func:`reading`
+    inputs that the output ``out`` would write over or into: the same file (through any link), a path
+    inside an input folder (a dataset being read), or (``holds``: a folder replaced whole) a folder
+    holding an input. None when the output touches no input."""
     try:
         here = out.resolve()
     except (OSError, RuntimeError):
         return None  # a loop: refused by check_path_name
-    for i in (*inputs, *_READING):
+    for i, folder in (*((i, False) for i in inputs), *((f, True) for f in folders), *_READING):
         if i is None or not os.fspath(i).strip():
             continue
         try:
@@ -253,30 +257,33 @@ def _aliases(out: Path, inputs: Iterable[str | Path], holds: bool) -> tuple[str,
             continue
         if here == ip:
             return os.fspath(i), "is"
-        if ip in here.parents:
+        if folder and ip in here.parents:
             return os.fspath(i), "lies inside"
         if holds and here in ip.parents:
             return os.fspath(i), "holds"
     return None
 
 
-def check_not_input(out: str | Path, flag: str, inputs: Iterable[str | Path] = (), holds: bool = False) -> None:
+def check_not_input(out: str | Path, flag: str, inputs: Iterable[str | Path] = (), holds: bool = False,
+                    folders: Iterable[str | Path] = ()) -> None:
     """Refuse (one line naming ``flag``) an output that is or lies inside one of ``inputs`` or of the
     inputs the command registered (:func:`reading`), and with ``holds`` one that holds an input: the
     one rule that keeps an input being read from being written over (``dataset info DIR --json
     DIR/info.json``, a model written into the dataset it is trained on)."""
-    hit = _aliases(Path(out), inputs, holds)
+    hit = _aliases(Path(out), inputs, holds, folders)
     if hit is not None:
         raise TwinError(f"{flag}: {show(out)} {hit[1]} the input {show(hit[0])}, which this command reads; "
                         "choose an output outside every input")
 
 
 def check_output_file(path: str | Path, flag: str, suffixes: str | Iterable[str],
-                      inputs: Iterable[str | Path] = ()) -> Path:
+                      inputs: Iterable[str | Path] = (), folders: Iterable[str | Path] = ()) -> Path:
     """Check an output file given on the command line before any work starts.
 
     It must end in one of ``suffixes``, its folder must exist and be writable, it must not be a
-    folder, nor one of ``inputs``; its name must fit the file system (:func:`check_path_name`).
+    folder, nor a symbolic link, nor one of ``inputs`` (files) or a path inside one of ``folders`` or
+    of what the command registered as read (:func:`reading`); its name must fit the file system
+    (:func:`check_path_name`).
     Stale temporary files in its folder are removed. Raises a one-line :class:`TwinError` naming
     ``flag`` otherwise. Nothing is created.
     """
@@ -295,7 +302,7 @@ def check_output_file(path: str | Path, flag: str, suffixes: str | Iterable[str]
         raise TwinError(f"{flag}: {show(out)} is a dangling symbolic link")
     if out.exists() and not out.is_file():
         raise TwinError(f"{flag}: {show(out)} exists and is not a regular file")
-    check_not_input(out, flag, inputs)
+    check_not_input(out, flag, inputs, folders=folders)
     if out.is_symlink():  # refused now, not after the work (the writers never replace a link: check_not_link)
         raise TwinError(f"{flag}: {show(out)} is a symbolic link; the twin writes regular files, never through "
                         "a link: name the file itself or another one")

@@ -130,7 +130,7 @@ def _info(args: argparse.Namespace) -> int:
     if args.show < 0:
         raise TwinError(f"--show: must be >= 0 (0 = all), got {args.show}")
     # the dataset folder is an input: --json inside it (its info.json, its stats.json) is refused
-    js = check_output_file(args.json, "--json", ".json", inputs=(args.dir,)) if args.json not in (None, "-") else None
+    js = check_output_file(args.json, "--json", ".json", folders=(args.dir,)) if args.json not in (None, "-") else None
     if args.json == "-":
         print(json_text(summary(args.dir)))  # strict JSON: a missing number is null, never NaN
         return 0
