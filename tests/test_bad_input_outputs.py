@@ -196,6 +196,7 @@ def ws(tmp_path_factory) -> Path:
                  "--no-progress"]) == 0
     ds = ws / "ds"
     shutil.copytree(ds, ws / "ds2")
+    shutil.copytree(ds, ws / "pristine")  # the property tests' source: no table case names it
     os.symlink("ds", ws / "ds_link")
     os.symlink("ds/info.json", ws / "ds_info_as.json")
     rid = next(r for r in __import__("pyarrow.parquet", fromlist=["x"]).read_table(ds / "runs.parquet").to_pylist()
@@ -493,7 +494,7 @@ def _reader_contract(d: Path, capsys) -> None:
 
 @pytest.fixture(scope="module")
 def pristine(ws) -> Path:
-    return ws / "ds"
+    return ws / "pristine"
 
 
 def _copy(src: Path) -> Path:
