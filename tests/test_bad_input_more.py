@@ -536,11 +536,13 @@ CASES: list[tuple[str, str]] = [
 ]
 
 
-@pytest.mark.parametrize("line, fragment", CASES, ids=[c[0].replace("{ws}/", "")[:90] for c in CASES])
-def test_more_bad_input_is_one_line_exit_2_and_changes_nothing(line, fragment, ws, capsys, monkeypatch):
-    monkeypatch.chdir(ws)
+def check_case(line: str, fragment: str, ws: Path, capsys, subs: dict[str, str]) -> None:
+    """Run one table case (``{ws}`` and the keys of ``subs`` replaced) in ``ws``: exit 2, one line holding
+    ``fragment``, no traceback, nothing on stdout, ``ws`` unchanged."""
     before = snapshot(ws)
-    argv = [a.replace("{ws}", str(ws)).replace("{LONG}", LONG) for a in shlex.split(line)]
+    argv = shlex.split(line)
+    for k, v in {"{ws}": str(ws), **subs}.items():
+        argv = [a.replace(k, v) for a in argv]
     rc = main(argv)
     out, err = capsys.readouterr()
     assert rc == 2, (rc, err[-3000:])
@@ -548,6 +550,12 @@ def test_more_bad_input_is_one_line_exit_2_and_changes_nothing(line, fragment, w
     assert fragment in err, err
     assert "Traceback" not in err and out == "", (out, err)
     assert snapshot(ws) == before
+
+
+@pytest.mark.parametrize("line, fragment", CASES, ids=[c[0].replace("{ws}/", "")[:90] for c in CASES])
+def test_more_bad_input_is_one_line_exit_2_and_changes_nothing(line, fragment, ws, capsys, monkeypatch):
+    monkeypatch.chdir(ws)
+    check_case(line, fragment, ws, capsys, {"{LONG}": LONG})
 
 
 def test_the_new_table_covers_every_command_and_is_large():

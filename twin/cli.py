@@ -48,6 +48,25 @@ PATH_OPTIONS = ("out", "save", "json", "summary_json", "rerun", "screenshot", "m
                 "trace")
 
 
+#: arguments whose value is something the command reads (their ``dest``): registered with
+#: :func:`twin.util.reading` while the command runs, so that no output of any command can be one of
+#: them or lie inside one read as a folder (:data:`FOLDER_INPUTS`: a dataset)
+INPUT_OPTIONS = ("config", "trace", "calibration", "model", "dataset", "dir", "recording", "spec", "export", "runs",
+                 "input", "responses_csv", "responses")
+FOLDER_INPUTS = ("dataset", "dir", "input")
+
+
+def inputs_of(args: argparse.Namespace, dests: Sequence[str] = INPUT_OPTIONS) -> list[str]:
+    """The input paths named on a parsed command line (those of ``dests``)."""
+    out: list[str] = []
+    for dest in dests:
+        v = getattr(args, dest, None)
+        for x in (v if isinstance(v, (list, tuple)) else [v]):
+            if isinstance(x, str) and x.strip() and x != "-":
+                out.append(x)
+    return out
+
+
 class UsageError(TwinError):
     """A command line argparse refuses (unknown option, bad value type, missing argument)."""
 
@@ -280,8 +299,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     previous = None
     if threading.current_thread() is threading.main_thread():
         previous = signal.signal(signal.SIGTERM, raise_terminated)
+    from twin.util import reading
+
     try:
-        rc = int(args.func(args) or 0)
+        with reading(inputs_of(args, [d for d in INPUT_OPTIONS if d not in FOLDER_INPUTS]),
+                     inputs_of(args, FOLDER_INPUTS)):
+            rc = int(args.func(args) or 0)
         sys.stdout.flush()  # a full disk under `> /dev/full` shows here, not as a traceback at exit
         return rc
     except TwinError as err:

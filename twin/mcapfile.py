@@ -57,7 +57,7 @@ from twin import __version__
 from twin.config import BenchConfig, config_from_toml
 from twin.errors import RecordingError, TwinError
 from twin.run import Channel, Run
-from twin.util import json_default, remove_stale_temps, temp_path
+from twin.util import check_not_link, json_default, open_new, remove_stale_temps, temp_path
 
 #: what a damaged file raises while it is read (LZ4's frame decoder raises RuntimeError)
 _UNREADABLE = (McapError, ZstdError, RuntimeError, EOFError, struct.error, ValueError, KeyError)
@@ -273,7 +273,7 @@ class RunWriter:
     def _open(self) -> None:
         remove_stale_temps(self.path)
         try:
-            self._fh = open(self.tmp, "wb")
+            self._fh = os.fdopen(open_new(self.tmp), "wb")
         except OSError as err:
             raise TwinError(f"{self.path}: cannot write ({err.strerror})") from None
         self._w = Writer(self._fh, compression=self.compression, chunk_size=4 * 1024 * 1024)
@@ -360,7 +360,11 @@ class RunWriter:
             self._w.add_metadata("twin.summary", {"json": json.dumps(summary, sort_keys=True, default=json_default)})
         self._w.finish()
         self._fh.close()
-        os.replace(self.tmp, self.path)
+        try:
+            check_not_link(self.path)
+            os.replace(self.tmp, self.path)
+        except OSError as err:
+            raise TwinError(f"{self.path}: cannot write ({err.strerror})") from None
         self._done = True
         return self.path
 
@@ -371,6 +375,9 @@ class RunWriter:
             try:
                 if self._fh is not None:
                     self._fh.close()
+            except OSError:
+                pass  # the buffered rest cannot be written either (a full disk): the file is dropped anyway;
+                # raising here replaced the error naming the file with a bare one naming none
             finally:
                 self.tmp.unlink(missing_ok=True)
 

@@ -17,7 +17,8 @@ import shutil
 import socket
 import stat
 from pathlib import Path
-from typing import Any, Callable, Iterable
+from contextlib import contextmanager
+from typing import Any, Callable, Iterable, Iterator
 
 import numpy as np
 
@@ -38,6 +39,34 @@ def json_default(o: Any) -> Any:
     if isinstance(o, Path):
         return str(o)
     raise TypeError(f"not JSON serializable: {type(o).__name__}")
+
+
+def json_safe(o: Any) -> Any:
+    """``o`` with every float that JSON cannot hold (NaN, +-Infinity) replaced by ``None`` (JSON's
+    null), numpy scalars and arrays and paths converted: what the twin writes as JSON is strict JSON
+    (RFC 8259) that every parser reads. A missing value (a label a run lacks, a metric with no data)
+    is null; where a non-finite number would be a wrong answer rather than a missing one, the code
+    computing it refuses instead."""
+    if isinstance(o, float) or isinstance(o, np.floating):
+        v = float(o)
+        return v if v == v and v not in (float("inf"), float("-inf")) else None
+    if isinstance(o, dict):
+        return {k if isinstance(k, str) else str(k): json_safe(v) for k, v in o.items()}
+    if isinstance(o, (list, tuple)):
+        return [json_safe(v) for v in o]
+    if isinstance(o, np.ndarray):
+        return json_safe(o.tolist())
+    if isinstance(o, (np.integer, np.bool_)):
+        return o.item()
+    if isinstance(o, Path):
+        return str(o)
+    return o
+
+
+def json_text(obj: Any, indent: int | None = 2, sort_keys: bool = False) -> str:
+    """Strict JSON text of ``obj`` (:func:`json_safe`: NaN and infinities as null, ``allow_nan`` off):
+    the one serializer of every JSON the twin prints or writes."""
+    return json.dumps(json_safe(obj), indent=indent, sort_keys=sort_keys, default=json_default, allow_nan=False)
 
 
 def file_sha256(path: str | Path) -> str:
@@ -187,12 +216,74 @@ def check_path_name(path: str | Path, flag: str) -> Path:
     return p
 
 
+#: inputs the running command reads (:func:`reading`): (path, whether it is read as a folder)
+_READING: list[tuple[str, bool]] = []
+
+
+@contextmanager
+def reading(files: Iterable[str | Path | None], folders: Iterable[str | Path | None] = ()) -> Iterator[None]:
+    """Register the files and folders a command reads while it runs: every output checked by
+    :func:`check_output_file`, :func:`check_output_dir` or written by :func:`atomic_write_bytes`
+    meanwhile is refused when it is one of them or lies inside one of the ``folders`` (the command
+    line registers the input arguments of every command, so no command can forget one). A path
+    given where a file is read is only compared, never taken as a folder: a folder given there is
+    refused by its reader, naming the option."""
+    added = [(os.fspath(p), folder) for ps, folder in ((files, False), (folders, True)) for p in ps
+             if p is not None and os.fspath(p).strip()]
+    _READING.extend(added)
+    try:
+        yield
+    finally:
+        for a in added:
+            _READING.remove(a)
+
+
+def _aliases(out: Path, inputs: Iterable[str | Path], holds: bool, folders: Iterable[str | Path] = ()
+             ) -> tuple[str, str] | None:
+    """(input, how) for the first of ``inputs`` (files), ``folders`` and of the registered :func:`reading`
+    inputs that the output ``out`` would write over or into: the same file (through any link), a path
+    inside an input folder (a dataset being read), or (``holds``: a folder replaced whole) a folder
+    holding an input. None when the output touches no input."""
+    try:
+        here = out.resolve()
+    except (OSError, RuntimeError):
+        return None  # a loop: refused by check_path_name
+    for i, folder in (*((i, False) for i in inputs), *((f, True) for f in folders), *_READING):
+        if i is None or not os.fspath(i).strip():
+            continue
+        try:
+            ip = Path(i).resolve()
+        except (OSError, RuntimeError):
+            continue
+        if here == ip:
+            return os.fspath(i), "is"
+        if folder and ip in here.parents:
+            return os.fspath(i), "lies inside"
+        if holds and here in ip.parents:
+            return os.fspath(i), "holds"
+    return None
+
+
+def check_not_input(out: str | Path, flag: str, inputs: Iterable[str | Path] = (), holds: bool = False,
+                    folders: Iterable[str | Path] = ()) -> None:
+    """Refuse (one line naming ``flag``) an output that is or lies inside one of ``inputs`` or of the
+    inputs the command registered (:func:`reading`), and with ``holds`` one that holds an input: the
+    one rule that keeps an input being read from being written over (``dataset info DIR --json
+    DIR/info.json``, a model written into the dataset it is trained on)."""
+    hit = _aliases(Path(out), inputs, holds, folders)
+    if hit is not None:
+        raise TwinError(f"{flag}: {show(out)} {hit[1]} the input {show(hit[0])}, which this command reads; "
+                        "choose an output outside every input")
+
+
 def check_output_file(path: str | Path, flag: str, suffixes: str | Iterable[str],
-                      inputs: Iterable[str | Path] = ()) -> Path:
+                      inputs: Iterable[str | Path] = (), folders: Iterable[str | Path] = ()) -> Path:
     """Check an output file given on the command line before any work starts.
 
     It must end in one of ``suffixes``, its folder must exist and be writable, it must not be a
-    folder, nor one of ``inputs``; its name must fit the file system (:func:`check_path_name`).
+    folder, nor a symbolic link, nor one of ``inputs`` (files) or a path inside one of ``folders`` or
+    of what the command registered as read (:func:`reading`); its name must fit the file system
+    (:func:`check_path_name`).
     Stale temporary files in its folder are removed. Raises a one-line :class:`TwinError` naming
     ``flag`` otherwise. Nothing is created.
     """
@@ -211,9 +302,10 @@ def check_output_file(path: str | Path, flag: str, suffixes: str | Iterable[str]
         raise TwinError(f"{flag}: {show(out)} is a dangling symbolic link")
     if out.exists() and not out.is_file():
         raise TwinError(f"{flag}: {show(out)} exists and is not a regular file")
-    for i in inputs:
-        if Path(i).exists() and out.exists() and out.resolve() == Path(i).resolve():
-            raise TwinError(f"{flag}: {show(out)} is also an input; choose another output")
+    check_not_input(out, flag, inputs, folders=folders)
+    if out.is_symlink():  # refused now, not after the work (the writers never replace a link: check_not_link)
+        raise TwinError(f"{flag}: {show(out)} is a symbolic link; the twin writes regular files, never through "
+                        "a link: name the file itself or another one")
     _probe_dir_writable(parent, flag, out)
     remove_stale_temps(out)
     return out
@@ -234,10 +326,8 @@ def check_output_dir(path: str | Path, flag: str = "--out", need_parent: bool = 
     if out.is_symlink() and not out.exists():
         raise TwinError(f"{flag}: {show(out)} is a dangling symbolic link")
     here = out.resolve()
-    for i in inputs:
-        ip = Path(i).resolve()
-        if ip == here or here in ip.parents:
-            raise TwinError(f"{flag}: {show(out)} holds the input {show(i)}; choose another folder")
+    inputs = tuple(inputs)
+    check_not_input(out, flag, inputs, holds=own is not None or bool(inputs))  # a folder replaced whole
     if own is not None and (out.name in ("", ".", "..") or here == Path.cwd().resolve() or here == here.parent):
         raise TwinError(f"{flag}: {show(path)!r} names the current or a parent folder, which this command would "
                         "replace whole; give a new folder name")
@@ -327,16 +417,52 @@ def atomic_write_bytes(path: str | Path, data: bytes) -> Path:
     p = Path(path)
     if not p.parent.exists():
         raise TwinError(f"{p}: directory {p.parent} does not exist")
+    check_not_input(p, show(p))  # the last guard: an input being read is never written over
     tmp = temp_path(p)
+    created = False
     try:
         try:
-            tmp.write_bytes(data)
+            fd = open_new(tmp)
+            created = True
+            with os.fdopen(fd, "wb") as fh:
+                fh.write(data)
+            check_not_link(p)
             os.replace(tmp, p)
         except OSError as err:
-            raise TwinError(f"{p}: cannot write ({_why(err)})") from None
+            # the file named is the one the user asked for, whichever step failed (not the temporary)
+            raise TwinError(f"{show(p)}: cannot write ({_why(err)})") from None
     finally:
-        tmp.unlink(missing_ok=True)
+        if created:
+            tmp.unlink(missing_ok=True)
     return p
+
+
+#: flags of a file the twin creates: never through a symbolic link, never over an existing file
+NEW_FILE_FLAGS = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
+
+
+def open_new(path: str | Path, mode: int = 0o644) -> int:
+    """A descriptor of a new file at ``path`` (a temporary): created here, never an existing file
+    and never the target of a symbolic link planted at that name (``O_CREAT | O_EXCL |
+    O_NOFOLLOW``). A leftover of this very process (a retried write) is removed first."""
+    try:
+        return os.open(path, NEW_FILE_FLAGS, mode)
+    except FileExistsError:
+        if stat.S_ISLNK(os.lstat(path).st_mode) or not stat.S_ISREG(os.lstat(path).st_mode):
+            raise
+        os.unlink(path)  # our own name (host and PID): an earlier attempt of this process
+        return os.open(path, NEW_FILE_FLAGS, mode)
+
+
+def check_not_link(path: str | Path) -> None:
+    """OSError (ELOOP) when ``path`` is a symbolic link: a file the twin owns is replaced by a rename,
+    which would replace the link itself; refusing keeps a link the user made (and its target) as it is."""
+    try:
+        st = os.lstat(path)
+    except FileNotFoundError:
+        return
+    if stat.S_ISLNK(st.st_mode):
+        raise OSError(errno.ELOOP, "it is a symbolic link; the twin does not write through links", str(path))
 
 
 def atomic_write_text(path: str | Path, text: str) -> Path:
@@ -346,7 +472,7 @@ def atomic_write_text(path: str | Path, text: str) -> Path:
 
 def atomic_write_json(path: str | Path, obj: Any) -> Path:
     """Pretty JSON, written atomically."""
-    return atomic_write_text(path, json.dumps(obj, indent=2, sort_keys=False, default=json_default) + "\n")
+    return atomic_write_text(path, json_text(obj) + "\n")
 
 
 def replace_dir(tmp_dir: Path, target: Path) -> Path:
@@ -410,9 +536,16 @@ class FolderLock:
 
         path = self.folder / self.NAME
         try:
-            fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
+            fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC | getattr(os, "O_NOFOLLOW", 0), 0o644)
         except OSError as err:
+            if err.errno == errno.ELOOP:  # a link planted as the lock: never followed (its target truncated)
+                raise TwinError(f"{self.flag}: {show(path)} is a symbolic link; the lock file is the twin's own: "
+                                "remove the link") from None
             raise TwinError(f"{self.flag}: cannot lock {show(self.folder)} ({_why(err)})") from None
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            os.close(fd)
+            raise TwinError(f"{self.flag}: {show(path)} is not a regular file; the lock file is the twin's own: "
+                            "remove it")
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError as err:

@@ -63,7 +63,7 @@ def _run_contact(args: argparse.Namespace, deprecated: bool = False) -> int:
     from twin.config import BenchConfig, load_config
     from twin.errors import ConfigError
     from twin.studies.contact_check import contact_check
-    from twin.util import atomic_write_text, check_output_file
+    from twin.util import atomic_write_text, check_output_file, json_text
 
     joints = tuple(j.strip().upper() for j in args.joints.split(",") if j.strip())
     if not joints or any(j not in ("B", "C") for j in joints):
@@ -74,7 +74,7 @@ def _run_contact(args: argparse.Namespace, deprecated: bool = False) -> int:
     if deprecated:
         print(DEPRECATION_NOTE, file=sys.stderr)
     report = contact_check(cfg, joints=joints, progress=not args.no_progress and sys.stderr.isatty())
-    atomic_write_text(out, json.dumps(report, indent=1) + "\n")
+    atomic_write_text(out, json_text(report, indent=1) + "\n")
     print("| case | m_eff min/median/max [kg] | restitution/0.02 | peak force/5 % | duration/10 % | static | capture |")
     print("|---|---|---:|---:|---:|---:|---|")
     for key, r in report["cases"].items():

@@ -127,16 +127,15 @@ def _cell(v):
 
 
 def _info(args: argparse.Namespace) -> int:
-    import json
-
     from twin.dataset.reader import describe, summary
-    from twin.util import atomic_write_json, check_output_file, json_default
+    from twin.util import atomic_write_json, check_output_file, json_text
 
     if args.show < 0:
         raise TwinError(f"--show: must be >= 0 (0 = all), got {args.show}")
-    js = check_output_file(args.json, "--json", ".json") if args.json not in (None, "-") else None
+    # the dataset folder is an input: --json inside it (its info.json, its stats.json) is refused
+    js = check_output_file(args.json, "--json", ".json", folders=(args.dir,)) if args.json not in (None, "-") else None
     if args.json == "-":
-        print(json.dumps(summary(args.dir), indent=2, default=json_default))
+        print(json_text(summary(args.dir)))  # strict JSON: a missing number is null, never NaN
         return 0
     print(describe(args.dir, show=args.show))
     if js is not None:

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import sys
 import time
 from dataclasses import dataclass, field
@@ -98,6 +99,8 @@ def prepare(spec: DatasetSpec, out_dir: str | Path) -> Prepared:
     runs = plan(spec)
     ident = identity(spec)
     out = check_output_dir(out_dir, "--out", need_parent=False)
+    if out.exists():
+        check_writable(out)
     info_path = out / "info.json"
     if out.exists() and any(e.name != FolderLock.NAME and not _TMP_RE.match(e.name) for e in out.iterdir()):
         if not info_path.is_file():
@@ -114,6 +117,8 @@ def prepare(spec: DatasetSpec, out_dir: str | Path) -> Prepared:
             raise DatasetError(f"--out: {out} holds a dataset of format {info.get('format')!r}"
                                + (f" (an older twin's; this one reads it but writes {FORMAT} only): generate into a "
                                   "new folder" if older else f", expected {FORMAT}: use another folder"))
+        if not isinstance(info.get("identity"), dict):
+            raise DatasetError(f"{info_path}: field 'identity' must be an object, got {info.get('identity', 'missing')!r}"[:400])
         if info.get("identity") != json.loads(json.dumps(ident)):
             diff = sorted(k for k in set(ident) | set(info.get("identity", {}))
                           if info.get("identity", {}).get(k) != json.loads(json.dumps(ident)).get(k))
@@ -421,12 +426,14 @@ def generate(spec: DatasetSpec, out_dir: str | Path, workers: int | None = None,
 def _generate_locked(p: Prepared, workers: int, scheduler: str | None, run_tasks, limit: int | None,
                      progress: bool) -> dict[str, Any]:
     out = p.out
-    _write_info(p, complete=False)  # first: a folder with info.json is this dataset's, whatever happens next
+    check_writable(out)  # before anything is written: a complete dataset is never marked incomplete in vain
+    todo = p.pending[:limit] if limit is not None else p.pending
+    if todo or not (out / "info.json").is_file():
+        _write_info(p, complete=False)  # first: a folder with info.json is this dataset's, whatever happens next
     (out / "data").mkdir(exist_ok=True)
     (out / "results").mkdir(exist_ok=True)
     for d in (out, out / "data", out / "results"):
         remove_stale_temps_in(d)  # leftovers of killed processes, whatever they were writing
-    todo = p.pending[:limit] if limit is not None else p.pending
     t_start = time.perf_counter()
     sim_total = sum(r.config.duration_s for r in todo)
     bar = _Progress(len(todo), sim_total, progress)
@@ -449,6 +456,35 @@ def _generate_locked(p: Prepared, workers: int, scheduler: str | None, run_tasks
                           "wall_s": time.perf_counter() - t_start, "workers": workers,
                           "scheduler": scheduler or default_scheduler(workers)}
     return info
+
+
+#: the files a generation writes in the dataset folder (beside data/ and results/)
+OWN_FILES = ("info.json", "runs.parquet", "stats.json")
+
+
+def check_writable(out: Path) -> None:
+    """Every place a generation writes in ``out`` can be written, checked before the first write: the
+    folders ``out``, ``data`` and ``results`` are folders (or absent) where a file can be created, and
+    ``info.json``, ``runs.parquet`` and ``stats.json`` are regular files (or absent), never links or
+    folders. One line naming the place otherwise."""
+    import stat as _stat
+
+    from twin.util import show
+
+    places = [(d, _stat.S_ISDIR, "is not a folder (a file or link where the dataset keeps its runs)")
+              for d in (out, out / "data", out / "results")]
+    places += [(out / n, _stat.S_ISREG, "is not a regular file (a link or folder where the dataset writes its own "
+                                        "file)") for n in OWN_FILES]
+    for path, kind_ok, what in places:
+        try:
+            mode = os.lstat(path).st_mode
+        except FileNotFoundError:
+            continue
+        if not kind_ok(mode):
+            raise DatasetError(f"--out: {show(path)} {what}; move it away")
+        # no probe file: a folder's modification time is the dataset's own (a refused run changes nothing)
+        if _stat.S_ISDIR(mode) and (not os.access(path, os.W_OK | os.X_OK) or os.statvfs(path).f_flag & os.ST_RDONLY):
+            raise DatasetError(f"--out: cannot write in {show(path)} (permission denied or a read-only file system)")
 
 
 def _target_of(tmp_name: str) -> str:

@@ -38,33 +38,26 @@ class Dataset:
         info_path = self.path / "info.json"
         if not info_path.is_file():
             raise DatasetError(f"{self.path}: not a dataset folder (no info.json)")
-        try:
-            self.info = json.loads(info_path.read_text())
-        except (OSError, ValueError) as err:
-            raise DatasetError(f"{info_path}: unreadable ({err})") from None
+        self.info = _read_json(info_path)
         if not isinstance(self.info, dict):
             raise DatasetError(f"{info_path}: must hold a JSON object, got {type(self.info).__name__}")
         if self.info.get("format") not in READABLE:
             raise DatasetError(f"{info_path}: format {self.info.get('format')!r}, this twin reads "
                                f"{', '.join(READABLE)} (a newer twin's dataset? update twin)")
+        check_info(self.info, info_path)
         runs = self.path / "runs.parquet"
         if not runs.is_file():
             raise DatasetError(f"{self.path}: no runs.parquet (generation never finished a call; run it again)")
         try:
             self.runs = pq.read_table(runs)
-        except (OSError, ValueError) as err:
-            raise DatasetError(f"{runs}: unreadable ({err})") from None
+        except Exception as err:  # noqa: BLE001 - pyarrow raises many kinds on a damaged file: one line
+            raise DatasetError(f"{runs}: unreadable ({_one_line(err)})") from None
+        check_manifest(self.runs, runs)
         stats = self.path / "stats.json"
-        try:
-            self.stats: dict[str, dict[str, float]] = json.loads(stats.read_text())["channels"] if stats.is_file() else {}
-        except (OSError, ValueError, KeyError, TypeError) as err:
-            raise DatasetError(f"{stats}: unreadable ({type(err).__name__}: {err}); run generate again to rewrite it") from None
-        chans = self.info.get("channels")
-        try:
-            self.channels = {c["name"]: c for c in chans}  # type: ignore[union-attr]
-            self.rate_hz = float(chans[0]["rate_hz"]) if chans else 0.0  # type: ignore[index]
-        except (TypeError, KeyError, ValueError, IndexError):
-            raise DatasetError(f"{info_path}: 'channels' must be a list of {{name, rate_hz, ...}} tables") from None
+        self.stats: dict[str, dict[str, float]] = check_stats(_read_json(stats), stats) if stats.is_file() else {}
+        chans = self.info["channels"]
+        self.channels = {c["name"]: c for c in chans}
+        self.rate_hz = float(chans[0]["rate_hz"]) if chans else 0.0
         #: key and label columns of the data files before the channels (none in twin-dataset/1)
         self.key_columns: list[str] = list(self.info.get("key_columns", []))
         self.label_columns: list[str] = list(self.info.get("label_columns", []))
@@ -138,6 +131,143 @@ class Dataset:
                     order = np.argsort(tt, kind="stable")
                     w = np.stack([np.interp(grid, tt[order], ch[order]) for ch in w])
                 yield w.astype(np.float32), {**labels, "start_s": skip_s + a / rate}
+
+
+# ---------------------------------------------------------------- schema of the dataset's own files
+# Every field the readers (open, info, verify, identify train/evaluate, view --run) rely on is checked
+# when a dataset is opened: a file that is well-formed JSON or Parquet but holds other fields, other
+# types or other values is refused in one line naming the file and the field, never a traceback later.
+
+#: required ``runs.parquet`` columns and their kind (string, float: any number, int: an integer)
+MANIFEST_COLUMNS = {"run_id": "string", "split": "string", "status": "string", "fault": "string",
+                    "clearance_b_mm": "float", "clearance_c_mm": "float", "point": "int", "duration_s": "float",
+                    "simulated_s": "float", "rows": "int", "bytes": "int", "sha256": "string", "reason": "string",
+                    "file": "string"}
+#: allowed values of the manifest's categorical columns
+MANIFEST_VALUES = {"split": ("train", "val", "test"), "status": ("ok", "failed", "pending"),
+                   "fault": ("none", "B", "C", "BC")}
+#: the channel dtypes a data file may hold
+CHANNEL_DTYPES = ("float32", "float64", "int32", "int64")
+
+
+def _one_line(err: BaseException) -> str:
+    return " ".join(f"{type(err).__name__}: {err}".split())[:300]
+
+
+def _read_json(path: Path) -> Any:
+    """A JSON file of the dataset (strict: NaN and infinities are not JSON), or one line naming it."""
+    def no_constant(name: str) -> Any:
+        raise ValueError(f"{name} is not JSON")
+
+    try:
+        return json.loads(path.read_bytes().decode("utf-8"), parse_constant=no_constant)
+    except (OSError, ValueError, RecursionError) as err:
+        raise DatasetError(f"{path}: unreadable ({_one_line(err)})") from None
+
+
+def _is_num(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def check_info(info: dict[str, Any], path: Path) -> None:
+    """The fields of ``info.json`` the readers use: their presence, types and values."""
+    def bad(field: str, want: str) -> DatasetError:
+        got = info.get(field, "missing") if "." not in field else "another value"
+        return DatasetError(f"{path}: field {field!r} must be {want}, got {got!r}"[:400])
+
+    if not isinstance(info.get("name"), str):
+        raise bad("name", "a string")
+    if not isinstance(info.get("complete"), bool):
+        raise bad("complete", "true or false")
+    runs = info.get("runs")
+    if not isinstance(runs, dict) or any(not (isinstance(runs.get(k), int) and not isinstance(runs.get(k), bool)
+                                              and runs[k] >= 0) for k in ("planned", "ok", "failed", "pending")):
+        raise bad("runs", "an object of counts planned, ok, failed, pending (integers >= 0)")
+    chans = info.get("channels")
+    if not isinstance(chans, list):
+        raise bad("channels", "a list of {name, unit, dtype, rate_hz} objects")
+    names = set()
+    for k, c in enumerate(chans):
+        where = f"channels[{k}]"
+        if not isinstance(c, dict):
+            raise DatasetError(f"{path}: field {where!r} must be an object {{name, unit, dtype, rate_hz}}")
+        for key, ok, want in (("name", lambda v: isinstance(v, str) and v, "a non-empty string"),
+                              ("unit", lambda v: isinstance(v, str), "a string"),
+                              ("dtype", lambda v: v in CHANNEL_DTYPES, f"one of {', '.join(CHANNEL_DTYPES)}"),
+                              ("rate_hz", lambda v: _is_num(v) and v > 0, "a positive number")):
+            if not ok(c.get(key)):
+                raise DatasetError(f"{path}: field '{where}.{key}' must be {want}, got {c.get(key, 'missing')!r}"[:400])
+        if c["name"] in names:
+            raise DatasetError(f"{path}: field '{where}.name' repeats the channel {c['name']!r}")
+        names.add(c["name"])
+        if c["rate_hz"] != chans[0]["rate_hz"]:
+            raise DatasetError(f"{path}: field '{where}.rate_hz' differs from the first channel's "
+                               f"({c['rate_hz']!r} against {chans[0]['rate_hz']!r}); a dataset has one rate")
+    for field in ("key_columns", "label_columns"):
+        v = info.get(field, [])
+        if not isinstance(v, list) or not all(isinstance(x, str) and x for x in v):
+            raise bad(field, "a list of column names")
+    if info.get("key_columns") and list(info["key_columns"]) != ["run_id", "t"]:
+        raise bad("key_columns", '["run_id", "t"]')
+    cpr = info.get("encoder_counts_per_rev")
+    if cpr is not None and not (_is_num(cpr) and cpr > 0):
+        raise bad("encoder_counts_per_rev", "a positive number or null")
+    ident = info.get("identity")
+    if not isinstance(ident, dict) or not isinstance(ident.get("engine"), str):
+        raise bad("identity", "an object naming the dataset's engine")
+
+
+def check_manifest(table: Any, path: Path) -> None:
+    """The columns of ``runs.parquet`` the readers use (:data:`MANIFEST_COLUMNS`), their types, no
+    missing values where one is needed, the categorical values, unique run ids."""
+    import pyarrow as pa
+    import pyarrow.compute as pc
+
+    for name, kind in MANIFEST_COLUMNS.items():
+        if name not in table.column_names:
+            raise DatasetError(f"{path}: no column {name!r} (a manifest has {', '.join(MANIFEST_COLUMNS)})")
+        t = table.schema.field(name).type
+        ok = {"string": pa.types.is_string(t) or pa.types.is_large_string(t),
+              "float": pa.types.is_floating(t) or pa.types.is_integer(t),
+              "int": pa.types.is_integer(t)}[kind]
+        if not ok:
+            raise DatasetError(f"{path}: column {name!r} is {t}, must be {kind}")
+        col = table.column(name)
+        if col.null_count and name not in ("reason", "file", "sha256"):
+            raise DatasetError(f"{path}: column {name!r} has {col.null_count} missing values")
+        if kind == "float" and len(col):
+            x = col.to_numpy(zero_copy_only=False).astype(np.float64)
+            if not np.all(np.isfinite(x)) or np.any(x < 0):
+                raise DatasetError(f"{path}: column {name!r} must hold finite numbers >= 0")
+        if kind == "int" and len(col) and pc.min(col).as_py() < 0:
+            raise DatasetError(f"{path}: column {name!r} must hold integers >= 0")
+    for name, allowed in MANIFEST_VALUES.items():
+        odd = sorted(set(table.column(name).to_pylist()) - set(allowed))
+        if odd:
+            raise DatasetError(f"{path}: column {name!r} holds {odd[0]!r}; allowed: {', '.join(allowed)}"[:400])
+    ids = table.column("run_id").to_pylist()
+    if len(set(ids)) != len(ids):
+        raise DatasetError(f"{path}: column 'run_id' repeats a run id")
+    bad_id = next((i for i in ids if not i or "/" in i or "\\" in i or i in (".", "..") or "\x00" in i), None)
+    if bad_id is not None:
+        raise DatasetError(f"{path}: column 'run_id' holds {bad_id!r}, not a run id (a file name in data/)")
+    ok_rows = [r for r in zip(table.column("status").to_pylist(), table.column("sha256").to_pylist(),
+                              table.column("file").to_pylist()) if r[0] == "ok"]
+    if any(not isinstance(sha, str) or not isinstance(f, str) for _, sha, f in ok_rows):
+        raise DatasetError(f"{path}: columns 'sha256' and 'file' must be given for every ok run")
+
+
+def check_stats(obj: Any, path: Path) -> dict[str, dict[str, float]]:
+    """``stats.json``: ``{"channels": {NAME: {"mean": number, "std": number >= 0, ...}}}``."""
+    chans = obj.get("channels") if isinstance(obj, dict) else None
+    if not isinstance(chans, dict):
+        raise DatasetError(f"{path}: field 'channels' must be an object of per-channel statistics; run generate "
+                           "again to rewrite it")
+    for name, st in chans.items():
+        if not isinstance(st, dict) or not _is_num(st.get("mean")) or not (_is_num(st.get("std")) and st["std"] >= 0):
+            raise DatasetError(f"{path}: field 'channels.{name}' must hold a finite mean and std >= 0; run generate "
+                               "again to rewrite it"[:400])
+    return chans
 
 
 def revolution_edges(turns: np.ndarray) -> np.ndarray:

@@ -39,7 +39,7 @@ import numpy as np
 
 from twin.errors import RecordingError, TwinError
 from twin.run import Channel, Run
-from twin.util import remove_stale_temps, temp_path
+from twin.util import check_not_link, open_new, remove_stale_temps, temp_path
 
 META_KEY = b"twin.dataset"
 #: the key columns of every data file (format twin-dataset/2), before the labels and channels
@@ -169,7 +169,8 @@ class ParquetRunWriter:
         dictionary = ["run_id"] + [lab.name for lab in self.labels]
         self._labels = [pa.scalar(self.run_id, pa.string())] + [pa.scalar(lab.value, lab.dtype) for lab in self.labels]
         try:
-            self._w = pq.ParquetWriter(self.tmp, schema, compression="zstd", compression_level=3,
+            self._fh = os.fdopen(open_new(self.tmp), "wb")  # never through a link planted at the name
+            self._w = pq.ParquetWriter(self._fh, schema, compression="zstd", compression_level=3,
                                        use_dictionary=dictionary, column_encoding=encoding, write_statistics=False)
         except OSError as err:
             raise WriteError(f"{self.path}: cannot write ({err})") from None
@@ -208,6 +209,8 @@ class ParquetRunWriter:
             raise TwinError(f"{self.path}: the run produced no samples")
         try:
             self._w.close()
+            self._fh.close()
+            check_not_link(self.path)
             os.replace(self.tmp, self.path)
         except OSError as err:
             self.abort()
@@ -222,6 +225,8 @@ class ParquetRunWriter:
         try:
             if self._w is not None:
                 self._w.close()
+            if getattr(self, "_fh", None) is not None:
+                self._fh.close()
         except Exception:  # noqa: BLE001 - best effort on the error path
             pass
         self.tmp.unlink(missing_ok=True)
@@ -237,7 +242,34 @@ def read_meta(path: str | Path) -> dict[str, Any]:
         raise RecordingError(f"{path}: not a readable Parquet file ({err})") from None
     if META_KEY not in md:
         raise RecordingError(f"{path}: no twin.dataset metadata (not a dataset run file)")
-    return json.loads(md[META_KEY])
+    try:
+        meta = json.loads(md[META_KEY])
+    except (ValueError, RecursionError) as err:
+        raise RecordingError(f"{path}: twin.dataset metadata is not JSON ({' '.join(str(err).split())})") from None
+    return check_meta(meta, path)
+
+
+def check_meta(meta: Any, path: str | Path) -> dict[str, Any]:
+    """The fields of a run file's ``twin.dataset`` metadata the readers use, or one line naming the
+    file and the field."""
+    import math
+
+    def num(v: Any) -> bool:
+        return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+    if not isinstance(meta, dict):
+        raise RecordingError(f"{path}: twin.dataset metadata must be a JSON object, got {type(meta).__name__}")
+    for field, ok, want in (("run_id", lambda v: isinstance(v, str), "a string"),
+                            ("rate_hz", lambda v: num(v) and v > 0, "a positive number"),
+                            ("t0", lambda v: v is None or num(v), "a number"),
+                            ("units", lambda v: isinstance(v, dict) and all(isinstance(x, str) for x in v.values()),
+                             "an object of unit strings"),
+                            ("groups", lambda v: v is None or isinstance(v, dict), "an object"),
+                            ("config_toml", lambda v: v is None or isinstance(v, str), "a TOML text")):
+        if not ok(meta.get(field)):
+            raise RecordingError(f"{path}: twin.dataset metadata field {field!r} must be {want}, "
+                                 f"got {meta.get(field, 'missing')!r}"[:400])
+    return meta
 
 
 def read_columns(path: str | Path, columns: Iterable[str] | None = None, start: int = 0,
@@ -266,7 +298,10 @@ def read_columns(path: str | Path, columns: Iterable[str] | None = None, start: 
             groups.append(g)
             first = offset if first is None else first
         offset += m
-    table = f.read_row_groups(groups, columns=names)
+    try:
+        table = f.read_row_groups(groups, columns=names)
+    except Exception as err:  # noqa: BLE001 - a damaged page: pyarrow raises many kinds, one line here
+        raise RecordingError(f"{path}: damaged ({' '.join(str(err).split())[:200]})") from None
     return {c: table.column(c).to_numpy()[start - first:stop - first] for c in names}
 
 
@@ -287,7 +322,7 @@ def read_run(path: str | Path, columns: Iterable[str] | None = None) -> Run:
     meta = read_meta(path)
     cols = read_columns(path, channel_names(path, meta) if columns is None else columns)
     # channels a run lacks are stored as NaN columns (the dataset's union): left out here
-    chans = {k: Channel(k, meta["units"].get(k, ""), meta["groups"].get(k, "extra"), v) for k, v in cols.items()
+    chans = {k: Channel(k, meta["units"].get(k, ""), (meta.get("groups") or {}).get(k, "extra"), v) for k, v in cols.items()
              if not (v.dtype.kind == "f" and v.size and np.isnan(v[0]) and np.all(np.isnan(v)))}
     cfg = config_from_toml(meta["config_toml"]) if meta.get("config_toml") else None
     return Run(float(meta.get("t0", 0.0)), float(meta["rate_hz"]), chans, cfg, {"run_id": meta["run_id"]})

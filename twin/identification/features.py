@@ -123,10 +123,17 @@ RIPPLE_ALLOWANCE = 0.05
 MAX_SPEED_TOL = 0.30
 
 
+#: shortest hop between the ends of successive windows [turns]: at most 16 windows end per crank turn, so the
+#: feature matrix of a recording is bounded by its turns (a model file declaring a hop of 1e-300 turn once made
+#: every sample end a window: gigabytes of features for a 3 s recording, from a file of a few kilobytes)
+MIN_HOP_REVS = 1.0 / 16
+
+
 def hop_ok(hop_revs: object) -> bool:
     """Whether ``hop_revs`` is a hop between the ends of successive windows [turns] :func:`steady_windows` takes:
-    a number in (0, REVS_PER_WINDOW] (REVS_PER_WINDOW: back to back)."""
-    return isinstance(hop_revs, (int, float)) and 0.0 < hop_revs <= REVS_PER_WINDOW
+    a number in [MIN_HOP_REVS, REVS_PER_WINDOW] (REVS_PER_WINDOW: back to back)."""
+    return isinstance(hop_revs, (int, float)) and not isinstance(hop_revs, bool) and \
+        MIN_HOP_REVS <= hop_revs <= REVS_PER_WINDOW
 
 
 def steady_windows(counts: np.ndarray, rate_hz: float, counts_per_rev: float, skip_s: float = 0.0,
@@ -143,7 +150,7 @@ def steady_windows(counts: np.ndarray, rate_hz: float, counts_per_rev: float, sk
     the next one ends (overlapping windows). At least REVS_PER_WINDOW steady turns are needed.
     """
     if not hop_ok(hop_revs):
-        raise IdentifyError(f"hop_revs: {hop_revs!r}; allowed: 0 < hop_revs <= {REVS_PER_WINDOW}")
+        raise IdentifyError(f"hop_revs: {hop_revs!r}; allowed: {MIN_HOP_REVS} <= hop_revs <= {REVS_PER_WINDOW}")
     c = np.asarray(counts, dtype=np.float64)
     if c.size < 4 or not np.all(np.isfinite(c)):
         raise IdentifyError("the encoder counts are missing, too short or not finite")

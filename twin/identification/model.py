@@ -114,7 +114,7 @@ import numpy as np
 
 from twin.config import CATALOGUE_DIAMETRAL_MM, Drive
 from twin.identification.features import (FEATURE_VERSION, REVS_PER_WINDOW, IdentifyError, feature_names, features,
-                                          hop_ok)
+                                          hop_ok, MIN_HOP_REVS)
 from twin.identification.ranges import feature_reference, out_of_range, recording_measures, training_ranges, widen
 from twin.identification.trees import ModelError, TreeEnsemble, from_sklearn
 
@@ -240,7 +240,8 @@ class ClearanceModel:
                 raise ValueError("interval.size_band_mm malformed")
             _check_held_out(trained_on.get("held_out_size_accuracy"))
             if not hop_ok(trained_on.get("answer_hop_revs", REVS_PER_WINDOW)):
-                raise ValueError(f"answer_hop_revs must lie in (0, {REVS_PER_WINDOW}]")
+                raise ValueError(f"answer_hop_revs must lie in [{MIN_HOP_REVS}, {REVS_PER_WINDOW}] turns (at most "
+                                 f"{round(1 / MIN_HOP_REVS)} windows per turn)")
             try:
                 fault_split_joints(trained_on.get("interval", {}).get("fault_split", False))
             except ValueError:
@@ -802,7 +803,7 @@ def train(dataset_dir: str | Path | list[str | Path], splits: tuple[str, ...] = 
     if interval_folds not in INTERVAL_FOLDS:
         raise ModelError(f"interval_folds: {interval_folds!r}; allowed: {', '.join(INTERVAL_FOLDS)}")
     if not hop_ok(answer_hop_revs):
-        raise ModelError(f"answer_hop_revs: {answer_hop_revs!r}; allowed: 0 < answer_hop_revs <= {REVS_PER_WINDOW}")
+        raise ModelError(f"answer_hop_revs: {answer_hop_revs!r}; allowed: {MIN_HOP_REVS} <= answer_hop_revs <= {REVS_PER_WINDOW}")
     if size_regressor not in SIZE_REGRESSORS:
         raise ModelError(f"size_regressor: {size_regressor!r}; allowed: {', '.join(SIZE_REGRESSORS)}")
     from sklearn.ensemble import HistGradientBoostingClassifier, HistGradientBoostingRegressor

@@ -49,6 +49,8 @@ import math
 from dataclasses import dataclass, field
 
 import mujoco
+
+import twin.mujoco_log  # noqa: F401 - MuJoCo's warnings kept off the terminal and the folder
 import numpy as np
 
 from twin import names as mjcf_names

@@ -15,6 +15,8 @@ import os
 
 import mujoco
 
+import twin.mujoco_log  # noqa: F401 - MuJoCo's warnings kept off the terminal and the folder
+
 from twin.errors import EngineUnavailableError
 from twin import names
 

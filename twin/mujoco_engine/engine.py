@@ -31,17 +31,7 @@ from twin import names
 from twin.config import BenchConfig
 from twin.errors import SimulationError
 
-#: MuJoCo's own warnings of this process (its default handler prints them to stdout and appends them
-#: to MUJOCO_LOG.TXT in the working folder): kept here, the last few, for the divergence message
-MUJOCO_WARNINGS: list[str] = []
-
-
-def _on_mujoco_warning(message: str) -> None:
-    MUJOCO_WARNINGS.append(" ".join(str(message).split()))
-    del MUJOCO_WARNINGS[:-5]
-
-
-mujoco.set_mju_user_warning(_on_mujoco_warning)
+from twin.mujoco_log import MUJOCO_WARNINGS  # noqa: E402 - MuJoCo's warnings: kept, never printed
 
 #: largest speed of any degree of freedom [m/s or rad/s] before a run counts as exploding: 100 times
 #: the fastest crank of any preset (6000 rpm = 628 rad/s) and far beyond any body speed of the bench

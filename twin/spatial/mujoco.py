@@ -27,6 +27,8 @@ import time
 from typing import Any
 
 import mujoco
+
+import twin.mujoco_log  # noqa: F401 - MuJoCo's warnings kept off the terminal and the folder
 import numpy as np
 from mujoco import rollout
 

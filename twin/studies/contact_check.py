@@ -32,6 +32,8 @@ from dataclasses import dataclass
 from typing import Iterable
 
 import mujoco
+
+import twin.mujoco_log  # noqa: F401 - MuJoCo's warnings kept off the terminal and the folder
 import numpy as np
 
 from twin.config import CATALOGUE_DIAMETRAL_MM, BenchConfig, with_overrides

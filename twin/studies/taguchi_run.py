@@ -99,6 +99,55 @@ def load_taguchi(path: str | Path) -> TaguchiSpec:
     return spec
 
 
+def preflight(spec: TaguchiSpec) -> list[Any]:
+    """Everything about ``spec`` that can be known without simulating, checked before the first run (one
+    line naming the key otherwise): every analysis factor holds a finite number in every run of the design and
+    at least two levels, the interactions name pairs of analysis factors, the design is an orthogonal array for
+    those terms (the analysis's own checks, on the planned levels), the stored channels hold what every response
+    reads (the group ``slider_accel`` for the slider responses, ``joints`` and a clearance at the joint for the
+    forces). Returns the planned runs."""
+    from twin.dataset.design import plan
+    from twin.studies.taguchi import TableError, anova, level_index, parse_interactions
+
+    runs = plan(spec.dataset)
+    names = list(spec.factors)
+    cols = []
+    for k, v in spec.factors.items():
+        vals = [r.factors.get(v) for r in runs]
+        odd = next((x for x in vals if isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x)),
+                   None) if vals else None
+        if odd is not None or not vals:
+            raise SpecError(f"taguchi.factors.{k}", f"{v!r} must hold a finite number in every run of the design, "
+                                                   f"got {odd!r}")
+        try:
+            cols.append(level_index(vals, k)[0])
+        except TableError as err:
+            raise SpecError(f"taguchi.factors.{k}", str(err).split(": ", 1)[-1]) from None
+    try:
+        inter = parse_interactions(",".join(spec.interactions), names)
+    except TableError as err:
+        raise SpecError("taguchi.interactions", str(err).split(": ", 1)[-1]) from None
+    try:
+        anova(np.column_stack(cols), np.arange(len(runs), dtype=float), names, inter)
+    except TableError as err:
+        raise SpecError("taguchi.factors", str(err).split(": ", 1)[-1]) from None
+    truth = set(spec.dataset.outputs.truth)
+    for resp in spec.responses:
+        if resp.endswith("slider_accel") and "slider_accel" not in truth:
+            raise SpecError("taguchi.responses", f"{resp} needs the channel group slider_accel in outputs.truth")
+        if resp.startswith("max_force"):
+            if "joints" not in truth:
+                raise SpecError("taguchi.responses", f"{resp} needs the channel group joints in outputs.truth")
+            joint = resp[-1] if resp != "max_force" else None
+            bare = next((r for r in runs if (joint not in r.config.joints.clearance_joints if joint
+                                             else not r.config.joints.clearance_joints)), None)
+            if bare is not None:
+                raise SpecError("taguchi.responses", f"{resp} needs a clearance at "
+                                f"{'joint ' + joint if joint else 'some joint'} in every run; run {bare.index} "
+                                f"({bare.factors}) has none"[:400])
+    return runs
+
+
 def run_responses(path: Path, rate_hz: float, settle_s: float, names: tuple[str, ...]) -> dict[str, float]:
     """The responses of one stored run (``data/<run_id>.parquet``) over t >= settle_s."""
     import pyarrow.parquet as pq
@@ -183,9 +232,13 @@ def _run(args: Any) -> int:
     from twin.util import atomic_write_text, check_output_dir
 
     from twin.commands.inputs import spec as spec_arg
+    from twin.util import resolve_workers
 
     spec = load_taguchi(spec_arg(args.spec))
+    preflight(spec)  # every check that needs no simulation, before the first one
+    resolve_workers(args.workers)
     out = check_output_dir(args.out)
+    check_output_dir(out / "dataset", "--out", need_parent=False)
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     rows = simulate(spec, out / "dataset", args.workers, not args.no_progress and sys.stderr.isatty())

@@ -43,7 +43,7 @@ import rerun as rr
 
 from twin.config import ACCELEROMETERS, JOINTS, BenchConfig
 from twin.errors import TwinError
-from twin.util import remove_stale_temps, temp_path
+from twin.util import check_not_link, remove_stale_temps, temp_path
 from twin.run import Channel, Run
 from twin.viz import blueprint as bp
 from twin.viz import scene
@@ -365,7 +365,14 @@ class RerunWriter:
             self._closed = True
             if not self._tmp.is_file() or self._tmp.stat().st_size == 0:
                 raise TwinError(f"{self.path}: rerun wrote no data")
-            os.replace(self._tmp, self.path)
+            try:
+                check_not_link(self.path)
+                os.replace(self._tmp, self.path)
+            except OSError as err:
+                raise TwinError(f"{self.path}: cannot write ({err.strerror})") from None
+        except RuntimeError as err:  # rerun's file writer stopped (a full disk): name the file, one line
+            self.abort()
+            raise TwinError(f"{self.path}: cannot write (rerun: {' '.join(str(err).split())[:200]})") from None
         except BaseException:
             self.abort()
             raise
