@@ -177,11 +177,16 @@ def test_missing_input_and_missing_output_folder(run_file, tmp_path, capsys):
     assert main(["plot", str(path), "--out", str(tmp_path / "missing" / "a.png")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--out: directory" in err and "does not exist" in err
-    assert main(["plot", str(tmp_path), "--out", str(tmp_path / "a.png")]) == 2
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    assert main(["plot", str(empty), "--out", str(tmp_path / "a.png")]) == 2
     assert "not a replay folder" in capsys.readouterr().err
+    # an output inside the folder it reads is refused before any work (the output rule)
+    assert main(["plot", str(empty), "--out", str(empty / "a.png")]) == 2
+    assert "lies inside the input" in capsys.readouterr().err
     assert main(["plot", str(path), "--out", str(tmp_path / "a.jpg")]) == 2
     assert "--out: must end in .png" in capsys.readouterr().err
-    assert list(tmp_path.iterdir()) == []
+    assert list(tmp_path.iterdir()) == [empty] and list(empty.iterdir()) == []
 
 
 def test_a_failed_write_leaves_the_old_figure(run_file, tmp_path, monkeypatch):
