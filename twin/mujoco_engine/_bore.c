@@ -101,7 +101,10 @@
  * (v_pin(p) - v_bore(p)) and the tangential slip along t = axis x n at the step's state, and applies
  * F = law(delta, delta', v_imp) (law_terms, the row's law; v_imp kept in the same userdata slot) and
  * the friction mu(|v_t|) F (friction_coefficient) as equal and opposite forces at p on the two
- * bodies (mj_applyFT into qfrc_passive). Both are explicit at the step's start: with MuJoCo's
+ * bodies (mj_applyFT into qfrc_passive). Where the law's damping c exceeds m_hat / h (m_hat the
+ * pair's effective mass along n, from M's factorization: a resting contact at the impact-speed
+ * floor under a large load), an explicit damper would overshoot, and diverge beyond 2 m_hat / h:
+ * there c = m_hat / h, the dead-beat damping the row's theta-method also applies. Both are explicit at the step's start: with MuJoCo's
  * semi-implicit Euler update this is exactly the reference engine's symplectic Euler of the same
  * forces, with no collision, row, or solver cost. A position-stage user sensor of dimension 4 on the
  * bore (the builder's replacement of the contact sensor) gets [1, F, 0, 0] while delta > 0.
@@ -242,6 +245,8 @@ static mjfGeneric g_prev_passive = NULL;
 static mjfSensor g_prev_sensor = NULL;
 typedef void (*applyFT_t)(const mjModel*, mjData*, const mjtNum*, const mjtNum*, const mjtNum*, int, mjtNum*);
 static applyFT_t g_applyFT = NULL;
+typedef void (*solveM_t)(const mjModel*, mjData*, mjtNum*, const mjtNum*, int);
+static solveM_t g_solveM = NULL;
 
 static int is_bore(const mjModel* m, int g) {
   return m->nuser_geom >= BORE_NUSER && m->geom_user[g * m->nuser_geom + BORE_MARKER] == BORE_MAGIC;
@@ -624,6 +629,23 @@ static void passive_bore(const mjModel* m, mjData* d) {
   drivetrain_passive(m, d);  /* last: it books the other passive forces of the step */
 }
 
+/* the inverse effective mass of the pin/bore pair along n at p [1/kg]: w^T M^-1 w with w =
+ * (J_pin(p) - J_bore(p))^T n (mj_applyFT builds w, mj_solveM uses the factorization of M that the
+ * position stage made); 0 when the functions are missing or nv exceeds the local buffer */
+enum { FORCE_NV_MAX = 64 };
+static mjtNum inverse_mass(const mjModel* m, mjData* d, int bp, int bb, const mjtNum n[3], const mjtNum p[3]) {
+  if (!g_applyFT || !g_solveM || m->nv > FORCE_NV_MAX) return 0;
+  mjtNum w[FORCE_NV_MAX], x[FORCE_NV_MAX];
+  for (int i = 0; i < m->nv; i++) w[i] = 0;
+  const mjtNum nm[3] = {-n[0], -n[1], -n[2]};
+  g_applyFT(m, d, n, NULL, p, bp, w);
+  g_applyFT(m, d, nm, NULL, p, bb, w);
+  g_solveM(m, d, x, w, 1);
+  mjtNum a = 0;
+  for (int i = 0; i < m->nv; i++) a += w[i] * x[i];
+  return a;
+}
+
 /* contact_source = "force" (module docstring, "Force"): the law and the friction of bore gb as
  * passive forces between its pin (geom user[BORE_FORCE_PIN]) and the bore, no contact row */
 static void force_bore(const mjModel* m, mjData* d, int gb, const mjtNum* user, int sensors) {
@@ -663,6 +685,15 @@ static void force_bore(const mjModel* m, mjData* d, int gb, const mjtNum* user, 
   if (!(vimp > 0)) return;
   mjtNum fe, c;
   law_terms(user, law, delta, rate, vimp, &fe, &c);
+  if (c > 0) {
+    /* an explicit damper overshoots where c h exceeds the pair's effective mass m_hat (and
+     * diverges beyond 2 m_hat): the resting contact's damping at the impact-speed floor. There
+     * the damping is the dead-beat m_hat / h, which the contact row's theta-method also reaches
+     * (module docstring, "How the solver is made to apply it") */
+    const mjtNum h = m->opt.timestep;
+    const mjtNum ainv = inverse_mass(m, d, bp, bb, n, p);
+    if (ainv > 0 && c * h * ainv > 1) c = 1 / (h * ainv);
+  }
   mjtNum fn = fe + c * rate;
   if (fn < 0) fn = 0;                            /* the law never pulls */
   const mjtNum t[3] = {a[1] * n[2] - a[2] * n[1], a[2] * n[0] - a[0] * n[2], a[0] * n[1] - a[1] * n[0]};
@@ -735,8 +766,9 @@ static void sensor_friction(const mjModel* m, mjData* d, int stage) {
 
 /* install(table, passive_cb, sensor_cb, mj_applyFT) addresses -> True if installed now */
 static PyObject* py_install(PyObject* self, PyObject* args) {
-  unsigned long long table_addr, passive_addr, sensor_addr, applyft_addr;
-  if (!PyArg_ParseTuple(args, "KKKK", &table_addr, &passive_addr, &sensor_addr, &applyft_addr)) return NULL;
+  unsigned long long table_addr, passive_addr, sensor_addr, applyft_addr, solvem_addr = 0;
+  if (!PyArg_ParseTuple(args, "KKKK|K", &table_addr, &passive_addr, &sensor_addr, &applyft_addr, &solvem_addr))
+    return NULL;
   if (!table_addr || !passive_addr || !sensor_addr || !applyft_addr) {
     PyErr_SetString(PyExc_ValueError, "null address");
     return NULL;
@@ -746,6 +778,7 @@ static PyObject* py_install(PyObject* self, PyObject* args) {
   mjfSensor* sensor = (mjfSensor*)(uintptr_t)sensor_addr;
   int changed = 0;
   g_applyFT = (applyFT_t)(uintptr_t)applyft_addr;
+  if (solvem_addr) g_solveM = (solveM_t)(uintptr_t)solvem_addr;
   /* (re)install each hook that is not ours, chaining what was there */
   if (table[mjGEOM_CYLINDER][mjGEOM_CYLINDER] != collide_pin_bore) {
     g_previous = table[mjGEOM_CYLINDER][mjGEOM_CYLINDER];
@@ -844,7 +877,7 @@ static PyObject* py_drivetrain_layout(PyObject* self, PyObject* args) {
 }
 
 static PyMethodDef methods[] = {
-  {"install", py_install, METH_VARARGS, "install(table, passive, sensor, applyFT): addresses of mjCOLLISIONFUNC, mjcb_passive, mjcb_sensor and the function mj_applyFT."},
+  {"install", py_install, METH_VARARGS, "install(table, passive, sensor, applyFT[, solveM]): addresses of mjCOLLISIONFUNC, mjcb_passive, mjcb_sensor and the functions mj_applyFT and mj_solveM."},
   {"header_version", py_header_version, METH_NOARGS, "mjVERSION_HEADER the module was compiled against."},
   {"bore_magic", py_bore_magic, METH_NOARGS, "geom user data marker value that marks a bore."},
   {"userdata_fields", py_userdata_fields, METH_NOARGS, "names of the bore geom's user data fields, in order (enum bore_user)."},

@@ -305,6 +305,22 @@ def contact_setting(cfg: BenchConfig, joint: str, a_hat: float, native: bool = T
     return ContactSetting((term,), mu, "first-guess")
 
 
+def as_passive_force(spec: mujoco.MjSpec, pair: mujoco.MjsPair, bore: mujoco.MjsGeom, pin_id: int,
+                     sensor: str | None) -> None:
+    """Turn a native-law pin/bore ``pair`` into ``mujoco.contact_source = "force"``: the pair is
+    deleted (no collision, no contact row), the bore's ``force_pin`` user data field names the
+    pin's geom id ``pin_id`` (geom ids do not change when pairs and sensors do), and the contact
+    sensor ``sensor`` (if the spec has it) becomes a position-stage user sensor of dimension 4 on
+    the bore that the native module fills with [found, normal force, 0, 0] (``_bore.c``, "Force")."""
+    spec.delete(pair)
+    bore.userdata = mjcf_names.replace_bore_userdata(list(bore.userdata), force_pin=float(pin_id))
+    if sensor is not None and spec.sensor(sensor) is not None:
+        spec.delete(spec.sensor(sensor))
+        spec.add_sensor(name=sensor, type=mujoco.mjtSensor.mjSENS_USER, objtype=mujoco.mjtObj.mjOBJ_GEOM,
+                        objname=bore.name, dim=4, needstage=mujoco.mjtStage.mjSTAGE_POS,
+                        datatype=mujoco.mjtDataType.mjDATATYPE_REAL)
+
+
 # --------------------------------------------------------------------------- builder
 def _set_inertial(body: mujoco.MjsBody, mass: float, ipos, izz: float) -> None:
     body.explicitinertial = True
@@ -629,16 +645,8 @@ def build(cfg: BenchConfig) -> tuple[mujoco.MjSpec, mujoco.MjModel, BuildInfo]:
                 bush = spec.geom(mjcf_names.bushing(jt))
                 bush.userdata = mjcf_names.replace_bore_userdata(list(bush.userdata), **setting.law.userdata(slot))
             if force:
-                spec.delete(p)
-                bush = spec.geom(mjcf_names.bushing(jt))
-                pin_id = int(model.geom(mjcf_names.pin(jt)).id)  # geom ids do not change with pairs and sensors
-                bush.userdata = mjcf_names.replace_bore_userdata(list(bush.userdata), force_pin=float(pin_id))
-                if spec.sensor(mjcf_names.sensor_contact(jt)) is not None:
-                    spec.delete(spec.sensor(mjcf_names.sensor_contact(jt)))
-                    spec.add_sensor(name=mjcf_names.sensor_contact(jt), type=mujoco.mjtSensor.mjSENS_USER,
-                                    objtype=mujoco.mjtObj.mjOBJ_GEOM, objname=mjcf_names.bushing(jt), dim=4,
-                                    needstage=mujoco.mjtStage.mjSTAGE_POS,
-                                    datatype=mujoco.mjtDataType.mjDATATYPE_REAL)
+                as_passive_force(spec, p, spec.geom(mjcf_names.bushing(jt)),
+                                 int(model.geom(mjcf_names.pin(jt)).id), mjcf_names.sensor_contact(jt))
         info.contacts[jt] = setting
         info.a_hat[jt] = a_hat
     info.sensors = [x.name for x in spec.sensors]
