@@ -117,6 +117,8 @@ class MujocoSettings:
         _choice(self.friction, "friction", ("native", "cone"))
         _choice(self.contact_source, "contact_source", ("law", "force", "first-guess"))
         _choice(self.guide_friction, "guide_friction", ("native", "frictionloss"))
+        _check(self.contact_source != "force" or self.integrator != "RK4", "integrator",
+               "contact_source = \"force\" needs one force evaluation per step: Euler, implicitfast or implicit, not RK4")
         _check(isinstance(self.impact_damping_gain, (int, float)) and 0.1 <= self.impact_damping_gain <= 10,
                "impact_damping_gain", f"must lie in [0.1, 10], got {self.impact_damping_gain!r}")
         _check(self.bushing == "bore" or self.friction == "cone" or self.bushing == "tendon", "friction",

@@ -614,9 +614,10 @@ def build(cfg: BenchConfig) -> tuple[mujoco.MjSpec, mujoco.MjModel, BuildInfo]:
                 spec.delete(spec.sensor(mjcf_names.sensor_friction(jt)))
     model = _compile(spec, cfg)
     native = native_law_applies(cfg)
-    if native:
-        spec.nuserdata = len(cfg.joints.clearance_joints)  # one slot per joint: v_imp of its contact event
     force = native and ms.contact_source == "force"
+    per_joint = 2 if force else 1  # force: v_imp and the previous step's normal velocity (_bore.c, "Force")
+    if native:
+        spec.nuserdata = per_joint * len(cfg.joints.clearance_joints)  # v_imp of each joint's contact event
     if force:
         # the law and friction as passive forces (_bore.c, "Force"): no pair, no collision at all
         # (the guide clearance is a passive force too), the contact sensor a user sensor the
@@ -643,7 +644,8 @@ def build(cfg: BenchConfig) -> tuple[mujoco.MjSpec, mujoco.MjModel, BuildInfo]:
                 spec.sensor(mjcf_names.sensor_contact(jt)).intprm = [3, 0, 1]  # [found, force], one slot
             if setting.law is not None:
                 bush = spec.geom(mjcf_names.bushing(jt))
-                bush.userdata = mjcf_names.replace_bore_userdata(list(bush.userdata), **setting.law.userdata(slot))
+                bush.userdata = mjcf_names.replace_bore_userdata(list(bush.userdata),
+                                                                 **setting.law.userdata(per_joint * slot))
             if force:
                 as_passive_force(spec, p, spec.geom(mjcf_names.bushing(jt)),
                                  int(model.geom(mjcf_names.pin(jt)).id), mjcf_names.sensor_contact(jt))

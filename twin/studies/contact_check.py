@@ -94,6 +94,7 @@ def probe_model(cfg: BenchConfig, joint: str, m_eff: float, preload_n: float = 0
     if setting.law is not None:
         bore.userdata = replace_bore_userdata(list(bore.userdata), **setting.law.userdata(0))
     if setting.source == "force":  # the law as a passive force, no pair (as the builder does)
+        spec.nuserdata = 2  # v_imp and the previous step's normal velocity
         pin_id = int(spec.compile().geom("pin").id)
         as_passive_force(spec, pair, bore, pin_id, "f")
         spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT
