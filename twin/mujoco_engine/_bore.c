@@ -258,6 +258,25 @@ static int is_bore(const mjModel* m, int g) {
   return m->nuser_geom >= BORE_NUSER && m->geom_user[g * m->nuser_geom + BORE_MARKER] == BORE_MAGIC;
 }
 
+/* e = pin centre - bore centre projected on the plane normal to the bore axis a (geom z, world);
+ * returns |e| */
+static mjtNum bore_eccentricity(const mjData* d, int gb, int gp, mjtNum e[3], mjtNum a[3]) {
+  const mjtNum* xb = d->geom_xpos + 3 * gb;
+  const mjtNum* xp = d->geom_xpos + 3 * gp;
+  const mjtNum* R = d->geom_xmat + 9 * gb;
+  a[0] = R[2];
+  a[1] = R[5];
+  a[2] = R[8];
+  e[0] = xp[0] - xb[0];
+  e[1] = xp[1] - xb[1];
+  e[2] = xp[2] - xb[2];
+  const mjtNum ea = e[0] * a[0] + e[1] * a[1] + e[2] * a[2];
+  e[0] -= ea * a[0];
+  e[1] -= ea * a[1];
+  e[2] -= ea * a[2];
+  return sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+}
+
 static int collide_pin_bore(const mjModel* m, mjData* d, mjPreContact* con,
                             int g1, int g2, mjtNum margin) {
   int b1 = is_bore(m, g1), b2 = is_bore(m, g2);
@@ -265,16 +284,10 @@ static int collide_pin_bore(const mjModel* m, mjData* d, mjPreContact* con,
     return g_previous ? g_previous(m, d, con, g1, g2, margin) : 0;
   }
   int gb = b1 ? g1 : g2, gp = b1 ? g2 : g1;
-  const mjtNum* xb = d->geom_xpos + 3 * gb;
   const mjtNum* xp = d->geom_xpos + 3 * gp;
   const mjtNum* R = d->geom_xmat + 9 * gb;
-  const mjtNum a[3] = {R[2], R[5], R[8]};        /* bore axis (geom z) in world */
-  mjtNum e[3] = {xp[0] - xb[0], xp[1] - xb[1], xp[2] - xb[2]};
-  const mjtNum ea = e[0] * a[0] + e[1] * a[1] + e[2] * a[2];
-  e[0] -= ea * a[0];
-  e[1] -= ea * a[1];
-  e[2] -= ea * a[2];
-  const mjtNum ecc = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+  mjtNum e[3], a[3];
+  const mjtNum ecc = bore_eccentricity(d, gb, gp, e, a);
   const mjtNum rb = m->geom_size[3 * gb], rp = m->geom_size[3 * gp];
   const mjtNum dist = (rb - rp) - ecc;
   if (dist > margin) return 0;
@@ -661,14 +674,9 @@ static void force_bore(const mjModel* m, mjData* d, int gb, const mjtNum* user, 
   const int has_slot = slot >= 0 && slot < m->nuserdata;
   if (gp >= m->ngeom || !(law == LAW_HYSTERESIS || law == LAW_LINEAR || law == LAW_IMPACT || law == LAW_CYLINDER))
     return;
-  const mjtNum* xb = d->geom_xpos + 3 * gb;
   const mjtNum* xp = d->geom_xpos + 3 * gp;
-  const mjtNum* R = d->geom_xmat + 9 * gb;
-  const mjtNum a[3] = {R[2], R[5], R[8]};        /* bore axis (geom z) in world */
-  mjtNum e[3] = {xp[0] - xb[0], xp[1] - xb[1], xp[2] - xb[2]};
-  const mjtNum ea = e[0] * a[0] + e[1] * a[1] + e[2] * a[2];
-  for (int k = 0; k < 3; k++) e[k] -= ea * a[k];
-  const mjtNum ecc = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+  mjtNum e[3], a[3];
+  const mjtNum ecc = bore_eccentricity(d, gb, gp, e, a);
   const mjtNum delta = ecc - (m->geom_size[3 * gb] - m->geom_size[3 * gp]);
   if (!(ecc > 1e-300)) {                          /* centred: no direction, no contact */
     if (has_slot) d->userdata[slot] = 0;
