@@ -16,7 +16,10 @@ variant alike:
 * ``ratio`` = scene / floor (the issue's target: clearance scenes within 2x the floor);
 * ``engine RTF``: the real-time factor of the whole engine path (``twin.simulation.simulate``:
   reference generation, rollout, channel assembly) over the same simulated time;
-* ``posthoc / sensor``: the step time of the posthoc setting over the sensor setting's.
+* ``posthoc / sensor``: the step time of the posthoc setting over the sensor setting's;
+* ``force``: the scene with the bushing as a passive force (``mujoco.contact_source = "force"``:
+  no collision, contact row or solver), posthoc accelerometers, beside the default "law" and the
+  same constraint-free floor.
 
 Each timing is the best of ``REPEATS`` rollouts of ``STEPS`` steps, every variant interleaved.
 Run: ``python analysis/bench_mujoco.py [--steps N] [--repeats R] [--lean]``.
@@ -50,9 +53,12 @@ def prepare(test_id: int, steps: int, channels=None, accelerometers: str = "sens
     return prepare_posthoc(test_id, steps, channels, accelerometers)[:3]
 
 
-def prepare_posthoc(test_id: int, steps: int, channels=None, accelerometers: str = "posthoc"):
-    """:func:`prepare` and the engine's after-the-rollout accelerometers (None with the sensors)."""
-    over = {"simulation.duration_s": 0.4, "drive.ramp_s": 0.2, "mujoco.accelerometers": accelerometers}
+def prepare_posthoc(test_id: int, steps: int, channels=None, accelerometers: str = "posthoc",
+                    contact_source: str = "law"):
+    """:func:`prepare` and the engine's after-the-rollout accelerometers (None with the sensors);
+    ``contact_source``: ``mujoco.contact_source`` ("law", the default, or "force")."""
+    over = {"simulation.duration_s": 0.4, "drive.ramp_s": 0.2, "mujoco.accelerometers": accelerometers,
+            "mujoco.contact_source": contact_source}
     if channels is not None:
         over["sensors.channels"] = channels
     eng = MujocoEngine(preset(test_id).replace(**over))
@@ -101,6 +107,8 @@ def main() -> None:
         if args.lean:  # the default setting
             ml, sl, cl, pl = prepare_posthoc(tid, args.steps, channels=["accel", "encoder"])
             variants[label][("lean", "posthoc")] = (ml, sl, cl, pl)
+        # the bushing as a passive force (mujoco.contact_source = "force"), posthoc accelerometers
+        variants[label][("force", "posthoc")] = prepare_posthoc(tid, args.steps, contact_source="force")
     best = {(lab, k): math.inf for lab, v in variants.items() for k in v}
     for _ in range(args.repeats):  # interleaved repeats
         for lab, v in variants.items():
@@ -134,6 +142,18 @@ def main() -> None:
                 else:
                     row += " | |"
             print(row)
+    print()
+    print("Bushing representation (posthoc accelerometers; floor = the \"law\" model's constraint-free floor, "
+          "the same in both):")
+    print()
+    print("| scene | \"law\" us/step | \"force\" us/step | floor us/step | law / floor | force / floor | "
+          "force RTF | law / force |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|")
+    for lab in SCENES:
+        la, fo = best[(lab, ("scene", "posthoc"))], best[(lab, ("force", "posthoc"))]
+        fl = best[(lab, ("floor", "posthoc"))]
+        print(f"| {lab} | {la:.2f} | {fo:.2f} | {fl:.2f} | {la / fl:.2f} | {fo / fl:.2f} | {h * 1e6 / fo:.2f} | "
+              f"{la / fo:.2f} |")
     print()
     print("| scene | posthoc / sensor us/step | posthoc / sensor engine RTF |")
     print("|---|---|---|")

@@ -65,7 +65,7 @@ def test_presets_follow_table4(test_id):
     ({"contact.restitution": 1.5}, "contact.restitution", "(0, 1]"),
     ({"contact.v1_mps": 1e-4}, "contact.v1_mps", "v0_mps"),
     ({"mujoco.contact_solref": [0.1]}, "mujoco.contact_solref", "2 numbers"),
-    ({"mujoco.contact_source": "calibration"}, "mujoco.contact_source", "law, first-guess"),
+    ({"mujoco.contact_source": "calibration"}, "mujoco.contact_source", "law, force, first-guess"),
     ({"mujoco.impact_damping_gain": 0.0}, "mujoco.impact_damping_gain", "[0.1, 10]"),
     ({"contact.impact_speed_floor_mps": 5.0}, "contact.impact_speed_floor_mps", "[1e-6, 1] m/s"),
     ({"sensors.channels": ["accel", "gps"]}, "sensors.channels", "accel"),

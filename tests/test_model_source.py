@@ -292,8 +292,8 @@ def test_parser_reports_a_missing_file_or_an_unreadable_value(tmp_path):
         model_xml.read_defaults(_edited(tmp_path, 'mass="5.72"', 'mass="5.7x2"'))
     with pytest.raises(ModelError, match="kp"):
         model_xml.read_defaults(_edited(tmp_path, 'kp="1.7e5" ', ""))
-    with pytest.raises(ModelError, match="nuser_geom=14"):
-        model_xml.read_defaults(_edited(tmp_path, 'nuser_geom="13"', 'nuser_geom="14"'))
+    with pytest.raises(ModelError, match="nuser_geom=15"):
+        model_xml.read_defaults(_edited(tmp_path, 'nuser_geom="14"', 'nuser_geom="15"'))
     with pytest.raises(ModelError, match="gravity"):
         model_xml.read_defaults(_edited(tmp_path, 'gravity="0 -9.81 0"', 'gravity="0 -9.81 1"'))
     with pytest.raises(ModelError, match="rod length"):  # the same number written twice must agree
@@ -338,6 +338,6 @@ def test_collider_refuses_a_different_layout(monkeypatch):
 
 
 def test_builder_checks_nuser_geom(tmp_path, monkeypatch):
-    monkeypatch.setattr(mjcf_names, "BASE_XML", _edited(tmp_path, 'nuser_geom="13"', 'nuser_geom="14"'))
-    with pytest.raises(ModelError, match="nuser_geom = 14"):
+    monkeypatch.setattr(mjcf_names, "BASE_XML", _edited(tmp_path, 'nuser_geom="14"', 'nuser_geom="15"'))
+    with pytest.raises(ModelError, match="nuser_geom = 15"):
         build(IDEAL)

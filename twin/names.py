@@ -172,16 +172,20 @@ BORE_MAGIC = 7301.0
 #:   transition velocity v_d = ``v1`` and ``mus`` = μ_s [-];
 #: * ``dmax``: the ADAMS IMPACT law's (``law`` 3) penetration of full damping [m]; its K, n and
 #:   c_max are ``stiffness``, ``exponent`` and ``damping``; Johnson's cylindrical law (``law`` 4):
-#:   the radial clearance ΔR [m], with k = π L E* in ``stiffness`` and χ in ``damping``.
+#:   the radial clearance ΔR [m], with k = π L E* in ``stiffness`` and χ in ``damping``;
+#: * ``force_pin``: -1 = the law acts on the collider's contact row; else the pin's geom id: the law
+#:   and the friction act as passive forces between pin and bore, with no contact row
+#:   (``mujoco.contact_source = "force"``).
 BORE_USERDATA_FIELDS: tuple[str, ...] = ("marker", "mu0", "v0", "v1", "law", "stiffness", "exponent", "damping",
-                                         "speed_floor", "slot", "friction", "mus", "dmax")
+                                         "speed_floor", "slot", "friction", "mus", "dmax", "force_pin")
 #: codes of the ``friction`` field
 BORE_FRICTION_LAWS: dict[str, int] = {"regularized-coulomb": 0, "adams": 1}
 #: codes of the ``law`` field
 BORE_LAWS: dict[str, int] = {"soft": 0, "hysteresis": 1, "linear": 2, "impact": 3, "cylinder": 4}
 #: values of the optional fields when not given (MuJoCo's soft contact, no slot)
 _BORE_USERDATA_OPTIONAL = {"marker": BORE_MAGIC, "law": 0.0, "stiffness": 0.0, "exponent": 0.0, "damping": 0.0,
-                           "speed_floor": 0.0, "slot": -1.0, "friction": 0.0, "mus": 0.0, "dmax": 0.0}
+                           "speed_floor": 0.0, "slot": -1.0, "friction": 0.0, "mus": 0.0, "dmax": 0.0,
+                           "force_pin": -1.0}
 
 
 #: marker of a guide joint in its user data's "marker" field (must match GUIDE_MAGIC in _bore.c)

@@ -59,7 +59,10 @@ class MujocoSettings:
             own law (``contact.law``: Lankarani–Nikravesh K δⁿ (1 + χ δ̇/v_imp) with its stored
             impact speed and floor, Hunt–Crossley, Flores or linear; same K, n, e), applied
             exactly by the native module (``_bore.c``); ring and tendon bushings,
-            which the module does not serve, take the first guess. "first-guess": MuJoCo's own
+            which the module does not serve, take the first guess. "force": the same law and
+            friction as a native passive force between pin and bore, explicit at the step's start as
+            in the reference engine's symplectic Euler, with no collision, contact row or solver
+            work (the pin/bushing pair is removed; bore bushing only; docs/speed.md). "first-guess": MuJoCo's own
             soft contact, the linear spring-damper with the LN law's duration and restitution
             at 0.1 m/s (``twin.contact_params.first_guess_contact``). ``contact_solref``/``solimp`` override
             both. (Stored configurations with the retired "calibration" read as "law", and their
@@ -114,8 +117,10 @@ class MujocoSettings:
         _check(isinstance(self.ring_boxes, int) and 8 <= self.ring_boxes <= 512, "ring_boxes",
                f"must be an integer in [8, 512], got {self.ring_boxes!r}")
         _choice(self.friction, "friction", ("native", "cone"))
-        _choice(self.contact_source, "contact_source", ("law", "first-guess"))
+        _choice(self.contact_source, "contact_source", ("law", "force", "first-guess"))
         _choice(self.guide_friction, "guide_friction", ("native", "frictionloss"))
+        _check(self.contact_source != "force" or self.integrator != "RK4", "integrator",
+               "contact_source = \"force\" needs one force evaluation per step: Euler, implicitfast or implicit, not RK4")
         _check(isinstance(self.impact_damping_gain, (int, float)) and 0.1 <= self.impact_damping_gain <= 10,
                "impact_damping_gain", f"must lie in [0.1, 10], got {self.impact_damping_gain!r}")
         _check(self.bushing == "bore" or self.friction == "cone" or self.bushing == "tendon", "friction",

@@ -94,6 +94,27 @@
  * times the applied normal force by up to 20 %, the cause of the twin's +10 % peak AC6 in the
  * 0.5 mm scene of analysis/contact_table.py).
  *
+ * Force (user[BORE_FORCE_PIN] >= 0, mujoco.contact_source = "force"). The same law and friction
+ * without a contact row: the builder removes the pin/bore pair, and the passive callback computes,
+ * from the geoms' poses, e (pin centre - bore centre in the bore's plane), delta = |e| - (R_i -
+ * R_j), n = e/|e|, the contact point p (midpoint of the surfaces, as the collider's), delta' = n .
+ * (v_pin(p) - v_bore(p)) and the tangential slip along t = axis x n at the step's state, and applies
+ * F = law(delta, delta', v_imp) (law_terms, the row's law; v_imp kept in the same userdata slot) and
+ * the friction mu(|v_t|) F (friction_coefficient) as equal and opposite forces at p on the two
+ * bodies (mj_applyFT into qfrc_passive). The rate: MuJoCo's (and the reference's) semi-implicit
+ * Euler advances positions with the updated velocity, so the velocities at the step's start are
+ * those of the half step before it; the law takes delta'(t_k) = (3 v_k - v_(k-1)) / 2 (v_k the
+ * normal velocity above, v_(k-1) the previous step's, kept in the userdata slot after v_imp's).
+ * Measured on the single impacts of twin check contact: the plain v_k (the reference engine's
+ * choice) makes the peak force 1-6 % too large and the contact 1-4 % too short at h = 1e-5 s,
+ * (3 v_k - v_(k-1)) / 2 within 0.3 % and 0.1 %. The two-step rate is stable while c h < m_hat (the
+ * pair's effective mass along n, from M's factorization); where the law's damping exceeds
+ * m_hat / (2 h) (a resting contact at the impact-speed floor under a large load) c = m_hat / (2 h).
+ * One passive call per step is assumed (not RK4).  Both are explicit at the step's start: with MuJoCo's
+ * semi-implicit Euler update this is exactly the reference engine's symplectic Euler of the same
+ * forces, with no collision, row, or solver cost. A position-stage user sensor of dimension 4 on the
+ * bore (the builder's replacement of the contact sensor) gets [1, F, 0, 0] while delta > 0.
+ *
  * Friction. The pair is a frictionless (condim 1) MuJoCo contact: MuJoCo's soft elliptic cone
  * adds mu * (would-be sticking force) to the normal force while sliding, which inflated the
  * normal force by a median 23 % and up to 27x on the bench (measured, see the builder's
@@ -153,11 +174,13 @@ enum bore_user {
   BORE_FRICTION,         /* friction law: 0 = regularized Coulomb (mu0, v0, v1), 1 = Adams/COSMOS */
   BORE_MUS,              /* Adams/COSMOS: static coefficient mu_s [-] (mu_d = mu0, v_s = v0, v_d = v1) */
   BORE_DMAX,             /* ADAMS IMPACT law: penetration of full damping d_max [m]; Johnson law: radial clearance [m] */
+  BORE_FORCE_PIN,        /* -1: the law acts on the collider's contact row; >= 0: geom id of the pin, the law and
+                            the friction act as passive forces between pin and bore, no contact row ("Force") */
   BORE_NUSER             /* number of fields */
 };
 static const char* const bore_user_names[] = {
   "marker", "mu0", "v0", "v1", "law", "stiffness", "exponent", "damping", "speed_floor", "slot",
-  "friction", "mus", "dmax"
+  "friction", "mus", "dmax", "force_pin"
 };
 _Static_assert(sizeof(bore_user_names) / sizeof(bore_user_names[0]) == BORE_NUSER,
                "bore_user_names must name every field of enum bore_user");
@@ -228,9 +251,30 @@ static mjfGeneric g_prev_passive = NULL;
 static mjfSensor g_prev_sensor = NULL;
 typedef void (*applyFT_t)(const mjModel*, mjData*, const mjtNum*, const mjtNum*, const mjtNum*, int, mjtNum*);
 static applyFT_t g_applyFT = NULL;
+typedef void (*solveM_t)(const mjModel*, mjData*, mjtNum*, const mjtNum*, int);
+static solveM_t g_solveM = NULL;
 
 static int is_bore(const mjModel* m, int g) {
   return m->nuser_geom >= BORE_NUSER && m->geom_user[g * m->nuser_geom + BORE_MARKER] == BORE_MAGIC;
+}
+
+/* e = pin centre - bore centre projected on the plane normal to the bore axis a (geom z, world);
+ * returns |e| */
+static mjtNum bore_eccentricity(const mjData* d, int gb, int gp, mjtNum e[3], mjtNum a[3]) {
+  const mjtNum* xb = d->geom_xpos + 3 * gb;
+  const mjtNum* xp = d->geom_xpos + 3 * gp;
+  const mjtNum* R = d->geom_xmat + 9 * gb;
+  a[0] = R[2];
+  a[1] = R[5];
+  a[2] = R[8];
+  e[0] = xp[0] - xb[0];
+  e[1] = xp[1] - xb[1];
+  e[2] = xp[2] - xb[2];
+  const mjtNum ea = e[0] * a[0] + e[1] * a[1] + e[2] * a[2];
+  e[0] -= ea * a[0];
+  e[1] -= ea * a[1];
+  e[2] -= ea * a[2];
+  return sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
 }
 
 static int collide_pin_bore(const mjModel* m, mjData* d, mjPreContact* con,
@@ -240,16 +284,10 @@ static int collide_pin_bore(const mjModel* m, mjData* d, mjPreContact* con,
     return g_previous ? g_previous(m, d, con, g1, g2, margin) : 0;
   }
   int gb = b1 ? g1 : g2, gp = b1 ? g2 : g1;
-  const mjtNum* xb = d->geom_xpos + 3 * gb;
   const mjtNum* xp = d->geom_xpos + 3 * gp;
   const mjtNum* R = d->geom_xmat + 9 * gb;
-  const mjtNum a[3] = {R[2], R[5], R[8]};        /* bore axis (geom z) in world */
-  mjtNum e[3] = {xp[0] - xb[0], xp[1] - xb[1], xp[2] - xb[2]};
-  const mjtNum ea = e[0] * a[0] + e[1] * a[1] + e[2] * a[2];
-  e[0] -= ea * a[0];
-  e[1] -= ea * a[1];
-  e[2] -= ea * a[2];
-  const mjtNum ecc = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+  mjtNum e[3], a[3];
+  const mjtNum ecc = bore_eccentricity(d, gb, gp, e, a);
   const mjtNum rb = m->geom_size[3 * gb], rp = m->geom_size[3 * gp];
   const mjtNum dist = (rb - rp) - ecc;
   if (dist > margin) return 0;
@@ -395,6 +433,53 @@ static void set_regularizer(const mjModel* m, mjData* d, int row, mjtNum R) {
   }
 }
 
+/* the law's elastic force fe [N] and damping coefficient c [N s/m] at penetration delta > 0 [m],
+ * rate delta' [m/s] (> 0 approaching) and stored impact speed vimp [m/s] (laws 1-4, module
+ * docstring): the force is fe + c delta'. In the clamped branch of a hysteresis law (delta'/v_imp
+ * < -1) fe = K delta^n (1 - chi) and c = 0. The one implementation of the law in this module: the
+ * contact row (contact_law) and the passive force (force_bore) both call it. */
+static void law_terms(const mjtNum* user, int law, mjtNum delta, mjtNum rate, mjtNum vimp, mjtNum* fe_out,
+                      mjtNum* c_out) {
+  const mjtNum K = user[BORE_STIFFNESS];
+  mjtNum fe, c;
+  if (law == LAW_HYSTERESIS || law == LAW_CYLINDER) {
+    const mjtNum n = user[BORE_EXPONENT];
+    const mjtNum chi = user[BORE_DAMPING];
+    if (law == LAW_CYLINDER) fe = johnson_force(delta, K, user[BORE_DMAX]);
+    else fe = K * (n == 1.5 ? delta * sqrt(delta) : pow(delta, n));
+    c = chi * fe / vimp;
+    if (rate < -vimp) {                         /* clamp delta'/v_imp at -1: no rate term */
+      fe *= 1 - chi;
+      c = 0;
+    }
+  } else if (law == LAW_IMPACT) {             /* ADAMS IMPACT: K delta^n + STEP(delta; d_max) c_max delta' */
+    const mjtNum n = user[BORE_EXPONENT];
+    fe = K * (n == 1.5 ? delta * sqrt(delta) : pow(delta, n));
+    c = step3(delta, 0, 0, user[BORE_DMAX], user[BORE_DAMPING]);
+  } else {
+    fe = K * delta;
+    c = user[BORE_DAMPING];
+  }
+  *fe_out = fe;
+  *c_out = c;
+}
+
+/* the friction law's coefficient at slip speed s = |v_t| >= 0 [m/s] (module docstring,
+ * "Friction"): regularized Coulomb (mu0, v0, v1) or Adams/COSMOS (BORE_FRICTION = 1) */
+static mjtNum friction_coefficient(const mjtNum* user, mjtNum s) {
+  const mjtNum mu0 = user[BORE_MU0], v0 = user[BORE_V0], v1 = user[BORE_V1];
+  mjtNum mu = 0;
+  if (user[BORE_FRICTION] == 1) {
+    /* Adams/COSMOS (S001 Table II): odd cubic STEP through 0 up to v_s = v0, STEP from mu_s to
+     * mu_d = mu0 up to v_d = v1, mu_d above (twin.reference.contact.adams_mu) */
+    const mjtNum mus = user[BORE_MUS];
+    if (s < v0) mu = step3(s, -v0, -mus, v0, mus);
+    else mu = step3(s, v0, mus, v1, mu0);
+  } else if (s >= v1) mu = mu0;
+  else if (s > v0) mu = mu0 * (s - v0) / (v1 - v0);
+  return mu;
+}
+
 /* the contact law (module docstring) on the normal row of each bore's contact; keeps v_imp */
 static void contact_law(const mjModel* m, mjData* d) {
   const int nu = m->nuser_geom;
@@ -404,6 +489,7 @@ static void contact_law(const mjModel* m, mjData* d) {
     if (user[BORE_MARKER] != BORE_MAGIC) continue;
     const int law = (int)user[BORE_LAW];
     if (law != LAW_HYSTERESIS && law != LAW_LINEAR && law != LAW_IMPACT && law != LAW_CYLINDER) continue;
+    if (user[BORE_FORCE_PIN] >= 0) continue;     /* a passive force (force_bore), no row */
     const int slot = (int)user[BORE_SLOT];
     const int has_slot = slot >= 0 && slot < m->nuserdata;
     int icon = -1;
@@ -434,26 +520,8 @@ static void contact_law(const mjModel* m, mjData* d) {
       kbip[1] = 0;
       continue;
     }
-    const mjtNum K = user[BORE_STIFFNESS];
     mjtNum fe, c;                                 /* elastic force, damping coefficient */
-    if (law == LAW_HYSTERESIS || law == LAW_CYLINDER) {
-      const mjtNum n = user[BORE_EXPONENT];
-      const mjtNum chi = user[BORE_DAMPING];
-      if (law == LAW_CYLINDER) fe = johnson_force(delta, K, user[BORE_DMAX]);
-      else fe = K * (n == 1.5 ? delta * sqrt(delta) : pow(delta, n));
-      c = chi * fe / vimp;
-      if (rate < -vimp) {                         /* clamp delta'/v_imp at -1: no rate term */
-        fe *= 1 - chi;
-        c = 0;
-      }
-    } else if (law == LAW_IMPACT) {             /* ADAMS IMPACT: K delta^n + STEP(delta; d_max) c_max delta' */
-      const mjtNum n = user[BORE_EXPONENT];
-      fe = K * (n == 1.5 ? delta * sqrt(delta) : pow(delta, n));
-      c = step3(delta, 0, 0, user[BORE_DMAX], user[BORE_DAMPING]);
-    } else {
-      fe = K * delta;
-      c = user[BORE_DAMPING];
-    }
+    law_terms(user, law, delta, rate, vimp, &fe, &c);
     const mjtNum h = m->opt.timestep;
     const mjtNum mhat = d->efc_diagA[row] > 0 ? 1 / d->efc_diagA[row] : 0;
     const mjtNum ch = c * h;
@@ -495,7 +563,6 @@ static int bore_friction(const mjModel* m, const mjData* d, int icon, friction_t
   const int b1 = con->geom[0] == gb;
   const int gp = b1 ? con->geom[1] : con->geom[0];
   const mjtNum* user = m->geom_user + gb * m->nuser_geom;
-  const mjtNum mu0 = user[BORE_MU0], v0 = user[BORE_V0], v1 = user[BORE_V1];
   const int row = con->efc_address;
   const mjtNum* kbip = d->efc_KBIP + 4 * row;
   mjtNum va[3], vb[3];
@@ -534,16 +601,7 @@ static int bore_friction(const mjModel* m, const mjData* d, int icon, friction_t
   if (m->geom_type[gb] == mjGEOM_SPHERE) twin_socket_tangent(vpin, vbore, n, out->t);  /* socket: along the slip */
   const mjtNum vt = (vpin[0] - vbore[0]) * out->t[0] + (vpin[1] - vbore[1]) * out->t[1] +
                     (vpin[2] - vbore[2]) * out->t[2];
-  const mjtNum s = fabs(vt);
-  mjtNum mu = 0;
-  if (user[BORE_FRICTION] == 1) {
-    /* Adams/COSMOS (S001 Table II): odd cubic STEP through 0 up to v_s = v0, STEP from mu_s to
-     * mu_d = mu0 up to v_d = v1, mu_d above (twin.reference.contact.adams_mu) */
-    const mjtNum mus = user[BORE_MUS];
-    if (s < v0) mu = step3(s, -v0, -mus, v0, mus);
-    else mu = step3(s, v0, mus, v1, mu0);
-  } else if (s >= v1) mu = mu0;
-  else if (s > v0) mu = mu0 * (s - v0) / (v1 - v0);
+  const mjtNum mu = friction_coefficient(user, fabs(vt));
   out->ft = vt > 0 ? -mu * out->fn : (vt < 0 ? mu * out->fn : 0.0);
   return 1;
 }
@@ -575,7 +633,7 @@ static _Thread_local const mjData* g_sensor_pending = NULL;
 static void add_friction_sensor(const mjModel* m, mjData* d, int gb, mjtNum ft) {
   for (int s = 0; s < m->nsensor; s++) {
     if (m->sensor_type[s] == mjSENS_USER && m->sensor_objtype[s] == mjOBJ_GEOM && m->sensor_objid[s] == gb &&
-        m->sensor_needstage[s] == mjSTAGE_POS) d->sensordata[m->sensor_adr[s]] += ft;
+        m->sensor_needstage[s] == mjSTAGE_POS && m->sensor_dim[s] == 1) d->sensordata[m->sensor_adr[s]] += ft;
   }
 }
 
@@ -590,6 +648,97 @@ static void passive_bore(const mjModel* m, mjData* d) {
   drivetrain_passive(m, d);  /* last: it books the other passive forces of the step */
 }
 
+/* the inverse effective mass of the pin/bore pair along n at p [1/kg]: w^T M^-1 w with w =
+ * (J_pin(p) - J_bore(p))^T n (mj_applyFT builds w, mj_solveM uses the factorization of M that the
+ * position stage made); 0 when the functions are missing or nv exceeds the local buffer */
+enum { FORCE_NV_MAX = 64 };
+static mjtNum inverse_mass(const mjModel* m, mjData* d, int bp, int bb, const mjtNum n[3], const mjtNum p[3]) {
+  if (!g_applyFT || !g_solveM || m->nv > FORCE_NV_MAX) return 0;
+  mjtNum w[FORCE_NV_MAX], x[FORCE_NV_MAX];
+  for (int i = 0; i < m->nv; i++) w[i] = 0;
+  const mjtNum nm[3] = {-n[0], -n[1], -n[2]};
+  g_applyFT(m, d, n, NULL, p, bp, w);
+  g_applyFT(m, d, nm, NULL, p, bb, w);
+  g_solveM(m, d, x, w, 1);
+  mjtNum a = 0;
+  for (int i = 0; i < m->nv; i++) a += w[i] * x[i];
+  return a;
+}
+
+/* contact_source = "force" (module docstring, "Force"): the law and the friction of bore gb as
+ * passive forces between its pin (geom user[BORE_FORCE_PIN]) and the bore, no contact row */
+static void force_bore(const mjModel* m, mjData* d, int gb, const mjtNum* user, int sensors) {
+  const int gp = (int)user[BORE_FORCE_PIN];
+  const int law = (int)user[BORE_LAW];
+  const int slot = (int)user[BORE_SLOT];
+  const int has_slot = slot >= 0 && slot < m->nuserdata;
+  if (gp >= m->ngeom || !(law == LAW_HYSTERESIS || law == LAW_LINEAR || law == LAW_IMPACT || law == LAW_CYLINDER))
+    return;
+  const mjtNum* xp = d->geom_xpos + 3 * gp;
+  mjtNum e[3], a[3];
+  const mjtNum ecc = bore_eccentricity(d, gb, gp, e, a);
+  const mjtNum delta = ecc - (m->geom_size[3 * gb] - m->geom_size[3 * gp]);
+  if (!(ecc > 1e-300)) {                          /* centred: no direction, no contact */
+    if (has_slot) d->userdata[slot] = 0;
+    return;
+  }
+  const mjtNum n[3] = {e[0] / ecc, e[1] / ecc, e[2] / ecc};  /* bore centre -> pin */
+  const mjtNum s = m->geom_size[3 * gp] - 0.5 * delta;       /* pin centre -> midpoint of the surfaces */
+  const mjtNum p[3] = {xp[0] + s * n[0], xp[1] + s * n[1], xp[2] + s * n[2]};
+  const int bp = m->geom_bodyid[gp], bb = m->geom_bodyid[gb];
+  mjtNum vp[3], vb[3];
+  point_velocity(m, d, bp, p, vp);
+  point_velocity(m, d, bb, p, vb);
+  const mjtNum dv[3] = {vp[0] - vb[0], vp[1] - vb[1], vp[2] - vb[2]};
+  const mjtNum vk = n[0] * dv[0] + n[1] * dv[1] + n[2] * dv[2];  /* delta' of the velocities (> 0 approaching) */
+  /* the rate at the step's time: velocities are those of the half step before (symplectic Euler),
+   * so delta'(t_k) = (3 v_k - v_(k-1)) / 2, v_(k-1) kept in the slot after v_imp's */
+  const int has_prev = has_slot && slot + 1 < m->nuserdata;
+  const mjtNum rate = has_prev ? vk + 0.5 * (vk - d->userdata[slot + 1]) : vk;
+  if (has_prev) d->userdata[slot + 1] = vk;
+  if (!(delta > 0)) {                            /* no penetration: the event is over */
+    if (has_slot) d->userdata[slot] = 0;
+    return;
+  }
+  mjtNum vimp = user[BORE_SPEED_FLOOR];
+  if (has_slot) {
+    if (!(d->userdata[slot] > 0)) d->userdata[slot] = fmax(rate, user[BORE_SPEED_FLOOR]);
+    vimp = d->userdata[slot];
+  }
+  if (!(vimp > 0)) return;
+  mjtNum fe, c;
+  law_terms(user, law, delta, rate, vimp, &fe, &c);
+  if (c > 0) {
+    /* explicit damping on the two-step rate is stable while c h < m_hat (the pair's effective
+     * mass), its parasitic root -0.39 at c h = m_hat / 2: beyond that (a resting contact's
+     * damping at the impact-speed floor under a large load) c = m_hat / (2 h) */
+    const mjtNum h = m->opt.timestep;
+    const mjtNum ainv = inverse_mass(m, d, bp, bb, n, p);
+    if (ainv > 0 && c * h * ainv > 0.5) c = 0.5 / (h * ainv);
+  }
+  mjtNum fn = fe + c * rate;
+  if (fn < 0) fn = 0;                            /* the law never pulls */
+  const mjtNum t[3] = {a[1] * n[2] - a[2] * n[1], a[2] * n[0] - a[0] * n[2], a[0] * n[1] - a[1] * n[0]};
+  const mjtNum vt = dv[0] * t[0] + dv[1] * t[1] + dv[2] * t[2];
+  const mjtNum mu = friction_coefficient(user, fabs(vt));
+  const mjtNum ft = vt > 0 ? -mu * fn : (vt < 0 ? mu * fn : 0.0);   /* on the pin along t */
+  if (sensors) {
+    add_friction_sensor(m, d, gb, ft);
+    for (int k = 0; k < m->nsensor; k++) {         /* the contact sensor: [found, normal force, 0, 0] */
+      if (m->sensor_type[k] == mjSENS_USER && m->sensor_objtype[k] == mjOBJ_GEOM && m->sensor_objid[k] == gb &&
+          m->sensor_needstage[k] == mjSTAGE_POS && m->sensor_dim[k] == 4) {
+        d->sensordata[m->sensor_adr[k]] = 1;
+        d->sensordata[m->sensor_adr[k] + 1] = fn;
+      }
+    }
+  }
+  if (!g_applyFT || (fn == 0 && ft == 0)) return;
+  const mjtNum F[3] = {-fn * n[0] + ft * t[0], -fn * n[1] + ft * t[1], -fn * n[2] + ft * t[2]};  /* on the pin */
+  const mjtNum Fm[3] = {-F[0], -F[1], -F[2]};
+  g_applyFT(m, d, F, NULL, p, bp, d->qfrc_passive);
+  g_applyFT(m, d, Fm, NULL, p, bb, d->qfrc_passive);
+}
+
 static void passive_bore_joints(const mjModel* m, mjData* d) {
   if (g_prev_passive) g_prev_passive(m, d);
   const int sensors = g_sensor_pending == d;  /* this pass computes sensors (slots zeroed by MuJoCo) */
@@ -597,6 +746,10 @@ static void passive_bore_joints(const mjModel* m, mjData* d) {
   guide_friction(m, d);
   if (m->nuser_geom < BORE_NUSER) return;
   contact_law(m, d);
+  for (int gb = 0; gb < m->ngeom; gb++) {
+    const mjtNum* user = m->geom_user + gb * m->nuser_geom;
+    if (user[BORE_MARKER] == BORE_MAGIC && user[BORE_FORCE_PIN] >= 0) force_bore(m, d, gb, user, sensors);
+  }
   for (int i = 0; i < d->ncon; i++) {
     friction_t f;
     if (!bore_friction(m, d, i, &f)) continue;
@@ -635,8 +788,9 @@ static void sensor_friction(const mjModel* m, mjData* d, int stage) {
 
 /* install(table, passive_cb, sensor_cb, mj_applyFT) addresses -> True if installed now */
 static PyObject* py_install(PyObject* self, PyObject* args) {
-  unsigned long long table_addr, passive_addr, sensor_addr, applyft_addr;
-  if (!PyArg_ParseTuple(args, "KKKK", &table_addr, &passive_addr, &sensor_addr, &applyft_addr)) return NULL;
+  unsigned long long table_addr, passive_addr, sensor_addr, applyft_addr, solvem_addr = 0;
+  if (!PyArg_ParseTuple(args, "KKKK|K", &table_addr, &passive_addr, &sensor_addr, &applyft_addr, &solvem_addr))
+    return NULL;
   if (!table_addr || !passive_addr || !sensor_addr || !applyft_addr) {
     PyErr_SetString(PyExc_ValueError, "null address");
     return NULL;
@@ -646,6 +800,7 @@ static PyObject* py_install(PyObject* self, PyObject* args) {
   mjfSensor* sensor = (mjfSensor*)(uintptr_t)sensor_addr;
   int changed = 0;
   g_applyFT = (applyFT_t)(uintptr_t)applyft_addr;
+  if (solvem_addr) g_solveM = (solveM_t)(uintptr_t)solvem_addr;
   /* (re)install each hook that is not ours, chaining what was there */
   if (table[mjGEOM_CYLINDER][mjGEOM_CYLINDER] != collide_pin_bore) {
     g_previous = table[mjGEOM_CYLINDER][mjGEOM_CYLINDER];
@@ -744,7 +899,7 @@ static PyObject* py_drivetrain_layout(PyObject* self, PyObject* args) {
 }
 
 static PyMethodDef methods[] = {
-  {"install", py_install, METH_VARARGS, "install(table, passive, sensor, applyFT): addresses of mjCOLLISIONFUNC, mjcb_passive, mjcb_sensor and the function mj_applyFT."},
+  {"install", py_install, METH_VARARGS, "install(table, passive, sensor, applyFT[, solveM]): addresses of mjCOLLISIONFUNC, mjcb_passive, mjcb_sensor and the functions mj_applyFT and mj_solveM."},
   {"header_version", py_header_version, METH_NOARGS, "mjVERSION_HEADER the module was compiled against."},
   {"bore_magic", py_bore_magic, METH_NOARGS, "geom user data marker value that marks a bore."},
   {"userdata_fields", py_userdata_fields, METH_NOARGS, "names of the bore geom's user data fields, in order (enum bore_user)."},

@@ -199,7 +199,8 @@ class ContactSetting:
         terms: the MuJoCo pair's parameters (one pair per joint; a tuple for the engine's
             contact sensor layout).
         friction: μ0 of the native regularized Coulomb friction [-].
-        source: "law" (the native reference law; the pair's solref/solimp are its placeholder),
+        source: "law" (the native reference law on the contact row; the pair's solref/solimp are its
+            placeholder), "force" (the same law as a passive force, no pair),
             "first-guess" (MuJoCo's soft contact, linear first guess) or "config" (the
             configuration's raw solref/solimp).
         law: the native law (source "law"), else None.
@@ -247,10 +248,10 @@ class BuildInfo:
 # ------------------------------------------------------------------ contact parameters
 def native_law_applies(cfg: BenchConfig) -> bool:
     """Whether the clearance joints take the native reference law: bore bushing,
-    ``mujoco.contact_source = "law"``, no raw ``contact_solref``/``contact_solimp``, and a
+    ``mujoco.contact_source = "law"`` or ``"force"``, no raw ``contact_solref``/``contact_solimp``, and a
     clearance joint to apply it to."""
     ms = cfg.mujoco
-    return (ms.bushing == "bore" and ms.contact_source == "law" and not (ms.contact_solref and ms.contact_solimp)
+    return (ms.bushing == "bore" and ms.contact_source in ("law", "force") and not (ms.contact_solref and ms.contact_solimp)
             and bool(cfg.joints.clearance_joints))
 
 
@@ -301,9 +302,25 @@ def contact_setting(cfg: BenchConfig, joint: str, a_hat: float, native: bool = T
     k *= ms.contact_stiffness_scale * cfg.contact.stiffness_scale
     c *= ms.contact_damping_scale
     term = ContactTerm((-k * a_hat, -c * a_hat), FLAT_SOLIMP, k, c)
-    if native and ms.contact_source == "law":
-        return ContactSetting((term,), mu, "law", native_law(cfg, joint))
+    if native and ms.contact_source in ("law", "force"):
+        return ContactSetting((term,), mu, ms.contact_source, native_law(cfg, joint))
     return ContactSetting((term,), mu, "first-guess")
+
+
+def as_passive_force(spec: mujoco.MjSpec, pair: mujoco.MjsPair, bore: mujoco.MjsGeom, pin_id: int,
+                     sensor: str | None) -> None:
+    """Turn a native-law pin/bore ``pair`` into ``mujoco.contact_source = "force"``: the pair is
+    deleted (no collision, no contact row), the bore's ``force_pin`` user data field names the
+    pin's geom id ``pin_id`` (geom ids do not change when pairs and sensors do), and the contact
+    sensor ``sensor`` (if the spec has it) becomes a position-stage user sensor of dimension 4 on
+    the bore that the native module fills with [found, normal force, 0, 0] (``_bore.c``, "Force")."""
+    spec.delete(pair)
+    bore.userdata = mjcf_names.replace_bore_userdata(list(bore.userdata), force_pin=float(pin_id))
+    if sensor is not None and spec.sensor(sensor) is not None:
+        spec.delete(spec.sensor(sensor))
+        spec.add_sensor(name=sensor, type=mujoco.mjtSensor.mjSENS_USER, objtype=mujoco.mjtObj.mjOBJ_GEOM,
+                        objname=bore.name, dim=4, needstage=mujoco.mjtStage.mjSTAGE_POS,
+                        datatype=mujoco.mjtDataType.mjDATATYPE_REAL)
 
 
 # --------------------------------------------------------------------------- builder
@@ -599,8 +616,15 @@ def build(cfg: BenchConfig) -> tuple[mujoco.MjSpec, mujoco.MjModel, BuildInfo]:
                 spec.delete(spec.sensor(mjcf_names.sensor_friction(jt)))
     model = _compile(spec, cfg)
     native = native_law_applies(cfg)
+    force = native and ms.contact_source == "force"
+    per_joint = 2 if force else 1  # force: v_imp and the previous step's normal velocity (_bore.c, "Force")
     if native:
-        spec.nuserdata = len(cfg.joints.clearance_joints)  # one slot per joint: v_imp of its contact event
+        spec.nuserdata = per_joint * len(cfg.joints.clearance_joints)  # v_imp of each joint's contact event
+    if force:
+        # the law and friction as passive forces (_bore.c, "Force"): no pair, no collision at all
+        # (the guide clearance is a passive force too), the contact sensor a user sensor the
+        # passive callback fills with [found, normal force, 0, 0]
+        spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT
     for slot, jt in enumerate(cfg.joints.clearance_joints):
         if ms.bushing == "tendon":
             a_hat = float(model.tendon_invweight0[model.tendon(mjcf_names.pair(jt)).id])
@@ -622,7 +646,11 @@ def build(cfg: BenchConfig) -> tuple[mujoco.MjSpec, mujoco.MjModel, BuildInfo]:
                 spec.sensor(mjcf_names.sensor_contact(jt)).intprm = [3, 0, 1]  # [found, force], one slot
             if setting.law is not None:
                 bush = spec.geom(mjcf_names.bushing(jt))
-                bush.userdata = mjcf_names.replace_bore_userdata(list(bush.userdata), **setting.law.userdata(slot))
+                bush.userdata = mjcf_names.replace_bore_userdata(list(bush.userdata),
+                                                                 **setting.law.userdata(per_joint * slot))
+            if force:
+                as_passive_force(spec, p, spec.geom(mjcf_names.bushing(jt)),
+                                 int(model.geom(mjcf_names.pin(jt)).id), mjcf_names.sensor_contact(jt))
         info.contacts[jt] = setting
         info.a_hat[jt] = a_hat
     info.sensors = [x.name for x in spec.sensors]

@@ -2,7 +2,8 @@
 
 ``mjCOLLISIONFUNC`` (collision table), ``mjcb_passive`` and ``mjcb_sensor`` are globals of
 the MuJoCo library; their addresses, and that of ``mj_applyFT``, are taken with ctypes from
-the very library the ``mujoco`` module loaded. Installation is idempotent and process-wide;
+the very library the ``mujoco`` module loaded (and that of ``mj_solveM``, for the effective mass
+of ``mujoco.contact_source = "force"``). Installation is idempotent and process-wide;
 other cylinder-cylinder pairs keep MuJoCo's own collider, and callbacks installed earlier
 are chained. Models without bore geoms are unaffected.
 """
@@ -20,7 +21,7 @@ import twin.mujoco_log  # noqa: F401 - MuJoCo's warnings kept off the terminal a
 from twin.errors import EngineUnavailableError
 from twin import names
 
-_addresses: tuple[int, int, int, int] | None = None
+_addresses: tuple[int, int, int, int, int] | None = None
 
 
 def _library_path() -> str:
@@ -81,5 +82,6 @@ def ensure_installed() -> None:
     passive = ctypes.addressof(ctypes.c_void_p.in_dll(lib, "mjcb_passive"))
     sensor = ctypes.addressof(ctypes.c_void_p.in_dll(lib, "mjcb_sensor"))
     apply_ft = ctypes.cast(lib.mj_applyFT, ctypes.c_void_p).value
-    _addresses = (table, passive, sensor, apply_ft)
+    solve_m = ctypes.cast(lib.mj_solveM, ctypes.c_void_p).value
+    _addresses = (table, passive, sensor, apply_ft, solve_m)
     _bore.install(*_addresses)

@@ -108,6 +108,7 @@ def variants(quick: bool = False) -> list[Variant]:
             Variant(DEFAULT_KEY, m, "default"),
             Variant("mujoco h=2e-5", m, "timestep", {"simulation.timestep_s": 2e-5, "sensors.output_rate_hz": 5e4}),
             Variant("mujoco first-guess contact", m, "contact", {"mujoco.contact_source": "first-guess"}),
+            Variant("mujoco force contact", m, "contact", {"mujoco.contact_source": "force"}),
             Variant("reference h=1e-5", "reference", "reference", {"simulation.timestep_s": 1e-5}),
         ]
     return [
@@ -120,6 +121,9 @@ def variants(quick: bool = False) -> list[Variant]:
         Variant("mujoco Newton 3 it, tol 1e-6", m, "solver", {"mujoco.iterations": 3, "mujoco.tolerance": 1e-6}),
         Variant("mujoco PGS", m, "solver", {"mujoco.solver": "PGS"}),
         Variant("mujoco first-guess contact", m, "contact", {"mujoco.contact_source": "first-guess"}),
+        Variant("mujoco force contact", m, "contact", {"mujoco.contact_source": "force"}),
+        Variant("mujoco force contact h=2e-5", m, "contact", {"mujoco.contact_source": "force",
+                                                                "simulation.timestep_s": 2e-5, "sensors.output_rate_hz": 5e4}),
         Variant("mujoco impact-speed damping x2", m, "contact", {"mujoco.impact_damping_gain": 2.0}),
         Variant("mujoco frictionloss guide", m, "contact", {"mujoco.guide_friction": "frictionloss"}),
         Variant("mujoco friction cone", m, "bushing", {"mujoco.friction": "cone"}),

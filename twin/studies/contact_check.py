@@ -64,7 +64,7 @@ def probe_model(cfg: BenchConfig, joint: str, m_eff: float, preload_n: float = 0
     inside ``joint``'s bore, with the twin's contact setting for ``cfg`` (native law or soft
     contact, exactly as the builder resolves it), frictionless; ``preload_n`` presses the pin
     into the wall (gravity along +x)."""
-    from twin.mujoco_engine.builder import FLAT_SOLIMP, contact_setting, native_law_applies
+    from twin.mujoco_engine.builder import FLAT_SOLIMP, as_passive_force, contact_setting, native_law_applies
 
     ensure_installed()
     rj, ri = cfg.joints.pin_radius(joint), cfg.joints.bushing_radius_m(joint)
@@ -95,6 +95,11 @@ def probe_model(cfg: BenchConfig, joint: str, m_eff: float, preload_n: float = 0
     pair.solref, pair.solimp = list(setting.solref), list(setting.solimp)
     if setting.law is not None:
         bore.userdata = replace_bore_userdata(list(bore.userdata), **setting.law.userdata(0))
+    if setting.source == "force":  # the law as a passive force, no pair (as the builder does)
+        spec.nuserdata = 2  # v_imp and the previous step's normal velocity
+        pin_id = int(spec.compile().geom("pin").id)
+        as_passive_force(spec, pair, bore, pin_id, "f")
+        spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT
     return spec.compile()
 
 
