@@ -57,7 +57,7 @@ def digests(quick: bool = False) -> dict[str, str]:
         run = twin.simulate(twin.preset(which), duration=duration, engine=engine)
         out[f"simulate {which} {engine or 'preset'}"] = _digest_run(run)
         print(f"  {which} {engine or ''}: done", file=sys.stderr, flush=True)
-    answer = dict(twin.identify(twin.samples.path("test6")))
+    answer = twin.identify(twin.samples.path("test6")).to_dict()
     answer.pop("seconds", None)  # wall time of the answer, not an output
     out["identify sample:test6"] = _digest_json(answer)
     if not quick:

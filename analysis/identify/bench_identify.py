@@ -40,7 +40,8 @@ def main() -> None:
     ap.add_argument("--model", help="model file (default: the shipped one)")
     args = ap.parse_args()
     from twin.commands.identify import default_model_path
-    from twin.identification.model import ClearanceModel, identify_recording, recording_inputs
+    from twin.identification.inputs import recording_inputs
+    from twin.identification.model import ClearanceModel, identify_recording
 
     model = ClearanceModel.load(args.model or default_model_path())
     with tempfile.TemporaryDirectory() as d:

@@ -49,7 +49,7 @@ ROOT = Path(__file__).resolve().parents[2]
 def recording_features() -> dict[str, np.ndarray]:
     """Window features of every sample recording that has them (the calibration-only one has none)."""
     from twin.identification.features import IdentifyError, features
-    from twin.identification.model import recording_inputs
+    from twin.identification.inputs import recording_inputs
 
     out = {}
     for rec in sorted((ROOT / "recordings").glob("*.mcap")):

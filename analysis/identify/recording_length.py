@@ -41,7 +41,9 @@ KS = (1, 2, 3, 4, 7)  # windows used, from the end of the steady part
 def main(argv: list[str] | None = None) -> int:
     from twin.dataset import open as open_dataset
     from twin.identification.evaluate import half_gap_mm, within_factor
-    from twin.identification.model import ClearanceModel, dataset_features, resolution
+    from twin.identification.inputs import dataset_features
+    from twin.identification.intervals import resolution
+    from twin.identification.model import ClearanceModel
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("dataset")

@@ -27,7 +27,9 @@ def one(job: tuple) -> dict:
     engine, angle, model_path = job
     from twin.config import preset
     from twin.identification.features import features
-    from twin.identification.model import ClearanceModel, simulated_inputs, size_answer
+    from twin.identification.inputs import simulated_inputs
+    from twin.identification.intervals import size_answer
+    from twin.identification.model import ClearanceModel
     from twin.simulation import simulate_run
 
     cfg = preset(6).replace(**{"simulation.engine": engine, "simulation.duration_s": 5.5, "drive.ramp_s": 0.4,
