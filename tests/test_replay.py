@@ -190,3 +190,25 @@ def test_replay_errors(clearance, tmp_path, capsys):
     with pytest.raises(RecordingError, match="50000"):
         replay(path, tmp_path / "o3", lambda c: c.replace(**{"instrumentation.daq_rate_hz": 50000.0}))
     assert not (tmp_path / "o3").exists()
+
+
+def test_the_replay_result_is_the_report_file_and_has_the_golden_layout(ideal):
+    """The replay returns a :class:`~twin.replay_result.ReplayResult` whose ``to_dict()`` is ``report.json`` plus
+    the report files' own entry, with the keys of the report captured before the typed result (tests/golden,
+    the same recording) in the same order: top level, configuration, tracking and every sensor's figures."""
+    from pathlib import Path
+
+    from twin.replay_result import ReplayResult
+
+    _, _, report, out = ideal
+    assert isinstance(report, ReplayResult)
+    d = report.to_dict()
+    golden = json.loads((Path(__file__).resolve().parent / "golden" / "replay_t3.json").read_text())
+    assert list(d) == list(golden)
+    for part in ("configuration", "tracking", "simulation", "files", "time_lag_estimate"):
+        assert list(d[part]) == list(golden[part]), part
+    assert list(d["sensors"]) == list(golden["sensors"])
+    assert all(list(d["sensors"][a]) == list(golden["sensors"][a]) for a in d["sensors"])
+    on_disk = json.loads((out / "report.json").read_text())
+    assert d["files"].pop("report") == ["report.json", "report.md"]
+    assert json.loads(json.dumps(d, default=float)) == on_disk

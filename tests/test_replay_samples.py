@@ -69,7 +69,7 @@ def test_replay_of_a_sample_with_its_own_model(tmp_path, name):
         assert r.sensors["AC4"]["nrmse_pct"] < 0.3
     else:
         assert abs(r.time_lag_s) <= 5e-5 and hi - lo <= 1e-4
-    assert "CI" in render_markdown(r)
+    assert "CI" in render_markdown(r.to_dict())
 
 
 # ---------------------------------------------------------------- repeatability

@@ -147,7 +147,7 @@ def main() -> int:
         answers = {}
         for rec in sorted((ROOT / "recordings").glob("*.mcap")):
             try:
-                a, b = (identify_recording(m, rec) for m in (old, back))
+                a, b = (identify_recording(m, rec).to_dict() for m in (old, back))
             except Exception as err:  # noqa: BLE001 - the calibration-only sample is refused by both
                 answers[rec.name] = {"refused": str(err)}
                 continue

@@ -110,7 +110,7 @@ def main() -> None:
         acc, counts, rate, cpr, cfg = recording_inputs(rec)
         X, w = features(acc, counts, rate, cpr, orientation=cfg.mechanism.orientation)
         res = resolution(cfg.mechanism.orientation, w.crank_hz)
-        a, b = old.identify(X, res), new.identify(X, res)
+        a, b = old.identify(X, res).to_dict(), new.identify(X, res).to_dict()
         if json.dumps(a, sort_keys=True) != json.dumps(b, sort_keys=True):
             tmp.unlink()
             raise SystemExit(f"{rec.name}: the converted model answers differently: {a} vs {b}")

@@ -47,7 +47,7 @@ def one(job: tuple) -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from twin.commands.identify import default_model_path
+    from twin.identification.model import default_model_path
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--angles", default="0,1,2,3,4,5", help="start angles [rad], comma-separated")

@@ -326,7 +326,8 @@ HELD_OUT_FACTOR = 1.5
 
 
 def held_out_accuracy(scores: np.ndarray, held_runs: list[dict[str, Any]]) -> dict[str, dict[str, list]]:
-    """The held-out size accuracy of one joint from its out-of-fold scores (:func:`twin.identification.training.train`): per orientation, at
+    """The held-out size accuracy of one joint from its out-of-fold scores
+    (:func:`twin.identification.training.train`): per orientation, at
     each training speed (the runs' motor speed; placed at the median of their crank rates [Hz]), the share of the
     runs whose answer lies within a factor :data:`HELD_OUT_FACTOR` of the truth and the number of runs. With
     ``interval_folds="speed"`` each answer was made by a regressor that never saw that speed, as a bench

@@ -172,7 +172,8 @@ class ClearanceModel:
 
     @property
     def hop_revs(self) -> float:
-        """Where an answer's windows end, every this many crank turns [turns] (:data:`twin.identification.training.ANSWER_HOP_REVS`)."""
+        """Where an answer's windows end, every this many crank turns [turns]
+        (:data:`twin.identification.training.ANSWER_HOP_REVS`)."""
         return float(self.trained_on.get("answer_hop_revs", REVS_PER_WINDOW))
 
     # ------------------------------------------------------------- predict
@@ -236,7 +237,8 @@ def _check_ranges(ranges: Any, ref: Any, n_features: int) -> None:
 
 
 def _check_held_out(table: Any) -> None:
-    """Raise ValueError unless ``table`` (None, or :func:`train`'s ``held_out_size_accuracy``) is well formed."""
+    """Raise ValueError unless ``table`` (None, or the ``held_out_size_accuracy`` of
+    :func:`twin.identification.training.train`) is well formed."""
     if table is None:
         return
     if not (isinstance(table, dict) and {"B", "C"} <= set(table)):

@@ -154,7 +154,8 @@ class IdentifyResult:
         for j in self.joints:
             if j.joint == name:
                 return j
-        raise KeyError(f"{name!r}: no such clearance location; the answer has {', '.join(j.joint for j in self.joints)}")
+        have = ", ".join(j.joint for j in self.joints)
+        raise KeyError(f"{name!r}: no such clearance location; the answer has {have}")
 
     def to_dict(self) -> dict[str, Any]:
         """The answer as the plain dict of the JSON file (keys in the file's order)."""

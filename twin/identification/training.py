@@ -168,7 +168,8 @@ def _dataset_use(b: bool, c: bool) -> dict[str, str]:
 
 
 
-def _training_dirs(dataset_dir: str | Path | list[str | Path], o: TrainOptions) -> tuple[list[str | Path], int, int, int]:
+def _training_dirs(dataset_dir: str | Path | list[str | Path], o: TrainOptions
+                   ) -> tuple[list[str | Path], int, int, int]:
     """Every dataset folder in the order the features are pooled (the datasets, ``size_only_at["B"]``,
     ``size_only_at["C"]``, ``location_only``), the count of the datasets, of B's size-only ones, and of all those
     teaching a size; refuses a folder given twice (its runs would be in twice)."""
