@@ -25,12 +25,12 @@ from the file, and answering needs no scikit-learn. Members:
 
 * ``model.json``: a 0-d unicode array holding JSON: ``format`` (``twin-identify-model/4``),
   ``feature_version`` and ``feature_names`` (:mod:`twin.identification.features`), ``interval_log10`` (the
-  conformal half widths [log10], see above), ``trained_on`` (the training data, with ``versions``:
+  conformal half widths [log10], :mod:`twin.identification.intervals`), ``trained_on`` (the training data, with ``versions``:
   twin, scikit-learn and numpy of the training; ``ranges``: the training runs' ranges of crank rate,
   within-turn ripple per harmonic, noise level and orientations, with their ``source``; ``feature_reference``:
   the training windows' feature quartiles, or null where unknown; ``interval.normalized``: the normalized
-  conformal scale per joint, where trained; ``held_out_size_accuracy`` and ``answer_hop_revs``, where recorded;
-  see below), and ``estimators``: per estimator (``classifier``,
+  conformal scale per joint, where trained; ``held_out_size_accuracy``
+  (:func:`twin.identification.intervals.held_out_accuracy`) and ``answer_hop_revs``, where recorded), and ``estimators``: per estimator (``classifier``,
   ``size_B``, ``size_C``) its kind (link: ``softmax`` for the classifier, ``identity`` for the size
   regressors), number of features, trees per iteration, classes and source
   (:meth:`twin.identification.trees.TreeEnsemble.meta`);

@@ -36,7 +36,7 @@ from twin.identification.intervals import (CATALOGUE_BANDS_MM, COVERAGE, FAULT_S
                                            _interval_parts, fault_split_joints,
                                            held_out_accuracy, logs_answer, logs_spread, normalized_scale,
                                            recorded_size_bands)
-from twin.identification.model import CLASSES, ClearanceModel
+from twin.identification.model import CLASSES, JOINTS, ClearanceModel
 from twin.identification.ranges import feature_reference, training_ranges
 from twin.identification.trees import ModelError, from_sklearn
 
@@ -61,7 +61,6 @@ SIZE_REGRESSORS = {
 #: (87.1 -> 85.7 %; ``analysis/identify/nuisance_study.py --variants overlap``): a short recording's size error is a
 #: bias of its scene (contact parameters, ripple), which more windows over the same turns do not average out
 ANSWER_HOP_REVS = float(REVS_PER_WINDOW)
-JOINTS = ("B", "C")
 
 
 class TrainOptionsError(ConfigError, ModelError):
