@@ -405,8 +405,8 @@ def test_a_trained_model_stores_its_training_ranges_and_its_interval_rule(small)
         res = resolution(row["orientation"], row["crank_hz"])
         a = m.identify(Xr, res)
         for j in ("B", "C"):
-            lo, hi = a[f"clearance_{j.lower()}_if_faulty_mm"]["interval_90"]
-            mid = a[f"clearance_{j.lower()}_if_faulty_mm"]["median"]
+            lo, hi = a.joint(j).interval_if_faulty_mm
+            mid = a.joint(j).size_if_faulty_mm
             side = j if res[j] or f"{j}_unresolved" not in m.interval_log10 else f"{j}_unresolved"
             w = _half_width(m, side, mid, len(Xr))
             assert math.log10(hi / mid) == pytest.approx(w, abs=1e-9)

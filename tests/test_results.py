@@ -153,7 +153,7 @@ def test_train_options_defaults_are_the_shipped_models_settings():
     o = TrainOptions()
     assert (o.splits, o.workers, o.seed, o.interval_folds, o.size_regressor) == (("train", "val"), 1, 0, "runs", "mean")
     assert o.size_band_mm == CATALOGUE_BANDS_MM and o.fault_split == FAULT_SPLIT_JOINTS == ("C",)
-    assert o.answer_hop_revs == ANSWER_HOP_REVS and o.ripple_split and o.interval_by_engine and o.by_windows
+    assert o.answer_hop_revs == ANSWER_HOP_REVS and o.ripple_split and o.interval_by_engine and not o.by_windows
     assert not o.normalized_intervals and o.location_only == () and o.size_only_at == {}
     # lists become tuples, True both joints, a single split string one split
     o = TrainOptions(splits="train", location_only=["a"], size_only_at={"B": ["b"]}, fault_split=True,
@@ -212,3 +212,48 @@ def test_the_api_and_the_identification_library_import_nothing_of_the_command_li
     for m in starts:
         cli = sorted(n for n in reach(m) if n == "twin.cli" or n.startswith("twin.commands"))
         assert cli == [], (m, cli)
+
+
+def test_train_makes_the_tables_by_windows_when_asked_and_not_by_default(tmp_path):
+    """``by_windows``: synthetic features (two windows per run, the first column log10 of B's clearance, the second
+    C's): asked for, the model holds the half widths of answers from one window, calibrated on the out-of-fold runs'
+    first windows (equal to :func:`_half_widths_by_windows` on the out-of-fold answers it hands out); by default the
+    table is empty, as ``train`` has always written it."""
+    import math
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from twin.identification.features import feature_names
+    from twin.identification.intervals import _half_widths_by_windows
+    from twin.identification.training import TrainOptions, train
+
+    rng = np.random.default_rng(5)
+    nf = len(feature_names())
+    rows, owner, X = [], [], []
+    for i in range(160):
+        fault = ("B", "C", "BC", "none")[i % 4]
+        size = {j: (10 ** rng.uniform(-1.7, -0.3) if j in fault else 0.0) for j in "BC"}
+        rpm = (400.0, 550.0, 700.0, 750.0)[(i // 4) % 4]
+        rows.append({"fault": fault, "clearance_b_mm": size["B"], "clearance_c_mm": size["C"], "dataset": "s",
+                     "orientation": "z", "crank_hz": rpm / 60 / 3.97, "motor_rpm": rpm, "engine": "reference",
+                     "measures": {"crank_hz": rpm / 60 / 3.97, "ripple_pct": [1.0, 0.5, 0.2, 0.0], "noise_ug_rthz": 30.0}})
+        for _ in range(2):
+            x = rng.normal(size=nf)
+            x[:2] = [math.log10(size[j]) + rng.normal(0, 0.05) if size[j] else -3.0 for j in "BC"]
+            X.append(x)
+            owner.append(i)
+    ds = SimpleNamespace(info={"name": "s", "identity": {"engine": "reference"}}, rate_hz=100000.0, path=tmp_path)
+    opts = dict(interval_folds="speed", size_regressor="median")
+    oof: dict = {}
+    m, info = train([tmp_path], TrainOptions(**opts, by_windows=True), features=(np.array(X), rows, owner, [], [ds]),
+                    out_of_fold=oof)
+    table = info["interval"]["half_width_log10_by_windows"]
+    assert list(table) == ["1"]
+    for j in "BC":
+        again = _half_widths_by_windows(j, oof[j]["window_logs"], oof[j]["runs"], m.trained_on["interval"]["size_band_mm"],
+                                        True, True, j == "C")
+        assert again["1"] == {k: v for k, v in table["1"].items() if k[0] == j}
+    _, plain = train([tmp_path], TrainOptions(**opts), features=(np.array(X), rows, owner, [], [ds]))
+    assert plain["interval"]["half_width_log10_by_windows"] == {}
+    assert plain["interval"]["half_width_log10"] == info["interval"]["half_width_log10"]

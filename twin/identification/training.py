@@ -96,7 +96,9 @@ class TrainOptions:
         fault_split: the joints whose intervals are split also by whether both joints are faulty (``_both``): a
             tuple of distinct joints, True for both, False for none (stored as the tuple).
         by_windows: also the half widths of answers from 1, 2, ... windows
-            (``interval.half_width_log10_by_windows``; with windows back to back only).
+            (``interval.half_width_log10_by_windows``; with windows back to back only). Off by default: ``train``
+            has never made these tables (the option was ignored), and turning it on changes what
+            ``twin identify train`` writes.
     """
 
     splits: tuple[str, ...] = ("train", "val")
@@ -112,7 +114,7 @@ class TrainOptions:
     interval_by_engine: bool = True
     answer_hop_revs: float = ANSWER_HOP_REVS
     fault_split: bool | tuple[str, ...] = FAULT_SPLIT_JOINTS
-    by_windows: bool = True
+    by_windows: bool = False
 
     def __post_init__(self) -> None:
         def bad(name: str, message: str) -> TrainOptionsError:
@@ -213,16 +215,14 @@ def train(dataset_dir: str | Path | list[str | Path], options: TrainOptions | No
     o = TrainOptions() if options is None else options
     if not isinstance(o, TrainOptions):
         raise TypeError(f"options: must be a TrainOptions, got {type(o).__name__}")
-    from sklearn.ensemble import HistGradientBoostingClassifier, HistGradientBoostingRegressor
+    from sklearn.ensemble import HistGradientBoostingClassifier
 
     dirs, n_both, n_b, n_size = _training_dirs(dataset_dir, o)
-    split_by_fault = o.fault_split
     t0 = time.perf_counter()
     X, rows, owner, skipped, dss = features if features is not None else pooled_features(dirs, o.splits, o.workers)
     y = np.array([rows[i]["fault"] for i in owner])
     names = [d.info["name"] for d in dss]
     size_names = {"B": set(names[:n_both + n_b]), "C": set(names[:n_both] + names[n_both + n_b:n_size])}
-    for_size = {j: np.array([rows[i]["dataset"] in size_names[j] for i in owner]) for j in JOINTS}
     t_feat = time.perf_counter() - t0
     # leaves of at least 20 windows (scikit-learn's default) on datasets of a thousand windows and
     # more; smaller datasets (tests, first looks) get smaller leaves, and no early stopping below 500
@@ -233,59 +233,89 @@ def train(dataset_dir: str | Path | list[str | Path], options: TrainOptions | No
     clf.fit(X, y)
     classifier = from_sklearn(clf, check=X)  # what the file holds: answers equal bit for bit, checked
     size: dict[str, Any] = {}
-    half_width: dict[str, float] = {}
-    held_out: dict[str, Any] = {}
-    normalized: dict[str, dict[str, float]] = {}
-    by_windows: dict[str, dict[str, float]] = {}  # half widths of answers from 1, 2, ... windows
-    n_folds: dict[str, int] = {}
-    owner_a = np.asarray(owner)
+    cal = _Calibration()
     for j in JOINTS:
-        key = f"clearance_{j.lower()}_mm"  # the dataset's label column
-        truth = np.array([rows[i][key] for i in owner], float)
-        sel = (truth > 0) & for_size[j]
-        if sel.sum() < 10:
-            raise ModelError(f"{', '.join(map(str, dirs))}: fewer than 10 windows with a clearance at {j}: cannot "
-                             "learn its size")
+        for_size = np.array([rows[i]["dataset"] in size_names[j] for i in owner])
+        size[j] = _fit_size(j, X, rows, np.asarray(owner), for_size, o, cal, out_of_fold, dirs)
+    trained_on = _trained_on(dss, dirs, rows, X, owner, y, skipped, size_names, o, cal)
+    trained_on |= {"feature_seconds": t_feat, "fit_seconds": time.perf_counter() - t0 - t_feat}
+    return ClearanceModel(classifier, size, cal.half_width, trained_on=trained_on), trained_on
 
-        def fit(use: np.ndarray) -> Any:
-            reg = HistGradientBoostingRegressor(**SIZE_REGRESSORS[o.size_regressor],
-                                                min_samples_leaf=int(min(20, max(3, int(use.sum()) // 48))),
-                                                random_state=o.seed)
-            return reg.fit(X[use], np.log10(truth[use]))
 
-        size[j] = from_sklearn(fit(sel), check=X[sel])
-        # out-of-fold scores of whole runs (twin.identification.intervals)
-        fold = _conformal_folds(rows, np.unique(owner_a[sel]), o.interval_folds, o.seed)
-        n_folds[j] = int(fold.max()) + 1
-        scores, held_runs, spread, answers, window_logs = [], [], [], [], []
-        for k in range(n_folds[j]):
-            held = sel & (fold[owner_a] == k)
-            if not held.any() or (sel & ~held).sum() < 10:
-                continue
-            reg = fit(sel & ~held)
-            for r in np.unique(owner_a[held]):
-                Xr = X[owner_a == r]
-                window_logs.append(reg.predict(Xr))  # one prediction per run: its answer and spread
-                answers.append(logs_answer(window_logs[-1]))
-                scores.append(abs(math.log10(answers[-1]) - math.log10(rows[int(r)][key])))
-                spread.append(logs_spread(window_logs[-1]))
-                held_runs.append(rows[int(r)])
-        scores, spread, answers = np.array(scores), np.array(spread), np.array(answers)
-        if out_of_fold is not None:
-            out_of_fold[j] = {"scores": scores, "runs": held_runs, "answers": answers, "window_logs": window_logs}
-        if o.normalized_intervals:
-            normalized[j] = normalized_scale(scores, spread)
-        half_width |= _half_widths(j, scores, held_runs, answers, o.size_band_mm, o.ripple_split,
-                                   o.interval_by_engine, j in split_by_fault)
-        if o.by_windows and float(o.answer_hop_revs) == REVS_PER_WINDOW:
-            for n, half in _half_widths_by_windows(j, window_logs, held_runs, o.size_band_mm, o.ripple_split,
-                                                   o.interval_by_engine, j in split_by_fault).items():
-                by_windows.setdefault(n, {}).update(half)
-        held_out[j] = held_out_accuracy(scores, held_runs)
-        if o.normalized_intervals:
-            for part, m in _interval_parts(j, held_runs, answers, o.size_band_mm, o.ripple_split,
-                                           j in split_by_fault)[1].items():
-                normalized[part] = normalized_scale(scores[m], spread[m], normalized[j]["beta"])
+@dataclass
+class _Calibration:
+    """What :func:`_fit_size` calibrates, gathered over the joints: the conformal half widths [log10] by key, those
+    of answers from 1, 2, ... windows (by str(n)), the normalized scales, the held-out size accuracy and the number
+    of folds, per joint."""
+
+    half_width: dict[str, float] = field(default_factory=dict)
+    by_windows: dict[str, dict[str, float]] = field(default_factory=dict)
+    normalized: dict[str, dict[str, float]] = field(default_factory=dict)
+    held_out: dict[str, Any] = field(default_factory=dict)
+    n_folds: dict[str, int] = field(default_factory=dict)
+
+
+def _fit_size(j: str, X: np.ndarray, rows: list[dict[str, Any]], owner: np.ndarray, for_size: np.ndarray,
+              o: TrainOptions, cal: _Calibration, out_of_fold: dict[str, Any] | None, dirs: list[str | Path]) -> Any:
+    """Fit joint ``j``'s size regressor on the windows ``X`` [windows, features] of the runs with a clearance there
+    whose dataset teaches its size (``for_size`` [windows]; ``owner`` [windows]: each window's row in ``rows``),
+    and calibrate its intervals and held-out accuracy from out-of-fold answers of whole runs into ``cal``.
+    Returns the regressor as plain arrays (:class:`twin.identification.trees.TreeEnsemble`)."""
+    from sklearn.ensemble import HistGradientBoostingRegressor
+
+    key = f"clearance_{j.lower()}_mm"  # the dataset's label column
+    truth = np.array([rows[i][key] for i in owner], float)
+    sel = (truth > 0) & for_size
+    if sel.sum() < 10:
+        raise ModelError(f"{', '.join(map(str, dirs))}: fewer than 10 windows with a clearance at {j}: cannot "
+                         "learn its size")
+
+    def fit(use: np.ndarray) -> Any:
+        reg = HistGradientBoostingRegressor(**SIZE_REGRESSORS[o.size_regressor],
+                                            min_samples_leaf=int(min(20, max(3, int(use.sum()) // 48))),
+                                            random_state=o.seed)
+        return reg.fit(X[use], np.log10(truth[use]))
+
+    regressor = from_sklearn(fit(sel), check=X[sel])
+    # out-of-fold scores of whole runs (twin.identification.intervals)
+    fold = _conformal_folds(rows, np.unique(owner[sel]), o.interval_folds, o.seed)
+    cal.n_folds[j] = int(fold.max()) + 1
+    scores, held_runs, spread, answers, window_logs = [], [], [], [], []
+    for k in range(cal.n_folds[j]):
+        held = sel & (fold[owner] == k)
+        if not held.any() or (sel & ~held).sum() < 10:
+            continue
+        reg = fit(sel & ~held)
+        for r in np.unique(owner[held]):
+            window_logs.append(reg.predict(X[owner == r]))  # one prediction per run: its answer and spread
+            answers.append(logs_answer(window_logs[-1]))
+            scores.append(abs(math.log10(answers[-1]) - math.log10(rows[int(r)][key])))
+            spread.append(logs_spread(window_logs[-1]))
+            held_runs.append(rows[int(r)])
+    scores, spread, answers = np.array(scores), np.array(spread), np.array(answers)
+    if out_of_fold is not None:
+        out_of_fold[j] = {"scores": scores, "runs": held_runs, "answers": answers, "window_logs": window_logs}
+    split = j in o.fault_split
+    if o.normalized_intervals:
+        cal.normalized[j] = normalized_scale(scores, spread)
+    cal.half_width |= _half_widths(j, scores, held_runs, answers, o.size_band_mm, o.ripple_split,
+                                   o.interval_by_engine, split)
+    if o.by_windows and float(o.answer_hop_revs) == REVS_PER_WINDOW:
+        for n, half in _half_widths_by_windows(j, window_logs, held_runs, o.size_band_mm, o.ripple_split,
+                                               o.interval_by_engine, split).items():
+            cal.by_windows.setdefault(n, {}).update(half)
+    cal.held_out[j] = held_out_accuracy(scores, held_runs)
+    if o.normalized_intervals:
+        for part, m in _interval_parts(j, held_runs, answers, o.size_band_mm, o.ripple_split, split)[1].items():
+            cal.normalized[part] = normalized_scale(scores[m], spread[m], cal.normalized[j]["beta"])
+    return regressor
+
+
+def _trained_on(dss: list[Any], dirs: list[str | Path], rows: list[dict[str, Any]], X: np.ndarray, owner: list[int],
+                y: np.ndarray, skipped: list[dict[str, Any]], size_names: dict[str, set[str]], o: TrainOptions,
+                cal: _Calibration) -> dict[str, Any]:
+    """The model file's ``trained_on`` record (module docstring of :mod:`twin.identification.model`), but the
+    seconds spent."""
     import sklearn
 
     from twin import __version__
@@ -294,7 +324,7 @@ def train(dataset_dir: str | Path | list[str | Path], options: TrainOptions | No
     ident = infos[0]["identity"] if len(infos) == 1 else [i["identity"] for i in infos]  # one dataset: its identity
     digest = hashlib.sha256(json.dumps(ident, sort_keys=True).encode()).hexdigest()[:16]
     hz = np.array([r["crank_hz"] for r in rows])
-    trained_on = {
+    return {
         "dataset": "+".join(i["name"] for i in infos), "dataset_dir": ", ".join(map(str, dirs)),
         "datasets": [{"name": i["name"], "runs": sum(1 for r in rows if r["dataset"] == i["name"])}
                      | _dataset_use(i["name"] in size_names["B"], i["name"] in size_names["C"]) for i in infos],
@@ -309,26 +339,24 @@ def train(dataset_dir: str | Path | list[str | Path], options: TrainOptions | No
         "versions": {"twin": __version__, "sklearn": sklearn.__version__, "numpy": np.__version__},
         "size_regressor": o.size_regressor,
         "answer_hop_revs": float(o.answer_hop_revs),
-        "held_out_size_accuracy": held_out | {
+        "held_out_size_accuracy": cal.held_out | {
             "method": f"out-of-fold answers of the training runs (folds by {o.interval_folds}), per orientation and "
                       f"training speed: the share within a factor {HELD_OUT_FACTOR:g} of the truth"},
-        "interval": {"method": "split-conformal, out of fold", "folds_by": o.interval_folds, "folds": n_folds,
+        "interval": {"method": "split-conformal, out of fold", "folds_by": o.interval_folds, "folds": cal.n_folds,
                      "coverage": COVERAGE,
                      "size_band_mm": recorded_size_bands(o.size_band_mm),
                      "ripple_band_pct": RIPPLE_BAND_PCT if o.ripple_split else None,
                      "by_engine": o.interval_by_engine,
-                     "fault_split": list(split_by_fault),
-                     "half_width_log10": half_width,
-                     "half_width_log10_by_windows": by_windows,
-                     "normalized": normalized,
+                     "fault_split": list(o.fault_split),
+                     "half_width_log10": cal.half_width,
+                     "half_width_log10_by_windows": cal.by_windows,
+                     "normalized": cal.normalized,
                      "difficulty": "spread of the per-window answers: interquartile range of the windows' log10 "
                                    "answers / 1.349 [log10]"},
         "ranges": training_ranges([r["measures"] for r in rows], [r["orientation"] for r in rows],
                                   "measured on every training run (twin identify train)"),
         "feature_reference": feature_reference(X, np.asarray(owner)),
-        "feature_seconds": t_feat, "fit_seconds": time.perf_counter() - t0 - t_feat,
     }
-    return ClearanceModel(classifier, size, half_width, trained_on=trained_on), trained_on
 
 
 def _clearances_seen(values: list[float]) -> list[float] | dict[str, Any]:
