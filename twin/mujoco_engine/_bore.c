@@ -135,10 +135,18 @@
  * same forward pass: MuJoCo calls a position-stage user sensor before the velocity stage and
  * then leaves its slot alone, while a velocity-stage user sensor makes every step run
  * mj_subtreeVel first (0.1 us per step here, for nothing the friction needs) and would compute
- * the friction a second time. The position-stage callback marks the mjData (thread-local), and
- * only the passive callback of that same pass writes, so the forward passes that skip sensors
- * (RK4's intermediate stages) leave the step's value in place. needstage="vel" still works the
- * old way (the value computed by the sensor callback).
+ * the friction a second time. The position-stage callback marks the sensors' own slots in the
+ * mjData (mark_sensors_pending), and only the passive callback of that same pass writes, so the
+ * forward passes that skip sensors (RK4's intermediate stages) leave the step's value in place.
+ * needstage="vel" still works the old way (the value computed by the sensor callback).
+ *
+ * One set of hooks for every model. MuJoCo's collision table and callbacks are process-wide
+ * ("global and not model-specific", its API reference), so every hook here is a dispatcher that
+ * reads all it needs from the model and data it is given: parameters from the geom/joint user data
+ * and <numeric> elements, per-scene state from d->userdata, the sensor mark from d->sensordata.
+ * Nothing is kept between calls; the only file-scope variables are the pointers below, written once
+ * by install() (under the GIL) and the same for every model. check_model() names what a model lays
+ * out wrongly, since a callback can only skip it.
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -235,6 +243,8 @@ _Static_assert(sizeof(guide_user_names) / sizeof(guide_user_names[0]) == GUIDE_N
 int twin_socket_install(void* table_addr);
 void twin_socket_tangent(const mjtNum vball[3], const mjtNum vsocket[3], const mjtNum n[3], mjtNum t[3]);
 
+/* what the hooks chain to (the table's cylinder-cylinder collider, callbacks installed before) and
+ * the MuJoCo functions they call: set by install(), the same for every model */
 static mjfCollision g_previous = NULL;
 static mjfGeneric g_prev_passive = NULL;
 static mjfSensor g_prev_sensor = NULL;
@@ -468,6 +478,13 @@ static mjtNum friction_coefficient(const mjtNum* user, mjtNum s) {
   return mu;
 }
 
+/* the theta-method weight of the law's damping on row `row` with c h = ch (module docstring): 1/2
+ * while c h <= 2 m_hat, 1 - m_hat/(c h) beyond (m_hat = 1/efc_diagA, the row's mass estimate) */
+static mjtNum row_theta(const mjData* d, int row, mjtNum ch) {
+  const mjtNum mhat = d->efc_diagA[row] > 0 ? 1 / d->efc_diagA[row] : 0;
+  return ch > 2 * mhat ? 1 - mhat / ch : 0.5;
+}
+
 /* the contact law (module docstring) on the normal row of each bore's contact; keeps v_imp */
 static void contact_law(const mjModel* m, mjData* d) {
   const int nu = m->nuser_geom;
@@ -510,10 +527,8 @@ static void contact_law(const mjModel* m, mjData* d) {
     }
     mjtNum fe, c;                                 /* elastic force, damping coefficient */
     law_terms(user, law, delta, rate, vimp, &fe, &c);
-    const mjtNum h = m->opt.timestep;
-    const mjtNum mhat = d->efc_diagA[row] > 0 ? 1 / d->efc_diagA[row] : 0;
-    const mjtNum ch = c * h;
-    const mjtNum theta = ch > 2 * mhat ? 1 - mhat / ch : 0.5;
+    const mjtNum ch = c * m->opt.timestep;
+    const mjtNum theta = row_theta(d, row, ch);
     const mjtNum gamma = theta * ch;
     const mjtNum R0 = d->efc_R[row];
     const mjtNum R = gamma * R0 > 1 ? 1 / gamma : R0;
@@ -565,11 +580,8 @@ static int bore_friction(const mjModel* m, const mjData* d, int icon, friction_t
     fn = aref / d->efc_R[row];
     const mjtNum c = kbip[1] / d->efc_R[row];
     if (c > 0) {
-      const mjtNum h = m->opt.timestep;
-      const mjtNum mhat = d->efc_diagA[row] > 0 ? 1 / d->efc_diagA[row] : 0;
-      const mjtNum ch = c * h;
-      const mjtNum theta = ch > 2 * mhat ? 1 - mhat / ch : 0.5;
-      fn -= theta * ch * bore_bias_acceleration(m, d, con, gb);
+      const mjtNum ch = c * m->opt.timestep;
+      fn -= row_theta(d, row, ch) * ch * bore_bias_acceleration(m, d, con, gb);
     }
   } else {
     fn = aref / (d->efc_diagA[row] + d->efc_R[row]);

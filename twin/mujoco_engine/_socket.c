@@ -19,12 +19,12 @@
  * reference engine's definition (twin/spatial/model.py: its rod has no spin). The contact law
  * and the friction are those of _bore.c, which treats a marked sphere as a socket (no bore
  * axis). Every other sphere-sphere pair goes to the function that was in the table before
- * (MuJoCo's own, kept from the first install). Stateless and thread-safe: the collider reads
- * everything from the model and data it is given.
+ * (MuJoCo's own). Stateless and thread-safe: the collider reads everything from the model and
+ * data it is given.
  */
 #include "_native.h"
 
-/* MuJoCo's sphere-sphere collider, as found in the table at the first install (then constant) */
+/* the sphere-sphere collider that was in the table when this one was installed (MuJoCo's own) */
 static mjfCollision g_prev_sphere = NULL;
 
 static int is_socket(const mjModel* m, int g) {
