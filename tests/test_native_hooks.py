@@ -10,12 +10,12 @@ its ball-in-socket colliders), so a parameter or a state leaking from one to the
 from __future__ import annotations
 
 import ctypes
-import shutil
-import subprocess
 import hashlib
 import json
-import sysconfig
+import shutil
+import subprocess
 import sys
+import sysconfig
 import threading
 from pathlib import Path
 
@@ -69,7 +69,7 @@ def _state(e) -> str:
 
 
 def solo(which: str) -> dict:
-    """What one model gives alone (run by :func:`_fresh` in a process of its own): the run's channel
+    """What one model gives alone (run by the fixture :func:`fresh` in a process of its own): the run's channel
     digests and the state digest after NSTEP plain steps."""
     e = _engine(which)
     for _ in range(NSTEP):
