@@ -914,6 +914,9 @@ static int model_problem(const mjModel* m, char* msg, size_t n) {
       if (dofs[k] < 0 || dofs[k] >= m->nv)
         return snprintf(msg, n, "numeric '%s': dof index %d outside 0 to %d", name, dofs[k], (int)m->nv - 1);
     }
+    if (dt && ((int)p[DT_GUIDE_DOF] < -1 || (int)p[DT_GUIDE_DOF] >= m->nv))
+      return snprintf(msg, n, "numeric '%s': field 'guide_dof' is %g, allowed -1 or 0 to %d", name, p[DT_GUIDE_DOF],
+                      (int)m->nv - 1);
     if (dt && ((int)p[DT_ACT] < 0 || (int)p[DT_ACT] >= m->nu))
       return snprintf(msg, n, "numeric '%s': field 'actuator' is %g, allowed 0 to %d", name, p[DT_ACT], (int)m->nu - 1);
     if (dt && !(p[DT_STRIDE] >= 1))
