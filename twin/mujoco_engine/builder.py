@@ -62,7 +62,7 @@ from twin.impact import DAMPING_FACTOR
 from twin.mujoco_engine.accel import posthoc_applies
 from twin.mujoco_engine import drivetrain
 from twin.mujoco_engine import guide as guide_clearance
-from twin.mujoco_engine.collider import ensure_installed
+from twin.mujoco_engine.collider import check_model, ensure_installed
 
 #: flat, tiny impedance: the contact force is then exactly k δ + c δ̇ with a direct solref
 #: (−k Â, −c Â), Â the row's inverse-inertia estimate (ENGINEERING_NOTES, re-measured in tests).
@@ -658,7 +658,9 @@ def build(cfg: BenchConfig) -> tuple[mujoco.MjSpec, mujoco.MjModel, BuildInfo]:
         guide_clearance.finish(spec, cfg, model)
     if drivetrain.applies(cfg):
         drivetrain.finish(spec, cfg, model)
-    return spec, _compile(spec, cfg), info
+    model = _compile(spec, cfg)
+    check_model(model)  # the layout the native code reads, or a one-line refusal
+    return spec, model, info
 
 
 def build_model(cfg: BenchConfig) -> mujoco.MjModel:

@@ -182,7 +182,7 @@ def _compile(spec: mujoco.MjSpec, cfg: Any) -> mujoco.MjModel:
 def build(cfg: Any, theta0: float) -> tuple[mujoco.MjSpec, mujoco.MjModel, dict[str, Any]]:
     """(spec, model, contacts) of the spatial mechanism at crank angle θ0 [rad]: pairs, native laws."""
     from twin.mujoco_engine.builder import contact_setting
-    from twin.mujoco_engine.collider import ensure_installed
+    from twin.mujoco_engine.collider import check_model, ensure_installed
 
     if cfg.contact.law == "linear":
         raise ConfigError("contact.law", "the linear law is not available for the spatial mechanism; use a "
@@ -207,7 +207,9 @@ def build(cfg: Any, theta0: float) -> tuple[mujoco.MjSpec, mujoco.MjModel, dict[
         spec.geom(BUSH[jt]).userdata = names.bore_userdata(mu0=cfg.contact.mu0, v0=cfg.contact.v0_mps,
                                                        v1=cfg.contact.v1_mps, **setting.law.userdata(slot))
         contacts[jt] = {"kind": "journal in bearing" if jt == "A" else "ball in socket", **setting.to_json()}
-    return spec, _compile(spec, cfg), contacts
+    model = _compile(spec, cfg)
+    check_model(model)  # the layout the native code reads, or a one-line refusal
+    return spec, model, contacts
 
 
 class SpatialMujocoEngine:

@@ -39,7 +39,7 @@ import numpy as np
 from twin.config import CATALOGUE_DIAMETRAL_MM, BenchConfig, with_overrides
 from twin.contact_params import initial_linear_law, law_stiffness
 from twin.impact import ImpactResult, impact_hysteresis, impact_linear
-from twin.mujoco_engine.collider import ensure_installed
+from twin.mujoco_engine.collider import check_model, ensure_installed
 from twin.names import BORE_USERDATA_FIELDS, bore_userdata, replace_bore_userdata
 
 #: impact speeds of the check [m/s] (1 mm/s to 0.5 m/s). Measured on reference runs
@@ -100,7 +100,9 @@ def probe_model(cfg: BenchConfig, joint: str, m_eff: float, preload_n: float = 0
         pin_id = int(spec.compile().geom("pin").id)
         as_passive_force(spec, pair, bore, pin_id, "f")
         spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT
-    return spec.compile()
+    model = spec.compile()
+    check_model(model)
+    return model
 
 
 def twin_impacts(cfg: BenchConfig, joint: str, m_eff: float, speeds: Iterable[float] = SPEEDS,
