@@ -116,10 +116,11 @@ def _window_indices(n: int, rate: float, window_s: tuple[float, float] | None,
     else:
         t0, t1 = window_s
         if not (0 <= t0 < t1 <= T + 1e-12):
-            raise TwinError(f"--window: need 0 <= start < stop <= {T:g} s (recording length), got {t0:g} {t1:g}")
+            raise TwinError(f"need 0 <= start < stop <= {T:g} s (recording length), got {t0:g} {t1:g}",
+                            field="window_s")
     i0, i1 = int(round(t0 * rate)), min(n, int(round(t1 * rate)))
     if i1 - i0 < 16:
-        raise TwinError(f"--window: {t0:g}..{t1:g} s holds fewer than 16 samples")
+        raise TwinError(f"{t0:g}..{t1:g} s holds fewer than 16 samples", field="window_s")
     return i0, i1
 
 
@@ -246,8 +247,8 @@ def replay(recording: str | Path, out_dir: str | Path,
     rec, info, repairs = read_recording(recording, nan=opts.nan)
     check_motion(rec, str(recording))
     if info.calibration is None:
-        raise RecordingError(f"{recording}: no calibration data; re-import it with --calibration STATIC "
-                             "(a static recording in the calibration pose) or --zero-g AC1=V,...")
+        raise RecordingError(f"{recording}: no calibration data; import it again with a static recording in the "
+                             "calibration pose or the six sensors' known zero-g offsets")
     rec_cfg = rec.config
     base = configure(rec_cfg) if configure is not None else rec_cfg
     inst = base.instrumentation
@@ -256,9 +257,9 @@ def replay(recording: str | Path, out_dir: str | Path,
                              f"rate ({rec.rate_hz:g} Hz)")
     trace = final / "encoder_trace.npz"
     if opts.drive not in ("pid", "motor"):
-        raise TwinError(f"--drive: must be pid or motor, got {opts.drive!r}")
+        raise TwinError(f"must be pid or motor, got {opts.drive!r}", field="drive")
     if opts.drive == "motor" and "motor_command" not in rec:
-        raise RecordingError(f"{recording}: --drive motor needs the recording's motor_command channel; it has none")
+        raise RecordingError(f"{recording}: `drive` motor needs the recording's motor_command channel; it has none")
     # the simulated configuration (checked before anything is written) and the analysis window
     cfg = replay_config(base, trace, rec, dict(info.calibration.zero_g_v))
     if opts.drive == "motor":

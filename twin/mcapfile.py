@@ -254,9 +254,9 @@ class RunWriter:
         self._preview: _Preview | None = None
         self.compression = _COMPRESSION[compression]
         if self.path.suffix != ".mcap":
-            raise TwinError(f"--out: run files must end in .mcap, got {self.path.name}")
+            raise TwinError(f"run files must end in .mcap, got {self.path.name}", field="path")
         if not self.path.parent.is_dir():
-            raise TwinError(f"--out: directory {self.path.parent} does not exist")
+            raise TwinError(f"directory {self.path.parent} does not exist", field="path")
         self.tmp = temp_path(self.path)
         self.config = config
         self.block = int(block)
