@@ -58,7 +58,8 @@ def first_pass(phi: np.ndarray, i_from: int, angle_rad: float) -> int:
     k = np.floor((phi[i_from:] - angle_rad) / (2 * np.pi))
     hits = np.flatnonzero(np.diff(k) != 0)
     if hits.size == 0:
-        raise TwinError(f"--align-angle: the crank never passes {np.degrees(angle_rad):g} deg after the window start")
+        raise TwinError(f"the crank never passes {np.degrees(angle_rad):g} deg after the window start",
+                        field="align_angle")
     return i_from + int(hits[0]) + 1
 
 
@@ -74,7 +75,8 @@ def load_signal(path: str | Path, channel: str) -> tuple[np.ndarray, float, floa
         rec, info, _ = read_recording(p)
         if channel in ACCELEROMETERS:
             if info.calibration is None:
-                raise RecordingError(f"{p}: recording has no calibration data; re-import it with --calibration")
+                raise RecordingError(f"{p}: recording has no calibration data; import it again with a static "
+                                     "recording in the calibration pose or known zero-g offsets")
             meas = measured_accel(rec.select([f"volt_{channel}"]), info.calibration)
             return meas[f"meas_{channel}"].astype(np.float64), rec.t0, rec.rate_hz, f"meas_{channel}"
         return rec[channel].astype(np.float64), rec.t0, rec.rate_hz, channel
