@@ -59,7 +59,7 @@ def test_only_the_viewer_process_status_counts(fake_env, monkeypatch):
     with pytest.raises(TwinError) as err:
         shot.screenshot(rrd, d / "shot.png", wait_s=5.0, window=(320, 180))
     msg = str(err.value)
-    assert msg == "--screenshot: the headless viewer exited (status 3): Error: no adapter for this test"
+    assert msg == "png: the headless viewer exited (status 3): Error: no adapter for this test"
     calls = (d / "calls.txt").read_text().splitlines()
     assert len(calls) == 1 and "--headless" in calls[0] and "--window-size 320x180" in calls[0]  # no probe
     assert not (d / "shot.png").exists() and sorted(p.name for p in d.iterdir()) == ["calls.txt", "icd.json",
@@ -72,7 +72,7 @@ def test_a_viewer_that_never_listens_is_stopped(tmp_path, monkeypatch):
     exe = _viewer(tmp_path, f'echo $$ > "{pidfile}"\nexec sleep 30')
     viewer = shot.HeadlessViewer(shot.viewer_command(exe, shot._free_port(), (320, 180)), tmp_path / "log", tmp_path)
     try:
-        with pytest.raises(TwinError, match=r"^--screenshot: the headless viewer did not listen on port \d+ within "
+        with pytest.raises(TwinError, match=r"^png: the headless viewer did not listen on port \d+ within "
                                             r"0.5 s$"):
             viewer.connect(timeout_s=0.5)
     finally:
