@@ -308,8 +308,17 @@ def _leaf_parsers(parser: argparse.ArgumentParser):
             yield from _leaf_parsers(p)
 
 
+#: configuration fields that :func:`config_from_args` sets from an option (its ``dest``): a message naming
+#: such a field between backticks names the option too, where the command offers it
+CONFIG_FLAGS = {"joints.clearance_b_mm": "clearance_b", "joints.clearance_c_mm": "clearance_c",
+                "joints.clearance_a_mm": "clearance_a", "joints.clearance_guide_mm": "clearance_guide",
+                "mechanism.orientation": "orientation", "drive.motor_rpm": "speed", "drive.trace_file": "trace",
+                "simulation.duration_s": "duration", "simulation.timestep_s": "timestep",
+                "sensors.output_rate_hz": "output_rate", "simulation.engine": "engine", "drive.mode": "drive_mode",
+                "sensors.channels": "channels"}
+
 #: unit suffixes of the library's argument names (``max_lag_s``) that the flag leaves out (``--max-lag``)
-_UNIT_SUFFIXES = ("_s", "_hz", "_mm", "_m", "_rpm", "_n", "_deg")
+_UNIT_SUFFIXES = ("_s", "_hz", "_mm", "_m", "_rpm", "_n", "_deg", "_px")
 
 
 def error_message(err: TwinError, args: argparse.Namespace | None = None) -> str:
@@ -330,6 +339,8 @@ def error_message(err: TwinError, args: argparse.Namespace | None = None) -> str
     def flag_of(name: str, given_only: bool) -> str | None:
         if name in explicit:
             return explicit[name]
+        if not given_only and CONFIG_FLAGS.get(name) in flags:  # a configuration field this command sets
+            return f"{name} or {flags[CONFIG_FLAGS[name]]}"
         for dest in [name] + [name[:-len(u)] for u in _UNIT_SUFFIXES if name.endswith(u)]:
             if dest in flags and not (given_only and getattr(args, dest, None) is None):
                 return flags[dest]

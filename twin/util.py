@@ -75,6 +75,15 @@ def file_sha256(path: str | Path) -> str:
         return hashlib.file_digest(fh, "sha256").hexdigest()
 
 
+def check_size_px(size: Any, field: str) -> tuple[int, int]:
+    """An image or window size (width, height) [px]: two whole numbers in 64..8192, else a one-line
+    :class:`TwinError` about ``field``."""
+    if not (isinstance(size, (tuple, list)) and len(size) == 2
+            and all(isinstance(v, int) and not isinstance(v, bool) and 64 <= v <= 8192 for v in size)):
+        raise TwinError(f"must be two whole numbers of pixels in 64..8192, got {size!r}", field=field)
+    return int(size[0]), int(size[1])
+
+
 def resolve_workers(n: int | None, flag: str = "workers") -> int:
     """Worker processes: ``n``, or the machine's cores when None; one line naming ``flag`` when
     out of [1, 1024]."""

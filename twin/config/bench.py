@@ -67,7 +67,7 @@ class BenchConfig:
             raise ConfigError("simulation.timestep_s",
                               f"{sim.timestep_s:g} s does not divide the output period 1/{sen.output_rate_hz:g} Hz; "
                               f"use a timestep of (1/output_rate)/k for an integer k, or set the output rate "
-                              f"explicitly (sensors.output_rate_hz), e.g. {every:.10g} Hz for a "
+                              f"explicitly (`sensors.output_rate_hz`), e.g. {every:.10g} Hz for a "
                               "sample every step")
         if round(self.duration_s * sen.output_rate_hz) < 1:
             raise ConfigError("simulation.duration_s",

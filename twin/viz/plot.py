@@ -40,7 +40,7 @@ import numpy as np
 from twin.config import ACCELEROMETERS, JOINTS, BenchConfig
 from twin.errors import RecordingError, TwinError
 from twin.run import Run
-from twin.util import show
+from twin.util import check_size_px, show
 
 #: default time window: the last this many seconds of the run [s]
 DEFAULT_WINDOW_S = 0.4
@@ -431,6 +431,8 @@ def plot(source: str | Path | Run, out: str | Path, *, channels: Sequence[str] |
     names = select_channels(src, channels)
     if size_px is None:
         size_px = figure_size(len(names), spectrum, bool(_orbits(src)[0]))
+    else:
+        check_size_px(size_px, "size_px")
     w, h = size_px
     fig = Figure(figsize=(w / DPI, h / DPI), dpi=DPI)
     info = draw(fig, src, channels=channels, window=window, spectrum=spectrum)

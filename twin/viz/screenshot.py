@@ -38,7 +38,7 @@ from pathlib import Path
 from typing import Callable, Iterator
 
 from twin.errors import TwinError
-from twin.util import temp_path
+from twin.util import check_size_px, temp_path
 
 #: System folders the Vulkan loader searches for ICD manifests on Linux (besides the XDG ones).
 SYSTEM_ICD_DIRS: tuple[str, ...] = ("/usr/local/etc/vulkan/icd.d", "/etc/vulkan/icd.d",
@@ -154,8 +154,7 @@ def check_screenshot_args(wait_s: float, at_s: float | None, window: tuple[int, 
         raise TwinError(f"must be a finite number of seconds >= 0, got {wait_s!r}", field="wait_s")
     if at_s is not None and not (isinstance(at_s, (int, float)) and math.isfinite(at_s)):
         raise TwinError(f"must be a finite time [s], got {at_s!r}", field="at_s")
-    if not (len(window) == 2 and all(isinstance(v, int) and 64 <= v <= 8192 for v in window)):
-        raise TwinError(f"must be two whole numbers of pixels in 64..8192, got {window!r}", field="window")
+    check_size_px(window, "window")
 
 
 def rerun_executable() -> Path:
