@@ -45,7 +45,7 @@ import numpy as np
 
 from twin.channels import encoder_from_bench
 from twin.config import ACCELEROMETERS, CHANNEL_GROUPS, BenchConfig
-from twin.errors import RecordingError, TwinError
+from twin.errors import ConfigError, RecordingError, TwinError
 from twin.instrument import (apply_chain, counts_to_angle, measured_accel, simulated_calibration)
 from twin.instrument.encoder import count_step_rad
 from twin.recording import read_recording
@@ -95,6 +95,16 @@ class ReplayOptions:
     plots: bool = True
     progress: bool = False
     drive: str = "pid"
+
+    def __post_init__(self) -> None:
+        for name in ("max_lag_s", "dtw_window_s", "dtw_max_s"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not (math.isfinite(v) and 0 <= v <= 10):
+                raise ConfigError(name, f"must lie in [0, 10] s, got {v!r}")
+        if self.dtw_max_s < 0.001:  # DTW on a few samples says nothing
+            raise ConfigError("dtw_max_s", f"must be at least 0.001 s, got {self.dtw_max_s!r}")
+        if self.drive not in ("pid", "motor"):
+            raise ConfigError("drive", f"must be pid or motor, got {self.drive!r}")
 
 
 def replay_config(rec_cfg: BenchConfig, trace_file: Path, rec: Run, zero_g_v: dict[str, float]) -> BenchConfig:
@@ -256,8 +266,6 @@ def replay(recording: str | Path, out_dir: str | Path,
         raise RecordingError(f"instrumentation.daq_rate_hz ({inst.daq_rate_hz:g} Hz) differs from the recording's "
                              f"rate ({rec.rate_hz:g} Hz)")
     trace = final / "encoder_trace.npz"
-    if opts.drive not in ("pid", "motor"):
-        raise TwinError(f"must be pid or motor, got {opts.drive!r}", field="drive")
     if opts.drive == "motor" and "motor_command" not in rec:
         raise RecordingError(f"{recording}: `drive` motor needs the recording's motor_command channel; it has none")
     # the simulated configuration (checked before anything is written) and the analysis window

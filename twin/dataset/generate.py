@@ -323,15 +323,15 @@ def _threads(workers: int, fn: Callable[..., dict] | None = None) -> Callable[[l
     return run
 
 
-#: what --scheduler says where Dask is not installed (the local executors never import it)
-NO_DASK = "scheduler {}: Dask is not installed; a Dask scheduler needs the cluster extra: pip install 'twin[cluster]'"
+#: what a Dask scheduler address says where Dask is not installed (the local executors never import it)
+NO_DASK = "{}: Dask is not installed; a Dask scheduler needs the cluster extra: pip install 'twin[cluster]'"
 
 
 def _require_dask(address: str) -> None:
     try:
         import distributed  # noqa: F401 - an optional dependency (the cluster extra)
     except ImportError:
-        raise MissingExtraError(NO_DASK.format(address)) from None
+        raise MissingExtraError(NO_DASK.format(address), field="scheduler") from None
     import re
 
     if address != "local" and not re.fullmatch(r"(tcp|tls|ucx)://[^\s/:]+(:\d{1,5})?/?|inproc://\S+", address):
