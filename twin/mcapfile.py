@@ -247,9 +247,9 @@ class RunWriter:
                  compression: str = "none", preview_rate_hz: float = 0.0):
         self.path = Path(path)
         if compression not in _COMPRESSION:
-            raise TwinError(f"compression: must be one of {', '.join(_COMPRESSION)}, got {compression!r}")
+            raise TwinError(f"must be one of {', '.join(_COMPRESSION)}, got {compression!r}", field="compression")
         if not (np.isfinite(preview_rate_hz) and preview_rate_hz >= 0):
-            raise TwinError(f"preview rate: must be >= 0 Hz (0 = no preview), got {preview_rate_hz!r}")
+            raise TwinError(f"must be >= 0 Hz (0 = no preview), got {preview_rate_hz!r}", field="preview_rate_hz")
         self.preview_rate_hz = float(preview_rate_hz)
         self._preview: _Preview | None = None
         self.compression = _COMPRESSION[compression]

@@ -11,6 +11,7 @@ simulated runs use the calibrated channel ``meas_ACi`` if present, else the simu
 from __future__ import annotations
 
 import itertools
+import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Sequence
@@ -87,6 +88,27 @@ def load_signal(path: str | Path, channel: str) -> tuple[np.ndarray, float, floa
     raise RecordingError(f"{p}: no channel {channel!r} (channels: {', '.join(run.channels)})")
 
 
+def check_arguments(runs: Sequence[str | Path], start: float | None, stop: float | None, dtw_window: float,
+                    align_angle: float | None, decimate: int) -> None:
+    """The rules of :func:`repeatability`'s arguments (a one-line :class:`TwinError` naming the
+    argument), checked before any run is read."""
+    if len(runs) < 2:
+        raise TwinError(f"give at least 2 runs, got {len(runs)}", field="runs")
+    if isinstance(decimate, bool) or not isinstance(decimate, int) or decimate < 1:
+        raise TwinError(f"must be an integer >= 1, got {decimate!r}", field="decimate")
+    for name, v in (("start", start), ("stop", stop), ("align_angle", align_angle)):
+        if v is not None and not math.isfinite(v):
+            raise TwinError(f"must be a finite number, got {v!r}", field=name)
+    if start is not None and start < 0:
+        raise TwinError(f"must be a time >= 0 s, got {start!r}", field="start")
+    if stop is not None and stop <= (start or 0.0):
+        raise TwinError(f"must be a time > `start`, got {stop!r}", field="stop")
+    if not (math.isfinite(dtw_window) and 0 <= dtw_window <= 10):
+        raise TwinError(f"must lie in [0, 10] s, got {dtw_window!r}", field="dtw_window")
+    if align_angle is not None and not -360 <= align_angle <= 360:
+        raise TwinError(f"must lie in [-360, 360] degrees, got {align_angle!r}", field="align_angle")
+
+
 def repeatability(runs: Sequence[str | Path], channel: str = "AC4", start: float | None = None,
                   stop: float | None = None, dtw_window: float = 0.05, align_angle: float | None = None,
                   decimate: int = 1, progress: bool = False) -> Repeatability:
@@ -102,6 +124,7 @@ def repeatability(runs: Sequence[str | Path], channel: str = "AC4", start: float
     """
     from twin.signals import dtw_compare
 
+    check_arguments(runs, start, stop, dtw_window, align_angle, decimate)
     sigs = []
     starts: list[float] = []
     rate = None
