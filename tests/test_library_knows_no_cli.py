@@ -145,3 +145,18 @@ def test_an_error_keeps_its_field_through_pickling():
     err = pickle.loads(pickle.dumps(TwinError("must be >= 1", field="workers")))
     assert (str(err), err.field, err.message) == ("workers: must be >= 1", "workers", "must be >= 1")
     assert TwinError("plain").field is None
+
+
+def test_every_field_map_of_a_command_names_its_own_options():
+    """``_field_flags`` (library name -> option) of every command names an option of that command, or its
+    positional arguments' metavar: a typo would print a flag the command does not have."""
+    from twin.cli import _leaf_parsers, build_parser
+
+    checked = 0
+    for leaf in _leaf_parsers(build_parser()):
+        names = {s for a in leaf._actions for s in a.option_strings}
+        names |= {f"{a.metavar}..." if a.nargs == "+" else str(a.metavar) for a in leaf._actions if not a.option_strings}
+        for field, flag in (leaf._defaults.get("_field_flags") or {}).items():
+            assert flag in names, (leaf.prog, field, flag)
+            checked += 1
+    assert checked >= 10
