@@ -172,3 +172,13 @@ def test_the_cli_passes_a_lowpass_above_a_megahertz_to_the_sweep(monkeypatch, ca
     assert main(["identify", "restitution", REC, "--lowpass", "2e6", "--max-lag", "0.5"]) == 2
     assert "stopped before simulating" in capsys.readouterr().err
     assert seen[0].lowpass_hz == 2e6 and seen[0].max_lag_s == 0.5
+
+
+def test_contact_check_joints_are_checked_by_the_check(tmp_path, capsys):
+    from twin.config import BenchConfig
+    from twin.studies.contact_check import contact_check
+
+    lib = _library_error(lambda: contact_check(BenchConfig(), joints=("X",), progress=False))
+    assert main(["check", "contact", "--joints", "X", "--out", str(tmp_path / "c.json")]) == 2
+    assert capsys.readouterr().err == f"twin: error: --joints: {lib.message}\n"
+    assert list(tmp_path.iterdir()) == []
