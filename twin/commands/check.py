@@ -62,10 +62,10 @@ def _run_contact(args: argparse.Namespace, deprecated: bool = False) -> int:
 
     from twin.cli import load_config_file
     from twin.config import BenchConfig
-    from twin.studies.contact_check import contact_check
+    from twin.studies.contact_check import check_joints, contact_check
     from twin.util import atomic_write_text, check_output_file, json_text
 
-    joints = tuple(j.strip().upper() for j in args.joints.split(",") if j.strip())  # contact_check checks them
+    joints = check_joints(j.strip().upper() for j in args.joints.split(",") if j.strip())  # before any work
     out = Path(args.out)
     check_output_file(out, "--out", ".json")
     cfg = load_config_file(args.config) if args.config else BenchConfig()
