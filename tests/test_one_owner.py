@@ -182,3 +182,13 @@ def test_contact_check_joints_are_checked_by_the_check(tmp_path, capsys):
     assert main(["check", "contact", "--joints", "X", "--out", str(tmp_path / "c.json")]) == 2
     assert capsys.readouterr().err == f"twin: error: --joints: {lib.message}\n"
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("rate", ["-1", "nan", "200000"])
+def test_the_preview_rate_rule_is_the_writer_s(rate, tmp_path, capsys):
+    from twin.mcapfile import check_preview_rate
+
+    lib = _library_error(lambda: check_preview_rate(float(rate), 100_000.0))
+    assert main(["simulate", "--duration", "0.001", "--out", str(tmp_path / "r.mcap"), "--preview-rate", rate]) == 2
+    assert capsys.readouterr().err == f"twin: error: --preview-rate: {lib.message}\n"
+    assert list(tmp_path.iterdir()) == []
