@@ -46,7 +46,8 @@ def run(name: str, work: Path, workers: int, engine: str | None = None) -> dict:
                                                                      name=spec.dataset.name + "-" + engine))
         tag = f"{name}_{engine}"
     out = work / tag
-    res = doe_study.run_study(spec, out, workers, progress=False, log=lambda m: print(f"[{tag}] {m}", file=sys.stderr))
+    res = doe_study.run_study(doe_study.DoeOptions(spec, out, workers),
+                              log=lambda m: print(f"[{tag}] {m}", file=sys.stderr)).to_dict()
     dst = RES / tag
     dst.mkdir(parents=True, exist_ok=True)
     for f in ["doe.md", "doe.json", *res["figures"]]:

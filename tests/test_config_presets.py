@@ -42,7 +42,7 @@ def test_table4_presets_hold_the_papers_numbers(test_id):
 def test_table4_has_the_twelve_tests():
     assert sorted(TABLE4) == list(range(1, 13))
     for bad in (0, 13, "6", 6.0, True):
-        with pytest.raises(twin.config.ConfigError, match="--test"):
+        with pytest.raises(twin.config.ConfigError, match="^test: "):
             preset(bad)
 
 

@@ -189,7 +189,7 @@ def test_a_run_file_with_a_preview_reads_bit_for_bit_as_without(run12, tmp_path)
     assert prev.t0 == pytest.approx(16 / 1e5) and stamps[1] - stamps[0] == 330_000
     np.testing.assert_allclose(prev["AC4"], run12["AC4"][:prev.n * 33].reshape(-1, 33).astype(np.float64).mean(1),
                                rtol=1e-6)
-    with pytest.raises(TwinError, match="preview rate"):
+    with pytest.raises(TwinError, match="^preview_rate_hz: must be >= 0 Hz"):
         RunWriter(tmp_path / "c.mcap", run12.config, preview_rate_hz=-1.0)
 
 

@@ -342,7 +342,8 @@ def test_spectrum_reads_amplitude_and_default_windows():
     (["view", "{d}/good.mcap", "--at", "0.1"], "--at: applies to --screenshot only"),
     (["view", "{d}/good.mcap", "--wait", "5"], "--wait: applies to --screenshot only"),
     (["view", "{d}/good.mcap", "--window-size", "800x450"], "--window-size: applies to --screenshot only"),
-    (["view", "{d}/good.mcap", "--screenshot", "{d}/shot.png", "--window-size", "16x9"], "--window-size: must be WIDTHx"),
+    (["view", "{d}/good.mcap", "--screenshot", "{d}/shot.png", "--window-size", "16x9"],
+     "--window-size: must be two whole numbers of pixels in 64..8192"),
     (["view", "{d}/good.mcap", "--fft-window", "0.5", "2.0"], "outside the run"),
     (["view", "{d}/good.mcap", "--fft-window", "0.1", "0.05"], "T0 < T1"),
 ])

@@ -45,7 +45,7 @@ import numpy as np
 
 from twin.channels import encoder_from_bench
 from twin.config import ACCELEROMETERS, CHANNEL_GROUPS, BenchConfig
-from twin.errors import RecordingError, TwinError
+from twin.errors import ConfigError, RecordingError, TwinError
 from twin.instrument import (apply_chain, counts_to_angle, measured_accel, simulated_calibration)
 from twin.instrument.encoder import count_step_rad
 from twin.recording import read_recording
@@ -96,6 +96,16 @@ class ReplayOptions:
     progress: bool = False
     drive: str = "pid"
 
+    def __post_init__(self) -> None:
+        for name in ("max_lag_s", "dtw_window_s", "dtw_max_s"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not (math.isfinite(v) and 0 <= v <= 10):
+                raise ConfigError(name, f"must lie in [0, 10] s, got {v!r}")
+        if self.dtw_max_s < 0.001:  # DTW on a few samples says nothing
+            raise ConfigError("dtw_max_s", f"must be at least 0.001 s, got {self.dtw_max_s!r}")
+        if self.drive not in ("pid", "motor"):
+            raise ConfigError("drive", f"must be pid or motor, got {self.drive!r}")
+
 
 def replay_config(rec_cfg: BenchConfig, trace_file: Path, rec: Run, zero_g_v: dict[str, float]) -> BenchConfig:
     """Simulation configuration of a replay: ``rec_cfg`` driven by the trace at the recording's rate."""
@@ -116,10 +126,11 @@ def _window_indices(n: int, rate: float, window_s: tuple[float, float] | None,
     else:
         t0, t1 = window_s
         if not (0 <= t0 < t1 <= T + 1e-12):
-            raise TwinError(f"--window: need 0 <= start < stop <= {T:g} s (recording length), got {t0:g} {t1:g}")
+            raise TwinError(f"need 0 <= start < stop <= {T:g} s (recording length), got {t0:g} {t1:g}",
+                            field="window_s")
     i0, i1 = int(round(t0 * rate)), min(n, int(round(t1 * rate)))
     if i1 - i0 < 16:
-        raise TwinError(f"--window: {t0:g}..{t1:g} s holds fewer than 16 samples")
+        raise TwinError(f"{t0:g}..{t1:g} s holds fewer than 16 samples", field="window_s")
     return i0, i1
 
 
@@ -246,8 +257,8 @@ def replay(recording: str | Path, out_dir: str | Path,
     rec, info, repairs = read_recording(recording, nan=opts.nan)
     check_motion(rec, str(recording))
     if info.calibration is None:
-        raise RecordingError(f"{recording}: no calibration data; re-import it with --calibration STATIC "
-                             "(a static recording in the calibration pose) or --zero-g AC1=V,...")
+        raise RecordingError(f"{recording}: no calibration data; import it again with a static recording in the "
+                             "calibration pose or the six sensors' known zero-g offsets")
     rec_cfg = rec.config
     base = configure(rec_cfg) if configure is not None else rec_cfg
     inst = base.instrumentation
@@ -255,10 +266,8 @@ def replay(recording: str | Path, out_dir: str | Path,
         raise RecordingError(f"instrumentation.daq_rate_hz ({inst.daq_rate_hz:g} Hz) differs from the recording's "
                              f"rate ({rec.rate_hz:g} Hz)")
     trace = final / "encoder_trace.npz"
-    if opts.drive not in ("pid", "motor"):
-        raise TwinError(f"--drive: must be pid or motor, got {opts.drive!r}")
     if opts.drive == "motor" and "motor_command" not in rec:
-        raise RecordingError(f"{recording}: --drive motor needs the recording's motor_command channel; it has none")
+        raise RecordingError(f"{recording}: `drive` motor needs the recording's motor_command channel; it has none")
     # the simulated configuration (checked before anything is written) and the analysis window
     cfg = replay_config(base, trace, rec, dict(info.calibration.zero_g_v))
     if opts.drive == "motor":

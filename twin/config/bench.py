@@ -58,7 +58,7 @@ class BenchConfig:
         if sim.duration_s == 0 and self.drive.program != "protocol":
             raise ConfigError("simulation.duration_s",
                               f"must be > 0 for the {self.drive.program} program (0 = the protocol's length); "
-                              + ("--trace FILE and configuration files fill in the trace's length"
+                              + ("configuration files (load_config) fill in the trace's length"
                                  if self.drive.program == "trace" else "got 0"))
         k = 1.0 / (sim.timestep_s * sen.output_rate_hz)
         stride = int(round(k))
@@ -67,7 +67,7 @@ class BenchConfig:
             raise ConfigError("simulation.timestep_s",
                               f"{sim.timestep_s:g} s does not divide the output period 1/{sen.output_rate_hz:g} Hz; "
                               f"use a timestep of (1/output_rate)/k for an integer k, or set the output rate "
-                              f"explicitly (sensors.output_rate_hz, --output-rate), e.g. {every:.10g} Hz for a "
+                              f"explicitly (`sensors.output_rate_hz`), e.g. {every:.10g} Hz for a "
                               "sample every step")
         if round(self.duration_s * sen.output_rate_hz) < 1:
             raise ConfigError("simulation.duration_s",

@@ -271,11 +271,22 @@ def check_case(cfg: BenchConfig, joint: str, clearance_mm: float, speeds=SPEEDS)
                       float(worst))
 
 
+def check_joints(joints) -> tuple[str, ...]:
+    """The joints a contact check may probe: one or both of B, C (a one-line ConfigError otherwise)."""
+    from twin.errors import ConfigError
+
+    joints = tuple(joints)
+    if not joints or any(j not in ("B", "C") for j in joints):
+        raise ConfigError("joints", f"must be one or both of B, C; got {joints!r}")
+    return joints
+
+
 def contact_check(cfg: BenchConfig, joints=("B", "C"), clearances=CATALOGUE_DIAMETRAL_MM, speeds=SPEEDS,
                   progress: bool = True) -> dict:
-    """:func:`check_case` for every joint and catalogue clearance; the JSON report."""
+    """:func:`check_case` for every joint (some of B, C) and catalogue clearance; the JSON report."""
     from tqdm import tqdm
 
+    joints = check_joints(joints)
     jobs = [(j, cl) for j in joints for cl in clearances if cl > 0]
     cases = [check_case(cfg, j, cl, speeds) for j, cl in tqdm(jobs, disable=not progress, desc="contact check")]
     return {

@@ -74,7 +74,7 @@ import io
 import math
 import tempfile
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any, Callable
 
@@ -83,7 +83,7 @@ import numpy as np
 from twin.config import CATALOGUE_DIAMETRAL_MM, ORIENTATIONS, BenchConfig, preset
 from twin.errors import ConfigError, TwinError
 from twin.studies.stability_bench import ENGINES, bench_draws, bench_overrides, guide_penetration, label, rotor_energy
-from twin.util import atomic_write_bytes, atomic_write_json, atomic_write_text, check_output_dir
+from twin.util import atomic_write_bytes, atomic_write_json, atomic_write_text
 
 #: Largest admissible penetration / radial clearance [-].
 PEN_LIMIT = 0.25
@@ -132,11 +132,11 @@ class StudySettings:
 
     def __post_init__(self) -> None:
         if isinstance(self.scenes, bool) or not isinstance(self.scenes, int) or self.scenes < 1:
-            raise ConfigError("--scenes", f"must be an integer >= 1, got {self.scenes!r}")
+            raise ConfigError("scenes", f"must be an integer >= 1, got {self.scenes!r}")
         if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
-            raise ConfigError("--seed", f"must be an integer >= 0, got {self.seed!r}")
+            raise ConfigError("seed", f"must be an integer >= 0, got {self.seed!r}")
         if self.family not in ("bench", "spatial"):
-            raise ConfigError("--family", f"must be bench or spatial, got {self.family!r}")
+            raise ConfigError("family", f"must be bench or spatial, got {self.family!r}")
 
 
 def quick(scenes: int = 20, seed: int = 1, bench: bool = False) -> StudySettings:
@@ -422,9 +422,39 @@ def summarize(rows: list[dict[str, Any]], wall_s: float) -> dict[str, Any]:
     }
 
 
-def run_study(out: Path | None, settings: StudySettings, progress: bool = False,
-              log: Callable[[str], None] | None = None) -> dict[str, Any]:
-    """Run the campaign; write the outputs to ``out`` (if given); return the JSON data."""
+@dataclass(frozen=True)
+class StabilityResult:
+    """What a campaign found (``stability.json``).
+
+    Attributes:
+        settings: the campaign's :class:`StudySettings` and the pass limits (``pen_limit``, ``energy_tol``).
+        summary: the counts and statistics of :func:`summarize` (``passed`` of ``scenes``, ...).
+        scenes: per scene its draw (``scene``) and what it gave (``metrics``), in scene order.
+        figures: the PNG files written beside the JSON (none without an output folder).
+    """
+
+    settings: dict[str, Any]
+    summary: dict[str, Any]
+    scenes: list[dict[str, Any]]
+    figures: tuple[str, ...] = ()
+
+    @property
+    def passed(self) -> bool:
+        """Every scene passed."""
+        return self.summary["passed"] == self.summary["scenes"]
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON data of ``stability.json`` (non-finite floats as they are; written through
+        :func:`_jsonable`)."""
+        return {"study": "stability", "settings": self.settings, "summary": self.summary, "scenes": self.scenes,
+                "figures": list(self.figures)}
+
+
+def run_study(settings: StudySettings, *, out: str | Path | None = None, progress: bool = False,
+              log: Callable[[str], None] | None = None) -> StabilityResult:
+    """Run the campaign of ``settings``; write ``stability.json``, ``stability.md`` and
+    ``stability.png`` to the folder ``out`` when given; ``progress``: a progress bar on stderr;
+    ``log``: receives one line per failed scene."""
     run_one = run_scene
     if settings.family == "spatial":
         from twin.spatial.stability import run_scene as run_one, sample_scene as sample_spatial  # noqa: F811
@@ -454,15 +484,16 @@ def run_study(out: Path | None, settings: StudySettings, progress: bool = False,
     finally:
         if bar is not None:
             bar.close()
-    data = {"study": "stability", "settings": {**asdict(settings), "pen_limit": PEN_LIMIT, "energy_tol": ENERGY_TOL},
-            "summary": summarize(rows, time.perf_counter() - t0), "scenes": rows, "figures": []}
+    res = StabilityResult({**asdict(settings), "pen_limit": PEN_LIMIT, "energy_tol": ENERGY_TOL},
+                          summarize(rows, time.perf_counter() - t0), rows)
     if out is not None:
         out = Path(out)
         out.mkdir(exist_ok=True)
-        data["figures"] = [_figure(out, rows)]
+        res = replace(res, figures=(_figure(out, rows),))
+        data = res.to_dict()
         atomic_write_json(out / "stability.json", _jsonable(data))
         atomic_write_text(out / "stability.md", markdown(data))
-    return data
+    return res
 
 
 def _jsonable(o: Any) -> Any:
@@ -488,9 +519,9 @@ def _failure(met: dict[str, Any]) -> str:
                                 for j, v in met["joints"].items())
 
 
-def one_line(data: dict[str, Any]) -> str:
-    """The one-line summary the CLI prints."""
-    s = data["summary"]
+def one_line(result: StabilityResult) -> str:
+    """The campaign in one line."""
+    s = result.summary
     verdict = "PASS" if s["passed"] == s["scenes"] else "FAIL"
     return (f"stability {verdict}: {s['passed']}/{s['scenes']} scenes passed, {s['diverged']} diverged, "
             f"max pen/c {s['max_pen_over_c']:.3f} (scene {s['max_pen_over_c_scene']}), "
@@ -608,44 +639,3 @@ def _figure(out: Path, rows: list[dict[str, Any]]) -> str:
     plt.close(fig)
     atomic_write_bytes(out / "stability.png", buf.getvalue())
     return "stability.png"
-
-
-# --------------------------------------------------------------------------- CLI
-def register(studies: Any) -> None:
-    """Add ``twin study stability`` to the ``twin study`` group."""
-    p = studies.add_parser(
-        "stability", help="numerical-stability stress test of the MuJoCo twin over random scenes",
-        description="N randomized scenes (clearances, orientation, drive program, timestep, contact parameters "
-                    "within their calibrated uncertainty); per scene divergence, max penetration/clearance, "
-                    "tracking error and an energy-balance residual. Writes stability.json, stability.md and "
-                    "stability.png; exit status 0 when every scene passes (no divergence, pen/c <= 0.25).")
-    p.add_argument("--scenes", type=int, required=True, metavar="N", help="number of scenes (>= 1)")
-    p.add_argument("--seed", type=int, required=True, metavar="S", help="seed (>= 0); scene i depends on (S, i)")
-    p.add_argument("--out", metavar="DIR", default="stability", help="output directory (default ./stability)")
-    p.add_argument("--quick", action="store_true", help="short scenes (0.3-1.0 s instead of 0.5-3.0 s): the CI version")
-    p.add_argument("--bench", action="store_true",
-                   help="the whole bench: also draw the slider guide's clearance and the drive (crank PID or the "
-                        "motor with its V-belt, the drive train's parameters over their ranges), and run every "
-                        "scene in both engines (one row each)")
-    p.add_argument("--family", choices=("bench", "spatial"), default="bench",
-                   help="scene family: the bench's planar twin (default) or S002's spatial mechanism in both engines")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    p.set_defaults(func=_run)
-
-
-def _run(args: Any) -> int:
-    import sys
-
-    settings = (quick if args.quick else lambda scenes, seed, bench: StudySettings(scenes=scenes, seed=seed,
-                                                                                  bench=bench))(
-        args.scenes, args.seed, args.bench)
-    if getattr(args, "family", "bench") != "bench":
-        from dataclasses import replace
-
-        settings = replace(settings, family=args.family)
-    out = check_output_dir(args.out)
-    data = run_study(out, settings, progress=not args.no_progress,
-                     log=lambda m: print(m, file=sys.stderr, flush=True))
-    print(one_line(data))
-    s = data["summary"]
-    return 0 if s["passed"] == s["scenes"] else 1
