@@ -269,6 +269,11 @@ def ws(tmp_path_factory) -> Path:
     _taguchi(ws / "tg_no_joints.toml", truth='["slider_accel"]', responses='["max_force_A"]')
     _taguchi(ws / "tg_no_clear_b.toml", responses='["max_force_B"]', extra_first='"joints.clearance_b_mm" = 0.0\n')
     _taguchi(ws / "tg_good.toml")
+    # a Taguchi CSV named like one of the analysis's outputs, in the output folder
+    (ws / "tga").mkdir()
+    table = "A,B,y1,y2\n1,1,1.0,1.1\n1,2,2.0,2.1\n2,1,3.0,3.3\n2,2,4.0,4.2\n"
+    for name in ("report.md", "taguchi.json", "main_effects_y1.png", "sn_y1.png"):
+        (ws / "tga" / name).write_text(table)
     return ws
 
 
@@ -350,6 +355,9 @@ def _cases() -> list[tuple[str, str]]:
     for name in ("i_no_dtype", "i_labels_str", "i_no_identity", "m_no_status", "m_fault_odd", "s_mean_text"):
         c.append((f"identify train {{ws}}/{name} --out {{ws}}/m.npz", INFO_MUTATIONS.get(name, MANIFEST_MUTATIONS.get(
             name, STATS_MUTATIONS.get(name, ("", "")))) [1]))
+    for name in ("report.md", "taguchi.json", "main_effects_y1.png", "sn_y1.png"):
+        c.append((f"study taguchi-analyze {{ws}}/tga/{name} --responses y1 --factors A,B --out {{ws}}/tga",
+                  f"tga/{name} is the input"))
     for name in ("d_no_rate", "d_rate_text", "d_not_json"):
         c.append((f"view {{ws}}/{name} --run {{rid}} --save {{ws}}/v.rrd", DATA_MUTATIONS[name][1]))
     return c

@@ -413,11 +413,16 @@ def register(studies: Any) -> None:
 
 
 def _run(args: Any) -> int:
-    from twin.util import atomic_write_json, atomic_write_text, check_output_dir
+    from twin.util import atomic_write_json, atomic_write_text, check_not_input, check_output_dir
 
     res = run_analysis(args.responses_csv, args.responses, args.factors, args.sn, args.interactions, args.pool,
                        args.predict_with, args.alpha, args.confirmation_runs)
     out = check_output_dir(args.out)
+    # every file this command writes, checked against the inputs before the first is written (an input CSV
+    # named like an output, in the output folder, would otherwise be refused only after the figures)
+    names = [f"{kind}_{_safe(spec)}.png" for spec in res["responses"] for kind in ("main_effects", "sn")]
+    for name in (*names, "taguchi.json", "report.md"):
+        check_not_input(out / name, "--out")
     out.mkdir(exist_ok=True)
     figs = []
     for spec, r in res["responses"].items():
