@@ -175,8 +175,9 @@ def _spawn(exe: str, path: Path) -> None:
     :data:`SPAWN_CHECK_S` seconds (its output until then goes to a log quoted on failure)."""
     from twin.viz.screenshot import viewer_message
 
-    env = dict(os.environ)
-    env.setdefault("RUST_LOG", "error")
+    from twin.viz import USER_RUST_LOG
+
+    env = dict(os.environ, RUST_LOG=USER_RUST_LOG or "error")  # not the SDK's "off" of this process
     with tempfile.TemporaryFile() as log:
         proc = subprocess.Popen([exe, str(path)], start_new_session=True, stdin=subprocess.DEVNULL,
                                 stdout=log, stderr=log, env=env)
