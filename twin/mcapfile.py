@@ -253,7 +253,7 @@ class RunWriter:
         self.preview_rate_hz = float(preview_rate_hz)
         self._preview: _Preview | None = None
         self.compression = _COMPRESSION[compression]
-        if self.path.suffix != ".mcap":
+        if self.path.suffix.lower() != ".mcap":
             raise TwinError(f"--out: run files must end in .mcap, got {self.path.name}")
         if not self.path.parent.is_dir():
             raise TwinError(f"--out: directory {self.path.parent} does not exist")

@@ -86,7 +86,7 @@ def run(args: argparse.Namespace) -> int:
     else:
         if args.run:
             raise TwinError("--run: applies to a dataset folder, not to a run file")
-        if src.suffix != ".mcap":
+        if src.suffix.lower() != ".mcap":
             raise TwinError(f"{src}: expected a .mcap run or recording file, or a dataset folder")
         if src.is_dir():
             raise TwinError(f"{src}: is a directory; expected a .mcap run or recording file, or a dataset folder")

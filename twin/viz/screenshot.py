@@ -277,7 +277,7 @@ def screenshot(rrd: str | Path, png: str | Path, *, at_s: float | None = None, w
     rrd, png = Path(rrd).resolve(), Path(png).resolve()
     if not rrd.is_file():
         raise TwinError(f"{rrd}: no such recording")
-    if png.suffix != ".png" or not png.parent.is_dir():
+    if png.suffix.lower() != ".png" or not png.parent.is_dir():
         raise TwinError(f"--screenshot: {png} must be a .png in an existing directory")
     if not (isinstance(wait_s, (int, float)) and math.isfinite(wait_s) and wait_s >= 0):
         raise TwinError(f"--wait: must be a finite number of seconds >= 0, got {wait_s!r}")

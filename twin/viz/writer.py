@@ -104,7 +104,7 @@ class RerunWriter:
                  options: ViewOptions = ViewOptions(), t_start: float = 0.0, t_end: float | None = None,
                  source: str = ""):
         self.path = Path(path)
-        if self.path.suffix != ".rrd":
+        if self.path.suffix.lower() != ".rrd":
             raise TwinError(f"{self.path}: a rerun recording must end in .rrd")
         if not self.path.parent.is_dir():
             raise TwinError(f"{self.path}: directory {self.path.parent} does not exist")
