@@ -144,7 +144,7 @@ def _former_code() -> dict[str, BenchConfig]:
         mechanism=dataclasses.replace(base.mechanism, orientation="y", d_off_m=0.0, guide_friction_n=0.0,
                                       crank_direction=1),
         contact=dataclasses.replace(base.contact, law="adams-impact", exponent=1.5, stiffness=0.0,
-                                    impact_c_max_nspm=1e4, impact_d_max_m=1e-5, mu0=0.0, mu_static=0.0),
+                                    impact_c_max_nspm=1e4, impact_d_max_m=1e-5, mu0=0.0),
         drive=dataclasses.replace(base.drive, program="constant", mode="prescribed",
                                   crank_rpm=30.0 * 60.0 / (2.0 * math.pi), ramp_s=0.0,
                                   initial_encoder_angle_rad=math.pi / 2),

@@ -51,7 +51,7 @@ from twin.instrument.encoder import count_step_rad
 from twin.recording import read_recording
 from twin.run import Channel, Run
 from twin.signals import band_energy_db, dtw_compare, hann_spectrum
-from twin.util import json_default
+from twin.util import json_default, json_text
 
 #: Frequency bands of S003 Fig. 15 where clearance raises spectral activity [Hz]. The paper
 #: shades them without giving edges; ±200 Hz around 1 kHz and ±300 Hz around 3 kHz is our
@@ -390,7 +390,7 @@ def _replay_into(out: Path, recording: str | Path, rec: Run, info: Any, repairs:
                                                                   else np.float64)) for k, c in chans.items()}
     both = Run(rec.t0, rate, chans, stored_cfg, {**sim.meta, "replay_of": str(recording)})
     mcap_path = out / "replay.mcap"
-    write_run(mcap_path, both, extra_metadata={"twin.replay": {"json": json.dumps(report, default=json_default)},
+    write_run(mcap_path, both, extra_metadata={"twin.replay": {"json": json_text(report, indent=None)},
                                                "twin.recording": info.to_record()})
     report["files"]["mcap"] = mcap_path.name
     report["files"]["trace"] = trace.name

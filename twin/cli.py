@@ -272,15 +272,15 @@ def config_from_args(args: argparse.Namespace) -> BenchConfig:
                     raise ConfigError(f"--set {k}", f"does not apply to this command (it sets {r.rstrip('.')} "
                                                     "itself or does not use it)")
             ov[k] = v
-    out = with_overrides(cfg, ov) if ov else cfg
-    if out.drive.mode == "torque":  # the torque drive follows drivetrain.torque_s/torque_nm, no speed program
+    if ov.get("drive.mode", cfg.drive.mode) == "torque":  # the torque drive follows its torque program, no speed
+        # program: the configuration refuses drive.program/motor speed too; here the flag that set it is named
         for flag, given in (("--speed", _opt(args, "speed")), ("--protocol", _opt(args, "protocol") or None),
                             ("--trace", _opt(args, "trace"))):
             if given is not None:
                 raise ConfigError(flag, "is not used with drive.mode = 'torque' (the motor follows the torque program "
                                         "drivetrain.torque_s/torque_nm, then coasts); leave it out or use another "
                                         "--drive-mode")
-    return out
+    return with_overrides(cfg, ov) if ov else cfg
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -57,7 +57,7 @@ from twin import __version__
 from twin.config import BenchConfig, config_from_toml
 from twin.errors import RecordingError, TwinError
 from twin.run import Channel, Run
-from twin.util import check_not_link, json_default, open_new, remove_stale_temps, temp_path
+from twin.util import check_not_link, json_text, open_new, remove_stale_temps, temp_path
 
 #: what a damaged file raises while it is read (LZ4's frame decoder raises RuntimeError)
 _UNREADABLE = (McapError, ZstdError, RuntimeError, EOFError, struct.error, ValueError, KeyError)
@@ -266,7 +266,7 @@ class RunWriter:
         self.preview_rate_hz = check_preview_rate(preview_rate_hz)  # the run's rate is known at its first block
         self._preview: _Preview | None = None
         self.compression = _COMPRESSION[compression]
-        if self.path.suffix != ".mcap":
+        if self.path.suffix.lower() != ".mcap":
             raise TwinError(f"run files must end in .mcap, got {self.path.name}", field="path")
         if not self.path.parent.is_dir():
             raise TwinError(f"directory {self.path.parent} does not exist", field="path")
@@ -368,9 +368,9 @@ class RunWriter:
         self._w.add_metadata("twin.run", {
             "format": FORMAT, "t0": repr(float(self.t0 or 0.0)), "rate_hz": repr(float(self.rate_hz or 0.0)),
             "n": str(self._written), "channels": ",".join(self._channels or []),
-            "meta": json.dumps(meta or {}, sort_keys=True, default=json_default)})
+            "meta": json_text(meta or {}, indent=None, sort_keys=True)})
         if summary is not None:
-            self._w.add_metadata("twin.summary", {"json": json.dumps(summary, sort_keys=True, default=json_default)})
+            self._w.add_metadata("twin.summary", {"json": json_text(summary, indent=None, sort_keys=True)})
         self._w.finish()
         self._fh.close()
         try:

@@ -52,7 +52,7 @@ from twin.instrument.calibration import Calibration, calibrate_static, calibrati
 from twin.instrument.chain import DAQ_GROUP
 from twin.instrument.encoder import check_counts, max_counts_per_sample, unwrap_counts
 from twin.run import Channel, Run
-from twin.util import json_default
+from twin.util import json_text
 
 RECORDING_FORMAT = "twin-recording/1"
 RECORDING_RECORD = "twin.recording"
@@ -109,7 +109,7 @@ class RecordingInfo:
                 "extra": self.extra}
 
     def to_record(self) -> dict[str, str]:
-        return {"format": RECORDING_FORMAT, "json": json.dumps(self.to_dict(), sort_keys=True, default=json_default)}
+        return {"format": RECORDING_FORMAT, "json": json_text(self.to_dict(), indent=None, sort_keys=True)}
 
     @classmethod
     def from_record(cls, record: Mapping[str, str], where: str = "") -> "RecordingInfo":

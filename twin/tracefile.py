@@ -21,12 +21,12 @@ def load_trace(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     import zipfile
 
     p = Path(path)
-    if p.suffix not in (".npz", ".csv"):
+    if p.suffix.lower() not in (".npz", ".csv"):
         raise ConfigError("drive.trace_file", f"must be a .npz or .csv file, got {str(p)!r}")
     if not p.is_file():
         raise ConfigError("drive.trace_file", f"no such file: {p}")
     try:
-        if p.suffix == ".npz":
+        if p.suffix.lower() == ".npz":
             loaded = np.load(p, allow_pickle=False)
             if not isinstance(loaded, np.lib.npyio.NpzFile):  # an .npy array renamed .npz
                 raise RecordingError(f"{p}: not an .npz archive of named arrays (a single .npy array renamed?)")
@@ -40,7 +40,7 @@ def load_trace(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
 
             with warnings.catch_warnings():
                 warnings.simplefilter("error")  # empty or ragged files: an error, not a warning
-                data = np.genfromtxt(p, delimiter=",", names=True, encoding="utf-8")
+                data = np.genfromtxt(p, delimiter=",", names=True, encoding="utf-8-sig")
             names = data.dtype.names or ()
             if "t" not in names or "angle" not in names:
                 raise RecordingError(f"{p}: needs CSV columns 't' and 'angle', has {', '.join(names) or 'none'}")

@@ -298,7 +298,7 @@ def check_output_file(path: str | Path, flag: str, suffixes: str | Iterable[str]
     """
     out = check_path_name(path, flag)
     allowed = (suffixes,) if isinstance(suffixes, str) else tuple(suffixes)
-    if out.suffix not in allowed or out.name.startswith(".") and out.name == out.suffix:
+    if out.suffix.lower() not in allowed or out.name.startswith(".") and out.name == out.suffix:
         raise TwinError(f"must end in {' or '.join(allowed)}, got {show(out)!r}", field=flag)
     parent = out.parent if str(out.parent) else Path(".")
     if not parent.exists():
@@ -401,11 +401,12 @@ MAX_TOML_DEPTH = 32
 
 def toml_loads(text: str) -> dict[str, Any]:
     """``tomllib.loads`` that refuses deep nesting as a TOMLDecodeError (one line) instead of a
-    RecursionError: nothing the twin reads is nested more than a few levels."""
+    RecursionError (nothing the twin reads is nested more than a few levels) and reads a text that starts
+    with a UTF-8 byte-order mark as without it."""
     import tomllib
 
     try:
-        data = tomllib.loads(text)
+        data = tomllib.loads(text.removeprefix("\ufeff"))  # a byte-order mark (Windows editors write one)
     except RecursionError:
         raise tomllib.TOMLDecodeError(f"tables or arrays nested deeper than {MAX_TOML_DEPTH} levels") from None
     stack: list[tuple[Any, int]] = [(data, 1)]

@@ -152,7 +152,7 @@ def _recording_and_json(args: argparse.Namespace) -> tuple[Path, Path | None]:
     from twin.util import check_output_file
 
     rec = recording(args.recording)
-    if rec.suffix != ".mcap":
+    if rec.suffix.lower() != ".mcap":
         raise TwinError(f"{rec}: a recording is an .mcap file; convert DAQ exports with 'twin import'")
     return rec, check_output_file(args.json, "--json", ".json") if args.json else None
 

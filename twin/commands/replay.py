@@ -65,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
     from twin.bench_replay import ReplayOptions, replay
 
     rec = recording(args.recording)
-    if rec.suffix != ".mcap":
+    if rec.suffix.lower() != ".mcap":
         raise TwinError(f"{rec}: a recording is an .mcap file; convert DAQ exports with 'twin import'")
     if not rec.is_file():
         raise TwinError(f"{rec}: " + ("not a regular file (a folder, pipe or device)" if rec.exists() else "no such file"))

@@ -86,7 +86,7 @@ def run(args: argparse.Namespace) -> int:
     else:
         if args.run:
             raise TwinError("--run: applies to a dataset folder, not to a run file")
-        if src.suffix != ".mcap":
+        if src.suffix.lower() != ".mcap":
             raise TwinError(f"{src}: expected a .mcap run or recording file, or a dataset folder")
         if src.is_dir():
             raise TwinError(f"{src}: is a directory; expected a .mcap run or recording file, or a dataset folder")
@@ -172,8 +172,9 @@ def _spawn(exe: str, path: Path) -> None:
     :data:`SPAWN_CHECK_S` seconds (its output until then goes to a log quoted on failure)."""
     from twin.viz.screenshot import viewer_message
 
-    env = dict(os.environ)
-    env.setdefault("RUST_LOG", "error")
+    from twin.viz import USER_RUST_LOG
+
+    env = dict(os.environ, RUST_LOG=USER_RUST_LOG or "error")  # not the SDK's "off" of this process
     with tempfile.TemporaryFile() as log:
         proc = subprocess.Popen([exe, str(path)], start_new_session=True, stdin=subprocess.DEVNULL,
                                 stdout=log, stderr=log, env=env)

@@ -211,6 +211,10 @@ def _check_options_used(cfg: BenchConfig) -> None:
                                   f"{' or '.join(repr(m) for m in modes)}); leave it out (default "
                                   f"{getattr(default, name)!r}), got {getattr(own, name)!r}")
     default = Drive()
+    if mode == "torque" and program != default.program:
+        raise ConfigError("drive.program", f"is not used with drive.mode = 'torque' (the motor follows the torque "
+                          "program drivetrain.torque_s/torque_nm, then coasts: no speed program); leave it out "
+                          f"(default {default.program!r}), got {program!r}")
     for names, programs in _PROGRAM_FIELDS:
         if program in programs:
             continue

@@ -444,12 +444,17 @@ class TaguchiResult:
 def run_study(options: TaguchiOptions) -> TaguchiResult:
     """Analyse ``options.csv_path`` and write ``taguchi.json``, ``report.md`` and per response its
     main-effect and S/N PNGs to ``options.out``."""
-    from twin.util import atomic_write_json, atomic_write_text
+    from twin.util import atomic_write_json, atomic_write_text, check_not_input
 
     o = options
     res = run_analysis(o.csv_path, o.responses, o.factors, o.sn, o.interactions, o.pool, o.predict_with, o.alpha,
                        o.confirmation_runs)
     out = Path(o.out)
+    # every file this writes, checked against the inputs before the first is written (an input CSV named like
+    # an output, in the output folder, would otherwise be refused only after the figures)
+    names = [f"{kind}_{_safe(spec)}.png" for spec in res["responses"] for kind in ("main_effects", "sn")]
+    for name in (*names, "taguchi.json", "report.md"):
+        check_not_input(out / name, "out")
     out.mkdir(exist_ok=True)
     figs = []
     for spec, r in res["responses"].items():

@@ -152,7 +152,7 @@ def load(source: str | Path | Run) -> PlotSource:
         raise TwinError(f"{show(p)}: no such file")
     elif not p.is_file():
         raise TwinError(f"{show(p)}: not a regular file (a pipe or device)")
-    elif p.suffix != ".mcap":
+    elif p.suffix.lower() != ".mcap":
         raise TwinError(f"{show(p)}: expected a .mcap run or recording file, or a replay folder")
     records = read_metadata(p)
     name = p.parent.name if p.name == REPLAY_RUN else p.stem

@@ -287,7 +287,7 @@ def screenshot(rrd: str | Path, png: str | Path, *, at_s: float | None = None, w
     rrd, png = Path(rrd).resolve(), Path(png).resolve()
     if not rrd.is_file():
         raise TwinError(f"{rrd}: no such recording")
-    if png.suffix != ".png" or not png.parent.is_dir():
+    if png.suffix.lower() != ".png" or not png.parent.is_dir():
         raise TwinError(f"{png} must be a .png in an existing directory", field="png")
     check_screenshot_args(wait_s, at_s, window)
     check_vulkan()
