@@ -76,7 +76,7 @@ def main() -> int:
     import matplotlib.pyplot as plt
 
     from twin.config import ln_stiffness, named_preset
-    from twin.identification.restitution import SweepOptions, sweep_restitution, synthetic_recording
+    from twin.identification.restitution import SweepOptions, sweep_restitution, write_synthetic_recording
     from twin.simulation import simulate_run
 
     base = named_preset("s001")
@@ -256,7 +256,7 @@ def main() -> int:
     for rec_eng, sweep_eng, e in cases:
         p = tmp / f"rec_{rec_eng}_{e}.mcap"
         if not p.exists():
-            synthetic_recording(base.replace(**{"simulation.engine": rec_eng}), p, e, noise_mps2=5.0, seed=11)
+            write_synthetic_recording(base.replace(**{"simulation.engine": rec_eng}), p, e, noise_mps2=5.0, seed=11)
         grid = tuple(round(0.17 + 0.05 * k, 2) for k in range(17))   # the known values are off this grid
         s = sweep_restitution(p, SweepOptions(coarse=grid, engine=sweep_eng))
         rec_rows.append({"recording_engine": rec_eng, "sweep_engine": sweep_eng, "e_true": e,
@@ -268,7 +268,7 @@ def main() -> int:
     for eng in ENGINES:
         cfg_i = base.replace(**{"simulation.engine": eng, "contact.law": "adams-impact"})
         p = tmp / f"rec_impact_{eng}.mcap"
-        synthetic_recording(cfg_i, p, 27960.0, noise_mps2=5.0, seed=11, parameter="c_max")
+        write_synthetic_recording(cfg_i, p, 27960.0, noise_mps2=5.0, seed=11, parameter="c_max")
         s = sweep_restitution(p, SweepOptions(parameter="c_max", coarse=tuple(6100.0 + 2500 * k for k in range(18))))
         cmax_rows.append({"engine": eng, "c_max_true": 27960.0, "c_max_found": s.value,
                           "error_pct": 100 * (s.value / 27960.0 - 1), "rms_mismatch_mps2": s.mismatch_mps2,
@@ -284,7 +284,7 @@ def main() -> int:
     from twin.identification.restitution import _lowpass, recorded_acceleration, rms_mismatch, simulated_acceleration
 
     p = out / "_land.mcap"
-    synthetic_recording(base, p, 0.55, noise_mps2=5.0, seed=11)
+    write_synthetic_recording(base, p, 0.55, noise_mps2=5.0, seed=11)
     rec, cfg, rate = recorded_acceleration(p)
     p.unlink()
     lp = _lowpass(200.0, rate)

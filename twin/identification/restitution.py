@@ -30,7 +30,7 @@ until they agreed (0.55 after seven trials). Here:
    beside the answer's narrow basin and scored 1.8 m/s² low-passed against a wide wrong basin's 1.71
    at 0.42, while over the full band 0.428 reads 9.2 m/s² and the answer the noise's 5.
 
-:func:`synthetic_recording` makes the recordings of the recovery check: a run of the configuration at
+:func:`write_synthetic_recording` writes the recordings of the recovery check: a run of the configuration at
 a known e, white noise added to the accelerometer's truth, through the sensor chain.
 """
 
@@ -322,8 +322,8 @@ def sweep_restitution(path: str | Path, opts: SweepOptions = SweepOptions(), pro
 
 
 # ------------------------------------------------------------------------ synthetic
-def synthetic_recording(cfg: BenchConfig, path: str | Path, value: float, noise_mps2: float = 5.0,
-                        seed: int = 0, sensor: str = "AC6", parameter: str = "restitution") -> Path:
+def write_synthetic_recording(cfg: BenchConfig, path: str | Path, value: float, noise_mps2: float = 5.0,
+                              seed: int = 0, sensor: str = "AC6", parameter: str = "restitution") -> Path:
     """Write a synthetic bench recording of ``cfg`` at a known ``parameter`` value (restitution, or the
     IMPACT law's c_max): the twin's run (engine of ``cfg``), white Gaussian noise of ``noise_mps2`` RMS
     [m/s²] added to ``sensor``'s truth, then the sensor chain of ``cfg.instrumentation`` (its own

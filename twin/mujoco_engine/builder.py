@@ -661,11 +661,6 @@ def build(cfg: BenchConfig) -> tuple[mujoco.MjSpec, mujoco.MjModel, BuildInfo]:
     return spec, _compile(spec, cfg), info
 
 
-def build_model(cfg: BenchConfig) -> mujoco.MjModel:
-    """Compiled model of a configuration."""
-    return build(cfg)[1]
-
-
 def export_xml(cfg: BenchConfig) -> str:
     """MJCF text of the configuration's compiled variant (opens in MuJoCo's viewer). It keeps
     MuJoCo's accelerometer sensors whatever ``mujoco.accelerometers`` says: a plain MuJoCo has no
