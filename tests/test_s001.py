@@ -21,7 +21,7 @@ from conftest import bore_bias_acceleration
 
 def _adams_mu(v, mus, mud, vs, vd):
     """MSC Adams' contact friction coefficient, written from its documentation (independent
-    of twin.reference.contact): step(v, −vs, μs, vs, −μs) of the force direction inside ±vs,
+    of twin.physics.contact): step(v, −vs, μs, vs, −μs) of the force direction inside ±vs,
     −step(|v|, vs, μs, vd, μd) sign(v) beyond; returned as a magnitude."""
     def step(x, x0, h0, x1, h1):
         d = np.clip((x - x0) / (x1 - x0), 0.0, 1.0)
@@ -82,7 +82,7 @@ def test_linear_ramp_reference():
 
 # ------------------------------------------------------------------------- friction
 def test_adams_friction_law_of_the_reference():
-    from twin.reference.contact import adams_friction_force, adams_mu
+    from twin.physics.contact import adams_friction_force, adams_mu
 
     mus, mud, vs, vd = 0.08, 0.05, 1e-4, 0.01016
     v = np.concatenate([np.linspace(0, 2e-4, 201), np.geomspace(2e-4, 0.1, 200)])
@@ -278,7 +278,7 @@ def _impact_force(delta, rate, K, n, c_max, d_max):
 
 
 def test_adams_impact_law_of_the_reference():
-    from twin.reference.contact import LAW_CODES, adams_impact, normal_force
+    from twin.physics.contact import LAW_CODES, adams_impact, normal_force
 
     K, n, cmax, dmax = 3.1e10, 1.5, 27960.0, 1e-5
     for delta in (-1e-7, 0.0, 2e-6, 5e-6, 1e-5, 2e-5):

@@ -107,7 +107,7 @@ class MujocoEngine:
         self._drive = None
         if cfg.drive.mode == "prescribed":
             from twin.drive import DriveReference
-            from twin.mujoco_engine.builder import prescribed_armature
+            from twin.physics.mujoco_params import prescribed_armature
 
             self._drive = DriveReference(cfg)
             self._armature = prescribed_armature(cfg)

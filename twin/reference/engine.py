@@ -5,7 +5,7 @@ configuration, drive, channels, chunking and metadata (:class:`twin.simulation.E
 the two engines compare channel by channel. The formulation is in
 :mod:`twin.natural_coordinates` (coordinates, constraints, mass matrix) and
 :mod:`twin.reference.model` (forces, equations of motion, integration), the contact laws in
-:mod:`twin.reference.contact` with their constants from :mod:`twin.contact_params`.
+:mod:`twin.physics.contact` with their constants from :mod:`twin.contact_params`.
 
 Clearance joints: any of A (the crank journal in the frame's bore; its eccentricity channels in
 the bench frame), B and C (rod frame), each with its own pin and bushing radii.

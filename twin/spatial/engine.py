@@ -60,7 +60,7 @@ def build(cfg: Any, options: SpatialOptions = SpatialOptions()) -> tuple[np.ndar
     """(P, jon, contacts): the model's parameter vector, the clearance flags (A, B, C) and the resolved
     contact constants per clearance joint."""
     from twin.contact_params import law_stiffness
-    from twin.reference.contact import LAW_CODES
+    from twin.physics.contact import LAW_CODES
 
     con = cfg.contact
     if con.law == "linear":
