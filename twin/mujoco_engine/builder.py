@@ -57,6 +57,7 @@ from twin.mujoco_engine import drivetrain
 from twin.mujoco_engine import guide as guide_clearance
 from twin.mujoco_engine.collider import ensure_installed
 from twin.physics.mujoco_params import ContactSetting, contact_setting, native_law_applies, prescribed_armature
+from twin.tracefile import DriveInputs
 
 #: frictionless MuJoCo contact; friction is the native passive force (see module docstring)
 _CONDIM = 1
@@ -322,7 +323,7 @@ def _ring(spec: mujoco.MjSpec, cfg: BenchConfig, jt: str) -> list[str]:
     return names
 
 
-def build(cfg: BenchConfig) -> tuple[mujoco.MjSpec, mujoco.MjModel, BuildInfo]:
+def build(cfg: BenchConfig, *, inputs: DriveInputs | None = None) -> tuple[mujoco.MjSpec, mujoco.MjModel, BuildInfo]:
     """Spec, compiled model and build info of a configuration (collider installed).
 
     The bushing representation (``mujoco.bushing``) and the friction model
@@ -395,7 +396,7 @@ def build(cfg: BenchConfig) -> tuple[mujoco.MjSpec, mujoco.MjModel, BuildInfo]:
         else:
             a_hat = float(model.body_invweight0[model.geom_bodyid[model.geom(mjcf_names.pin(jt)).id], 0] +
                           model.body_invweight0[model.geom_bodyid[model.geom(mjcf_names.bushing(jt)).id], 0])
-        setting = contact_setting(cfg, jt, a_hat, native=native)
+        setting = contact_setting(cfg, jt, a_hat, native=native, inputs=inputs)
         if ms.bushing == "tendon":
             t = spec.tendon(mjcf_names.pair(jt))
             t.solref_limit, t.solimp_limit = list(setting.solref), list(setting.solimp)

@@ -24,6 +24,7 @@ from twin.config import BenchConfig
 from twin.contact_params import (cylindrical_stiffness, first_guess_contact, initial_linear_law, johnson_elastic_force,
                                  law_stiffness)
 from twin.impact import DAMPING_FACTOR
+from twin.tracefile import DriveInputs
 
 #: flat, tiny impedance: the contact force is then exactly k δ + c δ̇ with a direct solref
 #: (−k Â, −c Â), Â the row's inverse-inertia estimate (ENGINEERING_NOTES, re-measured in tests).
@@ -199,11 +200,12 @@ def impact_speed_coefficient(cfg: BenchConfig, joint: str) -> float:
     return law.damping * law.stiffness
 
 
-def native_law(cfg: BenchConfig, joint: str) -> NativeLaw:
-    """The reference's contact law of ``joint`` as the native module applies it (:class:`NativeLaw`)."""
+def native_law(cfg: BenchConfig, joint: str, inputs: DriveInputs | None = None) -> NativeLaw:
+    """The reference's contact law of ``joint`` as the native module applies it (:class:`NativeLaw`);
+    ``inputs``: the recorded drive trace in memory, if any (the linear law's pose)."""
     ct, ms = cfg.contact, cfg.mujoco
     if ct.law == "linear":
-        k, c = initial_linear_law(cfg)[joint]
+        k, c = initial_linear_law(cfg, inputs)[joint]
         return NativeLaw(ct.law, k * ms.contact_stiffness_scale, 1.0, c * ms.contact_damping_scale,
                          ct.impact_speed_floor_mps)
     if ct.law == "johnson-cylindrical":  # k = π L E*, ΔR in d_max_m, LN damping of e
@@ -221,7 +223,8 @@ def native_law(cfg: BenchConfig, joint: str) -> NativeLaw:
                      chi * ms.impact_damping_gain * ms.contact_damping_scale, ct.impact_speed_floor_mps)
 
 
-def contact_setting(cfg: BenchConfig, joint: str, a_hat: float, native: bool = True) -> ContactSetting:
+def contact_setting(cfg: BenchConfig, joint: str, a_hat: float, native: bool = True,
+                    inputs: DriveInputs | None = None) -> ContactSetting:
     """Resolve the contact of a clearance joint (see module docstring).
 
     ``native`` is False for representations the native module does not serve (ring of boxes,
@@ -238,7 +241,7 @@ def contact_setting(cfg: BenchConfig, joint: str, a_hat: float, native: bool = T
     c *= ms.contact_damping_scale
     term = ContactTerm((-k * a_hat, -c * a_hat), FLAT_SOLIMP, k, c)
     if native and ms.contact_source in ("law", "force"):
-        return ContactSetting((term,), mu, ms.contact_source, native_law(cfg, joint))
+        return ContactSetting((term,), mu, ms.contact_source, native_law(cfg, joint, inputs))
     return ContactSetting((term,), mu, "first-guess")
 
 

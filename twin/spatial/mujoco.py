@@ -36,6 +36,7 @@ from twin import __version__ as twin_version
 from twin import names
 from twin.errors import ConfigError, ModelError, SimulationError
 from twin.physics.mujoco_params import contact_setting, prescribed_armature
+from twin.tracefile import DriveInputs
 from twin.spatial import geometry as spatial_geometry
 
 _STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
@@ -206,11 +207,11 @@ class SpatialMujocoEngine:
 
     name = "mujoco"
 
-    def __init__(self, cfg: Any):
+    def __init__(self, cfg: Any, *, inputs: DriveInputs | None = None):
         from twin.drive import DriveReference
 
         self.cfg = cfg
-        self._drive = DriveReference(cfg)
+        self._drive = DriveReference(cfg, inputs)
         t0 = time.perf_counter()
         theta0 = float(self._drive(np.array([0.0]))[0][0])
         self.spec, self.model, contacts = build(cfg, theta0)
