@@ -202,7 +202,7 @@ def simulated_acceleration(cfg: BenchConfig, e: float, n: int, rate_hz: float, s
     return a
 
 
-def _lowpass(f_hz: float, rate_hz: float):
+def zero_phase_lowpass(f_hz: float, rate_hz: float):
     """Zero-phase 4th-order Butterworth low-pass at ``f_hz`` (None for 0 or at/above Nyquist)."""
     if not f_hz or f_hz >= 0.5 * rate_hz:
         return None
@@ -253,7 +253,7 @@ def sweep_restitution(path: str | Path, opts: SweepOptions = SweepOptions(), pro
     # over the full band the mismatch is a needle at the answer among spurious dips. Low-passed
     # (``lowpass_hz``) the minimum is wider, still rugged. The coarse grid and the first fine grid are
     # scored low-passed, the finest grid (fine_step/5 over ±2 fine_step) over the full band.
-    lp = _lowpass(opts.lowpass_hz, rate)
+    lp = zero_phase_lowpass(opts.lowpass_hz, rate)
     rec_lp = lp(rec) if lp else rec
 
     def evaluate(e: float) -> float:
