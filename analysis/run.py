@@ -4,6 +4,7 @@
     python analysis/run.py NAME [NAME ...]     run the named scripts in turn with the arguments that
                                                rebuild their committed results
     python analysis/run.py NAME -- ARGS        one script with other arguments (its own --help says which)
+    python analysis/run.py --unstamped         the results files that carry no version and commit (older)
 
 Names are the script's path under ``analysis/`` without ``.py`` (``s004_report``,
 ``identify/held_out_plot``). Costs are rough wall times on the project's two-core machine, from the
@@ -54,7 +55,7 @@ R = "analysis/results"
 SCRIPTS: dict[str, Script] = {
     # ---- reproductions of the papers
     "s000_report": Script(f"{R}/s000/comparison.json, comparison.md (runs twin study doe into s000_example*/)",
-                          "~40 min", long=True),
+                          "2 min"),
     "s000_impact_law": Script(f"{R}/s000/impact_law.json, impact_law.md", "15 s"),
     "s001_report": Script(f"{R}/s001/: results.json, tables.md, 7 PNG figures", "5 min"),
     "s002_paper_tables": Script(f"{R}/s002/paper_tables.json, paper_tables.md, responses_reconstructed.csv",
@@ -170,6 +171,44 @@ def listing() -> str:
     return "\n".join(lines)
 
 
+def is_stamped(path: Path) -> bool | None:
+    """Whether a results file carries the version and commit (:mod:`twin.provenance`; the ``commit``
+    and ``version`` keys some scripts wrote before it count too); None for a kind that carries none
+    (CSV: read by other programs, stamped through the JSON written beside it)."""
+    import json
+
+    if path.suffix == ".json":
+        try:
+            top = json.loads(path.read_text(encoding="utf-8"))
+        except ValueError:
+            return False
+        return isinstance(top, dict) and ("provenance" in top or "commit" in top)
+    if path.suffix == ".md":
+        lines = [ln for ln in path.read_text(encoding="utf-8").splitlines() if ln.strip()]
+        return bool(lines) and (lines[-1].startswith("_Written ") or "commit" in lines[0].lower())
+    if path.suffix == ".png":
+        from PIL import Image
+
+        with Image.open(path) as im:
+            return str(im.info.get("Software", "")).startswith("twin ")
+    return None
+
+
+def unstamped() -> str:
+    """The results files of analysis/results/ without a stamp, by folder (they predate the stamp)."""
+    from collections import Counter
+
+    files = sorted(p for p in (HERE / "results").rglob("*") if p.is_file())
+    state = {p: is_stamped(p) for p in files}
+    old = [p for p, s in state.items() if s is False]
+    per_dir = Counter(p.parent.relative_to(ROOT).as_posix() for p in old)
+    lines = [f"{len(old)} of {sum(s is not None for s in state.values())} results files carry no version and commit "
+             f"(written before the stamp; {sum(s is None for s in state.values())} CSV files are stamped through "
+             "the JSON beside them):"]
+    lines += [f"  {d}: {n}" for d, n in sorted(per_dir.items())]
+    return "\n".join(lines)
+
+
 def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     extra: list[str] = []
@@ -181,7 +220,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("names", nargs="*", metavar="NAME", help="scripts to run (see --list)")
     ap.add_argument("--list", action="store_true", help="list the scripts, their cost and what they rebuild")
     ap.add_argument("--long", action="store_true", help="also run the named scripts marked LONG")
+    ap.add_argument("--unstamped", action="store_true", help="list the results files without version and commit")
     args = ap.parse_args(argv)
+    if args.unstamped:
+        print(unstamped())
+        return 0
     if args.list or not args.names:
         print(listing())
         return 0
