@@ -142,3 +142,18 @@ def test_the_checker_catches_an_engine_edge_in_the_configuration(tmp_path):
     src.write_text("def f(cfg):\n    from twin.spatial.checks import check_spatial\n    check_spatial(cfg)\n")
     found = imported_modules(src, "twin.config.probe")
     assert any(_is_within(n, "twin.spatial") for n in found)
+
+
+#: the layers above the engines: the library's run loop and sinks, the studies, the commands
+ABOVE = ("twin.simulation", "twin.studies", "twin.commands", "twin.cli", "twin.api", "twin.bench_replay",
+         "twin.identification", "twin.dataset", "twin.viz", "twin.mcapfile")
+
+
+@pytest.mark.parametrize("name", ENGINES + NEUTRAL)
+def test_no_arrow_back_up(name):
+    """Layering: commands -> library -> engines -> shared physics. Neither an engine package nor a
+    shared module (nor the configuration) imports the layers above it."""
+    files = _package_files(name)
+    bad = [f"{_module_name(f)} -> {n}" for f in files for n in sorted(imported_modules(f))
+           if any(_is_within(n, a) for a in ABOVE)]
+    assert not bad, f"{name} imports a layer above it:\n" + "\n".join(bad)

@@ -121,7 +121,7 @@ class StudySettings:
         bench: also draw the guide clearance and the drive train and run every scene in both
             engines (:mod:`twin.studies.stability_bench`).
         family: "bench" (the planar twin's scenes, this module) or "spatial" (S002's mechanism in both
-            engines, :mod:`twin.spatial.stability`).
+            engines, :mod:`twin.studies.spatial_stability`).
     """
 
     scenes: int = 500
@@ -437,7 +437,7 @@ def run_study(out: Path | None, settings: StudySettings, progress: bool = False,
     """Run the campaign; write the outputs to ``out`` (if given); return the JSON data."""
     run_one = run_scene
     if settings.family == "spatial":
-        from twin.spatial.stability import run_scene as run_one, sample_scene as sample_spatial  # noqa: F811
+        from twin.studies.spatial_stability import run_scene as run_one, sample_scene as sample_spatial  # noqa: F811
 
         scenes = [sample_spatial(settings.seed, i, settings.duration_range_s) for i in range(settings.scenes)]
     else:
