@@ -61,7 +61,7 @@ from mujoco import rollout
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_mujoco import SCENES, prepare  # noqa: E402
 
-from twin.mujoco_engine.collider import library_path  # noqa: E402
+from twin.mujoco_engine.collider import _library_path  # noqa: E402
 from twin.provenance import stamped  # noqa: E402
 
 D = mujoco.mjtDisableBit
@@ -125,7 +125,7 @@ class Shims:
         self.lib = ctypes.CDLL(str(so))
         self.lib.prof_calibrate.restype = ctypes.c_double
         self.ticks_per_us = self.lib.prof_calibrate(ctypes.c_double(0.2))
-        self.mj = ctypes.CDLL(library_path())
+        self.mj = ctypes.CDLL(_library_path())
         self._slots = {
             "time": ctypes.c_void_p.in_dll(self.mj, "mjcb_time"),
             "passive": ctypes.c_void_p.in_dll(self.mj, "mjcb_passive"),

@@ -24,8 +24,7 @@ from twin import names
 _addresses: tuple[int, int, int, int, int] | None = None
 
 
-def library_path() -> str:
-    """Path of the MuJoCo shared library the ``mujoco`` module loaded (beside it)."""
+def _library_path() -> str:
     libs = sorted(glob.glob(os.path.join(os.path.dirname(mujoco.__file__), "libmujoco.so*")))
     if not libs:
         raise EngineUnavailableError("cannot locate libmujoco next to the mujoco module")
@@ -78,7 +77,7 @@ def ensure_installed() -> None:
         raise EngineUnavailableError(
             "the native module's guide-clearance layout differs from twin.names (GUIDE_CLEARANCE_FIELDS, "
             "GUIDE_CLEARANCE_MAGIC, GUIDE_SENSOR_FIELDS); rebuild the extension ('pip install -e .')")
-    lib = ctypes.CDLL(library_path())
+    lib = ctypes.CDLL(_library_path())
     table = ctypes.addressof(ctypes.c_void_p.in_dll(lib, "mjCOLLISIONFUNC"))
     passive = ctypes.addressof(ctypes.c_void_p.in_dll(lib, "mjcb_passive"))
     sensor = ctypes.addressof(ctypes.c_void_p.in_dll(lib, "mjcb_sensor"))

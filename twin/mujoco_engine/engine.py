@@ -59,9 +59,9 @@ def stage_timers_off() -> None:
     if _clock is None:
         import ctypes
 
-        from twin.mujoco_engine.collider import library_path
+        from twin.mujoco_engine.collider import _library_path
 
-        slot = ctypes.c_void_p.in_dll(ctypes.CDLL(library_path()), "mjcb_time")
+        slot = ctypes.c_void_p.in_dll(ctypes.CDLL(_library_path()), "mjcb_time")
         _clock = (slot, slot.value or 0)
     slot, default = _clock
     if slot.value and slot.value == default and mujoco.get_mjcb_time() is None:
