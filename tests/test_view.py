@@ -513,6 +513,10 @@ def test_spawn_real_viewer_without_x_server(tmp_path, small_mcap, monkeypatch, c
     monkeypatch.setenv("DISPLAY", ":97")
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
     monkeypatch.delenv("WAYLAND_SOCKET", raising=False)
+    # the wait ends when the viewer exits, so a long check costs nothing here; the default 1.5 s was
+    # too short for the viewer to start and fail on a loaded machine (the test then saw it "open")
+    import twin.commands.view as view
+    monkeypatch.setattr(view, "SPAWN_CHECK_S", 60.0)
     assert cli("view", small_mcap, "--save", tmp_path / "run.rrd", "--spawn") == 2
     _one_line_error(capfd, "--spawn: the rerun viewer exited at once")
 
