@@ -158,7 +158,7 @@ def test_the_reference_re_run_deflects_under_the_twins_perturbed_stiffness(monke
         def __getitem__(self, k):
             return np.array([1e-6])
 
-    def fake_simulate_run(cfg):
+    def fake_simulate_run(cfg, inputs=None):
         seen.append(cfg)
         return FakeRun()
 

@@ -5,8 +5,9 @@ PID; the virtual accelerometers go through the same sensor chain and the same ca
 real ones; the two are compared. Steps of :func:`replay`:
 
 1. read and validate the recording (:func:`twin.recording.read_recording`), repairs reported;
-2. encoder counts → encoder angle (count centres) → ``encoder_trace.npz`` in the output folder;
-   the drive's ``trace`` program turns it into the reference angle and rate with its zero-phase
+2. encoder counts → encoder angle (count centres), handed to the drive in memory
+   (:class:`twin.tracefile.DriveInputs`) and written to ``encoder_trace.npz`` in the output folder
+   as an output; the drive's ``trace`` program turns it into the reference angle and rate with its zero-phase
    filter (``drive.trace_filter_hz``, :meth:`twin.drive.DriveReference._prepare_trace`);
 3. simulate with the recording's bench configuration, or an overridden one (e.g. ideal joints
    on a clearance recording, as in Fig. 16), at the recording's sample rate
@@ -51,6 +52,7 @@ from twin.instrument.encoder import count_step_rad
 from twin.recording import read_recording
 from twin.run import Channel, Run
 from twin.signals import band_energy_db, dtw_compare, hann_spectrum
+from twin.tracefile import DriveInputs
 from twin.util import json_default, json_text
 
 #: Frequency bands of S003 Fig. 15 where clearance raises spectral activity [Hz]. The paper
@@ -294,7 +296,8 @@ def _replay_into(out: Path, recording: str | Path, rec: Run, info: Any, repairs:
                  rec_cfg: BenchConfig, base: BenchConfig, cfg: BenchConfig, window: tuple[int, int],
                  opts: ReplayOptions, wall0: float) -> dict[str, Any]:
     """Steps 2-6 of :func:`replay`, writing into the folder ``out`` (renamed into place by the
-    caller); the configuration ``cfg`` names the trace at its final place."""
+    caller); the configuration ``cfg`` names the trace at its final place (an output: the
+    simulation takes the trace's arrays in memory)."""
     from twin.mcapfile import write_run
     from twin.simulation import simulate_run
     from twin.util import atomic_write_json, atomic_write_text
@@ -305,20 +308,21 @@ def _replay_into(out: Path, recording: str | Path, rec: Run, info: Any, repairs:
     count = count_step_rad(cpr)
     phi = counts_to_angle(rec["encoder_counts"], cpr, centre=inst.encoder_quantization)
     t_rel = np.arange(rec.n) / rec.rate_hz
+    inputs = DriveInputs(trace=(t_rel, phi))
     trace = out / "encoder_trace.npz"
-    np.savez(trace, t=t_rel, angle=phi)
-    stored_cfg, cfg = cfg, cfg.replace(**{"drive.trace_file": str(trace)})  # run from here, store the final place
+    np.savez(trace, t=t_rel, angle=phi)  # an output (the configuration names it), never read back here
+    stored_cfg = cfg
 
     # 3. simulate
     t_sim = time.perf_counter()
-    sim = simulate_run(cfg, progress=opts.progress)
+    sim = simulate_run(cfg, progress=opts.progress, inputs=inputs)
     sim_wall = time.perf_counter() - t_sim
     if sim.n != rec.n:
         raise TwinError(f"internal: simulated {sim.n} samples for a {rec.n}-sample recording")
 
     # 4. virtual sensor chain + the bench's calibration on both sides
     # noise streams 2 and 3: independent of a synthetic recording's own (0 and 1)
-    sim_daq = apply_chain(sim, cfg, prefix="sim_", stream=2)
+    sim_daq = apply_chain(sim, cfg, prefix="sim_", stream=2, drive_inputs=inputs)
     sim_cal = simulated_calibration(cfg, opts.static_s, stream=3)
     sim_meas = measured_accel(sim_daq, sim_cal, prefix="sim_")
     rec_meas = measured_accel(rec, info.calibration)
@@ -399,8 +403,8 @@ def _replay_into(out: Path, recording: str | Path, rec: Run, info: Any, repairs:
                                  track, pid, i0, sim, phi, cfg, rec.n / rate)
         report["files"]["plots"] = list(report["plots"])
     if opts.drive == "motor":
-        report["motor_drive"] = _motor_drive(out, rec, cfg, phi, window, lag, sensors, rec_meas, crank_rate_hz,
-                                             opts, comparison, tracking)
+        report["motor_drive"] = _motor_drive(out, rec, cfg, inputs, phi, window, lag, sensors, rec_meas,
+                                             crank_rate_hz, opts, comparison, tracking)
         report["files"]["motor_command_trace"] = "motor_command_trace.npz"
     report["wall_s"] = {"simulation": sim_wall, "total": time.perf_counter() - wall0}
     atomic_write_json(out / "report.json", json.loads(json.dumps(report, default=json_default)))
@@ -417,20 +421,23 @@ def motor_config(cfg: BenchConfig, command_trace: Path) -> BenchConfig:
                           "sensors.channels": groups})
 
 
-def _motor_drive(out: Path, rec: Run, cfg: BenchConfig, phi: np.ndarray, window: tuple[int, int], lag: int,
-                 sensors: list[str], rec_meas: Run, crank_rate_hz: float, opts: ReplayOptions,
+def _motor_drive(out: Path, rec: Run, cfg: BenchConfig, inputs: DriveInputs, phi: np.ndarray,
+                 window: tuple[int, int], lag: int, sensors: list[str], rec_meas: Run, crank_rate_hz: float,
+                 opts: ReplayOptions,
                  pid_comparison: dict[str, Any], pid_tracking: dict[str, Any]) -> dict[str, Any]:
     """The motor-driven replay (:class:`ReplayOptions` ``drive = "motor"``): simulate, put through the
     same sensor chain and calibration, compare over the same window with the PID replay's time lag."""
     from twin.simulation import simulate_run
 
+    t_cmd, volts = np.arange(rec.n) / rec.rate_hz, np.asarray(rec["motor_command"], dtype=np.float64)
+    inputs = DriveInputs(trace=inputs.trace, command=(t_cmd, volts))
     trace = out / "motor_command_trace.npz"
-    np.savez(trace, t=np.arange(rec.n) / rec.rate_hz, volts=np.asarray(rec["motor_command"], dtype=np.float64))
+    np.savez(trace, t=t_cmd, volts=volts)  # an output, never read back here
     mcfg = motor_config(cfg, trace)
     t0 = time.perf_counter()
-    sim = simulate_run(mcfg, progress=opts.progress)
+    sim = simulate_run(mcfg, progress=opts.progress, inputs=inputs)
     wall = time.perf_counter() - t0
-    sim_meas = measured_accel(apply_chain(sim, mcfg, prefix="sim_", stream=2),
+    sim_meas = measured_accel(apply_chain(sim, mcfg, prefix="sim_", stream=2, drive_inputs=inputs),
                               simulated_calibration(mcfg, opts.static_s, stream=3), prefix="sim_")
     i0, i1 = window
     j0, j1 = max(i0, -lag, 0), min(i1, rec.n - lag, rec.n)

@@ -16,7 +16,7 @@ from twin.config.drivetrain import Drivetrain
 from twin.config.engines import MujocoSettings, Simulation
 from twin.config.mechanism import Bodies, Contact, Joints, Materials, Mechanism, ln_stiffness
 from twin.config.sensors import Instrumentation, Sensors
-from twin.config.spatial import Spatial
+from twin.config.spatial import Spatial, check_spatial
 from twin.errors import ConfigError
 
 
@@ -95,8 +95,6 @@ class BenchConfig:
                     raise ConfigError("sensors.channels", f"the optional group {group!r} needs drive.mode = "
                                       f"\"motor\" or \"torque\", got {self.drive.mode!r}")
         if self.spatial.enabled:
-            from twin.spatial.checks import check_spatial
-
             check_spatial(self)
         elif "slider_accel" in sen.channels:
             raise ConfigError("sensors.channels", "the optional group 'slider_accel' is produced by the spatial "

@@ -487,11 +487,6 @@ def check_writable(out: Path) -> None:
             raise DatasetError(f"cannot write in {show(path)} (permission denied or a read-only file system)", field="out_dir")
 
 
-def _target_of(tmp_name: str) -> str:
-    # ".NAME.PID.tmp[.ext]" -> NAME
-    return tmp_name[1:].rsplit(".tmp", 1)[0].rsplit(".", 1)[0]
-
-
 class _Progress:
     def __init__(self, n: int, sim_s: float, enabled: bool):
         self.bar = None

@@ -1,7 +1,7 @@
 """Check of the twin's pin/bushing contact against the reference law's closed forms.
 
 The MuJoCo twin's contact force at a clearance joint *is* the reference's law
-(:class:`twin.mujoco_engine.builder.NativeLaw`, applied by ``_bore.c``): nothing is fitted any
+(:class:`twin.physics.mujoco_params.NativeLaw`, applied by ``_bore.c``): nothing is fitted any
 more. The former calibration table (a two-pair solref/solimp law fitted to LN single impacts)
 and its fit are retired. What remains here checks the law as MuJoCo actually integrates it, in a
 probe with the real bore collider and native module, against closed forms:
@@ -19,7 +19,7 @@ probe with the real bore collider and native module, against closed forms:
 
 The probe is a pin of mass m_eff on a slide joint inside the joint's bore: one DOF along the
 contact normal, the twin's timestep and integrator, the builder's own contact setting
-(:func:`twin.mujoco_engine.builder.contact_setting`). The effective masses a clearance joint sees
+(:func:`twin.physics.mujoco_params.contact_setting`). The effective masses a clearance joint sees
 over a crank turn come from the twin's model (:func:`effective_masses`, equal to the reference
 engine's reduced mass matrix). ``twin check contact`` runs the whole check for every joint
 and catalogue clearance at the smallest, median and largest effective mass.
@@ -64,7 +64,8 @@ def probe_model(cfg: BenchConfig, joint: str, m_eff: float, preload_n: float = 0
     inside ``joint``'s bore, with the twin's contact setting for ``cfg`` (native law or soft
     contact, exactly as the builder resolves it), frictionless; ``preload_n`` presses the pin
     into the wall (gravity along +x)."""
-    from twin.mujoco_engine.builder import FLAT_SOLIMP, as_passive_force, contact_setting, native_law_applies
+    from twin.mujoco_engine.builder import as_passive_force
+    from twin.physics.mujoco_params import FLAT_SOLIMP, contact_setting, native_law_applies
 
     ensure_installed()
     rj, ri = cfg.joints.pin_radius(joint), cfg.joints.bushing_radius_m(joint)

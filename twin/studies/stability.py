@@ -72,7 +72,6 @@ from __future__ import annotations
 
 import io
 import math
-import tempfile
 import time
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
@@ -83,6 +82,7 @@ import numpy as np
 from twin.config import CATALOGUE_DIAMETRAL_MM, ORIENTATIONS, BenchConfig, preset
 from twin.errors import ConfigError, TwinError
 from twin.studies.stability_bench import ENGINES, bench_draws, bench_overrides, guide_penetration, label, rotor_energy
+from twin.tracefile import DriveInputs
 from twin.util import atomic_write_bytes, atomic_write_json, atomic_write_text
 
 #: Largest admissible penetration / radial clearance [-].
@@ -121,7 +121,7 @@ class StudySettings:
         bench: also draw the guide clearance and the drive train and run every scene in both
             engines (:mod:`twin.studies.stability_bench`).
         family: "bench" (the planar twin's scenes, this module) or "spatial" (S002's mechanism in both
-            engines, :mod:`twin.spatial.stability`).
+            engines, :mod:`twin.studies.spatial_stability`).
     """
 
     scenes: int = 500
@@ -217,9 +217,18 @@ def startstop_trace(scene: dict[str, Any], belt_ratio: float) -> tuple[np.ndarra
     return t, angle
 
 
+def scene_inputs(scene: dict[str, Any]) -> DriveInputs | None:
+    """The recorded drive input of a scene, in memory: a start/stop scene's encoder trace
+    (:func:`startstop_trace`), None for the other programs."""
+    if scene["drive"]["program"] in ("constant", "protocol"):
+        return None
+    return DriveInputs(trace=startstop_trace(scene, preset(1).drive.belt_ratio))
+
+
 def scene_config(scene: dict[str, Any], trace_dir: Path | None = None) -> BenchConfig:
-    """Bench configuration of a scene (MuJoCo engine). A start/stop scene writes its trace to
-    ``trace_dir`` (required for it)."""
+    """Bench configuration of a scene (MuJoCo engine). A start/stop scene's trace travels in memory
+    (:func:`scene_inputs`); with ``trace_dir`` it is also written there, as the file the configuration
+    names (to run the scene again outside the study), else the configuration names it only."""
     base = preset(1)
     d = scene["drive"]
     ov: dict[str, Any] = {
@@ -241,11 +250,10 @@ def scene_config(scene: dict[str, Any], trace_dir: Path | None = None) -> BenchC
                    "drive.protocol_hold_s": d["protocol_hold_s"], "drive.protocol_stop_s": d["protocol_stop_s"],
                    "drive.ramp_s": d["ramp_s"]})
     else:
-        if trace_dir is None:
-            raise TwinError("scene_config: a start/stop scene needs a directory for its trace file")
-        t, angle = startstop_trace(scene, base.drive.belt_ratio)
-        path = Path(trace_dir) / f"trace_s{scene['seed']}_{scene['index']:05d}.npz"
-        np.savez(path, t=t, angle=angle)
+        path = Path(trace_dir or ".") / f"trace_s{scene['seed']}_{scene['index']:05d}.npz"
+        if trace_dir is not None:
+            t, angle = startstop_trace(scene, base.drive.belt_ratio)
+            np.savez(path, t=t, angle=angle)
         ov.update({"drive.program": "trace", "drive.trace_file": str(path)})
     if "drive_mode" in scene:
         ov.update(bench_overrides(scene))
@@ -304,21 +312,23 @@ def scene_metrics(run: Any, cfg: BenchConfig, scene: dict[str, Any]) -> dict[str
     return out
 
 
-def run_scene(scene: dict[str, Any], trace_dir: Path) -> dict[str, Any]:
-    """Simulate one scene and return its metrics (a raised engine error counts as a divergence)."""
+def run_scene(scene: dict[str, Any], trace_dir: Path | None = None) -> dict[str, Any]:
+    """Simulate one scene and return its metrics (a raised engine error counts as a divergence);
+    ``trace_dir``: where to also write a start/stop scene's trace (:func:`scene_config`)."""
     from twin.errors import SimulationError
     from twin.simulation import simulate_run
 
     cfg = scene_config(scene, trace_dir)
+    inputs = scene_inputs(scene)
     t0 = time.perf_counter()
     try:
-        run = simulate_run(cfg)
+        run = simulate_run(cfg, inputs=inputs)
     except SimulationError as err:
         return {"diverged": True, "passed": False, "error": str(err), "warnings": {}, "nonfinite_channels": [],
                 "joints": {}, "max_pen_over_c": float("nan"), "wall_s": time.perf_counter() - t0}
     met = scene_metrics(run, cfg, scene)
     if not met["diverged"] and met["max_pen_over_c"] > PEN_LIMIT:
-        met["reference"] = reference_check(cfg)
+        met["reference"] = reference_check(cfg, inputs)
         _mark_agreement(met)
     return met
 
@@ -343,7 +353,7 @@ def carried_restitution(cfg: BenchConfig) -> float | None:
     return float(brentq(lambda x: chi(x) - target, lo, hi, xtol=1e-14))
 
 
-def reference_check(cfg: BenchConfig) -> dict[str, Any]:
+def reference_check(cfg: BenchConfig, inputs: DriveInputs | None = None) -> dict[str, Any]:
     """pen/c of the reference engine at its converged step (REFERENCE_TIMESTEP_S) on the same
     scene, under the twin's perturbed law (module docstring): tells a physical exceedance of
     PEN_LIMIT (the converged reference exceeds it too) from a numerical one."""
@@ -356,7 +366,7 @@ def reference_check(cfg: BenchConfig) -> dict[str, Any]:
     if e_ref is not None:
         over["contact.restitution"] = e_ref
     try:
-        run = simulate_run(cfg.replace(**over))
+        run = simulate_run(cfg.replace(**over), inputs=inputs)
     except TwinError as err:
         return {"error": str(err)}
     pen = {j: float(np.max(run[f"pen_{j}"]) / cfg.joints.radial_m(j)) for j in cfg.joints.clearance_joints}
@@ -457,7 +467,7 @@ def run_study(settings: StudySettings, *, out: str | Path | None = None, progres
     ``log``: receives one line per failed scene."""
     run_one = run_scene
     if settings.family == "spatial":
-        from twin.spatial.stability import run_scene as run_one, sample_scene as sample_spatial  # noqa: F811
+        from twin.studies.spatial_stability import run_scene as run_one, sample_scene as sample_spatial  # noqa: F811
 
         scenes = [sample_spatial(settings.seed, i, settings.duration_range_s) for i in range(settings.scenes)]
     else:
@@ -473,14 +483,13 @@ def run_study(settings: StudySettings, *, out: str | Path | None = None, progres
 
         bar = tqdm(total=len(scenes), desc="stability", unit="scene", mininterval=1.0)
     try:
-        with tempfile.TemporaryDirectory(prefix="twin_stability_") as tmp:
-            for sc in scenes:
-                met = run_one(sc, Path(tmp))
-                rows.append({"scene": sc, "metrics": met})
-                if bar is not None:
-                    bar.update(1)
-                if log is not None and not met["passed"]:
-                    log(f"scene {sc['index']}: FAILED ({_failure(met)})")
+        for sc in scenes:
+            met = run_one(sc)
+            rows.append({"scene": sc, "metrics": met})
+            if bar is not None:
+                bar.update(1)
+            if log is not None and not met["passed"]:
+                log(f"scene {sc['index']}: FAILED ({_failure(met)})")
     finally:
         if bar is not None:
             bar.close()
