@@ -95,6 +95,8 @@ SCRIPTS: dict[str, Script] = {
     "bench_storage": Script("prints the dataset signal layouts measured (Parquet, Zarr, NPZ, MCAP, HDF5)",
                             "~10 min", long=True),
     "profile_scenes": Script("prints µs per step of each scene's skipped parts", "~2 min"),
+    "native_threads": Script("prints the GIL's share during a rollout and two scenes on two threads (bytes checked)",
+                             "~1 min"),
     "profile_stages": Script(f"prints where a MuJoCo step goes; {R}/speed/profile_stages.json", "~3 min",
                              args=("--json", f"{R}/speed/profile_stages.json")),
     "bit_identical": Script("prints (or --save/--against) digests of the outputs a refactoring keeps", "30 s"),

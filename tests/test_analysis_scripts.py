@@ -28,7 +28,6 @@ ANALYSIS = ROOT / "analysis"
 PENDING_PRIVATE: dict[str, tuple[set[str], str]] = {
     "identify/nuisance_study": ({"_half_widths", "_half_widths_by_windows"},
                                 "twin.identification's interval helpers (split on the identification branch)"),
-    "profile_stages": ({"_library_path"}, "twin.mujoco_engine.collider's library look-up (native branch)"),
 }
 
 #: writes of a script that are not results files (a cache, a work folder, a spec, the docs page in place)
