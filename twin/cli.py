@@ -31,6 +31,7 @@ if TYPE_CHECKING:
 #: modules providing subcommands (``register(subparsers)``), in help order
 COMMANDS: list[str] = [
     "twin.commands.simulate",
+    "twin.commands.record",
     "twin.commands.export_mjcf",
     "twin.commands.view",
     "twin.commands.plot",

@@ -773,12 +773,22 @@ def synthetic_recording(truth: Run, cfg: BenchConfig, notes: str = "", static_s:
     """A bench recording made by the twin: the sensor chain of ``cfg.instrumentation`` on a
     simulated ``truth`` run (motor command from ``cfg``'s drive program), calibrated by a
     simulated static recording through the same chain (Eq. 1–4)."""
-    from twin.instrument import apply_chain, simulated_calibration
+    from twin.instrument import apply_chain
 
-    daq = apply_chain(truth, cfg)
+    return synthetic_daq_recording(apply_chain(truth, cfg), cfg, truth.meta, notes, static_s, extra, created_by)
+
+
+def synthetic_daq_recording(daq: Run, cfg: BenchConfig, truth_meta: Mapping[str, Any], notes: str = "",
+                            static_s: float = 1.0, extra: Mapping[str, Any] | None = None,
+                            created_by: str = "twin.recording") -> tuple[Run, RecordingInfo]:
+    """The recording of DAQ channels ``daq`` that the sensor chain of ``cfg`` made from a simulated run
+    (whose metadata is ``truth_meta``): validated as an import is, with the calibration of a simulated
+    static recording of ``static_s`` [s] through the same chain (Eq. 1–4)."""
+    from twin.instrument import simulated_calibration
+
     cal = simulated_calibration(cfg, static_s)
     info = RecordingInfo(daq.rate_hz, notes=notes, calibration=cal, synthetic=True, created_by=created_by,
-                         extra={"engine": truth.meta.get("engine"), "timestep_s": truth.meta.get("timestep_s"),
+                         extra={"engine": truth_meta.get("engine"), "timestep_s": truth_meta.get("timestep_s"),
                                 "chain_seed": cfg.instrumentation.seed, **dict(extra or {})})
     daq, repairs = validate_daq(daq, cfg, where="synthetic recording")
     info.repairs.extend(repairs)
