@@ -86,6 +86,11 @@ def _snapshot(root: Path) -> dict[str, tuple[int, str]]:
 # --------------------------------------------------------------------------- cases
 #: (command line, fragment the one-line error must contain). {ws} is the workspace.
 CASES: list[tuple[str, str]] = [
+    # record: its own options and the configuration's
+    ("record --duration 0.01 --out r.mcap --static 0", "--static: must lie in [0.1, 60] s"),
+    ("record --duration 0.01 --out r.csv", "--out: must end in .mcap"),
+    ("record --duration 0.01", "the following arguments are required: --out"),
+    ("record --clearance-b 0.3 --out r.mcap", "joints.clearance_b_mm"),
     # simulate: values of the configuration options
     ("simulate --clearance-b 0.3", "joints.clearance_b_mm"),
     ("simulate --clearance-c -1", "joints.clearance_c_mm"),
