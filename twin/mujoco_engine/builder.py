@@ -57,10 +57,10 @@ from twin import names as mjcf_names
 from twin.config import JOINTS, BenchConfig
 from twin.contact_params import (cylindrical_stiffness, first_guess_contact, initial_linear_law, johnson_elastic_force,
                                  law_stiffness)
-from twin.errors import ModelError
+from twin.errors import ModelError, TwinError
 from twin.impact import DAMPING_FACTOR
 from twin.mujoco_engine.accel import posthoc_applies
-from twin.mujoco_engine import drivetrain
+from twin.mujoco_engine import drivetrain, flexible
 from twin.mujoco_engine import guide as guide_clearance
 from twin.mujoco_engine.collider import ensure_installed
 
@@ -336,8 +336,14 @@ def _set_inertial(body: mujoco.MjsBody, mass: float, ipos, izz: float) -> None:
 def build_spec(cfg: BenchConfig) -> mujoco.MjSpec:
     """Edited (uncompiled) spec of the configuration; contact pairs without final solref."""
     try:
-        spec = mujoco.MjSpec.from_file(str(mjcf_names.BASE_XML))
+        if flexible.applies(cfg):  # the flexible structure's bodies nested into the base model
+            flexible.check(cfg)
+            spec = mujoco.MjSpec.from_string(flexible.flexible_xml(cfg))
+        else:
+            spec = mujoco.MjSpec.from_file(str(mjcf_names.BASE_XML))
     except Exception as err:  # mujoco raises ValueError with the parser message
+        if isinstance(err, TwinError):
+            raise
         raise ModelError(f"cannot load base model {mjcf_names.BASE_XML}: {err}") from None
     spec.modelname = f"slider_crank_bench_{cfg.name}"
     b, j, mech = cfg.bodies, cfg.joints, cfg.mechanism
@@ -478,6 +484,8 @@ def build_spec(cfg: BenchConfig) -> mujoco.MjSpec:
         guide_clearance.add_guide(spec, cfg)
     if drivetrain.applies(cfg):
         drivetrain.add_drive_train(spec, cfg)
+    if flexible.applies(cfg):
+        flexible.finish(spec, cfg)
     return spec
 
 
