@@ -81,7 +81,7 @@ class _Parser(argparse.ArgumentParser):
 
 #: configuration options, by what they describe (``add_config_args(p, options=...)``)
 SELECT_OPTIONS = ("config", "test")
-MODEL_OPTIONS = ("clearance_b", "clearance_c", "clearance_a", "clearance_guide", "orientation", "set")
+MODEL_OPTIONS = ("clearance_b", "clearance_c", "clearance_a", "clearance_guide", "orientation", "structure", "set")
 DRIVE_OPTIONS = ("speed", "protocol", "trace")
 RUN_OPTIONS = ("duration", "timestep", "engine", "channels", "output_rate", "drive_mode")
 ALL_CONFIG_OPTIONS = SELECT_OPTIONS + MODEL_OPTIONS + DRIVE_OPTIONS + RUN_OPTIONS
@@ -126,6 +126,13 @@ def add_config_args(p: argparse.ArgumentParser, options: Sequence[str] = ALL_CON
                             "between its rails (joints.clearance_guide_mm); 0 = the preloaded ideal guide")
     if "orientation" in has:
         g.add_argument("--orientation", choices=ORIENTATIONS, help="bench axis that points up")
+    if "structure" in has:
+        from twin.config import STRUCTURE_MODES
+
+        g.add_argument("--structure", choices=STRUCTURE_MODES,
+                       help="rigid (the default) or flexible: the connecting rod bends and stretches, the frame and "
+                            "the guide are sprung supports, the accelerometers sit on mounts ([structure] fields; "
+                            "the MuJoCo engine adds the channel group 'structure' unless --channels is given)")
     drive = [o for o in DRIVE_OPTIONS if o in has]
     sp = g.add_mutually_exclusive_group() if len(drive) > 1 else g
     if "speed" in has:
@@ -232,6 +239,8 @@ def config_from_args(args: argparse.Namespace) -> BenchConfig:
         ov["sensors.output_rate_hz"] = args.output_rate
     if _opt(args, "engine"):
         ov["simulation.engine"] = args.engine
+    if _opt(args, "structure") is not None:
+        ov["structure.mode"] = args.structure
     if _opt(args, "drive_mode") is not None:
         ov["drive.mode"] = args.drive_mode
         if args.drive_mode in ("motor", "torque") and _opt(args, "channels") is None \
@@ -259,6 +268,9 @@ def config_from_args(args: argparse.Namespace) -> BenchConfig:
                                                     "itself or does not use it)")
             ov[k] = v
     out = with_overrides(cfg, ov) if ov else cfg
+    if (_opt(args, "structure") == "flexible" and _opt(args, "channels") is None and out.simulation.engine == "mujoco"
+            and "structure" not in out.sensors.channels):
+        out = with_overrides(out, {"sensors.channels": list(out.sensors.channels) + ["structure"]})
     if out.drive.mode == "torque":  # the torque drive follows drivetrain.torque_s/torque_nm, no speed program
         for flag, given in (("--speed", _opt(args, "speed")), ("--protocol", _opt(args, "protocol") or None),
                             ("--trace", _opt(args, "trace"))):

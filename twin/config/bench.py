@@ -108,6 +108,9 @@ class BenchConfig:
                 raise ConfigError("sensors.channels",
                                   f"the optional group {group!r} is produced by the {' and '.join(engines)} engine "
                                   f"only; remove it for simulation.engine = {sim.engine!r}")
+        if "structure" in sen.channels and not self.structure.flexible:
+            raise ConfigError("sensors.channels", "the optional group 'structure' is produced by the flexible structure "
+                              "only (structure.mode = \"flexible\"); remove it")
         if self.structure.flexible:
             from twin.structure.checks import check_structure
 
