@@ -162,3 +162,21 @@ def test_flexible_refusals_name_the_field():
         MujocoEngine(_flexible(**{"joints.clearance_a_mm": 0.1}))
     with pytest.raises(ConfigError, match="mujoco.bushing"):
         MujocoEngine(_flexible(6, **{"mujoco.bushing": "ring", "mujoco.friction": "cone"}))
+
+
+@pytest.mark.parametrize("test", [6, 12])
+def test_posthoc_tree_accelerometers_equal_mujocos_sensors(test):
+    """The flexible tree's after-the-rollout readings (twin.mujoco_engine.accel_tree) against MuJoCo's own
+    ``<accelerometer>`` sensors on the same run; every other channel bit for bit. Tolerance from the method's
+    round-off (tests/test_posthoc_accel.py: eps |qvel|/h per unit lever arm, here times the mount filter's
+    largest gain 1/(2ζ) = 10 at its resonance)."""
+    from test_posthoc_accel import EPS, _run
+
+    cfg = _flexible(test, **{"simulation.duration_s": 0.03})
+    a, ea, qa = _run(cfg, "sensor")
+    b, eb, qb = _run(cfg, "posthoc")
+    assert ea._accel is None and type(eb._accel).__name__ == "TreeAccelerometers"
+    bound = 4 * EPS * max(qa, qb) / cfg.simulation.timestep_s * 2 * 10
+    for k in names.ACCEL_SENSORS:
+        assert np.max(np.abs(a[k] - b[k])) < bound, k
+    assert all(np.array_equal(a[k], b[k]) for k in a if k not in names.ACCEL_SENSORS)

@@ -50,8 +50,7 @@ def posthoc_applies(cfg: BenchConfig) -> bool:
     "posthoc"``, the "accel" channel group requested and the Euler integrator (another
     integrator's qvel update is not h qacc, so it keeps MuJoCo's sensors)."""
     return (cfg.mujoco.accelerometers == "posthoc" and "accel" in cfg.sensors.channels
-            and cfg.mujoco.integrator == "Euler" and not cfg.joints.guide_play  # its slider only slides
-            and not cfg.structure.flexible)  # the rigid bodies' kinematics only
+            and cfg.mujoco.integrator == "Euler" and not cfg.joints.guide_play)  # its slider only slides
 
 
 def _quat_x_axis(q: np.ndarray) -> np.ndarray:

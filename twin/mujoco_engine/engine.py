@@ -101,7 +101,11 @@ class MujocoEngine:
         self._nstate = mujoco.mj_stateSize(self.model, _STATE)
         self._sens = np.empty((1, 0, self.model.nsensordata))
         # accelerometers from the recorded state (mujoco.accelerometers = "posthoc", Euler)
-        self._accel = PosthocAccelerometers(self.model) if posthoc else None
+        self._accel = None
+        if posthoc:  # the flexible structure's tree: the generic planar recursion (twin.mujoco_engine.accel_tree)
+            from twin.mujoco_engine.accel_tree import TreeAccelerometers
+
+            self._accel = (TreeAccelerometers if cfg.structure.flexible else PosthocAccelerometers)(self.model)
         self._states = np.empty((1, 0, self._nstate))
         self._k = 0  # integration steps taken since reset
         self._mount = None
