@@ -18,6 +18,7 @@ from twin.reference.flexible import N_OUT_FLEX, O_DISS, FlexibleRun, flex_projec
 def _run(cfg, theta0, *, drive=False, guide_friction=False):
     prm = lambda c: RM.build_params(c, drive=drive, guide_friction=guide_friction)  # noqa: E731
     run = FlexibleRun(cfg, prm(cfg), prm)
+    run.P[RM.P_OUT_ENERGY] = 1.0   # the energy columns
     st = initial_state(cfg, theta0, 0.0, run.P)
     run.reset(st)
     return run, st
