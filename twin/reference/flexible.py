@@ -46,7 +46,7 @@ import numpy as np
 
 from twin.jit import njit
 from twin.natural_coordinates import (N_Q, N_Z, P_CLR_B, P_CLR_C, P_DOFF, P_GX, P_GY, P_H, P_IMAX, P_KI, P_KP, P_KV, P_M3,
-                                      P_NEWTON_MAXIT, P_NEWTON_TOL, P_SENS, S_I, S_IN_A, S_IN_B, S_IN_C, S_Q, S_QD,
+                                      P_NEWTON_MAXIT, P_NEWTON_TOL, P_OUT_ENERGY, P_SENS, S_I, S_IN_A, S_IN_B, S_IN_C, S_Q, S_QD,
                                       S_VIMP_A, S_VIMP_B, S_VIMP_C, energy, independent_rows, kinetic_energy,
                                       mass_times, quadratic_terms, residual, solve_aug)
 from twin.reference.model import (N_OUT, NEWTON_FAILED, NOT_FINITE, O_ACC, O_EKIN, O_EPOT, OK, _cholesky_solve,
@@ -469,13 +469,18 @@ def _independent_values(P, G, q, qd, segs, slides, indep, b):
 @njit(cache=True)
 def flex_project(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, res, dq, b, tmp):
     """Newton on the constraints with the independent coordinates held, then q̇ ← R ż (as the rigid
-    :func:`twin.natural_coordinates.project`). Returns the iterations, −1 if no convergence."""
+    :func:`twin.natural_coordinates.project`). On return A and LU hold the chain's rows at the final q (the
+    next step's acceleration solve reuses them). Returns the iterations, −1 if no convergence."""
     n = q.shape[0]
     nc = A.shape[0]
     tol = P[P_NEWTON_TOL]
     maxit = int(P[P_NEWTON_MAXIT])
     it = 0
     conv = False
+    # modified Newton: the chain block factored once at the predicted q (a step moves it by h q̇, so the
+    # iteration contracts by ~|ΔA|/|A| per pass); the velocity projection below refactors at the final q
+    if not factor(q, segs, slides, indep, A, LU, piv):
+        return -1
     while it < maxit:
         s, c = math.sin(q[7]), math.cos(q[7])
         residual(P, q[:N_Q], s, c, res[:N_Q])
@@ -490,8 +495,6 @@ def flex_project(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, res, dq, b
         chain_residual(q, segs, seg_f, slides, res[N_Q:])
         for i in range(n):
             res[i] = -res[i]
-        if not factor(q, segs, slides, indep, A, LU, piv):
-            return -1
         flex_solve(q, s, c, A, LU, piv, res, dq, tmp)
         big = 0.0
         for i in range(n):
@@ -664,7 +667,7 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
             nx, ny = (ex / d, ey / d) if d > 0.0 else (1.0, 0.0)
             Q[10] += -jc[3] * ny + jc[4] * nx
         diss = chain_forces(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G, Q)
-        if not factor(q, segs, slides, indep, A, LU, piv):
+        if k == 0 and not factor(q, segs, slides, indep, A, LU, piv):   # later steps: the projection's
             status = NOT_FINITE
             break
         if not flex_accelerations(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, Q, rows, nz, Rt, S, Mb, rhs,
@@ -677,9 +680,10 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
             _rod_sensors(P, q, qdd, segs, sens, row)
             if G[G_FLEX_G] > 0.5:
                 _slider_sensors(P, qdd, sens, row)
-            T, V = flex_energy(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G)
-            row[O_EKIN] = T
-            row[O_EPOT] = V
+            if P[P_OUT_ENERGY] > 0.5:
+                T, V = flex_energy(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G)
+                row[O_EKIN] = T
+                row[O_EPOT] = V
             row[N_OUT] = diss_total
         diss_total += h * diss
         integ += h * err
