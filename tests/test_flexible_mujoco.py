@@ -180,3 +180,28 @@ def test_posthoc_tree_accelerometers_equal_mujocos_sensors(test):
     for k in names.ACCEL_SENSORS:
         assert np.max(np.abs(a[k] - b[k])) < bound, k
     assert all(np.array_equal(a[k], b[k]) for k in a if k not in names.ACCEL_SENSORS)
+
+
+def test_a_dataset_spec_varies_every_structure_field():
+    """Every [structure] placeholder is a named dataset factor with its documented range; the plan's
+    configurations carry the drawn values (resolved, so each is a valid flexible configuration)."""
+    from twin.config.structure import EXPLORE_RANGES
+    from twin.dataset.design import plan
+    from twin.dataset.factors import NAMED
+    from twin.dataset.spec import parse_spec
+
+    assert NAMED["structure"].choices == ("rigid", "flexible")
+    factors = {"structure": ["flexible"]}
+    for name, field, _doc, bounds in EXPLORE_RANGES:
+        assert NAMED[name].bounds == bounds
+        factors[name] = {"range": list(bounds)}
+    spec = parse_spec({"dataset": {"name": "t", "seed": 3}, "base": {"test": 6, "duration_s": 0.05},
+                       "factors": factors, "design": {"kind": "lhs", "runs": 8}})
+    runs = plan(spec)
+    assert len(runs) == 8
+    for r in runs:
+        st = r.config.structure
+        assert st.mode == "flexible"
+        for name, field, _doc, (lo, hi) in EXPLORE_RANGES:
+            assert lo <= getattr(st, field) <= hi
+    assert len({r.config.structure.frame_frequency_hz for r in runs}) == 8  # one stratum each
