@@ -205,3 +205,32 @@ def test_a_dataset_spec_varies_every_structure_field():
         for name, field, _doc, (lo, hi) in EXPLORE_RANGES:
             assert lo <= getattr(st, field) <= hi
     assert len({r.config.structure.frame_frequency_hz for r in runs}) == 8  # one stratum each
+
+
+def test_export_mjcf_of_the_flexible_bench_loads_in_plain_mujoco(tmp_path):
+    from twin.cli import main
+
+    out = tmp_path / "flex.xml"
+    assert main(["export-mjcf", "--test", "12", "--structure", "flexible", "--out", str(out)]) == 0
+    m = mujoco.MjModel.from_xml_path(str(out))
+    cfg = _flexible(12)
+    chain = chain_of(cfg)
+    for j, name in zip(chain.joints, joint_names(chain)):
+        assert m.jnt_stiffness[m.joint(name).id] == pytest.approx(j.stiffness, rel=1e-9)
+        assert m.dof_damping[m.jnt_dofadr[m.joint(name).id]] == pytest.approx(j.damping, rel=1e-9)
+    assert m.body(names.FRAME_SUPPORT).id > 0 and m.body(names.GUIDE_SUPPORT).id > 0
+
+
+@pytest.mark.parametrize("engine", ["mujoco", "reference"])
+def test_simulate_test6_flexible_runs_in_both_engines(engine, tmp_path, capsys):
+    from twin.cli import main
+    from twin.mcapfile import read_run
+
+    out = tmp_path / "t6.mcap"
+    assert main(["simulate", "--test", "6", "--structure", "flexible", "--engine", engine, "--duration", "0.05",
+                 "--out", str(out), "--no-progress"]) == 0
+    assert "structure: flexible, rod modes" in capsys.readouterr().out
+    run = read_run(out)
+    assert run.config.structure.mode == "flexible"
+    assert ("rod_deflection" in run.channels) == (engine == "mujoco")  # the group is the MuJoCo engine's
+    assert np.all(np.isfinite(run["AC4"]))

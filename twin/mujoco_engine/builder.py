@@ -691,6 +691,8 @@ def export_xml(cfg: BenchConfig) -> str:
                if cfg.drive.mode in ("motor", "torque") else "")
             + " -->\n")
     xml = _exact_geom_user(spec.to_xml(), _model)
+    if flexible.applies(cfg):
+        xml = flexible.exact_structure_numbers(xml, _model)
     i = xml.find("<mujoco")
     return xml[:i] + head + xml[i:]
 

@@ -166,9 +166,10 @@ def _inertial(body: mujoco.MjsBody, mass: float, com_x: float, izz: float) -> No
     body.ipos = [com_x, 0.0, 0.0]
     body.iquat = [1.0, 0.0, 0.0, 0.0]
     # planar: only I_zz acts (a point mass has none: MuJoCo needs a positive tensor, 1e-12 kg m² is
-    # below the round-off of the chain's composite inertia about any of its joints)
+    # below the round-off of the chain's composite inertia about any of its joints); the off-plane values
+    # equal it, so that the triangle inequality holds with margin also after the XML export's rounding
     izz = max(izz, 1e-12)
-    body.inertia = [izz / 2, izz / 2, izz]
+    body.inertia = [izz, izz, izz]
 
 
 def _spring(joint: mujoco.MjsJoint, k: float, c: float) -> None:
@@ -267,3 +268,33 @@ def structure_channels(col, length_m: float) -> dict:
             "frame_x": col(names.SENSOR_FRAME_X), "frame_y": col(names.SENSOR_FRAME_Y),
             "guide_y": col(names.SENSOR_GUIDE_Y)}
 
+
+
+def exact_structure_numbers(xml: str, model: mujoco.MjModel) -> str:
+    """``xml`` (MuJoCo's writer keeps 6 significant digits) with the structure's numbers written from the compiled
+    ``model`` at full precision: every named joint's ``stiffness`` and ``damping``, every named body's inertial
+    ``mass`` and ``diaginertia`` (the chain's modes and damping ratios then survive the export exactly)."""
+    import re
+
+    def num(v: float) -> str:
+        return repr(float(v)).removesuffix(".0")
+
+    for j in range(model.njnt):
+        name = model.joint(j).name
+        if not name:
+            continue
+        k = model.jnt_stiffness[j]
+        c = model.dof_damping[model.jnt_dofadr[j]]
+        for attr, value in (("stiffness", k), ("damping", c)):
+            tag = re.compile(r'(<joint\b[^>]*?\bname="' + re.escape(name) + r'"[^>]*?\b' + attr + r'=")[^"]*(")')
+            xml = tag.sub(lambda mt, v=value: mt.group(1) + num(v) + mt.group(2), xml, count=1)
+    for b in range(1, model.nbody):
+        name = model.body(b).name
+        if not name:
+            continue
+        tag = re.compile(r'(<body\b[^>]*?\bname="' + re.escape(name) + r'"[^>]*>\s*<inertial\b[^>]*?\bmass=")[^"]*'
+                         r'("[^>]*?\bdiaginertia=")[^"]*(")')
+        di = " ".join(num(v) for v in model.body_inertia[b])
+        xml = tag.sub(lambda mt, m=model.body_mass[b], d=di: mt.group(1) + num(m) + mt.group(2) + d + mt.group(3),
+                      xml, count=1)
+    return xml
