@@ -122,6 +122,10 @@ class StudySettings:
             engines (:mod:`twin.studies.stability_bench`).
         family: "bench" (the planar twin's scenes, this module) or "spatial" (S002's mechanism in both
             engines, :mod:`twin.spatial.stability`).
+        structure: every scene with the flexible structure (``structure.mode = "flexible"``), its placeholders
+            drawn uniformly over their documented ranges (:data:`twin.config.structure.EXPLORE_RANGES`) from the
+            scene's own generator ``default_rng([seed, index, 43])`` (the other draws stay those of the rigid
+            campaign), and run in both engines (one row each).
     """
 
     scenes: int = 500
@@ -129,6 +133,7 @@ class StudySettings:
     duration_range_s: tuple[float, float] = (0.5, 3.0)
     bench: bool = False
     family: str = "bench"
+    structure: bool = False
 
     def __post_init__(self) -> None:
         if isinstance(self.scenes, bool) or not isinstance(self.scenes, int) or self.scenes < 1:
@@ -137,6 +142,10 @@ class StudySettings:
             raise ConfigError("--seed", f"must be an integer >= 0, got {self.seed!r}")
         if self.family not in ("bench", "spatial"):
             raise ConfigError("--family", f"must be bench or spatial, got {self.family!r}")
+        if self.structure and (self.bench or self.family != "bench"):
+            raise ConfigError("--structure", "draws the flexible structure on the planar twin's plain scenes; it "
+                              "cannot be combined with --bench (guide clearance and motor drive are not available "
+                              "with the flexible structure) or --family spatial")
 
 
 def quick(scenes: int = 20, seed: int = 1, bench: bool = False) -> StudySettings:
@@ -146,7 +155,7 @@ def quick(scenes: int = 20, seed: int = 1, bench: bool = False) -> StudySettings
 
 # ----------------------------------------------------------------------- sampler
 def sample_scene(seed: int, index: int, duration_range_s: tuple[float, float] = (0.5, 3.0),
-                 bench: bool = False) -> dict[str, Any]:
+                 bench: bool = False, structure: bool = False) -> dict[str, Any]:
     """Parameters of scene ``index`` of seed ``seed`` (JSON-ready; see module docstring); with
     ``bench`` the whole-bench draws follow (:func:`twin.studies.stability_bench.bench_draws`).
 
@@ -193,6 +202,11 @@ def sample_scene(seed: int, index: int, duration_range_s: tuple[float, float] = 
              "contact_stiffness_scale": ks, "contact_damping_scale": cs, "duration_s": duration, "settle_s": settle}
     if bench:
         scene.update(bench_draws(rng))
+    if structure:
+        from twin.config.structure import EXPLORE_RANGES
+
+        srng = np.random.default_rng([seed, index, 43])
+        scene["structure"] = {field: float(f"{srng.uniform(lo, hi):.6g}") for _, field, _, (lo, hi) in EXPLORE_RANGES}
     return scene
 
 
@@ -247,6 +261,9 @@ def scene_config(scene: dict[str, Any], trace_dir: Path | None = None) -> BenchC
         path = Path(trace_dir) / f"trace_s{scene['seed']}_{scene['index']:05d}.npz"
         np.savez(path, t=t, angle=angle)
         ov.update({"drive.program": "trace", "drive.trace_file": str(path)})
+    if "structure" in scene:  # the flexible structure (StudySettings.structure), in the scene's engine
+        ov.update({"structure.mode": "flexible", "simulation.engine": scene.get("engine", "mujoco"),
+                   **{f"structure.{k}": v for k, v in scene["structure"].items()}})
     if "drive_mode" in scene:
         ov.update(bench_overrides(scene))
         if scene["drive_mode"] == "motor":
@@ -431,9 +448,9 @@ def run_study(out: Path | None, settings: StudySettings, progress: bool = False,
 
         scenes = [sample_spatial(settings.seed, i, settings.duration_range_s) for i in range(settings.scenes)]
     else:
-        scenes = [sample_scene(settings.seed, i, settings.duration_range_s, settings.bench)
+        scenes = [sample_scene(settings.seed, i, settings.duration_range_s, settings.bench, settings.structure)
                   for i in range(settings.scenes)]
-        if settings.bench:  # every bench scene in both engines: one row each
+        if settings.bench or settings.structure:  # every bench or structure scene in both engines: one row each
             scenes = [{**sc, "engine": e} for sc in scenes for e in ENGINES]
     rows = []
     t0 = time.perf_counter()
@@ -454,7 +471,8 @@ def run_study(out: Path | None, settings: StudySettings, progress: bool = False,
     finally:
         if bar is not None:
             bar.close()
-    data = {"study": "stability", "settings": {**asdict(settings), "pen_limit": PEN_LIMIT, "energy_tol": ENERGY_TOL},
+    kept = {k: v for k, v in asdict(settings).items() if k != "structure" or v}  # rigid campaigns: as before
+    data = {"study": "stability", "settings": {**kept, "pen_limit": PEN_LIMIT, "energy_tol": ENERGY_TOL},
             "summary": summarize(rows, time.perf_counter() - t0), "scenes": rows, "figures": []}
     if out is not None:
         out = Path(out)
@@ -627,6 +645,9 @@ def register(studies: Any) -> None:
                    help="the whole bench: also draw the slider guide's clearance and the drive (crank PID or the "
                         "motor with its V-belt, the drive train's parameters over their ranges), and run every "
                         "scene in both engines (one row each)")
+    p.add_argument("--structure", action="store_true",
+                   help="every scene with the flexible structure (flexible rod, sprung frame and guide, sensor mounts), "
+                        "its placeholders drawn over their documented ranges, in both engines (one row each)")
     p.add_argument("--family", choices=("bench", "spatial"), default="bench",
                    help="scene family: the bench's planar twin (default) or S002's spatial mechanism in both engines")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -639,10 +660,10 @@ def _run(args: Any) -> int:
     settings = (quick if args.quick else lambda scenes, seed, bench: StudySettings(scenes=scenes, seed=seed,
                                                                                   bench=bench))(
         args.scenes, args.seed, args.bench)
-    if getattr(args, "family", "bench") != "bench":
+    if getattr(args, "family", "bench") != "bench" or getattr(args, "structure", False):
         from dataclasses import replace
 
-        settings = replace(settings, family=args.family)
+        settings = replace(settings, family=getattr(args, "family", "bench"), structure=getattr(args, "structure", False))
     out = check_output_dir(args.out)
     data = run_study(out, settings, progress=not args.no_progress,
                      log=lambda m: print(m, file=sys.stderr, flush=True))
