@@ -257,3 +257,20 @@ def test_engines_agree_on_third_octave_band_energies(test):
     per = agreement(test, 0.6, 0.2, {})
     worst = max(max(abs(x) for x in v) for v in per.values())
     assert worst <= 1.0, {k: round(max(abs(x) for x in v), 2) for k, v in per.items()}
+
+
+def test_stability_campaign_draws_the_structure_without_changing_the_other_draws():
+    from twin.config.structure import EXPLORE_RANGES
+    from twin.studies.stability import StudySettings, sample_scene, scene_config
+
+    for i in range(5):
+        plain = sample_scene(7, i, (0.3, 1.0))
+        flex = sample_scene(7, i, (0.3, 1.0), structure=True)
+        assert {k: v for k, v in flex.items() if k != "structure"} == plain
+        for _, field, _, (lo, hi) in EXPLORE_RANGES:
+            assert lo <= flex["structure"][field] <= hi
+        if flex["drive"]["program"] != "startstop":
+            cfg = scene_config({**flex, "engine": "reference"})
+            assert cfg.structure.flexible and cfg.simulation.engine == "reference"
+    with pytest.raises(ConfigError, match="--structure"):
+        StudySettings(scenes=2, seed=1, bench=True, structure=True)
