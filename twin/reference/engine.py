@@ -179,7 +179,8 @@ class ReferenceEngine:
             if self._buf.shape[0] < n_out or self._buf.shape[1] != N_OUT_FLEX:
                 self._buf = np.empty((n_out, N_OUT_FLEX))
             status, steps = self._flex.run(self._st, np.ascontiguousarray(theta_ref, dtype=np.float64),
-                                           np.ascontiguousarray(omega_ref, dtype=np.float64), stride, self._buf)
+                                           np.ascontiguousarray(omega_ref, dtype=np.float64), stride, self._buf[:n_out],
+                                           self._train, self._k)
         elif self._train is not None:
             status, steps = self._train.run(self.P, self._st, self._k, omega_ref, stride, self._buf, n_out)
         elif self._drive is not None:
@@ -245,9 +246,9 @@ def _flexible_run(cfg: BenchConfig, P: np.ndarray, options: ReferenceOptions):
     leaves out."""
     from twin.reference.flexible import FlexibleRun
 
-    if cfg.drive.mode != "pid":
-        raise ConfigError("structure.mode", "\"flexible\" runs in the reference engine with drive.mode = \"pid\" "
-                          f"only so far; got drive.mode = {cfg.drive.mode!r}")
+    if cfg.drive.mode == "prescribed":
+        raise ConfigError("structure.mode", "\"flexible\" runs in the reference engine with drive.mode = \"pid\", "
+                          "\"motor\" or \"torque\" so far; got \"prescribed\"")
     if options.integrator != "euler":
         raise ConfigError("reference.integrator", "the flexible structure integrates with \"euler\"")
     if cfg.joints.diametral_mm("A") > 0 or cfg.joints.guide_play:

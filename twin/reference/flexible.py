@@ -45,12 +45,14 @@ import math
 import numpy as np
 
 from twin.jit import njit
-from twin.natural_coordinates import (N_Q, N_Z, P_CLR_B, P_CLR_C, P_DOFF, P_GX, P_GY, P_H, P_IMAX, P_KI, P_KP, P_KV, P_M3,
+from twin.natural_coordinates import (N_Q, N_Z, P_CLR_B, P_CLR_C, P_DOFF, P_FGUIDE, P_GX, P_GY, P_H, P_IMAX, P_KI, P_KP, P_KV, P_L,
+                                      P_M1, P_M2, P_M3, P_R, P_V0, P_V1, P_XG1, P_XG2,
                                       P_NEWTON_MAXIT, P_NEWTON_TOL, P_OUT_ENERGY, P_SENS, S_I, S_IN_A, S_IN_B, S_IN_C, S_Q, S_QD,
                                       S_VIMP_A, S_VIMP_B, S_VIMP_C, energy, independent_rows, kinetic_energy,
                                       mass_times, quadratic_terms, residual, solve_aug)
 from twin.reference.model import (N_OUT, NEWTON_FAILED, NOT_FINITE, O_ACC, O_EKIN, O_EPOT, OK, _cholesky_solve,
                                   _outputs, generalized_forces)
+from twin.reference import drivetrain as DT
 from twin.reference.guide import N_GUIDE_OUT
 
 # ------------------------------------------------------------------------ layout of the integer table ``L``
@@ -599,10 +601,12 @@ def _slider_sensors(P, qdd, sens, row):
 
 @njit(cache=True, nogil=True)
 def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sens, st, x, theta_ref, omega_ref,
-                 stride, out, want_out):
+                 stride, out, want_out, D, ds, setpoint, dout):
     """Integrate ``len(theta_ref)`` steps of the flexible bench from the rigid state ``st`` (PID integral,
     contact events; its q, q̇ unused) and the full coordinates ``x`` = [q (n), q̇ (n), dissipated energy]
-    (updated in place). Crank PID drive, symplectic Euler with projection, the same sampling as
+    (updated in place). Crank PID drive, or with ``D`` non-empty the drive train (:mod:`twin.reference.drivetrain`,
+    state ``ds``, ``setpoint[k]`` the step's speed set point or motor torque, ``dout`` its sample rows) as
+    :func:`twin.reference.model.run_motor`; symplectic Euler with projection, the same sampling as
     :func:`twin.reference.model.run_steps`. Returns (status, steps done)."""
     n = (x.shape[0] - 1) // 2
     nc = n - N_Q
@@ -645,12 +649,23 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
     A = np.empty((nc, n))
     LU = np.empty((nc, nc))
     piv = np.empty(nc, dtype=np.int64)
-    nsteps = theta_ref.shape[0]
+    motor = D.shape[0] > 0
+    nsteps = setpoint.shape[0] if motor else theta_ref.shape[0]
+    dtmp = np.empty(3)
+    Qb = np.empty(N_Q)
+    qd0 = np.empty(N_Q)
+    Qg = np.zeros(N_Q)
+    if motor:
+        DT.gravity_forces(P[P_GX], P[P_GY], P[P_M1], P[P_XG1], P[P_R], P[P_M2], P[P_XG2], P[P_L], P[P_M3], Qg)
     status = OK
     k = 0
     while k < nsteps:
-        err = theta_ref[k] - q[7]
-        tau = kp * err + kv * (omega_ref[k] - qd[7]) + ki * integ
+        if motor:   # drive-train hook: the belt's torque on the crank
+            err = 0.0
+            tau = DT.begin_step(D, ds, qd[7], setpoint[k], dtmp)
+        else:
+            err = theta_ref[k] - q[7]
+            tau = kp * err + kv * (omega_ref[k] - qd[7]) + ki * integ
         for i in range(n):
             Q[i] = 0.0
         for i in range(N_Q):
@@ -666,6 +681,8 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
             d = math.sqrt(ex * ex + ey * ey)
             nx, ny = (ex / d, ey / d) if d > 0.0 else (1.0, 0.0)
             Q[10] += -jc[3] * ny + jc[4] * nx
+        for i in range(N_Q):   # the mechanism's own forces (the drive train's accounts read them)
+            Qb[i] = Q[i]
         diss = chain_forces(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G, Q)
         if k == 0 and not factor(q, segs, slides, indep, A, LU, piv):   # later steps: the projection's
             status = NOT_FINITE
@@ -685,6 +702,11 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
                 row[O_EKIN] = T
                 row[O_EPOT] = V
             row[N_OUT] = diss_total
+            if motor:
+                DT.outputs(D, ds, dout[k // stride])
+                if D[DT.D_ACCOUNT] != 0.0:
+                    T, V = flex_energy(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G)
+                    dout[k // stride, DT.DO_EMECH] = T + V + dout[k // stride, DT.DO_ROTOR_KE]
         diss_total += h * diss
         integ += h * err
         if imax > 0.0:
@@ -692,6 +714,8 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
                 integ = imax
             elif integ < -imax:
                 integ = -imax
+        for i in range(N_Q):
+            qd0[i] = qd[i]
         for i in range(n):
             qd[i] += h * qdd[i]
             q[i] += h * qd[i]
@@ -707,6 +731,9 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
             status = NOT_FINITE
             k += 1
             break
+        if motor:   # drive-train hook: rotor, belt stretch, accounts
+            fgd = DT.guide_force(P[P_FGUIDE], qd0[6], P[P_V0], P[P_V1]) if D[DT.D_ACCOUNT] != 0.0 else 0.0
+            DT.end_step(D, ds, Qb, Qg, tau, fgd, qd0, qd[:N_Q])
         k += 1
     x[:n] = q
     x[n:2 * n] = qd
@@ -795,7 +822,18 @@ class FlexibleRun:
         self.x = initial_coordinates(self.P, lay.G, lay, st_rigid[S_Q:S_Q + N_Q], st_rigid[S_QD:S_QD + N_Q])
         self.mounts.reset()
 
-    def run(self, st: np.ndarray, theta_ref: np.ndarray, omega_ref: np.ndarray, stride: int, buf: np.ndarray):
+    def run(self, st: np.ndarray, theta_ref: np.ndarray, omega_ref: np.ndarray, stride: int, buf: np.ndarray,
+            train=None, k0: int = 0):
+        """One chunk; ``train`` the run's :class:`twin.reference.drivetrain_run.ReferenceTrain` (motor or torque
+        drive; ``k0`` the chunk's first step) or None (crank PID)."""
         lay = self.layout
+        if train is not None:
+            n_out = buf.shape[0]
+            sp, dbuf = train.chunk_inputs(k0, omega_ref, stride, n_out)
+            D, ds = train.D, train.ds
+        else:
+            sp = dbuf = D = ds = np.empty(0)
+            dbuf = np.empty((0, 1))
         return run_flexible(self.P, lay.G, lay.segs, lay.seg_f, lay.hinges, lay.hinge_f, lay.slides, lay.slide_f,
-                            lay.indep, lay.sensors, st, self.x, theta_ref, omega_ref, stride, buf, True)
+                            lay.indep, lay.sensors, st, self.x, theta_ref, omega_ref, stride, buf, True, D, ds, sp,
+                            dbuf)
