@@ -203,11 +203,28 @@ def sample_scene(seed: int, index: int, duration_range_s: tuple[float, float] = 
     if bench:
         scene.update(bench_draws(rng))
     if structure:
-        from twin.config.structure import EXPLORE_RANGES
-
-        srng = np.random.default_rng([seed, index, 43])
-        scene["structure"] = {field: float(f"{srng.uniform(lo, hi):.6g}") for _, field, _, (lo, hi) in EXPLORE_RANGES}
+        scene["structure"] = structure_draws(seed, index, timestep)
     return scene
+
+
+def structure_draws(seed: int, index: int, timestep_s: float) -> dict[str, float]:
+    """The flexible structure's placeholders of a scene, uniform over their documented ranges, from the scene's own
+    generator; a draw the configuration refuses at this timestep (a mount at or above half the output rate, a mode
+    beyond the explicit step's stability margin) is drawn again (at most 100 times), so every scene is one a user
+    could run."""
+    from twin.config.structure import EXPLORE_RANGES
+
+    srng = np.random.default_rng([seed, index, 43])
+    rate = min(100_000.0, 1.0 / timestep_s)
+    for _ in range(100):
+        draw = {field: float(f"{srng.uniform(lo, hi):.6g}") for _, field, _, (lo, hi) in EXPLORE_RANGES}
+        try:
+            preset(1).replace(**{"structure.mode": "flexible", "simulation.timestep_s": timestep_s,
+                                 "sensors.output_rate_hz": rate, **{f"structure.{k}": v for k, v in draw.items()}})
+        except ConfigError:
+            continue
+        return draw
+    raise TwinError(f"stability scene {index} (seed {seed}): no runnable structure in 100 draws at h = {timestep_s:g} s")
 
 
 def startstop_trace(scene: dict[str, Any], belt_ratio: float) -> tuple[np.ndarray, np.ndarray]:
