@@ -29,7 +29,7 @@ import numpy as np
 from twin import names as mjcf_names
 from twin.errors import ModelError
 from twin.jit import njit
-from twin.mujoco_engine.accel import _quat_x_axis
+from twin.mujoco_engine.accel import _quat_x_axis, check_euler_update
 
 
 class TreeAccelerometers:
@@ -38,10 +38,7 @@ class TreeAccelerometers:
     def __init__(self, model: mujoco.MjModel, names: tuple[str, ...] = mjcf_names.ACCEL_SENSORS):
         m = model
         self.names = tuple(names)
-        if m.opt.integrator != mujoco.mjtIntegrator.mjINT_EULER:
-            raise ModelError("posthoc accelerometers need the Euler integrator")
-        if not (m.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_EULERDAMP) and np.any(m.dof_damping > 0):
-            raise ModelError("posthoc accelerometers need eulerdamp disabled (or no joint damping)")
+        check_euler_update(m)
         nq = m.nq
         wanted = {int(m.site_bodyid[m.site(s).id]) for s in self.names}
         # the bodies on the paths from the world to the sensors' bodies, parents first
