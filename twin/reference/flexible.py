@@ -851,12 +851,13 @@ class FlexibleRun:
 
 
 def tap_response(cfg, speed_mps: float = 0.01, duration_s: float = 0.2, every: int = 5, theta0: float = 0.3,
-                 drive: bool = False) -> tuple[np.ndarray, np.ndarray]:
+                 drive: bool = False, axial: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """A tap on the flexible rod in the reference engine: the mechanism at rest at crank angle ``theta0`` [rad]
     (no drive unless ``drive``, no guide friction), the rod's middle node given ``speed_mps`` normal to the
     chord; returns (t [s], the node's distance from the chord B'–C [m]) every ``every`` steps for
     ``duration_s``. The rod's bending relative to its ends: its ringing gives the in-situ bending mode and
-    its damping (``tests/test_structure_reference.py``; the MuJoCo twin's agreement checks can tap the same)."""
+    its damping (``tests/test_structure_reference.py``; the MuJoCo twin's agreement checks can tap the same).
+    ``axial``: the tap is on the bore C along the chord instead, and the response the stretch |C − B'| − L."""
     from twin.natural_coordinates import initial_state
     from twin.reference.model import build_params
 
@@ -871,8 +872,12 @@ def tap_response(cfg, speed_mps: float = 0.01, duration_s: float = 0.2, every: i
     q, qd = x[:n].copy(), x[n:2 * n].copy()
     ux, uy = q[4] - q[2], q[5] - q[3]
     L = math.hypot(ux, uy)
-    qd[mid] += -speed_mps * uy / L
-    qd[mid + 1] += speed_mps * ux / L
+    if axial:
+        qd[4] += speed_mps * ux / L
+        qd[5] += speed_mps * uy / L
+    else:
+        qd[mid] += -speed_mps * uy / L
+        qd[mid + 1] += speed_mps * ux / L
     nc = n - N_Q
     A, LU, piv = np.empty((nc, n)), np.empty((nc, nc)), np.empty(nc, dtype=np.int64)
     if flex_project(run.P, lay.G, q, qd, lay.segs, lay.seg_f, lay.slides, lay.indep, A, LU, piv,
@@ -891,5 +896,8 @@ def tap_response(cfg, speed_mps: float = 0.01, duration_s: float = 0.2, every: i
             raise ValueError(f"the tap response failed at step {i * every} (status {status})")
         qq = x[:n]
         ux, uy = qq[4] - qq[2], qq[5] - qq[3]
-        w[i] = ((qq[mid] - qq[2]) * (-uy) + (qq[mid + 1] - qq[3]) * ux) / math.hypot(ux, uy)
+        if axial:
+            w[i] = math.hypot(ux, uy) - cfg.bodies.rod.length_m
+        else:
+            w[i] = ((qq[mid] - qq[2]) * (-uy) + (qq[mid + 1] - qq[3]) * ux) / math.hypot(ux, uy)
     return (np.arange(steps) + 1) * every * h, w
