@@ -4,17 +4,17 @@ S003 §5 (Fig. 15b): with 0.1 mm at C (test 6) against ideal joints (test 3) at 
 rises "specially around 1000 Hz and 3000 Hz" while the crank rate and its first harmonics barely change; §6: impact
 peaks "quickly reach their maximum value and subside in a few milliseconds".
 
-Method: tests 3 and 6 (crank PID drive, 750 motor rpm), ``--duration`` s from rest, each with ``structure.mode``
-rigid and flexible (the defaults of ``[structure]``: every number a documented placeholder); AC4 through the
-sensor chain (``twin.instrument.apply_chain``: ADXL1001 response, noise, 18-bit DAQ), ``--repeats`` noise streams
-per run (the simulation is deterministic: repeats differ by the sensor chain's noise only; the drive train is not
-used: the reference engine's flexible structure runs with the crank PID so far). Spectra of the last ``--window`` s
+Method: tests 3 and 6 (750 motor rpm) driven by the bench's motor and V-belt (``drive.mode = "motor"``; ``--drive
+pid`` for the crank PID), ``--duration`` s from rest, each with ``structure.mode`` rigid and flexible (the defaults
+of ``[structure]``: every number a documented placeholder); AC4 through the sensor chain
+(``twin.instrument.apply_chain``: ADXL1001 response, noise, 18-bit DAQ), ``--repeats`` noise streams per run (the
+simulation is deterministic: repeats differ by the sensor chain's noise only). Spectra of the last ``--window`` s
 (Hann, one-sided, averaged over the repeats), summed per 250 Hz band up to 5 kHz, in dB re 1 g²; the increase is
 test 6 − test 3. Impact decay: AC4 of the truth (no noise) in test 6 high-passed at 200 Hz, each impact peak (local maxima of |a| above
 half the largest), the time its envelope (|a| max over 0.2 ms windows) takes to fall to 10 % of the peak.
 
-Writes ``analysis/results/structure_fig15/{bands.csv, summary.json, fig15.png}`` and prints the tables.
-Run: ``python analysis/structure_fig15.py [--duration 1.5] [--window 1.0] [--repeats 5]``.
+Writes ``analysis/results/structure_fig15/<drive>/{bands.csv, summary.json, fig15.png}`` and prints the tables.
+Run: ``python analysis/structure_fig15.py [--duration 2] [--window 1] [--repeats 5] [--drive motor|pid]``.
 """
 
 from __future__ import annotations
@@ -46,9 +46,9 @@ def _commit() -> str:
         return "unknown"
 
 
-def run_case(test: int, mode: str, duration: float):
+def run_case(test: int, mode: str, duration: float, drive: str):
     cfg = preset(test).replace(**{"simulation.engine": "reference", "simulation.duration_s": duration,
-                                  "structure.mode": mode})
+                                  "structure.mode": mode, "drive.mode": drive})
     return cfg, simulate_run(cfg)
 
 
@@ -105,17 +105,20 @@ def decay_times(run, t_from: float) -> list[float]:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--duration", type=float, default=1.5)
+    ap.add_argument("--duration", type=float, default=2.0)
     ap.add_argument("--window", type=float, default=1.0)
     ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--drive", default="motor", choices=("motor", "pid"),
+                    help="drive.mode: the bench's motor and V-belt (default) or the crank PID")
     a = ap.parse_args()
-    OUT.mkdir(parents=True, exist_ok=True)
+    out = OUT / a.drive
+    out.mkdir(parents=True, exist_ok=True)
     res: dict = {}
     spec: dict = {}
     for mode in ("rigid", "flexible"):
         for test in (3, 6):
             print(f"simulating test {test}, {mode} ({a.duration:g} s)...", flush=True)
-            cfg, run = run_case(test, mode, a.duration)
+            cfg, run = run_case(test, mode, a.duration, a.drive)
             f, p = spectra(cfg, run, a.window, a.repeats)
             spec[(mode, test)] = (f, p)
             res[(mode, test)] = bands(f, p)
@@ -131,7 +134,8 @@ def main() -> None:
         r3, r6, f3, f6 = res[("rigid", 3)][i], res[("rigid", 6)][i], res[("flexible", 3)][i], res[("flexible", 6)][i]
         print(f"{lo:5.0f}-{hi:5.0f} | {r3:12.1f} {r6:7.1f} {r6 - r3:6.1f} | {f3:15.1f} {f6:7.1f} {f6 - f3:6.1f}")
         lines.append(f"{lo:.0f}-{hi:.0f},{r3:.2f},{r6:.2f},{r6 - r3:.2f},{f3:.2f},{f6:.2f},{f6 - f3:.2f}")
-    summary = {"version": __version__, "commit": _commit(), "duration_s": a.duration, "window_s": a.window,
+    summary = {"version": __version__, "commit": _commit(), "drive_mode": a.drive, "duration_s": a.duration,
+               "window_s": a.window,
                "repeats": a.repeats, "band_hz": BAND_HZ}
     for mode in ("rigid", "flexible"):
         inc = res[(mode, 6)] - res[(mode, 3)]
@@ -147,10 +151,10 @@ def main() -> None:
               f"({summary[mode]['largest_increase_db']} dB); impact decay to 10 %: "
               f"{summary[mode]['impact_decay_ms']}")
     for name, text in (("bands.csv", "\n".join(lines) + "\n"), ("summary.json", json.dumps(summary, indent=2) + "\n")):
-        fd, tmp = tempfile.mkstemp(dir=OUT)
+        fd, tmp = tempfile.mkstemp(dir=out)
         with os.fdopen(fd, "w") as fh:
             fh.write(text)
-        os.replace(tmp, OUT / name)
+        os.replace(tmp, out / name)
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -162,17 +166,18 @@ def main() -> None:
             ax.semilogy(f, p, color=col, lw=0.5, label=f"test {test}" + (" (ideal)" if test == 3 else " (0.1 mm at C)"))
         for fc in (1000.0, 3000.0):
             ax.axvspan(fc - 250, fc + 250, color="0.85", zorder=0)
-        ax.set_title(f"AC4, {mode} structure (reference engine); shaded: S003 Fig. 15b's 1 and 3 kHz")
+        ax.set_title(f"AC4, {mode} structure, {a.drive} drive (reference engine); shaded: S003 Fig. 15b's 1 and 3 kHz",
+                     fontsize=10)
         ax.set_ylabel("PSD [g²/Hz]")
         ax.legend(loc="upper right")
     axes[-1].set_xlim(0, F_MAX)
     axes[-1].set_xlabel("frequency [Hz]")
     fig.tight_layout()
-    fd, tmp = tempfile.mkstemp(dir=OUT, suffix=".png")
+    fd, tmp = tempfile.mkstemp(dir=out, suffix=".png")
     os.close(fd)
     fig.savefig(tmp, dpi=110)
-    os.replace(tmp, OUT / "fig15.png")
-    print(f"wrote {OUT}")
+    os.replace(tmp, out / "fig15.png")
+    print(f"wrote {out}")
 
 
 if __name__ == "__main__":

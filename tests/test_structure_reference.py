@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from twin.config import preset
-from twin.natural_coordinates import N_Q, initial_state
+from twin.natural_coordinates import initial_state
 from twin.reference import model as RM
-from twin.reference.flexible import N_OUT_FLEX, O_DISS, FlexibleRun, flex_project
+from twin.reference.flexible import N_OUT_FLEX, O_DISS, FlexibleRun, tap_response
 
 
 def _run(cfg, theta0, *, drive=False, guide_friction=False):
@@ -24,13 +24,6 @@ def _run(cfg, theta0, *, drive=False, guide_friction=False):
     return run, st
 
 
-def _chord_deflection(x, n, point):
-    """Distance of a chain point from the chord B'–C (the rod's bending relative to its ends) [m]."""
-    q = x[:n]
-    ux, uy = q[4] - q[2], q[5] - q[3]
-    return ((q[point] - q[2]) * (-uy) + (q[point + 1] - q[3]) * ux) / math.hypot(ux, uy)
-
-
 def test_tap_decays_with_the_configured_damping_ratio():
     """Rod between a crank of large inertia and the guide on heavy, undamped supports, no gravity, no drive: a tap
     (transverse velocity of the middle node) rings in the first bending mode, whose logarithmic decrement over
@@ -40,31 +33,8 @@ def test_tap_decays_with_the_configured_damping_ratio():
         "structure.mode": "flexible", "mechanism.gravity_mps2": 0.0, "bodies.crank.inertia_kgm2": 10.0,
         "structure.bending_damping_ratio": zeta_set, "structure.frame_damping_ratio": 0.0,
         "structure.guide_damping_ratio": 0.0, "structure.frame_mass_kg": 1000.0, "structure.guide_mass_kg": 1000.0})
-    run, st = _run(cfg, 0.3)
-    lay = run.layout
-    n = lay.n
-    mid = int(lay.segs[cfg.structure.rod_segments // 2 - 1, 1])   # the middle node (end of the middle segment)
-    x = run.x
-    q, qd = x[:n].copy(), x[n:2 * n].copy()
-    ux, uy = q[4] - q[2], q[5] - q[3]
-    L = math.hypot(ux, uy)
-    qd[mid] += -0.01 * uy / L
-    qd[mid + 1] += 0.01 * ux / L
-    nc = n - N_Q
-    A, LU, piv = np.empty((nc, n)), np.empty((nc, nc)), np.empty(nc, dtype=np.int64)
-    assert flex_project(run.P, lay.G, q, qd, lay.segs, lay.seg_f, lay.slides, lay.indep, A, LU, piv,
-                        np.empty(n), np.empty(n), np.empty(n), np.empty(n)) >= 0
-    x[:n], x[n:2 * n] = q, qd
+    t, w = tap_response(cfg, 0.01, 0.2, 5, 0.3)
     stride, h = 5, cfg.simulation.timestep_s
-    buf = np.empty((1, N_OUT_FLEX))
-    zero = np.zeros(stride)
-    w = []
-    for _ in range(4000):   # 0.2 s
-        status, _ = run.run(st, zero, zero, stride, buf)
-        assert status == RM.OK
-        w.append(_chord_deflection(x, n, mid))
-    w = np.array(w)
-    t = np.arange(w.size) * stride * h
     peaks, times = [], []
     for i in range(1, w.size - 1):
         if w[i] > 0 and w[i] > w[i - 1] and w[i] >= w[i + 1]:   # parabolic interpolation of each crest
@@ -81,6 +51,46 @@ def test_tap_decays_with_the_configured_damping_ratio():
     assert zeta == pytest.approx(zeta_set, rel=0.05)
     # and it rings at the first bending mode (pinned-pinned closed form 192.4 Hz, within 1 %)
     assert 1.0 / np.mean(np.diff(times[keep])) == pytest.approx(192.4, rel=0.01)
+
+
+def _crests(t, w, sign):
+    """Times and values of the crests (sign +1) or troughs (−1) of w, each refined by a parabola."""
+    tt, vv = [], []
+    for i in range(1, w.size - 1):
+        if sign * w[i] > sign * w[i - 1] and sign * w[i] >= sign * w[i + 1]:
+            a, b, c = w[i - 1], w[i], w[i + 1]
+            d = 0.5 * (a - c) / (a - 2 * b + c)
+            vv.append(b - 0.25 * (a - c) * d)
+            tt.append(t[i] + d * (t[1] - t[0]))
+    return np.array(tt), np.array(vv)
+
+
+def test_axial_tap_rings_at_the_closed_form_and_decays_with_the_axial_ratio():
+    """The same heavy crank and supports; a tap on the bore C along the rod: the stretch |C − B'| − L rings at the
+    first axial mode of the bar fixed at B with the end mass and the slider at C (closed form β tan β = m_bar/m_tip,
+    1041.4 Hz; within 1 %) and its crest-to-trough amplitude decays with the axial damping ratio set (within 5 %)."""
+    from twin.structure import axial_fixed_mass_hz, rod_split
+
+    zeta_set = 0.01
+    cfg = preset(3).replace(**{
+        "structure.mode": "flexible", "mechanism.gravity_mps2": 0.0, "bodies.crank.inertia_kgm2": 10.0,
+        "structure.axial_damping_ratio": zeta_set, "structure.frame_damping_ratio": 0.0,
+        "structure.guide_damping_ratio": 0.0, "structure.frame_mass_kg": 1000.0, "structure.guide_mass_kg": 1000.0})
+    rod = cfg.bodies.rod
+    sp = rod_split(rod.mass_kg, rod.length_m, rod.x_g_m, rod.inertia_kgm2, 0.0)
+    f_ref = axial_fixed_mass_hz(cfg.structure.rod_ea_n, sp.bar_mass_kg / sp.length_m, sp.length_m,
+                                sp.end_c_kg + cfg.bodies.slider.mass_kg, 1)[0]
+    t, w = tap_response(cfg, 0.01, 0.05, 1, 0.3, axial=True)
+    tp, p = _crests(t, w, 1)
+    _, v = _crests(t, w, -1)
+    m = min(p.size, v.size)
+    amp = 0.5 * (p[:m] - v[:m])     # crest to trough: blind to the slow drift of the coasting mechanism
+    keep = tp[:m] > 0.002
+    a = amp[keep]
+    delta = math.log(a[0] / a[-1]) / (a.size - 1)
+    assert a.size > 40
+    assert delta / math.sqrt(4 * math.pi ** 2 + delta ** 2) == pytest.approx(zeta_set, rel=0.05)
+    assert 1.0 / np.mean(np.diff(tp)) == pytest.approx(f_ref, rel=0.01)
 
 
 def _energy_change(cfg, flexible):

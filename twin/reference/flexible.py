@@ -280,12 +280,23 @@ def flex_solve(q, s, c, A, LU, piv, b, out, tmp):
     """Solve the whole augmented system for v: the rigid twelve in closed form, then the chain block (A holds
     the chain's rows over all coordinates, LU/piv the factors of its chain columns)."""
     nc = A.shape[0]
-    solve_aug(q, s, c, b, out)
-    for r in range(nc):
-        acc = b[N_Q + r]
+    rigid = False
+    for k in range(N_Q):
+        if b[k] != 0.0:
+            rigid = True
+            break
+    if rigid:
+        solve_aug(q, s, c, b, out)
+        for r in range(nc):
+            acc = b[N_Q + r]
+            for k in range(N_Q):
+                acc -= A[r, k] * out[k]
+            tmp[r] = acc
+    else:   # a chain-only right-hand side (the chain's independent columns of R): the rigid block's answer is 0
         for k in range(N_Q):
-            acc -= A[r, k] * out[k]
-        tmp[r] = acc
+            out[k] = 0.0
+        for r in range(nc):
+            tmp[r] = b[N_Q + r]
     lu_solve(LU, piv, nc, tmp)
     for r in range(nc):
         out[N_Q + r] = tmp[r]
@@ -837,3 +848,56 @@ class FlexibleRun:
         return run_flexible(self.P, lay.G, lay.segs, lay.seg_f, lay.hinges, lay.hinge_f, lay.slides, lay.slide_f,
                             lay.indep, lay.sensors, st, self.x, theta_ref, omega_ref, stride, buf, True, D, ds, sp,
                             dbuf)
+
+
+def tap_response(cfg, speed_mps: float = 0.01, duration_s: float = 0.2, every: int = 5, theta0: float = 0.3,
+                 drive: bool = False, axial: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """A tap on the flexible rod in the reference engine: the mechanism at rest at crank angle ``theta0`` [rad]
+    (no drive unless ``drive``, no guide friction), the rod's middle node given ``speed_mps`` normal to the
+    chord; returns (t [s], the node's distance from the chord B'–C [m]) every ``every`` steps for
+    ``duration_s``. The rod's bending relative to its ends: its ringing gives the in-situ bending mode and
+    its damping (``tests/test_structure_reference.py``; the MuJoCo twin's agreement checks can tap the same).
+    ``axial``: the tap is on the bore C along the chord instead, and the response the stretch |C − B'| − L."""
+    from twin.natural_coordinates import initial_state
+    from twin.reference.model import build_params
+
+    prm = lambda c: build_params(c, drive=drive, guide_friction=False)  # noqa: E731
+    run = FlexibleRun(cfg, prm(cfg), prm)
+    st = initial_state(cfg, theta0, 0.0, run.P)
+    run.reset(st)
+    lay = run.layout
+    n = lay.n
+    mid = int(lay.segs[cfg.structure.rod_segments // 2 - 1, 1])   # the middle node (end of the middle segment)
+    x = run.x
+    q, qd = x[:n].copy(), x[n:2 * n].copy()
+    ux, uy = q[4] - q[2], q[5] - q[3]
+    L = math.hypot(ux, uy)
+    if axial:
+        qd[4] += speed_mps * ux / L
+        qd[5] += speed_mps * uy / L
+    else:
+        qd[mid] += -speed_mps * uy / L
+        qd[mid + 1] += speed_mps * ux / L
+    nc = n - N_Q
+    A, LU, piv = np.empty((nc, n)), np.empty((nc, nc)), np.empty(nc, dtype=np.int64)
+    if flex_project(run.P, lay.G, q, qd, lay.segs, lay.seg_f, lay.slides, lay.indep, A, LU, piv,
+                    np.empty(n), np.empty(n), np.empty(n), np.empty(n)) < 0:
+        raise ValueError("the tapped state does not satisfy the constraints")
+    x[:n], x[n:2 * n] = q, qd
+    h = cfg.simulation.timestep_s
+    steps = int(round(duration_s / (every * h)))
+    buf = np.empty((1, N_OUT_FLEX))
+    ref = np.full(every, theta0)
+    zero = np.zeros(every)
+    w = np.empty(steps)
+    for i in range(steps):
+        status, _ = run.run(st, ref, zero, every, buf)
+        if status != OK:
+            raise ValueError(f"the tap response failed at step {i * every} (status {status})")
+        qq = x[:n]
+        ux, uy = qq[4] - qq[2], qq[5] - qq[3]
+        if axial:
+            w[i] = math.hypot(ux, uy) - cfg.bodies.rod.length_m
+        else:
+            w[i] = ((qq[mid] - qq[2]) * (-uy) + (qq[mid + 1] - qq[3]) * ux) / math.hypot(ux, uy)
+    return (np.arange(steps) + 1) * every * h, w
