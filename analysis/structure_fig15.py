@@ -10,8 +10,8 @@ of ``[structure]``: every number a documented placeholder); AC4 through the sens
 (``twin.instrument.apply_chain``: ADXL1001 response, noise, 18-bit DAQ), ``--repeats`` noise streams per run (the
 simulation is deterministic: repeats differ by the sensor chain's noise only). Spectra of the last ``--window`` s
 (Hann, one-sided, averaged over the repeats), summed per 250 Hz band up to 5 kHz, in dB re 1 g²; the increase is
-test 6 − test 3. Impact decay: AC4 of the truth (no noise) in test 6 high-passed at 200 Hz, each impact peak (local maxima of |a| above
-half the largest), the time its envelope (|a| max over 0.2 ms windows) takes to fall to 10 % of the peak.
+test 6 − test 3. Impact decay: AC4 of the truth (no noise) in test 6 high-passed at 200 Hz, each impact peak
+(local maxima of |a| above half the largest), the time its envelope (|a| max over 0.2 ms windows) takes to fall to 10 % of the peak.
 
 Writes ``analysis/results/structure_fig15/<drive>/{bands.csv, summary.json, fig15.png}`` and prints the tables.
 Run: ``python analysis/structure_fig15.py [--duration 2] [--window 1] [--repeats 5] [--drive motor|pid]``.

@@ -47,7 +47,8 @@ def test_split_keeps_table1_mass_centre_and_inertia():
         assert math.isclose(sp.inertia_g_kgm2, 0.197, rel_tol=1e-12)
     sp = _split()
     # BENCH.md's estimate: about 2 kg of bar and 0.75 kg at each end
-    assert abs(sp.bar_mass_kg - 2.04) < 0.01 and abs(sp.end_b_kg - 0.754) < 0.001 and sp.end_b_kg == pytest.approx(sp.end_c_kg)
+    assert abs(sp.bar_mass_kg - 2.04) < 0.01 and abs(sp.end_b_kg - 0.754) < 0.001
+    assert sp.end_b_kg == pytest.approx(sp.end_c_kg)
     # the chain's bodies hold the same mass, centre of mass and inertia about it (linearized rigid-body block)
     ch = undamped_chain(sp, ST.rod_ea_n, ST.rod_ei_nm2, 6, 2)
     M, _, _ = linear_matrices(ch)
@@ -68,7 +69,8 @@ def test_closed_forms_reduce_to_textbook_limits():
     # a huge end inertia: two slow modes of the housings swinging on the bar, then the bar with its end slopes held,
     # clamped-clamped β L = 4.7300, 7.8532
     cc = bending_pinned_end_inertia_hz(ei, mu, L, 1e6, 4)[2:]
-    assert cc == pytest.approx([(b / L) ** 2 * math.sqrt(ei / mu) / (2 * math.pi) for b in (4.73004, 7.85320)], rel=1e-4)
+    clamped = [(b / L) ** 2 * math.sqrt(ei / mu) / (2 * math.pi) for b in (4.73004, 7.85320)]
+    assert cc == pytest.approx(clamped, rel=1e-4)
     # a heavy tip mass: the spring-mass √(EA/(L m)) / 2π, with the Rayleigh correction m + m_bar/3
     m_tip = 1e3
     f = axial_fixed_mass_hz(ea, mu, L, m_tip, 1)[0]

@@ -118,7 +118,8 @@ class StructureConfig:
         _choice(self.mode, "mode", STRUCTURE_MODES)
         _bounded(self.rod_section_height_m, "rod_section_height_m", 0.003, 0.2, "m", "the rod's in-plane depth")
         _bounded(self.rod_section_width_m, "rod_section_width_m", 0.002, 0.2, "m", "the rod's thickness")
-        _bounded(self.rod_youngs_modulus_pa, "rod_youngs_modulus_pa", 1e9, 1e12, "Pa", "a structural metal or composite")
+        _bounded(self.rod_youngs_modulus_pa, "rod_youngs_modulus_pa", 1e9, 1e12, "Pa",
+                 "a structural metal or composite")
         _bounded(self.rod_end_inertia_kgm2, "rod_end_inertia_kgm2", 0.0, 0.05, "kg m^2",
                  "the housings' own inertia; Table 1's rod must keep a bar of positive mass")
         _check(isinstance(self.rod_segments, int) and not isinstance(self.rod_segments, bool)

@@ -45,24 +45,19 @@ import math
 import numpy as np
 
 from twin.jit import njit
-from twin.natural_coordinates import (N_Q, N_Z, P_CLR_B, P_CLR_C, P_DOFF, P_FGUIDE, P_GX, P_GY, P_H, P_IMAX, P_KI, P_KP, P_KV, P_L,
-                                      P_M1, P_M2, P_M3, P_R, P_V0, P_V1, P_XG1, P_XG2,
-                                      P_NEWTON_MAXIT, P_NEWTON_TOL, P_OUT_ENERGY, P_SENS, S_I, S_IN_A, S_IN_B, S_IN_C, S_Q, S_QD,
-                                      S_VIMP_A, S_VIMP_B, S_VIMP_C, energy, independent_rows, kinetic_energy,
-                                      mass_times, quadratic_terms, residual, solve_aug)
+from twin.natural_coordinates import (N_Q, N_Z, P_CLR_B, P_CLR_C, P_DOFF, P_FGUIDE, P_GX, P_GY, P_H, P_IMAX,
+                                      P_KI, P_KP, P_KV, P_L, P_M1, P_M2, P_M3, P_NEWTON_MAXIT, P_NEWTON_TOL,
+                                      P_OUT_ENERGY, P_R, P_SENS, P_V0, P_V1, P_XG1, P_XG2, S_I, S_IN_A, S_IN_B,
+                                      S_IN_C, S_Q, S_QD, S_VIMP_A, S_VIMP_B, S_VIMP_C, energy, independent_rows,
+                                      kinetic_energy, mass_times, quadratic_terms, residual, solve_aug)
 from twin.reference.model import (N_OUT, NEWTON_FAILED, NOT_FINITE, O_ACC, O_EKIN, O_EPOT, OK, _cholesky_solve,
                                   _outputs, generalized_forces)
 from twin.reference import drivetrain as DT
 from twin.reference.guide import N_GUIDE_OUT
 
-# ------------------------------------------------------------------------ layout of the integer table ``L``
-# L_* rows of the float table F (parameters of the chain), see build()
-F_SEG_M, F_SEG_L = 0, 1                   # per segment: mass, length
-# structure scalars in ``G``
+# ----------------------------------------------------------------- the supports' parameters ``G`` (build())
 G_KF, G_CF, G_MF, G_KG, G_CG, G_MG, G_FLEX_A, G_FLEX_G = 0, 1, 2, 3, 4, 5, 6, 7
 N_G = 8
-# extra state after the rigid state: PID integral etc. live in the rigid layout; we append the dissipated energy
-X_DISS = 0
 
 
 @dataclasses.dataclass
@@ -287,11 +282,8 @@ def flex_solve(q, s, c, A, LU, piv, b, out, tmp):
             break
     if rigid:
         solve_aug(q, s, c, b, out)
-        for r in range(nc):
-            acc = b[N_Q + r]
-            for k in range(N_Q):
-                acc -= A[r, k] * out[k]
-            tmp[r] = acc
+        for r in range(nc):   # the chain's rows reach the rigid coordinates through B' and C only (q_2 … q_5)
+            tmp[r] = b[N_Q + r] - A[r, 2] * out[2] - A[r, 3] * out[3] - A[r, 4] * out[4] - A[r, 5] * out[5]
     else:   # a chain-only right-hand side (the chain's independent columns of R): the rigid block's answer is 0
         for k in range(N_Q):
             out[k] = 0.0
@@ -824,8 +816,6 @@ class FlexibleRun:
     def reset(self, st_rigid: np.ndarray) -> None:
         """Start from the rigid model's state (the straight, unstretched rod on its pose), the contact stiffnesses
         of the rigid model's parameters."""
-        from twin.natural_coordinates import N_PARAMS  # noqa: F401 - layout check
-
         from twin.natural_coordinates import P_CLIN_A, P_CLIN_B, P_CLIN_C, P_K_A, P_K_B, P_K_C
         for i in (P_K_A, P_K_B, P_K_C, P_CLIN_A, P_CLIN_B, P_CLIN_C):
             self.P[i] = self.P_rigid[i]

@@ -100,7 +100,8 @@ def rod_split(mass_kg: float, length_m: float, x_g_m: float, inertia_kgm2: float
     end_b = mass_kg - bar - end_c
     if not (bar > 0.0 and end_b >= 0.0 and end_c >= 0.0):
         raise ConfigError("bodies.rod.inertia_kgm2",
-                          f"the flexible rod needs Table 1's rod as a uniform bar with end masses; mass {mass_kg:g} kg, "
+                          "the flexible rod needs Table 1's rod as a uniform bar with end masses; "
+                          f"mass {mass_kg:g} kg, "
                           f"x_G {x_g_m:g} m and I_G {inertia_kgm2:g} kg m^2 (with structure.rod_end_inertia_kgm2 = "
                           f"{end_inertia_kgm2:g}) give bar {bar:.4g}, ends {end_b:.4g} / {end_c:.4g} kg (must be >= 0)")
     return RodSplit(bar, end_b, end_c, end_inertia_kgm2, L)
@@ -274,7 +275,8 @@ def modes(chain: RodChain, boundary: str = "mechanism", tip_mass_kg: float = 0.0
     kinds = []
     for i in range(shapes.shape[1]):
         v = shapes[:, i]
-        axial = sum(v[3 + k] ** 2 * chain.joints[k].stiffness for k in range(chain.n_joints) if chain.joints[k].kind == "slide")
+        axial = sum(v[3 + k] ** 2 * chain.joints[k].stiffness for k in range(chain.n_joints)
+                    if chain.joints[k].kind == "slide")
         total = sum(v[3 + k] ** 2 * chain.joints[k].stiffness for k in range(chain.n_joints))
         if boundary == "free" and total == 0.0:
             total = axial = 1.0
