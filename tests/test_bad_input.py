@@ -145,7 +145,7 @@ CASES: list[tuple[str, str]] = [
     ("simulate --config {ws}/unknown.toml", "joints.clearance_x_mm: unknown field"),
     ("simulate --config {ws}/type.toml", "joints.clearance_b_mm: must be a number"),
     ("simulate --config {ws}/notrace.toml", "drive.trace_file"),
-    ("simulate --config {ws}/test99.toml", "--test"),
+    ("simulate --config {ws}/test99.toml", "error: test: must be a Table 4 test id"),  # the file's key, not --test
     ("simulate --config {ws}/name.toml", "name"),
     ("simulate --config {ws}/confdir.toml", "is a directory"),
     # simulate: --set

@@ -272,7 +272,7 @@ def test_stability_campaign_draws_the_structure_without_changing_the_other_draws
         if flex["drive"]["program"] != "startstop":
             cfg = scene_config({**flex, "engine": "reference"})
             assert cfg.structure.flexible and cfg.simulation.engine == "reference"
-    with pytest.raises(ConfigError, match="--structure"):
+    with pytest.raises(ConfigError, match="structure"):
         StudySettings(scenes=2, seed=1, bench=True, structure=True)
 
 

@@ -188,7 +188,7 @@ def sensor_friction(joint: str) -> str:
     return f"friction_{joint}"
 
 
-#: marker of a bushing bore in the geom user data's "marker" field (must match BORE_MAGIC in _bore.c)
+#: marker of a bushing bore in the geom user data's "marker" field (must match BORE_MAGIC in _native.h)
 BORE_MAGIC = 7301.0
 
 #: Layout of a bushing bore's geom user data (``nuser_geom`` = its length), read by index by the

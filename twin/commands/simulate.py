@@ -65,16 +65,11 @@ def run(args: argparse.Namespace) -> int:
 def preview_rate(given: float | None, output_rate_hz: float) -> float:
     """The preview rate of ``--preview-rate`` [Hz]: the default (1 kHz, at most the output rate),
     0 (none), or a given rate between 0 and the output rate."""
-    import math
-
-    from twin.mcapfile import DEFAULT_PREVIEW_HZ
+    from twin.mcapfile import DEFAULT_PREVIEW_HZ, check_preview_rate
 
     if given is None:
         return min(DEFAULT_PREVIEW_HZ, output_rate_hz)
-    if not math.isfinite(given) or given < 0 or given > output_rate_hz:
-        raise TwinError(f"--preview-rate: must be 0 (no preview) or a rate up to the output rate "
-                        f"{output_rate_hz:g} Hz, got {given:g}")
-    return given
+    return check_preview_rate(given, output_rate_hz)  # the writer's rule, checked before the run
 
 
 def check_free_space(cfg, out: Path, preview_hz: float = 0.0) -> None:

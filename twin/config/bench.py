@@ -16,7 +16,7 @@ from twin.config.drivetrain import Drivetrain
 from twin.config.engines import MujocoSettings, Simulation
 from twin.config.mechanism import Bodies, Contact, Joints, Materials, Mechanism, ln_stiffness
 from twin.config.sensors import Instrumentation, Sensors
-from twin.config.spatial import Spatial
+from twin.config.spatial import Spatial, check_spatial
 from twin.config.structure import StructureConfig
 from twin.errors import ConfigError
 
@@ -60,7 +60,7 @@ class BenchConfig:
         if sim.duration_s == 0 and self.drive.program != "protocol":
             raise ConfigError("simulation.duration_s",
                               f"must be > 0 for the {self.drive.program} program (0 = the protocol's length); "
-                              + ("--trace FILE and configuration files fill in the trace's length"
+                              + ("configuration files (load_config) fill in the trace's length"
                                  if self.drive.program == "trace" else "got 0"))
         k = 1.0 / (sim.timestep_s * sen.output_rate_hz)
         stride = int(round(k))
@@ -69,7 +69,7 @@ class BenchConfig:
             raise ConfigError("simulation.timestep_s",
                               f"{sim.timestep_s:g} s does not divide the output period 1/{sen.output_rate_hz:g} Hz; "
                               f"use a timestep of (1/output_rate)/k for an integer k, or set the output rate "
-                              f"explicitly (sensors.output_rate_hz, --output-rate), e.g. {every:.10g} Hz for a "
+                              f"explicitly (`sensors.output_rate_hz`), e.g. {every:.10g} Hz for a "
                               "sample every step")
         if round(self.duration_s * sen.output_rate_hz) < 1:
             raise ConfigError("simulation.duration_s",
@@ -97,8 +97,6 @@ class BenchConfig:
                     raise ConfigError("sensors.channels", f"the optional group {group!r} needs drive.mode = "
                                       f"\"motor\" or \"torque\", got {self.drive.mode!r}")
         if self.spatial.enabled:
-            from twin.spatial.checks import check_spatial
-
             check_spatial(self)
         elif "slider_accel" in sen.channels:
             raise ConfigError("sensors.channels", "the optional group 'slider_accel' is produced by the spatial "
@@ -223,6 +221,10 @@ def _check_options_used(cfg: BenchConfig) -> None:
                                   f"{' or '.join(repr(m) for m in modes)}); leave it out (default "
                                   f"{getattr(default, name)!r}), got {getattr(own, name)!r}")
     default = Drive()
+    if mode == "torque" and program != default.program:
+        raise ConfigError("drive.program", f"is not used with drive.mode = 'torque' (the motor follows the torque "
+                          "program drivetrain.torque_s/torque_nm, then coasts: no speed program); leave it out "
+                          f"(default {default.program!r}), got {program!r}")
     for names, programs in _PROGRAM_FIELDS:
         if program in programs:
             continue

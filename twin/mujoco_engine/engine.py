@@ -39,6 +39,7 @@ MAX_DOF_SPEED = 1.0e5
 from twin.kinematics import initial_pose, rot2
 from twin.mujoco_engine.accel import PosthocAccelerometers, posthoc_applies
 from twin.mujoco_engine.builder import build
+from twin.tracefile import DriveInputs
 
 _STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
 #: everything a step reads besides the model: physics, controls, warmstart and user data (v_imp)
@@ -58,9 +59,9 @@ def stage_timers_off() -> None:
     if _clock is None:
         import ctypes
 
-        from twin.mujoco_engine.collider import _library_path
+        from twin.mujoco_engine.collider import mujoco_library
 
-        slot = ctypes.c_void_p.in_dll(ctypes.CDLL(_library_path()), "mjcb_time")
+        slot = ctypes.c_void_p.in_dll(mujoco_library(), "mjcb_time")
         _clock = (slot, slot.value or 0)
     slot, default = _clock
     if slot.value and slot.value == default and mujoco.get_mjcb_time() is None:
@@ -73,11 +74,12 @@ class MujocoEngine:
 
     name = "mujoco"
 
-    def __init__(self, cfg: BenchConfig):
+    def __init__(self, cfg: BenchConfig, *, inputs: DriveInputs | None = None):
         self.cfg = cfg
+        self.inputs = inputs
         t0 = time.perf_counter()
         stage_timers_off()
-        self.spec, self.model, self.info = build(cfg)
+        self.spec, self.model, self.info = build(cfg, inputs=inputs)
         self.data = mujoco.MjData(self.model)
         posthoc = posthoc_applies(cfg)
         self.meta: dict[str, Any] = {
@@ -118,9 +120,9 @@ class MujocoEngine:
         self._drive = None
         if cfg.drive.mode == "prescribed":
             from twin.drive import DriveReference
-            from twin.mujoco_engine.builder import prescribed_armature
+            from twin.physics.mujoco_params import prescribed_armature
 
-            self._drive = DriveReference(cfg)
+            self._drive = DriveReference(cfg, inputs)
             self._armature = prescribed_armature(cfg)
             self.meta["drive"] = (f"prescribed: crank armature {self._armature:.6g} kg m^2, dead-beat law "
                                   "A [(theta_ref(t + h) - theta)/h^2 - omega/h]")
@@ -133,7 +135,7 @@ class MujocoEngine:
         if theta0 is None:
             from twin.drive import DriveReference
 
-            theta0 = float(DriveReference(cfg)(np.array([0.0]))[0][0])
+            theta0 = float(DriveReference(cfg, self.inputs)(np.array([0.0]))[0][0])
         mujoco.mj_resetData(m, d)
         d.userdata[:] = 0.0  # no contact event under way (mj_resetData clears it too; the rollout never does)
         pose = initial_pose(cfg, theta0)
@@ -220,7 +222,7 @@ class MujocoEngine:
             # the drive train's input (speed set point or torque) in the motor_command actuator's ctrl
             from twin.motor_drive import motor_input
 
-            ctrl = motor_input(self.cfg, self._k, nstep, omega_ref)[None, :, None]
+            ctrl = motor_input(self.cfg, self._k, nstep, omega_ref, self.inputs)[None, :, None]
             self._chunk_k0 = self._k
         else:
             ctrl = np.stack([theta_ref, omega_ref], axis=-1)[None]
@@ -297,7 +299,7 @@ class MujocoEngine:
                 out[name] = col(names.SENSOR_DRIVETRAIN, f[name])
             n, stride = sens.shape[0], self.cfg.output_stride
             t = (self._chunk_k0 + stride * np.arange(n)) * self.cfg.simulation.timestep_s
-            out["command_voltage"] = command_voltage(self.cfg, t)
+            out["command_voltage"] = command_voltage(self.cfg, t, self.inputs)
         if "drive_energy" in groups:
             for i, name in enumerate(names.DRIVETRAIN_ENERGY_FIELDS):
                 out[name] = col(names.SENSOR_DRIVETRAIN_ENERGY, i)

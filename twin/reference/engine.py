@@ -5,7 +5,7 @@ configuration, drive, channels, chunking and metadata (:class:`twin.simulation.E
 the two engines compare channel by channel. The formulation is in
 :mod:`twin.natural_coordinates` (coordinates, constraints, mass matrix) and
 :mod:`twin.reference.model` (forces, equations of motion, integration), the contact laws in
-:mod:`twin.reference.contact` with their constants from :mod:`twin.contact_params`.
+:mod:`twin.physics.contact` with their constants from :mod:`twin.contact_params`.
 
 Clearance joints: any of A (the crank journal in the frame's bore; its eccentricity channels in
 the bench frame), B and C (rod frame), each with its own pin and bushing radii.
@@ -32,6 +32,7 @@ from twin.config import ACCELEROMETERS, BenchConfig
 from twin.errors import ConfigError, SimulationError
 from twin.natural_coordinates import initial_state
 from twin.reference import model as ref_model
+from twin.tracefile import DriveInputs
 
 ENGINE_VERSION = "1"
 
@@ -86,8 +87,9 @@ class ReferenceEngine:
 
     name = "reference"
 
-    def __init__(self, cfg: BenchConfig, options: ReferenceOptions | None = None):
+    def __init__(self, cfg: BenchConfig, options: ReferenceOptions | None = None, *, inputs: DriveInputs | None = None):
         self.cfg = cfg
+        self.inputs = inputs
         self.options = options or ReferenceOptions()
         if self.options.integrator == "midpoint" and cfg.drive.mode == "prescribed":
             raise ConfigError("reference.integrator",
@@ -131,13 +133,13 @@ class ReferenceEngine:
         if cfg.drive.mode in ("motor", "torque"):
             from twin.reference.drivetrain_run import ReferenceTrain
 
-            self._train = ReferenceTrain(cfg)
+            self._train = ReferenceTrain(cfg, inputs)
             self.load_s += self._train.warm_up()
             self.meta["drive"] = self._train.describe()
         if cfg.drive.mode == "prescribed":
             from twin.drive import DriveReference
 
-            self._drive = DriveReference(cfg)
+            self._drive = DriveReference(cfg, inputs)
             self.meta["drive"] = "prescribed: the crank angle is a driving constraint theta = theta_ref(t)"
 
     def reset(self, theta0: float | None = None) -> None:
@@ -148,7 +150,7 @@ class ReferenceEngine:
         if theta0 is None:
             from twin.drive import DriveReference
 
-            theta0 = float(DriveReference(self.cfg)(np.array([0.0]))[0][0])
+            theta0 = float(DriveReference(self.cfg, self.inputs)(np.array([0.0]))[0][0])
         omega0 = self._drive.start_rate() if self._drive is not None else 0.0
         try:
             self.state0 = initial_state(self.cfg, theta0, omega0, self.P)

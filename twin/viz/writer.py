@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 from pathlib import Path
 from typing import Any
 
@@ -64,6 +65,8 @@ ROD_DEFLECTION_MAGNIFICATION = 1000
 #: points of the drawn bent centre line
 ROD_LINE_POINTS = 25
 
+#: free space a .rrd needs before rerun's writer starts [bytes] (its blueprint and first chunks)
+MIN_FREE_BYTES = 1 << 20
 #: rows of signals sent between two flushes of the recording stream (bounds its queue)
 FLUSH_ROWS = 200_000
 _ANGLE_SOURCES = ("crank_angle", "encoder_angle", "encoder_counts")
@@ -109,7 +112,7 @@ class RerunWriter:
                  options: ViewOptions = ViewOptions(), t_start: float = 0.0, t_end: float | None = None,
                  source: str = ""):
         self.path = Path(path)
-        if self.path.suffix != ".rrd":
+        if self.path.suffix.lower() != ".rrd":
             raise TwinError(f"{self.path}: a rerun recording must end in .rrd")
         if not self.path.parent.is_dir():
             raise TwinError(f"{self.path}: directory {self.path.parent} does not exist")
@@ -160,6 +163,11 @@ class RerunWriter:
         blueprint = bp.default_blueprint(self.cfg, self._groups, self._channels, self._joints, self._has_pose,
                                          self._fft_window, fft_names, self.opts)
         remove_stale_temps(self.path)
+        # rerun's save() blocks for good when its very first write (the blueprint) fails; a disk without
+        # room for it is refused here (a disk that fills later makes the SDK raise, reported in close())
+        free = shutil.disk_usage(self._tmp.parent).free
+        if free < MIN_FREE_BYTES:
+            raise TwinError(f"{self.path}: cannot write (no space left on the device: {free} bytes free)")
         rec = rr.RecordingStream(APP_ID, recording_id=self.recording_id, send_properties=False)
         rec.set_log_time_enabled(False)
         rec.set_log_tick_enabled(False)
