@@ -156,3 +156,21 @@ def test_flexible_test6_runs_with_mounted_sensors():
         assert np.all(np.isfinite(ch.data)), name
     assert np.max(np.abs(flex["AC3"].data - rigid["AC3"].data)) > 0.1
     assert np.max(np.abs(flex["crank_angle"].data - rigid["crank_angle"].data)) < 1e-3
+
+
+def test_flexible_runs_with_the_drive_train_and_refuses_what_it_leaves_out():
+    """Test 12 driven by the motor and V-belt for 10 ms through the flexible loop: finite channels, the motor's
+    channels present; the prescribed drive and a clearance at A are refused in one line naming the field."""
+    from twin.errors import ConfigError
+    from twin.reference.engine import ReferenceEngine
+    from twin.simulation import simulate_run
+
+    base = preset(12).replace(**{"simulation.engine": "reference", "simulation.duration_s": 0.01,
+                                 "structure.mode": "flexible"})
+    run = simulate_run(base.replace(**{"drive.mode": "motor", "sensors.channels": ["accel", "crank", "motor"]}))
+    assert "motor_speed" in run.channels
+    assert all(np.all(np.isfinite(ch.data)) for ch in run.channels.values())
+    with pytest.raises(ConfigError, match=r"^structure\.mode: .*prescribed"):
+        ReferenceEngine(base.replace(**{"drive.mode": "prescribed"}))
+    with pytest.raises(ConfigError, match=r"^structure\.mode: .*joints\.clearance_a_mm = 0"):
+        ReferenceEngine(base.replace(**{"joints.clearance_a_mm": 0.1}))
