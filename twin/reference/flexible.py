@@ -31,9 +31,11 @@ independent, with the guide's mass, spring and damper; the slider's weight is ca
 accelerometers on the rod read their segment (rigid): p̈ = ä + ξ ü + η R₉₀ ü along the segment's axes; the
 mount filter (:class:`twin.structure.MountFilter`) is applied to the sampled channels.
 
-Where it differs from the rigid model's conventions: the friction at the bores B and C uses the chord's angular
-velocity (C − B') for the eye's spin (the rigid model's), not the end segment's (a difference of the rod's
-deformation rate, µrad/s scale); the contact stiffnesses are resolved with the rigid rod's effective mass.
+Clearance joints: the contact force on the rod acts on the eye's centre (B' or C), its friction moment −R_b f_T on
+the end segment (the rigid model spreads a force on the rod over B' and C, which on a flexible rod would add a
+spurious axial pair R_b f_N / L). Where it differs from the rigid model's conventions: the friction's sliding speed
+uses the chord's angular velocity (C − B') for the eye's spin, not the end segment's (a difference of the rod's
+deformation rate); the contact stiffnesses are resolved with the rigid rod's effective mass.
 Scope: crank PID drive ("pid"), symplectic Euler, clearances at B and C (A and the guide ideal).
 """
 
@@ -47,11 +49,11 @@ import numpy as np
 from twin.jit import njit
 from twin.natural_coordinates import (N_Q, N_Z, P_CLR_B, P_CLR_C, P_DOFF, P_FGUIDE, P_GX, P_GY, P_H, P_IMAX,
                                       P_KI, P_KP, P_KV, P_L, P_M1, P_M2, P_M3, P_NEWTON_MAXIT, P_NEWTON_TOL,
-                                      P_OUT_ENERGY, P_R, P_SENS, P_V0, P_V1, P_XG1, P_XG2, S_I, S_IN_A, S_IN_B,
+                                      P_OUT_ENERGY, P_R, P_RBUSH_B, P_RBUSH_C, P_SENS, P_V0, P_V1, P_XG1, P_XG2, S_I, S_IN_A, S_IN_B,
                                       S_IN_C, S_Q, S_QD, S_VIMP_A, S_VIMP_B, S_VIMP_C, energy, independent_rows,
                                       kinetic_energy, mass_times, quadratic_terms, residual, solve_aug)
 from twin.reference.model import (N_OUT, NEWTON_FAILED, NOT_FINITE, O_ACC, O_EKIN, O_EPOT, OK, _cholesky_solve,
-                                  _outputs, generalized_forces)
+                                  _outputs, _rod_force, generalized_forces)
 from twin.reference import drivetrain as DT
 from twin.reference.guide import N_GUIDE_OUT
 
@@ -340,6 +342,26 @@ def _moment(q, a, b, m, Q):
     Q[b + 1] += ux * f
     Q[a] -= -uy * f
     Q[a + 1] -= ux * f
+
+
+@njit(cache=True)
+def _eye_contact(P, qs, q, jo, eye, rb, a, b, Q):
+    """Move a clearance joint's contact force on the rod from the rigid rod's distribution over B' and C
+    (:func:`twin.reference.model._rod_force`, which the joint's element applied) to the eye it acts on: the force at
+    the eye's centre (index ``eye``: 2 for B', 4 for C) and its moment about it, −R_b f_T, on the end segment a→b
+    (the housing turns with it)."""
+    ex, ey = jo[0], jo[1]
+    d = math.sqrt(ex * ex + ey * ey)
+    if d > 0.0:
+        nx, ny = ex / d, ey / d
+    else:
+        nx, ny = 1.0, 0.0
+    fx = -jo[3] * nx - jo[4] * ny      # on the pin: −f_N n + f_T t, t = (−n_y, n_x)
+    fy = -jo[3] * ny + jo[4] * nx
+    _rod_force(P, qs, fx, fy, qs[eye] + rb * nx, qs[eye + 1] + rb * ny, Q)   # undoes the element's −F
+    Q[eye] -= fx
+    Q[eye + 1] -= fy
+    _moment(q, a, b, -rb * jo[4], Q)
 
 
 @njit(cache=True)
@@ -679,6 +701,12 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
             qs[5] -= q[10]
             qds[5] -= qd[10]
         generalized_forces(P, qs, qds, tau, cst_a, cst_b, cst_c, Q[:N_Q], ja, jb, jc)
+        # the contact forces on the rod act on its eyes (end_B, end_C), not spread as on a rigid rod
+        if P[P_CLR_B] > 0.5 and jb[3] > 0.0:
+            _eye_contact(P, qs, q, jb, 2, P[P_RBUSH_B], segs[0, 0], segs[0, 1], Q)
+        if P[P_CLR_C] > 0.5 and jc[3] > 0.0:
+            last = segs.shape[0] - 1
+            _eye_contact(P, qs, q, jc, 4, P[P_RBUSH_C], segs[last, 0], segs[last, 1], Q)
         if shift and jc[3] > 0.0:   # the contact's normal component on the pin, which the ideal guide took, moves it
             ex, ey = jc[0], jc[1]
             d = math.sqrt(ex * ex + ey * ey)
