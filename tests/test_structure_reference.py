@@ -179,3 +179,5 @@ def test_flexible_runs_with_the_drive_train_the_prescribed_crank_and_refuses_wha
     assert all(np.all(np.isfinite(ch.data)) for ch in run.channels.values())
     with pytest.raises(ConfigError, match=r"^structure\.mode: .*joints\.clearance_a_mm = 0"):
         ReferenceEngine(base.replace(**{"joints.clearance_a_mm": 0.1}))
+    with pytest.raises(ConfigError, match=r"^sensors\.channels: the optional group 'drive_energy'"):
+        ReferenceEngine(base.replace(**{"drive.mode": "motor", "sensors.channels": ["accel", "drive_energy"]}))

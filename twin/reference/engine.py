@@ -255,6 +255,10 @@ def _flexible_run(cfg: BenchConfig, P: np.ndarray, options: ReferenceOptions):
 
     if options.integrator != "euler":
         raise ConfigError("reference.integrator", "the flexible structure integrates with \"euler\"")
+    if "drive_energy" in cfg.sensors.channels:
+        raise ConfigError("sensors.channels", "the optional group 'drive_energy' does not count the flexible "
+                          "structure's dampers in the reference engine yet (its balance would not close); remove it "
+                          "with structure.mode = \"flexible\"")
     if cfg.joints.diametral_mm("A") > 0 or cfg.joints.guide_play:
         raise ConfigError("structure.mode", "\"flexible\" carries the frame and the guide on their supports: "
                           "the reference engine has it with A and the guide ideal (joints.clearance_a_mm = 0, "
