@@ -156,3 +156,28 @@ def test_flexible_test6_runs_with_mounted_sensors():
         assert np.all(np.isfinite(ch.data)), name
     assert np.max(np.abs(flex["AC3"].data - rigid["AC3"].data)) > 0.1
     assert np.max(np.abs(flex["crank_angle"].data - rigid["crank_angle"].data)) < 1e-3
+
+
+def test_flexible_runs_with_the_drive_train_the_prescribed_crank_and_refuses_what_it_leaves_out():
+    """Test 12 for 10 ms through the flexible loop driven by the motor and V-belt (finite channels, the motor's
+    channels present) and by the prescribed crank (the crank angle is the program's at every sample, as in the
+    rigid model); a clearance at A is refused in one line naming the field."""
+    from twin.drive import DriveReference
+    from twin.errors import ConfigError
+    from twin.reference.engine import ReferenceEngine
+    from twin.simulation import simulate_run
+
+    base = preset(12).replace(**{"simulation.engine": "reference", "simulation.duration_s": 0.01,
+                                 "structure.mode": "flexible"})
+    run = simulate_run(base.replace(**{"drive.mode": "motor", "sensors.channels": ["accel", "crank", "motor"]}))
+    assert "motor_speed" in run.channels
+    assert all(np.all(np.isfinite(ch.data)) for ch in run.channels.values())
+    cfg = base.replace(**{"drive.mode": "prescribed", "sensors.channels": ["accel", "crank", "drive"]})
+    run = simulate_run(cfg)
+    th, _ = DriveReference(cfg)(np.arange(run.channels["crank_angle"].data.size) / cfg.sensors.output_rate_hz)
+    assert np.max(np.abs(run.channels["crank_angle"].data - th)) < 1e-9
+    assert all(np.all(np.isfinite(ch.data)) for ch in run.channels.values())
+    with pytest.raises(ConfigError, match=r"^structure\.mode: .*joints\.clearance_a_mm = 0"):
+        ReferenceEngine(base.replace(**{"joints.clearance_a_mm": 0.1}))
+    with pytest.raises(ConfigError, match=r"^sensors\.channels: the optional group 'drive_energy'"):
+        ReferenceEngine(base.replace(**{"drive.mode": "motor", "sensors.channels": ["accel", "drive_energy"]}))

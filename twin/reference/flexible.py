@@ -31,10 +31,13 @@ independent, with the guide's mass, spring and damper; the slider's weight is ca
 accelerometers on the rod read their segment (rigid): p̈ = ä + ξ ü + η R₉₀ ü along the segment's axes; the
 mount filter (:class:`twin.structure.MountFilter`) is applied to the sampled channels.
 
-Where it differs from the rigid model's conventions: the friction at the bores B and C uses the chord's angular
-velocity (C − B') for the eye's spin (the rigid model's), not the end segment's (a difference of the rod's
-deformation rate, µrad/s scale); the contact stiffnesses are resolved with the rigid rod's effective mass.
-Scope: crank PID drive ("pid"), symplectic Euler, clearances at B and C (A and the guide ideal).
+Clearance joints: the contact force on the rod acts on the eye's centre (B' or C), its friction moment −R_b f_T on
+the end segment (the rigid model spreads a force on the rod over B' and C, which on a flexible rod would add a
+spurious axial pair R_b f_N / L). Where it differs from the rigid model's conventions: the friction's sliding speed
+uses the chord's angular velocity (C − B') for the eye's spin, not the end segment's (a difference of the rod's
+deformation rate); the contact stiffnesses are resolved with the rigid rod's effective mass.
+Scope: every drive (crank PID, prescribed crank, motor and torque through the drive train), symplectic Euler,
+clearances at B and C (A and the guide ideal).
 """
 
 from __future__ import annotations
@@ -47,11 +50,11 @@ import numpy as np
 from twin.jit import njit
 from twin.natural_coordinates import (N_Q, N_Z, P_CLR_B, P_CLR_C, P_DOFF, P_FGUIDE, P_GX, P_GY, P_H, P_IMAX,
                                       P_KI, P_KP, P_KV, P_L, P_M1, P_M2, P_M3, P_NEWTON_MAXIT, P_NEWTON_TOL,
-                                      P_OUT_ENERGY, P_R, P_SENS, P_V0, P_V1, P_XG1, P_XG2, S_I, S_IN_A, S_IN_B,
+                                      P_OUT_ENERGY, P_R, P_RBUSH_B, P_RBUSH_C, P_SENS, P_V0, P_V1, P_XG1, P_XG2, S_I, S_IN_A, S_IN_B,
                                       S_IN_C, S_Q, S_QD, S_VIMP_A, S_VIMP_B, S_VIMP_C, energy, independent_rows,
                                       kinetic_energy, mass_times, quadratic_terms, residual, solve_aug)
 from twin.reference.model import (N_OUT, NEWTON_FAILED, NOT_FINITE, O_ACC, O_EKIN, O_EPOT, OK, _cholesky_solve,
-                                  _outputs, generalized_forces)
+                                  _outputs, _rod_force, generalized_forces)
 from twin.reference import drivetrain as DT
 from twin.reference.guide import N_GUIDE_OUT
 
@@ -343,6 +346,26 @@ def _moment(q, a, b, m, Q):
 
 
 @njit(cache=True)
+def _eye_contact(P, qs, q, jo, eye, rb, a, b, Q):
+    """Move a clearance joint's contact force on the rod from the rigid rod's distribution over B' and C
+    (:func:`twin.reference.model._rod_force`, which the joint's element applied) to the eye it acts on: the force at
+    the eye's centre (index ``eye``: 2 for B', 4 for C) and its moment about it, −R_b f_T, on the end segment a→b
+    (the housing turns with it)."""
+    ex, ey = jo[0], jo[1]
+    d = math.sqrt(ex * ex + ey * ey)
+    if d > 0.0:
+        nx, ny = ex / d, ey / d
+    else:
+        nx, ny = 1.0, 0.0
+    fx = -jo[3] * nx - jo[4] * ny      # on the pin: −f_N n + f_T t, t = (−n_y, n_x)
+    fy = -jo[3] * ny + jo[4] * nx
+    _rod_force(P, qs, fx, fy, qs[eye] + rb * nx, qs[eye + 1] + rb * ny, Q)   # undoes the element's −F
+    Q[eye] -= fx
+    Q[eye + 1] -= fy
+    _moment(q, a, b, -rb * jo[4], Q)
+
+
+@njit(cache=True)
 def chain_forces(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G, Q):
     """Add the chain's gravity, hinges and slides and the supports' springs and dampers to Q; returns the power
     the dampers dissipate [W] (≥ 0)."""
@@ -524,8 +547,11 @@ def flex_project(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, res, dq, b
 
 @njit(cache=True)
 def flex_accelerations(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, Q, rows, nz, Rt, S, Mb, rhs, MR,
-                       b, tmp, qdd):
-    """q̈ = R z̈ + Ṙż from Rᵀ M R z̈ = Rᵀ (Q − M Ṙż), A already factored at q. False if not SPD."""
+                       b, tmp, qdd, prescribed, alpha, tau):
+    """q̈ = R z̈ + Ṙż from Rᵀ M R z̈ = Rᵀ (Q − M Ṙż), A already factored at q. False if not SPD. With
+    ``prescribed`` the crank angle is a driving constraint (θ̈ = ``alpha``, the first independent coordinate):
+    the other rows are solved with it known and the drive torque (its multiplier) written to ``tau[0]``, as
+    :func:`twin.reference.model.accelerations_prescribed`."""
     n = q.shape[0]
     s, c = math.sin(q[7]), math.cos(q[7])
     for j in range(nz):
@@ -554,7 +580,24 @@ def flex_accelerations(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, Q, r
                 acc += Rt[i, k] * MR[j, k]
             Mb[i, j] = acc
             Mb[j, i] = acc
-    if not _cholesky_solve(Mb, rhs, nz):
+    if prescribed:
+        m = nz - 1
+        W = np.empty((m, m))
+        rw = np.empty(m)
+        for i in range(m):
+            rw[i] = rhs[i + 1] - Mb[i + 1, 0] * alpha
+            for j in range(m):
+                W[i, j] = Mb[i + 1, j + 1]
+        if not _cholesky_solve(W, rw, m):
+            return False
+        t = Mb[0, 0] * alpha - rhs[0]
+        for j in range(m):
+            t += Mb[0, j + 1] * rw[j]
+        tau[0] = t
+        rhs[0] = alpha
+        for j in range(m):
+            rhs[j + 1] = rw[j]
+    elif not _cholesky_solve(Mb, rhs, nz):
         return False
     for i in range(n):
         acc = S[i]
@@ -604,13 +647,16 @@ def _slider_sensors(P, qdd, sens, row):
 
 @njit(cache=True, nogil=True)
 def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sens, st, x, theta_ref, omega_ref,
-                 stride, out, want_out, D, ds, setpoint, dout):
+                 stride, out, want_out, D, ds, setpoint, dout, alpha_ref):
     """Integrate ``len(theta_ref)`` steps of the flexible bench from the rigid state ``st`` (PID integral,
     contact events; its q, q̇ unused) and the full coordinates ``x`` = [q (n), q̇ (n), dissipated energy]
     (updated in place). Crank PID drive, or with ``D`` non-empty the drive train (:mod:`twin.reference.drivetrain`,
     state ``ds``, ``setpoint[k]`` the step's speed set point or motor torque, ``dout`` its sample rows) as
     :func:`twin.reference.model.run_motor`; symplectic Euler with projection, the same sampling as
-    :func:`twin.reference.model.run_steps`. Returns (status, steps done)."""
+    :func:`twin.reference.model.run_steps`. With ``alpha_ref`` non-empty the crank angle is prescribed as
+    :func:`twin.reference.model.run_prescribed` does (``theta_ref``, ``omega_ref`` hold the program at t_0 … t_n,
+    ``alpha_ref`` its acceleration at t_0 … t_{n−1}; the drive torque goes to the torque column). Returns
+    (status, steps done)."""
     n = (x.shape[0] - 1) // 2
     nc = n - N_Q
     h = P[P_H]
@@ -653,7 +699,9 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
     LU = np.empty((nc, nc))
     piv = np.empty(nc, dtype=np.int64)
     motor = D.shape[0] > 0
-    nsteps = setpoint.shape[0] if motor else theta_ref.shape[0]
+    prescribed = alpha_ref.shape[0] > 0
+    nsteps = setpoint.shape[0] if motor else (alpha_ref.shape[0] if prescribed else theta_ref.shape[0])
+    tau_p = np.zeros(1)
     dtmp = np.empty(3)
     Qb = np.empty(N_Q)
     qd0 = np.empty(N_Q)
@@ -666,6 +714,9 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
         if motor:   # drive-train hook: the belt's torque on the crank
             err = 0.0
             tau = DT.begin_step(D, ds, qd[7], setpoint[k], dtmp)
+        elif prescribed:
+            err = 0.0
+            tau = 0.0
         else:
             err = theta_ref[k] - q[7]
             tau = kp * err + kv * (omega_ref[k] - qd[7]) + ki * integ
@@ -679,6 +730,12 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
             qs[5] -= q[10]
             qds[5] -= qd[10]
         generalized_forces(P, qs, qds, tau, cst_a, cst_b, cst_c, Q[:N_Q], ja, jb, jc)
+        # the contact forces on the rod act on its eyes (end_B, end_C), not spread as on a rigid rod
+        if P[P_CLR_B] > 0.5 and jb[3] > 0.0:
+            _eye_contact(P, qs, q, jb, 2, P[P_RBUSH_B], segs[0, 0], segs[0, 1], Q)
+        if P[P_CLR_C] > 0.5 and jc[3] > 0.0:
+            last = segs.shape[0] - 1
+            _eye_contact(P, qs, q, jc, 4, P[P_RBUSH_C], segs[last, 0], segs[last, 1], Q)
         if shift and jc[3] > 0.0:   # the contact's normal component on the pin, which the ideal guide took, moves it
             ex, ey = jc[0], jc[1]
             d = math.sqrt(ex * ex + ey * ey)
@@ -691,9 +748,11 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
             status = NOT_FINITE
             break
         if not flex_accelerations(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, Q, rows, nz, Rt, S, Mb, rhs,
-                                  MR, b, tmp, qdd):
+                                  MR, b, tmp, qdd, prescribed, alpha_ref[k] if prescribed else 0.0, tau_p):
             status = NOT_FINITE
             break
+        if prescribed:
+            tau = tau_p[0]
         if want_out and k % stride == 0:
             row = out[k // stride]
             _outputs(P, q[:N_Q], qd[:N_Q], qdd[:N_Q], tau, ja, jb, jc, row)
@@ -722,6 +781,9 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
         for i in range(n):
             qd[i] += h * qdd[i]
             q[i] += h * qd[i]
+        if prescribed:   # the driving constraint: θ and θ̇ are the program's at t_{k+1}
+            q[7] = theta_ref[k + 1]
+            qd[7] = omega_ref[k + 1]
         if flex_project(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, res, dq, b, tmp) < 0:
             status = NEWTON_FAILED
             k += 1
@@ -824,9 +886,10 @@ class FlexibleRun:
         self.mounts.reset()
 
     def run(self, st: np.ndarray, theta_ref: np.ndarray, omega_ref: np.ndarray, stride: int, buf: np.ndarray,
-            train=None, k0: int = 0):
+            train=None, k0: int = 0, alpha_ref: np.ndarray | None = None):
         """One chunk; ``train`` the run's :class:`twin.reference.drivetrain_run.ReferenceTrain` (motor or torque
-        drive; ``k0`` the chunk's first step) or None (crank PID)."""
+        drive; ``k0`` the chunk's first step) or None (crank PID, or the prescribed crank with ``alpha_ref``: then
+        ``theta_ref`` and ``omega_ref`` hold one more value, the program at the chunk's end)."""
         lay = self.layout
         if train is not None:
             n_out = buf.shape[0]
@@ -837,7 +900,7 @@ class FlexibleRun:
             dbuf = np.empty((0, 1))
         return run_flexible(self.P, lay.G, lay.segs, lay.seg_f, lay.hinges, lay.hinge_f, lay.slides, lay.slide_f,
                             lay.indep, lay.sensors, st, self.x, theta_ref, omega_ref, stride, buf, True, D, ds, sp,
-                            dbuf)
+                            dbuf, np.empty(0) if alpha_ref is None else alpha_ref)
 
 
 def tap_response(cfg, speed_mps: float = 0.01, duration_s: float = 0.2, every: int = 5, theta0: float = 0.3,
