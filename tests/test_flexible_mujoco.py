@@ -240,10 +240,9 @@ def test_simulate_test6_flexible_runs_in_both_engines(engine, tmp_path, capsys):
 @pytest.mark.xfail(strict=True, reason=(
     "known gap (analysis/results/structure/agreement.md): the reference's explicit impact-speed damping at the "
     "bores is unbounded and, on the flexible rod's 0.75 kg housing at B, oscillates at the step's Nyquist rate "
-    "(fn_B spectrum peaks at 50 kHz; MuJoCo's force path bounds c h by the pair's effective mass), up to 44 dB "
-    "in AC1/AC2 at 8-10 kHz on test 12; the reference takes the bores' friction slip from the chord's spin, "
-    "MuJoCo from the housing's (AC2/AC3 up to 10 dB on test 6); on test 3 AC5 differs by 2.2 dB at 10 kHz "
-    "(MuJoCo's ideal C is a soft connect of time constant 2 steps: a likely cause, not verified)"))
+    "(fn_B spectrum peaks at 50 kHz; MuJoCo's force path bounds c h by the pair's effective mass): AC1/AC2 up to "
+    "21 dB at 10 kHz on test 12; test 6 within 1.6 dB (not 1); test 3's AC5 2.2 dB at 10 kHz (MuJoCo's ideal C "
+    "is a soft connect of time constant 2 steps: a likely cause, not verified)"))
 @pytest.mark.parametrize("test", [3, 6, 12])
 def test_engines_agree_on_third_octave_band_energies(test):
     """The issue's engine agreement: AC1-AC6 third-octave band energies, 100 Hz - 10 kHz, within 1 dB between
