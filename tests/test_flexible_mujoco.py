@@ -349,3 +349,29 @@ def test_engines_tap_ring_at_the_same_in_situ_mode(axial, band):
     t_m, w_m = _mujoco_tap(cfg, 0.01, dur, every, 0.3, axial=axial)
     f_r, f_m = _ringing_hz(t_r, w_r, *band), _ringing_hz(t_m, w_m, *band)
     assert f_m == pytest.approx(f_r, rel=0.01), (f_m, f_r)
+
+
+def test_view_draws_the_rod_bent_by_its_deflection(tmp_path):
+    """The rerun view of a flexible run: /bench/rod/bent is the centre line from B' (0, 0) to C (L + M·stretch, 0)
+    with the mid-span point at M·rod_deflection of the pose's sample (M = ROD_DEFLECTION_MAGNIFICATION)."""
+    from test_view import read_rrd
+    from twin.viz.writer import ROD_DEFLECTION_MAGNIFICATION as M, ROD_LINE_POINTS
+
+    from twin.mcapfile import read_run
+    from twin.cli import main
+
+    out, rrd = tmp_path / "f.mcap", tmp_path / "f.rrd"
+    assert main(["simulate", "--test", "6", "--structure", "flexible", "--duration", "0.05", "--out", str(out),
+                 "--rerun", str(rrd), "--no-progress"]) == 0
+    run = read_run(out)
+    ent = read_rrd(rrd)["/bench/rod/bent"]
+    strips = ent["LineStrips3D:strips"]
+    assert len(strips) > 10
+    k = len(strips) // 2
+    pts = np.array(strips[k][0])
+    assert pts.shape == (ROD_LINE_POINTS, 3)
+    i = int(round(ent["time"][k] * 1e-9 * run.rate_hz))
+    L = run.config.bodies.rod.length_m
+    assert pts[0, :2] == pytest.approx([0.0, 0.0], abs=1e-12)
+    assert pts[-1, 0] == pytest.approx(L + M * run["rod_stretch"][i], rel=1e-6)
+    assert pts[ROD_LINE_POINTS // 2, 1] == pytest.approx(M * run["rod_deflection"][i], rel=1e-5)
