@@ -83,7 +83,7 @@ class _Parser(argparse.ArgumentParser):
 
 #: configuration options, by what they describe (``add_config_args(p, options=...)``)
 SELECT_OPTIONS = ("config", "test")
-MODEL_OPTIONS = ("clearance_b", "clearance_c", "clearance_a", "clearance_guide", "orientation", "set")
+MODEL_OPTIONS = ("clearance_b", "clearance_c", "clearance_a", "clearance_guide", "orientation", "structure", "set")
 DRIVE_OPTIONS = ("speed", "protocol", "trace")
 RUN_OPTIONS = ("duration", "timestep", "engine", "channels", "output_rate", "drive_mode")
 ALL_CONFIG_OPTIONS = SELECT_OPTIONS + MODEL_OPTIONS + DRIVE_OPTIONS + RUN_OPTIONS
@@ -128,6 +128,13 @@ def add_config_args(p: argparse.ArgumentParser, options: Sequence[str] = ALL_CON
                             "between its rails (joints.clearance_guide_mm); 0 = the preloaded ideal guide")
     if "orientation" in has:
         g.add_argument("--orientation", choices=ORIENTATIONS, help="bench axis that points up")
+    if "structure" in has:
+        from twin.config import STRUCTURE_MODES
+
+        g.add_argument("--structure", choices=STRUCTURE_MODES,
+                       help="rigid (the default) or flexible: the connecting rod bends and stretches, the frame and "
+                            "the guide are sprung supports, the accelerometers sit on mounts ([structure] fields; "
+                            "the MuJoCo engine adds the channel group 'structure' unless --channels is given)")
     drive = [o for o in DRIVE_OPTIONS if o in has]
     sp = g.add_mutually_exclusive_group() if len(drive) > 1 else g
     if "speed" in has:
@@ -247,6 +254,8 @@ def config_from_args(args: argparse.Namespace) -> BenchConfig:
         ov["sensors.output_rate_hz"] = args.output_rate
     if _opt(args, "engine"):
         ov["simulation.engine"] = args.engine
+    if _opt(args, "structure") is not None:
+        ov["structure.mode"] = args.structure
     if _opt(args, "drive_mode") is not None:
         ov["drive.mode"] = args.drive_mode
         if args.drive_mode in ("motor", "torque") and _opt(args, "channels") is None \
@@ -273,6 +282,11 @@ def config_from_args(args: argparse.Namespace) -> BenchConfig:
                     raise ConfigError(f"--set {k}", f"does not apply to this command (it sets {r.rstrip('.')} "
                                                     "itself or does not use it)")
             ov[k] = v
+    if (_opt(args, "structure") == "flexible" and _opt(args, "channels") is None
+            and ov.get("simulation.engine", cfg.simulation.engine) == "mujoco"):
+        groups = list(ov.get("sensors.channels", cfg.sensors.channels))
+        if "structure" not in groups:  # the flexible structure's channels (MuJoCo engine)
+            ov["sensors.channels"] = groups + ["structure"]
     if ov.get("drive.mode", cfg.drive.mode) == "torque":  # the torque drive follows its torque program, no speed
         # program: the configuration refuses drive.program/motor speed too; here the flag that set it is named
         for flag, given in (("--speed", _opt(args, "speed")), ("--protocol", _opt(args, "protocol") or None),

@@ -122,6 +122,13 @@ def _print_summary(s: dict, out: Path | None) -> None:
     acc = [f"{a} {s[a]['rms_mps2']:.1f}/{s[a]['peak_mps2']:.0f}" for a in ("AC1", "AC2", "AC3", "AC4", "AC5", "AC6") if a in s]
     if acc:
         print("  accel rms/peak [m/s^2]: " + ", ".join(acc))
+    if "structure" in s:
+        st = s["structure"]
+        line = f"  structure: flexible, rod modes {st['first_bending_hz']:.0f} Hz (bending), {st['first_axial_hz']:.0f} Hz (axial)"
+        if st.get("max_rod_deflection_m") is not None:
+            line += (f"; max rod deflection {st['max_rod_deflection_m'] * 1e6:.2f} um, stretch "
+                     f"{st['max_rod_stretch_m'] * 1e6:.2f} um")
+        print(line)
     if "drive_train" in s:
         dt = s["drive_train"]
         over = " (above the continuous rating)" if dt["rms_exceeds_continuous"] else ""

@@ -123,6 +123,9 @@ def register_stability(studies: argparse._SubParsersAction) -> None:
                    help="the whole bench: also draw the slider guide's clearance and the drive (crank PID or the "
                         "motor with its V-belt, the drive train's parameters over their ranges), and run every "
                         "scene in both engines (one row each)")
+    p.add_argument("--structure", action="store_true",
+                   help="every scene with the flexible structure (flexible rod, sprung frame and guide, sensor mounts), "
+                        "its placeholders drawn over their documented ranges, in both engines (one row each)")
     p.add_argument("--family", choices=("bench", "spatial"), default="bench",
                    help="scene family: the bench's planar twin (default) or S002's spatial mechanism in both engines")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -137,8 +140,8 @@ def _run_stability(args: argparse.Namespace) -> int:
 
     settings = (quick(args.scenes, args.seed, args.bench) if args.quick
                 else StudySettings(scenes=args.scenes, seed=args.seed, bench=args.bench))
-    if args.family != "bench":
-        settings = dataclasses.replace(settings, family=args.family)
+    if args.family != "bench" or args.structure:
+        settings = dataclasses.replace(settings, family=args.family, structure=args.structure)
     out = check_output_dir(args.out)
     res = run_study(settings, out=out, progress=not args.no_progress,
                     log=lambda m: print(m, file=sys.stderr, flush=True))

@@ -17,6 +17,7 @@ from twin.config.engines import MujocoSettings, Simulation
 from twin.config.mechanism import Bodies, Contact, Joints, Materials, Mechanism, ln_stiffness
 from twin.config.sensors import Instrumentation, Sensors
 from twin.config.spatial import Spatial, check_spatial
+from twin.config.structure import StructureConfig
 from twin.errors import ConfigError
 
 
@@ -38,6 +39,7 @@ class BenchConfig:
     instrumentation: Instrumentation = field(default_factory=Instrumentation)
     drivetrain: Drivetrain = Drivetrain()
     spatial: Spatial = Spatial()
+    structure: StructureConfig = StructureConfig()
 
     def __post_init__(self) -> None:
 
@@ -104,6 +106,13 @@ class BenchConfig:
                 raise ConfigError("sensors.channels",
                                   f"the optional group {group!r} is produced by the {' and '.join(engines)} engine "
                                   f"only; remove it for simulation.engine = {sim.engine!r}")
+        if "structure" in sen.channels and not self.structure.flexible:
+            raise ConfigError("sensors.channels", "the optional group 'structure' is produced by the flexible structure "
+                              "only (structure.mode = \"flexible\"); remove it")
+        if self.structure.flexible:
+            from twin.structure.checks import check_structure
+
+            check_structure(self)
 
     # -- derived
     @property
@@ -132,7 +141,8 @@ class BenchConfig:
     def to_dict(self) -> dict[str, Any]:
         """Plain nested dict (tuples as lists), the TOML layout. The ``[drivetrain]`` table is left
         out while it holds the defaults and the drive does not use it (crank PID, prescribed), and the
-        ``[spatial]`` table while it holds the defaults (the planar bench), so that the text and
+        ``[spatial]`` table while it holds the defaults (the planar bench) and the ``[structure]`` table
+        while it holds the defaults (the rigid bench), so that the text and
         digest of such configurations are what they were before these tables existed."""
         out = _to_plain(self)
         joints = out.get("joints", {})
@@ -143,6 +153,8 @@ class BenchConfig:
             out.pop("drivetrain", None)
         if self.spatial == Spatial():  # the planar bench: no [spatial] table (same text and digest as before it)
             out.pop("spatial", None)
+        if self.structure == StructureConfig():  # rigid defaults: no [structure] table (same text and digest)
+            out.pop("structure", None)
         return out
 
     def to_toml(self) -> str:
@@ -230,6 +242,12 @@ def _check_options_used(cfg: BenchConfig) -> None:
             if getattr(j, name) != Joints.GUIDE_DEFAULTS[name]:
                 raise ConfigError(f"joints.{name}", "is used only with a guide clearance (joints.clearance_guide_mm "
                                   f"> 0); leave it out (default {Joints.GUIDE_DEFAULTS[name]!r}), got {getattr(j, name)!r}")
+    st = cfg.structure
+    if not st.flexible:
+        for f in dataclasses.fields(StructureConfig):
+            if f.name != "mode" and getattr(st, f.name) != f.default:
+                raise ConfigError(f"structure.{f.name}", "is used only by the flexible structure (structure.mode = "
+                                  f"\"flexible\"); leave it out (default {f.default!r}), got {getattr(st, f.name)!r}")
     if not sp.enabled:
         for f in dataclasses.fields(Spatial):
             if f.name != "enabled" and getattr(sp, f.name) != f.default:

@@ -51,9 +51,9 @@ import numpy as np
 
 from twin import names as mjcf_names
 from twin.config import JOINTS, BenchConfig
-from twin.errors import ModelError
+from twin.errors import ModelError, TwinError
 from twin.mujoco_engine.accel import posthoc_applies
-from twin.mujoco_engine import drivetrain
+from twin.mujoco_engine import drivetrain, flexible
 from twin.mujoco_engine import guide as guide_clearance
 from twin.mujoco_engine.collider import check_model, ensure_installed
 from twin.physics.mujoco_params import ContactSetting, contact_setting, native_law_applies, prescribed_armature
@@ -116,8 +116,14 @@ def _set_inertial(body: mujoco.MjsBody, mass: float, ipos, izz: float) -> None:
 def build_spec(cfg: BenchConfig) -> mujoco.MjSpec:
     """Edited (uncompiled) spec of the configuration; contact pairs without final solref."""
     try:
-        spec = mujoco.MjSpec.from_file(str(mjcf_names.BASE_XML))
+        if flexible.applies(cfg):  # the flexible structure's bodies nested into the base model
+            flexible.check(cfg)
+            spec = mujoco.MjSpec.from_string(flexible.flexible_xml(cfg))
+        else:
+            spec = mujoco.MjSpec.from_file(str(mjcf_names.BASE_XML))
     except Exception as err:  # mujoco raises ValueError with the parser message
+        if isinstance(err, TwinError):
+            raise
         raise ModelError(f"cannot load base model {mjcf_names.BASE_XML}: {err}") from None
     spec.modelname = f"slider_crank_bench_{cfg.name}"
     b, j, mech = cfg.bodies, cfg.joints, cfg.mechanism
@@ -258,6 +264,8 @@ def build_spec(cfg: BenchConfig) -> mujoco.MjSpec:
         guide_clearance.add_guide(spec, cfg)
     if drivetrain.applies(cfg):
         drivetrain.add_drive_train(spec, cfg)
+    if flexible.applies(cfg):
+        flexible.finish(spec, cfg)
     return spec
 
 
@@ -445,6 +453,8 @@ def export_xml(cfg: BenchConfig) -> str:
                if cfg.drive.mode in ("motor", "torque") else "")
             + " -->\n")
     xml = _exact_geom_user(spec.to_xml(), _model)
+    if flexible.applies(cfg):
+        xml = flexible.exact_structure_numbers(xml, _model)
     i = xml.find("<mujoco")
     return xml[:i] + head + xml[i:]
 

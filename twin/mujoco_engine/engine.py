@@ -103,9 +103,20 @@ class MujocoEngine:
         self._nstate = mujoco.mj_stateSize(self.model, _STATE)
         self._sens = np.empty((1, 0, self.model.nsensordata))
         # accelerometers from the recorded state (mujoco.accelerometers = "posthoc", Euler)
-        self._accel = PosthocAccelerometers(self.model) if posthoc else None
+        self._accel = None
+        if posthoc:  # the flexible structure's tree: the generic planar recursion (twin.mujoco_engine.accel_tree)
+            from twin.mujoco_engine.accel_tree import TreeAccelerometers
+
+            self._accel = (TreeAccelerometers if cfg.structure.flexible else PosthocAccelerometers)(self.model)
         self._states = np.empty((1, 0, self._nstate))
         self._k = 0  # integration steps taken since reset
+        self._mount = None
+        if cfg.structure.flexible and "accel" in cfg.sensors.channels:
+            # the accelerometers' mounts (twin.structure.mount), on the sampled readings
+            from twin.structure import MountFilter
+
+            st = cfg.structure
+            self._mount = MountFilter(st.mount_frequency_hz, st.mount_damping_ratio, cfg.output_rate_hz)
         self._drive = None
         if cfg.drive.mode == "prescribed":
             from twin.drive import DriveReference
@@ -160,17 +171,25 @@ class MujocoEngine:
             d.qvel[m.jnt_dofadr[m.joint(names.SLIDER_SLIDE).id]] = xd
         mujoco.mj_forward(m, d)
         self._k = 0
+        if self._mount is not None:
+            self._mount.reset()
 
     def snapshot(self) -> tuple[int, np.ndarray]:
         """The scene's whole state: (integration steps since reset, ``mjSTATE_INTEGRATION`` vector
         including the warmstart and the stored impact speeds in ``mjData.userdata``)."""
         state = np.empty(mujoco.mj_stateSize(self.model, _SCENE_STATE))
         mujoco.mj_getState(self.model, self.data, state, _SCENE_STATE)
+        if self._mount is not None:  # the flexible structure's sensor mounts: their filter state too
+            zi = self._mount._zi  # MountFilter's lfilter state (None before the first chunk)
+            return self._k, state, None if zi is None else zi.copy()
         return self._k, state
 
     def restore(self, snap: tuple[int, np.ndarray]) -> None:
         """Continue from :meth:`snapshot` of an engine of the same configuration (this one or another)."""
-        k, state = snap
+        k, state = snap[0], snap[1]
+        if self._mount is not None:
+            zi = snap[2] if len(snap) > 2 else None
+            self._mount._zi = None if zi is None else np.array(zi, dtype=np.float64)
         if len(state) != mujoco.mj_stateSize(self.model, _SCENE_STATE):
             raise ValueError(f"{self.cfg.name}: the snapshot is of a model with another state size")
         # no mj_forward: the next rollout recomputes everything from this state (a forward pass
@@ -298,6 +317,14 @@ class MujocoEngine:
             for i, a in enumerate(names.ACCEL_SENSORS):
                 # site x axis = sensitive axis; posthoc: rows of the readings computed from the state
                 out[a] = col(a, 0) if accel is None else accel[i]
+            if self._mount is not None:  # flexible structure: what the sensors on their mounts feel
+                filtered = self._mount.process(np.stack([out[a] for a in names.ACCEL_SENSORS], axis=1))
+                for i, a in enumerate(names.ACCEL_SENSORS):
+                    out[a] = filtered[:, i]
+        if "structure" in groups:
+            from twin.mujoco_engine.flexible import structure_channels
+
+            out.update(structure_channels(col, cfg.bodies.rod.length_m))
         if "encoder" in groups or "crank" in groups:
             out["crank_angle"] = col(names.SENSOR_CRANK_ANGLE)
         if "crank" in groups:

@@ -58,6 +58,16 @@ class ReferenceTrain:
         self._last = (k0, n_out, stride)
         return ref_model.run_motor(P, self.D, st, self.ds, sp, stride, buf, self._dbuf, True)
 
+    def chunk_inputs(self, k0: int, omega_ref, stride: int, n_out: int):
+        """(set points, sample buffer) of a chunk of ``len(omega_ref)`` steps from step ``k0`` (the flexible
+        structure's loop, :mod:`twin.reference.flexible`, calls the drive train's hooks itself)."""
+        from twin.motor_drive import motor_input
+
+        if self._dbuf.shape[0] < n_out:
+            self._dbuf = np.empty((n_out, DT.N_DO))
+        self._last = (k0, n_out, stride)
+        return motor_input(self.cfg, k0, len(omega_ref), omega_ref), self._dbuf
+
     def channels(self, n: int) -> dict[str, np.ndarray]:
         from twin.motor_drive import command_voltage
 

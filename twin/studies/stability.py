@@ -122,6 +122,10 @@ class StudySettings:
             engines (:mod:`twin.studies.stability_bench`).
         family: "bench" (the planar twin's scenes, this module) or "spatial" (S002's mechanism in both
             engines, :mod:`twin.studies.spatial_stability`).
+        structure: every scene with the flexible structure (``structure.mode = "flexible"``), its placeholders
+            drawn uniformly over their documented ranges (:data:`twin.config.structure.EXPLORE_RANGES`) from the
+            scene's own generator ``default_rng([seed, index, 43])`` (the other draws stay those of the rigid
+            campaign), and run in both engines (one row each).
     """
 
     scenes: int = 500
@@ -129,6 +133,7 @@ class StudySettings:
     duration_range_s: tuple[float, float] = (0.5, 3.0)
     bench: bool = False
     family: str = "bench"
+    structure: bool = False
 
     def __post_init__(self) -> None:
         if isinstance(self.scenes, bool) or not isinstance(self.scenes, int) or self.scenes < 1:
@@ -137,6 +142,10 @@ class StudySettings:
             raise ConfigError("seed", f"must be an integer >= 0, got {self.seed!r}")
         if self.family not in ("bench", "spatial"):
             raise ConfigError("family", f"must be bench or spatial, got {self.family!r}")
+        if self.structure and (self.bench or self.family != "bench"):
+            raise ConfigError("structure", "draws the flexible structure on the planar twin's plain scenes; it "
+                              "cannot be combined with bench (guide clearance and motor drive are not available "
+                              "with the flexible structure) or the spatial family")
 
 
 def quick(scenes: int = 20, seed: int = 1, bench: bool = False) -> StudySettings:
@@ -146,7 +155,7 @@ def quick(scenes: int = 20, seed: int = 1, bench: bool = False) -> StudySettings
 
 # ----------------------------------------------------------------------- sampler
 def sample_scene(seed: int, index: int, duration_range_s: tuple[float, float] = (0.5, 3.0),
-                 bench: bool = False) -> dict[str, Any]:
+                 bench: bool = False, structure: bool = False) -> dict[str, Any]:
     """Parameters of scene ``index`` of seed ``seed`` (JSON-ready; see module docstring); with
     ``bench`` the whole-bench draws follow (:func:`twin.studies.stability_bench.bench_draws`).
 
@@ -193,7 +202,29 @@ def sample_scene(seed: int, index: int, duration_range_s: tuple[float, float] = 
              "contact_stiffness_scale": ks, "contact_damping_scale": cs, "duration_s": duration, "settle_s": settle}
     if bench:
         scene.update(bench_draws(rng))
+    if structure:
+        scene["structure"] = structure_draws(seed, index, timestep)
     return scene
+
+
+def structure_draws(seed: int, index: int, timestep_s: float) -> dict[str, float]:
+    """The flexible structure's placeholders of a scene, uniform over their documented ranges, from the scene's own
+    generator; a draw the configuration refuses at this timestep (a mount at or above half the output rate, a mode
+    beyond the explicit step's stability margin) is drawn again (at most 100 times), so every scene is one a user
+    could run."""
+    from twin.config.structure import EXPLORE_RANGES
+
+    srng = np.random.default_rng([seed, index, 43])
+    rate = min(100_000.0, 1.0 / timestep_s)
+    for _ in range(100):
+        draw = {field: float(f"{srng.uniform(lo, hi):.6g}") for _, field, _, (lo, hi) in EXPLORE_RANGES}
+        try:
+            preset(1).replace(**{"structure.mode": "flexible", "simulation.timestep_s": timestep_s,
+                                 "sensors.output_rate_hz": rate, **{f"structure.{k}": v for k, v in draw.items()}})
+        except ConfigError:
+            continue
+        return draw
+    raise TwinError(f"stability scene {index} (seed {seed}): no runnable structure in 100 draws at h = {timestep_s:g} s")
 
 
 def startstop_trace(scene: dict[str, Any], belt_ratio: float) -> tuple[np.ndarray, np.ndarray]:
@@ -255,6 +286,9 @@ def scene_config(scene: dict[str, Any], trace_dir: Path | None = None) -> BenchC
             t, angle = startstop_trace(scene, base.drive.belt_ratio)
             np.savez(path, t=t, angle=angle)
         ov.update({"drive.program": "trace", "drive.trace_file": str(path)})
+    if "structure" in scene:  # the flexible structure (StudySettings.structure), in the scene's engine
+        ov.update({"structure.mode": "flexible", "simulation.engine": scene.get("engine", "mujoco"),
+                   **{f"structure.{k}": v for k, v in scene["structure"].items()}})
     if "drive_mode" in scene:
         ov.update(bench_overrides(scene))
         if scene["drive_mode"] == "motor":
@@ -471,9 +505,9 @@ def run_study(settings: StudySettings, *, out: str | Path | None = None, progres
 
         scenes = [sample_spatial(settings.seed, i, settings.duration_range_s) for i in range(settings.scenes)]
     else:
-        scenes = [sample_scene(settings.seed, i, settings.duration_range_s, settings.bench)
+        scenes = [sample_scene(settings.seed, i, settings.duration_range_s, settings.bench, settings.structure)
                   for i in range(settings.scenes)]
-        if settings.bench:  # every bench scene in both engines: one row each
+        if settings.bench or settings.structure:  # every bench or structure scene in both engines: one row each
             scenes = [{**sc, "engine": e} for sc in scenes for e in ENGINES]
     rows = []
     t0 = time.perf_counter()
@@ -493,7 +527,8 @@ def run_study(settings: StudySettings, *, out: str | Path | None = None, progres
     finally:
         if bar is not None:
             bar.close()
-    res = StabilityResult({**asdict(settings), "pen_limit": PEN_LIMIT, "energy_tol": ENERGY_TOL},
+    kept = {k: v for k, v in asdict(settings).items() if k != "structure" or v}  # rigid campaigns: as before
+    res = StabilityResult({**kept, "pen_limit": PEN_LIMIT, "energy_tol": ENERGY_TOL},
                           summarize(rows, time.perf_counter() - t0), rows)
     if out is not None:
         out = Path(out)
