@@ -190,30 +190,6 @@ def test_train_takes_its_options_as_one_value():
         train("nowhere", interval_folds="speed")  # the options are no keyword arguments of train()
 
 
-# ------------------------------------------------------------------ layering
-def test_the_api_and_the_identification_library_import_nothing_of_the_command_line():
-    """``twin.api`` and every module of ``twin.identification`` reach no module of ``twin.commands`` (nor
-    ``twin.cli``) through their imports, at module level or inside functions (the import graph read with ast)."""
-    from test_import_graph import import_graph
-
-    graph = import_graph()
-
-    def reach(start: str) -> set[str]:
-        seen, stack = set(), [start]
-        while stack:
-            for n in graph.get(stack.pop(), ()):
-                if n not in seen:
-                    seen.add(n)
-                    stack.append(n)
-        return seen
-
-    starts = ["twin.api", "twin.replay_result", *(m for m in graph if m.startswith("twin.identification"))]
-    assert len(starts) >= 12
-    for m in starts:
-        cli = sorted(n for n in reach(m) if n == "twin.cli" or n.startswith("twin.commands"))
-        assert cli == [], (m, cli)
-
-
 def test_train_makes_the_tables_by_windows_when_asked_and_not_by_default(tmp_path):
     """``by_windows``: synthetic features (two windows per run, the first column log10 of B's clearance, the second
     C's): asked for, the model holds the half widths of answers from one window, calibrated on the out-of-fold runs'

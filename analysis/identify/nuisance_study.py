@@ -124,6 +124,7 @@ from twin.identification.intervals import (CATALOGUE_BANDS_MM, SIZE_BAND_MM, _ha
                                            catalogue_bands, fault_split_joints, recorded_size_bands)
 from twin.identification.model import ClearanceModel
 from twin.identification.training import TrainOptions, train
+from twin.provenance import stamped
 
 ROOT = Path(__file__).resolve().parents[2]
 OUT = ROOT / "analysis" / "results" / "identify" / "nuisance_dev.json"
@@ -334,7 +335,7 @@ def main() -> None:
             rep = evaluate(model, [work / d], ("train", "val", "test"), features=f)
             results[v][d] = figures(rep) | {"refused": len(rep["runs_left_out"])}
             print(v, d, json.dumps(results[v][d], default=float), flush=True)
-    OUT.write_text(json.dumps(results, indent=1, default=float) + "\n")
+    OUT.write_text(json.dumps(stamped(results), indent=1, default=float) + "\n")
     print(f"wrote {OUT}")
 
 
