@@ -146,7 +146,7 @@ def test_a_replay_results_dict_is_a_copy_and_optional_sections_appear_when_prese
 
 
 # ------------------------------------------------------------------ training options
-def test_train_options_defaults_are_the_shipped_models_settings():
+def test_train_options_defaults_are_what_train_has_always_used():
     from twin.identification.intervals import CATALOGUE_BANDS_MM, FAULT_SPLIT_JOINTS
     from twin.identification.training import ANSWER_HOP_REVS, TrainOptions
 

@@ -29,7 +29,8 @@ def recording_inputs(path: str | Path) -> tuple[dict[str, np.ndarray], np.ndarra
     if "encoder_counts" not in rec:
         raise IdentifyError(f"{path}: the recording has no encoder_counts channel")
     if info.calibration is None:
-        raise IdentifyError(f"{path}: no calibration data; re-import it with --calibration STATIC or --zero-g")
+        raise IdentifyError(f"{path}: no calibration data; import it again with a static recording in the "
+                            "calibration pose or the six sensors' known zero-g offsets")
     meas = measured_accel(rec, info.calibration)
     acc = {k[5:]: np.asarray(v.data) for k, v in meas.channels.items()}
     cfg = rec.config

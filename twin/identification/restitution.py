@@ -230,8 +230,8 @@ def sweep_restitution(path: str | Path, opts: SweepOptions = SweepOptions(), pro
         want = "the adams-impact law" if law == "adams-impact" else "a hysteresis law (restitution sets its damping)"
         raise ConfigError("contact.law", f"a {opts.parameter} sweep needs a clearance joint and {want} in the "
                                          f"recording's configuration; got law {cfg.contact.law!r}, clearance joints "
-                                         f"{list(cfg.joints.clearance_joints) or 'none'} (--set contact.law=... in "
-                                         "'twin import' records it)")
+                                         f"{list(cfg.joints.clearance_joints) or 'none'} (the recording's configuration "
+                                         "is set when it is imported)")
     n = rec.size
     i0 = int(round(opts.start_s * rate))
     if opts.stop_s > n / rate + 1e-9:
