@@ -194,3 +194,47 @@ def test_a_shared_run_feeds_each_configuration_what_its_own_run_gives():
     assert alone[0][1]["volt_AC1"].tobytes() != alone[1][1]["volt_AC1"].tobytes()  # the seeds differ
     with pytest.raises(ValueError, match="mechanical keys"):
         simulate_shared([cfg, other], [[], []])
+
+
+@pytest.mark.parametrize("engine", ["mujoco", "reference"])
+def test_a_dataset_with_warm_starts_is_the_same_bytes_as_without(engine, tmp_path):
+    from twin.dataset.generate import generate
+    from twin.dataset.spec import parse_spec
+
+    raw = {"dataset": {"name": "w", "seed": 3}, "base": {"test": 3, "duration_s": 0.03, "engine": engine},
+           "design": {"kind": "grid", "repeats": 3},
+           # the zero-g offsets are drawn per repeat (the sensor chain's): the repeats still share the engine run
+           "factors": {"fault": ["C", "BC"], "zero_g_spread_v": [0.02]}}
+    spec = parse_spec(raw)
+    cold = generate(spec, tmp_path / "cold", workers=2, scheduler="threads", progress=False, warm_start=False)
+    assert cold["generation"]["engine_runs_this_call"] == 6
+    # warm, in two calls (the second finishes the group the first left half done): 2 + 1 engine runs for 6 runs
+    first = generate(spec, tmp_path / "warm", workers=2, scheduler="threads", progress=False, limit=4)
+    rest = generate(spec, tmp_path / "warm", workers=2, scheduler="threads", progress=False)
+    assert (first["generation"]["engine_runs_this_call"], rest["generation"]["engine_runs_this_call"]) == (2, 1)
+    files = sorted(p.name for p in (tmp_path / "cold" / "data").iterdir())
+    assert len(files) == 6 and files == sorted(p.name for p in (tmp_path / "warm" / "data").iterdir())
+    for name in files:
+        assert (tmp_path / "cold" / "data" / name).read_bytes() == (tmp_path / "warm" / "data" / name).read_bytes(), name
+    results = [json.loads(p.read_text()) for p in (tmp_path / "warm" / "results").iterdir()]
+    assert all(r["status"] == "ok" for r in results)
+    assert sum(r["sim_wall_s"] > 0 for r in results) == 3  # the engine's time is on one run per engine run
+
+
+def test_repeats_with_their_own_mounting_do_not_share_an_engine_run(tmp_path):
+    from twin.dataset.design import plan
+    from twin.dataset.generate import Prepared, group_tasks
+    from twin.dataset.spec import parse_spec
+
+    spec = parse_spec({"dataset": {"name": "m", "seed": 3}, "base": {"test": 3, "duration_s": 0.03},
+                       "design": {"kind": "grid", "repeats": 2},
+                       # mounting offsets drawn per repeat move the accelerometers: the truth differs
+                       "factors": {"fault": ["C"], "mount_offset_m": [0.002], "noise_scale": [1.5]}})
+    runs = plan(spec)
+    p = Prepared(spec, tmp_path, runs, [], {}, {})
+    assert len(group_tasks(p, runs)) == 2
+    spec2 = parse_spec({"dataset": {"name": "m", "seed": 3}, "base": {"test": 3, "duration_s": 0.03},
+                        "design": {"kind": "grid", "repeats": 2}, "factors": {"fault": ["C"], "noise_scale": [1.5]}})
+    runs2 = plan(spec2)
+    tasks = group_tasks(Prepared(spec2, tmp_path, runs2, [], {}, {}), runs2)
+    assert len(tasks) == 1 and [m["run_id"] for m in tasks[0]["members"]] == [r.run_id for r in runs2]

@@ -36,6 +36,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "a running cluster (workers must see --out); Dask comes with the cluster extra: "
                         "pip install 'twin[cluster]'")
     g.add_argument("--limit", type=int, metavar="K", help="simulate at most K of the missing runs this time")
+    g.add_argument("--no-warm-start", action="store_true",
+                   help="simulate every run alone (default: the repeats of a design point, which differ in their "
+                        "sensor-noise seed only, share one engine run; the files are the same bytes either way)")
     g.add_argument("--no-progress", action="store_true", help="no progress bar")
     g.set_defaults(func=_generate)
 
@@ -72,7 +75,7 @@ def _generate(args: argparse.Namespace) -> int:
     spec = load_spec(spec_arg(args.spec))
     t = time.perf_counter()
     info = generate(spec, args.out, workers=resolve_workers(args.workers), scheduler=args.scheduler, limit=args.limit,
-                    progress=not args.no_progress and sys.stderr.isatty())
+                    progress=not args.no_progress and sys.stderr.isatty(), warm_start=not args.no_warm_start)
     g = info["generation"]
     on = {"processes": "worker processes", "threads": "threads"}.get(g["scheduler"], f"{g['scheduler']} workers")
     print(f"{args.out}: {g['runs_this_call']} runs simulated ({g['failed_this_call']} failed) on {g['workers']} "
