@@ -238,3 +238,16 @@ def test_repeats_with_their_own_mounting_do_not_share_an_engine_run(tmp_path):
     runs2 = plan(spec2)
     tasks = group_tasks(Prepared(spec2, tmp_path, runs2, [], {}, {}), runs2)
     assert len(tasks) == 1 and [m["run_id"] for m in tasks[0]["members"]] == [r.run_id for r in runs2]
+
+
+def test_the_plan_estimate_counts_one_engine_run_per_group():
+    from twin.dataset.design import plan
+    from twin.dataset.estimate import estimate_wall
+    from twin.dataset.spec import parse_spec
+
+    spec = parse_spec({"dataset": {"name": "e", "seed": 3}, "base": {"test": 3, "duration_s": 2.0},
+                       "design": {"kind": "grid", "repeats": 4}, "factors": {"fault": ["C"]}})
+    runs = plan(spec)
+    warm, cold = estimate_wall(spec, runs, 1), estimate_wall(spec, runs, 1, warm_start=False)
+    assert (warm["engine_runs"], cold["engine_runs"]) == (1, 4)
+    assert warm["wall_s"] < cold["wall_s"]

@@ -118,9 +118,10 @@ def _plan(args: argparse.Namespace) -> int:
         from twin.dataset.estimate import estimate_wall
 
         est = estimate_wall(spec, runs, workers)
+        shared = f"; {est['engine_runs']} engine runs, the repeats sharing theirs" if est["engine_runs"] < len(runs) else ""
         print(f"  estimated wall time on {workers} workers: {est['wall_s'] / 60:.1f} min "
               f"({est['per_sim_s']:.2f} s per simulated second per worker, measured on {est['probes']} short "
-              f"runs; {est['overhead_s']:.2f} s per run of set-up)")
+              f"runs; {est['overhead_s']:.2f} s per run of set-up{shared})")
     return 0
 
 
