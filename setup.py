@@ -2,7 +2,10 @@
 
 Metadata and dependencies are declared in pyproject.toml. The collider is compiled against the
 C headers shipped in the mujoco-core wheel (a build requirement), located without importing
-mujoco.
+mujoco. It does not link the MuJoCo library: at run time it calls the library the ``mujoco``
+module loaded (twin.mujoco_engine.collider), so a wheel of twin needs no MuJoCo library path.
+GCC and Clang compile it with ``-Wall -Wextra -Werror`` (a warning fails the build), MSVC with
+``/W3 /WX``.
 
 Layout: the packages under twin/, plus three folders of the repository installed as packages, so
 that their files ship in wheels and are found the same way in editable installs (with
@@ -23,11 +26,25 @@ import importlib.util
 import os
 
 from setuptools import Extension, find_namespace_packages, setup
+from setuptools.command.build_ext import build_ext
 
 spec = importlib.util.find_spec("mujoco")
 if spec is None or not spec.submodule_search_locations:
     raise RuntimeError("building twin needs mujoco-core (for its headers) in the build environment")
 include = os.path.join(list(spec.submodule_search_locations)[0], "include")
+
+#: warnings are errors in the native code, with each compiler's own flags
+WARNINGS = {"msvc": ["/W3", "/WX"]}
+WARNINGS_DEFAULT = ["-O2", "-Wall", "-Wextra", "-Werror"]
+
+
+class BuildExt(build_ext):
+    def build_extensions(self):
+        flags = WARNINGS.get(self.compiler.compiler_type, WARNINGS_DEFAULT)
+        for ext in self.extensions:
+            ext.extra_compile_args = list(ext.extra_compile_args or []) + flags
+        super().build_extensions()
+
 
 #: packages whose files live in a folder of the repository outside twin/ (see the docstring)
 MAPPED = {"twin.mjcf": "mjcf", "twin.sample_recordings": "recordings", "twin.dataset_specs": "analysis/datasets"}
@@ -46,9 +63,10 @@ setup(
         Extension(
             "twin.mujoco_engine._bore",
             sources=["twin/mujoco_engine/_bore.c", "twin/mujoco_engine/_socket.c"],
-            depends=["twin/mujoco_engine/_drivetrain.h"],
+            depends=["twin/mujoco_engine/_native.h", "twin/mujoco_engine/_guide.h",
+                     "twin/mujoco_engine/_drivetrain.h"],
             include_dirs=[include],
-            extra_compile_args=["-O2"],
         )
-    ]
+    ],
+    cmdclass={"build_ext": BuildExt},
 )

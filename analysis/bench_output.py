@@ -74,13 +74,13 @@ def make_sinks(kind: str, cfg, folder: Path) -> tuple[list, dict[str, Timed]]:
         t = Timed(RunWriter(folder / "run.mcap", cfg))
         return [t], {"sink": t}
     from twin.dataset.storage import ParquetRunWriter
-    from twin.dataset.worker import _INSTRUMENTED, _Instrument, column_specs
+    from twin.dataset.worker import INSTRUMENTED_CHANNELS, InstrumentSink, column_specs
 
-    inst = tuple(_INSTRUMENTED)
+    inst = tuple(INSTRUMENTED_CHANNELS)
     cols = column_specs(cfg, ("accel", "encoder", "joints"), inst, "auto")
     parquet = Timed(ParquetRunWriter(folder / "run.parquet", cols, "bench", {"name": cfg.name,
                                                                              "config_toml": cfg.to_toml()}))
-    outer = Timed(_Instrument(cfg, cols, parquet, inst))
+    outer = Timed(InstrumentSink(cfg, cols, parquet, inst))
     return [outer], {"sink": outer, "parquet": parquet}
 
 

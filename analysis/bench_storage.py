@@ -96,6 +96,8 @@ from typing import Any, Callable, Iterator
 
 import numpy as np
 
+from twin.provenance import stamped, with_stamp_line
+
 MB = 1e6
 WINDOW_CHANNELS = ("AC1", "AC5", "meas_AC1", "meas_AC6", "encoder_counts", "ecc_C_x")
 
@@ -1006,16 +1008,16 @@ def main() -> None:
         text = render(src, results, notes, checks, args, versions())
         print(text)
         if args.markdown:
-            Path(args.markdown).write_text(text)
+            Path(args.markdown).write_text(with_stamp_line(text))
         if args.json:
-            Path(args.json).write_text(json.dumps({
+            Path(args.json).write_text(json.dumps(stamped({
                 "description": src.description, "raw_bytes": src.raw_bytes, "duration_s": src.duration_s,
                 "results": [{"layout": r.layout.name, "settings": r.layout.settings, "streams": r.layout.streams,
                              "bytes": r.size, "write_s": r.write_s, "read_s": r.read_s, "window_median_ms": r.window_ms,
                              "open_window_ms": r.open_ms,
                              "windows": r.windows_done, "write_peak_mb": r.mem_mb, "memory_method": r.mem_method,
                              "round_trip": r.exact, "errors": r.errors} for r in results],
-                "checks": checks, "notes": notes}, indent=1))
+                "checks": checks, "notes": notes}), indent=1))
         log("done")
     finally:
         if tmp_ctx is not None:

@@ -9,6 +9,12 @@ plus a total. Run it before and after a change and compare the lines (``--save F
 
     python analysis/bit_identical.py --save /tmp/before.txt
     python analysis/bit_identical.py --against /tmp/before.txt
+
+``--native`` adds the runs that go through the native code's less common paths (0.06 s each, Table 4
+tests 6 and 12 with overrides, :data:`NATIVE_SCENES`): the guide clearance (both friction laws), the drive
+train ("motor" with its energy accounts, "torque"), the Adams/COSMOS friction law (contact row and passive
+force), RK4 (forward passes that skip sensors), every contact law, the frictionloss guide and a clearance at
+A with the passive force.
 """
 
 from __future__ import annotations
@@ -46,7 +52,26 @@ def _digest_json(obj) -> str:
     return hashlib.sha256(json.dumps(obj, sort_keys=True, default=default).encode()).hexdigest()
 
 
-def digests(quick: bool = False) -> dict[str, str]:
+_GROUPS = ("accel", "encoder", "crank", "slider", "joints", "drive")
+#: name -> (Table 4 test, overrides) of the ``--native`` runs
+NATIVE_SCENES = {
+    "guide clearance coulomb": (6, {"joints.clearance_guide_mm": 0.1}),
+    "guide clearance adams": (6, {"joints.clearance_guide_mm": 0.1, "contact.friction_law": "adams"}),
+    "motor drive + energy": (12, {"drive.mode": "motor", "sensors.channels": _GROUPS + ("motor", "drive_energy")}),
+    "torque drive": (12, {"drive.mode": "torque", "sensors.channels": _GROUPS + ("motor",)}),
+    "adams friction law": (12, {"contact.friction_law": "adams"}),
+    "adams friction force": (12, {"contact.friction_law": "adams", "mujoco.contact_source": "force"}),
+    "RK4 law": (12, {"mujoco.integrator": "RK4"}),
+    "impact law": (12, {"contact.law": "adams-impact"}),
+    "impact law force": (12, {"contact.law": "adams-impact", "mujoco.contact_source": "force"}),
+    "linear law": (12, {"contact.law": "linear"}),
+    "cylindrical law": (12, {"contact.law": "johnson-cylindrical"}),
+    "frictionloss guide": (12, {"mujoco.guide_friction": "frictionloss"}),
+    "clearance A force": (12, {"joints.clearance_a_mm": 0.1, "mujoco.contact_source": "force"}),
+}
+
+
+def digests(quick: bool = False, native: bool = False) -> dict[str, str]:
     import twin
 
     out: dict[str, str] = {}
@@ -57,8 +82,14 @@ def digests(quick: bool = False) -> dict[str, str]:
         run = twin.simulate(twin.preset(which), duration=duration, engine=engine)
         out[f"simulate {which} {engine or 'preset'}"] = _digest_run(run)
         print(f"  {which} {engine or ''}: done", file=sys.stderr, flush=True)
+    if native:
+        for name, (test, overrides) in NATIVE_SCENES.items():
+            run = twin.simulate(twin.preset(test).replace(**overrides), duration=0.06)
+            out[f"native {name}"] = _digest_run(run)
+            print(f"  native {name}: done", file=sys.stderr, flush=True)
     answer = dict(twin.identify(twin.samples.path("test6")))
     answer.pop("seconds", None)  # wall time of the answer, not an output
+    answer["recording"] = Path(str(answer.get("recording", ""))).name  # where the checkout is, not an output
     out["identify sample:test6"] = _digest_json(answer)
     if not quick:
         from twin.dataset.generate import generate  # noqa: PLC0415
@@ -84,8 +115,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--save", type=Path, help="write the digests to this file")
     p.add_argument("--against", type=Path, help="compare with digests saved earlier; exit 1 on a difference")
     p.add_argument("--quick", action="store_true", help="shorter runs, no dataset")
+    p.add_argument("--native", action="store_true", help="also the native code's less common paths (NATIVE_SCENES)")
     a = p.parse_args(argv)
-    d = digests(a.quick)
+    d = digests(a.quick, a.native)
     lines = [f"{k}\t{v}" for k, v in d.items()]
     text = "\n".join(lines) + "\n"
     print(text, end="")

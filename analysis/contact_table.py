@@ -25,6 +25,7 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
+from twin.provenance import stamped, with_stamp_line
 
 SCENES = (("0.1 mm", 0.1, 750.0), ("0.5 mm", 0.5, 750.0), ("1.0 mm", 1.0, 750.0),
           ("0.02 mm", 0.02, 750.0), ("250 rpm, 0.1 mm", 0.1, 250.0), ("500 rpm, 0.1 mm", 0.1, 500.0))
@@ -99,8 +100,8 @@ def main() -> None:
         lines.append("")
     outdir = Path(a.out)
     outdir.mkdir(parents=True, exist_ok=True)
-    (outdir / "contact_table.md").write_text("\n".join(lines) + "\n")
-    (outdir / "contact_table.json").write_text(json.dumps(out, indent=1) + "\n")
+    (outdir / "contact_table.md").write_text(with_stamp_line("\n".join(lines)))
+    (outdir / "contact_table.json").write_text(json.dumps(stamped(out), indent=1) + "\n")
     print("\n".join(lines))
 
 

@@ -36,6 +36,7 @@ from twin.studies.contact_check import SPEEDS
 from twin.config import CATALOGUE_DIAMETRAL_MM, BenchConfig, preset
 from twin.simulation import simulate_run
 from twin.summary import MIN_FREE_S, contact_onsets
+from twin.provenance import figure_metadata
 
 CHANNELS = ["crank", "joints"]
 #: onsets in the first SETTLE_S of a run are left out: a loaded start settles onto its static
@@ -111,7 +112,7 @@ def main() -> None:
         fig.tight_layout()
         out = Path(a.png)
         tmp = out.with_name(f".{out.name}.tmp.png")
-        fig.savefig(tmp, dpi=120)
+        fig.savefig(tmp, dpi=120, metadata=figure_metadata())
         tmp.replace(out)
         print(f"wrote {out}")
 

@@ -61,7 +61,8 @@ from mujoco import rollout
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_mujoco import SCENES, prepare  # noqa: E402
 
-from twin.mujoco_engine.collider import _library_path  # noqa: E402
+from twin.mujoco_engine.collider import mujoco_library  # noqa: E402
+from twin.provenance import stamped  # noqa: E402
 
 D = mujoco.mjtDisableBit
 T = mujoco.mjtTimer
@@ -124,7 +125,7 @@ class Shims:
         self.lib = ctypes.CDLL(str(so))
         self.lib.prof_calibrate.restype = ctypes.c_double
         self.ticks_per_us = self.lib.prof_calibrate(ctypes.c_double(0.2))
-        self.mj = ctypes.CDLL(_library_path())
+        self.mj = mujoco_library()
         self._slots = {
             "time": ctypes.c_void_p.in_dll(self.mj, "mjcb_time"),
             "passive": ctypes.c_void_p.in_dll(self.mj, "mjcb_passive"),
@@ -297,9 +298,9 @@ def main() -> None:
     print("| profiling overhead (timed − scene) | " + " | ".join(
         f"{best[(lab, 'timed')] - best[(lab, 'scene')]:.2f}" for lab in SCENES) + " |")
     if args.json:
-        Path(args.json).write_text(json.dumps({
+        Path(args.json).write_text(json.dumps(stamped({
             "mujoco": mujoco.__version__, "commit": commit, "steps": args.steps, "repeats": args.repeats,
-            "best_us_per_step": {f"{lab}|{k}": v for (lab, k), v in best.items()}, "stages_us": prof}, indent=1))
+            "best_us_per_step": {f"{lab}|{k}": v for (lab, k), v in best.items()}, "stages_us": prof}), indent=1))
 
 
 if __name__ == "__main__":

@@ -32,6 +32,7 @@ import numpy as np
 from twin.config import preset
 from twin.motor_drive import speed_harmonics
 from twin.simulation import simulate_run
+from twin.provenance import figure_metadata, stamped
 
 #: Table 4 clearance cases: name -> test id at 750 rpm (the speed is set separately)
 CASES = {"ideal": 3, "C": 6, "B": 9, "BC": 12}
@@ -96,7 +97,7 @@ def main() -> None:
                 r = measure(CASES["BC"], rpm, **{name: v})
                 res["sensitivity"][f"{name}={v:g}@{rpm:g}"] = r
                 print(f"BC {rpm:4.0f} rpm {name}={v:g}: harmonics {np.round(r['harmonics_pct'], 2)} %", flush=True)
-    (out / "ripple.json").write_text(json.dumps(res, indent=1))
+    (out / "ripple.json").write_text(json.dumps(stamped(res), indent=1))
     _figures(res, out)
 
 
@@ -117,7 +118,7 @@ def _figures(res: dict, out: Path) -> None:
     axes[0].legend(title="clearance")
     fig.suptitle("Crank speed ripple, motor drive train, defaults (reference engine)")
     fig.tight_layout()
-    fig.savefig(out / "ripple_defaults.png", dpi=110)
+    fig.savefig(out / "ripple_defaults.png", dpi=110, metadata=figure_metadata())
     plt.close(fig)
 
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.2))
@@ -137,7 +138,7 @@ def _figures(res: dict, out: Path) -> None:
         ax.grid(alpha=0.3, axis="x")
     axes[1].legend(fontsize=7, ncol=2)
     fig.tight_layout()
-    fig.savefig(out / "ripple_sensitivity.png", dpi=110)
+    fig.savefig(out / "ripple_sensitivity.png", dpi=110, metadata=figure_metadata())
     plt.close(fig)
 
 

@@ -24,6 +24,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from twin.provenance import stamped, with_stamp_line
 
 ROOT = Path(__file__).resolve().parent.parent
 RES = ROOT / "analysis" / "results" / "s000"
@@ -93,8 +94,8 @@ def main() -> int:
         engines.append(row)
     out = {"settle_s": SETTLE_S, "dampings": [list(d) for d in DAMPINGS], "rows": rows, "crank_inertia": inertia,
            "engines_impact_1e4": engines}
-    (RES / "impact_law.json").write_text(json.dumps(out, indent=1))
-    (RES / "impact_law.md").write_text(markdown(out))
+    (RES / "impact_law.json").write_text(json.dumps(stamped(out), indent=1))
+    (RES / "impact_law.md").write_text(with_stamp_line(markdown(out)))
     print(f"wrote {RES / 'impact_law.md'}")
     return 0
 

@@ -27,6 +27,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from twin.provenance import stamped, with_stamp_line
 
 ROOT = Path(__file__).resolve().parent.parent
 RES = ROOT / "analysis" / "results" / "s000"
@@ -46,7 +47,8 @@ def run(name: str, work: Path, workers: int, engine: str | None = None) -> dict:
                                                                      name=spec.dataset.name + "-" + engine))
         tag = f"{name}_{engine}"
     out = work / tag
-    res = doe_study.run_study(spec, out, workers, progress=False, log=lambda m: print(f"[{tag}] {m}", file=sys.stderr))
+    res = doe_study.run_study(doe_study.DoeOptions(spec, out, workers),
+                              log=lambda m: print(f"[{tag}] {m}", file=sys.stderr)).to_dict()
     dst = RES / tag
     dst.mkdir(parents=True, exist_ok=True)
     for f in ["doe.md", "doe.json", *res["figures"]]:
@@ -119,8 +121,8 @@ def main() -> int:
         "table6_paper": [row["paper"]["max_contact_force"] / row["paper"]["max_slider_accel"] for row in cmp["table6"]],
     }
     cmp["ideal_5000rpm"] = ideal_run()
-    (RES / "comparison.json").write_text(json.dumps(cmp, indent=1))
-    (RES / "comparison.md").write_text(comparison_md(cmp))
+    (RES / "comparison.json").write_text(json.dumps(stamped(cmp), indent=1))
+    (RES / "comparison.md").write_text(with_stamp_line(comparison_md(cmp)))
     print(f"wrote {RES}")
     return 0
 

@@ -23,6 +23,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from twin.provenance import figure_metadata, stamped, with_stamp_line
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -76,7 +77,7 @@ def main() -> int:
     import matplotlib.pyplot as plt
 
     from twin.config import ln_stiffness, named_preset
-    from twin.identification.restitution import SweepOptions, sweep_restitution, synthetic_recording
+    from twin.identification.restitution import SweepOptions, sweep_restitution, write_synthetic_recording
     from twin.simulation import simulate_run
 
     base = named_preset("s001")
@@ -125,7 +126,7 @@ def main() -> int:
            title="S001 ideal joints, 0 → 300 rpm in 0.2 s (cf. paper Fig. 15)")
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(out / "ideal_acceleration.png", dpi=120)
+    fig.savefig(out / "ideal_acceleration.png", dpi=120, metadata=figure_metadata())
     plt.close(fig)
 
     # ------------------------------------------------------------ clearance: figures 8-11, 16
@@ -186,7 +187,7 @@ def main() -> int:
         ax.legend(fontsize=7, loc="lower left")
     axs[-1].set_xlabel("time [s]")
     fig.tight_layout()
-    fig.savefig(out / "clearance_acceleration.png", dpi=120)
+    fig.savefig(out / "clearance_acceleration.png", dpi=120, metadata=figure_metadata())
     plt.close(fig)
 
     fig, axs = plt.subplots(2, 1, figsize=(10, 6.5), sharex=True)
@@ -202,7 +203,7 @@ def main() -> int:
     for ax in axs:
         ax.legend(fontsize=7, loc="lower left")
     fig.tight_layout()
-    fig.savefig(out / "impact_law.png", dpi=120)
+    fig.savefig(out / "impact_law.png", dpi=120, metadata=figure_metadata())
     plt.close(fig)
 
     fig, ax = plt.subplots(figsize=(10, 3.8))
@@ -212,7 +213,7 @@ def main() -> int:
     ax.set(xlabel="time [s]", ylabel="contact force at C [N]", title="Normal contact force at the rod–slider joint (cf. Fig. 10)")
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(out / "contact_force.png", dpi=120)
+    fig.savefig(out / "contact_force.png", dpi=120, metadata=figure_metadata())
     plt.close(fig)
 
     fig, axs = plt.subplots(1, 2, figsize=(10, 5))
@@ -226,7 +227,7 @@ def main() -> int:
                title=f"{eng}: journal centre in the bushing (cf. Fig. 11)")
         ax.legend(fontsize=7, loc="upper right")
     fig.tight_layout()
-    fig.savefig(out / "journal_orbit.png", dpi=120)
+    fig.savefig(out / "journal_orbit.png", dpi=120, metadata=figure_metadata())
     plt.close(fig)
 
     fig, axs = plt.subplots(2, 1, figsize=(10, 6), sharex=True)
@@ -242,7 +243,7 @@ def main() -> int:
     for ax in axs:
         ax.legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(out / "velocity_torque.png", dpi=120)
+    fig.savefig(out / "velocity_torque.png", dpi=120, metadata=figure_metadata())
     plt.close(fig)
 
     # ------------------------------------------------------------------ restitution recovery
@@ -256,7 +257,7 @@ def main() -> int:
     for rec_eng, sweep_eng, e in cases:
         p = tmp / f"rec_{rec_eng}_{e}.mcap"
         if not p.exists():
-            synthetic_recording(base.replace(**{"simulation.engine": rec_eng}), p, e, noise_mps2=5.0, seed=11)
+            write_synthetic_recording(base.replace(**{"simulation.engine": rec_eng}), p, e, noise_mps2=5.0, seed=11)
         grid = tuple(round(0.17 + 0.05 * k, 2) for k in range(17))   # the known values are off this grid
         s = sweep_restitution(p, SweepOptions(coarse=grid, engine=sweep_eng))
         rec_rows.append({"recording_engine": rec_eng, "sweep_engine": sweep_eng, "e_true": e,
@@ -268,7 +269,7 @@ def main() -> int:
     for eng in ENGINES:
         cfg_i = base.replace(**{"simulation.engine": eng, "contact.law": "adams-impact"})
         p = tmp / f"rec_impact_{eng}.mcap"
-        synthetic_recording(cfg_i, p, 27960.0, noise_mps2=5.0, seed=11, parameter="c_max")
+        write_synthetic_recording(cfg_i, p, 27960.0, noise_mps2=5.0, seed=11, parameter="c_max")
         s = sweep_restitution(p, SweepOptions(parameter="c_max", coarse=tuple(6100.0 + 2500 * k for k in range(18))))
         cmax_rows.append({"engine": eng, "c_max_true": 27960.0, "c_max_found": s.value,
                           "error_pct": 100 * (s.value / 27960.0 - 1), "rms_mismatch_mps2": s.mismatch_mps2,
@@ -281,13 +282,14 @@ def main() -> int:
     tmp.rmdir()
 
     # landscape of the 0.55 recovery, low-passed and full band, on a regular grid
-    from twin.identification.restitution import _lowpass, recorded_acceleration, rms_mismatch, simulated_acceleration
+    from twin.identification.restitution import (recorded_acceleration, rms_mismatch, simulated_acceleration,
+                                                 zero_phase_lowpass)
 
     p = out / "_land.mcap"
-    synthetic_recording(base, p, 0.55, noise_mps2=5.0, seed=11)
+    write_synthetic_recording(base, p, 0.55, noise_mps2=5.0, seed=11)
     rec, cfg, rate = recorded_acceleration(p)
     p.unlink()
-    lp = _lowpass(200.0, rate)
+    lp = zero_phase_lowpass(200.0, rate)
     es = np.round(np.arange(0.30, 0.801, 0.01), 3)
     full, low = [], []
     for e in es:
@@ -307,10 +309,10 @@ def main() -> int:
     h2, l2 = ax2.get_legend_handles_labels()
     ax.legend(h1 + h2, l1 + l2, fontsize=8, loc="upper left")
     fig.tight_layout()
-    fig.savefig(out / "restitution_landscape.png", dpi=120)
+    fig.savefig(out / "restitution_landscape.png", dpi=120, metadata=figure_metadata())
     plt.close(fig)
 
-    (out / "results.json").write_text(json.dumps(res, indent=1, default=float))
+    (out / "results.json").write_text(json.dumps(stamped(res), indent=1, default=float))
     # tables
     lines = ["| engine | min [m/s²] | error | max [m/s²] | error |", "|---|---|---|---|---|"]
     cf = res["closed_form_mps2"]
@@ -348,7 +350,7 @@ def main() -> int:
     for row in res["c_max_recovery"]:
         lines.append(f"| {row['engine']} | {row['c_max_true']:.0f} | {row['c_max_found']:.0f} | {row['error_pct']:+.1f} % | "
                      f"{row['rms_mismatch_mps2']:.2f} | {row['simulations']} | {row['seconds']:.0f} |")
-    (out / "tables.md").write_text("\n".join(lines) + "\n")
+    (out / "tables.md").write_text(with_stamp_line("\n".join(lines)))
     print("\n".join(lines))
     return 0
 

@@ -45,6 +45,7 @@ import numpy as np
 from scipy.stats import f as f_dist
 
 from twin.studies import mcdm, taguchi
+from twin.provenance import stamped, with_stamp_line
 
 # ---------------------------------------------------------------------------- transcription
 #: abstract and conclusion: run 1 (the optimum) has D = 32.72 m/s², S = 1.3452 kN
@@ -480,8 +481,8 @@ def main() -> None:
     res = {"identities": check_identities(),
            "responses": {"D_ms2": rec["D_ms2"].tolist(), "S_N": rec["S_N"].tolist(), "copies": rec["copies"]},
            "decisions": decisions(x), "taguchi_grade": taguchi_grade(), "taguchi_responses": taguchi_responses(x)}
-    (out / "paper_tables.json").write_text(json.dumps(res, indent=1, default=float) + "\n")
-    (out / "paper_tables.md").write_text(_md(res))
+    (out / "paper_tables.json").write_text(json.dumps(stamped(res), indent=1, default=float) + "\n")
+    (out / "paper_tables.md").write_text(with_stamp_line(_md(res)))
     d = taguchi.s002_design()
     lines = ["run,crank_length_mm,clearance_mm,friction,speed_rpm,max_slider_accel_ms2,max_force_revolute_N"]
     for i in range(27):

@@ -15,6 +15,7 @@ import numpy as np
 
 from twin.config import named_preset
 from twin.simulation import simulate_run
+from twin.provenance import with_stamp_line
 
 OUT = Path(__file__).resolve().parent / "results/s002/simulated/placeholders.md"
 SETTLE_S = 0.1
@@ -51,7 +52,7 @@ def main() -> None:
             lines.append(f"| {label} | {v:g} | {a:.1f} | {100 * (a / a0 - 1):+.0f} % | {f:.0f} "
                          f"| {100 * (f / f0 - 1):+.0f} % |")
             print(lines[-1])
-    OUT.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    OUT.write_text(with_stamp_line("\n".join(lines)), encoding="utf-8")
     print("wrote", OUT)
 
 

@@ -33,6 +33,7 @@ from twin.config import ln_stiffness, named_preset  # noqa: E402
 from twin.contact_params import cylindrical_stiffness  # noqa: E402
 from twin.simulation import simulate_run  # noqa: E402
 from twin.studies.continuous_contact import phases  # noqa: E402
+from twin.provenance import stamped, with_stamp_line  # noqa: E402
 
 W = 30.0
 T_TURN = 2 * math.pi / W
@@ -73,8 +74,8 @@ def main() -> int:
                 r = measure(eng, c, ov)
                 res["runs"].append({"clearance_mm": c, "law": name, "engine": eng, **r})
                 print(f"{c} mm {name} {eng}: pen {r['pen_max_mm']:.3f} mm, F {r['fn_max_n']:.3g} N", flush=True)
-    (OUT / "cylindrical_law.json").write_text(json.dumps(res, indent=1))
-    (OUT / "cylindrical_law.md").write_text(markdown(res))
+    (OUT / "cylindrical_law.json").write_text(json.dumps(stamped(res), indent=1))
+    (OUT / "cylindrical_law.md").write_text(with_stamp_line(markdown(res)))
     print(f"wrote {OUT / 'cylindrical_law.md'}")
     return 0
 

@@ -27,6 +27,7 @@ from twin.config import named_preset  # noqa: E402
 from twin.kinematics import slider_kinematics  # noqa: E402
 from twin.simulation import simulate_run  # noqa: E402
 from twin.studies.continuous_contact import ContinuousContact, Mechanism, phases  # noqa: E402
+from twin.provenance import figure_metadata, stamped  # noqa: E402
 
 W = 30.0                       # crank speed [rad/s] (S004 §3)
 T_TURN = 2 * math.pi / W       # one turn [s]
@@ -125,7 +126,7 @@ def plot_window(plt, p, path, label):
     ax[2].legend()
     fig.suptitle(f"S004, c = 0.5 mm, {label}: continuous-contact model restarted from the contact model")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=110, metadata=figure_metadata())
     plt.close(fig)
 
 
@@ -261,7 +262,7 @@ def main() -> None:
         ax.set_title(f"S004 Fig. {4 + ('x', 'v', 'a').index(key)} counterpart ({engines[0]} engine, turn {k_turn + 1})")
         ax.legend()
         fig.tight_layout()
-        fig.savefig(out / f"slider_{name}.png", dpi=110)
+        fig.savefig(out / f"slider_{name}.png", dpi=110, metadata=figure_metadata())
         plt.close(fig)
     fig, axs = plt.subplots(len(engines), 1, figsize=(8, 3.5 * len(engines)), sharex=True, squeeze=False)
     for ax, eng in zip(axs[:, 0], engines):
@@ -278,10 +279,10 @@ def main() -> None:
     axs[-1, 0].set_xlabel("crank angle over the turn [deg]")
     fig.suptitle("S004 Fig. 7 counterpart: rub-impact force, 0.5 mm")
     fig.tight_layout()
-    fig.savefig(out / "contact_force_05mm.png", dpi=110)
+    fig.savefig(out / "contact_force_05mm.png", dpi=110, metadata=figure_metadata())
     plt.close(fig)
 
-    (out / "s004.json").write_text(json.dumps(res, indent=1, default=float))
+    (out / "s004.json").write_text(json.dumps(stamped(res), indent=1, default=float))
     print(json.dumps({e: {c: {k: v for k, v in d.items() if k != "phases"} for c, d in res["engines"][e].items()}
                       for e in res["engines"]}, indent=1))
     print(json.dumps({k: res[k] for k in ("continuous", "continuous_cmax1e6", "continuous_free")}, indent=1))

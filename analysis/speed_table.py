@@ -46,6 +46,7 @@ TWIN = [sys.executable, "-m", "twin.cli"]
 
 sys.path.insert(0, str(ROOT / "analysis"))
 from bench_threads import machine_busy_s, own_cpu_s  # noqa: E402  (a sibling script)
+from twin.provenance import with_stamp_line  # noqa: E402
 
 # (label, arguments of `twin`, simulated seconds)
 PROCESSES = [
@@ -199,7 +200,7 @@ def main() -> None:
     if not args.no_write:
         write_page(text)
         raw = "\n".join(f"- {lab}: " + ", ".join(f"{x:.3f}" for x in w) + " s" for lab, w in res["walls"].items())
-        RESULTS.write_text(f"{table(res, with_commit=True)}\n\nEvery process's wall time:\n\n{raw}\n")
+        RESULTS.write_text(with_stamp_line(f"{table(res, with_commit=True)}\n\nEvery process's wall time:\n\n{raw}"))
         print(f"wrote {PAGE.relative_to(ROOT)} and {RESULTS.relative_to(ROOT)}", file=sys.stderr)
 
 

@@ -41,13 +41,13 @@ import argparse
 import dataclasses
 import json
 import math
-import subprocess
 from pathlib import Path
 
 import numpy as np
 
 from twin.config import ACCELEROMETERS, preset
 from twin.instrument.accel import STANDARD_G, AccelStream, model_of
+from twin.provenance import git_commit, stamped, with_stamp_line
 from twin.simulation import simulate_run
 
 H_REF, H_LONG, H_FINE = 1e-5, 2e-5, 5e-6
@@ -186,12 +186,11 @@ def main() -> None:
         results.append(study_test(t, args))
         print(f"test {t} done", flush=True)
     cost = interleaved_cost(12)
-    commit = subprocess.run(["git", "describe", "--always", "--dirty"], capture_output=True, text=True,
-                            cwd=Path(__file__).resolve().parent).stdout.strip() or "?"
+    commit = git_commit()
     text = markdown(results, cost, args, commit)
-    (out / "step_study.md").write_text(text)
-    (out / "step_study.json").write_text(json.dumps({"commit": commit, "settings": vars(args), "tests": results,
-                                                     "cost_test12": cost}, indent=1))
+    (out / "step_study.md").write_text(with_stamp_line(text))
+    (out / "step_study.json").write_text(json.dumps(stamped({"commit": commit, "settings": vars(args),
+                                                             "tests": results, "cost_test12": cost}), indent=1))
     print(text)
 
 

@@ -29,7 +29,7 @@ def test_score_is_the_worst_ratio_to_target():
 
 
 def test_settings_reject_tests_without_clearance():
-    with pytest.raises(Exception, match="--tests"):
+    with pytest.raises(Exception, match="^tests: "):
         accuracy_study.StudySettings(tests=(1,))
     with pytest.raises(Exception, match="window_s"):
         accuracy_study.StudySettings(window_s=0.01)

@@ -137,7 +137,7 @@ def test_dask_scheduler_without_the_cluster_extra_is_one_line(tmp_path, monkeypa
         rc = main(["dataset", "generate", str(TINY), "--out", str(out), "--scheduler", scheduler, "--no-progress"])
         err = capsys.readouterr().err
         assert rc == 2 and err.count("\n") == 1, err
-        assert err == (f"twin: error: --scheduler {scheduler}: Dask is not installed; a Dask scheduler needs the "
+        assert err == (f"twin: error: --scheduler: {scheduler}: Dask is not installed; a Dask scheduler needs the "
                        "cluster extra: pip install 'twin[cluster]'\n")
         assert not out.exists()  # refused before anything was written
 

@@ -86,6 +86,11 @@ def _snapshot(root: Path) -> dict[str, tuple[int, str]]:
 # --------------------------------------------------------------------------- cases
 #: (command line, fragment the one-line error must contain). {ws} is the workspace.
 CASES: list[tuple[str, str]] = [
+    # record: its own options and the configuration's
+    ("record --duration 0.01 --out r.mcap --static 0", "--static: must lie in [0.1, 60] s"),
+    ("record --duration 0.01 --out r.csv", "--out: must end in .mcap"),
+    ("record --duration 0.01", "the following arguments are required: --out"),
+    ("record --clearance-b 0.3 --out r.mcap", "joints.clearance_b_mm"),
     # simulate: values of the configuration options
     ("simulate --clearance-b 0.3", "joints.clearance_b_mm"),
     ("simulate --clearance-c -1", "joints.clearance_c_mm"),
@@ -145,7 +150,7 @@ CASES: list[tuple[str, str]] = [
     ("simulate --config {ws}/unknown.toml", "joints.clearance_x_mm: unknown field"),
     ("simulate --config {ws}/type.toml", "joints.clearance_b_mm: must be a number"),
     ("simulate --config {ws}/notrace.toml", "drive.trace_file"),
-    ("simulate --config {ws}/test99.toml", "--test"),
+    ("simulate --config {ws}/test99.toml", "error: test: must be a Table 4 test id"),  # the file's key, not --test
     ("simulate --config {ws}/name.toml", "name"),
     ("simulate --config {ws}/confdir.toml", "is a directory"),
     # simulate: --set

@@ -35,6 +35,7 @@ import pytest
 
 from test_bad_input_more import ZERO_G, _export, _trace, check_case, no_hang, snapshot  # noqa: F401 - no_hang: autouse
 from twin.cli import main
+from twin.errors import TwinError
 
 ROOT = Path(__file__).resolve().parent.parent
 SAMPLE = ROOT / "recordings" / "test6_synthetic.mcap"
@@ -269,6 +270,11 @@ def ws(tmp_path_factory) -> Path:
     _taguchi(ws / "tg_no_joints.toml", truth='["slider_accel"]', responses='["max_force_A"]')
     _taguchi(ws / "tg_no_clear_b.toml", responses='["max_force_B"]', extra_first='"joints.clearance_b_mm" = 0.0\n')
     _taguchi(ws / "tg_good.toml")
+    # a Taguchi CSV named like one of the analysis's outputs, in the output folder
+    (ws / "tga").mkdir()
+    table = "A,B,y1,y2\n1,1,1.0,1.1\n1,2,2.0,2.1\n2,1,3.0,3.3\n2,2,4.0,4.2\n"
+    for name in ("report.md", "taguchi.json", "main_effects_y1.png", "sn_y1.png"):
+        (ws / "tga" / name).write_text(table)
     return ws
 
 
@@ -350,6 +356,9 @@ def _cases() -> list[tuple[str, str]]:
     for name in ("i_no_dtype", "i_labels_str", "i_no_identity", "m_no_status", "m_fault_odd", "s_mean_text"):
         c.append((f"identify train {{ws}}/{name} --out {{ws}}/m.npz", INFO_MUTATIONS.get(name, MANIFEST_MUTATIONS.get(
             name, STATS_MUTATIONS.get(name, ("", "")))) [1]))
+    for name in ("report.md", "taguchi.json", "main_effects_y1.png", "sn_y1.png"):
+        c.append((f"study taguchi-analyze {{ws}}/tga/{name} --responses y1 --factors A,B --out {{ws}}/tga",
+                  f"tga/{name} is the input"))
     for name in ("d_no_rate", "d_rate_text", "d_not_json"):
         c.append((f"view {{ws}}/{name} --run {{rid}} --save {{ws}}/v.rrd", DATA_MUTATIONS[name][1]))
     return c
@@ -567,3 +576,41 @@ def test_any_damaged_file_is_read_or_refused_in_one_line(target, offset, data, t
         _reader_contract(d, capsys)
     finally:
         shutil.rmtree(d.parent, ignore_errors=True)
+
+
+def test_a_full_disk_during_the_rrd_is_one_line_without_the_sdks_log(tmp_path):
+    """rerun's own log lines ("ERROR re_log_encoding::rrd::file_sink ...") no longer precede the twin's one
+    line when the disk fills while `twin view` writes; nothing is left behind."""
+    assert main(["simulate", "--test", "6", "--duration", "0.2", "--no-progress", "--out",
+                 str(tmp_path / "r.mcap")]) == 0
+    out = tmp_path / "out"
+    out.mkdir()
+    code = ("import resource, signal, sys\n"
+            "signal.signal(signal.SIGXFSZ, signal.SIG_IGN)\n"
+            "resource.setrlimit(resource.RLIMIT_FSIZE, (400000, 400000))\n"
+            "from twin.cli import main\n"
+            "sys.exit(main(sys.argv[1:]))\n")
+    env = {k: v for k, v in os.environ.items() if k != "RUST_LOG"}
+    r = subprocess.run([sys.executable, "-c", code, "view", str(tmp_path / "r.mcap"), "--save", "x.rrd"],
+                       cwd=out, capture_output=True, text=True, timeout=300, env=env)
+    assert r.returncode == 2, r.stderr
+    assert r.stderr.count("\n") == 1 and r.stderr.startswith("twin: error: x.rrd: cannot write"), r.stderr
+    assert list(out.iterdir()) == []
+
+
+def test_a_disk_without_room_for_the_rrd_is_refused_before_rerun_starts(tmp_path, monkeypatch):
+    """rerun's save() blocks for good when its first write fails: a disk without the room is refused first."""
+    import shutil as sh
+    from collections import namedtuple
+
+    import twin.viz.writer as writer
+
+    assert main(["simulate", "--test", "6", "--duration", "0.05", "--no-progress", "--out",
+                 str(tmp_path / "r.mcap")]) == 0
+    usage = namedtuple("usage", "total used free")
+    monkeypatch.setattr(writer.shutil, "disk_usage", lambda p: usage(10 ** 9, 10 ** 9 - 4096, 4096))
+    assert writer.shutil is sh
+    with pytest.raises(TwinError, match=r"x\.rrd: cannot write \(no space left on the device: 4096 bytes free\)"):
+        from twin.viz import convert_file
+        convert_file(tmp_path / "r.mcap", tmp_path / "x.rrd")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["r.mcap"]

@@ -54,8 +54,8 @@ def test_engine_failure_midway_keeps_old_file(capsys, tmp_path, monkeypatch):
     class Dying:
         """The real engine, which diverges in its second chunk."""
 
-        def __init__(self, cfg):
-            self.inner = real(cfg)
+        def __init__(self, cfg, inputs=None):
+            self.inner = real(cfg, inputs)
             self.name, self.meta = self.inner.name, self.inner.meta
             self.calls = 0
 

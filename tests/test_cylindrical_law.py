@@ -51,7 +51,7 @@ def test_reference_and_native_law_apply_the_same_force():
     """The reference's compiled law and the native module's description (``NativeLaw``, what
     _bore.c computes) give F_J(δ) (1 + 3(1 − e²)/4 · max(δ̇/δ̇⁻, −1))."""
     from twin.mujoco_engine.builder import build
-    from twin.reference.contact import LAW_CODES, normal_force
+    from twin.physics.contact import LAW_CODES, normal_force
 
     e = 0.9
     cfg = named_preset("s004").replace(**{"contact.law": "johnson-cylindrical", "contact.restitution": e})

@@ -1,9 +1,17 @@
-"""Neither engine imports the other: ``twin.mujoco_engine.*`` never imports ``twin.reference.*``
-and the reference engine never imports the MuJoCo twin, at module level or inside a function.
-What both need (the contact law constants, the mechanism's effective masses) lives in neutral
-modules (``twin.contact_params``, ``twin.natural_coordinates``).
+"""No engine imports another, and what they share lives in engine-free modules.
 
-Method: parse every module of both engine packages with :mod:`ast` and collect every import
+The three engine packages: the planar reference (``twin.reference``), the planar MuJoCo twin
+(``twin.mujoco_engine``) and the spatial mechanism in both engines (``twin.spatial``). None imports
+another, at module level or inside a function. What they share lives in neutral modules: the
+contact laws and the MuJoCo parameters in :mod:`twin.physics`, the contact constants
+(``twin.contact_params``, ``twin.impact``) and the planar coordinates (``twin.natural_coordinates``);
+these import no engine, and neither does the configuration (``twin.config``).
+
+One edge is allowed and named: the spatial MuJoCo model installs the native colliders through
+``twin.mujoco_engine.collider`` (the C module of both MuJoCo models is built inside the planar
+package); :data:`ALLOWED` lists it so that any other edge fails.
+
+Method: parse every module of the packages with :mod:`ast` and collect every import
 statement anywhere in it (``import x``, ``from x import y``, relative imports resolved, and
 ``importlib.import_module("x")`` with a literal name).
 """
@@ -18,7 +26,11 @@ import pytest
 import twin
 
 PACKAGE = Path(twin.__file__).parent
-ENGINES = {"twin.mujoco_engine": "twin.reference", "twin.reference": "twin.mujoco_engine"}
+ENGINES = ("twin.reference", "twin.mujoco_engine", "twin.spatial")
+#: (importing package, imported module) edges between engines that are allowed, with the reason above
+ALLOWED = {("twin.spatial", "twin.mujoco_engine.collider")}
+#: packages and modules that every engine may use and that import no engine
+NEUTRAL = ("twin.physics", "twin.config", "twin.contact_params", "twin.natural_coordinates", "twin.impact")
 
 
 def _module_name(path: Path) -> str:
@@ -83,19 +95,65 @@ def test_the_walker_sees_local_relative_and_dynamic_imports(tmp_path):
     assert {"twin.drive", "numba"} <= real
 
 
-@pytest.mark.parametrize("engine", sorted(ENGINES))
-def test_engine_does_not_import_the_other_engine(engine):
-    other = ENGINES[engine]
+def _package_files(name: str) -> list[Path]:
+    """The files of a package (all its modules) or of a single module."""
+    base = PACKAGE.parent / name.replace(".", "/")
+    return sorted(base.rglob("*.py")) if base.is_dir() else [base.with_suffix(".py")]
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_engine_does_not_import_another_engine(engine):
+    others = [e for e in ENGINES if e != engine]
     modules = _engine_modules(engine)
     assert modules, f"no modules found for {engine}"
     edges = [f"{_module_name(p)} -> {name}" for p in modules for name in sorted(imported_modules(p))
-             if _is_within(name, other)]
+             if any(_is_within(name, o) for o in others)
+             and not any(e == engine and _is_within(name, t) for e, t in ALLOWED)]
     assert not edges, "engine-to-engine imports:\n" + "\n".join(edges)
 
 
-def test_neutral_contact_modules_import_neither_engine():
-    """The shared modules stay neutral, so no engine reaches the other through them."""
-    for name in ("contact_params", "natural_coordinates", "impact"):
-        found = imported_modules(PACKAGE / f"{name}.py")
-        bad = [n for n in found if any(_is_within(n, e) for e in ENGINES)]
-        assert not bad, f"twin.{name} imports an engine: {bad}"
+def test_allowed_edges_are_still_needed():
+    """An allowed edge that no module uses any more is taken off :data:`ALLOWED` (so the list stays true)."""
+    for engine, target in ALLOWED:
+        used = any(target in imported_modules(p) for p in _engine_modules(engine))
+        assert used, f"{engine} no longer imports {target}: remove it from ALLOWED"
+
+
+@pytest.mark.parametrize("name", NEUTRAL)
+def test_neutral_modules_import_no_engine(name):
+    """The shared modules and the configuration stay neutral, so no engine reaches another through them."""
+    files = _package_files(name)
+    assert files and all(f.exists() for f in files), name
+    bad = [f"{_module_name(f)} -> {n}" for f in files for n in sorted(imported_modules(f))
+           if any(_is_within(n, e) for e in ENGINES)]
+    assert not bad, f"{name} imports an engine:\n" + "\n".join(bad)
+
+
+def test_shared_physics_is_engine_free():
+    """``twin.physics`` imports no simulator either (``mujoco``): the engines take numbers from it."""
+    bad = [f"{_module_name(f)} -> {n}" for f in _package_files("twin.physics") for n in sorted(imported_modules(f))
+           if _is_within(n, "mujoco")]
+    assert not bad, "twin.physics imports mujoco:\n" + "\n".join(bad)
+
+
+def test_the_checker_catches_an_engine_edge_in_the_configuration(tmp_path):
+    """The walker flags a configuration module that imports an engine (the check can fail)."""
+    src = tmp_path / "probe.py"
+    src.write_text("def f(cfg):\n    from twin.spatial.checks import check_spatial\n    check_spatial(cfg)\n")
+    found = imported_modules(src, "twin.config.probe")
+    assert any(_is_within(n, "twin.spatial") for n in found)
+
+
+#: the layers above the engines: the library's run loop and sinks, the studies, the commands
+ABOVE = ("twin.simulation", "twin.studies", "twin.commands", "twin.cli", "twin.api", "twin.bench_replay",
+         "twin.identification", "twin.dataset", "twin.viz", "twin.mcapfile")
+
+
+@pytest.mark.parametrize("name", ENGINES + NEUTRAL)
+def test_no_arrow_back_up(name):
+    """Layering: commands -> library -> engines -> shared physics. Neither an engine package nor a
+    shared module (nor the configuration) imports the layers above it."""
+    files = _package_files(name)
+    bad = [f"{_module_name(f)} -> {n}" for f in files for n in sorted(imported_modules(f))
+           if any(_is_within(n, a) for a in ABOVE)]
+    assert not bad, f"{name} imports a layer above it:\n" + "\n".join(bad)

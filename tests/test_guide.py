@@ -16,7 +16,7 @@ from twin.simulation import simulate_run
 G = 9.81
 
 
-def _static_cfg(engine: str, x_g: float = 0.02) -> BenchConfig:
+def static_cfg(engine: str, x_g: float = 0.02) -> BenchConfig:
     """Ideal B and C, the crank held by its PID at rest (motor 0 rpm), 0.1 mm guide play, the
     slider's centre of mass x_g ahead of C (a known moment), gravity −y: the known side load."""
     return BenchConfig().replace(**{
@@ -25,7 +25,7 @@ def _static_cfg(engine: str, x_g: float = 0.02) -> BenchConfig:
         "sensors.output_rate_hz": 1000.0})
 
 
-def _closed_form(cfg: BenchConfig) -> tuple[float, float, float, float]:
+def closed_form(cfg: BenchConfig) -> tuple[float, float, float, float]:
     """Statics of the slider resting on the lower rail: (F_front, F_rear, y_g, φ).
 
     Without friction at rest the slider takes no load along the guide, so the rod's end C carries
@@ -45,8 +45,8 @@ def _closed_form(cfg: BenchConfig) -> tuple[float, float, float, float]:
 
 @pytest.mark.parametrize("engine", ["reference", "mujoco"])
 def test_static_tilt_and_contact_forces_under_side_load(engine):
-    cfg = _static_cfg(engine)
-    f_f, f_r, y_g, phi = _closed_form(cfg)
+    cfg = static_cfg(engine)
+    f_f, f_r, y_g, phi = closed_form(cfg)
     run = simulate_run(cfg)
     ch = {k: run.channels[k].data[-20:].astype(float) for k in
           ("fn_guide_front", "fn_guide_rear", "slider_y", "slider_tilt")}

@@ -13,7 +13,7 @@ from twin.jit import NOTICE
 
 # one small compiled function of the reference engine, compiled (or loaded) in a fresh process; prints
 # numba's own count of cache hits for it
-PROBE = ("from twin.reference.contact import _hysteresis as f\n"
+PROBE = ("from twin.physics.contact import _hysteresis as f\n"
          "f(1e-6, 0.1, 0.2, 1e9, 1.5, 0.5)\n"
          "print(sum(f.stats.cache_hits.values()), sum(f.stats.cache_misses.values()))\n")
 

@@ -189,7 +189,7 @@ def test_a_run_file_with_a_preview_reads_bit_for_bit_as_without(run12, tmp_path)
     assert prev.t0 == pytest.approx(16 / 1e5) and stamps[1] - stamps[0] == 330_000
     np.testing.assert_allclose(prev["AC4"], run12["AC4"][:prev.n * 33].reshape(-1, 33).astype(np.float64).mean(1),
                                rtol=1e-6)
-    with pytest.raises(TwinError, match="preview rate"):
+    with pytest.raises(TwinError, match="^preview_rate_hz: must be >= 0 Hz"):
         RunWriter(tmp_path / "c.mcap", run12.config, preview_rate_hz=-1.0)
 
 
@@ -209,3 +209,21 @@ def test_simulate_writes_a_1khz_preview_unless_told_otherwise(tmp_path, capsys):
         err = capsys.readouterr().err.strip()
         assert "--preview-rate" in err and err.count("\n") == 0
     assert not (tmp_path / "c.mcap").exists()
+
+
+def _strict(text: str):
+    """json.loads that refuses NaN/Infinity (RFC 8259 has no such numbers)."""
+    def bad(name):
+        raise ValueError(f"non-strict JSON constant {name}")
+    return __import__("json").loads(text, parse_constant=bad)
+
+
+def test_json_metadata_inside_run_files_is_strict(run12, tmp_path):
+    # a summary or meta with a non-finite number (a metric with no data) is written as null, not NaN
+    import dataclasses
+    run = dataclasses.replace(run12, meta={**run12.meta, "odd": float("nan"), "big": float("inf")})
+    path = write_run(tmp_path / "r.mcap", run, summary={"peak": float("nan"), "rms": np.float64(-np.inf), "ok": 1.5})
+    meta = read_metadata(path)
+    assert _strict(meta["twin.summary"]["json"]) == {"peak": None, "rms": None, "ok": 1.5}
+    inner = _strict(meta["twin.run"]["meta"])
+    assert inner["odd"] is None and inner["big"] is None

@@ -177,9 +177,9 @@ def test_loaded_start_is_at_rest(engine, orientation):
 def _law_force(cfg, law, delta, rate, v_imp):
     """The law's force before the contact's max(·, 0) (the native module applies max(·, 0) to the
     whole θ-blended force, decided by the solver); where positive, the reference engine's own law
-    function (twin.reference.contact) gives the same value."""
+    function (twin.physics.contact) gives the same value."""
     from twin.impact import DAMPING_FACTOR
-    from twin.reference.contact import LAW_CODES, normal_force
+    from twin.physics.contact import LAW_CODES, normal_force
 
     if cfg.contact.law == "linear":
         raw = law.stiffness * delta + law.damping * rate
@@ -375,7 +375,7 @@ def test_guide_friction_is_the_reference_regularized_law():
     engine's, F ramp(|v|; v0, v1) against the slider's velocity, a passive force of the native
     module (test 3, ideal joints: the guide is the only passive force on the slider's dof), through
     the slider's reversals; "frictionloss" restores MuJoCo's friction constraint."""
-    from twin.reference.contact import ramp
+    from twin.physics.contact import ramp
 
     cfg = short(preset(3), 0.4, **{"drive.ramp_s": 0.05})
     eng = MujocoEngine(cfg)

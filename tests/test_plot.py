@@ -158,7 +158,8 @@ def test_a_replay_draws_recorded_and_simulated(tmp_path):
     (["--window", "0.2:0.1"], "--window: expects finite seconds START < STOP"),
     (["--window", "0.1:0.5"], "--window: 0.1..0.5 s lies outside the run (0..0.2 s)"),
     (["--window", "0.1:0.1001"], "--window: 0.1..0.1001 s holds fewer than 64 samples"),
-    (["--size", "10x10"], "--size: must be WIDTHxHEIGHT"),
+    (["--size", "10x10"], "--size: must be two whole numbers of pixels in 64..8192"),
+    (["--size", "ax10"], "--size: must be WIDTHxHEIGHT"),
 ])
 def test_bad_arguments_are_one_line_and_write_nothing(run_file, tmp_path, capsys, argv, fragment):
     path, _ = run_file

@@ -145,7 +145,7 @@ def test_npz_import_without_time_column(tmp_path, recording):
     arrays["units"] = np.array(json.dumps({c: daq.channels[c].unit for c in daq.channels}))
     p = tmp_path / "export.npz"
     np.savez(p, **arrays)
-    with pytest.raises(RecordingError, match="--rate"):
+    with pytest.raises(RecordingError, match=r"no time column; give the sample rate \(`rate_hz`\)"):
         import_table(p, _cfg())
     run, repairs = import_table(p, _cfg(), rate_hz=RATE)
     assert run.t0 == 0.0 and run.n == N and repairs == []
@@ -184,13 +184,13 @@ def test_truncated_and_corrupt_mcap(tmp_path, recording):
 
 def test_missing_channel(tmp_path, good_cols):
     del good_cols["volt_AC3"]
-    with pytest.raises(RecordingError, match="missing channel volt_AC3 .*--map volt_AC3=COLUMN"):
+    with pytest.raises(RecordingError, match="missing channel volt_AC3 .*`mapping` volt_AC3=COLUMN"):
         _import(tmp_path, good_cols)
 
 
 def test_nan_samples_error_or_reported_repair(tmp_path, good_cols):
     good_cols["volt_AC2"][1000:1003] = np.nan
-    with pytest.raises(RecordingError, match=r"volt_AC2 has a NaN .* sample 1000 .*--repair-nan"):
+    with pytest.raises(RecordingError, match=r"volt_AC2 has a NaN .* sample 1000 .*`nan='interpolate'`"):
         _import(tmp_path, good_cols)
     run, repairs = _import(tmp_path, good_cols, nan="interpolate")
     assert repairs == ["volt_AC2: interpolated 3 NaN samples in 1 gap(s) (longest 3, first at t = 0.010000 s)"]
@@ -226,7 +226,7 @@ def test_wrong_sample_rate(tmp_path, good_cols):
     slow = good_cols | {"t": np.arange(N) / 50_000.0}
     with pytest.raises(RecordingError, match="sampled at 50000 Hz but instrumentation.daq_rate_hz is 100000"):
         _import(tmp_path, slow)
-    with pytest.raises(RecordingError, match="wrong sample rate: the time column says 100000 Hz, --rate says 200000"):
+    with pytest.raises(RecordingError, match="wrong sample rate: the time column says 100000 Hz, `rate_hz` says 200000"):
         _import(tmp_path, good_cols, rate_hz=200_000.0)
 
 

@@ -9,7 +9,7 @@ import pytest
 
 from twin.config import BenchConfig, ln_stiffness, preset
 from twin.impact import hysteresis_restitution, impact_hysteresis
-from twin.reference import contact as ref_contact
+from twin.physics import contact as ref_contact
 from twin import natural_coordinates as natural
 from twin.reference import model as ref_model
 from twin.simulation import simulate_run
@@ -139,7 +139,8 @@ def test_stiffness_scale_multiplies_the_law_stiffness_in_both_engines():
     """contact.stiffness_scale is a factor on Eq. 18's K (reference) and on the twin's calibrated
     pair stiffness and impact-speed damping chi K (MuJoCo), so datasets can perturb K in either."""
     from twin.config import ln_stiffness, preset
-    from twin.mujoco_engine.builder import build, impact_speed_coefficient
+    from twin.mujoco_engine.builder import build
+    from twin.physics.mujoco_params import impact_speed_coefficient
     from twin.reference.engine import ReferenceEngine
 
     cfg = preset(12)

@@ -21,7 +21,7 @@ from conftest import bore_bias_acceleration
 
 def _adams_mu(v, mus, mud, vs, vd):
     """MSC Adams' contact friction coefficient, written from its documentation (independent
-    of twin.reference.contact): step(v, −vs, μs, vs, −μs) of the force direction inside ±vs,
+    of twin.physics.contact): step(v, −vs, μs, vs, −μs) of the force direction inside ±vs,
     −step(|v|, vs, μs, vd, μd) sign(v) beyond; returned as a magnitude."""
     def step(x, x0, h0, x1, h1):
         d = np.clip((x - x0) / (x1 - x0), 0.0, 1.0)
@@ -82,7 +82,7 @@ def test_linear_ramp_reference():
 
 # ------------------------------------------------------------------------- friction
 def test_adams_friction_law_of_the_reference():
-    from twin.reference.contact import adams_friction_force, adams_mu
+    from twin.physics.contact import adams_friction_force, adams_mu
 
     mus, mud, vs, vd = 0.08, 0.05, 1e-4, 0.01016
     v = np.concatenate([np.linspace(0, 2e-4, 201), np.geomspace(2e-4, 0.1, 200)])
@@ -185,10 +185,10 @@ _OFF_GRID = tuple(round(0.17 + 0.05 * k, 2) for k in range(17))
 
 
 def _recover(tmp_path, e_true: float, engine: str = "mujoco") -> float:
-    from twin.identification.restitution import SweepOptions, sweep_restitution, synthetic_recording
+    from twin.identification.restitution import SweepOptions, sweep_restitution, write_synthetic_recording
 
     cfg = named_preset("s001").replace(**{"simulation.engine": engine})
-    rec = synthetic_recording(cfg, tmp_path / f"s001_e{e_true}.mcap", e_true, noise_mps2=5.0, seed=7)
+    rec = write_synthetic_recording(cfg, tmp_path / f"s001_e{e_true}.mcap", e_true, noise_mps2=5.0, seed=7)
     res = sweep_restitution(rec, SweepOptions(coarse=_OFF_GRID))
     assert res.engine == engine and res.window_s == (0.0, 0.6) and res.rate_hz == 5000
     return res.restitution
@@ -233,10 +233,10 @@ def test_identify_restitution_command(tmp_path, capsys):
     import json
 
     from twin.cli import main
-    from twin.identification.restitution import synthetic_recording
+    from twin.identification.restitution import write_synthetic_recording
 
     cfg = named_preset("s001").replace(**{"simulation.duration_s": 0.4})
-    rec = synthetic_recording(cfg, tmp_path / "rec.mcap", 0.55, noise_mps2=5.0, seed=1)
+    rec = write_synthetic_recording(cfg, tmp_path / "rec.mcap", 0.55, noise_mps2=5.0, seed=1)
     out = tmp_path / "e.json"
     assert main(["identify", "restitution", str(rec), "--grid", "0.45,0.55,0.65", "--fine-step", "0",
                  "--json", str(out)]) == 0
@@ -278,7 +278,7 @@ def _impact_force(delta, rate, K, n, c_max, d_max):
 
 
 def test_adams_impact_law_of_the_reference():
-    from twin.reference.contact import LAW_CODES, adams_impact, normal_force
+    from twin.physics.contact import LAW_CODES, adams_impact, normal_force
 
     K, n, cmax, dmax = 3.1e10, 1.5, 27960.0, 1e-5
     for delta in (-1e-7, 0.0, 2e-6, 5e-6, 1e-5, 2e-5):
@@ -341,14 +341,14 @@ def test_impact_damping_recovered_from_a_synthetic_noisy_recording(tmp_path):
     """S001's own procedure (Table IV): sweep the IMPACT law's c_max until the slider acceleration
     matches; a noisy synthetic recording at the paper's 27 960 N s/m gives it back within 5 %
     (the coarse grid 6 100, 8 600, ... N s/m does not hold it)."""
-    from twin.identification.restitution import SweepOptions, sweep_restitution, synthetic_recording
+    from twin.identification.restitution import SweepOptions, sweep_restitution, write_synthetic_recording
 
     cfg = named_preset("s001").replace(**{"simulation.engine": "reference", "contact.law": "adams-impact"})
-    rec = synthetic_recording(cfg, tmp_path / "impact.mcap", 27960.0, noise_mps2=5.0, seed=7, parameter="c_max")
+    rec = write_synthetic_recording(cfg, tmp_path / "impact.mcap", 27960.0, noise_mps2=5.0, seed=7, parameter="c_max")
     res = sweep_restitution(rec, SweepOptions(parameter="c_max", coarse=tuple(6100.0 + 2500 * k for k in range(18))))
     assert res.parameter == "c_max" and res.restitution is None
     assert res.value == pytest.approx(27960.0, rel=0.05)
     with pytest.raises(ConfigError, match="adams-impact"):  # a c_max sweep needs the IMPACT law
-        sweep_restitution(synthetic_recording(named_preset("s001").replace(**{"simulation.engine": "reference",
+        sweep_restitution(write_synthetic_recording(named_preset("s001").replace(**{"simulation.engine": "reference",
                                                                               "simulation.duration_s": 0.1}),
                                               tmp_path / "ln.mcap", 0.55), SweepOptions(parameter="c_max"))

@@ -1,4 +1,4 @@
-"""The spatial scene family of the stability campaign (twin.spatial.stability)."""
+"""The spatial scene family of the stability campaign (twin.studies.spatial_stability)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import dataclasses
 import pytest
 
 from twin.config import ConfigError
-from twin.spatial.stability import run_scene, sample_scene
+from twin.studies.spatial_stability import run_scene, sample_scene
 from twin.studies.stability import StudySettings
 
 
@@ -34,7 +34,7 @@ def test_family_is_checked():
 
 
 def test_agreement_factor_is_the_bench_familys():
-    from twin.spatial import stability as spatial
+    from twin.studies import spatial_stability as spatial
     from twin.studies import stability as bench
 
     assert spatial.REFERENCE_AGREEMENT == bench.REFERENCE_AGREEMENT

@@ -28,9 +28,10 @@ def test_bench_draws_follow_the_plain_scene_and_cover_their_ranges():
 def test_short_bench_campaign_in_both_engines():
     """Two short bench scenes (a motor scene with guide play, a PID one), each in both engines: no
     divergence, no energy created."""
-    data = stability_study.run_study(None, stability_study.StudySettings(scenes=2, seed=1, duration_range_s=(0.1, 0.2), bench=True))
+    res = stability_study.run_study(stability_study.StudySettings(scenes=2, seed=1, duration_range_s=(0.1, 0.2), bench=True))
+    data = res.to_dict()
     s = data["summary"]
-    assert s["scenes"] == 4 and s["diverged"] == 0 and s["energy_created"] == 0, stability_study.one_line(data)
+    assert s["scenes"] == 4 and s["diverged"] == 0 and s["energy_created"] == 0, stability_study.one_line(res)
     assert [r["scene"]["engine"] for r in data["scenes"]] == list(SB.ENGINES) * 2
 
 
@@ -38,6 +39,6 @@ def test_short_bench_campaign_in_both_engines():
 def test_full_bench_campaign():
     """The full campaign (500 scenes of 0.5-3 s, each in both engines: about 25 min on 2 cores, estimated):
     0 divergences and no energy created."""
-    data = stability_study.run_study(None, stability_study.StudySettings(scenes=500, seed=1, bench=True))
-    s = data["summary"]
-    assert s["diverged"] == 0 and s["energy_created"] == 0, stability_study.one_line(data)
+    res = stability_study.run_study(stability_study.StudySettings(scenes=500, seed=1, bench=True))
+    s = res.summary
+    assert s["diverged"] == 0 and s["energy_created"] == 0, stability_study.one_line(res)

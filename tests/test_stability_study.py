@@ -18,7 +18,9 @@ from twin.studies import stability as stability_study
 def ci(tmp_path_factory):
     """The CI version (``--scenes 20 --seed 1 --quick``), written to a directory."""
     out = tmp_path_factory.mktemp("stability")
-    return out, stability_study.run_study(out, stability_study.quick(20, 1))
+    res = stability_study.run_study(stability_study.quick(20, 1), out=out)
+    assert isinstance(res, stability_study.StabilityResult)
+    return out, res.to_dict()
 
 
 def test_ci_campaign_is_stable(ci):
@@ -46,7 +48,7 @@ def test_ci_outputs(ci):
     assert "scenes passed: **20 / 20**" in md and md.count("\n| ") == 21
     assert (out / "stability.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert not list(out.glob(".*tmp"))
-    assert stability_study.one_line(data).startswith("stability PASS: 20/20 scenes passed, 0 diverged")
+    assert stability_study.one_line(stability_study.StabilityResult(data["settings"], data["summary"], data["scenes"])).startswith("stability PASS: 20/20 scenes passed, 0 diverged")
 
 
 def test_sampler_covers_the_space(ci):
@@ -156,7 +158,7 @@ def test_the_reference_re_run_deflects_under_the_twins_perturbed_stiffness(monke
         def __getitem__(self, k):
             return np.array([1e-6])
 
-    def fake_simulate_run(cfg):
+    def fake_simulate_run(cfg, inputs=None):
         seen.append(cfg)
         return FakeRun()
 

@@ -342,7 +342,8 @@ def test_spectrum_reads_amplitude_and_default_windows():
     (["view", "{d}/good.mcap", "--at", "0.1"], "--at: applies to --screenshot only"),
     (["view", "{d}/good.mcap", "--wait", "5"], "--wait: applies to --screenshot only"),
     (["view", "{d}/good.mcap", "--window-size", "800x450"], "--window-size: applies to --screenshot only"),
-    (["view", "{d}/good.mcap", "--screenshot", "{d}/shot.png", "--window-size", "16x9"], "--window-size: must be WIDTHx"),
+    (["view", "{d}/good.mcap", "--screenshot", "{d}/shot.png", "--window-size", "16x9"],
+     "--window-size: must be two whole numbers of pixels in 64..8192"),
     (["view", "{d}/good.mcap", "--fft-window", "0.5", "2.0"], "outside the run"),
     (["view", "{d}/good.mcap", "--fft-window", "0.1", "0.05"], "T0 < T1"),
 ])
@@ -513,6 +514,10 @@ def test_spawn_real_viewer_without_x_server(tmp_path, small_mcap, monkeypatch, c
     monkeypatch.setenv("DISPLAY", ":97")
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
     monkeypatch.delenv("WAYLAND_SOCKET", raising=False)
+    # the wait ends when the viewer exits, so a long check costs nothing here; the default 1.5 s was
+    # too short for the viewer to start and fail on a loaded machine (the test then saw it "open")
+    import twin.commands.view as view
+    monkeypatch.setattr(view, "SPAWN_CHECK_S", 60.0)
     assert cli("view", small_mcap, "--save", tmp_path / "run.rrd", "--spawn") == 2
     _one_line_error(capfd, "--spawn: the rerun viewer exited at once")
 

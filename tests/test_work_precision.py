@@ -69,8 +69,8 @@ def test_unknown_integrator_is_refused():
 def test_work_precision_rows_and_front(tmp_path):
     methods = {"R-matrix, symplectic Euler": (1e-4,), "R-matrix, explicit midpoint": (1e-3, 1e-4),
                "MuJoCo twin, Euler": (1e-4,)}
-    data = formulations_study.run_study(tmp_path, duration_s=0.2, cases=(formulations_study.Case("R-matrix", 1e-4),), progress=False,
-                       work_precision_methods=methods)
+    data = formulations_study.run_study(formulations_study.FormulationsOptions(
+        tmp_path, duration_s=0.2, cases=(formulations_study.Case("R-matrix", 1e-4),), work_precision_methods=methods)).to_dict()
     rows = data["work_precision"]
     assert [r["method"] for r in rows] == ["R-matrix, symplectic Euler", "R-matrix, explicit midpoint",
                                            "R-matrix, explicit midpoint", "MuJoCo twin, Euler"]

@@ -6,6 +6,9 @@ The Python API (each name is imported on first use, so ``import twin`` stays qui
   :class:`twin.config.BenchConfig` (Table 4 test 1..12 of the bench paper, or another mechanism);
 * ``twin.simulate(cfg, duration=0.5)``: simulate it; returns a :class:`twin.run.Run` in memory
   (``run.time`` [s], ``run["AC6"]`` a numpy array per channel, ``run.to_pandas()``);
+* ``twin.record(cfg, "rec.mcap")``: simulate ``cfg`` and write a bench recording of it through the
+  sensor chain (DAQ volts, encoder counts, motor command, static calibration), as the bench's DAQ
+  would; returns a :class:`twin.bench_record.RecordResult`;
 * ``twin.replay(recording, out_dir)``: replay a bench recording through the twin; returns the
   report (a dict) and writes the comparison folder;
 * ``twin.dataset.open(DIR)``: a generated dataset (:class:`twin.dataset.Dataset`: manifest,
@@ -35,7 +38,7 @@ __version__ = "0.4.0"
 
 #: the API's calls, by the module that defines them
 _CALLS = {"preset": "twin.api", "simulate": "twin.api", "replay": "twin.api", "identify": "twin.api",
-          "plot": "twin.api", "BenchConfig": "twin.config", "Run": "twin.run"}
+          "plot": "twin.api", "record": "twin.bench_record", "BenchConfig": "twin.config", "Run": "twin.run"}
 #: subpackages and modules reached as attributes (``twin.dataset.open``) without importing them first
 _MODULES = ("api", "config", "dataset", "errors", "run", "samples", "simulation")
 

@@ -77,7 +77,7 @@ def preset(which: int | str = 6) -> BenchConfig:
     >>> twin.preset(13)
     Traceback (most recent call last):
     ...
-    twin.errors.ConfigError: --test: must be a Table 4 test id 1..12, got 13
+    twin.errors.ConfigError: test: must be a Table 4 test id 1..12, got 13
     """
     from twin.config import named_preset
     from twin.config import preset as table4

@@ -5,8 +5,9 @@ PID; the virtual accelerometers go through the same sensor chain and the same ca
 real ones; the two are compared. Steps of :func:`replay`:
 
 1. read and validate the recording (:func:`twin.recording.read_recording`), repairs reported;
-2. encoder counts → encoder angle (count centres) → ``encoder_trace.npz`` in the output folder;
-   the drive's ``trace`` program turns it into the reference angle and rate with its zero-phase
+2. encoder counts → encoder angle (count centres), handed to the drive in memory
+   (:class:`twin.tracefile.DriveInputs`) and written to ``encoder_trace.npz`` in the output folder
+   as an output; the drive's ``trace`` program turns it into the reference angle and rate with its zero-phase
    filter (``drive.trace_filter_hz``, :meth:`twin.drive.DriveReference._prepare_trace`);
 3. simulate with the recording's bench configuration, or an overridden one (e.g. ideal joints
    on a clearance recording, as in Fig. 16), at the recording's sample rate
@@ -45,13 +46,14 @@ import numpy as np
 
 from twin.channels import encoder_from_bench
 from twin.config import ACCELEROMETERS, CHANNEL_GROUPS, BenchConfig
-from twin.errors import RecordingError, TwinError
+from twin.errors import ConfigError, RecordingError, TwinError
 from twin.instrument import (apply_chain, counts_to_angle, measured_accel, simulated_calibration)
 from twin.instrument.encoder import count_step_rad
 from twin.recording import read_recording
 from twin.run import Channel, Run
 from twin.signals import band_energy_db, dtw_compare, hann_spectrum
-from twin.util import json_default
+from twin.tracefile import DriveInputs
+from twin.util import json_default, json_text
 
 #: Frequency bands of S003 Fig. 15 where clearance raises spectral activity [Hz]. The paper
 #: shades them without giving edges; ±200 Hz around 1 kHz and ±300 Hz around 3 kHz is our
@@ -96,6 +98,16 @@ class ReplayOptions:
     progress: bool = False
     drive: str = "pid"
 
+    def __post_init__(self) -> None:
+        for name in ("max_lag_s", "dtw_window_s", "dtw_max_s"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not (math.isfinite(v) and 0 <= v <= 10):
+                raise ConfigError(name, f"must lie in [0, 10] s, got {v!r}")
+        if self.dtw_max_s < 0.001:  # DTW on a few samples says nothing
+            raise ConfigError("dtw_max_s", f"must be at least 0.001 s, got {self.dtw_max_s!r}")
+        if self.drive not in ("pid", "motor"):
+            raise ConfigError("drive", f"must be pid or motor, got {self.drive!r}")
+
 
 def replay_config(rec_cfg: BenchConfig, trace_file: Path, rec: Run, zero_g_v: dict[str, float]) -> BenchConfig:
     """Simulation configuration of a replay: ``rec_cfg`` driven by the trace at the recording's rate."""
@@ -116,10 +128,11 @@ def _window_indices(n: int, rate: float, window_s: tuple[float, float] | None,
     else:
         t0, t1 = window_s
         if not (0 <= t0 < t1 <= T + 1e-12):
-            raise TwinError(f"--window: need 0 <= start < stop <= {T:g} s (recording length), got {t0:g} {t1:g}")
+            raise TwinError(f"need 0 <= start < stop <= {T:g} s (recording length), got {t0:g} {t1:g}",
+                            field="window_s")
     i0, i1 = int(round(t0 * rate)), min(n, int(round(t1 * rate)))
     if i1 - i0 < 16:
-        raise TwinError(f"--window: {t0:g}..{t1:g} s holds fewer than 16 samples")
+        raise TwinError(f"{t0:g}..{t1:g} s holds fewer than 16 samples", field="window_s")
     return i0, i1
 
 
@@ -246,8 +259,8 @@ def replay(recording: str | Path, out_dir: str | Path,
     rec, info, repairs = read_recording(recording, nan=opts.nan)
     check_motion(rec, str(recording))
     if info.calibration is None:
-        raise RecordingError(f"{recording}: no calibration data; re-import it with --calibration STATIC "
-                             "(a static recording in the calibration pose) or --zero-g AC1=V,...")
+        raise RecordingError(f"{recording}: no calibration data; import it again with a static recording in the "
+                             "calibration pose or the six sensors' known zero-g offsets")
     rec_cfg = rec.config
     base = configure(rec_cfg) if configure is not None else rec_cfg
     inst = base.instrumentation
@@ -255,10 +268,8 @@ def replay(recording: str | Path, out_dir: str | Path,
         raise RecordingError(f"instrumentation.daq_rate_hz ({inst.daq_rate_hz:g} Hz) differs from the recording's "
                              f"rate ({rec.rate_hz:g} Hz)")
     trace = final / "encoder_trace.npz"
-    if opts.drive not in ("pid", "motor"):
-        raise TwinError(f"--drive: must be pid or motor, got {opts.drive!r}")
     if opts.drive == "motor" and "motor_command" not in rec:
-        raise RecordingError(f"{recording}: --drive motor needs the recording's motor_command channel; it has none")
+        raise RecordingError(f"{recording}: `drive` motor needs the recording's motor_command channel; it has none")
     # the simulated configuration (checked before anything is written) and the analysis window
     cfg = replay_config(base, trace, rec, dict(info.calibration.zero_g_v))
     if opts.drive == "motor":
@@ -285,7 +296,8 @@ def _replay_into(out: Path, recording: str | Path, rec: Run, info: Any, repairs:
                  rec_cfg: BenchConfig, base: BenchConfig, cfg: BenchConfig, window: tuple[int, int],
                  opts: ReplayOptions, wall0: float) -> dict[str, Any]:
     """Steps 2-6 of :func:`replay`, writing into the folder ``out`` (renamed into place by the
-    caller); the configuration ``cfg`` names the trace at its final place."""
+    caller); the configuration ``cfg`` names the trace at its final place (an output: the
+    simulation takes the trace's arrays in memory)."""
     from twin.mcapfile import write_run
     from twin.simulation import simulate_run
     from twin.util import atomic_write_json, atomic_write_text
@@ -296,20 +308,21 @@ def _replay_into(out: Path, recording: str | Path, rec: Run, info: Any, repairs:
     count = count_step_rad(cpr)
     phi = counts_to_angle(rec["encoder_counts"], cpr, centre=inst.encoder_quantization)
     t_rel = np.arange(rec.n) / rec.rate_hz
+    inputs = DriveInputs(trace=(t_rel, phi))
     trace = out / "encoder_trace.npz"
-    np.savez(trace, t=t_rel, angle=phi)
-    stored_cfg, cfg = cfg, cfg.replace(**{"drive.trace_file": str(trace)})  # run from here, store the final place
+    np.savez(trace, t=t_rel, angle=phi)  # an output (the configuration names it), never read back here
+    stored_cfg = cfg
 
     # 3. simulate
     t_sim = time.perf_counter()
-    sim = simulate_run(cfg, progress=opts.progress)
+    sim = simulate_run(cfg, progress=opts.progress, inputs=inputs)
     sim_wall = time.perf_counter() - t_sim
     if sim.n != rec.n:
         raise TwinError(f"internal: simulated {sim.n} samples for a {rec.n}-sample recording")
 
     # 4. virtual sensor chain + the bench's calibration on both sides
     # noise streams 2 and 3: independent of a synthetic recording's own (0 and 1)
-    sim_daq = apply_chain(sim, cfg, prefix="sim_", stream=2)
+    sim_daq = apply_chain(sim, cfg, prefix="sim_", stream=2, drive_inputs=inputs)
     sim_cal = simulated_calibration(cfg, opts.static_s, stream=3)
     sim_meas = measured_accel(sim_daq, sim_cal, prefix="sim_")
     rec_meas = measured_accel(rec, info.calibration)
@@ -381,7 +394,7 @@ def _replay_into(out: Path, recording: str | Path, rec: Run, info: Any, repairs:
                                                                   else np.float64)) for k, c in chans.items()}
     both = Run(rec.t0, rate, chans, stored_cfg, {**sim.meta, "replay_of": str(recording)})
     mcap_path = out / "replay.mcap"
-    write_run(mcap_path, both, extra_metadata={"twin.replay": {"json": json.dumps(report, default=json_default)},
+    write_run(mcap_path, both, extra_metadata={"twin.replay": {"json": json_text(report, indent=None)},
                                                "twin.recording": info.to_record()})
     report["files"]["mcap"] = mcap_path.name
     report["files"]["trace"] = trace.name
@@ -390,8 +403,8 @@ def _replay_into(out: Path, recording: str | Path, rec: Run, info: Any, repairs:
                                  track, pid, i0, sim, phi, cfg, rec.n / rate)
         report["files"]["plots"] = list(report["plots"])
     if opts.drive == "motor":
-        report["motor_drive"] = _motor_drive(out, rec, cfg, phi, window, lag, sensors, rec_meas, crank_rate_hz,
-                                             opts, comparison, tracking)
+        report["motor_drive"] = _motor_drive(out, rec, cfg, inputs, phi, window, lag, sensors, rec_meas,
+                                             crank_rate_hz, opts, comparison, tracking)
         report["files"]["motor_command_trace"] = "motor_command_trace.npz"
     report["wall_s"] = {"simulation": sim_wall, "total": time.perf_counter() - wall0}
     atomic_write_json(out / "report.json", json.loads(json.dumps(report, default=json_default)))
@@ -408,20 +421,23 @@ def motor_config(cfg: BenchConfig, command_trace: Path) -> BenchConfig:
                           "sensors.channels": groups})
 
 
-def _motor_drive(out: Path, rec: Run, cfg: BenchConfig, phi: np.ndarray, window: tuple[int, int], lag: int,
-                 sensors: list[str], rec_meas: Run, crank_rate_hz: float, opts: ReplayOptions,
+def _motor_drive(out: Path, rec: Run, cfg: BenchConfig, inputs: DriveInputs, phi: np.ndarray,
+                 window: tuple[int, int], lag: int, sensors: list[str], rec_meas: Run, crank_rate_hz: float,
+                 opts: ReplayOptions,
                  pid_comparison: dict[str, Any], pid_tracking: dict[str, Any]) -> dict[str, Any]:
     """The motor-driven replay (:class:`ReplayOptions` ``drive = "motor"``): simulate, put through the
     same sensor chain and calibration, compare over the same window with the PID replay's time lag."""
     from twin.simulation import simulate_run
 
+    t_cmd, volts = np.arange(rec.n) / rec.rate_hz, np.asarray(rec["motor_command"], dtype=np.float64)
+    inputs = DriveInputs(trace=inputs.trace, command=(t_cmd, volts))
     trace = out / "motor_command_trace.npz"
-    np.savez(trace, t=np.arange(rec.n) / rec.rate_hz, volts=np.asarray(rec["motor_command"], dtype=np.float64))
+    np.savez(trace, t=t_cmd, volts=volts)  # an output, never read back here
     mcfg = motor_config(cfg, trace)
     t0 = time.perf_counter()
-    sim = simulate_run(mcfg, progress=opts.progress)
+    sim = simulate_run(mcfg, progress=opts.progress, inputs=inputs)
     wall = time.perf_counter() - t0
-    sim_meas = measured_accel(apply_chain(sim, mcfg, prefix="sim_", stream=2),
+    sim_meas = measured_accel(apply_chain(sim, mcfg, prefix="sim_", stream=2, drive_inputs=inputs),
                               simulated_calibration(mcfg, opts.static_s, stream=3), prefix="sim_")
     i0, i1 = window
     j0, j1 = max(i0, -lag, 0), min(i1, rec.n - lag, rec.n)

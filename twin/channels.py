@@ -22,6 +22,10 @@ Conventions (bench frame of :mod:`twin.config`):
 * optional groups ``motor`` and ``drive_energy`` (``drive.mode`` "motor"/"torque"): see
   :mod:`twin.motor_drive` (motor angle/speed/torque, belt torque and slip, command voltage; the
   work, energy and dissipation accumulators of the energy balance).
+* optional group ``structure`` (``structure.mode = "flexible"``; MuJoCo engine): ``rod_deflection``: the
+  rod's mid-span point's distance from the chord B'–C' between the two bores' centres (+ to the left of
+  B'→C', i.e. along ẑ × (C' − B')) [m]; ``rod_stretch``: |C' − B'| − L [m]; ``frame_x``/``frame_y``: the
+  crank support's displacement, ``guide_y``: the guide support's, normal to the guide [m].
 * optional group ``energy`` (MuJoCo engine only; not computed unless asked for):
   ``energy_kinetic`` / ``energy_potential``: kinetic and gravitational potential energy of the
   three bodies (MuJoCo's ``e_kinetic``/``e_potential`` sensors; the soft contacts' elastic
@@ -134,6 +138,13 @@ _STATIC: dict[str, list[ChannelSpec]] = {
                     "gravitational potential energy of the mechanism (zero at the bench origin)"),
         ChannelSpec("slider_speed", "m/s", "energy", "float64", "slider velocity along the guide"),
     ],
+    # optional group of the flexible structure (structure.mode = "flexible")
+    "structure": [ChannelSpec(n, "m", "structure", "float64", d) for n, d in (
+        ("rod_deflection", "rod mid-span distance from the chord B'-C' (+: left of B'->C')"),
+        ("rod_stretch", "rod chord length |B'C'| minus its length"),
+        ("frame_x", "crank support (frame at A) displacement along x"),
+        ("frame_y", "crank support (frame at A) displacement along y"),
+        ("guide_y", "slider support (guide rails) displacement normal to the guide"))],
     # optional group of the spatial mechanism
     "slider_accel": [ChannelSpec("slider_acceleration", "m/s^2", "slider_accel", "float64",
                                  "slider acceleration along the guide")],

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import re
 import signal
 import sys
 import threading
@@ -30,6 +31,7 @@ if TYPE_CHECKING:
 #: modules providing subcommands (``register(subparsers)``), in help order
 COMMANDS: list[str] = [
     "twin.commands.simulate",
+    "twin.commands.record",
     "twin.commands.export_mjcf",
     "twin.commands.view",
     "twin.commands.plot",
@@ -81,7 +83,7 @@ class _Parser(argparse.ArgumentParser):
 
 #: configuration options, by what they describe (``add_config_args(p, options=...)``)
 SELECT_OPTIONS = ("config", "test")
-MODEL_OPTIONS = ("clearance_b", "clearance_c", "clearance_a", "clearance_guide", "orientation", "set")
+MODEL_OPTIONS = ("clearance_b", "clearance_c", "clearance_a", "clearance_guide", "orientation", "structure", "set")
 DRIVE_OPTIONS = ("speed", "protocol", "trace")
 RUN_OPTIONS = ("duration", "timestep", "engine", "channels", "output_rate", "drive_mode")
 ALL_CONFIG_OPTIONS = SELECT_OPTIONS + MODEL_OPTIONS + DRIVE_OPTIONS + RUN_OPTIONS
@@ -126,6 +128,13 @@ def add_config_args(p: argparse.ArgumentParser, options: Sequence[str] = ALL_CON
                             "between its rails (joints.clearance_guide_mm); 0 = the preloaded ideal guide")
     if "orientation" in has:
         g.add_argument("--orientation", choices=ORIENTATIONS, help="bench axis that points up")
+    if "structure" in has:
+        from twin.config import STRUCTURE_MODES
+
+        g.add_argument("--structure", choices=STRUCTURE_MODES,
+                       help="rigid (the default) or flexible: the connecting rod bends and stretches, the frame and "
+                            "the guide are sprung supports, the accelerometers sit on mounts ([structure] fields; "
+                            "the MuJoCo engine adds the channel group 'structure' unless --channels is given)")
     drive = [o for o in DRIVE_OPTIONS if o in has]
     sp = g.add_mutually_exclusive_group() if len(drive) > 1 else g
     if "speed" in has:
@@ -181,9 +190,22 @@ def _opt(args: argparse.Namespace, name: str) -> Any:
     return getattr(args, name, None)
 
 
+def load_config_file(path: str) -> BenchConfig:
+    """:func:`twin.config.load_config` for the ``--config`` option: an error about the file itself
+    (the library's ``path``) names ``--config``."""
+    from twin.config import load_config
+
+    try:
+        return load_config(path)
+    except ConfigError as err:
+        if err.field == "path":
+            raise ConfigError("--config", err.message) from None
+        raise
+
+
 def config_from_args(args: argparse.Namespace) -> BenchConfig:
     """Configuration from ``--config``/``--test`` plus the override options the command offers."""
-    from twin.config import ALL_CHANNEL_GROUPS, BenchConfig, load_config, preset, with_overrides
+    from twin.config import ALL_CHANNEL_GROUPS, BenchConfig, preset, with_overrides
 
     if _opt(args, "config") is not None and _opt(args, "test") is not None:
         raise ConfigError("--test", "cannot be combined with --config (put 'test = N' in the file)")
@@ -192,7 +214,7 @@ def config_from_args(args: argparse.Namespace) -> BenchConfig:
     if _opt(args, "test") is not None and _opt(args, "preset") is not None:
         raise ConfigError("--preset", "cannot be combined with --test: give one starting point")
     if _opt(args, "config") is not None:
-        cfg = load_config(args.config)
+        cfg = load_config_file(args.config)
     elif _opt(args, "test") is not None:
         cfg = preset(args.test)
     elif _opt(args, "preset") is not None:
@@ -232,6 +254,8 @@ def config_from_args(args: argparse.Namespace) -> BenchConfig:
         ov["sensors.output_rate_hz"] = args.output_rate
     if _opt(args, "engine"):
         ov["simulation.engine"] = args.engine
+    if _opt(args, "structure") is not None:
+        ov["structure.mode"] = args.structure
     if _opt(args, "drive_mode") is not None:
         ov["drive.mode"] = args.drive_mode
         if args.drive_mode in ("motor", "torque") and _opt(args, "channels") is None \
@@ -258,15 +282,20 @@ def config_from_args(args: argparse.Namespace) -> BenchConfig:
                     raise ConfigError(f"--set {k}", f"does not apply to this command (it sets {r.rstrip('.')} "
                                                     "itself or does not use it)")
             ov[k] = v
-    out = with_overrides(cfg, ov) if ov else cfg
-    if out.drive.mode == "torque":  # the torque drive follows drivetrain.torque_s/torque_nm, no speed program
+    if (_opt(args, "structure") == "flexible" and _opt(args, "channels") is None
+            and ov.get("simulation.engine", cfg.simulation.engine) == "mujoco"):
+        groups = list(ov.get("sensors.channels", cfg.sensors.channels))
+        if "structure" not in groups:  # the flexible structure's channels (MuJoCo engine)
+            ov["sensors.channels"] = groups + ["structure"]
+    if ov.get("drive.mode", cfg.drive.mode) == "torque":  # the torque drive follows its torque program, no speed
+        # program: the configuration refuses drive.program/motor speed too; here the flag that set it is named
         for flag, given in (("--speed", _opt(args, "speed")), ("--protocol", _opt(args, "protocol") or None),
                             ("--trace", _opt(args, "trace"))):
             if given is not None:
                 raise ConfigError(flag, "is not used with drive.mode = 'torque' (the motor follows the torque program "
                                         "drivetrain.torque_s/torque_nm, then coasts); leave it out or use another "
                                         "--drive-mode")
-    return out
+    return with_overrides(cfg, ov) if ov else cfg
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -278,7 +307,64 @@ def build_parser() -> argparse.ArgumentParser:
     sub.required = True
     for mod in COMMANDS:
         importlib.import_module(mod).register(sub)
+    for leaf in _leaf_parsers(parser):
+        leaf.set_defaults(_flags={a.dest: max(a.option_strings, key=len) for a in leaf._actions
+                                  if a.option_strings and a.dest not in (argparse.SUPPRESS, "help")})
     return parser
+
+
+def _leaf_parsers(parser: argparse.ArgumentParser):
+    """The parsers that run a command (those without subcommands of their own), each once."""
+    subs = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    if not subs:
+        yield parser
+    for a in subs:
+        for p in dict.fromkeys(a.choices.values()):  # an alias names the same parser
+            yield from _leaf_parsers(p)
+
+
+#: configuration fields that :func:`config_from_args` sets from an option (its ``dest``): a message naming
+#: such a field between backticks names the option too, where the command offers it
+CONFIG_FLAGS = {"joints.clearance_b_mm": "clearance_b", "joints.clearance_c_mm": "clearance_c",
+                "joints.clearance_a_mm": "clearance_a", "joints.clearance_guide_mm": "clearance_guide",
+                "mechanism.orientation": "orientation", "drive.motor_rpm": "speed", "drive.trace_file": "trace",
+                "simulation.duration_s": "duration", "simulation.timestep_s": "timestep",
+                "sensors.output_rate_hz": "output_rate", "simulation.engine": "engine", "drive.mode": "drive_mode",
+                "sensors.channels": "channels"}
+
+#: unit suffixes of the library's argument names (``max_lag_s``) that the flag leaves out (``--max-lag``)
+_UNIT_SUFFIXES = ("_s", "_hz", "_mm", "_m", "_rpm", "_n", "_deg", "_px")
+
+
+def error_message(err: TwinError, args: argparse.Namespace | None = None) -> str:
+    """The one-line message of ``err`` as the command line shows it.
+
+    The library names what an error is about by its own name (a Python argument, a dotted TOML
+    path): as :attr:`TwinError.field`, and in the text between backticks (``give `rate_hz` ``).
+    Where the running command sets that name with an option, the message names the option instead
+    (``max_lag_s: ...`` -> ``--max-lag: ...``). A command maps a name whose option is spelt otherwise
+    with ``set_defaults(_field_flags={name: flag})``; else a name maps to the option whose ``dest`` is
+    the name (less a unit suffix: ``max_lag_s`` -> ``--max-lag``). The field of the error maps only when
+    that option has a value (``test = 13`` in a ``--config`` file is not ``--test``)."""
+    if args is None:
+        return str(err)
+    explicit = getattr(args, "_field_flags", None) or {}
+    flags = getattr(args, "_flags", None) or {}
+
+    def flag_of(name: str, given_only: bool) -> str | None:
+        if name in explicit:
+            return explicit[name]
+        if not given_only and CONFIG_FLAGS.get(name) in flags:  # a configuration field this command sets
+            return f"{name} or {flags[CONFIG_FLAGS[name]]}"
+        for dest in [name] + [name[:-len(u)] for u in _UNIT_SUFFIXES if name.endswith(u)]:
+            if dest in flags and not (given_only and getattr(args, dest, None) is None):
+                return flags[dest]
+        return None
+
+    field = getattr(err, "field", None)
+    flag = flag_of(field, True) if field else None
+    text = f"{flag}: {err.message}" if flag else str(err)
+    return re.sub(r"`([^`\s][^`]*)`", lambda m: flag_of(m.group(1), False) or m.group(0), text)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -308,7 +394,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         sys.stdout.flush()  # a full disk under `> /dev/full` shows here, not as a traceback at exit
         return rc
     except TwinError as err:
-        return _fail(str(err))
+        return _fail(error_message(err, args))
     except Terminated:
         print("twin: terminated", file=sys.stderr)
         return 128 + signal.SIGTERM

@@ -32,6 +32,7 @@ from functools import lru_cache
 
 from twin.config import BenchConfig, joint_stiffness
 from twin.impact import linear_damping_ratio, linear_equivalent
+from twin.tracefile import DriveInputs
 
 #: impact speed at which a linear contact matches the Lankarani–Nikravesh contact duration [m/s]:
 #: the reference's linear law and the MuJoCo twin's first guess (impact speeds on the bench:
@@ -141,11 +142,16 @@ def johnson_elastic_force(delta: float, k: float, dr: float) -> float:
 _LINEAR_LAWS: dict[str, dict[str, tuple[float, float]]] = {}
 
 
-def initial_linear_law(cfg: BenchConfig) -> dict[str, tuple[float, float]]:
+def initial_linear_law(cfg: BenchConfig, inputs: DriveInputs | None = None) -> dict[str, tuple[float, float]]:
     """{joint: (k [N/m], c [N s/m])} of the linear law for ``cfg``, resolved as the reference
     engine resolves it: at the drive's initial pose, at rest (c from the effective mass along the
-    initial contact normal). The MuJoCo twin's native linear law takes these numbers."""
+    initial contact normal). The MuJoCo twin's native linear law takes these numbers. ``inputs``: the
+    recorded drive trace in memory, if any (its first angle is the pose of a "trace" program)."""
     key = cfg.digest()
+    if inputs is not None and inputs.trace is not None and cfg.drive.program == "trace":
+        import hashlib
+
+        key += ":" + hashlib.sha256(b"".join(a.tobytes() for a in inputs.trace)).hexdigest()
     if key not in _LINEAR_LAWS:
         import numpy as np
 
@@ -153,7 +159,7 @@ def initial_linear_law(cfg: BenchConfig) -> dict[str, tuple[float, float]]:
         from twin.natural_coordinates import N_Q, S_Q, effective_masses, initial_state, mechanism_params
 
         P = mechanism_params(cfg)
-        theta0 = float(DriveReference(cfg)(np.array([0.0]))[0][0])
+        theta0 = float(DriveReference(cfg, inputs)(np.array([0.0]))[0][0])
         q = initial_state(cfg, theta0)[S_Q:S_Q + N_Q]
         laws = {}
         for jt, m_eff in effective_masses(cfg, P, q).items():

@@ -24,7 +24,7 @@ import numpy as np
 from twin.channels import bench_from_encoder
 from twin.config import BenchConfig
 from twin.errors import ConfigError
-from twin.tracefile import load_trace, trace_duration  # noqa: F401 (trace_duration: re-exported)
+from twin.tracefile import DriveInputs, load_trace, trace_duration  # noqa: F401 (trace_duration: re-exported)
 
 RPM_TO_RAD_S = 2.0 * math.pi / 60.0
 
@@ -82,9 +82,12 @@ def _extrapolate(x: np.ndarray, n: int) -> np.ndarray:
 
 
 class DriveReference:
-    """Reference bench angle θ_ref(t) [rad] and rate ω_ref(t) [rad/s] of a configuration."""
+    """Reference bench angle θ_ref(t) [rad] and rate ω_ref(t) [rad/s] of a configuration.
 
-    def __init__(self, cfg: BenchConfig):
+    The "trace" program follows ``inputs.trace`` (t [s], encoder angle [rad]; the library passes the
+    arrays, e.g. a replay's recorded encoder), else the file ``drive.trace_file`` a user names."""
+
+    def __init__(self, cfg: BenchConfig, inputs: DriveInputs | None = None):
         self.cfg = cfg
         d = cfg.drive
         self.direction = cfg.mechanism.crank_direction
@@ -93,7 +96,7 @@ class DriveReference:
         if d.program == "trace":
             from twin.tracefile import check_trace_speed
 
-            t, phi = load_trace(d.trace_file)
+            t, phi = inputs.trace if inputs is not None and inputs.trace is not None else load_trace(d.trace_file)
             # the fastest crank the drive commands: the motor's ±1000 rpm through the belt, or crank_rpm
             check_trace_speed(t, phi, max(1000.0 / d.belt_ratio, abs(d.crank_rpm)), str(d.trace_file))
             self._trace = self._prepare_trace(t, phi)

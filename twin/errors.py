@@ -10,7 +10,25 @@ from typing import Iterable
 
 
 class TwinError(Exception):
-    """Base of every error the twin raises on purpose."""
+    """Base of every error the twin raises on purpose.
+
+    ``field`` (keyword) names what the error is about in the library's own terms: a dotted TOML path
+    (``joints.clearance_b_mm``) or the Python argument's name (``max_lag_s``), never a command-line
+    flag. The message then reads ``"field: message"``, and :attr:`field` and :attr:`message` keep the
+    two parts apart so that a front end can name the field its own way (the CLI shows the flag that
+    sets it). Errors about no single input leave ``field`` as None.
+    """
+
+    #: the parameter or configuration field the error is about, or None
+    field: str | None = None
+    #: the message without the field
+    message: str = ""
+
+    def __init__(self, *args: object, field: str | None = None):
+        if field is not None:
+            self.field, self.message = field, " ".join(str(a) for a in args)
+            args = (f"{field}: {self.message}",)
+        super().__init__(*args)
 
 
 class ConfigError(TwinError, ValueError):

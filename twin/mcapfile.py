@@ -57,7 +57,7 @@ from twin import __version__
 from twin.config import BenchConfig, config_from_toml
 from twin.errors import RecordingError, TwinError
 from twin.run import Channel, Run
-from twin.util import check_not_link, json_default, open_new, remove_stale_temps, temp_path
+from twin.util import check_not_link, json_text, open_new, remove_stale_temps, temp_path
 
 #: what a damaged file raises while it is read (LZ4's frame decoder raises RuntimeError)
 _UNREADABLE = (McapError, ZstdError, RuntimeError, EOFError, struct.error, ValueError, KeyError)
@@ -151,6 +151,21 @@ MSG: std_msgs/Header
 builtin_interfaces/Time stamp
 string frame_id
 """
+
+
+def check_preview_rate(preview_rate_hz: float, rate_hz: float | None = None) -> float:
+    """The rule of a preview rate [Hz]: 0 (no preview) or a finite rate > 0, at most the run's
+    ``rate_hz`` when known (a preview is a block mean of full-rate samples); a one-line
+    :class:`TwinError` about ``preview_rate_hz`` otherwise."""
+    ok = isinstance(preview_rate_hz, (int, float, np.integer, np.floating)) and not isinstance(preview_rate_hz, bool) \
+        and np.isfinite(preview_rate_hz) and preview_rate_hz >= 0
+    if ok and rate_hz is not None and preview_rate_hz > rate_hz:
+        ok = False
+    if not ok:
+        raise TwinError(("must be >= 0 Hz (0 = no preview)" if rate_hz is None else
+                         f"must be 0 (no preview) or a rate up to the output rate {rate_hz:g} Hz")
+                        + f", got {preview_rate_hz!r}", field="preview_rate_hz")
+    return float(preview_rate_hz)
 
 
 def preview_factor(rate_hz: float, preview_rate_hz: float) -> int:
@@ -247,16 +262,14 @@ class RunWriter:
                  compression: str = "none", preview_rate_hz: float = 0.0):
         self.path = Path(path)
         if compression not in _COMPRESSION:
-            raise TwinError(f"compression: must be one of {', '.join(_COMPRESSION)}, got {compression!r}")
-        if not (np.isfinite(preview_rate_hz) and preview_rate_hz >= 0):
-            raise TwinError(f"preview rate: must be >= 0 Hz (0 = no preview), got {preview_rate_hz!r}")
-        self.preview_rate_hz = float(preview_rate_hz)
+            raise TwinError(f"must be one of {', '.join(_COMPRESSION)}, got {compression!r}", field="compression")
+        self.preview_rate_hz = check_preview_rate(preview_rate_hz)  # the run's rate is known at its first block
         self._preview: _Preview | None = None
         self.compression = _COMPRESSION[compression]
-        if self.path.suffix != ".mcap":
-            raise TwinError(f"--out: run files must end in .mcap, got {self.path.name}")
+        if self.path.suffix.lower() != ".mcap":
+            raise TwinError(f"run files must end in .mcap, got {self.path.name}", field="path")
         if not self.path.parent.is_dir():
-            raise TwinError(f"--out: directory {self.path.parent} does not exist")
+            raise TwinError(f"directory {self.path.parent} does not exist", field="path")
         self.tmp = temp_path(self.path)
         self.config = config
         self.block = int(block)
@@ -355,9 +368,9 @@ class RunWriter:
         self._w.add_metadata("twin.run", {
             "format": FORMAT, "t0": repr(float(self.t0 or 0.0)), "rate_hz": repr(float(self.rate_hz or 0.0)),
             "n": str(self._written), "channels": ",".join(self._channels or []),
-            "meta": json.dumps(meta or {}, sort_keys=True, default=json_default)})
+            "meta": json_text(meta or {}, indent=None, sort_keys=True)})
         if summary is not None:
-            self._w.add_metadata("twin.summary", {"json": json.dumps(summary, sort_keys=True, default=json_default)})
+            self._w.add_metadata("twin.summary", {"json": json_text(summary, indent=None, sort_keys=True)})
         self._w.finish()
         self._fh.close()
         try:

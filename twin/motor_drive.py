@@ -17,10 +17,11 @@ import functools
 import numpy as np
 
 from twin.config import BenchConfig
+from twin.tracefile import DriveInputs, check_command
 
 
 @functools.lru_cache(maxsize=4)
-def _command_trace(path: str, mtime_ns: int) -> tuple[np.ndarray, np.ndarray]:  # noqa: ARG001 - cache key
+def _command_file(path: str, mtime_ns: int) -> tuple[np.ndarray, np.ndarray]:  # noqa: ARG001 - cache key
     from twin.errors import ConfigError
 
     try:
@@ -28,26 +29,16 @@ def _command_trace(path: str, mtime_ns: int) -> tuple[np.ndarray, np.ndarray]:  
             t, v = np.asarray(z["t"], dtype=np.float64), np.asarray(z["volts"], dtype=np.float64)
     except (OSError, KeyError, ValueError) as err:
         raise ConfigError("drivetrain.command_file", f"{path}: needs arrays 't' and 'volts' ({err})") from None
-    if t.ndim != 1 or t.shape != v.shape or t.size < 2 or np.any(np.diff(t) <= 0) \
-            or not (np.all(np.isfinite(t)) and np.all(np.isfinite(v))):
-        raise ConfigError("drivetrain.command_file", f"{path}: 't' must increase and match 'volts', all finite")
-    worst = float(np.abs(v).max())
-    if worst > COMMAND_LIMIT_V:
-        raise ConfigError("drivetrain.command_file",
-                          f"{path}: 'volts' reaches {worst:g} V, outside the DAQ's ±10 V analog command (a command "
-                          f"beyond ±{COMMAND_LIMIT_V:g} V is no recording of it: volts, not rpm or mV?)")
-    return t, v
+    return check_command(t, v, path)
 
 
-#: largest magnitude of a recorded motor command [V]: the DAQ's ±10 V analog output (S003 §2.3.1) with 2 % for
-#: its offset and gain error
-COMMAND_LIMIT_V = 10.2
-
-
-def command_trace(cfg: BenchConfig) -> tuple[np.ndarray, np.ndarray] | None:
-    """(t [s], volts [V]) of ``drivetrain.command_file``, or None."""
+def command_trace(cfg: BenchConfig, inputs: DriveInputs | None = None) -> tuple[np.ndarray, np.ndarray] | None:
+    """(t [s], volts [V]) of the recorded motor command: ``inputs.command`` (in memory), else the
+    file ``drivetrain.command_file`` a user names, else None."""
     import os
 
+    if inputs is not None and inputs.command is not None:
+        return inputs.command
     path = cfg.drivetrain.command_file
     if not path:
         return None
@@ -55,15 +46,16 @@ def command_trace(cfg: BenchConfig) -> tuple[np.ndarray, np.ndarray] | None:
         from twin.errors import ConfigError
 
         raise ConfigError("drivetrain.command_file", f"no such file: {path}")
-    return _command_trace(path, os.stat(path).st_mtime_ns)
+    return _command_file(path, os.stat(path).st_mtime_ns)
 
 
-def motor_input(cfg: BenchConfig, k0: int, nstep: int, omega_ref: np.ndarray) -> np.ndarray:
+def motor_input(cfg: BenchConfig, k0: int, nstep: int, omega_ref: np.ndarray,
+                inputs: DriveInputs | None = None) -> np.ndarray:
     """Per-step motor input of steps k0 .. k0 + nstep − 1, about +z like the crank angle: speed set
     point [rad/s] ("motor") or motor torque [N m] ("torque"); a positive command turns the crank
-    in ``mechanism.crank_direction``."""
+    in ``mechanism.crank_direction``. ``inputs``: the recorded motor command in memory, if any."""
     if cfg.drive.mode == "motor":
-        rec = command_trace(cfg)
+        rec = command_trace(cfg, inputs)
         if rec is not None:
             t = (k0 + np.arange(nstep)) * cfg.simulation.timestep_s
             rpm = np.interp(t, rec[0], rec[1]) / cfg.instrumentation.command_v_per_rpm
@@ -73,17 +65,18 @@ def motor_input(cfg: BenchConfig, k0: int, nstep: int, omega_ref: np.ndarray) ->
     return np.ascontiguousarray(cfg.mechanism.crank_direction * cfg.drivetrain.torque_program(t))
 
 
-def command_voltage(cfg: BenchConfig, t: np.ndarray) -> np.ndarray:
-    """Analog command [V] at times ``t`` (see the module docstring)."""
+def command_voltage(cfg: BenchConfig, t: np.ndarray, inputs: DriveInputs | None = None) -> np.ndarray:
+    """Analog command [V] at times ``t`` (see the module docstring); ``inputs``: the recorded trace
+    or motor command in memory, if any."""
     if cfg.drive.mode == "torque":
         dt = cfg.drivetrain
         return 10.0 * dt.torque_program(t) / dt.peak_torque_nm
-    rec = command_trace(cfg)
+    rec = command_trace(cfg, inputs)
     if rec is not None:
         return np.interp(t, rec[0], rec[1])
     from twin.drive import DriveReference
 
-    return cfg.instrumentation.command_v_per_rpm * DriveReference(cfg).command_rpm(t)
+    return cfg.instrumentation.command_v_per_rpm * DriveReference(cfg, inputs).command_rpm(t)
 
 
 def crank_side_inertia(cfg: BenchConfig, theta: float) -> float:

@@ -50,6 +50,45 @@ SLIDER_BLOCK = "slider_block"
 GUIDE_RAIL = "guide_rail"
 
 
+# the flexible structure (structure.mode = "flexible", twin.mujoco_engine.flexible): the rod's chain
+# (ROD is its root, the housing at B), the supports of the crank (frame at A) and of the slider (guide)
+ROD_END_C = "rod_end_C"
+FRAME_SUPPORT = "frame_support"
+FRAME_X = "frame_x"
+FRAME_Y = "frame_y"
+GUIDE_SUPPORT = "guide_support"
+GUIDE_Y = "guide_y"
+#: site at the rod's mid-span (the deflection channel)
+ROD_MID = "rod_mid"
+#: sensors of the optional channel group "structure"
+SENSOR_ROD_B = "rod_pos_B"
+SENSOR_ROD_MID = "rod_pos_mid"
+SENSOR_ROD_C = "rod_pos_C"
+SENSOR_FRAME_X = "frame_x"
+SENSOR_FRAME_Y = "frame_y"
+SENSOR_GUIDE_Y = "guide_y"
+
+
+def rod_segment(k: int) -> str:
+    """Body of the flexible rod's k-th segment (1-based, from B)."""
+    return f"rod_seg_{k}"
+
+
+def rod_segment_beam(k: int) -> str:
+    """Visual beam geom of the flexible rod's k-th segment."""
+    return f"rod_beam_{k}"
+
+
+def rod_bend(i: int) -> str:
+    """The flexible rod's i-th elastic hinge (bending; 1-based, from B)."""
+    return f"rod_bend_{i}"
+
+
+def rod_axial(i: int) -> str:
+    """The flexible rod's i-th elastic slide (axial; 1-based, from B)."""
+    return f"rod_axial_{i}"
+
+
 def pin(joint: str) -> str:
     """Pin geom and site of clearance joint ``joint`` ("A": the crank's journal, on the crank at
     its origin; "B" on the crank; "C" on the slider)."""
@@ -149,7 +188,7 @@ def sensor_friction(joint: str) -> str:
     return f"friction_{joint}"
 
 
-#: marker of a bushing bore in the geom user data's "marker" field (must match BORE_MAGIC in _bore.c)
+#: marker of a bushing bore in the geom user data's "marker" field (must match BORE_MAGIC in _native.h)
 BORE_MAGIC = 7301.0
 
 #: Layout of a bushing bore's geom user data (``nuser_geom`` = its length), read by index by the

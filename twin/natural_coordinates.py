@@ -114,7 +114,7 @@ P_MU0, P_V0, P_V1, P_FGUIDE = 29, 30, 31, 32
 P_KP, P_KV, P_KI, P_IMAX, P_H = 33, 34, 35, 36, 37
 P_NEWTON_TOL, P_NEWTON_MAXIT = 38, 39
 P_SENS = 40            # 6 sensors × (body 0 rod / 1 slider, x, y, axis 0 +x 1 −x 2 +y 3 −y)
-# clearance-joint friction law (twin.reference.contact.FRICTION_CODES: 0 regularized Coulomb with
+# clearance-joint friction law (twin.physics.contact.FRICTION_CODES: 0 regularized Coulomb with
 # P_MU0, P_V0, P_V1; 1 Adams/COSMOS with μ_d = P_MU0, μ_s, v_s, v_d)
 P_FRIC_LAW, P_MUS, P_VS, P_VD = P_SENS + 24, P_SENS + 25, P_SENS + 26, P_SENS + 27
 P_DMAX = P_VD + 1       # penetration of full damping of the ADAMS IMPACT law (its c_max in P_CLIN_B/C)

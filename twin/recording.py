@@ -24,13 +24,13 @@ samples (or, with ``nan="interpolate"``, a reported repair of gaps up to
 :data:`MAX_NAN_GAP` samples), a sample rate different from ``instrumentation.daq_rate_hz``,
 non-integer encoder counts, and encoder jumps the crank cannot make (short glitches are
 repaired and reported, steps are errors). Table imports also check that the time column is
-strictly increasing and regular, in seconds, and that it agrees with ``--rate``; that NPZ columns
+strictly increasing and regular, in seconds, and that it agrees with ``rate_hz``; that NPZ columns
 are 1-D arrays of real numbers (int, uint, float: no bool, complex, object/pickle, string or date
 types) of one length and CSV files UTF-8 text with one number per header column on every line
 (the error names the line and column); that imported volts lie in the DAQ's input range
 (``instrumentation.daq_range``, the motor command in ±10 V) and counts within ±2**53; and that
-``--map``, ``--rate``, ``--zero-g`` (inside the sensor's output range) and ``--encoder-modulus``
-make sense. Every such error is one :class:`RecordingError` line naming the file or option.
+``mapping``, ``rate_hz``, ``zero_g_v`` (inside the sensor's output range) and ``encoder_modulus``
+make sense. Every such error is one :class:`RecordingError` line naming the file or argument.
 """
 
 from __future__ import annotations
@@ -52,7 +52,7 @@ from twin.instrument.calibration import Calibration, calibrate_static, calibrati
 from twin.instrument.chain import DAQ_GROUP
 from twin.instrument.encoder import check_counts, max_counts_per_sample, unwrap_counts
 from twin.run import Channel, Run
-from twin.util import json_default
+from twin.util import json_text
 
 RECORDING_FORMAT = "twin-recording/1"
 RECORDING_RECORD = "twin.recording"
@@ -71,8 +71,8 @@ UNIT_ALIASES: dict[str, tuple[str, float]] = {
 MAX_NAN_GAP = 16
 #: Relative tolerance of the sample rate against the configuration and of time regularity.
 RATE_TOL = 1e-4
-#: how closely a stored recording's rate must match the configured DAQ rate (and --rate the time
-#: column) [-]: replay and identify compare the two to this precision
+#: how closely a stored recording's rate must match the configured DAQ rate (and ``rate_hz`` the
+#: time column) [-]: replay and identify compare the two to this precision
 STORED_RATE_TOL = 1e-6
 
 
@@ -109,7 +109,7 @@ class RecordingInfo:
                 "extra": self.extra}
 
     def to_record(self) -> dict[str, str]:
-        return {"format": RECORDING_FORMAT, "json": json.dumps(self.to_dict(), sort_keys=True, default=json_default)}
+        return {"format": RECORDING_FORMAT, "json": json_text(self.to_dict(), indent=None, sort_keys=True)}
 
     @classmethod
     def from_record(cls, record: Mapping[str, str], where: str = "") -> "RecordingInfo":
@@ -215,13 +215,13 @@ def validate_daq(run: Run, cfg: BenchConfig, nan: str = "error", encoder_repair:
                 m = int(encoder_modulus)
                 step = encoder_max_step(cfg, run.rate_hz)
                 if m <= 2 * step:
-                    raise RecordingError(f"--encoder-modulus: {m} is too small: at {run.rate_hz:g} Hz the crank can move "
+                    raise RecordingError(f"{m} is too small: at {run.rate_hz:g} Hz the crank can move "
                                          f"{step:.3g} counts per sample, so a counter wrapping at {m} cannot be "
-                                         f"unwrapped (needs more than {2 * step:.3g})")
+                                         f"unwrapped (needs more than {2 * step:.3g})", field="encoder_modulus")
                 if np.max(np.abs(x)) >= m:
                     i = int(np.argmax(np.abs(x) >= m))
                     raise RecordingError(f"{where}: encoder_counts reaches {x[i]:.0f} at sample {i}, not below "
-                                         f"--encoder-modulus {m}: the counter does not wrap at {m}")
+                                         f"`encoder_modulus` {m}: the counter does not wrap at {m}")
                 x = unwrap_counts(x, m)
                 repairs.append(f"encoder_counts: unwrapped a counter of modulus {int(encoder_modulus)}")
             try:
@@ -233,7 +233,7 @@ def validate_daq(run: Run, cfg: BenchConfig, nan: str = "error", encoder_repair:
             if nan == "error":
                 i = int(np.flatnonzero(~np.isfinite(x))[0])
                 raise RecordingError(f"{where}: channel {name} has a NaN or infinite sample at sample {i} "
-                                     f"(t = {run.t0 + i / run.rate_hz:.6f} s); import with --repair-nan to "
+                                     f"(t = {run.t0 + i / run.rate_hz:.6f} s); import with `nan='interpolate'` to "
                                      f"interpolate gaps of up to {MAX_NAN_GAP} samples")
             x = _fill_nan(x, name, run.rate_hz, repairs)
         if name.startswith("volt_AC") and x.size:
@@ -294,21 +294,22 @@ def parse_mapping(items: list[str] | None) -> dict[str, tuple[str, str | None]]:
             if not part:
                 continue
             if "=" not in part:
-                raise RecordingError(f"--map: expects TARGET=SOURCE[:UNIT], got {part!r}")
+                raise RecordingError(f"expects TARGET=SOURCE[:UNIT], got {part!r}", field="mapping")
             target, src = (s.strip() for s in part.split("=", 1))
             unit = None
             if ":" in src:
                 src, unit = (s.strip() for s in src.rsplit(":", 1))
                 if not unit:
-                    raise RecordingError(f"--map: empty unit after ':' in {part!r}; give TARGET=SOURCE:UNIT or "
-                                         "leave out ':'")
+                    raise RecordingError(f"empty unit after ':' in {part!r}; give TARGET=SOURCE:UNIT or "
+                                         "leave out ':'", field="mapping")
             allowed = REQUIRED_CHANNELS + OPTIONAL_CHANNELS + ("t",)
             if target not in allowed:
-                raise RecordingError(f"--map: unknown target channel {target!r}; allowed: {', '.join(allowed)}")
+                raise RecordingError(f"unknown target channel {target!r}; allowed: {', '.join(allowed)}", field="mapping")
             if not src:
-                raise RecordingError(f"--map: empty source column for {target!r}")
+                raise RecordingError(f"empty source column for {target!r}", field="mapping")
             if target in out:
-                raise RecordingError(f"--map: {target} is mapped twice ({out[target][0]!r} and {src!r}); give it once")
+                raise RecordingError(f"{target} is mapped twice ({out[target][0]!r} and {src!r}); give it once",
+                                     field="mapping")
             out[target] = (src, unit)
     return out
 
@@ -478,10 +479,10 @@ def read_table(path: str | Path) -> tuple[dict[str, np.ndarray], dict[str, str]]
 
 
 def _time_base(t: np.ndarray | None, rate_hz: float | None, n: int, where: str) -> tuple[float, float]:
-    """(t0, rate) from a time column and/or --rate, with monotonicity and regularity checks."""
+    """(t0, rate) from a time column and/or ``rate_hz``, with monotonicity and regularity checks."""
     if t is None:
         if rate_hz is None:
-            raise RecordingError(f"{where}: no time column; give the sample rate with --rate")
+            raise RecordingError(f"{where}: no time column; give the sample rate (`rate_hz`)")
         return 0.0, float(rate_hz)
     with np.errstate(over="ignore", invalid="ignore"):
         t = np.asarray(t, dtype=np.float64)
@@ -514,10 +515,10 @@ def _time_base(t: np.ndarray | None, rate_hz: float | None, n: int, where: str) 
     if not math.isfinite(rate):
         raise RecordingError(f"{where}: time step {h:.3g} s is too small (the time column must be in seconds)")
     if rate_hz is not None and abs(rate - rate_hz) > STORED_RATE_TOL * rate_hz:
-        # the rate stored is --rate's: it must be the time column's, to the precision replay and
+        # the rate stored is rate_hz's: it must be the time column's, to the precision replay and
         # identify compare rates with (a rate accepted here and refused there helps no one)
-        raise RecordingError(f"{where}: wrong sample rate: the time column says {rate:.9g} Hz, --rate says "
-                             f"{rate_hz:.9g} Hz (they must agree to {STORED_RATE_TOL:g}; leave out --rate)")
+        raise RecordingError(f"{where}: wrong sample rate: the time column says {rate:.9g} Hz, `rate_hz` says "
+                             f"{rate_hz:.9g} Hz (they must agree to {STORED_RATE_TOL:g}; leave out `rate_hz`)")
     if rate_hz is not None:
         rate = float(rate_hz)
     else:
@@ -540,13 +541,13 @@ RANGE_MARGIN = 0.01
 
 
 def check_encoder_modulus(modulus: Any) -> None:
-    """``--encoder-modulus``: None (no wrapping) or an integer in [2, 2**64]."""
+    """``encoder_modulus``: None (no wrapping) or an integer in [2, 2**64]."""
     if modulus is None:
         return
     if isinstance(modulus, bool) or not isinstance(modulus, (int, np.integer)) \
             or not 2 <= int(modulus) <= MAX_ENCODER_MODULUS:
-        raise RecordingError(f"--encoder-modulus: must be an integer in [2, 2**64] (the count at which the "
-                             f"counter wraps, e.g. 4294967296), got {modulus!r}")
+        raise RecordingError(f"must be an integer in [2, 2**64] (the count at which the "
+                             f"counter wraps, e.g. 4294967296), got {modulus!r}", field="encoder_modulus")
 
 
 def _check_range(x: np.ndarray, target: str, src: str, cfg: BenchConfig, rate: float, where: str) -> None:
@@ -589,12 +590,12 @@ def import_table(path: str | Path, cfg: BenchConfig, mapping: Mapping[str, tuple
     """
     p = Path(path)
     if rate_hz is not None and not (isinstance(rate_hz, (int, float)) and math.isfinite(rate_hz) and rate_hz > 0):
-        raise RecordingError(f"--rate: must be a finite sample rate > 0 Hz, got {rate_hz!r}")
+        raise RecordingError(f"must be a finite sample rate > 0 Hz, got {rate_hz!r}", field="rate_hz")
     check_encoder_modulus(encoder_modulus)
     cols, header_units = read_table(p)
     mapping = dict(mapping or {})
     where = str(p)
-    flag = "--map t=" if "t" in mapping else "--time-column"
+    flag = "`mapping` t=" if "t" in mapping else "`time_column`"
     explicit_t = "t" in mapping or time_column != "t"
     tname, tunit = mapping.pop("t", (time_column, None))
     t = cols.get(tname)
@@ -617,17 +618,17 @@ def import_table(path: str | Path, cfg: BenchConfig, mapping: Mapping[str, tuple
         src, unit = mapping.get(target, (target, None))
         if src in used and src in cols:
             raise RecordingError(f"{where}: column {src!r} would be both {used[src]} and {target}; each channel "
-                                 f"needs its own column (--map {target}=COLUMN)")
+                                 f"needs its own column (`mapping` {target}=COLUMN)")
         used[src] = target
         if src not in cols:
             if target in require:
                 raise RecordingError(f"{where}: missing channel {target} (no column {src!r}; columns: "
-                                     f"{', '.join(cols)}); map it with --map {target}=COLUMN")
+                                     f"{', '.join(cols)}); map it with `mapping` {target}=COLUMN")
             continue
         unit = unit or header_units.get(src)
         if unit is None:
             raise RecordingError(f"{where}: unknown unit of column {src!r} ({target}); give it in the header "
-                                 f"as '{src} [{CHANNEL_UNITS[target]}]' or with --map {target}={src}:{CHANNEL_UNITS[target]}")
+                                 f"as '{src} [{CHANNEL_UNITS[target]}]' or with `mapping` {target}={src}:{CHANNEL_UNITS[target]}")
         if unit not in UNIT_ALIASES or UNIT_ALIASES[unit][0] != CHANNEL_UNITS[target]:
             ok = [u for u, (s, _) in UNIT_ALIASES.items() if s == CHANNEL_UNITS[target]]
             raise RecordingError(f"{where}: unknown unit {unit!r} for {target} (column {src!r}); "
@@ -645,7 +646,7 @@ def import_table(path: str | Path, cfg: BenchConfig, mapping: Mapping[str, tuple
     rate_cfg = cfg.instrumentation.daq_rate_hz
     if RATE_TOL * rate_cfg >= abs(rate - rate_cfg) > STORED_RATE_TOL * rate_cfg:
         raise RecordingError(f"{where}: sampled at {rate:.9g} Hz but instrumentation.daq_rate_hz is {rate_cfg:g} Hz; "
-                             f"replay and identify need them equal to {STORED_RATE_TOL:g} (--rate, or set "
+                             f"replay and identify need them equal to {STORED_RATE_TOL:g} (`rate_hz`, or set "
                              f"instrumentation.daq_rate_hz = {rate:.9g})")
     run = Run.from_arrays(t0, rate, arrays, cfg, {"imported_from": str(p)}, units=units, groups=groups)
     if set(require) == set(REQUIRED_CHANNELS):
@@ -711,16 +712,16 @@ def calibration_from_offsets(cfg: BenchConfig, zero_g_v: Mapping[str, float], so
     """Calibration from known zero-g offsets (e.g. a lab calibration sheet)."""
     for k, v in zero_g_v.items():
         if k not in ACCELEROMETERS:
-            raise RecordingError(f"--zero-g: unknown sensor {k!r}; allowed: {', '.join(ACCELEROMETERS)}")
+            raise RecordingError(f"unknown sensor {k!r}; allowed: {', '.join(ACCELEROMETERS)}", field="zero_g_v")
         if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) or not math.isfinite(v):
-            raise RecordingError(f"--zero-g: {k} must be a finite voltage, got {v!r}")
+            raise RecordingError(f"{k} must be a finite voltage, got {v!r}", field="zero_g_v")
         supply = cfg.instrumentation.supply_v
         if not 0.0 < v < supply:
-            raise RecordingError(f"--zero-g: {k} = {v:g} V is outside the sensor's output range; allowed: "
-                                 f"(0, supply_v = {supply:g}) V (nominal {supply / 2:g} V)")
+            raise RecordingError(f"{k} = {v:g} V is outside the sensor's output range; allowed: "
+                                 f"(0, supply_v = {supply:g}) V (nominal {supply / 2:g} V)", field="zero_g_v")
     missing = [a for a in ACCELEROMETERS if a not in zero_g_v]
     if missing:
-        raise RecordingError(f"--zero-g: no offset for {', '.join(missing)}")
+        raise RecordingError(f"no offset for {', '.join(missing)}", field="zero_g_v")
     sens = nominal_sensitivities(cfg)
     return Calibration({k: float(v) for k, v in zero_g_v.items()}, sens, calibration_pose_g(cfg), source=source)
 
@@ -772,12 +773,22 @@ def synthetic_recording(truth: Run, cfg: BenchConfig, notes: str = "", static_s:
     """A bench recording made by the twin: the sensor chain of ``cfg.instrumentation`` on a
     simulated ``truth`` run (motor command from ``cfg``'s drive program), calibrated by a
     simulated static recording through the same chain (Eq. 1–4)."""
-    from twin.instrument import apply_chain, simulated_calibration
+    from twin.instrument import apply_chain
 
-    daq = apply_chain(truth, cfg)
+    return synthetic_daq_recording(apply_chain(truth, cfg), cfg, truth.meta, notes, static_s, extra, created_by)
+
+
+def synthetic_daq_recording(daq: Run, cfg: BenchConfig, truth_meta: Mapping[str, Any], notes: str = "",
+                            static_s: float = 1.0, extra: Mapping[str, Any] | None = None,
+                            created_by: str = "twin.recording") -> tuple[Run, RecordingInfo]:
+    """The recording of DAQ channels ``daq`` that the sensor chain of ``cfg`` made from a simulated run
+    (whose metadata is ``truth_meta``): validated as an import is, with the calibration of a simulated
+    static recording of ``static_s`` [s] through the same chain (Eq. 1–4)."""
+    from twin.instrument import simulated_calibration
+
     cal = simulated_calibration(cfg, static_s)
     info = RecordingInfo(daq.rate_hz, notes=notes, calibration=cal, synthetic=True, created_by=created_by,
-                         extra={"engine": truth.meta.get("engine"), "timestep_s": truth.meta.get("timestep_s"),
+                         extra={"engine": truth_meta.get("engine"), "timestep_s": truth_meta.get("timestep_s"),
                                 "chain_seed": cfg.instrumentation.seed, **dict(extra or {})})
     daq, repairs = validate_daq(daq, cfg, where="synthetic recording")
     info.repairs.extend(repairs)

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
-from typing import Any, Iterable, Iterator, Mapping
+from typing import Any, Iterable, Mapping
 
 import numpy as np
 
@@ -171,9 +171,3 @@ class Run:
                  for k, ch in first.channels.items()}
         meta = dict(chunks[-1].meta)
         return Run(first.t0, first.rate_hz, chans, first.config, meta)
-
-
-def iter_blocks(run: Run, block: int) -> Iterator[tuple[int, Run]]:
-    """Yield (first sample index, sub-run) blocks of at most ``block`` samples."""
-    for i in range(0, run.n, block):
-        yield i, run.slice(i, i + block)

@@ -32,6 +32,7 @@ from twin.channels import channel_specs, encoder_from_bench
 from twin.config import ENGINE_CLASSES, BenchConfig
 from twin.errors import SimulationError, raise_terminated
 from twin.run import Channel, Run
+from twin.tracefile import DriveInputs
 
 #: channels the loop computes itself (from the drive reference and the crank angle)
 LOOP_CHANNELS = ("theta_ref", "omega_ref", "encoder_angle")
@@ -175,15 +176,16 @@ class Outcome:
     summary: dict[str, Any] = field(default_factory=dict)
 
 
-def make_engine(cfg: BenchConfig) -> Engine:
-    """Instantiate the engine named by ``cfg.simulation.engine``."""
+def make_engine(cfg: BenchConfig, inputs: DriveInputs | None = None) -> Engine:
+    """Instantiate the engine named by ``cfg.simulation.engine``; ``inputs``: recorded drive inputs in
+    memory (encoder trace, motor command), used instead of the files the configuration names."""
     if cfg.spatial.enabled:  # the spatial mechanism has its own pair of engines
         from twin.spatial import SPATIAL_ENGINE_CLASSES
 
         mod, cls = SPATIAL_ENGINE_CLASSES[cfg.simulation.engine].split(":")
-        return getattr(importlib.import_module(mod), cls)(cfg)
+        return getattr(importlib.import_module(mod), cls)(cfg, inputs=inputs)
     mod, cls = ENGINE_CLASSES[cfg.simulation.engine].split(":")  # imported on demand
-    return getattr(importlib.import_module(mod), cls)(cfg)
+    return getattr(importlib.import_module(mod), cls)(cfg, inputs=inputs)
 
 
 class Progress:
@@ -207,11 +209,11 @@ class Progress:
             self.bar.close()
 
 
-def run_chunks(cfg: BenchConfig, engine: Engine | None = None, progress: bool = False, start: Any = None,
-               until: int | None = None) -> Iterator[Run]:
+def run_chunks(cfg: BenchConfig, engine: Engine | None = None, progress: bool = False,
+               inputs: DriveInputs | None = None, start: Any = None, until: int | None = None) -> Iterator[Run]:
     """The chunk loop (see the module docstring): yields consecutive chunks of the run of ``cfg``
     on ``engine`` (default: a new engine of ``cfg.simulation.engine``). ``engine.meta`` holds the
-    run's metadata as it goes.
+    run's metadata as it goes. ``inputs``: recorded drive inputs in memory (:func:`make_engine`).
 
     ``start``: a saved state (:class:`twin.warm.WarmState`) to continue from instead of the rest
     state: the engine is restored into it (``start.restore_engine``, which returns the output
@@ -219,8 +221,8 @@ def run_chunks(cfg: BenchConfig, engine: Engine | None = None, progress: bool = 
     output samples of the run (default: the run's end)."""
     from twin.drive import DriveReference
 
-    engine = engine if engine is not None else make_engine(cfg)
-    ref = DriveReference(cfg)
+    engine = engine if engine is not None else make_engine(cfg, inputs)
+    ref = DriveReference(cfg, inputs)
     h, stride, rate, n_out = cfg.simulation.timestep_s, cfg.output_stride, cfg.output_rate_hz, cfg.n_samples
     specs = channel_specs(cfg)
     encoder = "encoder" in cfg.sensors.channels
@@ -283,8 +285,10 @@ def _sigterm_interrupts() -> Iterator[None]:
 
 
 def simulate(cfg: BenchConfig, sinks: Iterable[Sink] = (), progress: bool = False,
-             engine: Engine | None = None, start: Any = None) -> Outcome:
+             engine: Engine | None = None, inputs: DriveInputs | None = None, start: Any = None) -> Outcome:
     """Run ``cfg`` to the end, streaming every chunk to ``sinks``; returns metadata and summary.
+    ``inputs``: recorded drive inputs in memory (the encoder trace of a "trace" program, the motor
+    command of ``drive.mode = "motor"``), used instead of the files the configuration names.
 
     ``start``: continue from a saved state (:class:`twin.warm.WarmState`, see :func:`run_chunks`);
     the sinks and the summary then see the run from that state's time on.
@@ -300,9 +304,9 @@ def simulate(cfg: BenchConfig, sinks: Iterable[Sink] = (), progress: bool = Fals
     t0 = time.perf_counter()
     try:
         with _sigterm_interrupts():
-            engine = engine if engine is not None else make_engine(cfg)
+            engine = engine if engine is not None else make_engine(cfg, inputs)
             acc = SummaryAccumulator(cfg)
-            for chunk in run_chunks(cfg, engine, progress, start):
+            for chunk in run_chunks(cfg, engine, progress, inputs, start=start):
                 acc.update(chunk)
                 for s in sinks:
                     s.write(chunk)
@@ -345,10 +349,11 @@ def simulate_many(cfgs: Iterable[BenchConfig], sinks: Iterable[Iterable[Sink]] |
     return [f.result() for f in futures]
 
 
-def simulate_run(cfg: BenchConfig, progress: bool = False, sinks: Iterable[Sink] = ()) -> Run:
+def simulate_run(cfg: BenchConfig, progress: bool = False, sinks: Iterable[Sink] = (),
+                 inputs: DriveInputs | None = None) -> Run:
     """Run ``cfg`` and return the whole run in memory (plus any other ``sinks``): for short runs.
-    Long runs should stream to sinks with :func:`simulate` instead."""
+    Long runs should stream to sinks with :func:`simulate` instead. ``inputs``: as :func:`simulate`."""
     keep = Collector()
-    simulate(cfg, [*sinks, keep], progress)
+    simulate(cfg, [*sinks, keep], progress, inputs=inputs)
     assert keep.run is not None
     return keep.run

@@ -17,6 +17,10 @@ Definitions (identical for both engines, so summaries compare line by line):
 * ``guide`` (runs with a guide clearance and the channel group ``joints``): the play [mm], the
   slider's max |y_g| [m] and |tilt| [rad], the max rail force at its front and rear ends [N] and
   the contact onsets of each end (either rail; defined as ``impacts``).
+* ``structure`` (``structure.mode = "flexible"``): the rod's modes in the mechanism (B pinned, C on the
+  guide with the slider's mass; the shared discrete model, :func:`twin.structure.modes`): the first bending and
+  the first axial frequency [Hz]; with the channel group ``structure`` also the max |rod_deflection| and
+  |rod_stretch| [m] and the supports' max displacement [m].
 """
 
 from __future__ import annotations
@@ -117,6 +121,7 @@ class SummaryAccumulator:
         self._motor: list[float] | None = None  # [sum u^2, max |u|, samples at the clamp, max |belt|, max |slip|]
         self._guide: list[float] | None = None  # [max |y|, max |tilt|, max |fn front|, max |fn rear|]
         self._guide_impacts: dict[str, ImpactCounter] = {}
+        self._structure: dict[str, float] = {}  # channel -> max |x| (group "structure")
 
     def update(self, chunk: Run) -> None:
         if self.rate_hz is None:
@@ -154,6 +159,9 @@ class SummaryAccumulator:
             tr[0] = max(tr[0], float(np.max(np.abs(err))))
             tr[1] += float(np.dot(err, err))
             self._track = tr
+        for name in ("rod_deflection", "rod_stretch", "frame_x", "frame_y", "guide_y"):
+            if name in chunk:
+                self._structure[name] = max(self._structure.get(name, 0.0), float(np.max(np.abs(chunk[name]))))
         if "motor_torque" in chunk:
             u = chunk["motor_torque"].astype(np.float64)
             mo = self._motor if self._motor is not None else [0.0, 0.0, 0.0, 0.0, 0.0]
@@ -210,7 +218,24 @@ class SummaryAccumulator:
                                   "rms_exceeds_continuous": bool(cont is not None and rms > cont),
                                   "fraction_at_peak_clamp": self._motor[2] / n,
                                   "max_belt_torque_Nm": self._motor[3], "max_belt_slip_mps": self._motor[4]}
+        if cfg is not None and cfg.structure.flexible:
+            out["structure"] = _structure_summary(cfg, self._structure)
         return out
+
+
+def _structure_summary(cfg: BenchConfig, maxima: dict[str, float]) -> dict[str, Any]:
+    from twin.structure import modes, rod_chain
+
+    md = modes(rod_chain(cfg.structure, cfg.bodies.rod, cfg.bodies.slider.mass_kg), "mechanism",
+               cfg.bodies.slider.mass_kg)
+    out: dict[str, Any] = {"mode": cfg.structure.mode,
+                           "first_bending_hz": float(md.of_kind("bending")[0]),
+                           "first_axial_hz": float(md.of_kind("axial")[0])}
+    if maxima:
+        out.update(max_rod_deflection_m=maxima.get("rod_deflection"), max_rod_stretch_m=maxima.get("rod_stretch"),
+                   max_frame_displacement_m=max(maxima.get("frame_x", 0.0), maxima.get("frame_y", 0.0)),
+                   max_guide_displacement_m=maxima.get("guide_y"))
+    return out
 
 
 def summarize(run: Run) -> dict[str, Any]:

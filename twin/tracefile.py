@@ -1,9 +1,13 @@
-"""Encoder trace files (``.npz`` or ``.csv`` with ``t`` [s] and ``angle`` [rad]) for the "trace" drive
-program: read and checked here, where both the drive (:mod:`twin.drive`) and the configuration
-loader (which fills in a trace program's duration) find them."""
+"""Recorded drive inputs: the crank encoder trace of the "trace" drive program and the motor command
+of ``drive.mode = "motor"``, in memory (:class:`DriveInputs`, what the library passes to the drive)
+or in the files a user names (``drive.trace_file``: ``.npz`` or ``.csv`` with ``t`` [s] and
+``angle`` [rad]; ``drivetrain.command_file``: ``.npz`` with ``t`` [s] and ``volts`` [V]). Both are
+checked here, where the drive (:mod:`twin.drive`, :mod:`twin.motor_drive`) and the configuration
+loader (which fills in a trace program's duration from a user's file) find them."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -21,12 +25,12 @@ def load_trace(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     import zipfile
 
     p = Path(path)
-    if p.suffix not in (".npz", ".csv"):
+    if p.suffix.lower() not in (".npz", ".csv"):
         raise ConfigError("drive.trace_file", f"must be a .npz or .csv file, got {str(p)!r}")
     if not p.is_file():
         raise ConfigError("drive.trace_file", f"no such file: {p}")
     try:
-        if p.suffix == ".npz":
+        if p.suffix.lower() == ".npz":
             loaded = np.load(p, allow_pickle=False)
             if not isinstance(loaded, np.lib.npyio.NpzFile):  # an .npy array renamed .npz
                 raise RecordingError(f"{p}: not an .npz archive of named arrays (a single .npy array renamed?)")
@@ -40,7 +44,7 @@ def load_trace(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
 
             with warnings.catch_warnings():
                 warnings.simplefilter("error")  # empty or ragged files: an error, not a warning
-                data = np.genfromtxt(p, delimiter=",", names=True, encoding="utf-8")
+                data = np.genfromtxt(p, delimiter=",", names=True, encoding="utf-8-sig")
             names = data.dtype.names or ()
             if "t" not in names or "angle" not in names:
                 raise RecordingError(f"{p}: needs CSV columns 't' and 'angle', has {', '.join(names) or 'none'}")
@@ -49,6 +53,16 @@ def load_trace(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
         raise
     except (OSError, ValueError, UnicodeDecodeError, zipfile.BadZipFile, EOFError, Warning) as err:
         raise RecordingError(f"{p}: not a readable trace ({type(err).__name__}: {str(err).splitlines()[0] if str(err) else ''})") from None
+    return check_trace(t, a, str(p))
+
+
+def check_trace(t: np.ndarray, angle: np.ndarray, where: str) -> tuple[np.ndarray, np.ndarray]:
+    """The encoder trace (t [s], angle [rad]) as float64 arrays, or a one-line
+    :class:`~twin.errors.RecordingError` starting with ``where``: real numbers, 1-D of equal length,
+    finite, time strictly increasing, at least :data:`MIN_TRACE_SAMPLES` samples spaced between
+    :data:`MIN_TRACE_SPACING_S` and :data:`MAX_TRACE_GAP_S`."""
+    p = where
+    t, a = np.asarray(t), np.asarray(angle)
     for name, x in (("t", t), ("angle", a)):
         if x.dtype.kind not in "iuf":
             raise RecordingError(f"{p}: '{name}' must hold real numbers, got dtype {x.dtype}")
@@ -71,6 +85,8 @@ def load_trace(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
         raise RecordingError(f"{p}: a gap of {float(dt[i]):.3g} s after sample {i}; samples may lie at most "
                              f"{MAX_TRACE_GAP_S:g} s apart")
     return t, a
+
+
 
 
 #: fewest samples of a trace (a spline through 2-3 samples is no drive)
@@ -104,3 +120,47 @@ def trace_duration(path: str | Path) -> float:
     configurations call it, so that a trace program's duration is known before the run."""
     t, _ = load_trace(path)
     return float(t[-1] - t[0])
+
+
+#: largest magnitude of a recorded motor command [V]: the DAQ's ±10 V analog output (S003 §2.3.1) with 2 % for
+#: its offset and gain error
+COMMAND_LIMIT_V = 10.2
+
+
+def check_command(t: np.ndarray, volts: np.ndarray, where: str) -> tuple[np.ndarray, np.ndarray]:
+    """The recorded motor command (t [s], volts [V]) as float64 arrays, or a one-line
+    :class:`~twin.errors.ConfigError` of ``drivetrain.command_file`` starting with ``where``: 1-D of
+    equal length (at least 2), time increasing, all finite, within ±:data:`COMMAND_LIMIT_V`."""
+    t, v = np.asarray(t, dtype=np.float64), np.asarray(volts, dtype=np.float64)
+    if t.ndim != 1 or t.shape != v.shape or t.size < 2 or np.any(np.diff(t) <= 0) \
+            or not (np.all(np.isfinite(t)) and np.all(np.isfinite(v))):
+        raise ConfigError("drivetrain.command_file", f"{where}: 't' must increase and match 'volts', all finite")
+    worst = float(np.abs(v).max())
+    if worst > COMMAND_LIMIT_V:
+        raise ConfigError("drivetrain.command_file",
+                          f"{where}: 'volts' reaches {worst:g} V, outside the DAQ's ±10 V analog command (a command "
+                          f"beyond ±{COMMAND_LIMIT_V:g} V is no recording of it: volts, not rpm or mV?)")
+    return t, v
+
+
+@dataclass(frozen=True)
+class DriveInputs:
+    """Recorded inputs of a run, in memory: what the library hands to the drive instead of a file.
+
+    A field left None falls back to the file the configuration names (``drive.trace_file``,
+    ``drivetrain.command_file``), which only a user gives. The arrays are checked (and made float64)
+    on construction, with the same one-line errors as the files.
+
+    Attributes:
+        trace: (t [s], crank encoder angle [rad]) of the "trace" drive program, 1-D arrays of equal length.
+        command: (t [s], motor command [V]) of ``drive.mode = "motor"``, 1-D arrays of equal length.
+    """
+
+    trace: tuple[np.ndarray, np.ndarray] | None = None
+    command: tuple[np.ndarray, np.ndarray] | None = None
+
+    def __post_init__(self) -> None:
+        if self.trace is not None:
+            object.__setattr__(self, "trace", check_trace(*self.trace, where="drive trace"))
+        if self.command is not None:
+            object.__setattr__(self, "command", check_command(*self.command, where="motor command"))

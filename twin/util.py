@@ -75,12 +75,21 @@ def file_sha256(path: str | Path) -> str:
         return hashlib.file_digest(fh, "sha256").hexdigest()
 
 
-def resolve_workers(n: int | None, flag: str = "--workers") -> int:
+def check_size_px(size: Any, field: str) -> tuple[int, int]:
+    """An image or window size (width, height) [px]: two whole numbers in 64..8192, else a one-line
+    :class:`TwinError` about ``field``."""
+    if not (isinstance(size, (tuple, list)) and len(size) == 2
+            and all(isinstance(v, int) and not isinstance(v, bool) and 64 <= v <= 8192 for v in size)):
+        raise TwinError(f"must be two whole numbers of pixels in 64..8192, got {size!r}", field=field)
+    return int(size[0]), int(size[1])
+
+
+def resolve_workers(n: int | None, flag: str = "workers") -> int:
     """Worker processes: ``n``, or the machine's cores when None; one line naming ``flag`` when
     out of [1, 1024]."""
     w = n if n is not None else (os.cpu_count() or 1)
     if isinstance(w, bool) or not isinstance(w, int) or not 1 <= w <= 1024:
-        raise TwinError(f"{flag}: must be an integer in [1, 1024], got {w!r}")
+        raise TwinError(f"must be an integer in [1, 1024], got {w!r}", field=flag)
     return w
 
 
@@ -174,7 +183,7 @@ def _probe_dir_writable(directory: Path, flag: str, target: Path) -> None:
     try:
         fd = os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
     except OSError as err:
-        raise TwinError(f"{flag}: cannot write in {show(directory)} ({_why(err)})") from None
+        raise TwinError(f"cannot write in {show(directory)} ({_why(err)})", field=flag) from None
     os.close(fd)
     try:
         os.unlink(probe)
@@ -196,23 +205,23 @@ def check_path_name(path: str | Path, flag: str) -> Path:
     ``flag`` otherwise."""
     text = os.fspath(path)
     if not text.strip():
-        raise TwinError(f"{flag}: is empty; give a path")
+        raise TwinError(f"is empty; give a path", field=flag)
     p = Path(text)
     limit = _name_max(p.parent if str(p.parent) else Path("."))
     for part in p.parts:
         if len(os.fsencode(part)) > limit:
-            raise TwinError(f"{flag}: the name {show(part[:40])}... is {len(os.fsencode(part))} bytes long; "
-                            f"the file system allows {limit}")
+            raise TwinError(f"the name {show(part[:40])}... is {len(os.fsencode(part))} bytes long; "
+                            f"the file system allows {limit}", field=flag)
     if len(os.fsencode(text)) >= 4096:
-        raise TwinError(f"{flag}: the path is {len(os.fsencode(text))} bytes long; the system allows 4095")
+        raise TwinError(f"the path is {len(os.fsencode(text))} bytes long; the system allows 4095", field=flag)
     for q in (p, *p.parents):
         try:
             os.stat(q)
         except OSError as err:
             if err.errno == errno.ELOOP:
-                raise TwinError(f"{flag}: {show(q)} is a symbolic-link loop") from None
+                raise TwinError(f"{show(q)} is a symbolic-link loop", field=flag) from None
             if err.errno == errno.ENAMETOOLONG:
-                raise TwinError(f"{flag}: {show(q)}: name too long") from None
+                raise TwinError(f"{show(q)}: name too long", field=flag) from None
     return p
 
 
@@ -272,8 +281,8 @@ def check_not_input(out: str | Path, flag: str, inputs: Iterable[str | Path] = (
     DIR/info.json``, a model written into the dataset it is trained on)."""
     hit = _aliases(Path(out), inputs, holds, folders)
     if hit is not None:
-        raise TwinError(f"{flag}: {show(out)} {hit[1]} the input {show(hit[0])}, which this command reads; "
-                        "choose an output outside every input")
+        raise TwinError(f"{show(out)} {hit[1]} the input {show(hit[0])}, which this command reads; "
+                        "choose an output outside every input", field=flag)
 
 
 def check_output_file(path: str | Path, flag: str, suffixes: str | Iterable[str],
@@ -289,29 +298,29 @@ def check_output_file(path: str | Path, flag: str, suffixes: str | Iterable[str]
     """
     out = check_path_name(path, flag)
     allowed = (suffixes,) if isinstance(suffixes, str) else tuple(suffixes)
-    if out.suffix not in allowed or out.name.startswith(".") and out.name == out.suffix:
-        raise TwinError(f"{flag}: must end in {' or '.join(allowed)}, got {show(out)!r}")
+    if out.suffix.lower() not in allowed or out.name.startswith(".") and out.name == out.suffix:
+        raise TwinError(f"must end in {' or '.join(allowed)}, got {show(out)!r}", field=flag)
     parent = out.parent if str(out.parent) else Path(".")
     if not parent.exists():
-        raise TwinError(f"{flag}: directory {show(parent)} does not exist")
+        raise TwinError(f"directory {show(parent)} does not exist", field=flag)
     if not parent.is_dir():
-        raise TwinError(f"{flag}: {show(parent)} is not a directory")
+        raise TwinError(f"{show(parent)} is not a directory", field=flag)
     if out.is_dir():
-        raise TwinError(f"{flag}: {show(out)} is a directory")
+        raise TwinError(f"{show(out)} is a directory", field=flag)
     if out.is_symlink() and not out.exists():
-        raise TwinError(f"{flag}: {show(out)} is a dangling symbolic link")
+        raise TwinError(f"{show(out)} is a dangling symbolic link", field=flag)
     if out.exists() and not out.is_file():
-        raise TwinError(f"{flag}: {show(out)} exists and is not a regular file")
+        raise TwinError(f"{show(out)} exists and is not a regular file", field=flag)
     check_not_input(out, flag, inputs, folders=folders)
     if out.is_symlink():  # refused now, not after the work (the writers never replace a link: check_not_link)
-        raise TwinError(f"{flag}: {show(out)} is a symbolic link; the twin writes regular files, never through "
-                        "a link: name the file itself or another one")
+        raise TwinError(f"{show(out)} is a symbolic link; the twin writes regular files, never through "
+                        "a link: name the file itself or another one", field=flag)
     _probe_dir_writable(parent, flag, out)
     remove_stale_temps(out)
     return out
 
 
-def check_output_dir(path: str | Path, flag: str = "--out", need_parent: bool = True,
+def check_output_dir(path: str | Path, flag: str = "out", need_parent: bool = True,
                      own: Callable[[str], bool] | None = None, inputs: Iterable[str | Path] = ()) -> Path:
     """An output folder given on the command line: it may exist (as a folder) or be created (in an
     existing parent unless ``need_parent`` is False, for callers that create parents). The
@@ -322,29 +331,29 @@ def check_output_dir(path: str | Path, flag: str = "--out", need_parent: bool = 
     nothing the command did not write is ever deleted. No ``inputs`` may lie inside it."""
     out = check_path_name(path, flag)
     if out.exists() and not out.is_dir():
-        raise TwinError(f"{flag}: {show(out)} exists and is not a directory")
+        raise TwinError(f"{show(out)} exists and is not a directory", field=flag)
     if out.is_symlink() and not out.exists():
-        raise TwinError(f"{flag}: {show(out)} is a dangling symbolic link")
+        raise TwinError(f"{show(out)} is a dangling symbolic link", field=flag)
     here = out.resolve()
     inputs = tuple(inputs)
     check_not_input(out, flag, inputs, holds=own is not None or bool(inputs))  # a folder replaced whole
     if own is not None and (out.name in ("", ".", "..") or here == Path.cwd().resolve() or here == here.parent):
-        raise TwinError(f"{flag}: {show(path)!r} names the current or a parent folder, which this command would "
-                        "replace whole; give a new folder name")
+        raise TwinError(f"{show(path)!r} names the current or a parent folder, which this command would "
+                        "replace whole; give a new folder name", field=flag)
     if own is not None and out.is_dir():
         foreign = sorted(e.name for e in out.iterdir() if not own(e.name) and not _TMP_RE.match(e.name))
         if foreign:
             listed = ", ".join(show(n) for n in foreign[:3]) + (", ..." if len(foreign) > 3 else "")
-            raise TwinError(f"{flag}: {show(out)} holds files this command did not write ({listed}); "
-                            "it would be replaced whole: give a new or empty folder")
+            raise TwinError(f"{show(out)} holds files this command did not write ({listed}); "
+                            "it would be replaced whole: give a new or empty folder", field=flag)
     parent = out.parent if str(out.parent) else Path(".")
     if need_parent and not parent.exists():
-        raise TwinError(f"{flag}: parent directory {show(parent)} does not exist")
+        raise TwinError(f"parent directory {show(parent)} does not exist", field=flag)
     probe_in = parent
     while not probe_in.exists():
         probe_in = probe_in.parent
     if not probe_in.is_dir():
-        raise TwinError(f"{flag}: {show(probe_in)} is not a directory")
+        raise TwinError(f"{show(probe_in)} is not a directory", field=flag)
     _probe_dir_writable(probe_in, flag, out)
     remove_stale_temps(out)
     return out
@@ -361,18 +370,18 @@ def check_input_file(path: str | Path, flag: str, max_bytes: int | None = None) 
     is at most ``max_bytes`` long. One line naming ``flag`` otherwise."""
     text = os.fspath(path)
     if not text.strip():
-        raise TwinError(f"{flag}: is empty; give a file")
+        raise TwinError(f"is empty; give a file", field=flag)
     p = Path(text)
     try:
         st = os.stat(p)
     except OSError as err:
-        raise TwinError(f"{flag}: cannot read {show(p)} ({_why(err)})") from None
+        raise TwinError(f"cannot read {show(p)} ({_why(err)})", field=flag) from None
     if stat.S_ISDIR(st.st_mode):
-        raise TwinError(f"{flag}: {show(p)} is a directory, not a file")
+        raise TwinError(f"{show(p)} is a directory, not a file", field=flag)
     if not stat.S_ISREG(st.st_mode):
-        raise TwinError(f"{flag}: {show(p)} is not a regular file (a pipe or device); give a file")
+        raise TwinError(f"{show(p)} is not a regular file (a pipe or device); give a file", field=flag)
     if max_bytes is not None and st.st_size > max_bytes:
-        raise TwinError(f"{flag}: {show(p)} is {st.st_size} bytes; at most {max_bytes} are read")
+        raise TwinError(f"{show(p)} is {st.st_size} bytes; at most {max_bytes} are read", field=flag)
     return p
 
 
@@ -383,7 +392,7 @@ def read_input_bytes(path: str | Path, flag: str, max_bytes: int = MAX_TEXT_BYTE
         with open(p, "rb") as fh:
             return fh.read(max_bytes + 1)[:max_bytes]
     except OSError as err:
-        raise TwinError(f"{flag}: cannot read {show(p)} ({_why(err)})") from None
+        raise TwinError(f"cannot read {show(p)} ({_why(err)})", field=flag) from None
 
 
 #: deepest nesting of tables and arrays accepted in TOML input
@@ -392,11 +401,12 @@ MAX_TOML_DEPTH = 32
 
 def toml_loads(text: str) -> dict[str, Any]:
     """``tomllib.loads`` that refuses deep nesting as a TOMLDecodeError (one line) instead of a
-    RecursionError: nothing the twin reads is nested more than a few levels."""
+    RecursionError (nothing the twin reads is nested more than a few levels) and reads a text that starts
+    with a UTF-8 byte-order mark as without it."""
     import tomllib
 
     try:
-        data = tomllib.loads(text)
+        data = tomllib.loads(text.removeprefix("\ufeff"))  # a byte-order mark (Windows editors write one)
     except RecursionError:
         raise tomllib.TOMLDecodeError(f"tables or arrays nested deeper than {MAX_TOML_DEPTH} levels") from None
     stack: list[tuple[Any, int]] = [(data, 1)]
@@ -525,7 +535,7 @@ class FolderLock:
 
     NAME = ".twin.lock"
 
-    def __init__(self, folder: str | Path, flag: str = "--out", what: str = "twin"):
+    def __init__(self, folder: str | Path, flag: str = "out", what: str = "twin"):
         self.folder = Path(folder)
         self.flag, self.what = flag, what
         self.fd: int | None = None
@@ -539,13 +549,13 @@ class FolderLock:
             fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC | getattr(os, "O_NOFOLLOW", 0), 0o644)
         except OSError as err:
             if err.errno == errno.ELOOP:  # a link planted as the lock: never followed (its target truncated)
-                raise TwinError(f"{self.flag}: {show(path)} is a symbolic link; the lock file is the twin's own: "
-                                "remove the link") from None
-            raise TwinError(f"{self.flag}: cannot lock {show(self.folder)} ({_why(err)})") from None
+                raise TwinError(f"{show(path)} is a symbolic link; the lock file is the twin's own: "
+                                "remove the link", field=self.flag) from None
+            raise TwinError(f"cannot lock {show(self.folder)} ({_why(err)})", field=self.flag) from None
         if not stat.S_ISREG(os.fstat(fd).st_mode):
             os.close(fd)
-            raise TwinError(f"{self.flag}: {show(path)} is not a regular file; the lock file is the twin's own: "
-                            "remove it")
+            raise TwinError(f"{show(path)} is not a regular file; the lock file is the twin's own: "
+                            "remove it", field=self.flag)
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError as err:
@@ -556,9 +566,9 @@ class FolderLock:
                 pass
             os.close(fd)
             if err.errno in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
-                raise TwinError(f"{self.flag}: {show(self.folder)} is in use by another {self.what} "
-                                f"({show(holder) or 'holder unknown'}); wait for it to end") from None
-            raise TwinError(f"{self.flag}: cannot lock {show(self.folder)} ({_why(err)})") from None
+                raise TwinError(f"{show(self.folder)} is in use by another {self.what} "
+                                f"({show(holder) or 'holder unknown'}); wait for it to end", field=self.flag) from None
+            raise TwinError(f"cannot lock {show(self.folder)} ({_why(err)})", field=self.flag) from None
         line = f"host {socket.gethostname()} pid {os.getpid()} since {time.strftime('%Y-%m-%d %H:%M:%S')}\n"
         os.ftruncate(fd, 0)
         os.pwrite(fd, line.encode(), 0)

@@ -297,8 +297,8 @@ def spin_up(cfg: BenchConfig, t_s: float, chains: Sequence[Any] = (), engine: An
     rate = cfg.output_rate_hz
     n0 = int(round(t_s * rate))
     if not (math.isfinite(t_s) and 0 < n0 <= cfg.n_samples):
-        raise WarmStateError(f"spin_up: t_s must lie in (0, {cfg.duration_s:g}] s (the run's duration) and span at "
-                             f"least one output sample, got {t_s!r}")
+        raise WarmStateError(f"must lie in (0, {cfg.duration_s:g}] s (the run's duration) and span at least one "
+                             f"output sample, got {t_s!r}", field="t_s")
     engine = engine if engine is not None else make_engine(cfg)
     t0 = time.perf_counter()
     for chunk in run_chunks(cfg, engine, until=n0):

@@ -42,6 +42,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from twin.provenance import stamped
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -162,7 +163,7 @@ def main() -> int:
         report["all_identical"] = all(checks) and len(answers) > 0
         print(json.dumps(report, indent=2))
         if args.report:
-            Path(args.report).write_text(json.dumps(report, indent=2) + "\n")
+            Path(args.report).write_text(json.dumps(stamped(report), indent=2) + "\n")
         if not report["all_identical"]:
             print(f"{src}: the converted model does not answer as the original; {out} not written", file=sys.stderr)
             return 1

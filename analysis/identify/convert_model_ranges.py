@@ -34,6 +34,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+from twin.provenance import stamped
 
 ROOT = Path(__file__).resolve().parents[2]
 OLD_FORMAT = "twin-identify-model/3"
@@ -116,7 +117,7 @@ def main() -> None:
     tmp.replace(path)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps({"runs": rows, "ranges": tr["ranges"]}, indent=1) + "\n")
+    out.write_text(json.dumps(stamped({"runs": rows, "ranges": tr["ranges"]}), indent=1) + "\n")
     print(f"wrote {path} ({MODEL_FORMAT}) and {out}")
 
 

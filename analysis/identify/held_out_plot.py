@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from twin.provenance import figure_metadata
 
 ROOT = Path(__file__).resolve().parents[2]
 BELT = 3.97  # motor turns per crank turn (the bench's V-belt)
@@ -66,7 +67,7 @@ def main() -> None:
     fig.tight_layout()
     out = Path(args.out)
     tmp = out.with_suffix(".tmp.png")
-    fig.savefig(tmp, dpi=110)
+    fig.savefig(tmp, dpi=110, metadata=figure_metadata())
     tmp.replace(out)
     print(f"wrote {out}")
 

@@ -123,6 +123,7 @@ from twin.identification.model import (CATALOGUE_BANDS_MM, SIZE_BAND_MM, Clearan
                                        _half_widths_by_windows,
                                        catalogue_bands, fault_split_joints, pool_features, pooled_features,
                                        recorded_size_bands, train)
+from twin.provenance import stamped
 
 ROOT = Path(__file__).resolve().parents[2]
 OUT = ROOT / "analysis" / "results" / "identify" / "nuisance_dev.json"
@@ -332,7 +333,7 @@ def main() -> None:
             rep = evaluate(model, [work / d], ("train", "val", "test"), features=f)
             results[v][d] = figures(rep) | {"refused": len(rep["runs_left_out"])}
             print(v, d, json.dumps(results[v][d], default=float), flush=True)
-    OUT.write_text(json.dumps(results, indent=1, default=float) + "\n")
+    OUT.write_text(json.dumps(stamped(results), indent=1, default=float) + "\n")
     print(f"wrote {OUT}")
 
 

@@ -34,6 +34,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from twin.provenance import stamped
 
 KS = (1, 2, 3, 4, 7)  # windows used, from the end of the steady part
 
@@ -110,7 +111,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.json:
         from twin.util import atomic_write_json
 
-        atomic_write_json(Path(args.json), out)
+        atomic_write_json(Path(args.json), stamped(out))
     return 0
 
 

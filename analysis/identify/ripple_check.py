@@ -27,6 +27,7 @@ from twin.config import preset
 from twin.identification.model import ClearanceModel, identify_recording
 from twin.recording import crank_trace, synthetic_recording, write_recording
 from twin.simulation import simulate_run
+from twin.provenance import stamped
 
 ROOT = Path(__file__).resolve().parents[2]
 MODEL = ROOT / "twin" / "data" / "identify_default.npz"
@@ -100,7 +101,7 @@ def main() -> None:
               f"({s['c_range_mm'][0]:.3f}–{s['c_range_mm'][1]:.3f}) | {100 * s['interval_holds_0.1']:.0f} % |")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    (out / "ripple.json").write_text(json.dumps({"rows": rows, "summary": summary}, indent=1) + "\n")
+    (out / "ripple.json").write_text(json.dumps(stamped({"rows": rows, "summary": summary}), indent=1) + "\n")
     print(f"wrote {out / 'ripple.json'}")
 
 

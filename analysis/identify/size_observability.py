@@ -37,6 +37,7 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
+from twin.provenance import stamped
 
 CPR = 32768.0  # encoder counts per crank turn used to build the counts (any fine resolution)
 
@@ -177,7 +178,7 @@ def main() -> None:
             print(f"| {s['orientation']} {s['motor_rpm']:g} rpm | {k} | {v['features_over_2']} | {v['max_ratio']:.1f} | "
                   f"{s['loo_accuracy']:.2f} |")
     if args.json:
-        Path(args.json).write_text(json.dumps(out, indent=1))
+        Path(args.json).write_text(json.dumps(stamped(out), indent=1))
 
 
 if __name__ == "__main__":

@@ -40,6 +40,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from nuisance_study import MOTOR, MOTOR_YZ, ROOT, VARIANTS  # noqa: E402
+from twin.provenance import stamped  # noqa: E402
 
 #: the fourth round's training sets driven by the crank PID
 SETS = tuple(n for n in VARIANTS["slow-b-bands"][0] if n not in (MOTOR, MOTOR_YZ))
@@ -106,7 +107,7 @@ def main() -> None:
                                           "within_1_5": share})
             print(f"  split {split}: {len(tr):4d} training runs -> {100 * share:.1f} % of {len(test)} held out within "
                   f"x{FACTOR}", flush=True)
-    OUT.write_text(json.dumps(out, indent=1) + "\n")
+    OUT.write_text(json.dumps(stamped(out), indent=1) + "\n")
     print(f"wrote {OUT}")
 
 

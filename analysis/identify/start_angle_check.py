@@ -21,6 +21,7 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
+from twin.provenance import stamped
 
 
 def one(job: tuple) -> dict:
@@ -65,7 +66,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.json:
         from twin.util import atomic_write_json
 
-        atomic_write_json(Path(args.json), {"model": model, "runs": rows})
+        atomic_write_json(Path(args.json), stamped({"model": model, "runs": rows}))
     return 0
 
 

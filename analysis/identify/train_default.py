@@ -57,6 +57,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from twin.provenance import stamped
 
 ROOT = Path(__file__).resolve().parents[2]
 MODEL = ROOT / "twin" / "data" / "identify_default.npz"
@@ -135,7 +136,7 @@ def samples() -> None:
             samples[rec.name]["evidence"] = {k: a["evidence"][k] for k in ("windows", "revolutions", "crank_hz")}
         else:
             samples[rec.name] = {"refused": r.stderr.strip()}
-    (REPORT / "samples.json").write_text(json.dumps(samples, indent=2) + "\n")
+    (REPORT / "samples.json").write_text(json.dumps(stamped(samples), indent=2) + "\n")
     print(json.dumps(samples, indent=2))
 
 

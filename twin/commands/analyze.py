@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import argparse
 
-from twin.errors import TwinError
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -38,7 +37,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="use every K-th sample after a zero-phase anti-alias filter (faster DTW)")
     r.add_argument("--json", metavar="FILE", help="write the table as JSON")
     r.add_argument("--no-progress", action="store_true", help="no progress bar")
-    r.set_defaults(func=run_repeatability)
+    r.set_defaults(func=run_repeatability, _field_flags={"runs": "RUN..."})  # the positional arguments
 
 
 def run_repeatability(args: argparse.Namespace) -> int:
@@ -48,26 +47,9 @@ def run_repeatability(args: argparse.Namespace) -> int:
     from twin.studies.repeatability import repeatability
     from twin.util import atomic_write_json
 
-    runs = [recording(r) for r in args.runs]
-    if len(runs) < 2:
-        raise TwinError("repeatability: give at least 2 runs")
-    if args.decimate < 1:
-        raise TwinError(f"--decimate: must be an integer >= 1, got {args.decimate}")
-    import math
-
     from twin.util import check_output_file
 
-    for flag, v in (("--start", args.start), ("--stop", args.stop), ("--align-angle", args.align_angle)):
-        if v is not None and not math.isfinite(v):
-            raise TwinError(f"{flag}: must be a finite number, got {v!r}")
-    if args.start is not None and args.start < 0:
-        raise TwinError(f"--start: must be a time >= 0 s, got {args.start!r}")
-    if args.stop is not None and args.stop <= (args.start or 0.0):
-        raise TwinError(f"--stop: must be a time > --start, got {args.stop!r}")
-    if not (math.isfinite(args.dtw_window) and 0 <= args.dtw_window <= 10):
-        raise TwinError(f"--dtw-window: must lie in [0, 10] s, got {args.dtw_window!r}")
-    if args.align_angle is not None and not -360 <= args.align_angle <= 360:
-        raise TwinError(f"--align-angle: must lie in [-360, 360] degrees, got {args.align_angle!r}")
+    runs = [recording(r) for r in args.runs]  # repeatability() checks the arguments before it reads them
     if args.json is not None:  # checked before the work, not after
         check_output_file(args.json, "--json", ".json", inputs=runs)
     rep = repeatability(runs, args.channel, args.start, args.stop, args.dtw_window, args.align_angle,

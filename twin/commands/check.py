@@ -60,17 +60,15 @@ def _run_contact(args: argparse.Namespace, deprecated: bool = False) -> int:
     import json
     from pathlib import Path
 
-    from twin.config import BenchConfig, load_config
-    from twin.errors import ConfigError
-    from twin.studies.contact_check import contact_check
+    from twin.cli import load_config_file
+    from twin.config import BenchConfig
+    from twin.studies.contact_check import check_joints, contact_check
     from twin.util import atomic_write_text, check_output_file, json_text
 
-    joints = tuple(j.strip().upper() for j in args.joints.split(",") if j.strip())
-    if not joints or any(j not in ("B", "C") for j in joints):
-        raise ConfigError("--joints", f"must be a comma list of B, C; got {args.joints!r}")
+    joints = check_joints(j.strip().upper() for j in args.joints.split(",") if j.strip())  # before any work
     out = Path(args.out)
     check_output_file(out, "--out", ".json")
-    cfg = load_config(args.config) if args.config else BenchConfig()
+    cfg = load_config_file(args.config) if args.config else BenchConfig()
     if deprecated:
         print(DEPRECATION_NOTE, file=sys.stderr)
     report = contact_check(cfg, joints=joints, progress=not args.no_progress and sys.stderr.isatty())

@@ -40,7 +40,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="simulate every run alone (default: the repeats of a design point, which differ in their "
                         "sensor-noise seed only, share one engine run; the files are the same bytes either way)")
     g.add_argument("--no-progress", action="store_true", help="no progress bar")
-    g.set_defaults(func=_generate)
+    g.set_defaults(func=_generate, _field_flags={"out_dir": "--out"})  # twin.dataset.generate's argument
 
     pl = ds.add_parser("plan", help="print the runs of a spec and estimate the time, without writing anything")
     pl.add_argument("spec", metavar="SPEC.toml", help=SPEC_HELP)
@@ -70,8 +70,6 @@ def _generate(args: argparse.Namespace) -> int:
     from twin.dataset.reader import describe
     from twin.dataset.spec import load_spec
 
-    if args.limit is not None and args.limit < 0:
-        raise TwinError(f"--limit: must be >= 0, got {args.limit}")
     spec = load_spec(spec_arg(args.spec))
     t = time.perf_counter()
     info = generate(spec, args.out, workers=resolve_workers(args.workers), scheduler=args.scheduler, limit=args.limit,

@@ -33,7 +33,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--encoder-modulus", type=int, metavar="N", help="the counter wraps at N (e.g. 4294967296)")
     p.add_argument("--repair-nan", action="store_true", help="interpolate NaN gaps up to 16 samples (reported)")
     p.add_argument("--no-encoder-repair", action="store_true", help="fail on encoder glitches instead of repairing")
-    p.set_defaults(func=run)
+    # the library's names for what these options set (twin.recording.import_table's arguments)
+    p.set_defaults(func=run, _field_flags={"mapping": "--map", "rate_hz": "--rate", "zero_g_v": "--zero-g",
+                                           "time_column": "--time-column", "nan='interpolate'": "--repair-nan"})
 
 
 def _zero_g(text: str) -> dict[str, float]:
@@ -67,8 +69,6 @@ def run(args: argparse.Namespace) -> int:
     out = check_output_file(args.out, "--out", ".mcap", inputs=inputs)
     if args.calibration and args.zero_g is not None:
         raise TwinError("--calibration and --zero-g are alternatives; give one")
-    if args.rate is not None and not args.rate > 0:
-        raise TwinError(f"--rate: must be > 0 Hz, got {args.rate!r}")
     mapping = parse_mapping(args.map)
     nan = "interpolate" if args.repair_nan else "error"
     run_, repairs = import_table(args.export, cfg, mapping, args.rate, args.time_column, nan=nan,

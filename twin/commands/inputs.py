@@ -50,7 +50,7 @@ def spec(text: str) -> Path:
     ``.toml`` suffix) or the name of a shipped spec (:func:`twin.samples.spec_path`)."""
     p = Path(text)
     # a folder of that name (the dataset generated from the spec: --out tiny) is not a spec: the name is looked up
-    if not text or p.is_file() or "/" in text or os.sep in text or p.suffix == ".toml":
+    if not text or p.is_file() or "/" in text or os.sep in text or p.suffix.lower() == ".toml":
         return p
     from twin import samples
 

@@ -55,7 +55,7 @@ def parse_window(text: str) -> tuple[float, float]:
 
 def run(args: argparse.Namespace) -> int:
     from twin.commands.view import parse_window_size
-    from twin.util import check_output_file
+    from twin.util import check_output_file, check_size_px
     from twin.viz.plot import plot
 
     src = Path(args.input)
@@ -63,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
         raise TwinError(f"{src}: no such file or folder")
     channels = parse_channels(args.channels) if args.channels is not None else None
     window = parse_window(args.window) if args.window is not None else None
-    size = parse_window_size(args.size, "--size") if args.size is not None else None
+    size = check_size_px(parse_window_size(args.size, "--size"), "size_px") if args.size is not None else None
     out = check_output_file(args.out, "--out", ".png", inputs=[src])
     info = plot(src, out, channels=channels, window=window, spectrum=args.spectrum, size_px=size)
     extra = []

@@ -65,16 +65,11 @@ def run(args: argparse.Namespace) -> int:
 def preview_rate(given: float | None, output_rate_hz: float) -> float:
     """The preview rate of ``--preview-rate`` [Hz]: the default (1 kHz, at most the output rate),
     0 (none), or a given rate between 0 and the output rate."""
-    import math
-
-    from twin.mcapfile import DEFAULT_PREVIEW_HZ
+    from twin.mcapfile import DEFAULT_PREVIEW_HZ, check_preview_rate
 
     if given is None:
         return min(DEFAULT_PREVIEW_HZ, output_rate_hz)
-    if not math.isfinite(given) or given < 0 or given > output_rate_hz:
-        raise TwinError(f"--preview-rate: must be 0 (no preview) or a rate up to the output rate "
-                        f"{output_rate_hz:g} Hz, got {given:g}")
-    return given
+    return check_preview_rate(given, output_rate_hz)  # the writer's rule, checked before the run
 
 
 def check_free_space(cfg, out: Path, preview_hz: float = 0.0) -> None:
@@ -127,6 +122,13 @@ def _print_summary(s: dict, out: Path | None) -> None:
     acc = [f"{a} {s[a]['rms_mps2']:.1f}/{s[a]['peak_mps2']:.0f}" for a in ("AC1", "AC2", "AC3", "AC4", "AC5", "AC6") if a in s]
     if acc:
         print("  accel rms/peak [m/s^2]: " + ", ".join(acc))
+    if "structure" in s:
+        st = s["structure"]
+        line = f"  structure: flexible, rod modes {st['first_bending_hz']:.0f} Hz (bending), {st['first_axial_hz']:.0f} Hz (axial)"
+        if st.get("max_rod_deflection_m") is not None:
+            line += (f"; max rod deflection {st['max_rod_deflection_m'] * 1e6:.2f} um, stretch "
+                     f"{st['max_rod_stretch_m'] * 1e6:.2f} um")
+        print(line)
     if "drive_train" in s:
         dt = s["drive_train"]
         over = " (above the continuous rating)" if dt["rms_exceeds_continuous"] else ""

@@ -66,7 +66,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         f"default {DEFAULT_WAIT_S:g})")
     p.add_argument("--window-size", metavar="WxH", default=None,
                    help="with --screenshot: size of the headless viewer's window in pixels (default 1920x1080)")
-    p.set_defaults(func=run)
+    p.set_defaults(func=run, _field_flags={"png": "--screenshot", "window": "--window-size"})  # twin.viz.screenshot's names
 
 
 def run(args: argparse.Namespace) -> int:
@@ -86,7 +86,7 @@ def run(args: argparse.Namespace) -> int:
     else:
         if args.run:
             raise TwinError("--run: applies to a dataset folder, not to a run file")
-        if src.suffix != ".mcap":
+        if src.suffix.lower() != ".mcap":
             raise TwinError(f"{src}: expected a .mcap run or recording file, or a dataset folder")
         if src.is_dir():
             raise TwinError(f"{src}: is a directory; expected a .mcap run or recording file, or a dataset folder")
@@ -99,13 +99,10 @@ def run(args: argparse.Namespace) -> int:
     wait = DEFAULT_WAIT_S if args.wait is None else args.wait
     if args.screenshot:
         check_output_file(args.screenshot, "--screenshot", ".png")
-        if not (math.isfinite(wait) and wait >= 0):
-            raise TwinError(f"--wait: must be a finite number of seconds >= 0, got {args.wait!r}")
-        if args.at is not None and not math.isfinite(args.at):
-            raise TwinError(f"--at: must be a finite time [s], got {args.at!r}")
         window = parse_window_size(args.window_size) if args.window_size is not None else DEFAULT_WINDOW
-        from twin.viz.screenshot import check_vulkan, rerun_executable
+        from twin.viz.screenshot import check_screenshot_args, check_vulkan, rerun_executable
 
+        check_screenshot_args(wait, args.at, window)
         rerun_executable()
         check_vulkan()
     else:
@@ -142,12 +139,12 @@ def run(args: argparse.Namespace) -> int:
 
 
 def parse_window_size(text: str, flag: str = "--window-size") -> tuple[int, int]:
-    """``WxH`` (e.g. ``1600x900``) as pixels, each 64..8192; else a one-line TwinError naming ``flag``."""
+    """``WxH`` (e.g. ``1600x900``) as pixels; else a one-line TwinError naming ``flag`` (the range is
+    :func:`twin.viz.screenshot.check_screenshot_args`'s to check)."""
     parts = text.lower().split("x")
     if len(parts) == 2 and all(p.strip().isdigit() for p in parts):
         w, h = (int(p) for p in parts)
-        if 64 <= w <= 8192 and 64 <= h <= 8192:
-            return w, h
+        return w, h
     raise TwinError(f"{flag}: must be WIDTHxHEIGHT in pixels, each 64..8192 (e.g. 1600x900), got {text!r}")
 
 
@@ -175,8 +172,9 @@ def _spawn(exe: str, path: Path) -> None:
     :data:`SPAWN_CHECK_S` seconds (its output until then goes to a log quoted on failure)."""
     from twin.viz.screenshot import viewer_message
 
-    env = dict(os.environ)
-    env.setdefault("RUST_LOG", "error")
+    from twin.viz import USER_RUST_LOG
+
+    env = dict(os.environ, RUST_LOG=USER_RUST_LOG or "error")  # not the SDK's "off" of this process
     with tempfile.TemporaryFile() as log:
         proc = subprocess.Popen([exe, str(path)], start_new_session=True, stdin=subprocess.DEVNULL,
                                 stdout=log, stderr=log, env=env)

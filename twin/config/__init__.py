@@ -22,7 +22,7 @@ naming the dotted TOML path of the field and what is allowed.
 
 Modules: the schema (:mod:`~twin.config.mechanism`: bodies, materials, joints, frame, contact;
 :mod:`~twin.config.drive`: drive program and PID; :mod:`~twin.config.drivetrain`: the motor and
-V-belt drive train; :mod:`~twin.config.sensors`: sensors and
+V-belt drive train; :mod:`~twin.config.structure`: the flexible rod, supports and sensor mounts; :mod:`~twin.config.sensors`: sensors and
 instrumentation; :mod:`~twin.config.engines`: the engines and their settings;
 :mod:`~twin.config.bench`: the whole :class:`BenchConfig`), the conversion to and from plain
 dicts with ``--set`` overrides (:mod:`~twin.config.convert`), the readers of TOML files and
@@ -42,6 +42,7 @@ from twin.config.loading import config_from_toml, load_config
 from twin.config.mechanism import Bodies, BodyParams, Contact, Joints, Material, Materials, Mechanism, ln_stiffness
 from twin.config.presets import NAMED_PRESETS, TABLE4, named_preset, preset
 from twin.config.spatial import Spatial
+from twin.config.structure import STRUCTURE_MODES, StructureConfig
 from twin.config.sensors import (ACCEL_MODEL_NAMES, ACCEL_RESPONSES, DAQ_RANGES, AccelMount, Instrumentation,
                                  Sensors)
 from twin.errors import ConfigError
@@ -49,9 +50,9 @@ from twin.errors import ConfigError
 __all__ = [
     "ACCELEROMETERS", "ACCEL_MODEL_NAMES", "ACCEL_RESPONSES", "ALL_CHANNEL_GROUPS", "CATALOGUE_DIAMETRAL_MM",
     "CHANNEL_GROUPS", "DAQ_RANGES", "ENGINES", "ENGINE_CLASSES", "ENGINE_ONLY_GROUPS", "JOINTS", "NAMED_PRESETS",
-    "OPTIONAL_CHANNEL_GROUPS", "ORIENTATIONS", "PROGRAMS", "TABLE4",
+    "OPTIONAL_CHANNEL_GROUPS", "ORIENTATIONS", "PROGRAMS", "STRUCTURE_MODES", "TABLE4",
     "AccelMount", "BenchConfig", "Bodies", "BodyParams", "ConfigError", "Contact", "Drive", "Drivetrain", "Instrumentation",
-    "Joints", "Material", "Materials", "Mechanism", "MujocoSettings", "PID", "Sensors", "Simulation", "Spatial",
+    "Joints", "Material", "Materials", "Mechanism", "MujocoSettings", "PID", "Sensors", "Simulation", "Spatial", "StructureConfig",
     "config_from_toml", "from_dict", "joint_stiffness", "ln_stiffness", "load_config", "named_preset", "preset",
     "with_overrides",
 ]

@@ -16,7 +16,8 @@ from twin.config.drivetrain import Drivetrain
 from twin.config.engines import MujocoSettings, Simulation
 from twin.config.mechanism import Bodies, Contact, Joints, Materials, Mechanism, ln_stiffness
 from twin.config.sensors import Instrumentation, Sensors
-from twin.config.spatial import Spatial
+from twin.config.spatial import Spatial, check_spatial
+from twin.config.structure import StructureConfig
 from twin.errors import ConfigError
 
 
@@ -38,6 +39,7 @@ class BenchConfig:
     instrumentation: Instrumentation = field(default_factory=Instrumentation)
     drivetrain: Drivetrain = Drivetrain()
     spatial: Spatial = Spatial()
+    structure: StructureConfig = StructureConfig()
 
     def __post_init__(self) -> None:
 
@@ -58,7 +60,7 @@ class BenchConfig:
         if sim.duration_s == 0 and self.drive.program != "protocol":
             raise ConfigError("simulation.duration_s",
                               f"must be > 0 for the {self.drive.program} program (0 = the protocol's length); "
-                              + ("--trace FILE and configuration files fill in the trace's length"
+                              + ("configuration files (load_config) fill in the trace's length"
                                  if self.drive.program == "trace" else "got 0"))
         k = 1.0 / (sim.timestep_s * sen.output_rate_hz)
         stride = int(round(k))
@@ -67,7 +69,7 @@ class BenchConfig:
             raise ConfigError("simulation.timestep_s",
                               f"{sim.timestep_s:g} s does not divide the output period 1/{sen.output_rate_hz:g} Hz; "
                               f"use a timestep of (1/output_rate)/k for an integer k, or set the output rate "
-                              f"explicitly (sensors.output_rate_hz, --output-rate), e.g. {every:.10g} Hz for a "
+                              f"explicitly (`sensors.output_rate_hz`), e.g. {every:.10g} Hz for a "
                               "sample every step")
         if round(self.duration_s * sen.output_rate_hz) < 1:
             raise ConfigError("simulation.duration_s",
@@ -95,8 +97,6 @@ class BenchConfig:
                     raise ConfigError("sensors.channels", f"the optional group {group!r} needs drive.mode = "
                                       f"\"motor\" or \"torque\", got {self.drive.mode!r}")
         if self.spatial.enabled:
-            from twin.spatial.checks import check_spatial
-
             check_spatial(self)
         elif "slider_accel" in sen.channels:
             raise ConfigError("sensors.channels", "the optional group 'slider_accel' is produced by the spatial "
@@ -106,6 +106,13 @@ class BenchConfig:
                 raise ConfigError("sensors.channels",
                                   f"the optional group {group!r} is produced by the {' and '.join(engines)} engine "
                                   f"only; remove it for simulation.engine = {sim.engine!r}")
+        if "structure" in sen.channels and not self.structure.flexible:
+            raise ConfigError("sensors.channels", "the optional group 'structure' is produced by the flexible structure "
+                              "only (structure.mode = \"flexible\"); remove it")
+        if self.structure.flexible:
+            from twin.structure.checks import check_structure
+
+            check_structure(self)
 
     # -- derived
     @property
@@ -134,7 +141,8 @@ class BenchConfig:
     def to_dict(self) -> dict[str, Any]:
         """Plain nested dict (tuples as lists), the TOML layout. The ``[drivetrain]`` table is left
         out while it holds the defaults and the drive does not use it (crank PID, prescribed), and the
-        ``[spatial]`` table while it holds the defaults (the planar bench), so that the text and
+        ``[spatial]`` table while it holds the defaults (the planar bench) and the ``[structure]`` table
+        while it holds the defaults (the rigid bench), so that the text and
         digest of such configurations are what they were before these tables existed."""
         out = _to_plain(self)
         joints = out.get("joints", {})
@@ -145,6 +153,8 @@ class BenchConfig:
             out.pop("drivetrain", None)
         if self.spatial == Spatial():  # the planar bench: no [spatial] table (same text and digest as before it)
             out.pop("spatial", None)
+        if self.structure == StructureConfig():  # rigid defaults: no [structure] table (same text and digest)
+            out.pop("structure", None)
         return out
 
     def to_toml(self) -> str:
@@ -211,6 +221,10 @@ def _check_options_used(cfg: BenchConfig) -> None:
                                   f"{' or '.join(repr(m) for m in modes)}); leave it out (default "
                                   f"{getattr(default, name)!r}), got {getattr(own, name)!r}")
     default = Drive()
+    if mode == "torque" and program != default.program:
+        raise ConfigError("drive.program", f"is not used with drive.mode = 'torque' (the motor follows the torque "
+                          "program drivetrain.torque_s/torque_nm, then coasts: no speed program); leave it out "
+                          f"(default {default.program!r}), got {program!r}")
     for names, programs in _PROGRAM_FIELDS:
         if program in programs:
             continue
@@ -228,6 +242,12 @@ def _check_options_used(cfg: BenchConfig) -> None:
             if getattr(j, name) != Joints.GUIDE_DEFAULTS[name]:
                 raise ConfigError(f"joints.{name}", "is used only with a guide clearance (joints.clearance_guide_mm "
                                   f"> 0); leave it out (default {Joints.GUIDE_DEFAULTS[name]!r}), got {getattr(j, name)!r}")
+    st = cfg.structure
+    if not st.flexible:
+        for f in dataclasses.fields(StructureConfig):
+            if f.name != "mode" and getattr(st, f.name) != f.default:
+                raise ConfigError(f"structure.{f.name}", "is used only by the flexible structure (structure.mode = "
+                                  f"\"flexible\"); leave it out (default {f.default!r}), got {getattr(st, f.name)!r}")
     if not sp.enabled:
         for f in dataclasses.fields(Spatial):
             if f.name != "enabled" and getattr(sp, f.name) != f.default:

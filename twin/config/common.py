@@ -29,12 +29,14 @@ CHANNEL_GROUPS: tuple[str, ...] = ("accel", "encoder", "crank", "slider", "joint
 #: "energy" (mechanical energy and slider speed, for energy balances; both engines);
 #: "motor" (motor, belt and command channels; drive.mode "motor" or "torque" only);
 #: "drive_energy" (the drive train's work, dissipation and energy accumulators; "motor"/"torque");
-#: "slider_accel" (the slider's acceleration along its guide; spatial mechanism only).
-OPTIONAL_CHANNEL_GROUPS: tuple[str, ...] = ("energy", "motor", "drive_energy", "slider_accel")
+#: "slider_accel" (the slider's acceleration along its guide; spatial mechanism only);
+#: "structure" (the flexible rod's deflection and stretch, the supports' displacements; structure.mode
+#: "flexible" only).
+OPTIONAL_CHANNEL_GROUPS: tuple[str, ...] = ("energy", "motor", "drive_energy", "slider_accel", "structure")
 #: Every channel group, in canonical order (the defaults, then the optional ones).
 ALL_CHANNEL_GROUPS: tuple[str, ...] = CHANNEL_GROUPS + OPTIONAL_CHANNEL_GROUPS
 #: Optional channel groups that only some engines produce: group -> engines.
-ENGINE_ONLY_GROUPS: dict[str, tuple[str, ...]] = {}
+ENGINE_ONLY_GROUPS: dict[str, tuple[str, ...]] = {"structure": ("mujoco",)}
 #: Configuration names (they name default output files).
 _NAME_RE = re.compile(r"[A-Za-z0-9_+=@,-][A-Za-z0-9._+=@,-]*")
 #: Accelerometers of the bench (S003 Table 3).

@@ -26,25 +26,25 @@ def load_config(path: str | Path) -> BenchConfig:
     if isinstance(path, bool) or not isinstance(path, (str, os.PathLike)):
         raise TypeError(f"path: must be a path (str or os.PathLike), got {type(path).__name__}")
     if not str(path):
-        raise ConfigError("--config", "is empty; give a TOML configuration file")
+        raise ConfigError("path", "is empty; give a TOML configuration file")
     from twin.util import read_input_bytes, show
 
     p = Path(path)
     try:
-        raw = read_input_bytes(p, "--config")  # a regular file of bounded size: a FIFO or /dev/zero never hangs
+        raw = read_input_bytes(p, "path")  # a regular file of bounded size: a FIFO or /dev/zero never hangs
     except ConfigError:
         raise
     except TwinError as err:
-        raise ConfigError("--config", str(err).split(": ", 1)[1]) from None
+        raise ConfigError("path", err.message or str(err)) from None
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as err:
-        raise ConfigError("--config", f"{show(p)} is not a UTF-8 text (TOML) file: byte {err.start} "
-                                      f"is {raw[err.start:err.start + 1]!r}") from None
+        raise ConfigError("path", f"{show(p)} is not a UTF-8 text (TOML) file: byte {err.start} "
+                                  f"is {raw[err.start:err.start + 1]!r}") from None
     try:
         data = toml_loads(text)
     except tomllib.TOMLDecodeError as err:
-        raise ConfigError("--config", f"{show(p)} is not valid TOML: {err}") from None
+        raise ConfigError("path", f"{show(p)} is not valid TOML: {err}") from None
     base: dict[str, Any] = {}
     if "test" in data and "preset" in data:
         raise ConfigError("preset", "cannot be combined with test = N: give one starting point")

@@ -465,6 +465,16 @@ class Contact:
         _bounded(self.v_kinetic_mps, "v_kinetic_mps", *TRANSITION_MPS, "m/s", why)
         _check(self.v_kinetic_mps > self.v_static_mps, "v_kinetic_mps",
                f"must exceed v_static_mps ({self.v_static_mps}), got {self.v_kinetic_mps!r}")
+        # a law's own fields are used by that law only: set under another law they would be ignored
+        for names, field_of, law in ((("mu_static", "v_static_mps", "v_kinetic_mps"), "friction_law", "adams"),
+                                     (("impact_c_max_nspm", "impact_d_max_m"), "law", "adams-impact")):
+            if getattr(self, field_of) == law:
+                continue
+            for name in names:
+                default = self.__dataclass_fields__[name].default
+                _check(getattr(self, name) == default, name,
+                       f"is used by {field_of} = {law!r} only, not {getattr(self, field_of)!r}; leave it out "
+                       f"(default {default!r}), got {getattr(self, name)!r}")
 
 
     def stiffness_of(self, joint: str) -> float:

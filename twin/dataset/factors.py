@@ -19,6 +19,8 @@ import numpy as np
 
 from twin.config import ACCELEROMETERS, CATALOGUE_DIAMETRAL_MM, BenchConfig
 from twin.config.drivetrain import EXPLORE_RANGES
+from twin.config.structure import EXPLORE_RANGES as STRUCTURE_RANGES
+from twin.config.structure import STRUCTURE_MODES
 from twin.dataset.spec import SpecError
 from twin.errors import did_you_mean
 
@@ -174,6 +176,13 @@ NAMED: dict[str, Factor] = {f.name: f for f in (
     # ranges the parameters' documentation asks users to explore
     *(Factor(name, f"drive train: {doc} (drivetrain.{field})", None, bounds, _set(f"drivetrain.{field}"))
       for name, field, doc, bounds in EXPLORE_RANGES),
+    Factor("structure", "the bench's structure: rigid, or flexible (flexible rod, sprung frame and guide, sensor "
+           "mounts; structure.mode)", STRUCTURE_MODES, None, _set("structure.mode")),
+    # the flexible structure's placeholders (twin.config.structure; with structure = flexible, in the factors or
+    # base.set): bounds are the ranges their documentation asks users to explore
+    *(Factor(name, f"flexible structure: {doc} (structure.{field}; needs structure = flexible)", None, bounds,
+             _set(f"structure.{field}"))
+      for name, field, doc, bounds in STRUCTURE_RANGES),
 )}
 
 

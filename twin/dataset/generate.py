@@ -98,14 +98,14 @@ def prepare(spec: DatasetSpec, out_dir: str | Path) -> Prepared:
     """Plan the spec and read what ``out_dir`` already holds (refusing another dataset)."""
     runs = plan(spec)
     ident = identity(spec)
-    out = check_output_dir(out_dir, "--out", need_parent=False)
+    out = check_output_dir(out_dir, "out_dir", need_parent=False)
     if out.exists():
         check_writable(out)
     info_path = out / "info.json"
     if out.exists() and any(e.name != FolderLock.NAME and not _TMP_RE.match(e.name) for e in out.iterdir()):
         if not info_path.is_file():
-            raise DatasetError(f"--out: {out} is not empty and holds no dataset (no info.json); choose an empty "
-                               "or new folder")
+            raise DatasetError(f"{out} is not empty and holds no dataset (no info.json); choose an empty "
+                               "or new folder", field="out_dir")
         try:
             info = json.loads(info_path.read_text())
         except (OSError, ValueError) as err:
@@ -114,16 +114,16 @@ def prepare(spec: DatasetSpec, out_dir: str | Path) -> Prepared:
             raise DatasetError(f"{info_path}: must hold a JSON object, got {type(info).__name__}")
         if info.get("format") != FORMAT:
             older = info.get("format") in READABLE
-            raise DatasetError(f"--out: {out} holds a dataset of format {info.get('format')!r}"
+            raise DatasetError(f"{out} holds a dataset of format {info.get('format')!r}"
                                + (f" (an older twin's; this one reads it but writes {FORMAT} only): generate into a "
-                                  "new folder" if older else f", expected {FORMAT}: use another folder"))
+                                  "new folder" if older else f", expected {FORMAT}: use another folder"), field="out_dir")
         if not isinstance(info.get("identity"), dict):
             raise DatasetError(f"{info_path}: field 'identity' must be an object, got {info.get('identity', 'missing')!r}"[:400])
         if info.get("identity") != json.loads(json.dumps(ident)):
             diff = sorted(k for k in set(ident) | set(info.get("identity", {}))
                           if info.get("identity", {}).get(k) != json.loads(json.dumps(ident)).get(k))
-            raise DatasetError(f"--out: {out} holds a different dataset ({info.get('identity', {}).get('name')!r}; "
-                               f"differs in {', '.join(diff)}); use another folder")
+            raise DatasetError(f"{out} holds a different dataset ({info.get('identity', {}).get('name')!r}; "
+                               f"differs in {', '.join(diff)}); use another folder", field="out_dir")
     columns = dataset_columns(runs, spec)
     done = _read_done(out, {r.run_id for r in runs}) if out.exists() else {}
     if len(done) < len(runs) and (out / "results").is_dir():
@@ -134,8 +134,8 @@ def prepare(spec: DatasetSpec, out_dir: str | Path) -> Prepared:
         if stale:
             # same spec, other run ids: each run's configuration changed (new fields or defaults of a
             # newer twin); adding the new runs beside the old ones would leave files no manifest names
-            raise DatasetError(f"--out: {out} holds {len(stale)} runs that this spec no longer plans (their "
-                               "configurations differ, e.g. made by another twin version); use another folder")
+            raise DatasetError(f"{out} holds {len(stale)} runs that this spec no longer plans (their "
+                               "configurations differ, e.g. made by another twin version); use another folder", field="out_dir")
     return Prepared(spec, out, runs, columns, done, ident, label_types(runs))
 
 
@@ -152,8 +152,8 @@ def _check_same_code(info_path: Path) -> None:
     ours = {"twin": __version__, "mujoco": mujoco.__version__}
     differ = [f"{k} {versions.get(k)!r} (now {v!r})" for k, v in ours.items() if versions.get(k) != v]
     if differ:
-        raise DatasetError(f"--out: {info_path.parent} was started by {', '.join(differ)}; its runs would mix two "
-                           "versions of the physics: use another folder")
+        raise DatasetError(f"{info_path.parent} was started by {', '.join(differ)}; its runs would mix two "
+                           "versions of the physics: use another folder", field="out_dir")
 
 
 def _read_done(out: Path, ids: set[str]) -> dict[str, dict[str, Any]]:
@@ -348,19 +348,19 @@ def _threads(workers: int, fn: Callable[..., dict] | None = None) -> Callable[[l
     return run
 
 
-#: what --scheduler says where Dask is not installed (the local executors never import it)
-NO_DASK = "--scheduler {}: Dask is not installed; a Dask scheduler needs the cluster extra: pip install 'twin[cluster]'"
+#: what a Dask scheduler address says where Dask is not installed (the local executors never import it)
+NO_DASK = "{}: Dask is not installed; a Dask scheduler needs the cluster extra: pip install 'twin[cluster]'"
 
 
 def _require_dask(address: str) -> None:
     try:
         import distributed  # noqa: F401 - an optional dependency (the cluster extra)
     except ImportError:
-        raise MissingExtraError(NO_DASK.format(address)) from None
+        raise MissingExtraError(NO_DASK.format(address), field="scheduler") from None
     import re
 
     if address != "local" and not re.fullmatch(r"(tcp|tls|ucx)://[^\s/:]+(:\d{1,5})?/?|inproc://\S+", address):
-        raise TwinError(f"--scheduler: {address!r} is not a Dask scheduler address like tcp://HOST:8786")
+        raise TwinError(f"{address!r} is not a Dask scheduler address like tcp://HOST:8786", field="scheduler")
 
 
 def _dask_client(address: str):
@@ -370,7 +370,7 @@ def _dask_client(address: str):
         return Client(address, timeout="20s")
     except Exception as err:  # noqa: BLE001 - distributed raises many types for an unreachable address
         why = str(err).strip().splitlines()[0][:200] if str(err).strip() else type(err).__name__
-        raise TwinError(f"--scheduler: cannot reach a Dask scheduler at {address} ({why})") from None
+        raise TwinError(f"cannot reach a Dask scheduler at {address} ({why})", field="scheduler") from None
 
 
 def _dask(address: str, workers: int) -> Callable[[list[dict]], Iterator[dict]]:
@@ -418,14 +418,14 @@ def default_scheduler(workers: int) -> str:
 
 def executor(scheduler: str | None, workers: int) -> Callable[[list[dict]], Iterator[dict]]:
     if scheduler is not None and not scheduler.strip():
-        raise TwinError("--scheduler: is empty; give processes, threads, local or a Dask scheduler address")
+        raise TwinError("is empty; give processes, threads, local or a Dask scheduler address", field="scheduler")
     scheduler = scheduler or default_scheduler(workers)
     if scheduler == "processes":
         return _local(workers)
     if scheduler == "threads":
         return _threads(workers)
     if scheduler != "local" and not scheduler.startswith(("tcp://", "tls://", "ucx://", "inproc://")):
-        raise TwinError(f"--scheduler: must be 'processes', 'threads', 'local' or a Dask scheduler address like tcp://HOST:8786, got {scheduler!r}")
+        raise TwinError(f"must be 'processes', 'threads', 'local' or a Dask scheduler address like tcp://HOST:8786, got {scheduler!r}", field="scheduler")
     return _dask(scheduler, workers)
 
 
@@ -440,13 +440,13 @@ def generate(spec: DatasetSpec, out_dir: str | Path, workers: int | None = None,
 
     workers = resolve_workers(workers)
     if limit is not None and limit < 0:
-        raise TwinError(f"--limit: must be >= 0, got {limit}")
+        raise TwinError(f"must be >= 0, got {limit}", field="limit")
     run_tasks = executor(scheduler, workers)  # checks the scheduler before anything is written
     p = prepare(spec, out_dir)  # every check, nothing written
     p.out.mkdir(parents=True, exist_ok=True)
     # one generator per folder: a second is refused naming the holder; the kernel frees the lock
     # of a holder that died (SIGKILL included), so a later run takes it over
-    with FolderLock(p.out, "--out", "twin dataset generate"):
+    with FolderLock(p.out, "out_dir", "twin dataset generate"):
         p = prepare(spec, out_dir)  # again under the lock: runs the previous holder finished count as done
         return _generate_locked(p, workers, scheduler, run_tasks, limit, progress, warm_start)
 
@@ -512,15 +512,10 @@ def check_writable(out: Path) -> None:
         except FileNotFoundError:
             continue
         if not kind_ok(mode):
-            raise DatasetError(f"--out: {show(path)} {what}; move it away")
+            raise DatasetError(f"{show(path)} {what}; move it away", field="out_dir")
         # no probe file: a folder's modification time is the dataset's own (a refused run changes nothing)
         if _stat.S_ISDIR(mode) and (not os.access(path, os.W_OK | os.X_OK) or os.statvfs(path).f_flag & os.ST_RDONLY):
-            raise DatasetError(f"--out: cannot write in {show(path)} (permission denied or a read-only file system)")
-
-
-def _target_of(tmp_name: str) -> str:
-    # ".NAME.PID.tmp[.ext]" -> NAME
-    return tmp_name[1:].rsplit(".tmp", 1)[0].rsplit(".", 1)[0]
+            raise DatasetError(f"cannot write in {show(path)} (permission denied or a read-only file system)", field="out_dir")
 
 
 class _Progress:

@@ -405,7 +405,7 @@ def _check_cross_fields(factors: tuple[FactorSpec, ...], points: Any, holdout: d
 
 def read_spec_toml(p: Path, what: str = "a dataset spec") -> dict[str, Any]:
     """The TOML of a spec file, or a one-line :class:`SpecError` naming the file."""
-    if p.suffix != ".toml":
+    if p.suffix.lower() != ".toml":
         raise SpecError(str(p), f"{what} is a .toml file")
     from twin.util import check_input_file, read_input_bytes, show, toml_loads
 

@@ -27,7 +27,7 @@ import numpy as np
 from twin.run import Channel, Run
 
 #: instrumented channel sets -> channel names (prefix-free)
-_INSTRUMENTED = {
+INSTRUMENTED_CHANNELS = {
     "volts": [f"volt_AC{i}" for i in range(1, 7)],
     "counts": ["encoder_counts"],
     "command": ["motor_command"],
@@ -47,7 +47,7 @@ def column_specs(cfg, truth_groups: tuple[str, ...], instrumented: tuple[str, ..
         # channel groups of the configuration: "joints" covers the run file's joint_B, joint_C
         if ("joints" if s.group.startswith("joint_") else s.group) in truth_groups:
             out.append(ColumnSpec(s.name, s.unit, s.group, *storage_dtype(s.name, s.dtype, dtype, False)))
-    wanted = {n for k in instrumented for n in _INSTRUMENTED[k]}
+    wanted = {n for k in instrumented for n in INSTRUMENTED_CHANNELS[k]}
     for s in daq_specs(cfg) + meas_specs():
         if s.name in wanted:
             run_dtype = "float32" if s.name.startswith("meas_") else s.dtype
@@ -55,7 +55,7 @@ def column_specs(cfg, truth_groups: tuple[str, ...], instrumented: tuple[str, ..
     return out
 
 
-class _Instrument:
+class InstrumentSink:
     """Sink adapter: truth chunk -> stored channels (truth groups kept, DAQ and calibrated added)."""
 
     def __init__(self, cfg, columns, inner, instrumented: tuple[str, ...]):
@@ -135,7 +135,7 @@ def _run_members(tasks: list[dict[str, Any]], stop: Any) -> list[dict[str, Any]]
             writer = ParquetRunWriter(path, columns, task["run_id"], {"name": cfg.name, "config_toml": cfg.to_toml()},
                                       labels)
             # the sensor chain and the Parquet writer run on a thread, overlapping the stepping
-            sink = ThreadedSink(_Instrument(cfg, columns, writer, tuple(task["instrumented"])))
+            sink = ThreadedSink(InstrumentSink(cfg, columns, writer, tuple(task["instrumented"])))
             cfgs.append(cfg)
             writers.append(writer)
             sinks.append([_Stop(stop), sink] if stop is not None else [sink])

@@ -30,7 +30,7 @@ until they agreed (0.55 after seven trials). Here:
    beside the answer's narrow basin and scored 1.8 m/s² low-passed against a wide wrong basin's 1.71
    at 0.42, while over the full band 0.428 reads 9.2 m/s² and the answer the noise's 5.
 
-:func:`synthetic_recording` makes the recordings of the recovery check: a run of the configuration at
+:func:`write_synthetic_recording` writes the recordings of the recovery check: a run of the configuration at
 a known e, white noise added to the accelerometer's truth, through the sensor chain.
 """
 
@@ -202,7 +202,7 @@ def simulated_acceleration(cfg: BenchConfig, e: float, n: int, rate_hz: float, s
     return a
 
 
-def _lowpass(f_hz: float, rate_hz: float):
+def zero_phase_lowpass(f_hz: float, rate_hz: float):
     """Zero-phase 4th-order Butterworth low-pass at ``f_hz`` (None for 0 or at/above Nyquist)."""
     if not f_hz or f_hz >= 0.5 * rate_hz:
         return None
@@ -253,7 +253,7 @@ def sweep_restitution(path: str | Path, opts: SweepOptions = SweepOptions(), pro
     # over the full band the mismatch is a needle at the answer among spurious dips. Low-passed
     # (``lowpass_hz``) the minimum is wider, still rugged. The coarse grid and the first fine grid are
     # scored low-passed, the finest grid (fine_step/5 over ±2 fine_step) over the full band.
-    lp = _lowpass(opts.lowpass_hz, rate)
+    lp = zero_phase_lowpass(opts.lowpass_hz, rate)
     rec_lp = lp(rec) if lp else rec
 
     def evaluate(e: float) -> float:
@@ -322,8 +322,8 @@ def sweep_restitution(path: str | Path, opts: SweepOptions = SweepOptions(), pro
 
 
 # ------------------------------------------------------------------------ synthetic
-def synthetic_recording(cfg: BenchConfig, path: str | Path, value: float, noise_mps2: float = 5.0,
-                        seed: int = 0, sensor: str = "AC6", parameter: str = "restitution") -> Path:
+def write_synthetic_recording(cfg: BenchConfig, path: str | Path, value: float, noise_mps2: float = 5.0,
+                              seed: int = 0, sensor: str = "AC6", parameter: str = "restitution") -> Path:
     """Write a synthetic bench recording of ``cfg`` at a known ``parameter`` value (restitution, or the
     IMPACT law's c_max): the twin's run (engine of ``cfg``), white Gaussian noise of ``noise_mps2`` RMS
     [m/s²] added to ``sensor``'s truth, then the sensor chain of ``cfg.instrumentation`` (its own

@@ -23,7 +23,6 @@ bench whose local gravity differs from standard gravity would.
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass, field
 from typing import Any, Mapping
@@ -34,6 +33,7 @@ from twin.config import ACCELEROMETERS, BenchConfig
 from twin.errors import RecordingError
 from twin.instrument.accel import STANDARD_G, model_of
 from twin.run import Channel, Run
+from twin.util import json_text
 
 _AXES = {"+x": (0, 1.0), "-x": (0, -1.0), "+y": (1, 1.0), "-y": (1, -1.0)}
 
@@ -67,7 +67,7 @@ class Calibration:
                 "source": self.source}
 
     def to_json(self) -> str:
-        return json.dumps(self.to_dict(), sort_keys=True)
+        return json_text(self.to_dict(), indent=None, sort_keys=True)
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> "Calibration":

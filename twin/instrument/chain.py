@@ -44,6 +44,7 @@ from twin.instrument.calibration import Calibration, calibrate_static, calibrati
 from twin.instrument.daq import DaqSampler, decimation_factor, first_daq_sample, quantize
 from twin.instrument.encoder import angle_to_counts
 from twin.run import Channel, Run
+from twin.tracefile import DriveInputs
 
 DAQ_GROUP = "daq"
 MEAS_GROUP = "meas_accel"
@@ -112,8 +113,10 @@ class ChainStream:
     a refused chunk, which changes nothing).
     """
 
-    def __init__(self, cfg: BenchConfig, rate_hz: float, prefix: str = "", stream: int = 0, command: bool = True):
+    def __init__(self, cfg: BenchConfig, rate_hz: float, prefix: str = "", stream: int = 0, command: bool = True,
+                 drive_inputs: DriveInputs | None = None):
         self.cfg, self.inst = cfg, cfg.instrumentation
+        self.drive_inputs = drive_inputs  # recorded drive trace in memory, for the command channel
         self.rate_hz = float(rate_hz)
         self.k = decimation_factor(self.rate_hz, self.inst)
         self.prefix, self.stream, self.command = prefix, stream, command
@@ -138,7 +141,7 @@ class ChainStream:
         if self.command:
             from twin.drive import DriveReference
 
-            self._drive = DriveReference(self.cfg)
+            self._drive = DriveReference(self.cfg, self.drive_inputs)
         self._inputs = inputs
         self.t0 = float(chunk.t0)
 
@@ -211,17 +214,18 @@ class ChainStream:
 
 
 def apply_chain(run: Run, cfg: BenchConfig | None = None, prefix: str = "", stream: int = 0,
-                command: bool = True) -> Run:
+                command: bool = True, drive_inputs: DriveInputs | None = None) -> Run:
     """Raw DAQ channels of ``run`` under ``cfg.instrumentation`` (``cfg`` defaults to ``run.config``).
 
     Returns a run at ``instrumentation.daq_rate_hz`` holding the ``{prefix}daq`` group for the
     truth channels present (accelerometers, ``encoder_angle``) and, if ``command``, the motor
-    command of ``cfg``'s drive program. The whole run as one chunk of a :class:`ChainStream`.
+    command of ``cfg``'s drive program (``drive_inputs``: its recorded trace in memory, if any). The
+    whole run as one chunk of a :class:`ChainStream`.
     """
     cfg = cfg if cfg is not None else run.config
     if cfg is None:
         raise RecordingError("apply_chain: the run carries no configuration; pass cfg")
-    return ChainStream(cfg, run.rate_hz, prefix, stream, command).process(run)
+    return ChainStream(cfg, run.rate_hz, prefix, stream, command, drive_inputs).process(run)
 
 
 def static_truth_run(cfg: BenchConfig, duration_s: float = 1.0) -> Run:

@@ -135,15 +135,22 @@
  * same forward pass: MuJoCo calls a position-stage user sensor before the velocity stage and
  * then leaves its slot alone, while a velocity-stage user sensor makes every step run
  * mj_subtreeVel first (0.1 us per step here, for nothing the friction needs) and would compute
- * the friction a second time. The position-stage callback marks the mjData (thread-local), and
- * only the passive callback of that same pass writes, so the forward passes that skip sensors
- * (RK4's intermediate stages) leave the step's value in place. needstage="vel" still works the
- * old way (the value computed by the sensor callback).
+ * the friction a second time. The position-stage callback marks the sensors' own slots in the
+ * mjData (mark_sensors_pending), and only the passive callback of that same pass writes, so the
+ * forward passes that skip sensors (RK4's intermediate stages) leave the step's value in place.
+ * needstage="vel" still works the old way (the value computed by the sensor callback).
+ *
+ * One set of hooks for every model. MuJoCo's collision table and callbacks are process-wide
+ * ("global and not model-specific", its API reference), so every hook here is a dispatcher that
+ * reads all it needs from the model and data it is given: parameters from the geom/joint user data
+ * and <numeric> elements, per-scene state from d->userdata, the sensor mark from d->sensordata.
+ * Nothing is kept between calls; the only file-scope variables are the pointers below, written once
+ * by install() (under the GIL) and the same for every model. check_model() names what a model lays
+ * out wrongly, since a callback can only skip it.
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
-#include <math.h>
-#include <mujoco/mujoco.h>
+#include "_native.h"
 
 #ifndef BORE_MODULE
 #define BORE_MODULE _bore
@@ -152,8 +159,6 @@
 #define BORE_STR(x) BORE_STR2(x)
 #define BORE_CAT2(a, b) a##b
 #define BORE_CAT(a, b) BORE_CAT2(a, b)
-
-#define BORE_MAGIC 7301.0
 
 /* Layout of a bore geom's user data (m->geom_user row, nuser_geom = BORE_NUSER): the one
  * definition is twin/names.py BORE_USERDATA_FIELDS (same names, same order). The module reports
@@ -217,14 +222,6 @@ static mjtNum johnson_force(mjtNum delta, mjtNum K, mjtNum dr) {
   return -K * delta / w;
 }
 
-/* Adams' cubic STEP: h0 for x <= x0, h1 for x >= x1, h0 + (h1 - h0) D^2 (3 - 2 D) between */
-static mjtNum step3(mjtNum x, mjtNum x0, mjtNum h0, mjtNum x1, mjtNum h1) {
-  if (x <= x0) return h0;
-  if (x >= x1) return h1;
-  const mjtNum dd = (x - x0) / (x1 - x0);
-  return h0 + (h1 - h0) * dd * dd * (3.0 - 2.0 * dd);
-}
-
 /* Layout of a guide joint's user data (m->jnt_user row, nuser_jnt >= GUIDE_NUSER): the one
  * definition is twin/names.py GUIDE_USERDATA_FIELDS. A slide or hinge joint marked with
  * GUIDE_MAGIC gets the reference's regularized Coulomb friction as a passive force on its dof:
@@ -243,16 +240,16 @@ _Static_assert(sizeof(guide_user_names) / sizeof(guide_user_names[0]) == GUIDE_N
                "guide_user_names must name every field of enum guide_user");
 
 /* the ball-in-socket collider of the spatial mechanism (_socket.c): a marked sphere is a socket */
-int twin_socket_install(void* table_addr, double magic);
+int twin_socket_install(void* table_addr);
 void twin_socket_tangent(const mjtNum vball[3], const mjtNum vsocket[3], const mjtNum n[3], mjtNum t[3]);
 
+/* what the hooks chain to (the table's cylinder-cylinder collider, callbacks installed before) and
+ * the MuJoCo functions they call: set by install(), the same for every model */
 static mjfCollision g_previous = NULL;
 static mjfGeneric g_prev_passive = NULL;
 static mjfSensor g_prev_sensor = NULL;
-typedef void (*applyFT_t)(const mjModel*, mjData*, const mjtNum*, const mjtNum*, const mjtNum*, int, mjtNum*);
-static applyFT_t g_applyFT = NULL;
-typedef void (*solveM_t)(const mjModel*, mjData*, mjtNum*, const mjtNum*, int);
-static solveM_t g_solveM = NULL;
+static twin_applyFT_t g_applyFT = NULL;
+static twin_solveM_t g_solveM = NULL;
 
 static int is_bore(const mjModel* m, int g) {
   return m->nuser_geom >= BORE_NUSER && m->geom_user[g * m->nuser_geom + BORE_MARKER] == BORE_MAGIC;
@@ -446,7 +443,7 @@ static void law_terms(const mjtNum* user, int law, mjtNum delta, mjtNum rate, mj
     const mjtNum n = user[BORE_EXPONENT];
     const mjtNum chi = user[BORE_DAMPING];
     if (law == LAW_CYLINDER) fe = johnson_force(delta, K, user[BORE_DMAX]);
-    else fe = K * (n == 1.5 ? delta * sqrt(delta) : pow(delta, n));
+    else fe = K * twin_pow(delta, n);
     c = chi * fe / vimp;
     if (rate < -vimp) {                         /* clamp delta'/v_imp at -1: no rate term */
       fe *= 1 - chi;
@@ -454,8 +451,8 @@ static void law_terms(const mjtNum* user, int law, mjtNum delta, mjtNum rate, mj
     }
   } else if (law == LAW_IMPACT) {             /* ADAMS IMPACT: K delta^n + STEP(delta; d_max) c_max delta' */
     const mjtNum n = user[BORE_EXPONENT];
-    fe = K * (n == 1.5 ? delta * sqrt(delta) : pow(delta, n));
-    c = step3(delta, 0, 0, user[BORE_DMAX], user[BORE_DAMPING]);
+    fe = K * twin_pow(delta, n);
+    c = twin_step3(delta, 0, 0, user[BORE_DMAX], user[BORE_DAMPING]);
   } else {
     fe = K * delta;
     c = user[BORE_DAMPING];
@@ -473,11 +470,19 @@ static mjtNum friction_coefficient(const mjtNum* user, mjtNum s) {
     /* Adams/COSMOS (S001 Table II): odd cubic STEP through 0 up to v_s = v0, STEP from mu_s to
      * mu_d = mu0 up to v_d = v1, mu_d above (twin.reference.contact.adams_mu) */
     const mjtNum mus = user[BORE_MUS];
-    if (s < v0) mu = step3(s, -v0, -mus, v0, mus);
-    else mu = step3(s, v0, mus, v1, mu0);
-  } else if (s >= v1) mu = mu0;
-  else if (s > v0) mu = mu0 * (s - v0) / (v1 - v0);
+    if (s < v0) mu = twin_step3(s, -v0, -mus, v0, mus);
+    else mu = twin_step3(s, v0, mus, v1, mu0);
+  } else {
+    mu = twin_ramp_scaled(mu0, s, v0, v1);
+  }
   return mu;
+}
+
+/* the theta-method weight of the law's damping on row `row` with c h = ch (module docstring): 1/2
+ * while c h <= 2 m_hat, 1 - m_hat/(c h) beyond (m_hat = 1/efc_diagA, the row's mass estimate) */
+static mjtNum row_theta(const mjData* d, int row, mjtNum ch) {
+  const mjtNum mhat = d->efc_diagA[row] > 0 ? 1 / d->efc_diagA[row] : 0;
+  return ch > 2 * mhat ? 1 - mhat / ch : 0.5;
 }
 
 /* the contact law (module docstring) on the normal row of each bore's contact; keeps v_imp */
@@ -522,10 +527,8 @@ static void contact_law(const mjModel* m, mjData* d) {
     }
     mjtNum fe, c;                                 /* elastic force, damping coefficient */
     law_terms(user, law, delta, rate, vimp, &fe, &c);
-    const mjtNum h = m->opt.timestep;
-    const mjtNum mhat = d->efc_diagA[row] > 0 ? 1 / d->efc_diagA[row] : 0;
-    const mjtNum ch = c * h;
-    const mjtNum theta = ch > 2 * mhat ? 1 - mhat / ch : 0.5;
+    const mjtNum ch = c * m->opt.timestep;
+    const mjtNum theta = row_theta(d, row, ch);
     const mjtNum gamma = theta * ch;
     const mjtNum R0 = d->efc_R[row];
     const mjtNum R = gamma * R0 > 1 ? 1 / gamma : R0;
@@ -577,11 +580,8 @@ static int bore_friction(const mjModel* m, const mjData* d, int icon, friction_t
     fn = aref / d->efc_R[row];
     const mjtNum c = kbip[1] / d->efc_R[row];
     if (c > 0) {
-      const mjtNum h = m->opt.timestep;
-      const mjtNum mhat = d->efc_diagA[row] > 0 ? 1 / d->efc_diagA[row] : 0;
-      const mjtNum ch = c * h;
-      const mjtNum theta = ch > 2 * mhat ? 1 - mhat / ch : 0.5;
-      fn -= theta * ch * bore_bias_acceleration(m, d, con, gb);
+      const mjtNum ch = c * m->opt.timestep;
+      fn -= row_theta(d, row, ch) * ch * bore_bias_acceleration(m, d, con, gb);
     }
   } else {
     fn = aref / (d->efc_diagA[row] + d->efc_R[row]);
@@ -602,7 +602,7 @@ static int bore_friction(const mjModel* m, const mjData* d, int icon, friction_t
   const mjtNum vt = (vpin[0] - vbore[0]) * out->t[0] + (vpin[1] - vbore[1]) * out->t[1] +
                     (vpin[2] - vbore[2]) * out->t[2];
   const mjtNum mu = friction_coefficient(user, fabs(vt));
-  out->ft = vt > 0 ? -mu * out->fn : (vt < 0 ? mu * out->fn : 0.0);
+  out->ft = twin_oppose(vt, mu * out->fn);
   return 1;
 }
 
@@ -615,25 +615,52 @@ static void guide_friction(const mjModel* m, mjData* d) {
     if (user[GUIDE_MARKER] != GUIDE_MAGIC) continue;
     if (m->jnt_type[j] != mjJNT_SLIDE && m->jnt_type[j] != mjJNT_HINGE) continue;
     const int dof = m->jnt_dofadr[j];
-    const mjtNum v = d->qvel[dof], s = fabs(v), v0 = user[GUIDE_V0], v1 = user[GUIDE_V1];
-    mjtNum r = 0;
-    if (s >= v1) r = 1;
-    else if (s > v0) r = (s - v0) / (v1 - v0);
+    const mjtNum v = d->qvel[dof];
+    const mjtNum r = twin_ramp(fabs(v), user[GUIDE_V0], user[GUIDE_V1]);
     if (v > 0) d->qfrc_passive[dof] -= user[GUIDE_FORCE] * r;
     else if (v < 0) d->qfrc_passive[dof] += user[GUIDE_FORCE] * r;
   }
 }
 
-/* the mjData whose position-stage friction sensors wait for this forward pass's friction: set
- * by the sensor callback at mjSTAGE_POS, taken by the passive callback of the same pass (each
- * thread runs one forward pass at a time) */
-static _Thread_local const mjData* g_sensor_pending = NULL;
+/* Position-stage sensors of the bores (friction, dimension 1; contact, dimension 4: "Force"): the
+ * passive callback writes them, but only in a forward pass that computes sensors (RK4's
+ * intermediate stages skip them and must leave the step's values). The sensor callback marks
+ * such a pass in the data itself: at mjSTAGE_POS it writes PENDING (a NaN no computation makes)
+ * into the first slot of each of these sensors, and the passive callback of the same pass finds
+ * the mark, sets the slot back to MuJoCo's 0 and writes the values. Nothing outside the mjData:
+ * any number of models and data, on any threads. */
+static const uint64_t PENDING = 0x7ff8000000007301ULL;
+
+static int bore_pos_sensor(const mjModel* m, int s) {
+  return m->sensor_type[s] == mjSENS_USER && m->sensor_objtype[s] == mjOBJ_GEOM &&
+         m->sensor_needstage[s] == mjSTAGE_POS && (m->sensor_dim[s] == 1 || m->sensor_dim[s] == 4) &&
+         m->sensor_objid[s] >= 0 && is_bore(m, m->sensor_objid[s]);
+}
+
+static void mark_sensors_pending(const mjModel* m, mjData* d) {
+  for (int s = 0; s < m->nsensor; s++) {
+    if (bore_pos_sensor(m, s)) memcpy(d->sensordata + m->sensor_adr[s], &PENDING, sizeof PENDING);
+  }
+}
+
+/* whether this pass computes the bores' position-stage sensors (the mark found and cleared) */
+static int take_sensors_pending(const mjModel* m, mjData* d) {
+  int pending = 0;
+  for (int s = 0; s < m->nsensor; s++) {
+    if (!bore_pos_sensor(m, s)) continue;
+    mjtNum* slot = d->sensordata + m->sensor_adr[s];
+    if (memcmp(slot, &PENDING, sizeof PENDING) == 0) {
+      *slot = 0;
+      pending = 1;
+    }
+  }
+  return pending;
+}
 
 /* add ft to the position-stage friction sensors of bore geom gb */
 static void add_friction_sensor(const mjModel* m, mjData* d, int gb, mjtNum ft) {
   for (int s = 0; s < m->nsensor; s++) {
-    if (m->sensor_type[s] == mjSENS_USER && m->sensor_objtype[s] == mjOBJ_GEOM && m->sensor_objid[s] == gb &&
-        m->sensor_needstage[s] == mjSTAGE_POS && m->sensor_dim[s] == 1) d->sensordata[m->sensor_adr[s]] += ft;
+    if (twin_user_sensor(m, s, mjOBJ_GEOM, gb, mjSTAGE_POS) && m->sensor_dim[s] == 1) d->sensordata[m->sensor_adr[s]] += ft;
   }
 }
 
@@ -721,12 +748,11 @@ static void force_bore(const mjModel* m, mjData* d, int gb, const mjtNum* user, 
   const mjtNum t[3] = {a[1] * n[2] - a[2] * n[1], a[2] * n[0] - a[0] * n[2], a[0] * n[1] - a[1] * n[0]};
   const mjtNum vt = dv[0] * t[0] + dv[1] * t[1] + dv[2] * t[2];
   const mjtNum mu = friction_coefficient(user, fabs(vt));
-  const mjtNum ft = vt > 0 ? -mu * fn : (vt < 0 ? mu * fn : 0.0);   /* on the pin along t */
+  const mjtNum ft = twin_oppose(vt, mu * fn);   /* on the pin along t */
   if (sensors) {
     add_friction_sensor(m, d, gb, ft);
     for (int k = 0; k < m->nsensor; k++) {         /* the contact sensor: [found, normal force, 0, 0] */
-      if (m->sensor_type[k] == mjSENS_USER && m->sensor_objtype[k] == mjOBJ_GEOM && m->sensor_objid[k] == gb &&
-          m->sensor_needstage[k] == mjSTAGE_POS && m->sensor_dim[k] == 4) {
+      if (twin_user_sensor(m, k, mjOBJ_GEOM, gb, mjSTAGE_POS) && m->sensor_dim[k] == 4) {
         d->sensordata[m->sensor_adr[k]] = 1;
         d->sensordata[m->sensor_adr[k] + 1] = fn;
       }
@@ -741,8 +767,7 @@ static void force_bore(const mjModel* m, mjData* d, int gb, const mjtNum* user, 
 
 static void passive_bore_joints(const mjModel* m, mjData* d) {
   if (g_prev_passive) g_prev_passive(m, d);
-  const int sensors = g_sensor_pending == d;  /* this pass computes sensors (slots zeroed by MuJoCo) */
-  if (sensors) g_sensor_pending = NULL;
+  const int sensors = take_sensors_pending(m, d);  /* this pass computes sensors */
   guide_friction(m, d);
   if (m->nuser_geom < BORE_NUSER) return;
   contact_law(m, d);
@@ -767,7 +792,7 @@ static void sensor_friction(const mjModel* m, mjData* d, int stage) {
   drivetrain_sensor(m, d, stage);
   if (m->nuser_geom < BORE_NUSER) return;
   if (stage == mjSTAGE_POS) {
-    g_sensor_pending = d;  /* the passive callback of this pass writes the values */
+    mark_sensors_pending(m, d);  /* the passive callback of this pass writes the values */
     return;
   }
   if (stage != mjSTAGE_VEL) return;
@@ -788,6 +813,7 @@ static void sensor_friction(const mjModel* m, mjData* d, int stage) {
 
 /* install(table, passive_cb, sensor_cb, mj_applyFT) addresses -> True if installed now */
 static PyObject* py_install(PyObject* self, PyObject* args) {
+  (void)self;
   unsigned long long table_addr, passive_addr, sensor_addr, applyft_addr, solvem_addr = 0;
   if (!PyArg_ParseTuple(args, "KKKK|K", &table_addr, &passive_addr, &sensor_addr, &applyft_addr, &solvem_addr))
     return NULL;
@@ -799,15 +825,15 @@ static PyObject* py_install(PyObject* self, PyObject* args) {
   mjfGeneric* passive = (mjfGeneric*)(uintptr_t)passive_addr;
   mjfSensor* sensor = (mjfSensor*)(uintptr_t)sensor_addr;
   int changed = 0;
-  g_applyFT = (applyFT_t)(uintptr_t)applyft_addr;
-  if (solvem_addr) g_solveM = (solveM_t)(uintptr_t)solvem_addr;
+  g_applyFT = (twin_applyFT_t)(uintptr_t)applyft_addr;
+  if (solvem_addr) g_solveM = (twin_solveM_t)(uintptr_t)solvem_addr;
   /* (re)install each hook that is not ours, chaining what was there */
   if (table[mjGEOM_CYLINDER][mjGEOM_CYLINDER] != collide_pin_bore) {
     g_previous = table[mjGEOM_CYLINDER][mjGEOM_CYLINDER];
     table[mjGEOM_CYLINDER][mjGEOM_CYLINDER] = collide_pin_bore;
     changed = 1;
   }
-  if (twin_socket_install((void*)table, BORE_MAGIC)) changed = 1;
+  if (twin_socket_install((void*)table)) changed = 1;
   if (*passive != passive_bore) {
     g_prev_passive = *passive;
     *passive = passive_bore;
@@ -822,84 +848,166 @@ static PyObject* py_install(PyObject* self, PyObject* args) {
   Py_RETURN_FALSE;
 }
 
+/* ------------------------------------------------------------------ model check */
+
+/* the name of element adr in m->names ("" if unnamed) */
+static const char* el_name(const mjModel* m, const int* name_adr, int id) {
+  return m->names + name_adr[id];
+}
+
+/* Why the native code cannot run model m as laid out, in one line written to msg, or 0 if it can.
+ * A callback cannot raise, and skips what it cannot read; twin refuses such a model before it runs
+ * (twin.mujoco_engine.collider.check_model). Only what the model marks as native is checked. */
+static int model_problem(const mjModel* m, char* msg, size_t n) {
+  const int nu = m->nuser_geom;
+  for (int g = 0; nu >= 1 && g < m->ngeom; g++) {
+    const mjtNum* user = m->geom_user + g * nu;
+    if (user[BORE_MARKER] != BORE_MAGIC) continue;
+    const char* name = el_name(m, m->name_geomadr, g);
+    if (nu < BORE_NUSER)
+      return snprintf(msg, n, "geom '%s' is marked as a bore (user[0] = %g) but the model's geom user data have %d "
+                      "fields, the native code reads %d (twin.names.BORE_USERDATA_FIELDS)", name, BORE_MAGIC, nu,
+                      (int)BORE_NUSER);
+    if (m->geom_type[g] != mjGEOM_CYLINDER && m->geom_type[g] != mjGEOM_SPHERE)
+      return snprintf(msg, n, "geom '%s' is marked as a bore but is of type %d: a bore is a cylinder (pin in bore) "
+                      "or a sphere (ball in socket)", name, m->geom_type[g]);
+    const mjtNum law = user[BORE_LAW], fric = user[BORE_FRICTION];
+    if (!(law == LAW_SOFT || law == LAW_HYSTERESIS || law == LAW_LINEAR || law == LAW_IMPACT || law == LAW_CYLINDER))
+      return snprintf(msg, n, "geom '%s': user field 'law' is %g, allowed 0 to 4", name, law);
+    if (!(fric == 0 || fric == 1))
+      return snprintf(msg, n, "geom '%s': user field 'friction' is %g, allowed 0 or 1", name, fric);
+    const mjtNum pin = user[BORE_FORCE_PIN], slot = user[BORE_SLOT];
+    const int force = pin >= 0;
+    if (!(pin == -1 || (pin >= 0 && pin < m->ngeom && pin == floor(pin) && pin != g)))
+      return snprintf(msg, n, "geom '%s': user field 'force_pin' is %g, allowed -1 or another geom's id (0 to %d)",
+                      name, pin, (int)m->ngeom - 1);
+    const int need = force ? 2 : 1;  /* "Force": v_imp and the previous step's normal velocity */
+    if (!(slot == -1 || (slot >= 0 && slot == floor(slot) && slot + need <= m->nuserdata)))
+      return snprintf(msg, n, "geom '%s': user field 'slot' is %g, allowed -1 or a userdata index with %d slot(s) "
+                      "from it (nuserdata = %d)", name, slot, need, (int)m->nuserdata);
+  }
+  const int nj = m->nuser_jnt;
+  for (int j = 0; nj >= 1 && j < m->njnt; j++) {
+    if (m->jnt_user[j * nj + GUIDE_MARKER] != GUIDE_MAGIC) continue;
+    const char* name = el_name(m, m->name_jntadr, j);
+    if (nj < GUIDE_NUSER)
+      return snprintf(msg, n, "joint '%s' is marked as a guide (user[0] = %g) but the model's joint user data have "
+                      "%d fields, the native code reads %d (twin.names.GUIDE_USERDATA_FIELDS)", name, GUIDE_MAGIC, nj,
+                      (int)GUIDE_NUSER);
+    if (m->jnt_type[j] != mjJNT_SLIDE && m->jnt_type[j] != mjJNT_HINGE)
+      return snprintf(msg, n, "joint '%s' is marked as a guide but is neither a slide nor a hinge", name);
+  }
+  for (int i = 0; i < m->nnumeric; i++) {
+    const mjtNum* p = m->numeric_data + m->numeric_adr[i];
+    const int size = m->numeric_size[i];
+    if (size < 1 || (p[0] != DT_MAGIC && p[0] != GC_MAGIC)) continue;
+    const char* name = el_name(m, m->name_numericadr, i);
+    const int dt = p[0] == DT_MAGIC;
+    const int nfields = dt ? DT_NFIELDS : GC_NFIELDS;
+    if (size < nfields)
+      return snprintf(msg, n, "numeric '%s' is marked as the %s (data[0] = %g) but has %d values, the native code "
+                      "reads %d (twin.names.%s)", name, dt ? "drive train" : "guide clearance", p[0], size, nfields,
+                      dt ? "DRIVETRAIN_FIELDS" : "GUIDE_CLEARANCE_FIELDS");
+    const int dofs[3] = {dt ? (int)p[DT_MOTOR_DOF] : (int)p[GC_DOF_X], dt ? (int)p[DT_CRANK_DOF] : (int)p[GC_DOF_Y],
+                         dt ? (int)p[DT_CRANK_DOF] : (int)p[GC_DOF_R]};
+    for (int k = 0; k < 3; k++) {
+      if (dofs[k] < 0 || dofs[k] >= m->nv)
+        return snprintf(msg, n, "numeric '%s': dof index %d outside 0 to %d", name, dofs[k], (int)m->nv - 1);
+    }
+    if (dt && ((int)p[DT_GUIDE_DOF] < -1 || (int)p[DT_GUIDE_DOF] >= m->nv))
+      return snprintf(msg, n, "numeric '%s': field 'guide_dof' is %g, allowed -1 or 0 to %d", name, p[DT_GUIDE_DOF],
+                      (int)m->nv - 1);
+    if (dt && ((int)p[DT_ACT] < 0 || (int)p[DT_ACT] >= m->nu))
+      return snprintf(msg, n, "numeric '%s': field 'actuator' is %g, allowed 0 to %d", name, p[DT_ACT], (int)m->nu - 1);
+    if (dt && !(p[DT_STRIDE] >= 1))
+      return snprintf(msg, n, "numeric '%s': field 'stride' is %g, allowed >= 1", name, p[DT_STRIDE]);
+    const mjtNum base = dt ? p[DT_SLOT] : p[GC_SLOT];
+    const int need = dt ? DT_NSTATE_FIXED + 2 * (int)m->nv : GC_NSTATE;
+    if (!(base >= 0 && base == floor(base) && base + need <= m->nuserdata))
+      return snprintf(msg, n, "numeric '%s': field 'slot' is %g, its state needs %d userdata slots from it "
+                      "(nuserdata = %d)", name, base, need, (int)m->nuserdata);
+  }
+  return 0;
+}
+
+/* check_model(address of an mjModel) -> None, or the one-line reason the native code cannot run it */
+static PyObject* py_check_model(PyObject* self, PyObject* arg) {
+  (void)self;
+  const unsigned long long addr = PyLong_AsUnsignedLongLong(arg);
+  if (PyErr_Occurred()) return NULL;
+  if (!addr) {
+    PyErr_SetString(PyExc_ValueError, "null model address");
+    return NULL;
+  }
+  char msg[512];
+  if (model_problem((const mjModel*)(uintptr_t)addr, msg, sizeof msg) > 0) return PyUnicode_FromString(msg);
+  Py_RETURN_NONE;
+}
+
+/* ------------------------------------------------------------------ layouts for twin/names.py */
+
+static PyObject* names_tuple(const char* const* names, int n) {
+  PyObject* out = PyTuple_New(n);
+  if (!out) return NULL;
+  for (int i = 0; i < n; i++) {
+    PyObject* name = PyUnicode_FromString(names[i]);
+    if (!name) {
+      Py_DECREF(out);
+      return NULL;
+    }
+    PyTuple_SET_ITEM(out, i, name);
+  }
+  return out;
+}
+
 static PyObject* py_header_version(PyObject* self, PyObject* args) {
+  (void)self, (void)args;
   return PyLong_FromLong(mjVERSION_HEADER);
 }
 
 static PyObject* py_bore_magic(PyObject* self, PyObject* args) {
+  (void)self, (void)args;
   return PyFloat_FromDouble(BORE_MAGIC);
 }
 
 static PyObject* py_userdata_fields(PyObject* self, PyObject* args) {
-  PyObject* out = PyTuple_New(BORE_NUSER);
-  if (!out) return NULL;
-  for (int i = 0; i < BORE_NUSER; i++) {
-    PyObject* name = PyUnicode_FromString(bore_user_names[i]);
-    if (!name) {
-      Py_DECREF(out);
-      return NULL;
-    }
-    PyTuple_SET_ITEM(out, i, name);
-  }
-  return out;
+  (void)self, (void)args;
+  return names_tuple(bore_user_names, BORE_NUSER);
 }
 
 static PyObject* py_guide_fields(PyObject* self, PyObject* args) {
-  PyObject* out = PyTuple_New(GUIDE_NUSER);
-  if (!out) return NULL;
-  for (int i = 0; i < GUIDE_NUSER; i++) {
-    PyObject* name = PyUnicode_FromString(guide_user_names[i]);
-    if (!name) {
-      Py_DECREF(out);
-      return NULL;
-    }
-    PyTuple_SET_ITEM(out, i, name);
-  }
-  return out;
+  (void)self, (void)args;
+  return names_tuple(guide_user_names, GUIDE_NUSER);
 }
 
 static PyObject* py_guide_magic(PyObject* self, PyObject* args) {
+  (void)self, (void)args;
   return PyFloat_FromDouble(GUIDE_MAGIC);
 }
 
 static PyObject* py_drivetrain_fields(PyObject* self, PyObject* args) {
-  PyObject* out = PyTuple_New(DT_NFIELDS);
-  if (!out) return NULL;
-  for (int i = 0; i < DT_NFIELDS; i++) {
-    PyObject* name = PyUnicode_FromString(dt_field_names[i]);
-    if (!name) {
-      Py_DECREF(out);
-      return NULL;
-    }
-    PyTuple_SET_ITEM(out, i, name);
-  }
-  return out;
+  (void)self, (void)args;
+  return names_tuple(dt_field_names, DT_NFIELDS);
 }
 
 static PyObject* py_guide_clearance_fields(PyObject* self, PyObject* args) {
-  PyObject* out = PyTuple_New(GC_NFIELDS);
-  if (!out) return NULL;
-  for (int i = 0; i < GC_NFIELDS; i++) {
-    PyObject* name = PyUnicode_FromString(gc_field_names[i]);
-    if (!name) {
-      Py_DECREF(out);
-      return NULL;
-    }
-    PyTuple_SET_ITEM(out, i, name);
-  }
-  return out;
+  (void)self, (void)args;
+  return names_tuple(gc_field_names, GC_NFIELDS);
 }
 
 static PyObject* py_guide_clearance_layout(PyObject* self, PyObject* args) {
+  (void)self, (void)args;
   return Py_BuildValue("(dii)", GC_MAGIC, (int)GC_NSTATE, (int)GC_NSENSOR);
 }
 
 static PyObject* py_drivetrain_layout(PyObject* self, PyObject* args) {
+  (void)self, (void)args;
   return Py_BuildValue("(diii)", DT_MAGIC, (int)DT_NSTATE_FIXED, (int)DT_NSENSOR_TORQUE, (int)DT_NSENSOR);
 }
 
 static PyMethodDef methods[] = {
   {"install", py_install, METH_VARARGS, "install(table, passive, sensor, applyFT[, solveM]): addresses of mjCOLLISIONFUNC, mjcb_passive, mjcb_sensor and the functions mj_applyFT and mj_solveM."},
+  {"check_model", py_check_model, METH_O, "check_model(address of an mjModel): None, or the one-line reason the native code cannot run the model as laid out."},
   {"header_version", py_header_version, METH_NOARGS, "mjVERSION_HEADER the module was compiled against."},
   {"bore_magic", py_bore_magic, METH_NOARGS, "geom user data marker value that marks a bore."},
   {"userdata_fields", py_userdata_fields, METH_NOARGS, "names of the bore geom's user data fields, in order (enum bore_user)."},
@@ -912,6 +1020,8 @@ static PyMethodDef methods[] = {
   {NULL, NULL, 0, NULL}
 };
 
-static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, BORE_STR(BORE_MODULE), NULL, -1, methods};
+static struct PyModuleDef module = {
+  PyModuleDef_HEAD_INIT, BORE_STR(BORE_MODULE), NULL, -1, methods, NULL, NULL, NULL, NULL
+};
 
 PyMODINIT_FUNC BORE_CAT(PyInit_, BORE_MODULE)(void) { return PyModule_Create(&module); }

@@ -27,6 +27,8 @@
  * User sensors on the motor hinge report the step's values (see drivetrain_sensor).
  */
 
+#include "_native.h"
+
 #define DT_MAGIC 7303.0
 
 enum dt_field {
@@ -54,11 +56,7 @@ enum dt_state {
 
 /* the drive train's numeric data, or NULL */
 static const mjtNum* dt_params(const mjModel* m) {
-  for (int i = 0; i < m->nnumeric; i++) {
-    if (m->numeric_size[i] >= DT_NFIELDS && m->numeric_data[m->numeric_adr[i]] == DT_MAGIC)
-      return m->numeric_data + m->numeric_adr[i];
-  }
-  return NULL;
+  return twin_numeric(m, DT_MAGIC, DT_NFIELDS);
 }
 
 static void dt_belt_pull(const mjtNum* p, mjtNum x, mjtNum vrel, mjtNum vm, mjtNum* F, mjtNum* w) {
@@ -82,11 +80,8 @@ static mjtNum dt_guide_force(const mjModel* m, const mjData* d, int dof) {
   const int j = m->dof_jntid[dof];
   const mjtNum* user = m->jnt_user + j * m->nuser_jnt;
   if (user[GUIDE_MARKER] != GUIDE_MAGIC) return 0;
-  const mjtNum v = d->qvel[dof], s = fabs(v), v0 = user[GUIDE_V0], v1 = user[GUIDE_V1];
-  mjtNum r = 0;
-  if (s >= v1) r = 1;
-  else if (s > v0) r = (s - v0) / (v1 - v0);
-  return v > 0 ? -user[GUIDE_FORCE] * r : (v < 0 ? user[GUIDE_FORCE] * r : 0.0);
+  const mjtNum v = d->qvel[dof];
+  return twin_oppose(v, user[GUIDE_FORCE] * twin_ramp(fabs(v), user[GUIDE_V0], user[GUIDE_V1]));
 }
 
 /* called at the end of the passive callback (every other passive force already in qfrc_passive) */
@@ -164,8 +159,7 @@ static void drivetrain_passive(const mjModel* m, mjData* d) {
    * is needed for these */
   const int jm = m->dof_jntid[dm];
   for (int i = 0; i < m->nsensor; i++) {
-    if (m->sensor_type[i] != mjSENS_USER || m->sensor_objtype[i] != mjOBJ_JOINT || m->sensor_objid[i] != jm ||
-        m->sensor_needstage[i] != mjSTAGE_POS || m->sensor_dim[i] < DT_NSENSOR_TORQUE) continue;
+    if (!twin_user_sensor(m, i, mjOBJ_JOINT, jm, mjSTAGE_POS) || m->sensor_dim[i] < DT_NSENSOR_TORQUE) continue;
     mjtNum* out = d->sensordata + m->sensor_adr[i];
     out[0] = s[DTS_U];
     out[1] = p[DT_RC] * F;
@@ -187,8 +181,7 @@ static void drivetrain_sensor(const mjModel* m, mjData* d, int stage) {
   const mjtNum* s = d->userdata + base;
   const int jm = m->dof_jntid[(int)p[DT_MOTOR_DOF]];
   for (int i = 0; i < m->nsensor; i++) {
-    if (m->sensor_type[i] != mjSENS_USER || m->sensor_objtype[i] != mjOBJ_JOINT || m->sensor_objid[i] != jm ||
-        m->sensor_needstage[i] != mjSTAGE_ACC || m->sensor_dim[i] < DT_NSENSOR) continue;
+    if (!twin_user_sensor(m, i, mjOBJ_JOINT, jm, mjSTAGE_ACC) || m->sensor_dim[i] < DT_NSENSOR) continue;
     mjtNum* out = d->sensordata + m->sensor_adr[i];
     out[0] = s[DTS_WORK];
     out[1] = 0.5 * p[DT_K] * s[DTS_X] * s[DTS_X];

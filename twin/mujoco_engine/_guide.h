@@ -22,6 +22,8 @@
  * rear points, friction along +x at each).
  */
 
+#include "_native.h"
+
 #define GC_MAGIC 7311.0
 
 enum gc_field {
@@ -38,18 +40,7 @@ _Static_assert(sizeof(gc_field_names) / sizeof(gc_field_names[0]) == GC_NFIELDS,
 #define GC_NSENSOR 4
 
 static const mjtNum* gc_params(const mjModel* m) {
-  for (int i = 0; i < m->nnumeric; i++) {
-    if (m->numeric_size[i] >= GC_NFIELDS && m->numeric_data[m->numeric_adr[i]] == GC_MAGIC)
-      return m->numeric_data + m->numeric_adr[i];
-  }
-  return NULL;
-}
-
-static mjtNum gc_step3(mjtNum x, mjtNum x0, mjtNum h0, mjtNum x1, mjtNum h1) {
-  if (x <= x0) return h0;
-  if (x >= x1) return h1;
-  const mjtNum t = (x - x0) / (x1 - x0);
-  return h0 + (h1 - h0) * t * t * (3.0 - 2.0 * t);
+  return twin_numeric(m, GC_MAGIC, GC_NFIELDS);
 }
 
 /* friction force along +x opposing the sliding speed v (the reference's friction_force /
@@ -58,16 +49,12 @@ static mjtNum gc_friction(const mjtNum* p, mjtNum v, mjtNum fn) {
   const mjtNum s = fabs(v);
   mjtNum mu;
   if (p[GC_FRIC] > 0.5) {
-    mu = s < p[GC_VS] ? gc_step3(s, -p[GC_VS], -p[GC_MUS], p[GC_VS], p[GC_MUS])
-                      : gc_step3(s, p[GC_VS], p[GC_MUS], p[GC_VD], p[GC_MU0]);
+    mu = s < p[GC_VS] ? twin_step3(s, -p[GC_VS], -p[GC_MUS], p[GC_VS], p[GC_MUS])
+                      : twin_step3(s, p[GC_VS], p[GC_MUS], p[GC_VD], p[GC_MU0]);
   } else {
-    const mjtNum v0 = p[GC_V0], v1 = p[GC_V1];
-    mjtNum r = 0.0;
-    if (s >= v1) r = 1.0;
-    else if (s > v0) r = (s - v0) / (v1 - v0);
-    mu = p[GC_MU0] * r;
+    mu = p[GC_MU0] * twin_ramp(s, p[GC_V0], p[GC_V1]);
   }
-  return v > 0 ? -mu * fn : (v < 0 ? mu * fn : 0.0);
+  return twin_oppose(v, mu * fn);
 }
 
 static void guide_passive(const mjModel* m, mjData* d) {
@@ -98,7 +85,7 @@ static void guide_passive(const mjModel* m, mjData* d) {
       }
       mjtNum ratio = ddelta / st[2 * e + 1];
       if (ratio < -1.0) ratio = -1.0;
-      const mjtNum dn = n == 1.5 ? delta * sqrt(delta) : pow(delta, n);
+      const mjtNum dn = twin_pow(delta, n);
       fn = K * dn * (1.0 + p[GC_CHI] * ratio);
       if (fn < 0) fn = 0;
       if (fn > 0) ft = gc_friction(p, pvx, fn);
@@ -114,8 +101,7 @@ static void guide_passive(const mjModel* m, mjData* d) {
   }
   const int jr = m->dof_jntid[dr];
   for (int i = 0; i < m->nsensor; i++) {
-    if (m->sensor_type[i] != mjSENS_USER || m->sensor_objtype[i] != mjOBJ_JOINT || m->sensor_objid[i] != jr ||
-        m->sensor_needstage[i] != mjSTAGE_POS || m->sensor_dim[i] < GC_NSENSOR) continue;
+    if (!twin_user_sensor(m, i, mjOBJ_JOINT, jr, mjSTAGE_POS) || m->sensor_dim[i] < GC_NSENSOR) continue;
     mjtNum* o = d->sensordata + m->sensor_adr[i];
     for (int k = 0; k < GC_NSENSOR; k++) o[k] = out[k];
   }

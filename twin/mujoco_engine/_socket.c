@@ -5,7 +5,7 @@
  *
  * MuJoCo has no concave primitive, so a socket (a hollow sphere) cannot be a geom. This
  * collider takes the sphere-sphere pair of the global table mjCOLLISIONFUNC: when exactly one
- * of the two spheres is marked as a socket (the bore marker of _bore.c in geom user data field
+ * of the two spheres is marked as a socket (BORE_MAGIC, the bore marker, in geom user data field
  * 0), the pair is a ball of radius R_b inside a socket of radius R_s (both geom_size[0]):
  *
  *   e    = ball centre - socket centre (3D)
@@ -18,18 +18,17 @@
  * slides on the velocity of the ball's centre relative to the socket's body at that point, the
  * reference engine's definition (twin/spatial/model.py: its rod has no spin). The contact law
  * and the friction are those of _bore.c, which treats a marked sphere as a socket (no bore
- * axis). Every other sphere-sphere pair goes to the function that was in the table before.
- * Stateless and thread-safe.
+ * axis). Every other sphere-sphere pair goes to the function that was in the table before
+ * (MuJoCo's own). Stateless and thread-safe: the collider reads everything from the model and
+ * data it is given.
  */
-#include <math.h>
-#include <stdint.h>
-#include <mujoco/mujoco.h>
+#include "_native.h"
 
+/* the sphere-sphere collider that was in the table when this one was installed (MuJoCo's own) */
 static mjfCollision g_prev_sphere = NULL;
-static mjtNum g_magic = 0;
 
 static int is_socket(const mjModel* m, int g) {
-  return m->nuser_geom >= 1 && m->geom_type[g] == mjGEOM_SPHERE && m->geom_user[g * m->nuser_geom] == g_magic;
+  return m->nuser_geom >= 1 && m->geom_type[g] == mjGEOM_SPHERE && m->geom_user[g * m->nuser_geom] == BORE_MAGIC;
 }
 
 static int collide_ball_socket(const mjModel* m, mjData* d, mjPreContact* con, int g1, int g2, mjtNum margin) {
@@ -80,10 +79,9 @@ void twin_socket_tangent(const mjtNum vball[3], const mjtNum vsocket[3], const m
 }
 
 /* install the collider in table[sphere][sphere] (table: mjCOLLISIONFUNC), chaining what was
- * there; magic: the bore marker value. Returns 1 if it changed the table. */
-int twin_socket_install(void* table_addr, double magic) {
+ * there. Returns 1 if it changed the table. */
+int twin_socket_install(void* table_addr) {
   mjfCollision (*table)[mjNGEOMTYPES] = (mjfCollision (*)[mjNGEOMTYPES])table_addr;
-  g_magic = magic;
   if (table[mjGEOM_SPHERE][mjGEOM_SPHERE] != collide_ball_socket) {
     g_prev_sphere = table[mjGEOM_SPHERE][mjGEOM_SPHERE];
     table[mjGEOM_SPHERE][mjGEOM_SPHERE] = collide_ball_socket;

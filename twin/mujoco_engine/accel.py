@@ -58,17 +58,23 @@ def _quat_x_axis(q: np.ndarray) -> np.ndarray:
     return np.array([1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z), 2.0 * (x * z - w * y)])
 
 
+def check_euler_update(m: mujoco.MjModel) -> None:
+    """ModelError unless a step of ``m`` updates qvel by exactly h qacc (Euler, no implicit joint damping): what
+    the after-the-rollout accelerations (qvel_{k+1} − qvel_k)/h rely on."""
+    if m.opt.integrator != mujoco.mjtIntegrator.mjINT_EULER:
+        raise ModelError("posthoc accelerometers need the Euler integrator")
+    if not (m.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_EULERDAMP) and np.any(m.dof_damping > 0):
+        raise ModelError("posthoc accelerometers need eulerdamp disabled (or no joint damping): "
+                         "Euler's implicit damping makes qvel_{k+1} - qvel_k differ from h qacc_k")
+
+
 class PosthocAccelerometers:
     """The six accelerometer readings of a compiled bench model from its recorded states."""
 
     def __init__(self, model: mujoco.MjModel, names: tuple[str, ...] = mjcf_names.ACCEL_SENSORS):
         m = model
         self.names = tuple(names)
-        if m.opt.integrator != mujoco.mjtIntegrator.mjINT_EULER:
-            raise ModelError("posthoc accelerometers need the Euler integrator")
-        if not (m.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_EULERDAMP) and np.any(m.dof_damping > 0):
-            raise ModelError("posthoc accelerometers need eulerdamp disabled (or no joint damping): "
-                             "Euler's implicit damping makes qvel_{k+1} - qvel_k differ from h qacc_k")
+        check_euler_update(m)
         crank, rod, slider = (m.body(b).id for b in (mjcf_names.CRANK, mjcf_names.ROD, mjcf_names.SLIDER))
         if m.body_parentid[crank] != 0 or m.body_parentid[rod] != crank or m.body_parentid[slider] != 0:
             raise ModelError("posthoc accelerometers: unexpected body tree (crank and slider on the world, rod on the crank)")

@@ -39,6 +39,7 @@ MAX_DOF_SPEED = 1.0e5
 from twin.kinematics import initial_pose, rot2
 from twin.mujoco_engine.accel import PosthocAccelerometers, posthoc_applies
 from twin.mujoco_engine.builder import build
+from twin.tracefile import DriveInputs
 
 _STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
 #: everything a step reads besides the model: physics, controls, warmstart and user data (v_imp)
@@ -58,9 +59,9 @@ def stage_timers_off() -> None:
     if _clock is None:
         import ctypes
 
-        from twin.mujoco_engine.collider import _library_path
+        from twin.mujoco_engine.collider import mujoco_library
 
-        slot = ctypes.c_void_p.in_dll(ctypes.CDLL(_library_path()), "mjcb_time")
+        slot = ctypes.c_void_p.in_dll(mujoco_library(), "mjcb_time")
         _clock = (slot, slot.value or 0)
     slot, default = _clock
     if slot.value and slot.value == default and mujoco.get_mjcb_time() is None:
@@ -73,11 +74,12 @@ class MujocoEngine:
 
     name = "mujoco"
 
-    def __init__(self, cfg: BenchConfig):
+    def __init__(self, cfg: BenchConfig, *, inputs: DriveInputs | None = None):
         self.cfg = cfg
+        self.inputs = inputs
         t0 = time.perf_counter()
         stage_timers_off()
-        self.spec, self.model, self.info = build(cfg)
+        self.spec, self.model, self.info = build(cfg, inputs=inputs)
         self.data = mujoco.MjData(self.model)
         posthoc = posthoc_applies(cfg)
         self.meta: dict[str, Any] = {
@@ -101,15 +103,26 @@ class MujocoEngine:
         self._nstate = mujoco.mj_stateSize(self.model, _STATE)
         self._sens = np.empty((1, 0, self.model.nsensordata))
         # accelerometers from the recorded state (mujoco.accelerometers = "posthoc", Euler)
-        self._accel = PosthocAccelerometers(self.model) if posthoc else None
+        self._accel = None
+        if posthoc:  # the flexible structure's tree: the generic planar recursion (twin.mujoco_engine.accel_tree)
+            from twin.mujoco_engine.accel_tree import TreeAccelerometers
+
+            self._accel = (TreeAccelerometers if cfg.structure.flexible else PosthocAccelerometers)(self.model)
         self._states = np.empty((1, 0, self._nstate))
         self._k = 0  # integration steps taken since reset
+        self._mount = None
+        if cfg.structure.flexible and "accel" in cfg.sensors.channels:
+            # the accelerometers' mounts (twin.structure.mount), on the sampled readings
+            from twin.structure import MountFilter
+
+            st = cfg.structure
+            self._mount = MountFilter(st.mount_frequency_hz, st.mount_damping_ratio, cfg.output_rate_hz)
         self._drive = None
         if cfg.drive.mode == "prescribed":
             from twin.drive import DriveReference
-            from twin.mujoco_engine.builder import prescribed_armature
+            from twin.physics.mujoco_params import prescribed_armature
 
-            self._drive = DriveReference(cfg)
+            self._drive = DriveReference(cfg, inputs)
             self._armature = prescribed_armature(cfg)
             self.meta["drive"] = (f"prescribed: crank armature {self._armature:.6g} kg m^2, dead-beat law "
                                   "A [(theta_ref(t + h) - theta)/h^2 - omega/h]")
@@ -122,7 +135,7 @@ class MujocoEngine:
         if theta0 is None:
             from twin.drive import DriveReference
 
-            theta0 = float(DriveReference(cfg)(np.array([0.0]))[0][0])
+            theta0 = float(DriveReference(cfg, self.inputs)(np.array([0.0]))[0][0])
         mujoco.mj_resetData(m, d)
         d.userdata[:] = 0.0  # no contact event under way (mj_resetData clears it too; the rollout never does)
         pose = initial_pose(cfg, theta0)
@@ -158,17 +171,25 @@ class MujocoEngine:
             d.qvel[m.jnt_dofadr[m.joint(names.SLIDER_SLIDE).id]] = xd
         mujoco.mj_forward(m, d)
         self._k = 0
+        if self._mount is not None:
+            self._mount.reset()
 
     def snapshot(self) -> tuple[int, np.ndarray]:
         """The scene's whole state: (integration steps since reset, ``mjSTATE_INTEGRATION`` vector
         including the warmstart and the stored impact speeds in ``mjData.userdata``)."""
         state = np.empty(mujoco.mj_stateSize(self.model, _SCENE_STATE))
         mujoco.mj_getState(self.model, self.data, state, _SCENE_STATE)
+        if self._mount is not None:  # the flexible structure's sensor mounts: their filter state too
+            zi = self._mount._zi  # MountFilter's lfilter state (None before the first chunk)
+            return self._k, state, None if zi is None else zi.copy()
         return self._k, state
 
     def restore(self, snap: tuple[int, np.ndarray]) -> None:
         """Continue from :meth:`snapshot` of an engine of the same configuration (this one or another)."""
-        k, state = snap
+        k, state = snap[0], snap[1]
+        if self._mount is not None:
+            zi = snap[2] if len(snap) > 2 else None
+            self._mount._zi = None if zi is None else np.array(zi, dtype=np.float64)
         if len(state) != mujoco.mj_stateSize(self.model, _SCENE_STATE):
             raise ValueError(f"{self.cfg.name}: the snapshot is of a model with another state size")
         # no mj_forward: the next rollout recomputes everything from this state (a forward pass
@@ -201,7 +222,7 @@ class MujocoEngine:
             # the drive train's input (speed set point or torque) in the motor_command actuator's ctrl
             from twin.motor_drive import motor_input
 
-            ctrl = motor_input(self.cfg, self._k, nstep, omega_ref)[None, :, None]
+            ctrl = motor_input(self.cfg, self._k, nstep, omega_ref, self.inputs)[None, :, None]
             self._chunk_k0 = self._k
         else:
             ctrl = np.stack([theta_ref, omega_ref], axis=-1)[None]
@@ -278,7 +299,7 @@ class MujocoEngine:
                 out[name] = col(names.SENSOR_DRIVETRAIN, f[name])
             n, stride = sens.shape[0], self.cfg.output_stride
             t = (self._chunk_k0 + stride * np.arange(n)) * self.cfg.simulation.timestep_s
-            out["command_voltage"] = command_voltage(self.cfg, t)
+            out["command_voltage"] = command_voltage(self.cfg, t, self.inputs)
         if "drive_energy" in groups:
             for i, name in enumerate(names.DRIVETRAIN_ENERGY_FIELDS):
                 out[name] = col(names.SENSOR_DRIVETRAIN_ENERGY, i)
@@ -296,6 +317,14 @@ class MujocoEngine:
             for i, a in enumerate(names.ACCEL_SENSORS):
                 # site x axis = sensitive axis; posthoc: rows of the readings computed from the state
                 out[a] = col(a, 0) if accel is None else accel[i]
+            if self._mount is not None:  # flexible structure: what the sensors on their mounts feel
+                filtered = self._mount.process(np.stack([out[a] for a in names.ACCEL_SENSORS], axis=1))
+                for i, a in enumerate(names.ACCEL_SENSORS):
+                    out[a] = filtered[:, i]
+        if "structure" in groups:
+            from twin.mujoco_engine.flexible import structure_channels
+
+            out.update(structure_channels(col, cfg.bodies.rod.length_m))
         if "encoder" in groups or "crank" in groups:
             out["crank_angle"] = col(names.SENSOR_CRANK_ANGLE)
         if "crank" in groups:

@@ -26,7 +26,7 @@ import math
 import numpy as np
 from twin.jit import njit
 
-from twin.reference.contact import ramp
+from twin.physics.contact import ramp
 
 # ---------------------------------------------------------------- parameter layout
 (D_MODE, D_JM, D_RM, D_RC, D_K, D_C, D_EA, D_FMAX, D_CS, D_STRIDE, D_COUNTS, D_ALPHA, D_KP, D_KI,

@@ -17,8 +17,9 @@ class ReferenceTrain:
     """The drive train of a :class:`twin.reference.engine.ReferenceEngine` run: parameters,
     state, the chunk call of :func:`twin.reference.model.run_motor` and its channels."""
 
-    def __init__(self, cfg) -> None:
+    def __init__(self, cfg, inputs=None) -> None:
         self.cfg = cfg
+        self.inputs = inputs  # recorded motor command in memory (twin.tracefile.DriveInputs), if any
         self.D = DT.build(cfg)
         self.ds = DT.initial_state()
         self._dbuf = np.empty((0, DT.N_DO))
@@ -53,9 +54,19 @@ class ReferenceTrain:
         nstep = len(omega_ref)
         if self._dbuf.shape[0] < n_out:
             self._dbuf = np.empty((n_out, DT.N_DO))
-        sp = motor_input(self.cfg, k0, nstep, omega_ref)
+        sp = motor_input(self.cfg, k0, nstep, omega_ref, self.inputs)
         self._last = (k0, n_out, stride)
         return ref_model.run_motor(P, self.D, st, self.ds, sp, stride, buf, self._dbuf, True)
+
+    def chunk_inputs(self, k0: int, omega_ref, stride: int, n_out: int):
+        """(set points, sample buffer) of a chunk of ``len(omega_ref)`` steps from step ``k0`` (the flexible
+        structure's loop, :mod:`twin.reference.flexible`, calls the drive train's hooks itself)."""
+        from twin.motor_drive import motor_input
+
+        if self._dbuf.shape[0] < n_out:
+            self._dbuf = np.empty((n_out, DT.N_DO))
+        self._last = (k0, n_out, stride)
+        return motor_input(self.cfg, k0, len(omega_ref), omega_ref), self._dbuf
 
     def channels(self, n: int) -> dict[str, np.ndarray]:
         from twin.motor_drive import command_voltage
@@ -68,7 +79,7 @@ class ReferenceTrain:
             t = (k0 + stride * np.arange(n)) * self.cfg.simulation.timestep_s
             cols.update(motor_angle=d[:, DT.DO_PHI], motor_speed=d[:, DT.DO_OMEGA], motor_torque=d[:, DT.DO_TORQUE],
                         belt_torque=d[:, DT.DO_BELT_TORQUE], belt_slip=d[:, DT.DO_SLIP],
-                        command_voltage=command_voltage(self.cfg, t))
+                        command_voltage=command_voltage(self.cfg, t, self.inputs))
         if "drive_energy" in groups:
             cols.update(motor_work=d[:, DT.DO_WORK], energy_mechanical=d[:, DT.DO_EMECH], energy_belt=d[:, DT.DO_EBELT],
                         diss_belt_damping=d[:, DT.DO_DDAMP], diss_belt_slip=d[:, DT.DO_DSLIP], diss_guide=d[:, DT.DO_DGUIDE],

@@ -5,7 +5,7 @@ configuration, drive, channels, chunking and metadata (:class:`twin.simulation.E
 the two engines compare channel by channel. The formulation is in
 :mod:`twin.natural_coordinates` (coordinates, constraints, mass matrix) and
 :mod:`twin.reference.model` (forces, equations of motion, integration), the contact laws in
-:mod:`twin.reference.contact` with their constants from :mod:`twin.contact_params`.
+:mod:`twin.physics.contact` with their constants from :mod:`twin.contact_params`.
 
 Clearance joints: any of A (the crank journal in the frame's bore; its eccentricity channels in
 the bench frame), B and C (rod frame), each with its own pin and bushing radii.
@@ -32,6 +32,7 @@ from twin.config import ACCELEROMETERS, BenchConfig
 from twin.errors import ConfigError, SimulationError
 from twin.natural_coordinates import initial_state
 from twin.reference import model as ref_model
+from twin.tracefile import DriveInputs
 
 ENGINE_VERSION = "1"
 
@@ -86,8 +87,9 @@ class ReferenceEngine:
 
     name = "reference"
 
-    def __init__(self, cfg: BenchConfig, options: ReferenceOptions | None = None):
+    def __init__(self, cfg: BenchConfig, options: ReferenceOptions | None = None, *, inputs: DriveInputs | None = None):
         self.cfg = cfg
+        self.inputs = inputs
         self.options = options or ReferenceOptions()
         if self.options.integrator == "midpoint" and cfg.drive.mode == "prescribed":
             raise ConfigError("reference.integrator",
@@ -103,6 +105,9 @@ class ReferenceEngine:
                               "clearance: it is not stable through hard impacts at the bench's steps (use \"euler\")")
         t0 = time.perf_counter()
         self.P = engine_params(cfg, self.options)
+        self._flex = None
+        if cfg.structure.flexible:
+            self._flex = _flexible_run(cfg, self.P, self.options)
         self.build_s = time.perf_counter() - t0
         self.load_s = warm_up() + (warm_up_prescribed() if cfg.drive.mode == "prescribed" else 0.0)
         self.meta: dict[str, Any] = {
@@ -128,13 +133,13 @@ class ReferenceEngine:
         if cfg.drive.mode in ("motor", "torque"):
             from twin.reference.drivetrain_run import ReferenceTrain
 
-            self._train = ReferenceTrain(cfg)
+            self._train = ReferenceTrain(cfg, inputs)
             self.load_s += self._train.warm_up()
             self.meta["drive"] = self._train.describe()
         if cfg.drive.mode == "prescribed":
             from twin.drive import DriveReference
 
-            self._drive = DriveReference(cfg)
+            self._drive = DriveReference(cfg, inputs)
             self.meta["drive"] = "prescribed: the crank angle is a driving constraint theta = theta_ref(t)"
 
     def reset(self, theta0: float | None = None) -> None:
@@ -145,7 +150,7 @@ class ReferenceEngine:
         if theta0 is None:
             from twin.drive import DriveReference
 
-            theta0 = float(DriveReference(self.cfg)(np.array([0.0]))[0][0])
+            theta0 = float(DriveReference(self.cfg, self.inputs)(np.array([0.0]))[0][0])
         omega0 = self._drive.start_rate() if self._drive is not None else 0.0
         try:
             self.state0 = initial_state(self.cfg, theta0, omega0, self.P)
@@ -155,6 +160,8 @@ class ReferenceEngine:
         self.meta["contact"] = {j: {"law": self.cfg.contact.law, **asdict(c)} for j, c in self.contacts.items()}
         self._st = self.state0.copy()
         self._k = 0
+        if self._flex is not None:
+            self._flex.reset(self.state0)
         if self._train is not None:
             self._train.reset()
 
@@ -203,7 +210,22 @@ class ReferenceEngine:
         n_out = -(-nstep // stride)
         if self._buf.shape[0] < n_out:
             self._buf = np.empty((n_out, ref_model.N_OUT))
-        if self._train is not None:
+        if self._flex is not None:
+            from twin.reference.flexible import N_OUT_FLEX
+
+            if self._buf.shape[0] < n_out or self._buf.shape[1] != N_OUT_FLEX:
+                self._buf = np.empty((n_out, N_OUT_FLEX))
+            if self._drive is not None:   # the prescribed crank: the program at t_k .. t_{k+n} and its acceleration
+                t = (self._k + np.arange(nstep + 1)) * h
+                th, om = self._drive(t)
+                status, steps = self._flex.run(self._st, np.ascontiguousarray(th), np.ascontiguousarray(om), stride,
+                                               self._buf[:n_out], None, self._k,
+                                               np.ascontiguousarray(self._drive.acceleration(t[:-1])))
+            else:
+                status, steps = self._flex.run(self._st, np.ascontiguousarray(theta_ref, dtype=np.float64),
+                                               np.ascontiguousarray(omega_ref, dtype=np.float64), stride,
+                                               self._buf[:n_out], self._train, self._k)
+        elif self._train is not None:
             status, steps = self._train.run(self.P, self._st, self._k, omega_ref, stride, self._buf, n_out)
         elif self._drive is not None:
             # the program at t_k .. t_{k+n} (the driving constraint's next value) and its acceleration
@@ -255,8 +277,30 @@ class ReferenceEngine:
             cols["crank_torque"] = out[:, ref_model.O_TORQUE]
         if self._train is not None:
             cols.update(self._train.channels(out.shape[0]))
+        if self._flex is not None and "accel" in groups:   # the sensors on their mounts (one-way, exact)
+            acc = self._flex.mounts.process(np.stack([cols[a] for a in ACCELEROMETERS], axis=1))
+            for i, a in enumerate(ACCELEROMETERS):
+                cols[a] = acc[:, i]
         # copies: the output buffer is reused by the next chunk
         return {k: np.array(v) for k, v in cols.items()}
+
+
+def _flexible_run(cfg: BenchConfig, P: np.ndarray, options: ReferenceOptions):
+    """The flexible structure's runner (:mod:`twin.reference.flexible`), or a ConfigError naming what its scope
+    leaves out."""
+    from twin.reference.flexible import FlexibleRun
+
+    if options.integrator != "euler":
+        raise ConfigError("reference.integrator", "the flexible structure integrates with \"euler\"")
+    if "drive_energy" in cfg.sensors.channels:
+        raise ConfigError("sensors.channels", "the optional group 'drive_energy' does not count the flexible "
+                          "structure's dampers in the reference engine yet (its balance would not close); remove it "
+                          "with structure.mode = \"flexible\"")
+    if cfg.joints.diametral_mm("A") > 0 or cfg.joints.guide_play:
+        raise ConfigError("structure.mode", "\"flexible\" carries the frame and the guide on their supports: "
+                          "the reference engine has it with A and the guide ideal (joints.clearance_a_mm = 0, "
+                          "joints.clearance_guide_mm = 0)")
+    return FlexibleRun(cfg, P, lambda c: engine_params(c, options))
 
 
 def warm_up() -> float:

@@ -33,7 +33,7 @@ from twin.jit import njit
 
 from twin.natural_coordinates import (P_C_G, P_DOFF, P_E, P_FRIC_LAW, P_GA, P_GX, P_GY, P_K_G, P_LAW, P_M3, P_MU0,
                                       P_MUS, P_N, P_S3D, P_S3X, P_V0, P_V1, P_VD, P_VMIN, P_VS)
-from twin.reference.contact import adams_friction_force, friction_force, normal_force
+from twin.physics.contact import adams_friction_force, friction_force, normal_force
 
 #: outputs of :func:`guide_forces` (``jout``): y_g, φ, then per end (front, rear) the normal
 #: force along +y on the slider (positive: from the lower rail), the friction force along +x

@@ -3,7 +3,7 @@ of the natural-coordinate model of the bench (S003 §3, Eq. 11–21).
 
 The coordinates q, the ten constraint rows, the velocity transformation (R-matrix), the mass
 matrix and the parameter and state layouts are :mod:`twin.natural_coordinates`; the contact laws
-are :mod:`twin.reference.contact`, their constants :mod:`twin.contact_params`.
+are :mod:`twin.physics.contact`, their constants :mod:`twin.contact_params`.
 
 
 Generalized forces Q (virtual work over δq):
@@ -15,7 +15,7 @@ Generalized forces Q (virtual work over δq):
 * a force F at a crank point P (δP = δA' + δθ ẑ × (P − A')): F on (x_A, y_A) and the torque
   ((P − A') × F)_z on θ; at a rod point P = B' + α u + β R₉₀ u (u = C − B'):
   (1 − α) F − β R₉₀ᵀF on B', α F + β R₉₀ᵀF on C; on the slider pin: F_x on x'_C;
-* contact at a clearance joint (:mod:`twin.reference.contact`): penetration δ = |e| − c,
+* contact at a clearance joint (:mod:`twin.physics.contact`): penetration δ = |e| − c,
   n = e/|e|, t = ẑ × n; force on the pin −f_N n + f_T t at the pin's surface point
   (pin centre + R_pin n), the opposite on the bushing's body at the bushing's surface point
   (bushing centre + R_bushing n). f_T acts on the true tangential relative velocity of those two
@@ -25,7 +25,7 @@ Generalized forces Q (virtual work over δq):
   joint's own (``joints.pin_radius(j)``, ``joints.bushing_radius_m(j)``);
 * slider guide friction (S003 §3: 2.5 N whenever the slider moves): −F_g ρ(|ẋ'_C|) sign(ẋ'_C)
   on x'_C, with ρ the same regularization ramp as the joint friction (0 below v0, linear to 1
-  at v1; :func:`twin.reference.contact.ramp`). A discontinuous sign() would chatter at the
+  at v1; :func:`twin.physics.contact.ramp`). A discontinuous sign() would chatter at the
   slider's dead centres; the ramp makes the guide force exactly F_g once |ẋ| ≥ v1 = 1 mm/s.
 
 Integration (S003 Eq. 21, symplectic Euler on the independent coordinates): ż ← ż + h z̈,
@@ -70,7 +70,7 @@ from twin.natural_coordinates import (
     project, quadratic_terms, solve_aug, velocity_constraint_norm)
 from twin.reference import drivetrain as DT
 from twin.reference.guide import N_GUIDE_OUT, guide_forces
-from twin.reference.contact import FRICTION_CODES, LAW_CODES, adams_friction_force, friction_force, normal_force, ramp
+from twin.physics.contact import FRICTION_CODES, LAW_CODES, adams_friction_force, friction_force, normal_force, ramp
 
 #: integrators of :func:`run_steps` by name -> code in ``P[P_INTEGRATOR]``
 INTEGRATORS = {"euler": 0, "midpoint": 1}

@@ -2,7 +2,6 @@
 joints at both ends, a slider along a guide; clearance at the base revolute joint A (a journal in a
 bearing) and at the spherical joints B and C (a ball in a socket).
 
-* :mod:`twin.spatial.checks`: the configuration rules of a spatial run;
 * :mod:`twin.spatial.geometry`: the mechanism's constants from a configuration, closed-form kinematics;
 * :mod:`twin.spatial.model`: the reference's compiled equations of motion (natural coordinates,
   R-matrix) and stepping loop;

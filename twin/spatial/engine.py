@@ -19,6 +19,7 @@ import numpy as np
 
 from twin import __version__ as twin_version
 from twin.errors import ConfigError, SimulationError
+from twin.tracefile import DriveInputs
 from twin.spatial import geometry as spatial_geometry
 from twin.spatial import model as SM
 
@@ -60,7 +61,7 @@ def build(cfg: Any, options: SpatialOptions = SpatialOptions()) -> tuple[np.ndar
     """(P, jon, contacts): the model's parameter vector, the clearance flags (A, B, C) and the resolved
     contact constants per clearance joint."""
     from twin.contact_params import law_stiffness
-    from twin.reference.contact import LAW_CODES
+    from twin.physics.contact import LAW_CODES
 
     con = cfg.contact
     if con.law == "linear":
@@ -122,7 +123,7 @@ class SpatialReferenceEngine:
 
     name = "reference"
 
-    def __init__(self, cfg: Any, options: SpatialOptions | None = None):
+    def __init__(self, cfg: Any, options: SpatialOptions | None = None, *, inputs: DriveInputs | None = None):
         self.cfg = cfg
         self.options = options or SpatialOptions()
         t0 = time.perf_counter()
@@ -134,7 +135,7 @@ class SpatialReferenceEngine:
         self.load_s = warm_up()
         from twin.drive import DriveReference
 
-        self._drive = DriveReference(cfg)
+        self._drive = DriveReference(cfg, inputs)
         self.meta: dict[str, Any] = {
             "engine": self.name,
             "engine_version": f"twin-spatial-reference {ENGINE_VERSION} (twin {twin_version})",

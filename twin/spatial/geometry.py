@@ -142,9 +142,3 @@ def gravity_forces(cfg: Any) -> np.ndarray:
         Q[j:j + 3] += b.mass_kg * xi * g
     Q[ICS:ICS + 3] += cfg.bodies.slider.mass_kg * g
     return Q
-
-
-def potential_energy(cfg: Any, q: np.ndarray) -> np.ndarray:
-    """Gravitational potential energy of coordinates ``q`` (rows) [J], zero at the origin."""
-    Q = gravity_forces(cfg)
-    return -np.atleast_2d(q) @ Q

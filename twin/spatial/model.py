@@ -26,7 +26,7 @@ relative position of a clearance joint, so the crank's correction at B (its cent
 r ω² h²/2 per step) also moves the rod's ball: an O(h) error of the rod's flight that the mass-weighted
 projection does not make.
 
-Forces Q: gravity; per clearance joint the contact law of :mod:`twin.reference.contact` on the
+Forces Q: gravity; per clearance joint the contact law of :mod:`twin.physics.contact` on the
 penetration δ = |e| − c (e = pin − bushing centre; A: the journal A in the bearing at the origin, radial
 in the plane x = 0; B, C: ball on the rod minus socket centre, in 3D) with the regularized Coulomb
 friction of S003 Eq. 19–20 opposing the tangential sliding velocity (A: of the journal's surface at the
@@ -42,7 +42,7 @@ import math
 import numpy as np
 from twin.jit import njit
 
-from twin.reference.contact import friction_force, normal_force, ramp
+from twin.physics.contact import friction_force, normal_force, ramp
 from twin.spatial.geometry import IA, IBC, IBR, ICR, ICS, NQ
 
 # parameter vector P

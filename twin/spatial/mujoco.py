@@ -11,10 +11,10 @@ applies), in the spatial frame of :mod:`twin.config.spatial`:
 * the base bearing A: a cylinder of the world marked as a bore (the pin-in-bore collider of
   ``_bore.c``); the spherical joints: the ball-in-socket collider of ``_socket.c``; one frictionless
   pair per joint, the reference's contact law and regularized Coulomb friction applied natively (the
-  same numbers as :mod:`twin.spatial.engine`, :func:`twin.mujoco_engine.builder.native_law`);
+  same numbers as :mod:`twin.spatial.engine`, :func:`twin.physics.mujoco_params.native_law`);
 * the prescribed drive of the bench's twin: the crank hinge a flywheel of armature
-  :data:`~twin.mujoco_engine.builder.PRESCRIBED_ARMATURE_FACTOR` × its inertia, driven by a dead-beat
-  affine actuator onto θ_ref(t + h) (:func:`twin.mujoco_engine.builder._prescribed_drive`).
+  :data:`~twin.physics.mujoco_params.PRESCRIBED_ARMATURE_FACTOR` × its inertia, driven by a dead-beat
+  affine actuator onto θ_ref(t + h) (as the planar MuJoCo model's prescribed drive).
 
 Channels as the spatial reference (:mod:`twin.spatial.engine`); ``slider_acceleration`` from an
 accelerometer on the slider (its axis along the guide, gravity's component removed).
@@ -35,6 +35,8 @@ from mujoco import rollout
 from twin import __version__ as twin_version
 from twin import names
 from twin.errors import ConfigError, ModelError, SimulationError
+from twin.physics.mujoco_params import contact_setting, prescribed_armature
+from twin.tracefile import DriveInputs
 from twin.spatial import geometry as spatial_geometry
 
 _STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
@@ -50,15 +52,6 @@ BUSH = {"A": "spatial_bore_A", "B": "spatial_socket_B", "C": "spatial_socket_C"}
 #: spin, every force on the rod passes through the ball centres on its axis)
 ROD_RADIUS_M = 0.005
 _Z_TO_X = [math.sqrt(0.5), 0.0, math.sqrt(0.5), 0.0]   # a cylinder's axis (z) along world x
-
-
-def armature(cfg: Any) -> float:
-    """Armature of the crank hinge for the prescribed drive [kg m²] (as the planar twin's)."""
-    from twin.mujoco_engine.builder import PRESCRIBED_ARMATURE_FACTOR
-
-    b = cfg.bodies
-    ia = b.crank.inertia_kgm2 + b.crank.mass_kg * b.crank.x_g_m ** 2
-    return PRESCRIBED_ARMATURE_FACTOR * (ia + (b.rod.mass_kg + b.slider.mass_kg) * b.crank.length_m ** 2)
 
 
 def _quat_x_to(u: np.ndarray) -> list[float]:
@@ -105,7 +98,7 @@ def _spec(cfg: Any, theta0: float) -> mujoco.MjSpec:
     if j.diametral_mm("A") > 0:
         crank.add_joint(name=SLIDE_Y, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 1, 0])
         crank.add_joint(name=SLIDE_Z, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1])
-    crank.add_joint(name=HINGE, type=mujoco.mjtJoint.mjJNT_HINGE, axis=[1, 0, 0], armature=armature(cfg))
+    crank.add_joint(name=HINGE, type=mujoco.mjtJoint.mjJNT_HINGE, axis=[1, 0, 0], armature=prescribed_armature(cfg))
     crank.add_geom(name=PIN["A"], type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[j.pin_radius("A"), 0.01, 0],
                    quat=_Z_TO_X, **geom_kw)
     crank.add_geom(name=BUSH["B"], type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[j.bushing_radius_m("B"), 0, 0],
@@ -143,7 +136,7 @@ def _spec(cfg: Any, theta0: float) -> mujoco.MjSpec:
                               objtype=mujoco.mjtObj.mjOBJ_SITE, name1=s1, name2=s2,
                               solref=list(cfg.mujoco.equality_solref), solimp=list(cfg.mujoco.equality_solimp))
     # prescribed drive: dead-beat affine actuator onto theta_ref(t + h)
-    A = armature(cfg)
+    A = prescribed_armature(cfg)
     act = spec.add_actuator(name=DRIVE, target=HINGE, trntype=mujoco.mjtTrn.mjTRN_JOINT)
     act.gaintype, act.biastype = mujoco.mjtGain.mjGAIN_FIXED, mujoco.mjtBias.mjBIAS_AFFINE
     act.gainprm[0] = A / h ** 2
@@ -175,14 +168,13 @@ def _compile(spec: mujoco.MjSpec, cfg: Any) -> mujoco.MjModel:
         model = spec.compile()
     except Exception as err:
         raise ModelError(f"MuJoCo could not compile the spatial model of {cfg.name}: {err}") from None
-    model.stat.meaninertia -= armature(cfg) / model.nv  # the flywheel must not set the solver's scale
+    model.stat.meaninertia -= prescribed_armature(cfg) / model.nv  # the flywheel must not set the solver's scale
     return model
 
 
 def build(cfg: Any, theta0: float) -> tuple[mujoco.MjSpec, mujoco.MjModel, dict[str, Any]]:
     """(spec, model, contacts) of the spatial mechanism at crank angle θ0 [rad]: pairs, native laws."""
-    from twin.mujoco_engine.builder import contact_setting
-    from twin.mujoco_engine.collider import ensure_installed
+    from twin.mujoco_engine.collider import check_model, ensure_installed
 
     if cfg.contact.law == "linear":
         raise ConfigError("contact.law", "the linear law is not available for the spatial mechanism; use a "
@@ -207,7 +199,9 @@ def build(cfg: Any, theta0: float) -> tuple[mujoco.MjSpec, mujoco.MjModel, dict[
         spec.geom(BUSH[jt]).userdata = names.bore_userdata(mu0=cfg.contact.mu0, v0=cfg.contact.v0_mps,
                                                        v1=cfg.contact.v1_mps, **setting.law.userdata(slot))
         contacts[jt] = {"kind": "journal in bearing" if jt == "A" else "ball in socket", **setting.to_json()}
-    return spec, _compile(spec, cfg), contacts
+    model = _compile(spec, cfg)
+    check_model(model)  # the layout the native code reads, or a one-line refusal
+    return spec, model, contacts
 
 
 class SpatialMujocoEngine:
@@ -215,11 +209,11 @@ class SpatialMujocoEngine:
 
     name = "mujoco"
 
-    def __init__(self, cfg: Any):
+    def __init__(self, cfg: Any, *, inputs: DriveInputs | None = None):
         from twin.drive import DriveReference
 
         self.cfg = cfg
-        self._drive = DriveReference(cfg)
+        self._drive = DriveReference(cfg, inputs)
         t0 = time.perf_counter()
         theta0 = float(self._drive(np.array([0.0]))[0][0])
         self.spec, self.model, contacts = build(cfg, theta0)
@@ -229,7 +223,8 @@ class SpatialMujocoEngine:
             "engine": self.name, "engine_version": f"mujoco {mujoco.__version__} (twin {twin_version})",
             "mechanism": "spatial slider-crank (S002)", "timestep_s": cfg.simulation.timestep_s,
             "integrator": "Euler", "steps": 0, "wall_s": 0.0, "build_s": time.perf_counter() - t0,
-            "contact": contacts, "drive": f"prescribed: crank armature {armature(cfg):.6g} kg m^2, dead-beat law",
+            "contact": contacts,
+            "drive": f"prescribed: crank armature {prescribed_armature(cfg):.6g} kg m^2, dead-beat law",
         }
         m = self.model
         self._adr = {s: (int(m.sensor_adr[m.sensor(s).id]), int(m.sensor_dim[m.sensor(s).id]))
@@ -321,5 +316,5 @@ class SpatialMujocoEngine:
                 cols[f"fn_{jt}"] = np.where(c(s, f"s_contact_{jt}") > 0, c(s, f"s_contact_{jt}", 1), 0.0)
                 cols[f"ft_{jt}"] = np.abs(c(s, f"s_friction_{jt}"))
         if "drive" in groups:
-            cols["crank_torque"] = c(s, "s_torque") - armature(cfg) * c(s, "s_angacc")
+            cols["crank_torque"] = c(s, "s_torque") - prescribed_armature(cfg) * c(s, "s_angacc")
         return {k: np.array(v) for k, v in cols.items()}

@@ -1,7 +1,7 @@
 """Check of the twin's pin/bushing contact against the reference law's closed forms.
 
 The MuJoCo twin's contact force at a clearance joint *is* the reference's law
-(:class:`twin.mujoco_engine.builder.NativeLaw`, applied by ``_bore.c``): nothing is fitted any
+(:class:`twin.physics.mujoco_params.NativeLaw`, applied by ``_bore.c``): nothing is fitted any
 more. The former calibration table (a two-pair solref/solimp law fitted to LN single impacts)
 and its fit are retired. What remains here checks the law as MuJoCo actually integrates it, in a
 probe with the real bore collider and native module, against closed forms:
@@ -19,7 +19,7 @@ probe with the real bore collider and native module, against closed forms:
 
 The probe is a pin of mass m_eff on a slide joint inside the joint's bore: one DOF along the
 contact normal, the twin's timestep and integrator, the builder's own contact setting
-(:func:`twin.mujoco_engine.builder.contact_setting`). The effective masses a clearance joint sees
+(:func:`twin.physics.mujoco_params.contact_setting`). The effective masses a clearance joint sees
 over a crank turn come from the twin's model (:func:`effective_masses`, equal to the reference
 engine's reduced mass matrix). ``twin check contact`` runs the whole check for every joint
 and catalogue clearance at the smallest, median and largest effective mass.
@@ -39,7 +39,7 @@ import numpy as np
 from twin.config import CATALOGUE_DIAMETRAL_MM, BenchConfig, with_overrides
 from twin.contact_params import initial_linear_law, law_stiffness
 from twin.impact import ImpactResult, impact_hysteresis, impact_linear
-from twin.mujoco_engine.collider import ensure_installed
+from twin.mujoco_engine.collider import check_model, ensure_installed
 from twin.names import BORE_USERDATA_FIELDS, bore_userdata, replace_bore_userdata
 
 #: impact speeds of the check [m/s] (1 mm/s to 0.5 m/s). Measured on reference runs
@@ -64,7 +64,8 @@ def probe_model(cfg: BenchConfig, joint: str, m_eff: float, preload_n: float = 0
     inside ``joint``'s bore, with the twin's contact setting for ``cfg`` (native law or soft
     contact, exactly as the builder resolves it), frictionless; ``preload_n`` presses the pin
     into the wall (gravity along +x)."""
-    from twin.mujoco_engine.builder import FLAT_SOLIMP, as_passive_force, contact_setting, native_law_applies
+    from twin.mujoco_engine.builder import as_passive_force
+    from twin.physics.mujoco_params import FLAT_SOLIMP, contact_setting, native_law_applies
 
     ensure_installed()
     rj, ri = cfg.joints.pin_radius(joint), cfg.joints.bushing_radius_m(joint)
@@ -100,7 +101,9 @@ def probe_model(cfg: BenchConfig, joint: str, m_eff: float, preload_n: float = 0
         pin_id = int(spec.compile().geom("pin").id)
         as_passive_force(spec, pair, bore, pin_id, "f")
         spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT
-    return spec.compile()
+    model = spec.compile()
+    check_model(model)
+    return model
 
 
 def twin_impacts(cfg: BenchConfig, joint: str, m_eff: float, speeds: Iterable[float] = SPEEDS,
@@ -269,11 +272,22 @@ def check_case(cfg: BenchConfig, joint: str, clearance_mm: float, speeds=SPEEDS)
                       float(worst))
 
 
+def check_joints(joints) -> tuple[str, ...]:
+    """The joints a contact check may probe: one or both of B, C (a one-line ConfigError otherwise)."""
+    from twin.errors import ConfigError
+
+    joints = tuple(joints)
+    if not joints or any(j not in ("B", "C") for j in joints):
+        raise ConfigError("joints", f"must be one or both of B, C; got {joints!r}")
+    return joints
+
+
 def contact_check(cfg: BenchConfig, joints=("B", "C"), clearances=CATALOGUE_DIAMETRAL_MM, speeds=SPEEDS,
                   progress: bool = True) -> dict:
-    """:func:`check_case` for every joint and catalogue clearance; the JSON report."""
+    """:func:`check_case` for every joint (some of B, C) and catalogue clearance; the JSON report."""
     from tqdm import tqdm
 
+    joints = check_joints(joints)
     jobs = [(j, cl) for j in joints for cl in clearances if cl > 0]
     cases = [check_case(cfg, j, cl, speeds) for j, cl in tqdm(jobs, disable=not progress, desc="contact check")]
     return {

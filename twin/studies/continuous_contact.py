@@ -54,12 +54,17 @@ in reality leave the wall: the model's own indicator of separation.
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from twin.config import BenchConfig
+from twin.errors import ConfigError
+from twin.util import json_default
 
 
 @dataclass(frozen=True)
@@ -280,45 +285,55 @@ def check_config(cfg: BenchConfig) -> None:
                                                    f"{cfg.mechanism.orientation!r}")
 
 
-def register(studies) -> None:
-    """Add ``twin study continuous-contact`` to the ``twin study`` group."""
-    p = studies.add_parser(
-        "continuous-contact", help="S004's continuous-contact model (clearance at B as a massless virtual rod)",
-        description="S004 §2.1: the clearance at the crank-rod joint B as a massless rod of length c, the crank "
-                    "prescribed, one degree of freedom from Lagrange's equations. Runs it "
-                    "from the quasi-static start (the journal where the ideal pin force pushes it) and writes "
-                    "continuous_contact.json (the crank angle up to which the journal stays on the wall, f_N >= 0, "
-                    "and the slider's deviation from the ideal motion up to there), continuous_contact.npz (time "
-                    "series) and continuous_contact.png. (In the repository, python analysis/s004_report.py compares "
-                    "it with the contact model.)")
-    p.add_argument("--preset", default="s004", metavar="NAME", help="mechanism (default s004)")
-    p.add_argument("--config", metavar="FILE", help="TOML configuration instead of a preset")
-    p.add_argument("--clearance-b", type=float, metavar="MM", help="diametral clearance at B [mm] (S004: 0.5, 1.0)")
-    p.add_argument("--duration", type=float, default=2 * math.pi / 30.0, metavar="S",
-                   help="simulated time [s] (default one turn at 30 rad/s)")
-    p.add_argument("--out", metavar="DIR", required=True, help="output directory (created if missing)")
-    p.set_defaults(func=_run)
+@dataclass(frozen=True)
+class ContinuousContactOptions:
+    """What the study runs.
+
+    Attributes:
+        out: output folder (created if needed).
+        config: the mechanism (:func:`check_config`: a clearance at B, the crank prescribed).
+        duration_s: simulated time [s], in (0, 10] (default one crank turn at 30 rad/s; the model
+            holds only while the journal stays on the wall, well within a turn).
+    """
+
+    out: str | Path
+    config: BenchConfig
+    duration_s: float = 2 * math.pi / 30.0
+
+    def __post_init__(self) -> None:
+        d = self.duration_s
+        if isinstance(d, bool) or not isinstance(d, (int, float)) or not (math.isfinite(d) and 0 < d <= 10):
+            raise ConfigError("duration_s", f"must lie in (0, 10] s, got {d!r}")
+        check_config(self.config)
 
 
-def _run(args) -> int:
-    import json
+@dataclass(frozen=True)
+class ContinuousContactResult:
+    """What the study found: ``summary`` is ``continuous_contact.json`` (the crank angle up to which
+    the journal stays on the wall and the slider's deviation from the ideal motion until then);
+    ``series`` the time series of ``continuous_contact.npz``."""
 
-    from twin.config import load_config, named_preset
-    from twin.errors import ConfigError
-    from twin.util import atomic_write_bytes, atomic_write_json, check_output_dir, json_default
+    summary: dict[str, Any]
+    series: dict[str, np.ndarray]
 
-    if not (isinstance(args.duration, float) and math.isfinite(args.duration) and 0 < args.duration <= 10):
-        raise ConfigError("--duration", f"must lie in (0, 10] s, got {args.duration!r}")
-    cfg = load_config(args.config) if args.config else named_preset(args.preset)
-    if args.clearance_b is not None:
-        cfg = cfg.replace(**{"joints.clearance_b_mm": args.clearance_b, "joints.allow_noncatalogue": True})
-    check_config(cfg)
-    out = check_output_dir(args.out)
-    out.mkdir(exist_ok=True)
-    res = run_free(cfg, args.duration)
-    atomic_write_json(out / "continuous_contact.json", json.loads(json.dumps(res["summary"], default=json_default)))
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON data of ``continuous_contact.json``."""
+        return json.loads(json.dumps(self.summary, default=json_default))
+
+
+def run_study(options: ContinuousContactOptions) -> ContinuousContactResult:
+    """Run the model from its quasi-static start and write ``continuous_contact.json``,
+    ``continuous_contact.npz`` and ``continuous_contact.png`` to ``options.out``."""
     import io
 
+    from twin.util import atomic_write_bytes, atomic_write_json
+
+    cfg = options.config
+    out = Path(options.out)
+    out.mkdir(exist_ok=True)
+    res = run_free(cfg, options.duration_s)
+    result = ContinuousContactResult(res["summary"], res["series"])
+    atomic_write_json(out / "continuous_contact.json", result.to_dict())
     buf = io.BytesIO()
     np.savez_compressed(buf, **res["series"])
     atomic_write_bytes(out / "continuous_contact.npz", buf.getvalue())
@@ -346,8 +361,4 @@ def _run(args) -> int:
     fig.savefig(png, format="png", dpi=110)
     plt.close(fig)
     atomic_write_bytes(out / "continuous_contact.png", png.getvalue())
-    sm = res["summary"]
-    print(f"continuous-contact model, c = {1e3 * sm['clearance_radial_m']:g} mm: journal on the wall up to "
-          f"{sm['valid_until_crank_deg']:.1f} deg; deviation from the ideal slider until then: "
-          f"x {1e3 * sm['dx_max_m']:.3f} mm, v {sm['dv_max_mps']:.3f} m/s, a {sm['da_max_mps2']:.0f} m/s^2; wrote {out}")
-    return 0
+    return result

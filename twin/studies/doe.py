@@ -395,11 +395,67 @@ def _list_spec(doe: DoeSpec, points: Sequence[Mapping[str, float]], name: str) -
 
 
 # ------------------------------------------------------------------------ study
-def run_study(doe: DoeSpec, out: Path, workers: int | None = None, progress: bool = False,
-              log: Callable[[str], None] = lambda m: None) -> dict[str, Any]:
-    """The whole study (module docstring); writes ``doe.json``, ``doe.md`` and the PNGs in ``out``."""
+@dataclass(frozen=True)
+class DoeOptions:
+    """What the study runs.
+
+    Attributes:
+        spec: the DOE spec (:func:`load_doe`); every configuration of its design and hold-out points
+            is checked here, before anything is simulated or written.
+        out: output folder (created; a second call resumes its datasets).
+        workers: simulations at a time (None = the machine's cores; else 1..1024).
+        progress: a progress bar on stderr.
+    """
+
+    spec: DoeSpec
+    out: str | Path
+    workers: int | None = None
+    progress: bool = False
+
+    def __post_init__(self) -> None:
+        from twin.dataset.design import plan
+        from twin.util import resolve_workers
+
+        if self.workers is not None:
+            resolve_workers(self.workers)
+        plan(self.spec.dataset)  # every configuration is valid before anything is written
+        for p in self.spec.holdout:
+            plan(_list_spec(self.spec, [p], self.spec.dataset.name + "-check"))
+
+
+@dataclass(frozen=True)
+class DoeResult:
+    """What the study found (``doe.json``): the simulated design ``points``, per response its
+    Kriging surrogate's leave-one-out error, optimum, Sobol indices and main effects
+    (``responses``), the hold-out and optimum ``checks`` simulated with their predictions."""
+
+    factors: list[dict[str, Any]]
+    responses: dict[str, Any]
+    design: str
+    points: list[dict[str, Any]]
+    settle_s: float
+    goal: str
+    spec: str
+    checks: list[dict[str, Any]]
+    figures: tuple[str, ...]
+    lhs_strata_ok: bool | None = None  # a Latin hypercube design only
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON data of ``doe.json``."""
+        d: dict[str, Any] = {"factors": self.factors, "responses": self.responses, "design": self.design,
+                             "points": self.points, "settle_s": self.settle_s, "goal": self.goal, "spec": self.spec}
+        if self.lhs_strata_ok is not None:
+            d["lhs_strata_ok"] = self.lhs_strata_ok
+        return d | {"checks": self.checks, "figures": list(self.figures)}
+
+
+def run_study(options: DoeOptions, *, log: Callable[[str], None] = lambda m: None) -> DoeResult:
+    """The whole study (module docstring); writes ``doe.json``, ``doe.md`` and the PNGs in
+    ``options.out``; ``log`` receives a line per stage."""
     from twin.util import atomic_write_json, atomic_write_bytes
 
+    doe, workers, progress = options.spec, options.workers, options.progress
+    out = Path(options.out)
     out.mkdir(parents=True, exist_ok=True)
     names = [f.name for f in doe.factors]
     d = len(names)
@@ -469,7 +525,7 @@ def run_study(doe: DoeSpec, out: Path, workers: int | None = None, progress: boo
     result["figures"] = figures
     atomic_write_json(out / "doe.json", result)
     atomic_write_bytes(out / "doe.md", report_md(doe, result).encode())
-    return result
+    return DoeResult(**{**result, "figures": tuple(figures)})
 
 
 def is_latin_hypercube(u: np.ndarray) -> bool:
@@ -605,49 +661,3 @@ def _one(doe: DoeSpec, j: int, v: float) -> np.ndarray:
     x = from_unit(doe.factors, np.full((1, len(doe.factors)), 0.5))
     x[0, j] = v
     return x
-
-
-# --------------------------------------------------------------------------- CLI
-def register(studies: Any) -> None:
-    """Add ``twin study doe`` to the ``twin study`` group."""
-    p = studies.add_parser(
-        "doe", help="design of experiments with a Kriging surrogate (S000's method)",
-        description="A Latin hypercube (or listed points) over named factors, simulated through the dataset "
-                    "generator; per run the responses (max slider acceleration, contact force, power); a Kriging "
-                    "surrogate of each (scikit-learn Gaussian process, anisotropic Matern kernel) with its "
-                    "leave-one-out error; its global optimum (differential evolution), simulated; hold-out "
-                    "predictions; Sobol sensitivities; a PNG of each surrogate. SPEC is a dataset spec with a "
-                    "[doe] table (the shipped s000_example1 is S000's Example 1).")
-    p.add_argument("spec", metavar="SPEC", help="DOE spec: a dataset spec plus [doe], a .toml file or the name of one "
-                   "that ships with twin (s000_example1)")
-    p.add_argument("--out", metavar="DIR", required=True, help="output directory (created; a second call resumes)")
-    p.add_argument("--workers", type=int, metavar="N", help="simulations at a time (default: the cores)")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    p.set_defaults(func=_run)
-
-
-def _run(args: Any) -> int:
-    import sys
-
-    from twin.util import check_output_dir
-
-    from twin.commands.inputs import spec
-
-    doe = load_doe(spec(args.spec))
-    from twin.dataset.design import plan
-
-    plan(doe.dataset)  # every configuration is valid before anything is written
-    for i, p in enumerate(doe.holdout):
-        plan(_list_spec(doe, [p], doe.dataset.name + "-check"))
-    out = check_output_dir(args.out)
-    res = run_study(doe, out, args.workers, progress=not args.no_progress and sys.stderr.isatty(),
-                    log=lambda m: print(m, file=sys.stderr, flush=True))
-    print(f"wrote {out / 'doe.md'}, {out / 'doe.json'}, " + ", ".join(str(out / f) for f in res["figures"]))
-    for r, s in res["responses"].items():
-        o = s["optimum"]
-        print(f"  {r:18s} LOO RMSE/std {s['loo_stats']['rmse_over_std']:.3f}  {doe.goal} "
-              + ", ".join(f"{n}={v:.4g}" for n, v in o["factors"].items()) + f" -> {o['predicted']:.4g}")
-    for c in res["checks"]:
-        print(f"  {c['kind']:8s} " + ", ".join(f"{n}={v:.4g}" for n, v in c["factors"].items()) + ": "
-              + ", ".join(f"{r} {c['responses'][r]:.3g} (pred {c['predicted'][r]['mean']:.3g})" for r in res["responses"]))
-    return 0

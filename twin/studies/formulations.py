@@ -29,10 +29,12 @@ import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from twin.config import BenchConfig
+from twin.errors import ConfigError
 from twin.natural_coordinates import N_Q, P_H, S_Q, S_QD, initial_state
 from twin.reference.model import N_OUT, OK, build_params, free_motion, run_steps
 from twin.studies.penalty import PenaltyParams, penalty_run
@@ -565,15 +567,64 @@ def _plots(results: list[CaseResult], ref_t: np.ndarray, ref_w: np.ndarray, out:
     return paths
 
 
-def run_study(out_dir: str | Path, cfg: BenchConfig | None = None, duration_s: float = 5.0,
-              cases: tuple[Case, ...] = DEFAULT_CASES, progress: bool = True,
-              work_precision_methods: dict[str, tuple[float, ...]] | None = None) -> dict:
-    """Run every case and the work–precision comparison (``work_precision_methods``: default
-    :data:`WORK_PRECISION`, ``{}`` for none), write ``formulations.md``, ``formulations.json`` and
-    PNG plots into ``out_dir`` (created if needed); returns the JSON content."""
-    out = Path(out_dir)
+@dataclass(frozen=True)
+class FormulationsOptions:
+    """What the study runs.
+
+    Attributes:
+        out: output folder (created if needed).
+        config: configuration of the bodies and d_off (:func:`study_config` makes the joints ideal,
+            y up); None = the bench's.
+        duration_s: simulated time [s], in (0, 60] (the penalty cases at h = 1e-4 s take about a
+            second of wall time per simulated second).
+        cases: the formulation cases compared.
+        work_precision_methods: method -> timesteps of the work–precision comparison; None =
+            :data:`WORK_PRECISION`, ``{}`` = none.
+        progress: a progress bar on stderr.
+    """
+
+    out: str | Path
+    config: BenchConfig | None = None
+    duration_s: float = 5.0
+    cases: tuple[Case, ...] = DEFAULT_CASES
+    work_precision_methods: dict[str, tuple[float, ...]] | None = None
+    progress: bool = False
+
+    def __post_init__(self) -> None:
+        d = self.duration_s
+        if isinstance(d, bool) or not isinstance(d, (int, float)) or not (math.isfinite(d) and 0 < d <= 60):
+            raise ConfigError("duration_s", f"must lie in (0, 60] s, got {d!r}")
+
+
+@dataclass(frozen=True)
+class FormulationsResult:
+    """What the study found (``formulations.json``): per case a row of energy error, constraint
+    violation and wall time; the exact solution's end angle; the work–precision rows."""
+
+    duration_s: float
+    theta0_rad: float
+    t_max_J: float
+    rows: list[dict]
+    theta_exact_end_rad: float
+    work_precision: list[dict]
+    exudyn: bool
+    figures: tuple[str, ...]
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON data of ``formulations.json``."""
+        return {"duration_s": self.duration_s, "theta0_rad": self.theta0_rad, "t_max_J": self.t_max_J,
+                "rows": self.rows, "theta_exact_end_rad": self.theta_exact_end_rad,
+                "work_precision": self.work_precision, "exudyn": self.exudyn, "figures": list(self.figures)}
+
+
+def run_study(options: FormulationsOptions) -> FormulationsResult:
+    """Run every case and the work–precision comparison, write ``formulations.md``,
+    ``formulations.json`` and PNG plots into ``options.out``."""
+    out = Path(options.out)
     out.mkdir(parents=True, exist_ok=True)
-    cfg = study_config(cfg)
+    cfg = study_config(options.config)
+    duration_s, cases, progress = options.duration_s, options.cases, options.progress
+    work_precision_methods = options.work_precision_methods
     results = []
     it = cases
     if progress:
@@ -602,8 +653,6 @@ def run_study(out_dir: str | Path, cfg: BenchConfig | None = None, duration_s: f
             + (work_precision_markdown(wp, duration_s, exudyn) + "\n" if wp else "")
             + "Figures: " + ", ".join(p.name for p in pngs) + "\n")
     atomic_write_text(out / "formulations.md", text)
-    data = {"duration_s": duration_s, "theta0_rad": THETA0, "t_max_J": tmax, "rows": rows,
-            "theta_exact_end_rad": float(th[-1]), "work_precision": wp, "exudyn": exudyn,
-            "figures": [p.name for p in pngs]}
-    atomic_write_json(out / "formulations.json", data)
-    return data
+    res = FormulationsResult(duration_s, THETA0, tmax, rows, float(th[-1]), wp, exudyn, tuple(p.name for p in pngs))
+    atomic_write_json(out / "formulations.json", res.to_dict())
+    return res

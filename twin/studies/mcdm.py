@@ -47,6 +47,7 @@ from __future__ import annotations
 
 import csv
 import math
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -66,7 +67,7 @@ class TableError(TwinError):
 
 
 # ------------------------------------------------------------------ input
-def read_csv_table(path: str | Path, flag: str = "RESPONSES.csv") -> tuple[list[str], list[list[str]]]:
+def read_csv_table(path: str | Path, flag: str = "csv_path") -> tuple[list[str], list[list[str]]]:
     """The header and data rows of a CSV file (blank lines skipped); one-line :class:`TableError`
     naming ``flag`` when the file is missing, unreadable, empty or ragged."""
     p = Path(path)
@@ -74,31 +75,31 @@ def read_csv_table(path: str | Path, flag: str = "RESPONSES.csv") -> tuple[list[
         with p.open(newline="", encoding="utf-8-sig") as f:
             rows = [r for r in csv.reader(f) if any(c.strip() for c in r)]
     except FileNotFoundError:
-        raise TableError(f"{flag}: {p} does not exist") from None
+        raise TableError(f"{p} does not exist", field=flag) from None
     except (OSError, UnicodeDecodeError, csv.Error) as err:
-        raise TableError(f"{flag}: cannot read {p} ({err})") from None
+        raise TableError(f"cannot read {p} ({err})", field=flag) from None
     if not rows:
-        raise TableError(f"{flag}: {p} is empty (a header row and at least one data row are needed)")
+        raise TableError(f"{p} is empty (a header row and at least one data row are needed)", field=flag)
     header = [h.strip() for h in rows[0]]
     if len(set(header)) != len(header):
         dup = sorted({h for h in header if header.count(h) > 1})
-        raise TableError(f"{flag}: duplicate column name(s) {', '.join(map(repr, dup))} in {p}")
+        raise TableError(f"duplicate column name(s) {', '.join(map(repr, dup))} in {p}", field=flag)
     data = rows[1:]
     if not data:
-        raise TableError(f"{flag}: {p} has a header but no data rows")
+        raise TableError(f"{p} has a header but no data rows", field=flag)
     for i, r in enumerate(data, start=2):
         if len(r) != len(header):
-            raise TableError(f"{flag}: line {i} of {p} has {len(r)} cells, the header has {len(header)}")
+            raise TableError(f"line {i} of {p} has {len(r)} cells, the header has {len(header)}", field=flag)
     return header, data
 
 
 def numeric_column(header: Sequence[str], rows: Sequence[Sequence[str]], name: str,
-                   flag: str = "--criteria") -> np.ndarray:
+                   flag: str = "criteria") -> np.ndarray:
     """Column ``name`` as floats; a one-line error naming ``flag``, the column and the first bad
     row for an unknown column or a cell that is not a finite number."""
     if name not in header:
-        raise TableError(f"{flag}: unknown column {name!r}{did_you_mean(name, header)}; the file has "
-                         f"{', '.join(header)}")
+        raise TableError(f"unknown column {name!r}{did_you_mean(name, header)}; the file has "
+                         f"{', '.join(header)}", field=flag)
     j = list(header).index(name)
     out = np.empty(len(rows))
     for i, r in enumerate(rows):
@@ -107,7 +108,7 @@ def numeric_column(header: Sequence[str], rows: Sequence[Sequence[str]], name: s
         except ValueError:
             out[i] = math.nan
         if not math.isfinite(out[i]):
-            raise TableError(f"{flag}: column {name!r}, data row {i + 1}: {r[j]!r} is not a finite number")
+            raise TableError(f"column {name!r}, data row {i + 1}: {r[j]!r} is not a finite number", field=flag)
     return out
 
 
@@ -119,7 +120,7 @@ def _is_number(text: str) -> bool:
 
 
 def name_column(header: Sequence[str], rows: Sequence[Sequence[str]], skip: Sequence[str] = (),
-                given: str | None = None, flag: str = "--name-column") -> str | None:
+                given: str | None = None, flag: str = "names_from") -> str | None:
     """The column that names the alternatives: ``given``, which must name every row once (a
     one-line error otherwise), or else the first column not in ``skip`` whose cells are text (not
     all numbers), none empty, none repeated; None when there is none (rows are then numbered)."""
@@ -129,10 +130,10 @@ def name_column(header: Sequence[str], rows: Sequence[Sequence[str]], skip: Sequ
 
     if given is not None:
         if given not in header:
-            raise TableError(f"{flag}: unknown column {given!r}{did_you_mean(given, header)}; the file has "
-                             f"{', '.join(header)}")
+            raise TableError(f"unknown column {given!r}{did_you_mean(given, header)}; the file has "
+                             f"{', '.join(header)}", field=flag)
         if not names_rows(list(header).index(given)):
-            raise TableError(f"{flag}: column {given!r} must name every row once (no empty or repeated cell)")
+            raise TableError(f"column {given!r} must name every row once (no empty or repeated cell)", field=flag)
         return given
     for j, h in enumerate(header):
         if h not in skip and names_rows(j) and not all(_is_number(r[j]) for r in rows):
@@ -146,36 +147,36 @@ def parse_criteria(text: str) -> list[tuple[str, bool]]:
     for item in (s.strip() for s in text.split(",")):
         name, sep, goal = item.rpartition(":")
         if not sep or not name or goal not in ("min", "max"):
-            raise TableError(f"--criteria: {item!r} must be NAME:min or NAME:max")
+            raise TableError(f"{item!r} must be NAME:min or NAME:max", field="criteria")
         if name in (n for n, _ in out):
-            raise TableError(f"--criteria: {name!r} is given twice")
+            raise TableError(f"{name!r} is given twice", field="criteria")
         out.append((name, goal == "max"))
     if not out:
-        raise TableError("--criteria: at least one NAME:min|max is needed")
+        raise TableError("at least one NAME:min|max is needed", field="criteria")
     return out
 
 
-def check_matrix(x: np.ndarray, names: Sequence[str], flag: str = "--criteria") -> np.ndarray:
+def check_matrix(x: np.ndarray, names: Sequence[str], flag: str = "criteria") -> np.ndarray:
     """A decision matrix every method here accepts: 2-D, finite, every value > 0 (MEREC, SAW and
     WASPAS divide by the values and take their logarithms) and no constant column (min-max and
     linear normalisations would divide by zero or carry no information)."""
     x = np.asarray(x, dtype=float)
     if x.ndim != 2 or x.shape[0] < 1 or x.shape[1] != len(names):
-        raise TableError(f"{flag}: need a matrix of alternatives x {len(names)} criteria, got shape {x.shape}")
+        raise TableError(f"need a matrix of alternatives x {len(names)} criteria, got shape {x.shape}", field=flag)
     if x.shape[0] < 2:
-        raise TableError(f"{flag}: at least two alternatives (rows) are needed, got {x.shape[0]}")
+        raise TableError(f"at least two alternatives (rows) are needed, got {x.shape[0]}", field=flag)
     for j, n in enumerate(names):
         col = x[:, j]
         if not np.all(np.isfinite(col)):
-            raise TableError(f"{flag}: column {n!r} has a value that is not finite")
+            raise TableError(f"column {n!r} has a value that is not finite", field=flag)
         if np.any(col <= 0):
-            raise TableError(f"{flag}: column {n!r} has a value <= 0 (row {int(np.argmax(col <= 0)) + 1}); "
-                             "MEREC, SAW and WASPAS need every value > 0")
+            raise TableError(f"column {n!r} has a value <= 0 (row {int(np.argmax(col <= 0)) + 1}); "
+                             "MEREC, SAW and WASPAS need every value > 0", field=flag)
         if np.all(col == col[0]):
-            raise TableError(f"{flag}: column {n!r} is constant ({col[0]:g}); it cannot rank the alternatives")
+            raise TableError(f"column {n!r} is constant ({col[0]:g}); it cannot rank the alternatives", field=flag)
         if col.min() / col.max() < MIN_RATIO:
-            raise TableError(f"{flag}: column {n!r} spans more than 300 decades ({col.min():g} to {col.max():g}); "
-                             "its ratios (min/x, x/max) are not representable in floating point")
+            raise TableError(f"column {n!r} spans more than 300 decades ({col.min():g} to {col.max():g}); "
+                             "its ratios (min/x, x/max) are not representable in floating point", field=flag)
     return x
 
 
@@ -212,16 +213,16 @@ def parse_weights(text: str, x: np.ndarray, benefit: Sequence[bool], names: Sequ
         return np.full(n, 1.0 / n), "equal"
     parts = [s.strip() for s in text.split(",")]
     if len(parts) != n:
-        raise TableError(f"--weights: {len(parts)} value(s) for {n} criteria ({', '.join(names)}); "
-                         "give merec, equal or one weight per criterion")
+        raise TableError(f"{len(parts)} value(s) for {n} criteria ({', '.join(names)}); "
+                         "give merec, equal or one weight per criterion", field="weights")
     try:
         w = np.array([float(s) for s in parts])
     except ValueError:
-        raise TableError(f"--weights: {text!r} must be merec, equal or numbers W1,W2,…") from None
+        raise TableError(f"{text!r} must be merec, equal or numbers W1,W2,…", field="weights") from None
     if not np.all(np.isfinite(w)) or np.any(w < 0):
-        raise TableError(f"--weights: every weight must be a finite number >= 0, got {text!r}")
+        raise TableError(f"every weight must be a finite number >= 0, got {text!r}", field="weights")
     if w.max() <= 0:
-        raise TableError(f"--weights: the weights must not all be 0, got {text!r}")
+        raise TableError(f"the weights must not all be 0, got {text!r}", field="weights")
     w = w / w.max()  # scale-free: huge weights do not overflow their sum, subnormal ones keep their ratios
     return w / w.sum(), "given"
 
@@ -262,7 +263,7 @@ def merec_details(x: np.ndarray, benefit: Sequence[bool]) -> dict[str, np.ndarra
     s_rem = np.log1p((a.sum(axis=1, keepdims=True) - a) / n)
     e = np.abs(s_rem - s[:, None]).sum(axis=0)
     if e.sum() <= 0:
-        raise TableError("--weights merec: every removal effect is 0 (no criterion separates the alternatives)")
+        raise TableError("merec: every removal effect is 0 (no criterion separates the alternatives)", field="weights")
     return {"n": nrm, "S": s, "S_removed": s_rem, "E": e, "weights": e / e.sum()}
 
 
@@ -326,7 +327,7 @@ def saw(x: np.ndarray, benefit: Sequence[bool], w: Sequence[float]) -> dict[str,
 
 def _check_lambda(lam: float) -> float:
     if not (isinstance(lam, (int, float)) and 0 <= lam <= 1):
-        raise TableError(f"--waspas-lambda: must lie in [0, 1], got {lam!r}")
+        raise TableError(f"must lie in [0, 1], got {lam!r}", field="lam")
     return float(lam)
 
 
@@ -461,40 +462,62 @@ def best_names(res: dict[str, Any], ranks_: Sequence[int]) -> str:
     return ", ".join(res["names"][i] for i, r in enumerate(ranks_) if r == 1)
 
 
-def register(studies: Any) -> None:
-    """Add ``twin study mcdm`` to the ``twin study`` group."""
-    p = studies.add_parser(
-        "mcdm", help="rank alternatives by several criteria: GRA, TOPSIS, SAW, WASPAS (S002's methods)",
-        description="Rank the rows of a CSV of responses by several criteria with grey relational analysis "
-                    "(xi = 0.5), TOPSIS, SAW and WASPAS (standard form and S002's variant), the criteria weighted "
-                    "by MEREC, equally or as given, each by its original definition. The alternatives are named "
-                    "by a name column when the CSV has one (--name-column), else by row number. Writes "
-                    "DIR/mcdm.json and DIR/report.md (the formulas, the weights, every score and rank).")
-    p.add_argument("responses", metavar="RESPONSES.csv", help="CSV with a header row, one row per alternative")
-    p.add_argument("--name-column", metavar="COL",
-                   help="column naming the alternatives (default: the first column of text that names every row "
-                        "once; without one, alternatives are numbered by row)")
-    p.add_argument("--criteria", required=True, metavar="NAME:min|max,…",
-                   help="criterion columns and whether smaller (min) or larger (max) is better")
-    p.add_argument("--weights", default="merec", metavar="merec|equal|W1,W2,…",
-                   help="MEREC weights (default), equal weights or one weight per criterion (scaled to sum 1)")
-    p.add_argument("--waspas-lambda", type=float, default=WASPAS_LAMBDA, metavar="L",
-                   help=f"lambda of WASPAS in [0, 1] (default {WASPAS_LAMBDA}, S002's; the original method uses 0.5)")
-    p.add_argument("--out", required=True, metavar="DIR", help="output directory (created if missing)")
-    p.set_defaults(func=_run)
+@dataclass(frozen=True)
+class McdmOptions:
+    """What :func:`run_study` ranks (the texts are parsed and checked by :func:`run_mcdm`).
+
+    Attributes:
+        csv_path: CSV with a header row, one row per alternative.
+        criteria: ``NAME:min|max,…``: criterion columns and whether smaller or larger is better.
+        out: output folder (created if missing).
+        weights: ``merec`` (default), ``equal`` or one weight per criterion ``W1,W2,…``.
+        lam: lambda of WASPAS in [0, 1] (default S002's).
+        names_from: the column naming the alternatives (default: found by :func:`name_column`).
+    """
+
+    csv_path: str | Path
+    criteria: str
+    out: str | Path
+    weights: str = "merec"
+    lam: float = WASPAS_LAMBDA
+    names_from: str | None = None
 
 
-def _run(args: Any) -> int:
-    from twin.util import atomic_write_json, atomic_write_text, check_output_dir
+@dataclass(frozen=True)
+class McdmResult:
+    """The ranking (``mcdm.json``): the alternatives' ``names``, the ``criteria`` and their
+    ``weights``, per method its scores and ranks (``methods``), MEREC's intermediate sums."""
 
-    res, x = run_mcdm(args.responses, args.criteria, args.weights, args.waspas_lambda, args.name_column)
-    out = check_output_dir(args.out)
+    input: str
+    alternatives: int
+    name_column: str | None
+    names: list[str]
+    criteria: list[dict[str, str]]
+    weights: list[float]
+    weights_source: str
+    methods: dict[str, Any]
+    merec: dict[str, list[float]] | None = None
+
+    def best(self, method: str) -> str:
+        """The alternatives ``method`` ranks first, by name (or row number), comma-separated."""
+        return best_names(self.to_dict(), self.methods[method]["ranks"])
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON data of ``mcdm.json``."""
+        d = {k: getattr(self, k) for k in ("input", "alternatives", "name_column", "names", "criteria", "weights",
+                                           "weights_source", "methods")}
+        return d if self.merec is None else d | {"merec": self.merec}
+
+
+def run_study(options: McdmOptions) -> McdmResult:
+    """Rank the alternatives of ``options.csv_path`` and write ``mcdm.json`` and ``report.md`` (the
+    formulas, the weights, every score and rank) to ``options.out``."""
+    from twin.util import atomic_write_json, atomic_write_text
+
+    o = options
+    res, x = run_mcdm(o.csv_path, o.criteria, o.weights, o.lam, o.names_from)
+    out = Path(o.out)
     out.mkdir(exist_ok=True)
     atomic_write_json(out / "mcdm.json", res)
     atomic_write_text(out / "report.md", report_md(res, x))
-    w = ", ".join(f"{c['name']} {v:.4f}" for c, v in zip(res["criteria"], res["weights"]))
-    print(f"wrote {out / 'mcdm.json'}, {out / 'report.md'}; weights ({res['weights_source']}): {w}")
-    for k in METHODS:
-        print(f"  {k:7s} best {'alternative' if res['name_column'] else 'row'} "
-              f"{best_names(res, res['methods'][k]['ranks'])}")
-    return 0
+    return McdmResult(**res)

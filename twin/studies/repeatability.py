@@ -11,6 +11,7 @@ simulated runs use the calibrated channel ``meas_ACi`` if present, else the simu
 from __future__ import annotations
 
 import itertools
+import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Sequence
@@ -58,7 +59,8 @@ def first_pass(phi: np.ndarray, i_from: int, angle_rad: float) -> int:
     k = np.floor((phi[i_from:] - angle_rad) / (2 * np.pi))
     hits = np.flatnonzero(np.diff(k) != 0)
     if hits.size == 0:
-        raise TwinError(f"--align-angle: the crank never passes {np.degrees(angle_rad):g} deg after the window start")
+        raise TwinError(f"the crank never passes {np.degrees(angle_rad):g} deg after the window start",
+                        field="align_angle")
     return i_from + int(hits[0]) + 1
 
 
@@ -74,7 +76,8 @@ def load_signal(path: str | Path, channel: str) -> tuple[np.ndarray, float, floa
         rec, info, _ = read_recording(p)
         if channel in ACCELEROMETERS:
             if info.calibration is None:
-                raise RecordingError(f"{p}: recording has no calibration data; re-import it with --calibration")
+                raise RecordingError(f"{p}: recording has no calibration data; import it again with a static "
+                                     "recording in the calibration pose or known zero-g offsets")
             meas = measured_accel(rec.select([f"volt_{channel}"]), info.calibration)
             return meas[f"meas_{channel}"].astype(np.float64), rec.t0, rec.rate_hz, f"meas_{channel}"
         return rec[channel].astype(np.float64), rec.t0, rec.rate_hz, channel
@@ -83,6 +86,27 @@ def load_signal(path: str | Path, channel: str) -> tuple[np.ndarray, float, floa
         if name in run:
             return run[name].astype(np.float64), run.t0, run.rate_hz, name
     raise RecordingError(f"{p}: no channel {channel!r} (channels: {', '.join(run.channels)})")
+
+
+def check_arguments(runs: Sequence[str | Path], start: float | None, stop: float | None, dtw_window: float,
+                    align_angle: float | None, decimate: int) -> None:
+    """The rules of :func:`repeatability`'s arguments (a one-line :class:`TwinError` naming the
+    argument), checked before any run is read."""
+    if len(runs) < 2:
+        raise TwinError(f"give at least 2 runs, got {len(runs)}", field="runs")
+    if isinstance(decimate, bool) or not isinstance(decimate, int) or decimate < 1:
+        raise TwinError(f"must be an integer >= 1, got {decimate!r}", field="decimate")
+    for name, v in (("start", start), ("stop", stop), ("align_angle", align_angle)):
+        if v is not None and not math.isfinite(v):
+            raise TwinError(f"must be a finite number, got {v!r}", field=name)
+    if start is not None and start < 0:
+        raise TwinError(f"must be a time >= 0 s, got {start!r}", field="start")
+    if stop is not None and stop <= (start or 0.0):
+        raise TwinError(f"must be a time > `start`, got {stop!r}", field="stop")
+    if not (math.isfinite(dtw_window) and 0 <= dtw_window <= 10):
+        raise TwinError(f"must lie in [0, 10] s, got {dtw_window!r}", field="dtw_window")
+    if align_angle is not None and not -360 <= align_angle <= 360:
+        raise TwinError(f"must lie in [-360, 360] degrees, got {align_angle!r}", field="align_angle")
 
 
 def repeatability(runs: Sequence[str | Path], channel: str = "AC4", start: float | None = None,
@@ -100,6 +124,7 @@ def repeatability(runs: Sequence[str | Path], channel: str = "AC4", start: float
     """
     from twin.signals import dtw_compare
 
+    check_arguments(runs, start, stop, dtw_window, align_angle, decimate)
     sigs = []
     starts: list[float] = []
     rate = None

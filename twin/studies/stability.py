@@ -72,9 +72,8 @@ from __future__ import annotations
 
 import io
 import math
-import tempfile
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any, Callable
 
@@ -83,7 +82,8 @@ import numpy as np
 from twin.config import CATALOGUE_DIAMETRAL_MM, ORIENTATIONS, BenchConfig, preset
 from twin.errors import ConfigError, TwinError
 from twin.studies.stability_bench import ENGINES, bench_draws, bench_overrides, guide_penetration, label, rotor_energy
-from twin.util import atomic_write_bytes, atomic_write_json, atomic_write_text, check_output_dir
+from twin.tracefile import DriveInputs
+from twin.util import atomic_write_bytes, atomic_write_json, atomic_write_text
 
 #: Largest admissible penetration / radial clearance [-].
 PEN_LIMIT = 0.25
@@ -121,7 +121,11 @@ class StudySettings:
         bench: also draw the guide clearance and the drive train and run every scene in both
             engines (:mod:`twin.studies.stability_bench`).
         family: "bench" (the planar twin's scenes, this module) or "spatial" (S002's mechanism in both
-            engines, :mod:`twin.spatial.stability`).
+            engines, :mod:`twin.studies.spatial_stability`).
+        structure: every scene with the flexible structure (``structure.mode = "flexible"``), its placeholders
+            drawn uniformly over their documented ranges (:data:`twin.config.structure.EXPLORE_RANGES`) from the
+            scene's own generator ``default_rng([seed, index, 43])`` (the other draws stay those of the rigid
+            campaign), and run in both engines (one row each).
     """
 
     scenes: int = 500
@@ -129,14 +133,19 @@ class StudySettings:
     duration_range_s: tuple[float, float] = (0.5, 3.0)
     bench: bool = False
     family: str = "bench"
+    structure: bool = False
 
     def __post_init__(self) -> None:
         if isinstance(self.scenes, bool) or not isinstance(self.scenes, int) or self.scenes < 1:
-            raise ConfigError("--scenes", f"must be an integer >= 1, got {self.scenes!r}")
+            raise ConfigError("scenes", f"must be an integer >= 1, got {self.scenes!r}")
         if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
-            raise ConfigError("--seed", f"must be an integer >= 0, got {self.seed!r}")
+            raise ConfigError("seed", f"must be an integer >= 0, got {self.seed!r}")
         if self.family not in ("bench", "spatial"):
-            raise ConfigError("--family", f"must be bench or spatial, got {self.family!r}")
+            raise ConfigError("family", f"must be bench or spatial, got {self.family!r}")
+        if self.structure and (self.bench or self.family != "bench"):
+            raise ConfigError("structure", "draws the flexible structure on the planar twin's plain scenes; it "
+                              "cannot be combined with bench (guide clearance and motor drive are not available "
+                              "with the flexible structure) or the spatial family")
 
 
 def quick(scenes: int = 20, seed: int = 1, bench: bool = False) -> StudySettings:
@@ -146,7 +155,7 @@ def quick(scenes: int = 20, seed: int = 1, bench: bool = False) -> StudySettings
 
 # ----------------------------------------------------------------------- sampler
 def sample_scene(seed: int, index: int, duration_range_s: tuple[float, float] = (0.5, 3.0),
-                 bench: bool = False) -> dict[str, Any]:
+                 bench: bool = False, structure: bool = False) -> dict[str, Any]:
     """Parameters of scene ``index`` of seed ``seed`` (JSON-ready; see module docstring); with
     ``bench`` the whole-bench draws follow (:func:`twin.studies.stability_bench.bench_draws`).
 
@@ -193,7 +202,29 @@ def sample_scene(seed: int, index: int, duration_range_s: tuple[float, float] = 
              "contact_stiffness_scale": ks, "contact_damping_scale": cs, "duration_s": duration, "settle_s": settle}
     if bench:
         scene.update(bench_draws(rng))
+    if structure:
+        scene["structure"] = structure_draws(seed, index, timestep)
     return scene
+
+
+def structure_draws(seed: int, index: int, timestep_s: float) -> dict[str, float]:
+    """The flexible structure's placeholders of a scene, uniform over their documented ranges, from the scene's own
+    generator; a draw the configuration refuses at this timestep (a mount at or above half the output rate, a mode
+    beyond the explicit step's stability margin) is drawn again (at most 100 times), so every scene is one a user
+    could run."""
+    from twin.config.structure import EXPLORE_RANGES
+
+    srng = np.random.default_rng([seed, index, 43])
+    rate = min(100_000.0, 1.0 / timestep_s)
+    for _ in range(100):
+        draw = {field: float(f"{srng.uniform(lo, hi):.6g}") for _, field, _, (lo, hi) in EXPLORE_RANGES}
+        try:
+            preset(1).replace(**{"structure.mode": "flexible", "simulation.timestep_s": timestep_s,
+                                 "sensors.output_rate_hz": rate, **{f"structure.{k}": v for k, v in draw.items()}})
+        except ConfigError:
+            continue
+        return draw
+    raise TwinError(f"stability scene {index} (seed {seed}): no runnable structure in 100 draws at h = {timestep_s:g} s")
 
 
 def startstop_trace(scene: dict[str, Any], belt_ratio: float) -> tuple[np.ndarray, np.ndarray]:
@@ -217,9 +248,18 @@ def startstop_trace(scene: dict[str, Any], belt_ratio: float) -> tuple[np.ndarra
     return t, angle
 
 
+def scene_inputs(scene: dict[str, Any]) -> DriveInputs | None:
+    """The recorded drive input of a scene, in memory: a start/stop scene's encoder trace
+    (:func:`startstop_trace`), None for the other programs."""
+    if scene["drive"]["program"] in ("constant", "protocol"):
+        return None
+    return DriveInputs(trace=startstop_trace(scene, preset(1).drive.belt_ratio))
+
+
 def scene_config(scene: dict[str, Any], trace_dir: Path | None = None) -> BenchConfig:
-    """Bench configuration of a scene (MuJoCo engine). A start/stop scene writes its trace to
-    ``trace_dir`` (required for it)."""
+    """Bench configuration of a scene (MuJoCo engine). A start/stop scene's trace travels in memory
+    (:func:`scene_inputs`); with ``trace_dir`` it is also written there, as the file the configuration
+    names (to run the scene again outside the study), else the configuration names it only."""
     base = preset(1)
     d = scene["drive"]
     ov: dict[str, Any] = {
@@ -241,12 +281,14 @@ def scene_config(scene: dict[str, Any], trace_dir: Path | None = None) -> BenchC
                    "drive.protocol_hold_s": d["protocol_hold_s"], "drive.protocol_stop_s": d["protocol_stop_s"],
                    "drive.ramp_s": d["ramp_s"]})
     else:
-        if trace_dir is None:
-            raise TwinError("scene_config: a start/stop scene needs a directory for its trace file")
-        t, angle = startstop_trace(scene, base.drive.belt_ratio)
-        path = Path(trace_dir) / f"trace_s{scene['seed']}_{scene['index']:05d}.npz"
-        np.savez(path, t=t, angle=angle)
+        path = Path(trace_dir or ".") / f"trace_s{scene['seed']}_{scene['index']:05d}.npz"
+        if trace_dir is not None:
+            t, angle = startstop_trace(scene, base.drive.belt_ratio)
+            np.savez(path, t=t, angle=angle)
         ov.update({"drive.program": "trace", "drive.trace_file": str(path)})
+    if "structure" in scene:  # the flexible structure (StudySettings.structure), in the scene's engine
+        ov.update({"structure.mode": "flexible", "simulation.engine": scene.get("engine", "mujoco"),
+                   **{f"structure.{k}": v for k, v in scene["structure"].items()}})
     if "drive_mode" in scene:
         ov.update(bench_overrides(scene))
         if scene["drive_mode"] == "motor":
@@ -304,21 +346,23 @@ def scene_metrics(run: Any, cfg: BenchConfig, scene: dict[str, Any]) -> dict[str
     return out
 
 
-def run_scene(scene: dict[str, Any], trace_dir: Path) -> dict[str, Any]:
-    """Simulate one scene and return its metrics (a raised engine error counts as a divergence)."""
+def run_scene(scene: dict[str, Any], trace_dir: Path | None = None) -> dict[str, Any]:
+    """Simulate one scene and return its metrics (a raised engine error counts as a divergence);
+    ``trace_dir``: where to also write a start/stop scene's trace (:func:`scene_config`)."""
     from twin.errors import SimulationError
     from twin.simulation import simulate_run
 
     cfg = scene_config(scene, trace_dir)
+    inputs = scene_inputs(scene)
     t0 = time.perf_counter()
     try:
-        run = simulate_run(cfg)
+        run = simulate_run(cfg, inputs=inputs)
     except SimulationError as err:
         return {"diverged": True, "passed": False, "error": str(err), "warnings": {}, "nonfinite_channels": [],
                 "joints": {}, "max_pen_over_c": float("nan"), "wall_s": time.perf_counter() - t0}
     met = scene_metrics(run, cfg, scene)
     if not met["diverged"] and met["max_pen_over_c"] > PEN_LIMIT:
-        met["reference"] = reference_check(cfg)
+        met["reference"] = reference_check(cfg, inputs)
         _mark_agreement(met)
     return met
 
@@ -343,7 +387,7 @@ def carried_restitution(cfg: BenchConfig) -> float | None:
     return float(brentq(lambda x: chi(x) - target, lo, hi, xtol=1e-14))
 
 
-def reference_check(cfg: BenchConfig) -> dict[str, Any]:
+def reference_check(cfg: BenchConfig, inputs: DriveInputs | None = None) -> dict[str, Any]:
     """pen/c of the reference engine at its converged step (REFERENCE_TIMESTEP_S) on the same
     scene, under the twin's perturbed law (module docstring): tells a physical exceedance of
     PEN_LIMIT (the converged reference exceeds it too) from a numerical one."""
@@ -356,7 +400,7 @@ def reference_check(cfg: BenchConfig) -> dict[str, Any]:
     if e_ref is not None:
         over["contact.restitution"] = e_ref
     try:
-        run = simulate_run(cfg.replace(**over))
+        run = simulate_run(cfg.replace(**over), inputs=inputs)
     except TwinError as err:
         return {"error": str(err)}
     pen = {j: float(np.max(run[f"pen_{j}"]) / cfg.joints.radial_m(j)) for j in cfg.joints.clearance_joints}
@@ -422,18 +466,48 @@ def summarize(rows: list[dict[str, Any]], wall_s: float) -> dict[str, Any]:
     }
 
 
-def run_study(out: Path | None, settings: StudySettings, progress: bool = False,
-              log: Callable[[str], None] | None = None) -> dict[str, Any]:
-    """Run the campaign; write the outputs to ``out`` (if given); return the JSON data."""
+@dataclass(frozen=True)
+class StabilityResult:
+    """What a campaign found (``stability.json``).
+
+    Attributes:
+        settings: the campaign's :class:`StudySettings` and the pass limits (``pen_limit``, ``energy_tol``).
+        summary: the counts and statistics of :func:`summarize` (``passed`` of ``scenes``, ...).
+        scenes: per scene its draw (``scene``) and what it gave (``metrics``), in scene order.
+        figures: the PNG files written beside the JSON (none without an output folder).
+    """
+
+    settings: dict[str, Any]
+    summary: dict[str, Any]
+    scenes: list[dict[str, Any]]
+    figures: tuple[str, ...] = ()
+
+    @property
+    def passed(self) -> bool:
+        """Every scene passed."""
+        return self.summary["passed"] == self.summary["scenes"]
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON data of ``stability.json`` (non-finite floats as they are; written through
+        :func:`_jsonable`)."""
+        return {"study": "stability", "settings": self.settings, "summary": self.summary, "scenes": self.scenes,
+                "figures": list(self.figures)}
+
+
+def run_study(settings: StudySettings, *, out: str | Path | None = None, progress: bool = False,
+              log: Callable[[str], None] | None = None) -> StabilityResult:
+    """Run the campaign of ``settings``; write ``stability.json``, ``stability.md`` and
+    ``stability.png`` to the folder ``out`` when given; ``progress``: a progress bar on stderr;
+    ``log``: receives one line per failed scene."""
     run_one = run_scene
     if settings.family == "spatial":
-        from twin.spatial.stability import run_scene as run_one, sample_scene as sample_spatial  # noqa: F811
+        from twin.studies.spatial_stability import run_scene as run_one, sample_scene as sample_spatial  # noqa: F811
 
         scenes = [sample_spatial(settings.seed, i, settings.duration_range_s) for i in range(settings.scenes)]
     else:
-        scenes = [sample_scene(settings.seed, i, settings.duration_range_s, settings.bench)
+        scenes = [sample_scene(settings.seed, i, settings.duration_range_s, settings.bench, settings.structure)
                   for i in range(settings.scenes)]
-        if settings.bench:  # every bench scene in both engines: one row each
+        if settings.bench or settings.structure:  # every bench or structure scene in both engines: one row each
             scenes = [{**sc, "engine": e} for sc in scenes for e in ENGINES]
     rows = []
     t0 = time.perf_counter()
@@ -443,26 +517,27 @@ def run_study(out: Path | None, settings: StudySettings, progress: bool = False,
 
         bar = tqdm(total=len(scenes), desc="stability", unit="scene", mininterval=1.0)
     try:
-        with tempfile.TemporaryDirectory(prefix="twin_stability_") as tmp:
-            for sc in scenes:
-                met = run_one(sc, Path(tmp))
-                rows.append({"scene": sc, "metrics": met})
-                if bar is not None:
-                    bar.update(1)
-                if log is not None and not met["passed"]:
-                    log(f"scene {sc['index']}: FAILED ({_failure(met)})")
+        for sc in scenes:
+            met = run_one(sc)
+            rows.append({"scene": sc, "metrics": met})
+            if bar is not None:
+                bar.update(1)
+            if log is not None and not met["passed"]:
+                log(f"scene {sc['index']}: FAILED ({_failure(met)})")
     finally:
         if bar is not None:
             bar.close()
-    data = {"study": "stability", "settings": {**asdict(settings), "pen_limit": PEN_LIMIT, "energy_tol": ENERGY_TOL},
-            "summary": summarize(rows, time.perf_counter() - t0), "scenes": rows, "figures": []}
+    kept = {k: v for k, v in asdict(settings).items() if k != "structure" or v}  # rigid campaigns: as before
+    res = StabilityResult({**kept, "pen_limit": PEN_LIMIT, "energy_tol": ENERGY_TOL},
+                          summarize(rows, time.perf_counter() - t0), rows)
     if out is not None:
         out = Path(out)
         out.mkdir(exist_ok=True)
-        data["figures"] = [_figure(out, rows)]
+        res = replace(res, figures=(_figure(out, rows),))
+        data = res.to_dict()
         atomic_write_json(out / "stability.json", _jsonable(data))
         atomic_write_text(out / "stability.md", markdown(data))
-    return data
+    return res
 
 
 def _jsonable(o: Any) -> Any:
@@ -488,9 +563,9 @@ def _failure(met: dict[str, Any]) -> str:
                                 for j, v in met["joints"].items())
 
 
-def one_line(data: dict[str, Any]) -> str:
-    """The one-line summary the CLI prints."""
-    s = data["summary"]
+def one_line(result: StabilityResult) -> str:
+    """The campaign in one line."""
+    s = result.summary
     verdict = "PASS" if s["passed"] == s["scenes"] else "FAIL"
     return (f"stability {verdict}: {s['passed']}/{s['scenes']} scenes passed, {s['diverged']} diverged, "
             f"max pen/c {s['max_pen_over_c']:.3f} (scene {s['max_pen_over_c_scene']}), "
@@ -608,44 +683,3 @@ def _figure(out: Path, rows: list[dict[str, Any]]) -> str:
     plt.close(fig)
     atomic_write_bytes(out / "stability.png", buf.getvalue())
     return "stability.png"
-
-
-# --------------------------------------------------------------------------- CLI
-def register(studies: Any) -> None:
-    """Add ``twin study stability`` to the ``twin study`` group."""
-    p = studies.add_parser(
-        "stability", help="numerical-stability stress test of the MuJoCo twin over random scenes",
-        description="N randomized scenes (clearances, orientation, drive program, timestep, contact parameters "
-                    "within their calibrated uncertainty); per scene divergence, max penetration/clearance, "
-                    "tracking error and an energy-balance residual. Writes stability.json, stability.md and "
-                    "stability.png; exit status 0 when every scene passes (no divergence, pen/c <= 0.25).")
-    p.add_argument("--scenes", type=int, required=True, metavar="N", help="number of scenes (>= 1)")
-    p.add_argument("--seed", type=int, required=True, metavar="S", help="seed (>= 0); scene i depends on (S, i)")
-    p.add_argument("--out", metavar="DIR", default="stability", help="output directory (default ./stability)")
-    p.add_argument("--quick", action="store_true", help="short scenes (0.3-1.0 s instead of 0.5-3.0 s): the CI version")
-    p.add_argument("--bench", action="store_true",
-                   help="the whole bench: also draw the slider guide's clearance and the drive (crank PID or the "
-                        "motor with its V-belt, the drive train's parameters over their ranges), and run every "
-                        "scene in both engines (one row each)")
-    p.add_argument("--family", choices=("bench", "spatial"), default="bench",
-                   help="scene family: the bench's planar twin (default) or S002's spatial mechanism in both engines")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    p.set_defaults(func=_run)
-
-
-def _run(args: Any) -> int:
-    import sys
-
-    settings = (quick if args.quick else lambda scenes, seed, bench: StudySettings(scenes=scenes, seed=seed,
-                                                                                  bench=bench))(
-        args.scenes, args.seed, args.bench)
-    if getattr(args, "family", "bench") != "bench":
-        from dataclasses import replace
-
-        settings = replace(settings, family=args.family)
-    out = check_output_dir(args.out)
-    data = run_study(out, settings, progress=not args.no_progress,
-                     log=lambda m: print(m, file=sys.stderr, flush=True))
-    print(one_line(data))
-    s = data["summary"]
-    return 0 if s["passed"] == s["scenes"] else 1

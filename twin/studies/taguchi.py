@@ -36,6 +36,7 @@ optimum. This module is that analysis, from a table of runs (factor levels and r
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -91,10 +92,10 @@ def sn_ratio(y: np.ndarray, kind: str = "smaller") -> np.ndarray:
             return -10.0 * np.log10(np.mean((y / s) ** 2, axis=1)) - 20.0 * np.log10(s[:, 0])
     if kind == "larger":
         if np.any(y == 0):
-            raise TableError("--sn larger: a response of 0 has no larger-the-better S/N ratio")
+            raise TableError("'larger': a response of 0 has no larger-the-better S/N ratio", field="sn")
         s = np.abs(y).min(axis=1, keepdims=True)
         return -10.0 * np.log10(np.mean((s / y) ** 2, axis=1)) + 20.0 * np.log10(s[:, 0])
-    raise TableError(f"--sn: must be one of {', '.join(SN_KINDS)}, got {kind!r}")
+    raise TableError(f"must be one of {', '.join(SN_KINDS)}, got {kind!r}", field="sn")
 
 
 def level_index(values: Sequence[float], name: str) -> tuple[np.ndarray, list[float]]:
@@ -102,7 +103,7 @@ def level_index(values: Sequence[float], name: str) -> tuple[np.ndarray, list[fl
     v = np.asarray(values, dtype=float)
     u = sorted(set(v.tolist()))
     if len(u) < 2:
-        raise TableError(f"--factors: column {name!r} has a single level ({u[0]:g}); it cannot be analysed")
+        raise TableError(f"column {name!r} has a single level ({u[0]:g}); it cannot be analysed", field="factors")
     return np.searchsorted(np.array(u), v), u
 
 
@@ -146,7 +147,7 @@ def anova(levels: np.ndarray, y: np.ndarray, names: Sequence[str],
     terms += [(f"{names[i]}*{names[j]}", (i, j)) for i, j in interactions]
     unknown = [p for p in pool if p not in {t for t, _ in terms}]
     if unknown:
-        raise TableError(f"--pool: unknown term(s) {', '.join(unknown)}; terms are {', '.join(t for t, _ in terms)}")
+        raise TableError(f"unknown term(s) {', '.join(unknown)}; terms are {', '.join(t for t, _ in terms)}", field="pool")
     main: dict[int, np.ndarray] = {}
     bases: list[np.ndarray] = []
     for name, term in terms:
@@ -157,8 +158,8 @@ def anova(levels: np.ndarray, y: np.ndarray, names: Sequence[str],
     for a in range(len(terms)):
         for b in range(a):
             if np.abs(bases[a].T @ bases[b]).max(initial=0.0) > 1e-8:
-                raise TableError(f"--factors: terms {terms[b][0]} and {terms[a][0]} are not orthogonal in this "
-                                 "design (confounded or unbalanced); this analysis needs an orthogonal array")
+                raise TableError(f"terms {terms[b][0]} and {terms[a][0]} are not orthogonal in this "
+                                 "design (confounded or unbalanced); this analysis needs an orthogonal array", field="factors")
     yc = y - y.mean()
     ss_total = float(yc @ yc)
     rows = []
@@ -308,11 +309,11 @@ def parse_interactions(text: str | None, names: Sequence[str]) -> list[tuple[int
     for item in (s.strip() for s in (text or "").split(",") if s.strip()):
         parts = item.split("*")
         if len(parts) != 2 or any(p not in names for p in parts) or parts[0] == parts[1]:
-            raise TableError(f"--interactions: {item!r} must be A*B with two different factors of --factors "
-                             f"({', '.join(names)})")
+            raise TableError(f"{item!r} must be A*B with two different factors of `factors` "
+                             f"({', '.join(names)})", field="interactions")
         pair = (names.index(parts[0]), names.index(parts[1]))
         if pair in out or pair[::-1] in out:
-            raise TableError(f"--interactions: {item!r} is given twice")
+            raise TableError(f"{item!r} is given twice", field="interactions")
         out.append(pair)
     return out
 
@@ -322,16 +323,16 @@ def run_analysis(csv_path: str | Path, responses: str, factors: str, sn: str = "
                  alpha: float = 0.05, confirmation_runs: int = 1) -> dict[str, Any]:
     """Read and analyse: the result that ``taguchi.json`` holds."""
     if sn not in SN_KINDS:
-        raise TableError(f"--sn: must be one of {', '.join(SN_KINDS)}, got {sn!r}")
+        raise TableError(f"must be one of {', '.join(SN_KINDS)}, got {sn!r}", field="sn")
     if not 0 < alpha < 1:
-        raise TableError(f"--alpha: must lie in (0, 1), got {alpha!r}")
+        raise TableError(f"must lie in (0, 1), got {alpha!r}", field="alpha")
     if confirmation_runs < 1:
-        raise TableError(f"--confirmation-runs: must be >= 1, got {confirmation_runs!r}")
+        raise TableError(f"must be >= 1, got {confirmation_runs!r}", field="confirmation_runs")
     header, rows = read_csv_table(csv_path)
     fnames = [s.strip() for s in factors.split(",") if s.strip()]
     if not fnames or len(set(fnames)) != len(fnames):
-        raise TableError(f"--factors: need distinct column names, got {factors!r}")
-    cols = [level_index(numeric_column(header, rows, f, "--factors"), f) for f in fnames]
+        raise TableError(f"need distinct column names, got {factors!r}", field="factors")
+    cols = [level_index(numeric_column(header, rows, f, "factors"), f) for f in fnames]
     levels = np.column_stack([c[0] for c in cols])
     values = [c[1] for c in cols]
     inter = parse_interactions(interactions, fnames)
@@ -341,28 +342,28 @@ def run_analysis(csv_path: str | Path, responses: str, factors: str, sn: str = "
         want = [s.strip() for s in predict_with.split(",") if s.strip()]
         bad = [w for w in want if w not in fnames]
         if bad or not want:
-            raise TableError(f"--predict-with: {', '.join(bad) or repr(predict_with)} not among --factors ({', '.join(fnames)})")
+            raise TableError(f"{', '.join(bad) or repr(predict_with)} not among `factors` ({', '.join(fnames)})", field="predict_with")
         used = [fnames.index(w) for w in want]
     specs = [s.strip() for s in responses.split(",") if s.strip()]
     if not specs:
-        raise TableError("--responses: at least one column is needed")
+        raise TableError("at least one column is needed", field="responses")
     res: dict[str, Any] = {"input": str(csv_path), "runs": len(rows), "factors": fnames,
                            "levels": values, "sn": sn, "interactions": [f"{fnames[i]}*{fnames[j]}" for i, j in inter],
                            "pooled": pooled, "responses": {}}
     goal = "min" if sn == "smaller" else "max"
     for spec in specs:
         reps = [c.strip() for c in spec.split("+")]
-        y = np.column_stack([numeric_column(header, rows, c, "--responses") for c in reps])
+        y = np.column_stack([numeric_column(header, rows, c, "responses") for c in reps])
         if sn == "smaller" and np.all(y == 0):
-            raise TableError(f"--responses: {spec!r} is 0 in every run")
+            raise TableError(f"{spec!r} is 0 in every run", field="responses")
         top = float(np.abs(y).max())
         if top > 0 and not MIN_RESPONSE <= top <= MAX_RESPONSE:
-            raise TableError(f"--responses: column {spec!r} has magnitudes up to {top:g}: outside "
+            raise TableError(f"column {spec!r} has magnitudes up to {top:g}: outside "
                              f"[{MIN_RESPONSE:g}, {MAX_RESPONSE:g}] its sums of squares (ANOVA) are not representable "
-                             "in floating point; give it in another unit")
+                             "in floating point; give it in another unit", field="responses")
         s = sn_ratio(y, sn)
         if not np.all(np.isfinite(s)):
-            raise TableError(f"--responses: {spec!r} gives an S/N ratio that is not finite (a run of zeros)")
+            raise TableError(f"{spec!r} gives an S/N ratio that is not finite (a run of zeros)", field="responses")
         obs_levels = np.repeat(levels, y.shape[1], axis=0)
         raw = analyze(obs_levels, y.ravel(), fnames, goal, inter, pooled, used, alpha, confirmation_runs)
         sna = analyze(levels, s, fnames, "max", inter, pooled, used, alpha, confirmation_runs)
@@ -389,35 +390,71 @@ def report_md(res: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def register(studies: Any) -> None:
-    """Add ``twin study taguchi-analyze`` to the ``twin study`` group."""
-    p = studies.add_parser(
-        "taguchi-analyze", help="Taguchi analysis of an orthogonal-array experiment from a CSV of runs (S002)",
-        description="S/N ratios (smaller- or larger-the-better), main effects, ANOVA with contributions, F and p "
-                    "(raw responses and S/N; interactions and pooling on request) and the additive-model prediction "
-                    "at the best levels with its confidence intervals, from a CSV with one row per run. Writes "
-                    "DIR/taguchi.json, DIR/report.md and per response main-effect and S/N PNG plots.")
-    p.add_argument("responses_csv", metavar="RESPONSES.csv", help="CSV with a header row, one row per run")
-    p.add_argument("--responses", required=True, metavar="COL,…",
-                   help="response columns; COL1+COL2 names the replicates of one response")
-    p.add_argument("--factors", required=True, metavar="COL,…", help="factor columns (their distinct values are the levels)")
-    p.add_argument("--sn", default="smaller", choices=SN_KINDS, help="S/N ratio kind (default smaller-the-better)")
-    p.add_argument("--interactions", metavar="A*B,…", help="two-factor interactions to include in the ANOVA")
-    p.add_argument("--pool", metavar="TERM,…", help="terms pooled into the error (e.g. speed or A*B)")
-    p.add_argument("--predict-with", metavar="FACTOR,…", help="factors of the prediction at the optimum (default all)")
-    p.add_argument("--alpha", type=float, default=0.05, help="significance level of the intervals (default 0.05)")
-    p.add_argument("--confirmation-runs", type=int, default=1, metavar="R",
-                   help="R of the confirmation-run interval (default 1)")
-    p.add_argument("--out", required=True, metavar="DIR", help="output directory (created if missing)")
-    p.set_defaults(func=_run)
+@dataclass(frozen=True)
+class TaguchiOptions:
+    """What :func:`run_study` analyses (the texts are parsed and checked by :func:`run_analysis`).
+
+    Attributes:
+        csv_path: CSV with a header row, one row per run.
+        responses: response columns ``COL,…``; ``COL1+COL2`` names the replicates of one response.
+        factors: factor columns ``COL,…`` (their distinct values are the levels).
+        out: output folder (created if missing).
+        sn: S/N ratio kind, smaller or larger (the better).
+        interactions: two-factor interactions ``A*B,…`` in the ANOVA.
+        pool: terms pooled into the error ``TERM,…``.
+        predict_with: factors of the prediction at the optimum (default all).
+        alpha: significance level of the intervals, in (0, 1).
+        confirmation_runs: R of the confirmation-run interval (>= 1).
+    """
+
+    csv_path: str | Path
+    responses: str
+    factors: str
+    out: str | Path
+    sn: str = "smaller"
+    interactions: str | None = None
+    pool: str | None = None
+    predict_with: str | None = None
+    alpha: float = 0.05
+    confirmation_runs: int = 1
 
 
-def _run(args: Any) -> int:
-    from twin.util import atomic_write_json, atomic_write_text, check_output_dir
+@dataclass(frozen=True)
+class TaguchiResult:
+    """The analysis (``taguchi.json``): per response its S/N ratios, main effects, ANOVA and the
+    prediction at the best levels, for the raw response and for the S/N ratio."""
 
-    res = run_analysis(args.responses_csv, args.responses, args.factors, args.sn, args.interactions, args.pool,
-                       args.predict_with, args.alpha, args.confirmation_runs)
-    out = check_output_dir(args.out)
+    input: str
+    runs: int
+    factors: list[str]
+    levels: list[list[float]]
+    sn: str
+    interactions: list[str]
+    pooled: list[str]
+    responses: dict[str, Any]
+    figures: tuple[str, ...] = ()
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON data of ``taguchi.json``."""
+        return {"input": self.input, "runs": self.runs, "factors": self.factors, "levels": self.levels, "sn": self.sn,
+                "interactions": self.interactions, "pooled": self.pooled, "responses": self.responses,
+                "figures": list(self.figures)}
+
+
+def run_study(options: TaguchiOptions) -> TaguchiResult:
+    """Analyse ``options.csv_path`` and write ``taguchi.json``, ``report.md`` and per response its
+    main-effect and S/N PNGs to ``options.out``."""
+    from twin.util import atomic_write_json, atomic_write_text, check_not_input
+
+    o = options
+    res = run_analysis(o.csv_path, o.responses, o.factors, o.sn, o.interactions, o.pool, o.predict_with, o.alpha,
+                       o.confirmation_runs)
+    out = Path(o.out)
+    # every file this writes, checked against the inputs before the first is written (an input CSV named like
+    # an output, in the output folder, would otherwise be refused only after the figures)
+    names = [f"{kind}_{_safe(spec)}.png" for spec in res["responses"] for kind in ("main_effects", "sn")]
+    for name in (*names, "taguchi.json", "report.md"):
+        check_not_input(out / name, "out")
     out.mkdir(exist_ok=True)
     figs = []
     for spec, r in res["responses"].items():
@@ -429,9 +466,4 @@ def _run(args: Any) -> int:
     res["figures"] = figs
     atomic_write_json(out / "taguchi.json", res)
     atomic_write_text(out / "report.md", report_md(res))
-    print(f"wrote {out / 'taguchi.json'}, {out / 'report.md'}, " + ", ".join(str(out / f) for f in figs))
-    for spec, r in res["responses"].items():
-        a = r["sn_analysis"]
-        best = ", ".join(f"{f}={res['levels'][i][a['optimum_levels'][i]]:g}" for i, f in enumerate(res["factors"]))
-        print(f"  {spec}: best S/N levels {best}; predicted S/N {a['prediction']['predicted']:.4g} dB")
-    return 0
+    return TaguchiResult(**{**res, "figures": tuple(figs)})

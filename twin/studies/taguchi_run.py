@@ -203,50 +203,60 @@ def responses_csv(rows: list[dict[str, Any]]) -> str:
     return buf.getvalue()
 
 
-def register(studies: Any) -> None:
-    """Add ``twin study taguchi`` to the ``twin study`` group."""
-    p = studies.add_parser(
-        "taguchi", help="an orthogonal-array experiment (S002's L27) simulated, then its Taguchi analysis",
-        description="S002's Taguchi experiment: simulates every run of SPEC's orthogonal array (a dataset spec "
-                    "with a list design, one point per run, and a [taguchi] table naming the analysis factors and "
-                    "the responses; the shipped s002_l27 is S002's L27: crank length, clearance, friction and "
-                    "speed at three levels in 27 runs) through the dataset generator into DIR/dataset (a second "
-                    "call resumes), computes each run's responses after settle_s (the slider's largest "
-                    "acceleration, the largest contact force per joint), writes DIR/responses.csv and analyses "
-                    "it as twin study taguchi-analyze does: S/N ratios, main effects, ANOVA with contributions, "
-                    "the prediction at the optimum with its confidence intervals, PNG plots.")
-    p.add_argument("spec", metavar="SPEC", help="Taguchi study spec: a dataset spec plus [taguchi], a .toml file or the "
-                   "name of one that ships with twin (s002_l27)")
-    p.add_argument("--out", required=True, metavar="DIR", help="output directory (created if missing)")
-    p.add_argument("--workers", type=int, default=None, metavar="N", help="worker processes (default: all cores)")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    p.set_defaults(func=_run)
+@dataclasses.dataclass(frozen=True)
+class TaguchiRunOptions:
+    """What :func:`run_study` simulates and analyses.
+
+    Attributes:
+        spec: the study spec (:func:`load_taguchi`); :func:`preflight` checks it here, before the
+            first simulation.
+        out: output folder (created; the design is generated into ``out/dataset``, resumed by a second call).
+        workers: simulations at a time (None = the machine's cores; else 1..1024).
+        progress: a progress bar on stderr.
+    """
+
+    spec: TaguchiSpec
+    out: str | Path
+    workers: int | None = None
+    progress: bool = False
+
+    def __post_init__(self) -> None:
+        from twin.util import resolve_workers
+
+        preflight(self.spec)  # every check that needs no simulation, before the first one
+        if self.workers is not None:
+            resolve_workers(self.workers)
 
 
-def _run(args: Any) -> int:
-    import sys
+@dataclasses.dataclass(frozen=True)
+class TaguchiRunResult:
+    """The experiment: per run its analysis factors, responses and wall time (``responses.csv``),
+    the simulations' wall time [s] and the Taguchi analysis of the responses."""
+
+    runs: list[dict[str, Any]]
+    wall_s: float
+    analysis: Any  # twin.studies.taguchi.TaguchiResult
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON data of ``taguchi.json`` (the analysis; the runs are ``responses.csv``)."""
+        return self.analysis.to_dict()
+
+
+def run_study(options: TaguchiRunOptions) -> TaguchiRunResult:
+    """Simulate the design into ``out/dataset``, write ``out/responses.csv``, then analyse it as
+    :func:`twin.studies.taguchi.run_study` does (``taguchi.json``, ``report.md``, PNGs in ``out``)."""
     import time
-    from types import SimpleNamespace
 
     from twin.studies import taguchi
-    from twin.util import atomic_write_text, check_output_dir
+    from twin.util import atomic_write_text
 
-    from twin.commands.inputs import spec as spec_arg
-    from twin.util import resolve_workers
-
-    spec = load_taguchi(spec_arg(args.spec))
-    preflight(spec)  # every check that needs no simulation, before the first one
-    resolve_workers(args.workers)
-    out = check_output_dir(args.out)
-    check_output_dir(out / "dataset", "--out", need_parent=False)
+    spec, out = options.spec, Path(options.out)
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
-    rows = simulate(spec, out / "dataset", args.workers, not args.no_progress and sys.stderr.isatty())
+    rows = simulate(spec, out / "dataset", options.workers, options.progress)
     wall = time.perf_counter() - t0
     atomic_write_text(out / "responses.csv", responses_csv(rows))
-    print(f"simulated {len(rows)} runs ({spec.dataset.engine}, {spec.dataset.duration_s:g} s each) in {wall:.1f} s; "
-          f"wrote {out / 'responses.csv'}")
-    ns = SimpleNamespace(responses_csv=str(out / "responses.csv"), responses=",".join(spec.responses),
-                         factors=",".join(spec.factors), sn=spec.sn, interactions=",".join(spec.interactions) or None,
-                         pool=None, predict_with=None, alpha=spec.alpha, confirmation_runs=1, out=str(out))
-    return taguchi._run(ns)
+    analysis = taguchi.run_study(taguchi.TaguchiOptions(
+        out / "responses.csv", ",".join(spec.responses), ",".join(spec.factors), out, sn=spec.sn,
+        interactions=",".join(spec.interactions) or None, alpha=spec.alpha))
+    return TaguchiRunResult(rows, wall, analysis)

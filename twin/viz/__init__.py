@@ -16,7 +16,17 @@ configuration, with a default blueprint (:mod:`twin.viz.blueprint`).
 from __future__ import annotations
 
 import hashlib
+import os
 from pathlib import Path
+
+#: ``RUST_LOG`` as the user's environment had it (None: unset). Unset, the twin silences the rerun SDK's
+#: own log lines in this process before rerun is imported (they would print e.g. "ERROR ... file_sink:
+#: Failed to write" above the twin's one-line error on a full disk; every failure the SDK reports is
+#: raised and reported by the twin itself); the viewer processes the twin starts get the user's value
+#: back (:func:`twin.commands.view` quotes their messages).
+USER_RUST_LOG = os.environ.get("RUST_LOG")
+if USER_RUST_LOG is None:
+    os.environ["RUST_LOG"] = "off"
 
 from twin.run import Run
 from twin.viz.options import ViewOptions

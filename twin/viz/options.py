@@ -59,4 +59,4 @@ class ViewOptions:
         if self.fft_window_s is not None:
             w = tuple(self.fft_window_s)
             if len(w) != 2 or not all(isinstance(x, (int, float)) and math.isfinite(x) for x in w) or w[1] <= w[0]:
-                raise ConfigError("--fft-window", f"must be two times T0 < T1 [s], got {list(w)!r}")
+                raise ConfigError("fft_window_s", f"must be two times T0 < T1 [s], got {list(w)!r}")

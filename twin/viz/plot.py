@@ -40,7 +40,7 @@ import numpy as np
 from twin.config import ACCELEROMETERS, JOINTS, BenchConfig
 from twin.errors import RecordingError, TwinError
 from twin.run import Run
-from twin.util import show
+from twin.util import check_size_px, show
 
 #: default time window: the last this many seconds of the run [s]
 DEFAULT_WINDOW_S = 0.4
@@ -152,7 +152,7 @@ def load(source: str | Path | Run) -> PlotSource:
         raise TwinError(f"{show(p)}: no such file")
     elif not p.is_file():
         raise TwinError(f"{show(p)}: not a regular file (a pipe or device)")
-    elif p.suffix != ".mcap":
+    elif p.suffix.lower() != ".mcap":
         raise TwinError(f"{show(p)}: expected a .mcap run or recording file, or a replay folder")
     records = read_metadata(p)
     name = p.parent.name if p.name == REPLAY_RUN else p.stem
@@ -204,7 +204,7 @@ def select_channels(src: PlotSource, patterns: Sequence[str] | None) -> list[str
     for pat in patterns:
         hits = [n for n in names if fnmatch.fnmatchcase(n, pat)]
         if not hits:
-            raise TwinError(f"--channels: {pat!r} matches no channel of {src.name}; channels: {', '.join(names)}")
+            raise TwinError(f"{pat!r} matches no channel of {src.name}; channels: {', '.join(names)}", field="channels")
         out += [h for h in hits if h not in out]
     return out
 
@@ -223,8 +223,8 @@ def choose_window(src: PlotSource, window: tuple[float, float] | None, spectrum:
         return (max(t_start, t_end - DEFAULT_WINDOW_S), t_end)
     t0, t1 = (float(v) for v in window)
     if not (np.isfinite(t0) and np.isfinite(t1) and t0 < t1):
-        raise TwinError(f"--window: START:STOP must be finite seconds with START < STOP, got {t0:g}:{t1:g}")
-    check_window((t0, t1), t_start, t_end, rate, flag="--window")
+        raise TwinError(f"START:STOP must be finite seconds with START < STOP, got {t0:g}:{t1:g}", field="window")
+    check_window((t0, t1), t_start, t_end, rate, flag="window")
     return (max(t0, t_start), min(t1, t_end))
 
 
@@ -431,6 +431,8 @@ def plot(source: str | Path | Run, out: str | Path, *, channels: Sequence[str] |
     names = select_channels(src, channels)
     if size_px is None:
         size_px = figure_size(len(names), spectrum, bool(_orbits(src)[0]))
+    else:
+        check_size_px(size_px, "size_px")
     w, h = size_px
     fig = Figure(figsize=(w / DPI, h / DPI), dpi=DPI)
     info = draw(fig, src, channels=channels, window=window, spectrum=spectrum)

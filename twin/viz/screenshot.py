@@ -38,7 +38,7 @@ from pathlib import Path
 from typing import Callable, Iterator
 
 from twin.errors import TwinError
-from twin.util import temp_path
+from twin.util import check_size_px, temp_path
 
 #: System folders the Vulkan loader searches for ICD manifests on Linux (besides the XDG ones).
 SYSTEM_ICD_DIRS: tuple[str, ...] = ("/usr/local/etc/vulkan/icd.d", "/etc/vulkan/icd.d",
@@ -88,7 +88,7 @@ def vulkan_drivers() -> list[Path]:
     return _manifests(list(entries) + (extra.split(os.pathsep) if extra else []))
 
 
-def check_vulkan(flag: str = "--screenshot") -> None:
+def check_vulkan(flag: str = "png") -> None:
     """Raise a one-line :class:`TwinError` if no Vulkan driver is registered (Linux only)."""
     if not sys.platform.startswith("linux") or vulkan_drivers():
         return
@@ -96,9 +96,9 @@ def check_vulkan(flag: str = "--screenshot") -> None:
         where = "in $VK_DRIVER_FILES / $VK_ICD_FILENAMES"
     else:
         where = "in " + ", ".join(str(d) for d in SYSTEM_ICD_DIRS) + " or the XDG folders"
-    raise TwinError(f"{flag}: no Vulkan driver found (no ICD manifest {where}); the headless viewer renders "
+    raise TwinError(f"no Vulkan driver found (no ICD manifest {where}); the headless viewer renders "
                     "with Vulkan: install one (Debian: apt-get install mesa-vulkan-drivers) or leave out "
-                    f"{flag}")
+                    f"{flag}", field=flag)
 
 
 def viewer_message(text: str | bytes) -> str:
@@ -147,11 +147,21 @@ def _free_port() -> int:
         return int(sock.getsockname()[1])
 
 
+def check_screenshot_args(wait_s: float, at_s: float | None, window: tuple[int, int]) -> None:
+    """The one check of :func:`screenshot`'s settings (a front end calls it before its long work):
+    a one-line :class:`TwinError` naming the argument otherwise."""
+    if not (isinstance(wait_s, (int, float)) and math.isfinite(wait_s) and wait_s >= 0):
+        raise TwinError(f"must be a finite number of seconds >= 0, got {wait_s!r}", field="wait_s")
+    if at_s is not None and not (isinstance(at_s, (int, float)) and math.isfinite(at_s)):
+        raise TwinError(f"must be a finite time [s], got {at_s!r}", field="at_s")
+    check_size_px(window, "window")
+
+
 def rerun_executable() -> Path:
     """The ``rerun`` viewer of this environment (from rerun-sdk), or a one-line TwinError."""
     exe = Path(sys.executable).with_name("rerun")
     if not exe.is_file():
-        raise TwinError(f"--screenshot: the rerun viewer ({exe}, from rerun-sdk) is not installed")
+        raise TwinError(f"the rerun viewer ({exe}, from rerun-sdk) is not installed", field="png")
     return exe
 
 
@@ -192,9 +202,9 @@ class HeadlessViewer:
                 code = None
         out = self.log.read_bytes() if self.log.is_file() else b""
         if code is None:
-            return TwinError(f"--screenshot: the headless viewer {what}")
-        return TwinError(f"--screenshot: the headless viewer exited (status {code}): "
-                         f"{viewer_message(out) if out.strip() else what}")
+            return TwinError(f"the headless viewer {what}", field="png")
+        return TwinError(f"the headless viewer exited (status {code}): "
+                         f"{viewer_message(out) if out.strip() else what}", field="png")
 
     def connect(self, timeout_s: float = START_TIMEOUT_S):
         """Wait until the viewer listens on its port (or exits: error), then connect a client."""
@@ -277,14 +287,9 @@ def screenshot(rrd: str | Path, png: str | Path, *, at_s: float | None = None, w
     rrd, png = Path(rrd).resolve(), Path(png).resolve()
     if not rrd.is_file():
         raise TwinError(f"{rrd}: no such recording")
-    if png.suffix != ".png" or not png.parent.is_dir():
-        raise TwinError(f"--screenshot: {png} must be a .png in an existing directory")
-    if not (isinstance(wait_s, (int, float)) and math.isfinite(wait_s) and wait_s >= 0):
-        raise TwinError(f"--wait: must be a finite number of seconds >= 0, got {wait_s!r}")
-    if at_s is not None and not (isinstance(at_s, (int, float)) and math.isfinite(at_s)):
-        raise TwinError(f"--at: must be a finite time [s], got {at_s!r}")
-    if not (len(window) == 2 and all(isinstance(v, int) and 64 <= v <= 8192 for v in window)):
-        raise TwinError(f"window: must be two whole numbers of pixels in 64..8192, got {window!r}")
+    if png.suffix.lower() != ".png" or not png.parent.is_dir():
+        raise TwinError(f"{png} must be a .png in an existing directory", field="png")
+    check_screenshot_args(wait_s, at_s, window)
     check_vulkan()
     exe = rerun_executable()
     t0 = time.monotonic()

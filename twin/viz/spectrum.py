@@ -35,15 +35,15 @@ def default_window(cfg: BenchConfig | None, t_start: float, t_end: float) -> tup
 
 
 def check_window(window: tuple[float, float], t_start: float, t_end: float, rate_hz: float,
-                 flag: str = "--fft-window") -> None:
+                 flag: str = "fft_window_s") -> None:
     """Raise a one-line :class:`TwinError` naming ``flag`` unless ``window`` lies in the run and holds
     enough samples."""
     t0, t1 = window
     eps = 0.5 / rate_hz
     if t0 < t_start - eps or t1 > t_end + eps:
-        raise TwinError(f"{flag}: {t0:g}..{t1:g} s lies outside the run ({t_start:g}..{t_end:g} s)")
+        raise TwinError(f"{t0:g}..{t1:g} s lies outside the run ({t_start:g}..{t_end:g} s)", field=flag)
     if (t1 - t0) * rate_hz < MIN_SAMPLES:
-        raise TwinError(f"{flag}: {t0:g}..{t1:g} s holds fewer than {MIN_SAMPLES} samples at {rate_hz:g} Hz")
+        raise TwinError(f"{t0:g}..{t1:g} s holds fewer than {MIN_SAMPLES} samples at {rate_hz:g} Hz", field=flag)
 
 
 def peak_bins(f: np.ndarray, amp: np.ndarray, max_bins: int) -> tuple[np.ndarray, np.ndarray]:

@@ -19,6 +19,9 @@ under the sockets' bodies, its orbits in 3-D):
   ``pose_rate_hz``; ``/bench/rod/orbit_J/journal``: magnified journal centre;
   ``/bench/rod/contact_J``: contact force on the pin, peak of each pose window (for a clearance
   at the ground pivot A both under ``/bench/frame``, whose frame A's eccentricity is given in);
+* ``/bench/rod/bent`` (a flexible-structure run with the channel group ``structure``): the rod's centre line
+  bent by its mid-span deflection ``rod_deflection`` (drawn as a half sine between the eyes) and stretched by
+  ``rod_stretch``, both magnified :data:`ROD_DEFLECTION_MAGNIFICATION` times, on the front face;
 * ``/orbit/J/clearance`` and ``/orbit/J/journal``: the journal-centre orbit in the rod frame
   (A: bench frame) in micrometres at ``orbit_rate_hz`` (red while in contact);
 * ``/fft/<ACi>/sim``, ``/fft/<ACi>/meas`` (recorded ``meas_ACi``) and ``/fft/<ACi>/sim_chain``
@@ -35,6 +38,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 from pathlib import Path
 from typing import Any
 
@@ -56,6 +60,13 @@ from twin.viz.style import CHAIN_COLOUR, MEAS_COLOUR, SIM_COLOUR, series_colour,
 APP_ID = "twin"
 TIMELINE = "time"
 
+#: magnification of the flexible rod's deflection and stretch in the 3-D view (a 10 µm deflection: 10 mm)
+ROD_DEFLECTION_MAGNIFICATION = 1000
+#: points of the drawn bent centre line
+ROD_LINE_POINTS = 25
+
+#: free space a .rrd needs before rerun's writer starts [bytes] (its blueprint and first chunks)
+MIN_FREE_BYTES = 1 << 20
 #: rows of signals sent between two flushes of the recording stream (bounds its queue)
 FLUSH_ROWS = 200_000
 _ANGLE_SOURCES = ("crank_angle", "encoder_angle", "encoder_counts")
@@ -101,7 +112,7 @@ class RerunWriter:
                  options: ViewOptions = ViewOptions(), t_start: float = 0.0, t_end: float | None = None,
                  source: str = ""):
         self.path = Path(path)
-        if self.path.suffix != ".rrd":
+        if self.path.suffix.lower() != ".rrd":
             raise TwinError(f"{self.path}: a rerun recording must end in .rrd")
         if not self.path.parent.is_dir():
             raise TwinError(f"{self.path}: directory {self.path.parent} does not exist")
@@ -152,6 +163,11 @@ class RerunWriter:
         blueprint = bp.default_blueprint(self.cfg, self._groups, self._channels, self._joints, self._has_pose,
                                          self._fft_window, fft_names, self.opts)
         remove_stale_temps(self.path)
+        # rerun's save() blocks for good when its very first write (the blueprint) fails; a disk without
+        # room for it is refused here (a disk that fills later makes the SDK raise, reported in close())
+        free = shutil.disk_usage(self._tmp.parent).free
+        if free < MIN_FREE_BYTES:
+            raise TwinError(f"{self.path}: cannot write (no space left on the device: {free} bytes free)")
         rec = rr.RecordingStream(APP_ID, recording_id=self.recording_id, send_properties=False)
         rec.set_log_time_enabled(False)
         rec.set_log_tick_enabled(False)
@@ -231,6 +247,7 @@ class RerunWriter:
         names = [next(a for a in _ANGLE_SOURCES if a in chunk)]
         if self._spatial:
             names += [n for n in ("crank_angle", "slider_position") if n in chunk and n not in names]
+        names += [n for n in ("rod_deflection", "rod_stretch") if n in chunk and not self._spatial]
         for j in self._joints:
             names += [f"ecc_{j}_x", f"ecc_{j}_y"] + [f"ecc_{j}_z"] * (self._spatial and f"ecc_{j}_z" in chunk) + [f"{p}_{j}" for p in ("pen", "fn", "ft") if f"{p}_{j}" in chunk]
         return names
@@ -290,6 +307,8 @@ class RerunWriter:
             translation=np.stack([p.c_pin[:, 0], p.c_pin[:, 1], z], axis=1), quaternion=half(np.zeros(K))))
         sc = self._scene
         assert sc is not None
+        if "rod_deflection" in self._buf:
+            self._emit_bent_rod(tcol, local, sc.front_z)
         for j in self._joints:
             cx, cy = sc.joint_centres[j]
             e = {"A": p.e_a, "B": p.e_b, "C": p.e_c}[j]
@@ -327,6 +346,20 @@ class RerunWriter:
                 origins=org, vectors=vec, labels=labels, colors=np.tile(np.array(scene.C_CONTACT, np.uint8),
                                                                         (int(on.sum()), 1)),
                 radii=np.full(int(on.sum()), 0.002, dtype=np.float32)).partition(lengths))
+
+    def _emit_bent_rod(self, tcol, local: np.ndarray, z: float) -> None:
+        """The flexible rod's centre line in the rod frame (module docstring: ``/bench/rod/bent``)."""
+        m, L = ROD_DEFLECTION_MAGNIFICATION, self.cfg.bodies.rod.length_m
+        xi = np.linspace(0.0, 1.0, ROD_LINE_POINTS)
+        w = self._buf["rod_deflection"][local].astype(float)
+        u = self._buf["rod_stretch"][local].astype(float) if "rod_stretch" in self._buf else np.zeros(len(local))
+        x = (L + m * u)[:, None] * xi[None, :]
+        y = m * w[:, None] * np.sin(np.pi * xi)[None, :]
+        pts = np.stack([x, y, np.full_like(x, z)], axis=2).reshape(-1, 3)
+        self.rec.send_columns("/bench/rod/bent", indexes=[tcol], columns=rr.LineStrips3D.columns(
+            strips=[p for p in pts.reshape(len(local), ROD_LINE_POINTS, 3)],
+            colors=np.tile(np.array(scene.C_CONTACT, np.uint8), (len(local), 1)),
+            radii=np.full(len(local), 0.0015, dtype=np.float32)).partition(np.ones(len(local), dtype=np.int32)))
 
     def _emit_orbit(self, g_a: int, g_b: int, g0: int) -> None:
         rec, so = self.rec, self._orbit_stride

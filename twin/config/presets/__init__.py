@@ -48,7 +48,7 @@ def preset(test_id: int) -> BenchConfig:
     motor speed, y vertical. The 38 s protocol with the same clearances is
     ``preset(i).replace(**{"drive.program": "protocol"})``."""
     if isinstance(test_id, bool) or not isinstance(test_id, int) or test_id not in TABLE4:
-        raise ConfigError("--test", f"must be a Table 4 test id 1..12, got {test_id!r}")
+        raise ConfigError("test", f"must be a Table 4 test id 1..12, got {test_id!r}")
     return _test(test_id)
 
 
@@ -85,7 +85,7 @@ PRESET_SUMMARIES: dict[str, str] = {
 }
 
 
-def named_preset(name: str, field_name: str = "--preset") -> BenchConfig:
+def named_preset(name: str, field_name: str = "preset") -> BenchConfig:
     """Configuration of a named preset (``--preset NAME``, ``preset = "NAME"`` in TOML), one of
     :data:`NAMED_PRESETS` (described in :data:`PRESET_SUMMARIES`): ``s000`` (S000's Flores
     slider–crank), ``s001`` (S001's rig), ``s002`` (S002's spatial slider–crank), ``s004`` (S004's

@@ -1,0 +1,82 @@
+"""Cost of the flexible structure: wall time per simulated second, flexible over rigid, for Table 4 test 12.
+
+For each engine (MuJoCo with each contact source, the reference), this script simulates test 12 (B+C, 750 motor
+rpm) for ``--duration`` simulated seconds with ``structure.mode = "rigid"`` and ``"flexible"`` (the default
+``[structure]`` fields), interleaved round by round so that machine load hits every variant alike, and keeps
+the best of ``--rounds`` of the chunk loop's own wall time (``meta["wall_s"]``: stepping, channels, mount filter;
+not the model's build). It prints a Markdown table (µs per step, real-time factor, ratio flexible / rigid per
+engine) and writes it, with the versions and the commit, to ``analysis/results/structure/bench_structure.md``.
+The issue's target: flexible at most 1.5× rigid in each engine.
+
+Run: ``python analysis/bench_structure.py [--duration S] [--rounds R]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import subprocess
+from pathlib import Path
+
+VARIANTS = {  # label: (engine, extra overrides)
+    "mujoco (contact law rows)": ("mujoco", {}),
+    "mujoco (contact as force)": ("mujoco", {"mujoco.contact_source": "force"}),
+    "reference": ("reference", {}),
+}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--duration", type=float, default=0.3, help="simulated time per run [s]")
+    ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--out", default=str(Path(__file__).resolve().parent / "results" / "structure" / "bench_structure.md"))
+    args = ap.parse_args()
+
+    import mujoco
+    import numba
+
+    from twin.config import preset
+    from twin.simulation import simulate
+
+    best: dict[tuple[str, str], float] = {}
+    steps: dict[tuple[str, str], int] = {}
+    for cfg_engine, over in VARIANTS.values():  # warm-up: numba's cache, MuJoCo's first rollouts
+        simulate(preset(12).replace(**{"simulation.engine": cfg_engine, "simulation.duration_s": 0.01,
+                                       "structure.mode": "flexible", **over}))
+    for r in range(args.rounds):
+        for label, (engine, over) in VARIANTS.items():
+            for mode in ("rigid", "flexible"):
+                cfg = preset(12).replace(**{"simulation.engine": engine, "simulation.duration_s": args.duration,
+                                            "structure.mode": mode, **over})
+                meta = simulate(cfg).meta
+                key = (label, mode)
+                best[key] = min(best.get(key, float("inf")), meta["wall_s"])
+                steps[key] = meta["steps"]
+        print(f"  round {r + 1}/{args.rounds} done", flush=True)
+    commit = subprocess.run(["git", "describe", "--always", "--dirty"], capture_output=True, text=True,
+                            cwd=Path(__file__).resolve().parent).stdout.strip()
+    import twin
+
+    lines = [f"twin {twin.__version__}, MuJoCo {mujoco.__version__}, numba {numba.__version__}, commit {commit or '?'}; "
+             f"Table 4 test 12 (B+C 0.1 mm, 750 motor rpm) from rest, {args.duration:g} s simulated, h = 1e-5 s, "
+             f"best of {args.rounds} interleaved rounds; wall time of the chunk loop (stepping, channels, mount filter).",
+             "",
+             "| engine | rigid µs/step | flexible µs/step | rigid RTF | flexible RTF | flexible / rigid |",
+             "|---|---:|---:|---:|---:|---:|"]
+    for label in VARIANTS:
+        r, f = best[(label, "rigid")], best[(label, "flexible")]
+        us_r, us_f = r / steps[(label, "rigid")] * 1e6, f / steps[(label, "flexible")] * 1e6
+        lines.append(f"| {label} | {us_r:.2f} | {us_f:.2f} | {args.duration / r:.2f} | {args.duration / f:.2f} | "
+                     f"{f / r:.2f} |")
+    lines += ["", "Target: flexible / rigid <= 1.5 in each engine."]
+    text = "\n".join(lines) + "\n"
+    print(text)
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = out.with_suffix(".tmp")
+    tmp.write_text(text)
+    tmp.replace(out)
+    print(f"wrote {out}")
+
+
+if __name__ == "__main__":
+    main()

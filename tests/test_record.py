@@ -1,0 +1,79 @@
+"""``twin record`` / ``twin.record``: a simulated run through the sensor chain, written as a bench recording."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import twin
+from twin.cli import main
+from twin.errors import ConfigError, TwinError
+from twin.recording import read_recording, synthetic_recording
+from twin.simulation import simulate_run
+
+
+def _cfg(duration=0.05):
+    return twin.preset(6).replace(**{"simulation.duration_s": duration})
+
+
+def test_the_recording_is_the_sensor_chain_on_the_whole_run(tmp_path):
+    """Streamed chunk by chunk through the chain as the engine produces them, the recording equals the chain
+    applied to the whole run at once (the path the sample recordings took), sample for sample."""
+    cfg = _cfg()
+    res = twin.record(cfg, tmp_path / "r.mcap", notes="unit test")
+    daq, info, _ = read_recording(res.path)
+    ref, ref_info = synthetic_recording(simulate_run(twin.bench_record.recording_config(cfg)), cfg)
+    assert set(daq.channels) == set(ref.channels) and res.channels == tuple(ref.channels)
+    for name in ref.channels:
+        np.testing.assert_array_equal(daq[name], ref[name], err_msg=name)
+    assert info.synthetic and info.created_by == "twin record" and info.notes == "unit test"
+    assert info.calibration is not None and info.calibration.to_dict() == ref_info.calibration.to_dict()
+    assert res.duration_s == pytest.approx(0.05) and res.rate_hz == cfg.instrumentation.daq_rate_hz
+    assert res.bytes == res.path.stat().st_size and res.engine == "mujoco"
+
+
+def test_channels_the_chain_needs_are_added(tmp_path):
+    cfg = _cfg().replace(**{"sensors.channels": ["crank"]})
+    res = twin.record(cfg, tmp_path / "r.mcap")
+    assert {f"volt_AC{i}" for i in range(1, 7)} | {"encoder_counts"} <= set(res.channels)
+
+
+@pytest.mark.parametrize("kwargs, error, match", [
+    ({"static_s": 0.0}, ConfigError, r"static_s: must lie in \[0.1, 60\] s"),
+    ({"static_s": float("nan")}, ConfigError, "static_s"),
+    ({"notes": 3}, TypeError, "notes: must be a str"),
+])
+def test_bad_arguments_are_refused_naming_them(tmp_path, kwargs, error, match):
+    with pytest.raises(error, match=match):
+        twin.record(_cfg(), tmp_path / "r.mcap", **kwargs)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_bad_output_or_configuration_is_refused_before_simulating(tmp_path):
+    with pytest.raises(TwinError, match=r"out: must end in \.mcap"):
+        twin.record(_cfg(), tmp_path / "r.csv")
+    with pytest.raises(TypeError, match="cfg: must be a BenchConfig"):
+        twin.record(6, tmp_path / "r.mcap")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_command_writes_the_recording_and_its_json(tmp_path, capsys):
+    rec, js = tmp_path / "rec.mcap", tmp_path / "rec.json"
+    assert main(["record", "--test", "12", "--duration", "0.03", "--no-progress", "--out", str(rec),
+                 "--json", str(js), "--notes", "bench 2 run 4"]) == 0
+    assert "wrote" in capsys.readouterr().out
+    d = json.loads(js.read_text())
+    assert d["path"] == str(rec) and d["duration_s"] == pytest.approx(0.03)
+    _, info, _ = read_recording(rec)
+    assert info.notes == "bench 2 run 4"
+
+
+def test_the_command_refuses_bad_values_in_one_line(tmp_path, capsys):
+    assert main(["record", "--duration", "0.03", "--static", "0", "--out", str(tmp_path / "r.mcap")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("twin: error: --static: must lie in [0.1, 60] s")
+    assert main(["record", "--duration", "0.03", "--out", str(tmp_path / "r.mcap"), "--json",
+                 str(tmp_path / "r.mcap")]) == 2
+    assert list(tmp_path.iterdir()) == []

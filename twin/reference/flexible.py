@@ -1,0 +1,956 @@
+r"""The reference engine's flexible structure (``structure.mode = "flexible"``): the connecting rod as the chain of
+:mod:`twin.structure.rod` in natural coordinates, the crank's and the slider's supports as lumped oscillators and
+structural damping, on the R-matrix formulation of :mod:`twin.natural_coordinates` (which it extends, unchanged).
+
+Coordinates: the twelve of the rigid model, then two per chain point::
+
+    q = [q_0 … q_11 | P_1 … P_{N+M}]      (n = 12 + 2 (N + M))
+
+B' (q_2, q_3) is the housing at B (``end_B``, a point mass m_B) and C (q_4, q_5) the housing at C (``end_C``, m_C):
+the rod's bores, where the joints B and C act as in the rigid model. Between them the N rigid segments: segment j
+is a natural-coordinate bar between two chain points a_j, b_j with |b_j − a_j| = l (mass matrix m_s/6 [[2I, I],
+[I, 2I]], constant: a rigid uniform bar). Nodes 1 … N−1 are shared points (the hinges); where the chain has a
+slide the node has two points, P⁻ (end of the parent) and P⁺ (start of the child), with P⁺ − P⁻ along the
+child's axis; at node 0 P⁻ is B', at node N P⁺ is C.
+
+Rows: the rigid model's twelve, with row 2 (the rod's length) turned from a constraint into an independent
+coordinate (|C − B'|² − L², the rod's total stretch), then the chain's: N segment lengths |b − a|² − l²,
+M + 1 slide rows (P⁺ − P⁻) × (b − a)_child = 0, and N + M − 1 independent rows: the y of each interior node (its
+parent-side point) and x(P⁺) − x(P⁻) of the slide at B and of each interior slide. The chain's rows do not enter
+the rigid twelve, so A is block lower-triangular: the rigid block is solved in closed form
+(:func:`twin.natural_coordinates.solve_aug`, row 2 taking its value from the right-hand side), the chain block
+(2 (N + M) square) by an LU factorization. The rod stays within ±12° of the guide, where the y rows and the
+length rows are independent.
+
+Elastic joints as forces: a hinge's moment −k Δ − c Δ̇ (Δ the angle from the parent's axis to the child's) on
+the two bars (a moment M on a bar a→b: forces ±M R₉₀u/|u|² on b and a); a slide's force −k δ − c δ̇ along the
+child's axis on P⁺ and the opposite on P⁻ (δ = (P⁺ − P⁻)·û). Supports: the frame's bore, with A ideal, moves with
+the crank journal A' (rows 8–9 become independent: A' is the frame's displacement, with the frame's mass and an
+isotropic spring and damper to ground); the guide rails with the slider move normal to the guide (row 10, y_g,
+independent, with the guide's mass, spring and damper; the slider's weight is carried by the spring). The
+accelerometers on the rod read their segment (rigid): p̈ = ä + ξ ü + η R₉₀ ü along the segment's axes; the
+mount filter (:class:`twin.structure.MountFilter`) is applied to the sampled channels.
+
+Clearance joints: the contact force on the rod acts on the eye's centre (B' or C), its friction moment −R_b f_T on
+the end segment (the rigid model spreads a force on the rod over B' and C, which on a flexible rod would add a
+spurious axial pair R_b f_N / L). Where it differs from the rigid model's conventions: the friction's sliding speed
+uses the chord's angular velocity (C − B') for the eye's spin, not the end segment's (a difference of the rod's
+deformation rate); the contact stiffnesses are resolved with the rigid rod's effective mass.
+Scope: every drive (crank PID, prescribed crank, motor and torque through the drive train), symplectic Euler,
+clearances at B and C (A and the guide ideal).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from twin.jit import njit
+from twin.natural_coordinates import (N_Q, N_Z, P_CLR_B, P_CLR_C, P_DOFF, P_FGUIDE, P_GX, P_GY, P_H, P_IMAX,
+                                      P_KI, P_KP, P_KV, P_L, P_M1, P_M2, P_M3, P_NEWTON_MAXIT, P_NEWTON_TOL,
+                                      P_OUT_ENERGY, P_R, P_RBUSH_B, P_RBUSH_C, P_SENS, P_V0, P_V1, P_XG1, P_XG2, S_I, S_IN_A, S_IN_B,
+                                      S_IN_C, S_Q, S_QD, S_VIMP_A, S_VIMP_B, S_VIMP_C, energy, independent_rows,
+                                      kinetic_energy, mass_times, quadratic_terms, residual, solve_aug)
+from twin.reference.model import (N_OUT, NEWTON_FAILED, NOT_FINITE, O_ACC, O_EKIN, O_EPOT, OK, _cholesky_solve,
+                                  _outputs, _rod_force, generalized_forces)
+from twin.reference import drivetrain as DT
+from twin.reference.guide import N_GUIDE_OUT
+
+# ----------------------------------------------------------------- the supports' parameters ``G`` (build())
+G_KF, G_CF, G_MF, G_KG, G_CG, G_MG, G_FLEX_A, G_FLEX_G = 0, 1, 2, 3, 4, 5, 6, 7
+N_G = 8
+
+
+@dataclasses.dataclass
+class FlexLayout:
+    """Index tables of the flexible rod (built from :func:`twin.structure.rod_chain`)."""
+
+    n: int                      #: number of coordinates
+    n_pts: int                  #: chain points
+    segs: np.ndarray            #: (N, 2) coordinate index (x) of each segment's points a, b
+    seg_f: np.ndarray           #: (N, 2) mass, length
+    hinges: np.ndarray          #: (N−1, 2) parent and child segment
+    hinge_f: np.ndarray         #: (N−1, 2) stiffness, damping
+    slides: np.ndarray          #: (M+1, 3) P⁻ index, P⁺ index, child segment
+    slide_f: np.ndarray         #: (M+1, 2) stiffness, damping
+    indep: np.ndarray           #: (N+M−1, 3) kind (0: y of point i; 1: x(i) − x(j)), i, j
+    sensors: np.ndarray         #: (6, 4) segment (−1: not on the rod), ξ [m from a], η [m], axis code
+    G: np.ndarray               #: supports (layout G_*)
+    x0: np.ndarray              #: (n_pts,) abscissa of each chain point along the straight rod [m]
+
+
+def build(cfg, chain) -> FlexLayout:
+    """The index tables of ``chain`` (:class:`twin.structure.RodChain`) for configuration ``cfg``."""
+    N = len(chain.bodies) - 2
+    L = chain.length_m
+    l = L / N
+    slide_nodes = sorted({round(j.x_m / l) for j in chain.joints if j.kind == "slide"})
+    # points: for each node, P⁻ then (if a slide sits there) P⁺; node 0's P⁻ is B' (index 2), node N's P⁺ is C (4)
+    minus, plus, x0 = {}, {}, []
+    idx = N_Q
+    for node in range(N + 1):
+        if node == 0:
+            minus[0] = 2
+        else:
+            minus[node] = idx
+            x0.append(node * l)
+            idx += 2
+        if node in slide_nodes:
+            if node == N:
+                plus[N] = 4
+            else:
+                plus[node] = idx
+                x0.append(node * l)
+                idx += 2
+        else:
+            plus[node] = minus[node]
+    n = idx
+    segs = np.array([[plus[j], minus[j + 1]] for j in range(N)], dtype=np.int64)
+    seg_bodies = chain.bodies[1:-1]
+    seg_f = np.array([[b.mass_kg, l] for b in seg_bodies])
+    hinges, hinge_f, slides, slide_f = [], [], [], []
+    for jt in chain.joints:
+        node = round(jt.x_m / l)
+        if jt.kind == "hinge":
+            hinges.append([node - 1, node])
+            hinge_f.append([jt.stiffness, jt.damping])
+        else:
+            slides.append([minus[node], plus[node], min(node, N - 1)])
+            slide_f.append([jt.stiffness, jt.damping])
+    indep = [[0, minus[j], 0] for j in range(1, N)]
+    indep += [[1, plus[j], minus[j]] for j in slide_nodes if j < N]
+    assert len(indep) == (n - N_Q) - (N + len(slide_nodes)), "the chain's rows must be square"
+    sens = np.full((6, 4), -1.0)
+    from twin.config import ACCELEROMETERS
+
+    axes = {"+x": 0, "-x": 1, "+y": 2, "-y": 3}
+    for i, name in enumerate(ACCELEROMETERS):
+        mnt = cfg.sensors.accelerometers[name]
+        if mnt.body != "rod":
+            continue
+        sx, sy = mnt.position_m
+        seg = min(N - 1, max(0, int(sx / l)))
+        sens[i] = [seg, sx - seg * l, sy, axes[mnt.axis]]
+    st = cfg.structure
+    G = np.zeros(N_G)
+    G[G_FLEX_A] = G[G_FLEX_G] = 1.0
+    G[G_MF] = st.frame_mass_kg
+    G[G_KF] = st.support_stiffness(st.frame_mass_kg, st.frame_frequency_hz)
+    G[G_CF] = st.support_damping(st.frame_mass_kg, st.frame_frequency_hz, st.frame_damping_ratio)
+    G[G_MG] = st.guide_mass_kg
+    G[G_KG] = st.support_stiffness(st.guide_mass_kg, st.guide_frequency_hz)
+    G[G_CG] = st.support_damping(st.guide_mass_kg, st.guide_frequency_hz, st.guide_damping_ratio)
+    return FlexLayout(n, (n - N_Q) // 2, segs, seg_f, np.array(hinges, dtype=np.int64), np.array(hinge_f),
+                      np.array(slides, dtype=np.int64), np.array(slide_f), np.array(indep, dtype=np.int64), sens, G,
+                      np.array(x0))
+
+
+# --------------------------------------------------------------------------------------------- kernels
+@njit(cache=True)
+def _cross(ax, ay, bx, by):
+    return ax * by - ay * bx
+
+
+@njit(cache=True)
+def chain_jacobian(q, segs, slides, indep, A):
+    """Rows of the chain (n − 12 of them) over all n coordinates into ``A`` (zeroed here)."""
+    A[:, :] = 0.0
+    r = 0
+    for j in range(segs.shape[0]):
+        a, b = segs[j, 0], segs[j, 1]
+        ux, uy = q[b] - q[a], q[b + 1] - q[a + 1]
+        A[r, a] -= 2.0 * ux
+        A[r, a + 1] -= 2.0 * uy
+        A[r, b] += 2.0 * ux
+        A[r, b + 1] += 2.0 * uy
+        r += 1
+    for k in range(slides.shape[0]):
+        p, c, s = slides[k, 0], slides[k, 1], slides[k, 2]
+        a, b = segs[s, 0], segs[s, 1]
+        dx, dy = q[c] - q[p], q[c + 1] - q[p + 1]
+        wx, wy = q[b] - q[a], q[b + 1] - q[a + 1]
+        # f = d × w: ∂/∂c = (w_y, −w_x), ∂/∂p = −that, ∂/∂b = (−d_y, d_x), ∂/∂a = −that
+        A[r, c] += wy
+        A[r, c + 1] -= wx
+        A[r, p] -= wy
+        A[r, p + 1] += wx
+        A[r, b] -= dy
+        A[r, b + 1] += dx
+        A[r, a] += dy
+        A[r, a + 1] -= dx
+        r += 1
+    for k in range(indep.shape[0]):
+        if indep[k, 0] == 0:
+            A[r, indep[k, 1] + 1] = 1.0
+        else:
+            A[r, indep[k, 1]] = 1.0
+            A[r, indep[k, 2]] = -1.0
+        r += 1
+
+
+@njit(cache=True)
+def chain_residual(q, segs, seg_f, slides, out):
+    """Constraint residuals of the chain's rows (independent rows 0)."""
+    out[:] = 0.0
+    r = 0
+    for j in range(segs.shape[0]):
+        a, b = segs[j, 0], segs[j, 1]
+        ux, uy = q[b] - q[a], q[b + 1] - q[a + 1]
+        out[r] = ux * ux + uy * uy - seg_f[j, 1] * seg_f[j, 1]
+        r += 1
+    for k in range(slides.shape[0]):
+        p, c, s = slides[k, 0], slides[k, 1], slides[k, 2]
+        a, b = segs[s, 0], segs[s, 1]
+        out[r] = _cross(q[c] - q[p], q[c + 1] - q[p + 1], q[b] - q[a], q[b + 1] - q[a + 1])
+        r += 1
+
+
+@njit(cache=True)
+def chain_quadratic(qd, segs, slides, out):
+    """−Φ̇_q q̇ of the chain's rows (zero for the independent rows)."""
+    out[:] = 0.0
+    r = 0
+    for j in range(segs.shape[0]):
+        a, b = segs[j, 0], segs[j, 1]
+        vx, vy = qd[b] - qd[a], qd[b + 1] - qd[a + 1]
+        out[r] = -2.0 * (vx * vx + vy * vy)
+        r += 1
+    for k in range(slides.shape[0]):
+        p, c, s = slides[k, 0], slides[k, 1], slides[k, 2]
+        a, b = segs[s, 0], segs[s, 1]
+        out[r] = -2.0 * _cross(qd[c] - qd[p], qd[c + 1] - qd[p + 1], qd[b] - qd[a], qd[b + 1] - qd[a + 1])
+        r += 1
+
+
+@njit(cache=True)
+def lu_factor(A, piv, n):
+    """In-place LU with partial pivoting of the n × n matrix A; returns False if singular."""
+    for k in range(n):
+        p = k
+        big = abs(A[k, k])
+        for i in range(k + 1, n):
+            if abs(A[i, k]) > big:
+                big = abs(A[i, k])
+                p = i
+        if big == 0.0:
+            return False
+        piv[k] = p
+        if p != k:
+            for j in range(n):
+                t = A[k, j]
+                A[k, j] = A[p, j]
+                A[p, j] = t
+        inv = 1.0 / A[k, k]
+        for i in range(k + 1, n):
+            A[i, k] *= inv
+            f = A[i, k]
+            if f != 0.0:
+                for j in range(k + 1, n):
+                    A[i, j] -= f * A[k, j]
+    return True
+
+
+@njit(cache=True)
+def lu_solve(LU, piv, n, b):
+    """Solve with the factors of :func:`lu_factor` (b overwritten by x)."""
+    for k in range(n):
+        p = piv[k]
+        if p != k:
+            t = b[k]
+            b[k] = b[p]
+            b[p] = t
+    for i in range(n):
+        acc = b[i]
+        for j in range(i):
+            acc -= LU[i, j] * b[j]
+        b[i] = acc
+    for i in range(n - 1, -1, -1):
+        acc = b[i]
+        for j in range(i + 1, n):
+            acc -= LU[i, j] * b[j]
+        b[i] = acc / LU[i, i]
+
+
+@njit(cache=True)
+def flex_solve(q, s, c, A, LU, piv, b, out, tmp):
+    """Solve the whole augmented system for v: the rigid twelve in closed form, then the chain block (A holds
+    the chain's rows over all coordinates, LU/piv the factors of its chain columns)."""
+    nc = A.shape[0]
+    rigid = False
+    for k in range(N_Q):
+        if b[k] != 0.0:
+            rigid = True
+            break
+    if rigid:
+        solve_aug(q, s, c, b, out)
+        for r in range(nc):   # the chain's rows reach the rigid coordinates through B' and C only (q_2 … q_5)
+            tmp[r] = b[N_Q + r] - A[r, 2] * out[2] - A[r, 3] * out[3] - A[r, 4] * out[4] - A[r, 5] * out[5]
+    else:   # a chain-only right-hand side (the chain's independent columns of R): the rigid block's answer is 0
+        for k in range(N_Q):
+            out[k] = 0.0
+        for r in range(nc):
+            tmp[r] = b[N_Q + r]
+    lu_solve(LU, piv, nc, tmp)
+    for r in range(nc):
+        out[N_Q + r] = tmp[r]
+
+
+@njit(cache=True)
+def factor(q, segs, slides, indep, A, LU, piv):
+    """Chain rows at q into A and the LU of their chain columns into LU; False if singular."""
+    chain_jacobian(q, segs, slides, indep, A)
+    nc = A.shape[0]
+    for i in range(nc):
+        for j in range(nc):
+            LU[i, j] = A[i, N_Q + j]
+    return lu_factor(LU, piv, nc)
+
+
+@njit(cache=True)
+def flex_mass_times(P, segs, seg_f, G, v, out):
+    """out = M v: the rigid model's blocks (the rod as its two end masses), the segments' bars, the supports."""
+    mass_times(P, v[:N_Q], out[:N_Q])
+    for i in range(N_Q, v.shape[0]):
+        out[i] = 0.0
+    if G[G_FLEX_A] > 0.5:
+        out[8] += G[G_MF] * v[8]
+        out[9] += G[G_MF] * v[9]
+    if G[G_FLEX_G] > 0.5:
+        out[10] += G[G_MG] * v[10]
+    for j in range(segs.shape[0]):
+        a, b = segs[j, 0], segs[j, 1]
+        m3, m6 = seg_f[j, 0] / 3.0, seg_f[j, 0] / 6.0
+        for d in range(2):
+            out[a + d] += m3 * v[a + d] + m6 * v[b + d]
+            out[b + d] += m6 * v[a + d] + m3 * v[b + d]
+
+
+@njit(cache=True)
+def _seg_angle_rate(q, qd, a, b):
+    ux, uy = q[b] - q[a], q[b + 1] - q[a + 1]
+    vx, vy = qd[b] - qd[a], qd[b + 1] - qd[a + 1]
+    return ux, uy, _cross(ux, uy, vx, vy) / (ux * ux + uy * uy)
+
+
+@njit(cache=True)
+def _moment(q, a, b, m, Q):
+    """A moment m about z on the bar a→b as the force pair ±m R₉₀u/|u|² on b and a."""
+    ux, uy = q[b] - q[a], q[b + 1] - q[a + 1]
+    f = m / (ux * ux + uy * uy)
+    Q[b] += -uy * f
+    Q[b + 1] += ux * f
+    Q[a] -= -uy * f
+    Q[a + 1] -= ux * f
+
+
+@njit(cache=True)
+def _eye_contact(P, qs, q, jo, eye, rb, a, b, Q):
+    """Move a clearance joint's contact force on the rod from the rigid rod's distribution over B' and C
+    (:func:`twin.reference.model._rod_force`, which the joint's element applied) to the eye it acts on: the force at
+    the eye's centre (index ``eye``: 2 for B', 4 for C) and its moment about it, −R_b f_T, on the end segment a→b
+    (the housing turns with it)."""
+    ex, ey = jo[0], jo[1]
+    d = math.sqrt(ex * ex + ey * ey)
+    if d > 0.0:
+        nx, ny = ex / d, ey / d
+    else:
+        nx, ny = 1.0, 0.0
+    fx = -jo[3] * nx - jo[4] * ny      # on the pin: −f_N n + f_T t, t = (−n_y, n_x)
+    fy = -jo[3] * ny + jo[4] * nx
+    _rod_force(P, qs, fx, fy, qs[eye] + rb * nx, qs[eye + 1] + rb * ny, Q)   # undoes the element's −F
+    Q[eye] -= fx
+    Q[eye + 1] -= fy
+    _moment(q, a, b, -rb * jo[4], Q)
+
+
+@njit(cache=True)
+def chain_forces(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G, Q):
+    """Add the chain's gravity, hinges and slides and the supports' springs and dampers to Q; returns the power
+    the dampers dissipate [W] (≥ 0)."""
+    gx, gy = P[P_GX], P[P_GY]
+    for j in range(segs.shape[0]):
+        a, b = segs[j, 0], segs[j, 1]
+        w = 0.5 * seg_f[j, 0]
+        Q[a] += w * gx
+        Q[a + 1] += w * gy
+        Q[b] += w * gx
+        Q[b + 1] += w * gy
+    diss = 0.0
+    for k in range(hinges.shape[0]):
+        i0, i1 = hinges[k, 0], hinges[k, 1]
+        a0, b0, a1, b1 = segs[i0, 0], segs[i0, 1], segs[i1, 0], segs[i1, 1]
+        u0x, u0y, w0 = _seg_angle_rate(q, qd, a0, b0)
+        u1x, u1y, w1 = _seg_angle_rate(q, qd, a1, b1)
+        delta = math.atan2(_cross(u0x, u0y, u1x, u1y), u0x * u1x + u0y * u1y)
+        rate = w1 - w0
+        m = -hinge_f[k, 0] * delta - hinge_f[k, 1] * rate
+        diss += hinge_f[k, 1] * rate * rate
+        _moment(q, a1, b1, m, Q)
+        _moment(q, a0, b0, -m, Q)
+    for k in range(slides.shape[0]):
+        p, c, s = slides[k, 0], slides[k, 1], slides[k, 2]
+        a, b = segs[s, 0], segs[s, 1]
+        wx, wy = q[b] - q[a], q[b + 1] - q[a + 1]
+        wn = math.sqrt(wx * wx + wy * wy)
+        ex, ey = wx / wn, wy / wn
+        d = (q[c] - q[p]) * ex + (q[c + 1] - q[p + 1]) * ey
+        dd = (qd[c] - qd[p]) * ex + (qd[c + 1] - qd[p + 1]) * ey
+        f = -slide_f[k, 0] * d - slide_f[k, 1] * dd
+        diss += slide_f[k, 1] * dd * dd
+        Q[c] += f * ex
+        Q[c + 1] += f * ey
+        Q[p] -= f * ex
+        Q[p + 1] -= f * ey
+    if G[G_FLEX_A] > 0.5:
+        for i in (8, 9):
+            Q[i] += -G[G_KF] * q[i] - G[G_CF] * qd[i]
+            diss += G[G_CF] * qd[i] * qd[i]
+    if G[G_FLEX_G] > 0.5:
+        Q[10] += -G[G_KG] * q[10] - G[G_CG] * qd[10] + (P[P_M3] + G[G_MG]) * gy
+        diss += G[G_CG] * qd[10] * qd[10]
+    return diss
+
+
+@njit(cache=True)
+def flex_energy(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G):
+    """(T, V) [J]: kinetic energy (all masses) and potential (gravity as the rigid model's, the segments, the
+    supports' springs with the guide's weight, the hinges and slides)."""
+    n = q.shape[0]
+    mv = np.empty(n)
+    flex_mass_times(P, segs, seg_f, G, qd, mv)
+    T = 0.0
+    for i in range(n):
+        T += 0.5 * qd[i] * mv[i]
+    V = energy(P, q[:N_Q], qd[:N_Q]) - kinetic_energy(P, q[:N_Q], qd[:N_Q])
+    gx, gy = P[P_GX], P[P_GY]
+    for j in range(segs.shape[0]):
+        a, b = segs[j, 0], segs[j, 1]
+        w = 0.5 * seg_f[j, 0]
+        V -= w * (gx * (q[a] + q[b]) + gy * (q[a + 1] + q[b + 1]))
+    for k in range(hinges.shape[0]):
+        i0, i1 = hinges[k, 0], hinges[k, 1]
+        a0, b0, a1, b1 = segs[i0, 0], segs[i0, 1], segs[i1, 0], segs[i1, 1]
+        u0x, u0y = q[b0] - q[a0], q[b0 + 1] - q[a0 + 1]
+        u1x, u1y = q[b1] - q[a1], q[b1 + 1] - q[a1 + 1]
+        delta = math.atan2(_cross(u0x, u0y, u1x, u1y), u0x * u1x + u0y * u1y)
+        V += 0.5 * hinge_f[k, 0] * delta * delta
+    for k in range(slides.shape[0]):
+        p, c, s = slides[k, 0], slides[k, 1], slides[k, 2]
+        a, b = segs[s, 0], segs[s, 1]
+        wx, wy = q[b] - q[a], q[b + 1] - q[a + 1]
+        wn = math.sqrt(wx * wx + wy * wy)
+        d = ((q[c] - q[p]) * wx + (q[c + 1] - q[p + 1]) * wy) / wn
+        V += 0.5 * slide_f[k, 0] * d * d
+    if G[G_FLEX_A] > 0.5:
+        V += 0.5 * G[G_KF] * (q[8] * q[8] + q[9] * q[9])
+    if G[G_FLEX_G] > 0.5:
+        V += 0.5 * G[G_KG] * q[10] * q[10] - (P[P_M3] + G[G_MG]) * gy * q[10]
+    return T, V
+
+
+@njit(cache=True)
+def flex_rows(P, G, indep, rows):
+    """Independent rows of the whole set: the rigid model's (θ and the clearance eccentricities), the rod's
+    stretch (row 2), the supports (rows 8–9, 10) and the chain's independent rows; returns their number."""
+    nz = independent_rows(P, rows)
+    rows[nz] = 2
+    nz += 1
+    if G[G_FLEX_A] > 0.5:
+        rows[nz] = 8
+        rows[nz + 1] = 9
+        nz += 2
+    if G[G_FLEX_G] > 0.5:
+        rows[nz] = 10
+        nz += 1
+    return nz
+
+
+@njit(cache=True)
+def _independent_values(P, G, q, qd, segs, slides, indep, b):
+    """Right-hand side of the velocity projection: the independent coordinates' rates from q̇."""
+    n = q.shape[0]
+    for i in range(n):
+        b[i] = 0.0
+    b[7] = qd[7]
+    if P[P_CLR_B] > 0.5:
+        b[3] = qd[0] - qd[2]
+        b[4] = qd[1] - qd[3]
+    if P[P_CLR_C] > 0.5:
+        b[5] = qd[6] - qd[4]
+        b[6] = qd[10] - qd[5]
+    b[2] = 2.0 * ((q[4] - q[2]) * (qd[4] - qd[2]) + (q[5] - q[3]) * (qd[5] - qd[3]))
+    if G[G_FLEX_A] > 0.5:
+        b[8] = qd[8]
+        b[9] = qd[9]
+    if G[G_FLEX_G] > 0.5:
+        b[10] = qd[10]
+    r0 = N_Q + segs.shape[0] + slides.shape[0]
+    for k in range(indep.shape[0]):
+        if indep[k, 0] == 0:
+            b[r0 + k] = qd[indep[k, 1] + 1]
+        else:
+            b[r0 + k] = qd[indep[k, 1]] - qd[indep[k, 2]]
+
+
+@njit(cache=True)
+def flex_project(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, res, dq, b, tmp):
+    """Newton on the constraints with the independent coordinates held, then q̇ ← R ż (as the rigid
+    :func:`twin.natural_coordinates.project`). On return A and LU hold the chain's rows at the final q (the
+    next step's acceleration solve reuses them). Returns the iterations, −1 if no convergence."""
+    n = q.shape[0]
+    nc = A.shape[0]
+    tol = P[P_NEWTON_TOL]
+    maxit = int(P[P_NEWTON_MAXIT])
+    it = 0
+    conv = False
+    # modified Newton: the chain block factored once at the predicted q (a step moves it by h q̇, so the
+    # iteration contracts by ~|ΔA|/|A| per pass); the velocity projection below refactors at the final q
+    if not factor(q, segs, slides, indep, A, LU, piv):
+        return -1
+    while it < maxit:
+        s, c = math.sin(q[7]), math.cos(q[7])
+        residual(P, q[:N_Q], s, c, res[:N_Q])
+        res[2] = 0.0
+        if G[G_FLEX_A] > 0.5:
+            res[8] = 0.0
+            res[9] = 0.0
+        if G[G_FLEX_G] > 0.5:
+            res[10] = 0.0
+            if P[P_CLR_C] < 0.5:   # the ideal joint C on the moving guide: C' at d_off + y_g
+                res[6] = P[P_DOFF] + q[10] - q[5]
+        chain_residual(q, segs, seg_f, slides, res[N_Q:])
+        for i in range(n):
+            res[i] = -res[i]
+        flex_solve(q, s, c, A, LU, piv, res, dq, tmp)
+        big = 0.0
+        for i in range(n):
+            q[i] += dq[i]
+            if abs(dq[i]) > big:
+                big = abs(dq[i])
+        it += 1
+        if big <= tol:
+            conv = True
+            break
+    if not conv:
+        return -1
+    s, c = math.sin(q[7]), math.cos(q[7])
+    if not factor(q, segs, slides, indep, A, LU, piv):
+        return -1
+    _independent_values(P, G, q, qd, segs, slides, indep, b)
+    flex_solve(q, s, c, A, LU, piv, b, dq, tmp)
+    for i in range(n):
+        qd[i] = dq[i]
+    return it
+
+
+@njit(cache=True)
+def flex_accelerations(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, Q, rows, nz, Rt, S, Mb, rhs, MR,
+                       b, tmp, qdd, prescribed, alpha, tau):
+    """q̈ = R z̈ + Ṙż from Rᵀ M R z̈ = Rᵀ (Q − M Ṙż), A already factored at q. False if not SPD. With
+    ``prescribed`` the crank angle is a driving constraint (θ̈ = ``alpha``, the first independent coordinate):
+    the other rows are solved with it known and the drive torque (its multiplier) written to ``tau[0]``, as
+    :func:`twin.reference.model.accelerations_prescribed`."""
+    n = q.shape[0]
+    s, c = math.sin(q[7]), math.cos(q[7])
+    for j in range(nz):
+        for i in range(n):
+            b[i] = 0.0
+        b[rows[j]] = 1.0
+        flex_solve(q, s, c, A, LU, piv, b, Rt[j], tmp)
+        flex_mass_times(P, segs, seg_f, G, Rt[j], MR[j])
+    quadratic_terms(q[:N_Q], qd[:N_Q], s, c, b[:N_Q])
+    # (row 2, the stretch s = |C − B'|² − L², is an independent coordinate defined by a nonlinear expression: its
+    # row keeps −Φ̇_q q̇ = −2|Ċ − Ḃ'|², as quadratic_terms writes it)
+    chain_quadratic(qd, segs, slides, b[N_Q:])
+    flex_solve(q, s, c, A, LU, piv, b, S, tmp)
+    flex_mass_times(P, segs, seg_f, G, S, tmp[:n])
+    for i in range(n):
+        b[i] = Q[i] - tmp[i]
+    for j in range(nz):
+        acc = 0.0
+        for k in range(n):
+            acc += Rt[j, k] * b[k]
+        rhs[j] = acc
+    for j in range(nz):
+        for i in range(j, nz):
+            acc = 0.0
+            for k in range(n):
+                acc += Rt[i, k] * MR[j, k]
+            Mb[i, j] = acc
+            Mb[j, i] = acc
+    if prescribed:
+        m = nz - 1
+        W = np.empty((m, m))
+        rw = np.empty(m)
+        for i in range(m):
+            rw[i] = rhs[i + 1] - Mb[i + 1, 0] * alpha
+            for j in range(m):
+                W[i, j] = Mb[i + 1, j + 1]
+        if not _cholesky_solve(W, rw, m):
+            return False
+        t = Mb[0, 0] * alpha - rhs[0]
+        for j in range(m):
+            t += Mb[0, j + 1] * rw[j]
+        tau[0] = t
+        rhs[0] = alpha
+        for j in range(m):
+            rhs[j + 1] = rw[j]
+    elif not _cholesky_solve(Mb, rhs, nz):
+        return False
+    for i in range(n):
+        acc = S[i]
+        for j in range(nz):
+            acc += Rt[j, i] * rhs[j]
+        qdd[i] = acc
+    return True
+
+
+@njit(cache=True)
+def _rod_sensors(P, q, qdd, segs, sens, row):
+    """Overwrite the rod's accelerometers of the output row with their segment's reading."""
+    gx, gy = P[P_GX], P[P_GY]
+    for i in range(6):
+        seg = int(sens[i, 0])
+        if seg < 0:
+            continue
+        a, b = segs[seg, 0], segs[seg, 1]
+        ux, uy = q[b] - q[a], q[b + 1] - q[a + 1]
+        ln = math.sqrt(ux * ux + uy * uy)
+        hx, hy = ux / ln, uy / ln
+        xi, eta = sens[i, 1] / ln, sens[i, 2] / ln
+        uax, uay = qdd[b] - qdd[a], qdd[b + 1] - qdd[a + 1]
+        ax = qdd[a] + xi * uax - eta * uay - gx
+        ay = qdd[a + 1] + xi * uay + eta * uax - gy
+        axis = int(sens[i, 3])
+        v = ax * hx + ay * hy if axis < 2 else -ax * hy + ay * hx
+        if axis == 1 or axis == 3:
+            v = -v
+        row[O_ACC + i] = v
+
+
+@njit(cache=True)
+def _slider_sensors(P, qdd, sens, row):
+    """The slider's accelerometers with the guide rails moving normal to the guide (y_g)."""
+    gx, gy = P[P_GX], P[P_GY]
+    for i in range(6):
+        base = P_SENS + 4 * i
+        if P[base] < 0.5:
+            continue
+        axis = int(P[base + 3])
+        v = (qdd[6] - gx) if axis < 2 else (qdd[10] - gy)
+        if axis == 1 or axis == 3:
+            v = -v
+        row[O_ACC + i] = v
+
+
+@njit(cache=True, nogil=True)
+def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sens, st, x, theta_ref, omega_ref,
+                 stride, out, want_out, D, ds, setpoint, dout, alpha_ref):
+    """Integrate ``len(theta_ref)`` steps of the flexible bench from the rigid state ``st`` (PID integral,
+    contact events; its q, q̇ unused) and the full coordinates ``x`` = [q (n), q̇ (n), dissipated energy]
+    (updated in place). Crank PID drive, or with ``D`` non-empty the drive train (:mod:`twin.reference.drivetrain`,
+    state ``ds``, ``setpoint[k]`` the step's speed set point or motor torque, ``dout`` its sample rows) as
+    :func:`twin.reference.model.run_motor`; symplectic Euler with projection, the same sampling as
+    :func:`twin.reference.model.run_steps`. With ``alpha_ref`` non-empty the crank angle is prescribed as
+    :func:`twin.reference.model.run_prescribed` does (``theta_ref``, ``omega_ref`` hold the program at t_0 … t_n,
+    ``alpha_ref`` its acceleration at t_0 … t_{n−1}; the drive torque goes to the torque column). Returns
+    (status, steps done)."""
+    n = (x.shape[0] - 1) // 2
+    nc = n - N_Q
+    h = P[P_H]
+    kp, kv, ki, imax = P[P_KP], P[P_KV], P[P_KI], P[P_IMAX]
+    q = x[:n].copy()
+    qd = x[n:2 * n].copy()
+    diss_total = x[2 * n]
+    integ = st[S_I]
+    cst_a = np.empty(2)
+    cst_b = np.empty(2)
+    cst_c = np.empty(6)
+    cst_a[0], cst_a[1] = st[S_IN_A], st[S_VIMP_A]
+    cst_b[0], cst_b[1] = st[S_IN_B], st[S_VIMP_B]
+    cst_c[0], cst_c[1] = st[S_IN_C], st[S_VIMP_C]
+    for i in range(4):
+        cst_c[2 + i] = 0.0
+    Q = np.empty(n)
+    qs = np.empty(N_Q)
+    qds = np.empty(N_Q)
+    ja = np.zeros(5)
+    jb = np.zeros(5)
+    jc = np.zeros(5 + N_GUIDE_OUT)
+    rows = np.empty(N_Z + 4 + nc, dtype=np.int64)
+    nz = flex_rows(P, G, indep, rows)
+    r0 = N_Q + segs.shape[0] + slides.shape[0]
+    for k in range(indep.shape[0]):
+        rows[nz] = r0 + k
+        nz += 1
+    Rt = np.empty((nz, n))
+    MR = np.empty((nz, n))
+    S = np.empty(n)
+    Mb = np.empty((nz, nz))
+    rhs = np.empty(nz)
+    qdd = np.empty(n)
+    res = np.empty(n)
+    dq = np.empty(n)
+    b = np.empty(n)
+    tmp = np.empty(n)
+    A = np.empty((nc, n))
+    LU = np.empty((nc, nc))
+    piv = np.empty(nc, dtype=np.int64)
+    motor = D.shape[0] > 0
+    prescribed = alpha_ref.shape[0] > 0
+    nsteps = setpoint.shape[0] if motor else (alpha_ref.shape[0] if prescribed else theta_ref.shape[0])
+    tau_p = np.zeros(1)
+    dtmp = np.empty(3)
+    Qb = np.empty(N_Q)
+    qd0 = np.empty(N_Q)
+    Qg = np.zeros(N_Q)
+    if motor:
+        DT.gravity_forces(P[P_GX], P[P_GY], P[P_M1], P[P_XG1], P[P_R], P[P_M2], P[P_XG2], P[P_L], P[P_M3], Qg)
+    status = OK
+    k = 0
+    while k < nsteps:
+        if motor:   # drive-train hook: the belt's torque on the crank
+            err = 0.0
+            tau = DT.begin_step(D, ds, qd[7], setpoint[k], dtmp)
+        elif prescribed:
+            err = 0.0
+            tau = 0.0
+        else:
+            err = theta_ref[k] - q[7]
+            tau = kp * err + kv * (omega_ref[k] - qd[7]) + ki * integ
+        for i in range(n):
+            Q[i] = 0.0
+        for i in range(N_Q):
+            qs[i] = q[i]
+            qds[i] = qd[i]
+        shift = G[G_FLEX_G] > 0.5 and P[P_CLR_C] > 0.5
+        if shift:   # the joint C's pin C' rides on the guide: its eccentricity is measured from d_off + y_g
+            qs[5] -= q[10]
+            qds[5] -= qd[10]
+        generalized_forces(P, qs, qds, tau, cst_a, cst_b, cst_c, Q[:N_Q], ja, jb, jc)
+        # the contact forces on the rod act on its eyes (end_B, end_C), not spread as on a rigid rod
+        if P[P_CLR_B] > 0.5 and jb[3] > 0.0:
+            _eye_contact(P, qs, q, jb, 2, P[P_RBUSH_B], segs[0, 0], segs[0, 1], Q)
+        if P[P_CLR_C] > 0.5 and jc[3] > 0.0:
+            last = segs.shape[0] - 1
+            _eye_contact(P, qs, q, jc, 4, P[P_RBUSH_C], segs[last, 0], segs[last, 1], Q)
+        if shift and jc[3] > 0.0:   # the contact's normal component on the pin, which the ideal guide took, moves it
+            ex, ey = jc[0], jc[1]
+            d = math.sqrt(ex * ex + ey * ey)
+            nx, ny = (ex / d, ey / d) if d > 0.0 else (1.0, 0.0)
+            Q[10] += -jc[3] * ny + jc[4] * nx
+        for i in range(N_Q):   # the mechanism's own forces (the drive train's accounts read them)
+            Qb[i] = Q[i]
+        diss = chain_forces(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G, Q)
+        if k == 0 and not factor(q, segs, slides, indep, A, LU, piv):   # later steps: the projection's
+            status = NOT_FINITE
+            break
+        if not flex_accelerations(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, Q, rows, nz, Rt, S, Mb, rhs,
+                                  MR, b, tmp, qdd, prescribed, alpha_ref[k] if prescribed else 0.0, tau_p):
+            status = NOT_FINITE
+            break
+        if prescribed:
+            tau = tau_p[0]
+        if want_out and k % stride == 0:
+            row = out[k // stride]
+            _outputs(P, q[:N_Q], qd[:N_Q], qdd[:N_Q], tau, ja, jb, jc, row)
+            _rod_sensors(P, q, qdd, segs, sens, row)
+            if G[G_FLEX_G] > 0.5:
+                _slider_sensors(P, qdd, sens, row)
+            if P[P_OUT_ENERGY] > 0.5:
+                T, V = flex_energy(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G)
+                row[O_EKIN] = T
+                row[O_EPOT] = V
+            row[N_OUT] = diss_total
+            if motor:
+                DT.outputs(D, ds, dout[k // stride])
+                if D[DT.D_ACCOUNT] != 0.0:
+                    T, V = flex_energy(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G)
+                    dout[k // stride, DT.DO_EMECH] = T + V + dout[k // stride, DT.DO_ROTOR_KE]
+        diss_total += h * diss
+        integ += h * err
+        if imax > 0.0:
+            if integ > imax:
+                integ = imax
+            elif integ < -imax:
+                integ = -imax
+        for i in range(N_Q):
+            qd0[i] = qd[i]
+        for i in range(n):
+            qd[i] += h * qdd[i]
+            q[i] += h * qd[i]
+        if prescribed:   # the driving constraint: θ and θ̇ are the program's at t_{k+1}
+            q[7] = theta_ref[k + 1]
+            qd[7] = omega_ref[k + 1]
+        if flex_project(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, res, dq, b, tmp) < 0:
+            status = NEWTON_FAILED
+            k += 1
+            break
+        fin = True
+        for i in range(n):
+            if not (math.isfinite(q[i]) and math.isfinite(qd[i])):
+                fin = False
+        if not fin:
+            status = NOT_FINITE
+            k += 1
+            break
+        if motor:   # drive-train hook: rotor, belt stretch, accounts
+            fgd = DT.guide_force(P[P_FGUIDE], qd0[6], P[P_V0], P[P_V1]) if D[DT.D_ACCOUNT] != 0.0 else 0.0
+            DT.end_step(D, ds, Qb, Qg, tau, fgd, qd0, qd[:N_Q])
+        k += 1
+    x[:n] = q
+    x[n:2 * n] = qd
+    x[2 * n] = diss_total
+    st[S_Q:S_Q + N_Q] = q[:N_Q]
+    st[S_QD:S_QD + N_Q] = qd[:N_Q]
+    st[S_I] = integ
+    st[S_IN_A], st[S_VIMP_A] = cst_a[0], cst_a[1]
+    st[S_IN_B], st[S_VIMP_B] = cst_b[0], cst_b[1]
+    st[S_IN_C], st[S_VIMP_C] = cst_c[0], cst_c[1]
+    return status, k
+
+
+# ------------------------------------------------------------------------------------------ Python side
+#: output columns of :func:`run_flexible`: the rigid model's, then the dissipated energy
+O_DISS = N_OUT
+N_OUT_FLEX = N_OUT + 1
+
+
+def rigid_rod_body(split):
+    """The rod's two housings as the rigid model's rod body (point masses m_B at B', m_C at C)."""
+    from twin.config.mechanism import BodyParams
+
+    m = split.end_b_kg + split.end_c_kg
+    L = split.length_m
+    return BodyParams(m, L, L * split.end_c_kg / m, split.end_b_kg * split.end_c_kg * L * L / m)
+
+
+def initial_coordinates(P, G, lay: FlexLayout, q_rigid, qd_rigid) -> np.ndarray:
+    """Full coordinates [q, q̇, 0] of the straight, unstretched rod on the rigid pose, velocities projected."""
+    n = lay.n
+    x = np.zeros(2 * n + 1)
+    q, qd = x[:n], np.zeros(n)
+    q[:N_Q] = q_rigid
+    qd[:N_Q] = qd_rigid
+    bx, by, cx, cy = q_rigid[2], q_rigid[3], q_rigid[4], q_rigid[5]
+    bvx, bvy, cvx, cvy = qd_rigid[2], qd_rigid[3], qd_rigid[4], qd_rigid[5]
+    L = math.hypot(cx - bx, cy - by)
+    for p in range(lay.n_pts):
+        f = lay.x0[p] / L
+        i = N_Q + 2 * p
+        q[i], q[i + 1] = bx + f * (cx - bx), by + f * (cy - by)
+        qd[i], qd[i + 1] = bvx + f * (cvx - bvx), bvy + f * (cvy - bvy)
+    nc = n - N_Q
+    A, LU, piv = np.empty((nc, n)), np.empty((nc, nc)), np.empty(nc, dtype=np.int64)
+    qc = q.copy()
+    it = flex_project(P, G, qc, qd, lay.segs, lay.seg_f, lay.slides, lay.indep, A, LU, piv, np.empty(n),
+                      np.empty(n), np.empty(n), np.empty(n))
+    if it < 0:
+        raise ValueError("the flexible rod's initial pose does not satisfy its constraints")
+    x[:n], x[n:2 * n] = qc, qd
+    return x
+
+
+class FlexibleRun:
+    """The flexible bench of one configuration for :class:`twin.reference.engine.ReferenceEngine`: parameters,
+    layout, state and the accelerometer mounts."""
+
+    def __init__(self, cfg, P_rigid: np.ndarray, params) -> None:
+        from twin.structure import MountFilter, rod_chain, rod_split
+
+        st = cfg.structure
+        self.cfg = cfg
+        self.chain = rod_chain(st, cfg.bodies.rod, cfg.bodies.slider.mass_kg)
+        self.layout = build(cfg, self.chain)
+        split = rod_split(cfg.bodies.rod.mass_kg, cfg.bodies.rod.length_m, cfg.bodies.rod.x_g_m,
+                          cfg.bodies.rod.inertia_kgm2, st.rod_end_inertia_kgm2)
+        from twin.config.structure import StructureConfig
+
+        ends = dataclasses.replace(cfg, bodies=dataclasses.replace(cfg.bodies, rod=rigid_rod_body(split)),
+                                   structure=StructureConfig())
+        self.P = params(ends)
+        self.P_rigid = P_rigid
+        self.mounts = MountFilter(st.mount_frequency_hz, st.mount_damping_ratio, cfg.sensors.output_rate_hz)
+        self.x: np.ndarray | None = None
+
+    def reset(self, st_rigid: np.ndarray) -> None:
+        """Start from the rigid model's state (the straight, unstretched rod on its pose), the contact stiffnesses
+        of the rigid model's parameters."""
+        from twin.natural_coordinates import P_CLIN_A, P_CLIN_B, P_CLIN_C, P_K_A, P_K_B, P_K_C
+        for i in (P_K_A, P_K_B, P_K_C, P_CLIN_A, P_CLIN_B, P_CLIN_C):
+            self.P[i] = self.P_rigid[i]
+        lay = self.layout
+        self.x = initial_coordinates(self.P, lay.G, lay, st_rigid[S_Q:S_Q + N_Q], st_rigid[S_QD:S_QD + N_Q])
+        self.mounts.reset()
+
+    def run(self, st: np.ndarray, theta_ref: np.ndarray, omega_ref: np.ndarray, stride: int, buf: np.ndarray,
+            train=None, k0: int = 0, alpha_ref: np.ndarray | None = None):
+        """One chunk; ``train`` the run's :class:`twin.reference.drivetrain_run.ReferenceTrain` (motor or torque
+        drive; ``k0`` the chunk's first step) or None (crank PID, or the prescribed crank with ``alpha_ref``: then
+        ``theta_ref`` and ``omega_ref`` hold one more value, the program at the chunk's end)."""
+        lay = self.layout
+        if train is not None:
+            n_out = buf.shape[0]
+            sp, dbuf = train.chunk_inputs(k0, omega_ref, stride, n_out)
+            D, ds = train.D, train.ds
+        else:
+            sp = dbuf = D = ds = np.empty(0)
+            dbuf = np.empty((0, 1))
+        return run_flexible(self.P, lay.G, lay.segs, lay.seg_f, lay.hinges, lay.hinge_f, lay.slides, lay.slide_f,
+                            lay.indep, lay.sensors, st, self.x, theta_ref, omega_ref, stride, buf, True, D, ds, sp,
+                            dbuf, np.empty(0) if alpha_ref is None else alpha_ref)
+
+
+def tap_response(cfg, speed_mps: float = 0.01, duration_s: float = 0.2, every: int = 5, theta0: float = 0.3,
+                 drive: bool = False, axial: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """A tap on the flexible rod in the reference engine: the mechanism at rest at crank angle ``theta0`` [rad]
+    (no drive unless ``drive``, no guide friction), the rod's middle node given ``speed_mps`` normal to the
+    chord; returns (t [s], the node's distance from the chord B'–C [m]) every ``every`` steps for
+    ``duration_s``. The rod's bending relative to its ends: its ringing gives the in-situ bending mode and
+    its damping (``tests/test_structure_reference.py``; the MuJoCo twin's agreement checks can tap the same).
+    ``axial``: the tap is on the bore C along the chord instead, and the response the stretch |C − B'| − L."""
+    from twin.natural_coordinates import initial_state
+    from twin.reference.model import build_params
+
+    prm = lambda c: build_params(c, drive=drive, guide_friction=False)  # noqa: E731
+    run = FlexibleRun(cfg, prm(cfg), prm)
+    st = initial_state(cfg, theta0, 0.0, run.P)
+    run.reset(st)
+    lay = run.layout
+    n = lay.n
+    mid = int(lay.segs[cfg.structure.rod_segments // 2 - 1, 1])   # the middle node (end of the middle segment)
+    x = run.x
+    q, qd = x[:n].copy(), x[n:2 * n].copy()
+    ux, uy = q[4] - q[2], q[5] - q[3]
+    L = math.hypot(ux, uy)
+    if axial:
+        qd[4] += speed_mps * ux / L
+        qd[5] += speed_mps * uy / L
+    else:
+        qd[mid] += -speed_mps * uy / L
+        qd[mid + 1] += speed_mps * ux / L
+    nc = n - N_Q
+    A, LU, piv = np.empty((nc, n)), np.empty((nc, nc)), np.empty(nc, dtype=np.int64)
+    if flex_project(run.P, lay.G, q, qd, lay.segs, lay.seg_f, lay.slides, lay.indep, A, LU, piv,
+                    np.empty(n), np.empty(n), np.empty(n), np.empty(n)) < 0:
+        raise ValueError("the tapped state does not satisfy the constraints")
+    x[:n], x[n:2 * n] = q, qd
+    h = cfg.simulation.timestep_s
+    steps = int(round(duration_s / (every * h)))
+    buf = np.empty((1, N_OUT_FLEX))
+    ref = np.full(every, theta0)
+    zero = np.zeros(every)
+    w = np.empty(steps)
+    for i in range(steps):
+        status, _ = run.run(st, ref, zero, every, buf)
+        if status != OK:
+            raise ValueError(f"the tap response failed at step {i * every} (status {status})")
+        qq = x[:n]
+        ux, uy = qq[4] - qq[2], qq[5] - qq[3]
+        if axial:
+            w[i] = math.hypot(ux, uy) - cfg.bodies.rod.length_m
+        else:
+            w[i] = ((qq[mid] - qq[2]) * (-uy) + (qq[mid + 1] - qq[3]) * ux) / math.hypot(ux, uy)
+    return (np.arange(steps) + 1) * every * h, w
