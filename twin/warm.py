@@ -25,6 +25,11 @@ pay a spin-up once:
   physical parameter (a clearance, the speed) differs does not share its spin-up, and this module
   never pretends it does.
 
+The key is the configuration's text: a recorded drive input (a "trace" program's encoder trace, a motor
+command file) counts by its path, not its content, and recorded inputs handed over in memory
+(``twin.tracefile.DriveInputs``) are not taken here: warm starts are for runs that read their drive
+from the configuration alone, as a dataset's runs do.
+
 State files (:meth:`WarmState.save`, :meth:`WarmState.load`) are NumPy ``.npz`` archives of plain
 arrays and one JSON string, read with ``allow_pickle=False`` and checked on load (format, engine,
 twin and MuJoCo versions, array names, shapes and finiteness).
