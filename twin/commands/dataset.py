@@ -76,8 +76,11 @@ def _generate(args: argparse.Namespace) -> int:
                     progress=not args.no_progress and sys.stderr.isatty(), warm_start=not args.no_warm_start)
     g = info["generation"]
     on = {"processes": "worker processes", "threads": "threads"}.get(g["scheduler"], f"{g['scheduler']} workers")
+    shared = g.get("engine_runs_this_call", g["runs_this_call"])
+    shared = (f"; {shared} engine run{'s' if shared != 1 else ''}, the repeats sharing theirs"
+              if shared < g["runs_this_call"] else "")
     print(f"{args.out}: {g['runs_this_call']} runs simulated ({g['failed_this_call']} failed) on {g['workers']} "
-          f"{on} in {time.perf_counter() - t:.1f} s")
+          f"{on} in {time.perf_counter() - t:.1f} s{shared}")
     print(describe(args.out))
     return 0
 
