@@ -67,6 +67,9 @@ CASES = {
     "mujoco force C, motor drive": _cfg(6, **{"mujoco.contact_source": "force", "drive.mode": "motor"}),
     "reference B+C": _cfg(12, **{"simulation.engine": "reference"}),
     "reference C, motor drive": _cfg(6, **{"simulation.engine": "reference", "drive.mode": "motor"}),
+    "mujoco force B+C, prescribed drive": _cfg(12, **{"mujoco.contact_source": "force", "drive.mode": "prescribed"}),
+    "mujoco C, guide play": _cfg(6, **{"joints.clearance_guide_mm": 0.1}),
+    "reference C, guide play": _cfg(6, **{"simulation.engine": "reference", "joints.clearance_guide_mm": 0.1}),
 }
 
 
