@@ -233,13 +233,20 @@ CASES: list[tuple[str, str]] = [
     ("identify train {ws}/missing_ds --out {ws}/m.txt", "--out"),
     ("identify train {ws}/missing_ds --out {ws}/m.npz --splits train,dev", "--splits"),
     ("identify evaluate {ws}/afile {ws}/missing_ds --out {ws}/rep", "not a readable identification model"),
-    # study, check (and its deprecated name calibrate), analyze
+    # study, check, calibrate, analyze
     ("study formulations --out {ws}/afile", "--out"),
     ("study formulations --out {ws}/f --duration -1", "--duration"),
     ("study accuracy --out {ws}/afile --quick", "--out"),
     ("check contact --joints X --out {ws}/cal.json", "--joints"),
     ("check contact --out {ws}/cal.txt", "--out"),
-    ("calibrate contact --joints X --out {ws}/cal.json", "--joints"),
+    ("calibrate {ws}/rec.mcap --params contact.nothing --out {ws}/cal", "--params"),
+    ("calibrate {ws}/rec.mcap --params drive.motor_rpm --out {ws}/cal", "--params"),
+    ("calibrate {ws}/rec.mcap --params contact.mu0 --bounds contact.mu0=0.5:0.1 --out {ws}/cal", "--bounds"),
+    ("calibrate {ws}/rec.mcap --params contact.mu0 --bounds contact.mu0=-1:0.1 --out {ws}/cal", "--bounds"),
+    ("calibrate {ws}/rec.mcap --params mechanism.d_off_m --out {ws}/cal", "--bounds"),
+    ("calibrate {ws}/rec.mcap --params contact.mu0 --out {ws}/afile", "--out"),
+    ("calibrate {ws}/missing.mcap --params contact.mu0 --out {ws}/cal", "RECORDING"),
+    ("calibrate {ws}/rec.mcap --params contact.mu0 --out {ws}/cal --short-fraction 2", "--short-fraction"),
     ("analyze repeatability {ws}/rec.mcap", "at least 2"),
     ("analyze repeatability {ws}/rec.mcap {ws}/missing.mcap", "missing.mcap"),
 ]

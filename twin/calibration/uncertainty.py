@@ -1,0 +1,143 @@
+"""Intervals and identifiability from the evaluated points of the full-length stage.
+
+The objective J is a sum of squared terms, each scaled by its repeat-to-repeat scatter (or a default):
+a rise of ``delta_j`` (default 1) above the minimum means one term moved by about one scatter. Per
+parameter:
+
+* ``slice`` interval: a parabola fitted to the profile points (the parameter moved from the best
+  point, the others held) and the best point; the interval is where it stays within ``delta_j`` of
+  its minimum. A slice ignores the other parameters' compensation: it is narrower than the truth
+  where parameters are correlated;
+* ``marginal`` interval (two or more parameters, enough points): a full quadratic model fitted by
+  least squares to the full-stage points near the best one; half-width sqrt(2 delta_j (H⁻¹)_ii), and
+  the correlations of H⁻¹ name the pairs the recordings cannot tell apart (|ρ| > 0.9);
+* ``flat``: the fitted curvature is not positive, or the interval covers the whole range: the
+  recordings do not tell this parameter; the report says so instead of printing a value;
+* ``on_bound``: the fitted value sits within 1 % of the range from a bound.
+
+These are heuristic intervals (the terms are not independent Gaussian residuals): their coverage is
+what the validation protocol (docs/calibration.md) measures.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+#: |correlation| above which a pair is named as not told apart
+CORRELATED = 0.9
+#: distance from a bound, as a share of the range, that counts as "on the bound"
+ON_BOUND = 0.01
+
+
+@dataclass(frozen=True)
+class Interval:
+    """One parameter's fitted value and interval [the field's unit]."""
+
+    field: str
+    value: float
+    lo: float
+    hi: float
+    method: str  # "marginal", "slice" or "none"
+    flat: bool
+    on_bound: str  # "", "low" or "high"
+    slice_lo: float
+    slice_hi: float
+
+    def to_dict(self) -> dict[str, Any]:
+        return dict(self.__dict__)
+
+
+def _parabola(du: np.ndarray, dj: np.ndarray) -> tuple[float, float, float] | None:
+    """Least-squares c + b du + a du² through the points; None if under-determined."""
+    if len(du) < 3 or len(np.unique(np.round(du, 12))) < 3:
+        return None
+    A = np.stack([np.ones_like(du), du, du * du], axis=1)
+    c, b, a = np.linalg.lstsq(A, dj, rcond=None)[0]
+    return float(c), float(b), float(a)
+
+
+def slice_interval(u_best: float, du: np.ndarray, j: np.ndarray, delta_j: float) -> tuple[float, float, bool]:
+    """Interval in normalized coordinates from one parameter's slice; flat when the curvature is not
+    positive or the interval covers [0, 1]."""
+    fit = _parabola(du, j)
+    if fit is None or fit[2] <= 0:
+        return 0.0, 1.0, True
+    c, b, a = fit
+    centre = u_best - b / (2 * a)
+    half = math.sqrt(delta_j / a)
+    lo, hi = centre - half, centre + half
+    return max(0.0, lo), min(1.0, hi), (lo <= 0.0 and hi >= 1.0)
+
+
+def quadratic_model(U: np.ndarray, J: np.ndarray, u_best: np.ndarray) -> np.ndarray | None:
+    """Hessian of a full quadratic fitted to (U, J) around ``u_best``; None if under-determined."""
+    d = U.shape[1]
+    pairs = list(itertools.combinations_with_replacement(range(d), 2))
+    n_coef = 1 + d + len(pairs)
+    if len(U) < n_coef + 2:
+        return None
+    D = U - u_best
+    cols = [np.ones(len(U))] + [D[:, i] for i in range(d)] + [D[:, i] * D[:, k] for i, k in pairs]
+    A = np.stack(cols, axis=1)
+    coef, *_ = np.linalg.lstsq(A, J, rcond=None)
+    if np.linalg.matrix_rank(A) < n_coef:
+        return None
+    H = np.zeros((d, d))
+    for c, (i, k) in zip(coef[1 + d:], pairs):
+        if i == k:
+            H[i, i] = 2 * c
+        else:
+            H[i, k] = H[k, i] = c
+    return H
+
+
+def analyse(params, u_best: np.ndarray, points: list[tuple[np.ndarray, float]], delta_j: float = 1.0,
+            radius: float = 0.35) -> dict[str, Any]:
+    """Intervals, correlations, flat and on-bound parameters from the full-stage ``points`` (u, J)."""
+    U = np.asarray([p[0] for p in points])
+    J = np.asarray([p[1] for p in points])
+    ok = J < 1e5
+    U, J = U[ok], J[ok]
+    d = len(params)
+    near = np.max(np.abs(U - u_best), axis=1) <= radius
+    H = quadratic_model(U[near], J[near], u_best) if d >= 2 else None
+    cov = None
+    corr = None
+    if H is not None:
+        w = np.linalg.eigvalsh(H)
+        if np.all(w > 0):
+            cov = np.linalg.inv(H)
+            s = np.sqrt(np.diag(cov))
+            corr = cov / np.outer(s, s)
+    intervals = []
+    for i, p in enumerate(params):
+        others = [k for k in range(d) if k != i]
+        on = np.all(np.abs(U[:, others] - u_best[others]) < 1e-9, axis=1) if others else np.ones(len(U), bool)
+        du = U[on, i] - u_best[i]
+        slo, shi, sflat = slice_interval(float(u_best[i]), du, J[on], delta_j)
+        if cov is not None:
+            half = math.sqrt(2 * delta_j * cov[i, i])
+            lo, hi, method = max(0.0, u_best[i] - half), min(1.0, u_best[i] + half), "marginal"
+            flat = (u_best[i] - half <= 0 and u_best[i] + half >= 1) or sflat
+        else:
+            lo, hi, method, flat = slo, shi, "slice", sflat
+        bound = "low" if u_best[i] <= ON_BOUND else "high" if u_best[i] >= 1 - ON_BOUND else ""
+        intervals.append(Interval(p.field, p.from_unit(u_best[i]), p.from_unit(lo), p.from_unit(hi), method, flat,
+                                  bound, p.from_unit(slo), p.from_unit(shi)))
+    pairs = []
+    if corr is not None:
+        for i, k in itertools.combinations(range(d), 2):
+            if abs(corr[i, k]) > CORRELATED:
+                pairs.append({"a": params[i].field, "b": params[k].field, "correlation": float(corr[i, k])})
+    return {"intervals": intervals, "correlated_pairs": pairs,
+            "correlation": corr.tolist() if corr is not None else None,
+            "hessian_normalized": H.tolist() if H is not None else None,
+            "points_used": int(len(U)), "delta_j": delta_j,
+            "note": ("marginal intervals from a quadratic model of the full-stage points" if cov is not None else
+                     "slice intervals (profile points, other parameters held): too few points for a quadratic "
+                     "model, one parameter, or a model without positive curvature")}
