@@ -50,7 +50,7 @@ class CalibrationOptions:
     n_global: int = 16
     local_short: int = 20
     local_full: int = 12
-    profile_steps: tuple[float, ...] = (0.05, 0.15)
+    profile_steps: tuple[float, ...] = (0.03, 0.1, 0.25)
     short_fraction: float = 0.5
     drive: str = "trace"
     workers: int = 1
@@ -291,7 +291,12 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
         u_best, j_best = min(fulls, key=lambda c: c[1])
         if not np.array_equal(u_best, np.clip(u_best, 0, 1)):
             u_best = np.clip(u_best, 0, 1)
-        unc = uncertainty.analyse(P, u_best, fulls, options.delta_j)
+        # the rise that bounds an interval: delta_j, inflated by the misfit per term where the best
+        # point's terms exceed their scales (J*/n > 1: the scatter understates the model's error)
+        n_terms = max(1, sum(len(t) for t in ev.cache[search._key("full", u_best)]["terms"]))
+        inflation = max(1.0, float(j_best) / n_terms)
+        unc = uncertainty.analyse(P, u_best, fulls, options.delta_j * inflation)
+        unc["inflation"] = inflation
         e_before = ev.cache[search._key("full", u0)]
         e_after = ev.cache[search._key("full", u_best)]
     finally:
@@ -323,7 +328,7 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
         "parameters": [f.to_dict() for f in fitted],
         "objective": {"before": j0_full, "after": j_best, "terms_before": e_before["terms"],
                       "terms_after": e_after["terms"], "scales": scales["full"], "scales_note": scales_note,
-                      "delta_j": options.delta_j},
+                      "delta_j": options.delta_j, "delta_j_used": unc["delta_j"]},
         "uncertainty": {k: v for k, v in unc.items() if k != "intervals"},
         "warnings": warnings,
         "evaluations": {"total": len(ev.cache), "simulated_now": ev.simulated, "resumed": ev.resumed,

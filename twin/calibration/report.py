@@ -79,7 +79,8 @@ def render_markdown(r: dict[str, Any]) -> str:
             notes.append(f"on its {p['on_bound']} bound")
         lines.append(f"| {p['field']} | {_fmt(p['base'])} | {_fmt(p['value'])} | {_fmt(p['lo'])} – {_fmt(p['hi'])} | "
                      f"{p['method']} | {p['bounds'][0]:g} – {p['bounds'][1]:g} | {'; '.join(notes)} |")
-    lines += ["", f"Intervals: where the objective stays within {o['delta_j']:g} of its minimum "
+    lines += ["", f"Intervals: where the objective stays within {o['delta_j_used']:.3g} of its minimum "
+              f"({o['delta_j']:g} times the misfit per term J*/n where above 1) "
               f"({r['uncertainty']['note']}); heuristic, see docs/calibration.md.", ""]
     if r["warnings"]:
         lines += ["## Warnings", ""] + [f"- {w}" for w in r["warnings"]] + [""]

@@ -4,9 +4,9 @@ The objective J is a sum of squared terms, each scaled by its repeat-to-repeat s
 a rise of ``delta_j`` (default 1) above the minimum means one term moved by about one scatter. Per
 parameter:
 
-* ``slice`` interval: a parabola fitted to the profile points (the parameter moved from the best
-  point, the others held) and the best point; the interval is where it stays within ``delta_j`` of
-  its minimum. A slice ignores the other parameters' compensation: it is narrower than the truth
+* ``slice`` interval: along the profile points (the parameter moved from the best point, the
+  others held), where the objective first rises above its minimum + ``delta_j`` on each side (linear
+  interpolation; a parabola through the slice extends a side that never rises). A slice ignores the other parameters' compensation: it is narrower than the truth
   where parameters are correlated;
 * ``marginal`` interval (two or more parameters, enough points): a full quadratic model fitted by
   least squares to the full-stage points near the best one; half-width sqrt(2 delta_j (H⁻¹)_ii), and
@@ -15,6 +15,8 @@ parameter:
   recordings do not tell this parameter; the report says so instead of printing a value;
 * ``on_bound``: the fitted value sits within 1 % of the range from a bound.
 
+:func:`twin.calibration.calibrate` inflates ``delta_j`` by the misfit per term (J*/n, when above 1:
+the Birge ratio) so that a model that cannot reach the recordings' scatter gets wider intervals.
 These are heuristic intervals (the terms are not independent Gaussian residuals): their coverage is
 what the validation protocol (docs/calibration.md) measures.
 """
@@ -62,16 +64,38 @@ def _parabola(du: np.ndarray, dj: np.ndarray) -> tuple[float, float, float] | No
 
 
 def slice_interval(u_best: float, du: np.ndarray, j: np.ndarray, delta_j: float) -> tuple[float, float, bool]:
-    """Interval in normalized coordinates from one parameter's slice; flat when the curvature is not
-    positive or the interval covers [0, 1]."""
-    fit = _parabola(du, j)
-    if fit is None or fit[2] <= 0:
+    """Interval in normalized coordinates from one parameter's slice (offsets ``du`` from ``u_best``,
+    objective ``j``, the best point among them at du = 0): on each side, where the evaluated slice
+    first rises above min + ``delta_j`` (linear interpolation between evaluated points); a side that
+    never rises is extended by a parabola fitted to the slice, or to the range's end. Flat when
+    neither side rises and the parabola has no positive curvature or covers the range."""
+    order = np.argsort(du)
+    du, j = np.asarray(du)[order], np.asarray(j)[order]
+    if du.size == 0:
         return 0.0, 1.0, True
-    c, b, a = fit
-    centre = u_best - b / (2 * a)
-    half = math.sqrt(delta_j / a)
-    lo, hi = centre - half, centre + half
-    return max(0.0, lo), min(1.0, hi), (lo <= 0.0 and hi >= 1.0)
+    k0 = int(np.argmin(np.abs(du)))
+    level = float(j[k0]) + delta_j
+    fit = _parabola(du, j)
+    half = math.sqrt(delta_j / fit[2]) if fit is not None and fit[2] > 0 else math.inf
+    centre = (-fit[1] / (2 * fit[2])) if fit is not None and fit[2] > 0 else 0.0
+    bounds = []
+    for side in (-1, 1):
+        idx = range(k0 - 1, -1, -1) if side < 0 else range(k0 + 1, du.size)
+        prev = k0
+        found = None
+        for k in idx:
+            if j[k] > level:
+                w = (level - j[prev]) / (j[k] - j[prev]) if j[k] != j[prev] else 1.0
+                found = du[prev] + w * (du[k] - du[prev])
+                break
+            prev = k
+        bounds.append(found)
+    rises = [b is not None for b in bounds]
+    lo = bounds[0] if rises[0] else min(du[0], centre - half)
+    hi = bounds[1] if rises[1] else max(du[-1], centre + half)
+    lo, hi = u_best + lo, u_best + hi
+    flat = not any(rises) and (lo <= 0.0 and hi >= 1.0)
+    return max(0.0, lo), min(1.0, hi), flat
 
 
 def quadratic_model(U: np.ndarray, J: np.ndarray, u_best: np.ndarray) -> np.ndarray | None:
