@@ -9,7 +9,7 @@ parameter:
   interpolation; a parabola through the slice extends a side that never rises). A slice ignores the other parameters' compensation: it is narrower than the truth
   where parameters are correlated;
 * ``marginal`` interval (two or more parameters, enough points): a full quadratic model fitted by
-  least squares to the full-stage points near the best one; half-width sqrt(2 delta_j (H⁻¹)_ii), and
+  least squares to the full-stage points near the best one, used where it fits them (R² ≥ 0.9); half-width sqrt(2 delta_j (H⁻¹)_ii), and
   the correlations of H⁻¹ name the pairs the recordings cannot tell apart (|ρ| > 0.9);
 * ``flat``: the fitted curvature is not positive, or the interval covers the whole range: the
   recordings do not tell this parameter; the report says so instead of printing a value;
@@ -32,6 +32,8 @@ import numpy as np
 
 #: |correlation| above which a pair is named as not told apart
 CORRELATED = 0.9
+#: a quadratic model fitting the points worse than this (R²) is not used for intervals
+MIN_R2 = 0.9
 #: distance from a bound, as a share of the range, that counts as "on the bound"
 ON_BOUND = 0.01
 
@@ -98,8 +100,9 @@ def slice_interval(u_best: float, du: np.ndarray, j: np.ndarray, delta_j: float)
     return max(0.0, lo), min(1.0, hi), flat
 
 
-def quadratic_model(U: np.ndarray, J: np.ndarray, u_best: np.ndarray) -> np.ndarray | None:
-    """Hessian of a full quadratic fitted to (U, J) around ``u_best``; None if under-determined."""
+def quadratic_model(U: np.ndarray, J: np.ndarray, u_best: np.ndarray) -> tuple[np.ndarray, float] | None:
+    """Hessian of a full quadratic fitted to (U, J) around ``u_best`` and the fit's R²; None if
+    under-determined."""
     d = U.shape[1]
     pairs = list(itertools.combinations_with_replacement(range(d), 2))
     n_coef = 1 + d + len(pairs)
@@ -111,13 +114,15 @@ def quadratic_model(U: np.ndarray, J: np.ndarray, u_best: np.ndarray) -> np.ndar
     coef, *_ = np.linalg.lstsq(A, J, rcond=None)
     if np.linalg.matrix_rank(A) < n_coef:
         return None
+    ss = float(np.sum((J - J.mean()) ** 2))
+    r2 = 1.0 - float(np.sum((A @ coef - J) ** 2)) / ss if ss > 0 else 0.0
     H = np.zeros((d, d))
     for c, (i, k) in zip(coef[1 + d:], pairs):
         if i == k:
             H[i, i] = 2 * c
         else:
             H[i, k] = H[k, i] = c
-    return H
+    return H, r2
 
 
 def analyse(params, u_best: np.ndarray, points: list[tuple[np.ndarray, float]], delta_j: float = 1.0,
@@ -129,10 +134,11 @@ def analyse(params, u_best: np.ndarray, points: list[tuple[np.ndarray, float]], 
     U, J = U[ok], J[ok]
     d = len(params)
     near = np.max(np.abs(U - u_best), axis=1) <= radius
-    H = quadratic_model(U[near], J[near], u_best) if d >= 2 else None
+    model = quadratic_model(U[near], J[near], u_best) if d >= 2 else None
+    H, r2 = model if model is not None else (None, float("nan"))
     cov = None
     corr = None
-    if H is not None:
+    if H is not None and r2 >= MIN_R2:
         w = np.linalg.eigvalsh(H)
         if np.all(w > 0):
             cov = np.linalg.inv(H)
@@ -147,7 +153,7 @@ def analyse(params, u_best: np.ndarray, points: list[tuple[np.ndarray, float]], 
         if cov is not None:
             half = math.sqrt(2 * delta_j * cov[i, i])
             lo, hi, method = max(0.0, u_best[i] - half), min(1.0, u_best[i] + half), "marginal"
-            flat = (u_best[i] - half <= 0 and u_best[i] + half >= 1) or sflat
+            flat = u_best[i] - half <= 0 and u_best[i] + half >= 1
         else:
             lo, hi, method, flat = slo, shi, "slice", sflat
         bound = "low" if u_best[i] <= ON_BOUND else "high" if u_best[i] >= 1 - ON_BOUND else ""
@@ -161,7 +167,8 @@ def analyse(params, u_best: np.ndarray, points: list[tuple[np.ndarray, float]], 
     return {"intervals": intervals, "correlated_pairs": pairs,
             "correlation": corr.tolist() if corr is not None else None,
             "hessian_normalized": H.tolist() if H is not None else None,
-            "points_used": int(len(U)), "delta_j": delta_j,
+            "points_used": int(len(U)), "delta_j": delta_j, "quadratic_r2": r2,
             "note": ("marginal intervals from a quadratic model of the full-stage points" if cov is not None else
-                     "slice intervals (profile points, other parameters held): too few points for a quadratic "
-                     "model, one parameter, or a model without positive curvature")}
+                     "slice intervals (profile points, other parameters held): one parameter, too few points for "
+                     f"a quadratic model, a model without positive curvature, or one that fits poorly "
+                     f"(R² {r2:.2f} < {MIN_R2})")}
