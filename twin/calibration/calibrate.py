@@ -276,7 +276,8 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
         u_s = search.nelder_mead(ev, "short", u_g, options.local_short, 0.1)
         # 2. full length
         u_f = search.nelder_mead(ev, "full", u_s, options.local_full, 0.05)
-        fulls = [(np.asarray(e["u"]), ev.value(e)) for e in ev.cache.values() if e["stage"] == "full"]
+        # this run's path only (ev.history, cached or not): a resumed run retraces the same steps
+        fulls = [(np.asarray(e["u"]), ev.value(e)) for e in ev.history if e["stage"] == "full"]
         u_best = min(fulls, key=lambda c: c[1])[0] if fulls else u_f
         prof = []
         for i in range(len(P)):
@@ -286,8 +287,13 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
                     v[i] = v[i] + sign * s
                     if 0 <= v[i] <= 1:
                         prof.append(v)
+        u_centre = u_best.copy()
         ev.many("full", prof, "profiles (full length)")
-        fulls = [(np.asarray(e["u"]), ev.value(e)) for e in ev.cache.values() if e["stage"] == "full"]
+        seen: dict[tuple, tuple[np.ndarray, float]] = {}
+        for e in ev.history:
+            if e["stage"] == "full":
+                seen[search._key("full", np.asarray(e["u"]))] = (np.asarray(e["u"]), ev.value(e))
+        fulls = list(seen.values())
         u_best, j_best = min(fulls, key=lambda c: c[1])
         if not np.array_equal(u_best, np.clip(u_best, 0, 1)):
             u_best = np.clip(u_best, 0, 1)
@@ -295,8 +301,9 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
         # point's terms exceed their scales (J*/n > 1: the scatter understates the model's error)
         n_terms = max(1, sum(len(t) for t in ev.cache[search._key("full", u_best)]["terms"]))
         inflation = max(1.0, float(j_best) / n_terms)
-        unc = uncertainty.analyse(P, u_best, fulls, options.delta_j * inflation)
+        unc = uncertainty.analyse(P, u_best, fulls, options.delta_j * inflation, centre=u_centre)
         unc["inflation"] = inflation
+        unc["profile_centre_is_best"] = bool(np.array_equal(u_centre, u_best))
         e_before = ev.cache[search._key("full", u0)]
         e_after = ev.cache[search._key("full", u_best)]
     finally:
@@ -317,6 +324,10 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
     for pr in unc["correlated_pairs"]:
         warnings.append(f"{pr['a']} and {pr['b']} are correlated ({pr['correlation']:+.2f}): the recordings "
                         "cannot tell them apart")
+    if not unc["profile_centre_is_best"]:
+        warnings.append("a profile point was better than the point the profiles were taken around: the fitted "
+                        "values are that point's, the slices are around the earlier one; more local evaluations "
+                        "(--local-full) would settle it")
     failed = sum(1 for e in ev.cache.values() if e["status"] != "ok")
     if failed:
         warnings.append(f"{failed} evaluation(s) failed (simulation error; counted as a very bad objective)")

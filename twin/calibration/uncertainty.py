@@ -126,8 +126,11 @@ def quadratic_model(U: np.ndarray, J: np.ndarray, u_best: np.ndarray) -> tuple[n
 
 
 def analyse(params, u_best: np.ndarray, points: list[tuple[np.ndarray, float]], delta_j: float = 1.0,
-            radius: float = 0.35) -> dict[str, Any]:
-    """Intervals, correlations, flat and on-bound parameters from the full-stage ``points`` (u, J)."""
+            radius: float = 0.35, centre: np.ndarray | None = None) -> dict[str, Any]:
+    """Intervals, correlations, flat and on-bound parameters from the full-stage ``points`` (u, J);
+    ``centre``: the point the profiles were taken around (default ``u_best``; a profile point may turn
+    out better than it)."""
+    centre = u_best if centre is None else np.asarray(centre, dtype=np.float64)
     U = np.asarray([p[0] for p in points])
     J = np.asarray([p[1] for p in points])
     ok = J < 1e5
@@ -147,9 +150,9 @@ def analyse(params, u_best: np.ndarray, points: list[tuple[np.ndarray, float]], 
     intervals = []
     for i, p in enumerate(params):
         others = [k for k in range(d) if k != i]
-        on = np.all(np.abs(U[:, others] - u_best[others]) < 1e-9, axis=1) if others else np.ones(len(U), bool)
-        du = U[on, i] - u_best[i]
-        slo, shi, sflat = slice_interval(float(u_best[i]), du, J[on], delta_j)
+        on = np.all(np.abs(U[:, others] - centre[others]) < 1e-9, axis=1) if others else np.ones(len(U), bool)
+        du = U[on, i] - centre[i]
+        slo, shi, sflat = slice_interval(float(centre[i]), du, J[on], delta_j)
         if cov is not None:
             half = math.sqrt(2 * delta_j * cov[i, i])
             lo, hi, method = max(0.0, u_best[i] - half), min(1.0, u_best[i] + half), "marginal"
