@@ -239,7 +239,8 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
                                                     "dtw_window_s": options.dtw_window_s}}
 
     def make_task(stage: str, u: np.ndarray, i: int) -> dict[str, Any]:
-        return {"id": i, "recordings": recs, "base_toml": base_toml,
+        # run_id and index: what the dataset pool's report of a crashed worker names a task by
+        return {"id": i, "run_id": f"evaluation-{i}", "index": i, "recordings": recs, "base_toml": base_toml,
                 "fraction": options.short_fraction if stage == "short" else 1.0,
                 "dtw_max_s": options.dtw_max_s, "dtw_window_s": options.dtw_window_s, "motor": motor,
                 "ripple": ripple, "drive": options.drive, "fields": fields,
@@ -247,7 +248,8 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
 
     run = (search.in_process(obj.evaluate_task) if options.workers == 1
            else search.local_pool(options.workers, obj.evaluate_task))
-    ev = search.Evaluator(out_dir / "evaluations.jsonl", header, P, make_task, scales, run, options.progress)
+    ev = search.Evaluator(out_dir / "evaluations.jsonl", header, P, make_task, scales, run, options.progress,
+                          run_single=search.in_process(obj.evaluate_task))
     try:
         if ev.resumed:
             say(f"resuming: {ev.resumed} evaluations read back from {out_dir / 'evaluations.jsonl'}")

@@ -98,8 +98,10 @@ class Evaluator:
 
     def __init__(self, log_path: Path, header: dict[str, Any], params, make_task: Callable[[str, np.ndarray, int], dict],
                  scales: dict[str, dict[str, float]], run: Callable[[list[dict]], Iterator[dict]],
-                 progress: bool = False):
+                 progress: bool = False, run_single: Callable[[list[dict]], Iterator[dict]] | None = None):
+        # run_single: the executor of a lone point (Nelder-Mead's steps): in this process, no pool start-up
         self.params, self.make_task, self.scales, self.run = params, make_task, scales, run
+        self.run_single = run_single or run
         self.progress = progress
         self.cache: dict[tuple, dict[str, Any]] = {}
         self.history: list[dict[str, Any]] = []  # in the order evaluated (or read back)
@@ -145,12 +147,13 @@ class Evaluator:
                 bar = tqdm(total=len(todo), desc=desc or f"{stage} evaluations", unit="eval", leave=False)
             tasks = [self.make_task(stage, u, i) for i, (_k, u) in enumerate(todo)]
             try:
-                for r in self.run(tasks):
-                    k, u = todo[r["id"]]
+                for r in (self.run_single if len(tasks) == 1 else self.run)(tasks):
+                    k, u = todo[r["id"] if "id" in r else r["index"]]  # a crashed worker's report has no id
                     e = {"stage": stage, "u": [float(x) for x in u],
                          "x": [p.from_unit(x) for p, x in zip(self.params, u)],
-                         "status": r["status"], "terms": r.get("terms", []), "error": r.get("error"),
-                         "wall_s": r["wall_s"], "sim_wall_s": r.get("sim_wall_s", 0.0)}
+                         "status": r["status"], "terms": r.get("terms", []),
+                         "error": r.get("error") or r.get("reason"),
+                         "wall_s": r.get("wall_s", 0.0), "sim_wall_s": r.get("sim_wall_s", 0.0)}
                     if e["status"] != "ok":
                         e["terms"] = []
                     self.cache[k] = e
