@@ -247,6 +247,8 @@ CASES: list[tuple[str, str]] = [
     ("calibrate {ws}/rec.mcap --params contact.mu0 --out {ws}/afile", "--out"),
     ("calibrate {ws}/missing.mcap --params contact.mu0 --out {ws}/cal", "RECORDING"),
     ("calibrate {ws}/rec.mcap --params contact.mu0 --out {ws}/cal --short-fraction 2", "--short-fraction"),
+    ("calibrate {ws}/rec.mcap --params contact.mu0 --out {ws}/cal --profile-steps 0.1,x", "--profile-steps"),
+    ("calibrate {ws}/rec.mcap --params contact.mu0 --out {ws}/cal --profile-steps 0.9", "--profile-steps"),
     ("analyze repeatability {ws}/rec.mcap", "at least 2"),
     ("analyze repeatability {ws}/rec.mcap {ws}/missing.mcap", "missing.mcap"),
 ]

@@ -161,3 +161,23 @@ def test_intervals_of_a_known_quadratic():
     assert iv.method == "marginal"
     assert (iv.hi - iv.lo) / 2 == pytest.approx(sig, rel=1e-6)
     assert not math.isnan(iv.value)
+
+
+def test_cli_resumes_the_same_calibration(fitted, tmp_path, capsys):
+    """``twin calibrate`` with the API run's inputs finds its log and simulates nothing (the command
+    line's wiring: recordings, --params, --config, --bounds, the budget options)."""
+    import shutil
+
+    from twin.cli import main
+
+    ws, recs, base, res, _ = fitted
+    out = tmp_path / "cli"
+    shutil.copytree(ws / "out", out)
+    (tmp_path / "base.toml").write_text(base.to_toml())
+    args = ["calibrate", *map(str, recs), "--params", "contact.mu0", "--config", str(tmp_path / "base.toml"),
+            "--bounds", "contact.mu0=0:0.3", "--drive", "program", "--global-points", "4", "--local-short", "6",
+            "--local-full", "6", "--profile-steps", "0.05,0.2", "--out", str(out), "--no-plots", "--no-progress"]
+    assert main(args) == 0
+    cap = capsys.readouterr()
+    assert "(0 simulated" in cap.out and "| contact.mu0 | 0.05 |" in cap.out
+    assert "resuming" in cap.err

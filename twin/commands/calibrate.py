@@ -36,6 +36,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="Nelder-Mead evaluations on short windows (default 20)")
     p.add_argument("--local-full", type=int, default=12, metavar="N",
                    help="Nelder-Mead evaluations on the whole recordings (default 12)")
+    p.add_argument("--profile-steps", default="0.03,0.1,0.25", metavar="D,D",
+                   help="offsets of the profile points, as shares of each parameter's range (default 0.03,0.1,0.25)")
     p.add_argument("--short-fraction", type=float, default=0.5, metavar="F",
                    help="share of each recording simulated in the short stage (default 0.5)")
     p.add_argument("--workers", type=int, default=1, metavar="N", help="worker processes (default 1)")
@@ -46,16 +48,23 @@ def register(sub: argparse._SubParsersAction) -> None:
                                            "out": "--out", "n_global": "--global-points",
                                            "local_short": "--local-short", "local_full": "--local-full",
                                            "short_fraction": "--short-fraction", "workers": "--workers",
-                                           "seed": "--seed", "log": "--out"})
+                                           "seed": "--seed", "log": "--out",
+                                           "profile_steps": "--profile-steps"})
 
 
 def run(args: argparse.Namespace) -> int:
     from twin.calibration import CalibrationOptions, calibrate, parse_bounds
     from twin.cli import load_config_file
+    from twin.errors import TwinError
 
     workers = resolve_workers(args.workers, "workers")
     bounds = parse_bounds(args.bounds)
-    opts = CalibrationOptions(n_global=args.n_global, local_short=args.local_short, local_full=args.local_full,
+    try:
+        steps = tuple(float(x) for x in args.profile_steps.split(",") if x.strip())
+    except ValueError:
+        raise TwinError(f"expected numbers separated by commas, got {args.profile_steps!r}",
+                        field="--profile-steps") from None
+    opts = CalibrationOptions(profile_steps=steps, n_global=args.n_global, local_short=args.local_short, local_full=args.local_full,
                               short_fraction=args.short_fraction, drive=args.drive, workers=workers, seed=args.seed,
                               plots=not args.no_plots, progress=not args.no_progress and sys.stderr.isatty())
     cfg = load_config_file(args.config) if args.config else None
