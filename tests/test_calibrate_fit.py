@@ -58,8 +58,8 @@ def test_recovers_known_friction(fitted):
 def test_outputs_and_overlay_round_trip(fitted):
     ws, _recs, base, res, _ = fitted
     out = ws / "out"
-    for name in ("calibrated.toml", "report.json", "report.md", "evaluations.jsonl", "spectra.png", "history.png",
-                 "profiles.png"):
+    for name in ("calibrated.toml", "report.json", "report.md", "evaluations.jsonl", "spectra.png", "windows.png",
+                 "history.png", "profiles.png"):
         assert (out / name).is_file(), name
     cfg = load_config(out / "calibrated.toml")
     assert cfg.contact.mu0 == pytest.approx(res.parameters[0].value, rel=1e-6)

@@ -23,7 +23,7 @@ from twin.errors import ConfigError
 
 #: the files a calibration writes in its output folder
 OUTPUT_FILES = ("calibrated.toml", "report.json", "report.md", "evaluations.jsonl", "spectra.png",
-                "history.png", "profiles.png")
+                "windows.png", "history.png", "profiles.png")
 
 
 @dataclass(frozen=True)

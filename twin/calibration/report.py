@@ -79,9 +79,9 @@ def render_markdown(r: dict[str, Any]) -> str:
             notes.append(f"on its {p['on_bound']} bound")
         lines.append(f"| {p['field']} | {_fmt(p['base'])} | {_fmt(p['value'])} | {_fmt(p['lo'])} – {_fmt(p['hi'])} | "
                      f"{p['method']} | {p['bounds'][0]:g} – {p['bounds'][1]:g} | {'; '.join(notes)} |")
-    lines += ["", f"Intervals: where the objective stays within {o['delta_j_used']:.3g} of its minimum "
-              f"({o['delta_j']:g} times the misfit per term J*/n where above 1) "
-              f"({r['uncertainty']['note']}); heuristic, see docs/calibration.md.", ""]
+    lines += ["", f"Intervals: where the objective stays within ΔJ = {o['delta_j_used']:.3g} of its minimum "
+              f"({o['delta_j']:g} × max(1, misfit per term J*/n)); {r['uncertainty']['note']}. Heuristic: "
+              "see docs/calibration.md.", ""]
     if r["warnings"]:
         lines += ["## Warnings", ""] + [f"- {w}" for w in r["warnings"]] + [""]
     lines += ["## Objective", "", f"Total (full length): before {_fmt(o['before'])}, after {_fmt(o['after'])}. "
@@ -154,6 +154,24 @@ def _plots(out: Path, targets, sims, params, ev, report) -> list[str]:
     axes[-1, 0].set_xlabel("frequency [Hz]")
     fig.tight_layout()
     files.append(save(fig, "spectra.png"))
+
+    # time windows: about 1.2 crank turns from the window's start (at most the window)
+    i0, i1 = t.window
+    turns = abs(float(t.phi[i1 - 1] - t.phi[i0])) / (2 * math.pi)
+    m = i1 - i0 if turns <= 1.2 else int((i1 - i0) * 1.2 / turns)
+    tt = (i0 + np.arange(m)) / t.rate
+    fig, axes = plt.subplots(n, 1, figsize=(11, 1.9 * n), sharex=True, squeeze=False)
+    for ax, a in zip(axes[:, 0], t.sensors):
+        ax.plot(tt, t.rec_acc[a][:m], lw=0.6, color="k", label="recorded")
+        ax.plot(tt, acc0[a][:m], lw=0.6, color="tab:blue", alpha=0.8, label="before")
+        ax.plot(tt, acc1[a][:m], lw=0.6, color="tab:red", alpha=0.8, label="calibrated")
+        ax.set_ylabel(f"{a} [m/s²]")
+        ax.grid(alpha=0.3)
+    axes[0, 0].legend(fontsize=8, loc="upper right")
+    axes[0, 0].set_title(f"calibrated accelerations, {tt[0]:.3f}–{tt[-1]:.3f} s of {Path(t.path).name}")
+    axes[-1, 0].set_xlabel("time [s]")
+    fig.tight_layout()
+    files.append(save(fig, "windows.png"))
 
     fig, ax = plt.subplots(figsize=(9, 3.5))
     hist = list(ev.cache.values())

@@ -141,6 +141,14 @@ def analyse(params, u_best: np.ndarray, points: list[tuple[np.ndarray, float]], 
     H, r2 = model if model is not None else (None, float("nan"))
     cov = None
     corr = None
+    if d < 2:
+        why = "one parameter"
+    elif H is None:
+        why = "too few points for a quadratic model"
+    elif r2 < MIN_R2:
+        why = f"the quadratic model fits the points poorly (R² {r2:.2f} < {MIN_R2})"
+    else:
+        why = f"the quadratic model (R² {r2:.2f}) has no positive curvature in some direction"
     if H is not None and r2 >= MIN_R2:
         w = np.linalg.eigvalsh(H)
         if np.all(w > 0):
@@ -171,7 +179,5 @@ def analyse(params, u_best: np.ndarray, points: list[tuple[np.ndarray, float]], 
             "correlation": corr.tolist() if corr is not None else None,
             "hessian_normalized": H.tolist() if H is not None else None,
             "points_used": int(len(U)), "delta_j": delta_j, "quadratic_r2": r2,
-            "note": ("marginal intervals from a quadratic model of the full-stage points" if cov is not None else
-                     "slice intervals (profile points, other parameters held): one parameter, too few points for "
-                     f"a quadratic model, a model without positive curvature, or one that fits poorly "
-                     f"(R² {r2:.2f} < {MIN_R2})")}
+            "note": (f"marginal intervals from a quadratic model of the full-stage points (R² {r2:.2f})"
+                     if cov is not None else f"slice intervals (profile points, other parameters held): {why}")}
