@@ -222,8 +222,8 @@ def prepare_target(path: str, base_toml: str | None, fraction: float, dtw_max_s:
     phi = counts_to_angle(rec["encoder_counts"], inst.encoder_counts_per_rev, centre=inst.encoder_quantization)
     t = np.arange(rec.n) / rate
     cmd = (t, np.asarray(rec["motor_command"], dtype=np.float64)) if motor else None
-    if drive == "program":  # the configuration's own program (and the recorded command for the motor)
-        inputs = DriveInputs(command=cmd) if motor else None
+    if drive == "program":  # the configuration's own program (the motor, if any, follows it)
+        inputs = None
     else:
         inputs = DriveInputs(trace=(t, phi), command=cmd) if motor else DriveInputs(trace=(t, phi))
     edge = 2.0 / base.drive.trace_filter_hz if base.drive.trace_filter_hz > 0 else 0.0
@@ -250,10 +250,11 @@ def sim_config(target: Target, cfg):
     over |= {"simulation.duration_s": target.n_sim / target.rate,
             "sensors.output_rate_hz": target.rate, "sensors.channels": list(CHANNEL_GROUPS),
             "instrumentation.zero_g_v": dict(target.zero_g)}
-    if target.motor:
+    if target.motor:  # drive-train fields: the motor model drives the crank
         groups = list(CHANNEL_GROUPS) + (["motor"] if "motor" not in CHANNEL_GROUPS else [])
-        over.update({"drive.mode": "motor", "drivetrain.command_file": "motor_command_trace.npz",
-                     "sensors.channels": groups})
+        over.update({"drive.mode": "motor", "sensors.channels": groups})
+        if target.drive == "trace":  # on the recorded motor command (twin replay's motor drive)
+            over["drivetrain.command_file"] = "motor_command_trace.npz"  # in memory: never read
     return cfg.replace(**over)
 
 
