@@ -536,7 +536,7 @@ CASES: list[tuple[str, str]] = [
     ("check contact --out ''", "--out"),
     ("check contact --out {ws}/{LONG}.json", "--out"),
     ("check contact --out {ws}/loop1/c.json", "--out"),
-    ("calibrate contact --out ''", "--out"),
+    ("calibrate {ws}/rec.mcap --params contact.mu0 --out ''", "--out"),
 ]
 
 
