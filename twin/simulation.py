@@ -178,7 +178,10 @@ class Outcome:
 
 def make_engine(cfg: BenchConfig, inputs: DriveInputs | None = None) -> Engine:
     """Instantiate the engine named by ``cfg.simulation.engine``; ``inputs``: recorded drive inputs in
-    memory (encoder trace, motor command), used instead of the files the configuration names."""
+    memory (encoder trace, motor command), used instead of the files the configuration names. The files
+    a configuration names are read and checked here, before an engine is built (a bad file is refused
+    before the reference engine compiles), and reach the engine as arrays."""
+    inputs = _read_drive_files(cfg, inputs)
     if cfg.spatial.enabled:  # the spatial mechanism has its own pair of engines
         from twin.spatial import SPATIAL_ENGINE_CLASSES
 
@@ -186,6 +189,24 @@ def make_engine(cfg: BenchConfig, inputs: DriveInputs | None = None) -> Engine:
         return getattr(importlib.import_module(mod), cls)(cfg, inputs=inputs)
     mod, cls = ENGINE_CLASSES[cfg.simulation.engine].split(":")  # imported on demand
     return getattr(importlib.import_module(mod), cls)(cfg, inputs=inputs)
+
+
+def _read_drive_files(cfg: BenchConfig, inputs: DriveInputs | None) -> DriveInputs | None:
+    """``inputs`` completed with the encoder trace (``drive.trace_file`` of the "trace" program) and the
+    motor command (``drivetrain.command_file`` of the motor drive) the configuration names, read and
+    checked; None where the run reads neither."""
+    from twin.motor_drive import command_trace
+    from twin.tracefile import load_trace
+
+    trace = inputs.trace if inputs is not None else None
+    command = inputs.command if inputs is not None else None
+    if trace is None and cfg.drive.program == "trace" and cfg.drive.trace_file:
+        trace = load_trace(cfg.drive.trace_file)
+    if command is None and cfg.drive.mode == "motor" and cfg.drivetrain.command_file:
+        command = command_trace(cfg)
+    if trace is None and command is None:
+        return inputs
+    return DriveInputs(trace=trace, command=command)
 
 
 class Progress:
