@@ -20,6 +20,7 @@ import numpy as np
 
 from twin.config import BenchConfig
 from twin.errors import ConfigError
+from twin.calibration.params import overlay  # noqa: F401 - part of this module's API
 
 #: the files a calibration writes in its output folder
 OUTPUT_FILES = ("calibrated.toml", "report.json", "report.md", "evaluations.jsonl", "spectra.png",
@@ -147,34 +148,6 @@ class CalibrationResult:
                 "evaluations": self.evaluations, "simulated": self.simulated, "resumed": self.resumed,
                 "seconds_per_evaluation": self.seconds_per_evaluation, "wall_s": self.wall_s,
                 "out_dir": str(self.out_dir)}
-
-
-def overlay(base: BenchConfig | None, values: Mapping[str, float]) -> dict[str, Any]:
-    """The partial configuration a calibration writes: the fields of ``base`` that differ from the
-    defaults (when a base is given) and the fitted values, as nested TOML tables."""
-    out: dict[str, Any] = {}
-    if base is not None:
-        default = BenchConfig().to_dict()
-
-        def diff(a: dict, b: dict) -> dict:
-            d = {}
-            for k, v in a.items():
-                if isinstance(v, dict) and isinstance(b.get(k), dict):
-                    sub = diff(v, b[k])
-                    if sub:
-                        d[k] = sub
-                elif b.get(k) != v:
-                    d[k] = v
-            return d
-
-        out = diff(base.to_dict(), default)
-    for f, v in values.items():
-        node = out
-        keys = f.split(".")
-        for k in keys[:-1]:
-            node = node.setdefault(k, {})
-        node[keys[-1]] = float(v)
-    return out
 
 
 def _check_recordings(recordings: Iterable[str | Path]) -> list[str]:

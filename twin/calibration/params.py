@@ -179,3 +179,31 @@ def parse_bounds(items: Iterable[str]) -> dict[str, tuple[float, float]]:
 def apply(cfg: BenchConfig, params: tuple[Parameter, ...], values: Iterable[float]) -> BenchConfig:
     """``cfg`` with the parameters set to ``values`` [field units]."""
     return cfg.replace(**{p.field: float(v) for p, v in zip(params, values)})
+
+
+def overlay(base: BenchConfig | None, values: Mapping[str, float]) -> dict[str, Any]:
+    """The partial configuration a calibration writes: the fields of ``base`` that differ from the
+    defaults (when a base is given) and the fitted values, as nested TOML tables."""
+    out: dict[str, Any] = {}
+    if base is not None:
+        default = BenchConfig().to_dict()
+
+        def diff(a: dict, b: dict) -> dict:
+            d = {}
+            for k, v in a.items():
+                if isinstance(v, dict) and isinstance(b.get(k), dict):
+                    sub = diff(v, b[k])
+                    if sub:
+                        d[k] = sub
+                elif b.get(k) != v:
+                    d[k] = v
+            return d
+
+        out = diff(base.to_dict(), default)
+    for f, v in values.items():
+        node = out
+        keys = f.split(".")
+        for k in keys[:-1]:
+            node = node.setdefault(k, {})
+        node[keys[-1]] = float(v)
+    return out

@@ -31,7 +31,7 @@ def write_outputs(out: Path, report: dict[str, Any], targets, params, x0, x1, co
     """Fill ``report`` with the replay metrics and write calibrated.toml, report.md and the PNGs."""
     import tomli_w
 
-    from twin.calibration.calibrate import overlay
+    from twin.calibration.params import overlay
     from twin.util import atomic_write_text
 
     metrics, sims = [], []
