@@ -636,54 +636,107 @@ def flex_project(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, res, dq, b
 
 
 @njit(cache=True)
-def flex_accelerations(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, Q, rows, nz, Rt, S, Mb, rhs, MR,
-                       b, tmp, qdd, prescribed, alpha, tau):
-    """q̈ = R z̈ + Ṙż from Rᵀ M R z̈ = Rᵀ (Q − M Ṙż), A already factored at q. False if not SPD. With
-    ``prescribed`` the crank angle is a driving constraint (θ̈ = ``alpha``, the first independent coordinate):
-    the other rows are solved with it known and the drive torque (its multiplier) written to ``tau[0]``, as
-    :func:`twin.reference.model.accelerations_prescribed`. (:func:`flex_mass` then :func:`flex_solve_acc`.)"""
-    flex_mass(P, G, q, qd, segs, seg_f, slides, A, LU, piv, rows, nz, Rt, S, Mb, MR, b, tmp)
-    return flex_solve_acc(q, Q, nz, Rt, S, Mb, rhs, b, tmp, qdd, P, segs, seg_f, G, prescribed, alpha, tau)
+def lu_solve_many(LU, piv, n, B, m):
+    """:func:`lu_solve` on the first ``m`` columns of B (n × ≥ m) at once, B overwritten. Each column's arithmetic
+    is :func:`lu_solve`'s, operation for operation (bit for bit the same result); the columns being independent,
+    the inner loops run across them instead of along one dependent sum."""
+    for k in range(n):
+        p = piv[k]
+        if p != k:
+            for c in range(m):
+                t = B[k, c]
+                B[k, c] = B[p, c]
+                B[p, c] = t
+    for i in range(n):
+        for j in range(i):
+            f = LU[i, j]
+            for c in range(m):
+                B[i, c] -= f * B[j, c]
+    for i in range(n - 1, -1, -1):
+        for j in range(i + 1, n):
+            f = LU[i, j]
+            for c in range(m):
+                B[i, c] -= f * B[j, c]
+        d = LU[i, i]
+        for c in range(m):
+            B[i, c] = B[i, c] / d
 
 
 @njit(cache=True)
-def flex_mass(P, G, q, qd, segs, seg_f, slides, A, LU, piv, rows, nz, Rt, S, Mb, MR, b, tmp):
-    """The force-independent half of :func:`flex_accelerations`: Rᵀ (rows of R) into ``Rt``, M R into ``MR``,
-    Ṙż into ``S`` and Rᵀ M R into ``Mb`` (A already factored at q)."""
+def flex_mass(P, G, q, qd, segs, seg_f, slides, A, LU, piv, rows, nz, Rt, S, Mb, MR, b, Bm, RtT):
+    """The force-independent part of the accelerations q̈ = R z̈ + Ṙż (Rᵀ M R z̈ = Rᵀ (Q − M Ṙż), A already
+    factored at q): Rᵀ (rows of R, the unit right-hand sides of the independent rows) into ``Rt`` and its
+    transpose ``RtT``, M R into ``MR``, Ṙż into ``S`` and Rᵀ M R into ``Mb``. Each column as
+    :func:`flex_solve` would give it, the chain block's solves done together (:func:`lu_solve_many`; ``Bm``
+    (n − 12) × (nz + 1) scratch). :func:`flex_solve_acc` completes the step with the forces."""
     n = q.shape[0]
+    nc = A.shape[0]
     s, c = math.sin(q[7]), math.cos(q[7])
+    for j in range(nz + 1):
+        if j < nz:
+            for i in range(n):
+                b[i] = 0.0
+            b[rows[j]] = 1.0
+            out = Rt[j]
+        else:
+            quadratic_terms(q[:N_Q], qd[:N_Q], s, c, b[:N_Q])
+            # (row 2, the stretch s = |C − B'|² − L², is an independent coordinate defined by a nonlinear
+            # expression: its row keeps −Φ̇_q q̇ = −2|Ċ − Ḃ'|², as quadratic_terms writes it)
+            chain_quadratic(qd, segs, slides, b[N_Q:])
+            out = S
+        rigid = False
+        for k in range(N_Q):
+            if b[k] != 0.0:
+                rigid = True
+                break
+        if rigid:   # as flex_solve: the rigid block in closed form, its effect on the chain's rows
+            solve_aug(q, s, c, b, out)
+            for r in range(nc):
+                Bm[r, j] = b[N_Q + r] - A[r, 2] * out[2] - A[r, 3] * out[3] - A[r, 4] * out[4] - A[r, 5] * out[5]
+        else:
+            for k in range(N_Q):
+                out[k] = 0.0
+            for r in range(nc):
+                Bm[r, j] = b[N_Q + r]
+    lu_solve_many(LU, piv, nc, Bm, nz + 1)
+    for r in range(nc):
+        for j in range(nz):
+            Rt[j, N_Q + r] = Bm[r, j]
+        S[N_Q + r] = Bm[r, nz]
     for j in range(nz):
-        for i in range(n):
-            b[i] = 0.0
-        b[rows[j]] = 1.0
-        flex_solve(q, s, c, A, LU, piv, b, Rt[j], tmp)
         flex_mass_times(P, segs, seg_f, G, Rt[j], MR[j])
-    quadratic_terms(q[:N_Q], qd[:N_Q], s, c, b[:N_Q])
-    # (row 2, the stretch s = |C − B'|² − L², is an independent coordinate defined by a nonlinear expression: its
-    # row keeps −Φ̇_q q̇ = −2|Ċ − Ḃ'|², as quadratic_terms writes it)
-    chain_quadratic(qd, segs, slides, b[N_Q:])
-    flex_solve(q, s, c, A, LU, piv, b, S, tmp)
+    for k in range(n):
+        for j in range(nz):
+            RtT[k, j] = Rt[j, k]
+    # Mb[i, j] = Σ_k Rt[i, k] MR[j, k] (k ascending from 0.0, as one dot product would), rows i at once
     for j in range(nz):
         for i in range(j, nz):
-            acc = 0.0
-            for k in range(n):
-                acc += Rt[i, k] * MR[j, k]
-            Mb[i, j] = acc
-            Mb[j, i] = acc
+            Mb[j, i] = 0.0
+        for k in range(n):
+            mr = MR[j, k]
+            for i in range(j, nz):
+                Mb[j, i] += RtT[k, i] * mr
+        for i in range(j + 1, nz):
+            Mb[i, j] = Mb[j, i]
 
 
 @njit(cache=True)
-def flex_solve_acc(q, Q, nz, Rt, S, Mb, rhs, b, tmp, qdd, P, segs, seg_f, G, prescribed, alpha, tau):
-    """The force-dependent half of :func:`flex_accelerations` (after :func:`flex_mass`); Mb is overwritten."""
+def flex_solve_acc(q, Q, nz, Rt, RtT, S, Mb, rhs, b, tmp, qdd, P, segs, seg_f, G, prescribed, alpha, tau):
+    """The force-dependent part of the accelerations (after :func:`flex_mass`): z̈ from Rᵀ M R z̈ = Rᵀ (Q − M Ṙż),
+    q̈ = R z̈ + Ṙż into ``qdd``; False if Rᵀ M R is not SPD. With ``prescribed`` the crank angle is a driving
+    constraint (θ̈ = ``alpha``, the first independent coordinate): the other rows are solved with it known and the
+    drive torque (its multiplier) written to ``tau[0]``, as :func:`twin.reference.model.accelerations_prescribed`.
+    Mb is overwritten."""
     n = q.shape[0]
     flex_mass_times(P, segs, seg_f, G, S, tmp[:n])
     for i in range(n):
         b[i] = Q[i] - tmp[i]
-    for j in range(nz):
-        acc = 0.0
-        for k in range(n):
-            acc += Rt[j, k] * b[k]
-        rhs[j] = acc
+    for j in range(nz):   # rhs[j] = Σ_k Rt[j, k] b[k], k ascending
+        rhs[j] = 0.0
+    for k in range(n):
+        bk = b[k]
+        for j in range(nz):
+            rhs[j] += RtT[k, j] * bk
     if prescribed:
         m = nz - 1
         W = np.empty((m, m))
@@ -703,11 +756,12 @@ def flex_solve_acc(q, Q, nz, Rt, S, Mb, rhs, b, tmp, qdd, P, segs, seg_f, G, pre
             rhs[j + 1] = rw[j]
     elif not _cholesky_solve(Mb, rhs, nz):
         return False
-    for i in range(n):
-        acc = S[i]
-        for j in range(nz):
-            acc += Rt[j, i] * rhs[j]
-        qdd[i] = acc
+    for i in range(n):   # qdd[i] = S[i] + Σ_j Rt[j, i] rhs[j], j ascending
+        qdd[i] = S[i]
+    for j in range(nz):
+        rj = rhs[j]
+        for i in range(n):
+            qdd[i] += Rt[j, i] * rj
     return True
 
 
@@ -802,6 +856,8 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
     A = np.empty((nc, n))
     LU = np.empty((nc, nc))
     piv = np.empty(nc, dtype=np.int64)
+    Bm = np.empty((nc, nz + 1))
+    RtT = np.empty((n, nz))
     gmob = np.empty(2 * nz)
     Wmob = np.empty((nz, nz))
     motor = D.shape[0] > 0
@@ -838,7 +894,7 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
         if k == 0 and not factor(q, segs, slides, indep, A, LU, piv):   # later steps: the projection's
             status = NOT_FINITE
             break
-        flex_mass(P, G, q, qd, segs, seg_f, slides, A, LU, piv, rows, nz, Rt, S, Mb, MR, b, tmp)
+        flex_mass(P, G, q, qd, segs, seg_f, slides, A, LU, piv, rows, nz, Rt, S, Mb, MR, b, Bm, RtT)
         generalized_forces(P, qs, qds, tau, cst_a, cst_b, cst_c, Q[:N_Q], ja, jb, jc)
         # the contact forces on the rod act on its eyes (end_B, end_C), not spread as on a rigid rod, with the
         # law's damping bounded by the pair's effective mass (_bound_damping)
@@ -865,7 +921,7 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
         for i in range(N_Q):   # the mechanism's own forces (the drive train's accounts read them)
             Qb[i] = Q[i]
         diss = chain_forces(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G, Q)
-        if not flex_solve_acc(q, Q, nz, Rt, S, Mb, rhs, b, tmp, qdd, P, segs, seg_f, G, prescribed,
+        if not flex_solve_acc(q, Q, nz, Rt, RtT, S, Mb, rhs, b, tmp, qdd, P, segs, seg_f, G, prescribed,
                               alpha_ref[k] if prescribed else 0.0, tau_p):
             status = NOT_FINITE
             break
