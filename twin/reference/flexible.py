@@ -35,7 +35,10 @@ Clearance joints: the contact force on the rod acts on the eye's centre (B' or C
 the end segment (the rigid model spreads a force on the rod over B' and C, which on a flexible rod would add a
 spurious axial pair R_b f_N / L). Where it differs from the rigid model's conventions: the friction's sliding speed
 uses the chord's angular velocity (C − B') for the eye's spin, not the end segment's (a difference of the rod's
-deformation rate); the contact stiffnesses are resolved with the rigid rod's effective mass.
+deformation rate); the contact stiffnesses are resolved with the rigid rod's effective mass; the law's (explicit)
+damping is bounded at the dead-beat value m̂/(2h), m̂ the flexible model's effective mass along the normal
+(:func:`_bound_damping`, as the MuJoCo engine's force path): unbounded, against the light housing it rang at the
+step's Nyquist rate.
 Scope: every drive (crank PID, prescribed crank, motor and torque through the drive train), symplectic Euler,
 clearances at B and C (A and the guide ideal).
 """
