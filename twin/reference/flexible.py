@@ -711,16 +711,13 @@ def flex_mass(P, G, q, qd, segs, seg_f, slides, A, LU, piv, rows, nz, Rt, S, Mb,
     for k in range(n):
         for j in range(nz):
             RtT[k, j] = Rt[j, k]
-    # Mb[i, j] = Σ_k Rt[i, k] MR[j, k] (k ascending from 0.0, as one dot product would), rows i at once
-    for j in range(nz):
+    for j in range(nz):   # (independent dot products: the processor overlaps them)
         for i in range(j, nz):
-            Mb[j, i] = 0.0
-        for k in range(n):
-            mr = MR[j, k]
-            for i in range(j, nz):
-                Mb[j, i] += RtT[k, i] * mr
-        for i in range(j + 1, nz):
-            Mb[i, j] = Mb[j, i]
+            acc = 0.0
+            for k in range(n):
+                acc += Rt[i, k] * MR[j, k]
+            Mb[i, j] = acc
+            Mb[j, i] = acc
 
 
 @njit(cache=True)
