@@ -238,9 +238,9 @@ def test_simulate_test6_flexible_runs_in_both_engines(engine, tmp_path, capsys):
 
 @pytest.mark.long
 @pytest.mark.xfail(strict=True, reason=(
-    "known gap (analysis/results/structure/agreement.md): test 12's AC2 12.3 dB at 10 kHz (the reference's fn_B "
-    "~20 dB above MuJoCo's at 10-20 kHz, not a step effect: the same at h/2; its Nyquist ringing gone since the "
-    "contact damping is bounded at m_hat/(2h)), AC1 4.4 dB at 1.26 kHz; test 6 within 1.65 dB (not 1); test 3's "
+    "known gap (analysis/results/structure/agreement.md): test 12's AC2 12.3 dB at 10 kHz, AC1 4.4 dB at 1.26 kHz "
+    "(the reference's step error at 1e-5 s: refining h it converges to MuJoCo's bands; its Nyquist ringing at B "
+    "is gone since the contact damping is bounded at m_hat/(2h)); test 6 within 1.65 dB (not 1); test 3's "
     "AC5 2.2 dB at 10 kHz (MuJoCo's ideal C is a soft connect of time constant 2 steps: a likely cause, not "
     "verified)"))
 @pytest.mark.parametrize("test", [3, 6, 12])
