@@ -35,7 +35,10 @@ Clearance joints: the contact force on the rod acts on the eye's centre (B' or C
 the end segment (the rigid model spreads a force on the rod over B' and C, which on a flexible rod would add a
 spurious axial pair R_b f_N / L). Where it differs from the rigid model's conventions: the friction's sliding speed
 uses the chord's angular velocity (C − B') for the eye's spin, not the end segment's (a difference of the rod's
-deformation rate); the contact stiffnesses are resolved with the rigid rod's effective mass.
+deformation rate); the contact stiffnesses are resolved with the rigid rod's effective mass; the law's (explicit)
+damping is bounded at the dead-beat value m̂/(2h), m̂ the flexible model's effective mass along the normal
+(:func:`_bound_damping`, as the MuJoCo engine's force path): unbounded, against the light housing it rang at the
+step's Nyquist rate.
 Scope: every drive (crank PID, prescribed crank, motor and torque through the drive train), symplectic Euler,
 clearances at B and C (A and the guide ideal).
 """
@@ -48,11 +51,14 @@ import math
 import numpy as np
 
 from twin.jit import njit
-from twin.natural_coordinates import (N_Q, N_Z, P_CLR_B, P_CLR_C, P_DOFF, P_FGUIDE, P_GX, P_GY, P_H, P_IMAX,
+from twin.natural_coordinates import (N_Q, N_Z, P_CLIN_B, P_CLIN_C, P_CLR_G, P_DMAX, P_E, P_FRIC_LAW, P_K_B,
+                                      P_K_C, P_LAW, P_MU0, P_MUS, P_N, P_RPIN_B, P_VD, P_VS,
+                                      P_CLR_B, P_CLR_C, P_DOFF, P_FGUIDE, P_GX, P_GY, P_H, P_IMAX,
                                       P_KI, P_KP, P_KV, P_L, P_M1, P_M2, P_M3, P_NEWTON_MAXIT, P_NEWTON_TOL,
                                       P_OUT_ENERGY, P_R, P_RBUSH_B, P_RBUSH_C, P_SENS, P_V0, P_V1, P_XG1, P_XG2, S_I, S_IN_A, S_IN_B,
                                       S_IN_C, S_Q, S_QD, S_VIMP_A, S_VIMP_B, S_VIMP_C, energy, independent_rows,
                                       kinetic_energy, mass_times, quadratic_terms, residual, solve_aug)
+from twin.physics.contact import adams_friction_force, friction_force, normal_force
 from twin.reference.model import (N_OUT, NEWTON_FAILED, NOT_FINITE, O_ACC, O_EKIN, O_EPOT, OK, _cholesky_solve,
                                   _outputs, _rod_force, generalized_forces)
 from twin.reference import drivetrain as DT
@@ -346,23 +352,110 @@ def _moment(q, a, b, m, Q):
 
 
 @njit(cache=True)
-def _eye_contact(P, qs, q, jo, eye, rb, a, b, Q):
+def _eye_contact(P, qs, q, jo, fn0, ft0, eye, rb, a, b, Q):
     """Move a clearance joint's contact force on the rod from the rigid rod's distribution over B' and C
-    (:func:`twin.reference.model._rod_force`, which the joint's element applied) to the eye it acts on: the force at
-    the eye's centre (index ``eye``: 2 for B', 4 for C) and its moment about it, −R_b f_T, on the end segment a→b
-    (the housing turns with it)."""
+    (:func:`twin.reference.model._rod_force`, which the joint's element applied with the forces ``fn0``, ``ft0``) to
+    the eye it acts on: the force of ``jo`` (f_N, f_T: the element's, or the damping-bounded ones of
+    :func:`_bound_damping`) at the eye's centre (index ``eye``: 2 for B', 4 for C) and its moment about it,
+    −R_b f_T, on the end segment a→b (the housing turns with it)."""
     ex, ey = jo[0], jo[1]
     d = math.sqrt(ex * ex + ey * ey)
     if d > 0.0:
         nx, ny = ex / d, ey / d
     else:
         nx, ny = 1.0, 0.0
-    fx = -jo[3] * nx - jo[4] * ny      # on the pin: −f_N n + f_T t, t = (−n_y, n_x)
-    fy = -jo[3] * ny + jo[4] * nx
+    fx = -fn0 * nx - ft0 * ny      # on the pin: −f_N n + f_T t, t = (−n_y, n_x)
+    fy = -fn0 * ny + ft0 * nx
     _rod_force(P, qs, fx, fy, qs[eye] + rb * nx, qs[eye + 1] + rb * ny, Q)   # undoes the element's −F
+    fx = -jo[3] * nx - jo[4] * ny
+    fy = -jo[3] * ny + jo[4] * nx
     Q[eye] -= fx
     Q[eye + 1] -= fy
     _moment(q, a, b, -rb * jo[4], Q)
+
+
+@njit(cache=True)
+def normal_mobility(Rt, Mb, nz, prescribed, pin_x, pin_y, eye_x, eye_y, nx, ny, g, W):
+    """1/m̂ [1/kg]: the relative normal acceleration of a clearance joint's pin (coordinates ``pin_x``, ``pin_y``;
+    ``pin_y`` −1 if the pin cannot move along y) from its eye (``eye_x``, ``eye_y``) per newton of a contact force
+    pair along n = (nx, ny): J R (Rᵀ M R)⁻¹ Rᵀ Jᵀ from :func:`flex_mass`'s Rᵀ and Rᵀ M R (with ``prescribed`` the
+    crank angle, a driving constraint, does not move). m̂ is the flexible model's effective mass along the
+    normal (the rod's light housing, the chain behind it, the crank or the slider). ``g``, ``W`` scratch."""
+    j0 = 1 if prescribed else 0
+    m = nz - j0
+    for j in range(m):
+        r = Rt[j + j0]
+        vy = r[pin_y] if pin_y >= 0 else 0.0
+        g[j] = nx * (r[pin_x] - r[eye_x]) + ny * (vy - r[eye_y])
+        W[j, :m] = Mb[j + j0, j0:nz]
+    y = g[m:2 * m]
+    y[:] = g[:m]
+    if not _cholesky_solve(W, y, m):
+        return 0.0
+    mob = 0.0
+    for j in range(m):
+        mob += g[j] * y[j]
+    return mob
+
+
+@njit(cache=True)
+def _bound_damping(P, qs, qds, pin_b, cst, jo, mob, h, Q):
+    """Bound the contact law's damping at joint B (``pin_b``) or C at the dead-beat value m̂/(2h) (m̂ = 1/``mob``,
+    :func:`normal_mobility`; h the step), as the MuJoCo engine's force source does: the law's damping c (its
+    force at unit approach rate less its elastic force) beyond m̂/(2h) is scaled to it — the law evaluated at the
+    rate δ̇ m̂/(2 h c) — and the friction follows the new normal force. An explicit damping c acting on the mass
+    m̂ decays the rate by 1 − c h/m̂ per step: beyond 2m̂/h it diverges, beyond m̂/h it alternates (the step's
+    Nyquist ringing); at m̂/(2h) the rate halves each step. The element's forces (``jo`` [3:5], which it applied
+    to ``Q`` on both bodies) are replaced in ``jo`` and on the pin's side of ``Q`` (the crank, or the slider); the
+    rod's side is :func:`_eye_contact`'s. Returns the element's (f_N, f_T)."""
+    fn0, ft0 = jo[3], jo[4]
+    delta = jo[2]
+    if not (delta > 0.0 and mob > 0.0):
+        return fn0, ft0
+    if pin_b:
+        edx, edy = qds[0] - qds[2], qds[1] - qds[3]
+        K, clin, rb = P[P_K_B], P[P_CLIN_B], P[P_RBUSH_B]
+    else:
+        edx = qds[6] - qds[4]
+        edy = (qds[10] - qds[5]) if P[P_CLR_G] > 0.5 else -qds[5]
+        K, clin, rb = P[P_K_C], P[P_CLIN_C], P[P_RBUSH_C]
+    ex, ey = jo[0], jo[1]
+    d = math.sqrt(ex * ex + ey * ey)
+    nx, ny = (ex / d, ey / d) if d > 0.0 else (1.0, 0.0)
+    code = int(P[P_LAW])
+    fe = normal_force(code, delta, 0.0, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX])
+    c = normal_force(code, delta, 1.0, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX]) - fe
+    cmax = 0.5 / (h * mob)
+    if not c > cmax:
+        return fn0, ft0
+    rate = (nx * edx + ny * edy) * (cmax / c)
+    fn = normal_force(code, delta, rate, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX])
+    tx, ty = -ny, nx
+    ux, uy = qs[4] - qs[2], qs[5] - qs[3]
+    w2 = (ux * (qds[5] - qds[3]) - uy * (qds[4] - qds[2])) / (ux * ux + uy * uy)
+    vt = edx * tx + edy * ty - w2 * rb
+    if pin_b:
+        vt += qds[7] * P[P_RPIN_B]
+    if fn <= 0.0:
+        ft = 0.0
+    elif P[P_FRIC_LAW] > 0.5:
+        ft = adams_friction_force(vt, fn, P[P_MUS], P[P_MU0], P[P_VS], P[P_VD])
+    else:
+        ft = friction_force(vt, fn, P[P_MU0], P[P_V0], P[P_V1])
+    dfx = -(fn - fn0) * nx + (ft - ft0) * tx   # the change of the force on the pin
+    dfy = -(fn - fn0) * ny + (ft - ft0) * ty
+    if pin_b:
+        pcx, pcy = qs[0] - qs[8] + P[P_RPIN_B] * nx, qs[1] - qs[9] + P[P_RPIN_B] * ny
+        Q[7] += pcx * dfy - pcy * dfx
+        Q[8] += dfx
+        Q[9] += dfy
+    else:
+        Q[6] += dfx
+        if P[P_CLR_G] > 0.5:
+            Q[10] += dfy
+    jo[3] = fn
+    jo[4] = ft
+    return fn0, ft0
 
 
 @njit(cache=True)
@@ -546,40 +639,104 @@ def flex_project(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, res, dq, b
 
 
 @njit(cache=True)
-def flex_accelerations(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, Q, rows, nz, Rt, S, Mb, rhs, MR,
-                       b, tmp, qdd, prescribed, alpha, tau):
-    """q̈ = R z̈ + Ṙż from Rᵀ M R z̈ = Rᵀ (Q − M Ṙż), A already factored at q. False if not SPD. With
-    ``prescribed`` the crank angle is a driving constraint (θ̈ = ``alpha``, the first independent coordinate):
-    the other rows are solved with it known and the drive torque (its multiplier) written to ``tau[0]``, as
-    :func:`twin.reference.model.accelerations_prescribed`."""
-    n = q.shape[0]
-    s, c = math.sin(q[7]), math.cos(q[7])
-    for j in range(nz):
-        for i in range(n):
-            b[i] = 0.0
-        b[rows[j]] = 1.0
-        flex_solve(q, s, c, A, LU, piv, b, Rt[j], tmp)
-        flex_mass_times(P, segs, seg_f, G, Rt[j], MR[j])
-    quadratic_terms(q[:N_Q], qd[:N_Q], s, c, b[:N_Q])
-    # (row 2, the stretch s = |C − B'|² − L², is an independent coordinate defined by a nonlinear expression: its
-    # row keeps −Φ̇_q q̇ = −2|Ċ − Ḃ'|², as quadratic_terms writes it)
-    chain_quadratic(qd, segs, slides, b[N_Q:])
-    flex_solve(q, s, c, A, LU, piv, b, S, tmp)
-    flex_mass_times(P, segs, seg_f, G, S, tmp[:n])
+def lu_solve_many(LU, piv, n, B, m):
+    """:func:`lu_solve` on the first ``m`` columns of B (n × ≥ m) at once, B overwritten. Each column's arithmetic
+    is :func:`lu_solve`'s, operation for operation (bit for bit the same result); the columns being independent,
+    the inner loops run across them instead of along one dependent sum."""
+    for k in range(n):
+        p = piv[k]
+        if p != k:
+            for c in range(m):
+                t = B[k, c]
+                B[k, c] = B[p, c]
+                B[p, c] = t
     for i in range(n):
-        b[i] = Q[i] - tmp[i]
+        for j in range(i):
+            f = LU[i, j]
+            for c in range(m):
+                B[i, c] -= f * B[j, c]
+    for i in range(n - 1, -1, -1):
+        for j in range(i + 1, n):
+            f = LU[i, j]
+            for c in range(m):
+                B[i, c] -= f * B[j, c]
+        d = LU[i, i]
+        for c in range(m):
+            B[i, c] = B[i, c] / d
+
+
+@njit(cache=True)
+def flex_mass(P, G, q, qd, segs, seg_f, slides, A, LU, piv, rows, nz, Rt, S, Mb, MR, b, Bm, RtT):
+    """The force-independent part of the accelerations q̈ = R z̈ + Ṙż (Rᵀ M R z̈ = Rᵀ (Q − M Ṙż), A already
+    factored at q): Rᵀ (rows of R, the unit right-hand sides of the independent rows) into ``Rt`` and its
+    transpose ``RtT``, M R into ``MR``, Ṙż into ``S`` and Rᵀ M R into ``Mb``. Each column as
+    :func:`flex_solve` would give it, the chain block's solves done together (:func:`lu_solve_many`; ``Bm``
+    (n − 12) × (nz + 1) scratch). :func:`flex_solve_acc` completes the step with the forces."""
+    n = q.shape[0]
+    nc = A.shape[0]
+    s, c = math.sin(q[7]), math.cos(q[7])
+    for j in range(nz + 1):
+        if j < nz:
+            for i in range(n):
+                b[i] = 0.0
+            b[rows[j]] = 1.0
+            out = Rt[j]
+        else:
+            quadratic_terms(q[:N_Q], qd[:N_Q], s, c, b[:N_Q])
+            # (row 2, the stretch s = |C − B'|² − L², is an independent coordinate defined by a nonlinear
+            # expression: its row keeps −Φ̇_q q̇ = −2|Ċ − Ḃ'|², as quadratic_terms writes it)
+            chain_quadratic(qd, segs, slides, b[N_Q:])
+            out = S
+        rigid = False
+        for k in range(N_Q):
+            if b[k] != 0.0:
+                rigid = True
+                break
+        if rigid:   # as flex_solve: the rigid block in closed form, its effect on the chain's rows
+            solve_aug(q, s, c, b, out)
+            for r in range(nc):
+                Bm[r, j] = b[N_Q + r] - A[r, 2] * out[2] - A[r, 3] * out[3] - A[r, 4] * out[4] - A[r, 5] * out[5]
+        else:
+            for k in range(N_Q):
+                out[k] = 0.0
+            for r in range(nc):
+                Bm[r, j] = b[N_Q + r]
+    lu_solve_many(LU, piv, nc, Bm, nz + 1)
+    for r in range(nc):
+        for j in range(nz):
+            Rt[j, N_Q + r] = Bm[r, j]
+        S[N_Q + r] = Bm[r, nz]
     for j in range(nz):
-        acc = 0.0
-        for k in range(n):
-            acc += Rt[j, k] * b[k]
-        rhs[j] = acc
-    for j in range(nz):
+        flex_mass_times(P, segs, seg_f, G, Rt[j], MR[j])
+    for k in range(n):
+        for j in range(nz):
+            RtT[k, j] = Rt[j, k]
+    for j in range(nz):   # (independent dot products: the processor overlaps them)
         for i in range(j, nz):
             acc = 0.0
             for k in range(n):
                 acc += Rt[i, k] * MR[j, k]
             Mb[i, j] = acc
             Mb[j, i] = acc
+
+
+@njit(cache=True)
+def flex_solve_acc(q, Q, nz, Rt, RtT, S, Mb, rhs, b, tmp, qdd, P, segs, seg_f, G, prescribed, alpha, tau):
+    """The force-dependent part of the accelerations (after :func:`flex_mass`): z̈ from Rᵀ M R z̈ = Rᵀ (Q − M Ṙż),
+    q̈ = R z̈ + Ṙż into ``qdd``; False if Rᵀ M R is not SPD. With ``prescribed`` the crank angle is a driving
+    constraint (θ̈ = ``alpha``, the first independent coordinate): the other rows are solved with it known and the
+    drive torque (its multiplier) written to ``tau[0]``, as :func:`twin.reference.model.accelerations_prescribed`.
+    Mb is overwritten."""
+    n = q.shape[0]
+    flex_mass_times(P, segs, seg_f, G, S, tmp[:n])
+    for i in range(n):
+        b[i] = Q[i] - tmp[i]
+    for j in range(nz):   # rhs[j] = Σ_k Rt[j, k] b[k], k ascending
+        rhs[j] = 0.0
+    for k in range(n):
+        bk = b[k]
+        for j in range(nz):
+            rhs[j] += RtT[k, j] * bk
     if prescribed:
         m = nz - 1
         W = np.empty((m, m))
@@ -599,11 +756,12 @@ def flex_accelerations(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, Q, r
             rhs[j + 1] = rw[j]
     elif not _cholesky_solve(Mb, rhs, nz):
         return False
-    for i in range(n):
-        acc = S[i]
-        for j in range(nz):
-            acc += Rt[j, i] * rhs[j]
-        qdd[i] = acc
+    for i in range(n):   # qdd[i] = S[i] + Σ_j Rt[j, i] rhs[j], j ascending
+        qdd[i] = S[i]
+    for j in range(nz):
+        rj = rhs[j]
+        for i in range(n):
+            qdd[i] += Rt[j, i] * rj
     return True
 
 
@@ -698,6 +856,10 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
     A = np.empty((nc, n))
     LU = np.empty((nc, nc))
     piv = np.empty(nc, dtype=np.int64)
+    Bm = np.empty((nc, nz + 1))
+    RtT = np.empty((n, nz))
+    gmob = np.empty(2 * nz)
+    Wmob = np.empty((nz, nz))
     motor = D.shape[0] > 0
     prescribed = alpha_ref.shape[0] > 0
     nsteps = setpoint.shape[0] if motor else (alpha_ref.shape[0] if prescribed else theta_ref.shape[0])
@@ -729,13 +891,28 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
         if shift:   # the joint C's pin C' rides on the guide: its eccentricity is measured from d_off + y_g
             qs[5] -= q[10]
             qds[5] -= qd[10]
+        if k == 0 and not factor(q, segs, slides, indep, A, LU, piv):   # later steps: the projection's
+            status = NOT_FINITE
+            break
+        flex_mass(P, G, q, qd, segs, seg_f, slides, A, LU, piv, rows, nz, Rt, S, Mb, MR, b, Bm, RtT)
         generalized_forces(P, qs, qds, tau, cst_a, cst_b, cst_c, Q[:N_Q], ja, jb, jc)
-        # the contact forces on the rod act on its eyes (end_B, end_C), not spread as on a rigid rod
-        if P[P_CLR_B] > 0.5 and jb[3] > 0.0:
-            _eye_contact(P, qs, q, jb, 2, P[P_RBUSH_B], segs[0, 0], segs[0, 1], Q)
-        if P[P_CLR_C] > 0.5 and jc[3] > 0.0:
-            last = segs.shape[0] - 1
-            _eye_contact(P, qs, q, jc, 4, P[P_RBUSH_C], segs[last, 0], segs[last, 1], Q)
+        # the contact forces on the rod act on its eyes (end_B, end_C), not spread as on a rigid rod, with the
+        # law's damping bounded by the pair's effective mass (_bound_damping)
+        if P[P_CLR_B] > 0.5 and jb[2] > 0.0:
+            d = math.sqrt(jb[0] * jb[0] + jb[1] * jb[1])
+            mob = normal_mobility(Rt, Mb, nz, prescribed, 0, 1, 2, 3, jb[0] / d, jb[1] / d, gmob, Wmob) \
+                if d > 0.0 else 0.0
+            fn0, ft0 = _bound_damping(P, qs, qds, True, cst_b, jb, mob, h, Q)
+            if fn0 > 0.0 or jb[3] > 0.0:
+                _eye_contact(P, qs, q, jb, fn0, ft0, 2, P[P_RBUSH_B], segs[0, 0], segs[0, 1], Q)
+        if P[P_CLR_C] > 0.5 and jc[2] > 0.0:
+            d = math.sqrt(jc[0] * jc[0] + jc[1] * jc[1])
+            mob = normal_mobility(Rt, Mb, nz, prescribed, 6, 10 if shift else -1, 4, 5, jc[0] / d, jc[1] / d, gmob,
+                                  Wmob) if d > 0.0 else 0.0
+            fn0, ft0 = _bound_damping(P, qs, qds, False, cst_c, jc, mob, h, Q)
+            if fn0 > 0.0 or jc[3] > 0.0:
+                last = segs.shape[0] - 1
+                _eye_contact(P, qs, q, jc, fn0, ft0, 4, P[P_RBUSH_C], segs[last, 0], segs[last, 1], Q)
         if shift and jc[3] > 0.0:   # the contact's normal component on the pin, which the ideal guide took, moves it
             ex, ey = jc[0], jc[1]
             d = math.sqrt(ex * ex + ey * ey)
@@ -744,11 +921,8 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
         for i in range(N_Q):   # the mechanism's own forces (the drive train's accounts read them)
             Qb[i] = Q[i]
         diss = chain_forces(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G, Q)
-        if k == 0 and not factor(q, segs, slides, indep, A, LU, piv):   # later steps: the projection's
-            status = NOT_FINITE
-            break
-        if not flex_accelerations(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, Q, rows, nz, Rt, S, Mb, rhs,
-                                  MR, b, tmp, qdd, prescribed, alpha_ref[k] if prescribed else 0.0, tau_p):
+        if not flex_solve_acc(q, Q, nz, Rt, RtT, S, Mb, rhs, b, tmp, qdd, P, segs, seg_f, G, prescribed,
+                              alpha_ref[k] if prescribed else 0.0, tau_p):
             status = NOT_FINITE
             break
         if prescribed:
