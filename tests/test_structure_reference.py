@@ -212,7 +212,7 @@ def test_normal_mobility_is_the_relative_acceleration_per_newton():
     pin B, and the opposite on the rod's eye B') changes the relative normal acceleration n·(B̈ − B̈') by −1/m̂ in the
     flexible model's own accelerations; and m̂ lies between the housing's mass and the whole mechanism's."""
     from twin.natural_coordinates import N_Q, N_Z
-    from twin.reference import flexible as F
+    from twin.reference import flexible_kernels as F
 
     cfg = preset(12).replace(**{"structure.mode": "flexible"})
     run, _ = _run(cfg, 0.7, drive=True)
