@@ -17,6 +17,8 @@ import argparse
 import subprocess
 from pathlib import Path
 
+from twin.provenance import with_stamp_line
+
 VARIANTS = {  # label: (engine, extra overrides)
     "mujoco (contact law rows)": ("mujoco", {}),
     "mujoco (contact as force)": ("mujoco", {"mujoco.contact_source": "force"}),
@@ -73,7 +75,7 @@ def main() -> None:
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.with_suffix(".tmp")
-    tmp.write_text(text)
+    tmp.write_text(with_stamp_line(text))
     tmp.replace(out)
     print(f"wrote {out}")
 

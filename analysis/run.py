@@ -124,6 +124,16 @@ SCRIPTS: dict[str, Script] = {
     "identify/start_angle_check": Script(f"{R}/identify/start_angle.json (--json)", "2 min",
                                          args=("--json", f"{R}/identify/start_angle.json")),
     "identify/bench_identify": Script("prints the time to identify a 2 s recording against reading it", "~1 min"),
+    "structure_modes": Script("prints the flexible rod's modes against the closed forms (results/structure_modes.txt "
+                              "by hand)", "~10 s"),
+    "structure_cost": Script("prints flexible / rigid cost per simulated second, test 12, per engine", "~3 min"),
+    "structure_stability": Script("prints the flexible structure's stability over random scenes, both engines",
+                                  "~5 min"),
+    "bench_structure": Script(f"{R}/structure/bench_structure.md (flexible / rigid cost, side by side)", "~5 min"),
+    "structure_agreement": Script(f"{R}/structure/agreement.md, .json (third-octave bands, MuJoCo against the "
+                                  "reference)", "~10 min"),
+    "structure_fig15": Script(f"{R}/structure_fig15/motor (S003 Fig. 15 and §6 rigid against flexible)", "~20 min",
+                              long=True),
 }
 
 #: folders of analysis/results/ written by a twin command rather than a script here

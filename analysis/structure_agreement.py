@@ -20,6 +20,8 @@ import json
 import subprocess
 from pathlib import Path
 
+from twin.provenance import stamped, with_stamp_line
+
 ACCELS = ("AC1", "AC2", "AC3", "AC4", "AC5", "AC6")
 
 
@@ -86,12 +88,14 @@ def main() -> None:
     print(text)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    for path, body in ((out, text), (out.with_suffix(".json"), json.dumps(
-            {"header": head, "band_centres_hz": centres.tolist(), "db": {str(t): v for t, v in results.items()}},
-            indent=1))):
-        tmp = path.with_suffix(path.suffix + ".tmp")
-        tmp.write_text(body)
-        tmp.replace(path)
+    tmp = out.with_suffix(out.suffix + ".tmp")
+    tmp.write_text(with_stamp_line(text))
+    tmp.replace(out)
+    js = out.with_suffix(".json")
+    tmp = js.with_suffix(".json.tmp")
+    tmp.write_text(json.dumps(stamped({"header": head, "band_centres_hz": centres.tolist(),
+                                       "db": {str(t): v for t, v in results.items()}}), indent=1))
+    tmp.replace(js)
     print(f"wrote {out} and {out.with_suffix('.json')}")
 
 

@@ -28,6 +28,8 @@ from pathlib import Path
 
 import numpy as np
 
+from twin.provenance import figure_metadata, stamped
+
 from twin import __version__
 from twin.config import preset
 from twin.simulation import simulate_run
@@ -150,7 +152,7 @@ def main() -> None:
         print(f"{mode}: largest increases in {summary[mode]['largest_increase_bands_hz']} "
               f"({summary[mode]['largest_increase_db']} dB); impact decay to 10 %: "
               f"{summary[mode]['impact_decay_ms']}")
-    for name, text in (("bands.csv", "\n".join(lines) + "\n"), ("summary.json", json.dumps(summary, indent=2) + "\n")):
+    for name, text in (("bands.csv", "\n".join(lines) + "\n"), ("summary.json", json.dumps(stamped(summary), indent=2) + "\n")):
         fd, tmp = tempfile.mkstemp(dir=out)
         with os.fdopen(fd, "w") as fh:
             fh.write(text)
@@ -175,7 +177,7 @@ def main() -> None:
     fig.tight_layout()
     fd, tmp = tempfile.mkstemp(dir=out, suffix=".png")
     os.close(fd)
-    fig.savefig(tmp, dpi=110)
+    fig.savefig(tmp, dpi=110, metadata=figure_metadata())
     os.replace(tmp, out / "fig15.png")
     print(f"wrote {out}")
 

@@ -257,6 +257,10 @@ def ws(tmp_path_factory) -> Path:
 #: (command line, fragment the one-line error must contain). {ws} is the workspace, {LONG} a name
 #: longer than NAME_MAX once suffixed.
 CASES: list[tuple[str, str]] = [
+    # ---- record: outputs that are inputs or links, configurations that are not what they claim
+    ("record --config {ws}/fifo.toml --out {ws}/r.mcap", "not a regular file"),
+    ("record --duration 0.01 --out {ws}/r.mcap --json {ws}/r.mcap", "--json: must end in .json"),
+    ("record --duration 0.01 --static nan --out {ws}/r.mcap", "--static: must lie in [0.1, 60] s"),
     # ---- simulate: configuration files that are not what they claim
     ("simulate --config {ws}/fifo.toml", "not a regular file"),
     ("simulate --config /dev/zero", "not a regular file"),
@@ -532,7 +536,7 @@ CASES: list[tuple[str, str]] = [
     ("check contact --out ''", "--out"),
     ("check contact --out {ws}/{LONG}.json", "--out"),
     ("check contact --out {ws}/loop1/c.json", "--out"),
-    ("calibrate contact --out ''", "--out"),
+    ("calibrate {ws}/rec.mcap --params contact.mu0 --out ''", "--out"),
 ]
 
 

@@ -158,16 +158,15 @@ def test_a_trace_config_without_duration_runs_for_the_trace(tmp_path):
     assert load_config(tmp_path / "d.toml").simulation.duration_s == 0.5
 
 
-def test_check_contact_and_its_deprecated_alias_behave_alike(tmp_path, monkeypatch, capsys):
-    """``twin check contact`` and the deprecated ``twin calibrate contact`` take the same options
-    and print and write the same; only the alias adds its one-line note on stderr. The check
-    itself is replaced by a fixed report here (this is the command line's wiring; the check's
-    physics is tests/test_calibration.py)."""
+def test_check_contact_wiring(tmp_path, monkeypatch, capsys):
+    """``twin check contact`` passes its options to the check and prints and writes its report.
+    The check itself is replaced by a fixed report here (this is the command line's wiring; the
+    check's physics is tests/test_calibration.py). Its old name ``twin calibrate contact`` is gone:
+    ``twin calibrate`` fits configuration fields (tests/test_calibrate_fit.py)."""
     import json
 
     import twin.studies.contact_check as contact_check_module
     from twin.cli import main
-    from twin.commands.check import DEPRECATION_NOTE
 
     seen = []
 
@@ -179,16 +178,10 @@ def test_check_contact_and_its_deprecated_alias_behave_alike(tmp_path, monkeypat
                                                 "static_error": 1e-6, "capture_agrees": True}}}
 
     monkeypatch.setattr(contact_check_module, "contact_check", fake_check)
-    outputs = {}
-    for name in ("check", "calibrate"):
-        out = tmp_path / f"{name}.json"
-        assert main([name, "contact", "--joints", "B", "--no-progress", "--out", str(out)]) == 0
-        cap = capsys.readouterr()
-        outputs[name] = (cap.out.replace(str(out), "OUT"), out.read_text(), cap.err)
-    assert seen == [("B",), ("B",)]
-    assert outputs["check"][:2] == outputs["calibrate"][:2]
-    assert "| B:0.1 | 0.80/1.30/3.50 | 0.04 | 0.20 | 0.05 | 0.000 % | same |" in outputs["check"][0]
-    assert json.loads(outputs["check"][1])["ok"] is True
-    assert DEPRECATION_NOTE not in outputs["check"][2]
-    assert outputs["calibrate"][2].strip() == DEPRECATION_NOTE
-    assert len(DEPRECATION_NOTE.splitlines()) == 1
+    out = tmp_path / "check.json"
+    assert main(["check", "contact", "--joints", "B", "--no-progress", "--out", str(out)]) == 0
+    cap = capsys.readouterr()
+    assert seen == [("B",)]
+    assert "| B:0.1 | 0.80/1.30/3.50 | 0.04 | 0.20 | 0.05 | 0.000 % | same |" in cap.out
+    assert json.loads(out.read_text())["ok"] is True
+    assert cap.err == ""

@@ -104,7 +104,7 @@ def test_timestep_must_divide_the_output_period():
     # a configuration that exists can be run: the rule is checked when it is made
     with pytest.raises(ConfigError, match="does not divide"):
         preset(6).replace(**{"simulation.timestep_s": 7e-6})
-    with pytest.raises(ConfigError, match="output-rate"):  # 2e-5 s does not divide 1/100 kHz' period
+    with pytest.raises(ConfigError, match="output_rate_hz"):  # 2e-5 s does not divide 1/100 kHz' period
         preset(6).replace(**{"simulation.timestep_s": 3e-5})
     cfg = preset(6).replace(**{"simulation.timestep_s": 2e-5, "sensors.output_rate_hz": 50_000.0})
     assert (cfg.output_stride, cfg.n_samples) == (1, 100_000)

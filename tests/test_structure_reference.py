@@ -181,3 +181,69 @@ def test_flexible_runs_with_the_drive_train_the_prescribed_crank_and_refuses_wha
         ReferenceEngine(base.replace(**{"joints.clearance_a_mm": 0.1}))
     with pytest.raises(ConfigError, match=r"^sensors\.channels: the optional group 'drive_energy'"):
         ReferenceEngine(base.replace(**{"drive.mode": "motor", "sensors.channels": ["accel", "drive_energy"]}))
+
+
+def _nyquist_fraction(h):
+    """Test 12 (B and C clearances, 750 rpm), flexible, reference engine at step ``h``: the share of fn_B's energy
+    (Hann window, mean removed, t in [0.2, 0.6] s, sampled at 100 kHz) in the 40-50 kHz band."""
+    import twin
+
+    cfg = preset(12).replace(**{"structure.mode": "flexible", "simulation.duration_s": 0.6,
+                                "simulation.engine": "reference", "simulation.timestep_s": h})
+    r = twin.simulate(cfg)
+    x = np.asarray(r["fn_B"], float)[int(0.2 * r.rate_hz):]
+    X = np.abs(np.fft.rfft((x - x.mean()) * np.hanning(len(x)))) ** 2
+    f = np.fft.rfftfreq(len(x), 1.0 / r.rate_hz)
+    return X[(f >= 40e3) & (f <= 50e3)].sum() / X[f > 0].sum()
+
+
+@pytest.mark.long
+def test_contact_force_at_B_does_not_ring_at_the_steps_nyquist_rate():
+    """The contact law's explicit damping on the rod's light housing at B, unbounded, rang at 50 kHz, the Nyquist
+    rate of h = 1e-5 s (a quarter of fn_B's energy in 40-50 kHz on test 12). Independent basis: the same run at h/2,
+    whose Nyquist rate is 100 kHz, outside the band: the band's share at h is no more than 10x its share there (or
+    1e-9, a floor of round-off; measured 4e-13 at h and 2e-12 at h/2 with the bound, 0.25 and 8e-16 without)."""
+    at_h, at_half = _nyquist_fraction(1e-5), _nyquist_fraction(5e-6)
+    assert at_h <= max(10.0 * at_half, 1e-9), (at_h, at_half)
+
+
+def test_normal_mobility_is_the_relative_acceleration_per_newton():
+    """normal_mobility (1/m̂ of the damping bound) against its definition: a unit force pair along n (on the crank's
+    pin B, and the opposite on the rod's eye B') changes the relative normal acceleration n·(B̈ − B̈') by −1/m̂ in the
+    flexible model's own accelerations; and m̂ lies between the housing's mass and the whole mechanism's."""
+    from twin.natural_coordinates import N_Q, N_Z
+    from twin.reference import flexible_kernels as F
+
+    cfg = preset(12).replace(**{"structure.mode": "flexible"})
+    run, _ = _run(cfg, 0.7, drive=True)
+    lay, P, G = run.layout, run.P, run.layout.G
+    n, nc = lay.n, lay.n - N_Q
+    q, qd = run.x[:n].copy(), run.x[n:2 * n].copy()
+    rows = np.empty(N_Z + 4 + nc, dtype=np.int64)
+    nz = F.flex_rows(P, G, lay.indep, rows)
+    r0 = N_Q + lay.segs.shape[0] + lay.slides.shape[0]
+    for k in range(lay.indep.shape[0]):
+        rows[nz] = r0 + k
+        nz += 1
+    A, LU, piv = np.empty((nc, n)), np.empty((nc, nc)), np.empty(nc, dtype=np.int64)
+    assert F.factor(q, lay.segs, lay.slides, lay.indep, A, LU, piv)
+    Rt, MR, Mb, S = np.empty((nz, n)), np.empty((nz, n)), np.empty((nz, nz)), np.empty(n)
+    RtT, Bm = np.empty((n, nz)), np.empty((nc, nz + 1))
+    F.flex_mass(P, G, q, qd, lay.segs, lay.seg_f, lay.slides, A, LU, piv, rows, nz, Rt, S, Mb, MR, np.empty(n),
+                Bm, RtT)
+    nx, ny = 0.6, 0.8
+    mob = F.normal_mobility(Rt, Mb, nz, False, 0, 1, 2, 3, nx, ny, np.empty(2 * nz), np.empty((nz, nz)))
+
+    def rel_acc(Q):
+        qdd = np.empty(n)
+        assert F.flex_solve_acc(q, Q, nz, Rt, RtT, S, Mb.copy(), np.empty(nz), np.empty(n), np.empty(n), qdd, P,
+                                lay.segs, lay.seg_f, G, False, 0.0, np.zeros(1))
+        return nx * (qdd[0] - qdd[2]) + ny * (qdd[1] - qdd[3])
+
+    Q0 = np.zeros(n)
+    Q1 = Q0.copy()
+    Q1[[0, 1]] -= (nx, ny)      # on the pin B (the crank's point: q_0, q_1), −n
+    Q1[[2, 3]] += (nx, ny)      # on the eye B', +n
+    assert rel_acc(Q1) - rel_acc(Q0) == pytest.approx(-mob, rel=1e-9)
+    m_hat = 1.0 / mob
+    assert 0.1 < m_hat < cfg.bodies.rod.mass_kg + cfg.bodies.slider.mass_kg + cfg.bodies.crank.mass_kg, m_hat

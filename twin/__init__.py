@@ -13,6 +13,9 @@ The Python API (each name is imported on first use, so ``import twin`` stays qui
   report (a :class:`twin.replay_result.ReplayResult`; ``.to_dict()``) and writes the comparison folder;
 * ``twin.dataset.open(DIR)``: a generated dataset (:class:`twin.dataset.Dataset`: manifest,
   signals, training windows as numpy arrays);
+* ``twin.calibrate(recordings, ["contact.mu0"], "out_dir")``: fit configuration fields to bench
+  recordings, with intervals; returns a :class:`twin.calibration.CalibrationResult` and writes
+  ``calibrated.toml`` and a report;
 * ``twin.identify(recording)``: locate and size the clearance faults of a recording; returns the
   answer (a :class:`twin.identification.results.IdentifyResult`: ``.fault``, ``.joint("C").size_mm``, ...);
 * ``twin.samples.path("test6")``, ``twin.samples.spec_path("tiny")``: the sample recordings and
@@ -38,7 +41,7 @@ __version__ = "0.4.0"
 
 #: the API's calls, by the module that defines them
 _CALLS = {"preset": "twin.api", "simulate": "twin.api", "replay": "twin.api", "identify": "twin.api",
-          "plot": "twin.api", "record": "twin.bench_record", "BenchConfig": "twin.config", "Run": "twin.run"}
+          "plot": "twin.api", "record": "twin.bench_record", "calibrate": "twin.calibration", "BenchConfig": "twin.config", "Run": "twin.run"}
 #: subpackages and modules reached as attributes (``twin.dataset.open``) without importing them first
 _MODULES = ("api", "config", "dataset", "errors", "run", "samples", "simulation")
 

@@ -37,6 +37,7 @@ COMMANDS: list[str] = [
     "twin.commands.plot",
     "twin.commands.study",
     "twin.commands.check",
+    "twin.commands.calibrate",
     "twin.commands.import_recording",
     "twin.commands.replay",
     "twin.commands.analyze",

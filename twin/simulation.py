@@ -178,7 +178,10 @@ class Outcome:
 
 def make_engine(cfg: BenchConfig, inputs: DriveInputs | None = None) -> Engine:
     """Instantiate the engine named by ``cfg.simulation.engine``; ``inputs``: recorded drive inputs in
-    memory (encoder trace, motor command), used instead of the files the configuration names."""
+    memory (encoder trace, motor command), used instead of the files the configuration names. The files
+    a configuration names are read and checked here, before an engine is built (a bad file is refused
+    before the reference engine compiles), and reach the engine as arrays."""
+    inputs = _read_drive_files(cfg, inputs)
     if cfg.spatial.enabled:  # the spatial mechanism has its own pair of engines
         from twin.spatial import SPATIAL_ENGINE_CLASSES
 
@@ -186,6 +189,24 @@ def make_engine(cfg: BenchConfig, inputs: DriveInputs | None = None) -> Engine:
         return getattr(importlib.import_module(mod), cls)(cfg, inputs=inputs)
     mod, cls = ENGINE_CLASSES[cfg.simulation.engine].split(":")  # imported on demand
     return getattr(importlib.import_module(mod), cls)(cfg, inputs=inputs)
+
+
+def _read_drive_files(cfg: BenchConfig, inputs: DriveInputs | None) -> DriveInputs | None:
+    """``inputs`` completed with the encoder trace (``drive.trace_file`` of the "trace" program) and the
+    motor command (``drivetrain.command_file`` of the motor drive) the configuration names, read and
+    checked; None where the run reads neither."""
+    from twin.motor_drive import command_trace
+    from twin.tracefile import load_trace
+
+    trace = inputs.trace if inputs is not None else None
+    command = inputs.command if inputs is not None else None
+    if trace is None and cfg.drive.program == "trace" and cfg.drive.trace_file:
+        trace = load_trace(cfg.drive.trace_file)
+    if command is None and cfg.drive.mode == "motor" and cfg.drivetrain.command_file:
+        command = command_trace(cfg)
+    if trace is None and command is None:
+        return inputs
+    return DriveInputs(trace=trace, command=command)
 
 
 class Progress:
@@ -210,10 +231,15 @@ class Progress:
 
 
 def run_chunks(cfg: BenchConfig, engine: Engine | None = None, progress: bool = False,
-               inputs: DriveInputs | None = None) -> Iterator[Run]:
+               inputs: DriveInputs | None = None, start: Any = None, until: int | None = None) -> Iterator[Run]:
     """The chunk loop (see the module docstring): yields consecutive chunks of the run of ``cfg``
     on ``engine`` (default: a new engine of ``cfg.simulation.engine``). ``engine.meta`` holds the
-    run's metadata as it goes. ``inputs``: recorded drive inputs in memory (:func:`make_engine`)."""
+    run's metadata as it goes. ``inputs``: recorded drive inputs in memory (:func:`make_engine`).
+
+    ``start``: a saved state (:class:`twin.warm.WarmState`) to continue from instead of the rest
+    state: the engine is restored into it (``start.restore_engine``, which returns the output
+    samples already done) and the chunks run on from that sample. ``until``: stop after this many
+    output samples of the run (default: the run's end)."""
     from twin.drive import DriveReference
 
     engine = engine if engine is not None else make_engine(cfg, inputs)
@@ -223,10 +249,16 @@ def run_chunks(cfg: BenchConfig, engine: Engine | None = None, progress: bool = 
     encoder = "encoder" in cfg.sensors.channels
     direction = cfg.mechanism.crank_direction
     per_chunk = max(1, int(round(cfg.simulation.chunk_s * rate)))
-    engine.reset(float(ref(np.zeros(1))[0][0]))
-    engine.meta.update(steps=0, wall_s=0.0, real_time_factor=None)
-    bar = Progress(n_out / rate, progress, desc=f"{cfg.simulation.engine} {cfg.name}")
-    done, wall = 0, 0.0
+    done = 0
+    if start is None:
+        engine.reset(float(ref(np.zeros(1))[0][0]))
+    else:
+        done = int(start.restore_engine(engine, cfg))
+    if until is not None:
+        n_out = min(n_out, int(until))
+    engine.meta.update(steps=done * stride, wall_s=0.0, real_time_factor=None)
+    bar = Progress((n_out - done) / rate, progress, desc=f"{cfg.simulation.engine} {cfg.name}")
+    wall, done0 = 0.0, done
     try:
         while done < n_out:
             n = min(per_chunk, n_out - done)
@@ -251,7 +283,7 @@ def run_chunks(cfg: BenchConfig, engine: Engine | None = None, progress: bool = 
             wall += time.perf_counter() - t_start
             done += n
             engine.meta.update(steps=done * stride, wall_s=wall,
-                               real_time_factor=(done * stride * h) / wall if wall > 0 else None)
+                               real_time_factor=((done - done0) * stride * h) / wall if wall > 0 else None)
             bar.update(chunk)
             yield chunk
     finally:
@@ -274,10 +306,13 @@ def _sigterm_interrupts() -> Iterator[None]:
 
 
 def simulate(cfg: BenchConfig, sinks: Iterable[Sink] = (), progress: bool = False,
-             engine: Engine | None = None, inputs: DriveInputs | None = None) -> Outcome:
+             engine: Engine | None = None, inputs: DriveInputs | None = None, start: Any = None) -> Outcome:
     """Run ``cfg`` to the end, streaming every chunk to ``sinks``; returns metadata and summary.
     ``inputs``: recorded drive inputs in memory (the encoder trace of a "trace" program, the motor
     command of ``drive.mode = "motor"``), used instead of the files the configuration names.
+
+    ``start``: continue from a saved state (:class:`twin.warm.WarmState`, see :func:`run_chunks`);
+    the sinks and the summary then see the run from that state's time on.
 
     Sinks are closed in the order given, with the run's metadata and summary. If anything fails
     (engine construction, a diverging step, a sink's write or close) or the run is interrupted
@@ -292,7 +327,7 @@ def simulate(cfg: BenchConfig, sinks: Iterable[Sink] = (), progress: bool = Fals
         with _sigterm_interrupts():
             engine = engine if engine is not None else make_engine(cfg, inputs)
             acc = SummaryAccumulator(cfg)
-            for chunk in run_chunks(cfg, engine, progress, inputs):
+            for chunk in run_chunks(cfg, engine, progress, inputs, start=start):
                 acc.update(chunk)
                 for s in sinks:
                     s.write(chunk)

@@ -7,19 +7,14 @@ clearance at the smallest, median and largest effective mass (method:
 1 mm/s-0.5 m/s (restitution ±0.02, peak force 5 %, duration 10 %) and the capture of preloaded
 slow impacts. Writes a JSON report; exit status 1 when a case misses a tolerance.
 
-``twin calibrate contact`` is the old name of the same command, kept as a deprecated alias for
-one version: the same options and output, plus a one-line note on stderr (after the arguments
-are accepted, so a refused argument is still a one-line error).
+``twin calibrate contact``, the old name of this command, is gone: ``twin calibrate`` now fits
+configuration fields to bench recordings (:mod:`twin.commands.calibrate`).
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
-
-#: the note the deprecated ``twin calibrate`` prints on stderr before running
-DEPRECATION_NOTE = ("note: 'twin calibrate contact' is deprecated and will be removed in the next version; "
-                    "use 'twin check contact'")
 
 _CONTACT_HELP = "check the twin's contact law against the reference's single-impact solutions"
 _CONTACT_DESCRIPTION = (
@@ -33,9 +28,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("check", help="check the twin against the reference (contact law)",
                        description="Checks of the MuJoCo twin against the reference engine's closed forms.")
     _add_contact(p, _run_contact)
-    old = sub.add_parser("calibrate", help="deprecated name of 'twin check'",
-                         description="Deprecated name of 'twin check' (removed in the next version).")
-    _add_contact(old, _run_contact_deprecated)
 
 
 def _add_contact(parent: argparse.ArgumentParser, func) -> None:
@@ -50,13 +42,7 @@ def _add_contact(parent: argparse.ArgumentParser, func) -> None:
     c.set_defaults(func=func)
 
 
-def _run_contact_deprecated(args: argparse.Namespace) -> int:
-    return _run_contact(args, deprecated=True)
-
-
-def _run_contact(args: argparse.Namespace, deprecated: bool = False) -> int:
-    """``deprecated``: called by the old name; the note goes to stderr once the arguments are
-    accepted (a refused argument stays a one-line error)."""
+def _run_contact(args: argparse.Namespace) -> int:
     import json
     from pathlib import Path
 
@@ -69,8 +55,6 @@ def _run_contact(args: argparse.Namespace, deprecated: bool = False) -> int:
     out = Path(args.out)
     check_output_file(out, "--out", ".json")
     cfg = load_config_file(args.config) if args.config else BenchConfig()
-    if deprecated:
-        print(DEPRECATION_NOTE, file=sys.stderr)
     report = contact_check(cfg, joints=joints, progress=not args.no_progress and sys.stderr.isatty())
     atomic_write_text(out, json_text(report, indent=1) + "\n")
     print("| case | m_eff min/median/max [kg] | restitution/0.02 | peak force/5 % | duration/10 % | static | capture |")

@@ -36,6 +36,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "a running cluster (workers must see --out); Dask comes with the cluster extra: "
                         "pip install 'twin[cluster]'")
     g.add_argument("--limit", type=int, metavar="K", help="simulate at most K of the missing runs this time")
+    g.add_argument("--no-warm-start", action="store_true",
+                   help="simulate every run alone (default: the repeats of a design point, which differ in their "
+                        "sensor-noise seed only, share one engine run; the files are the same bytes either way)")
     g.add_argument("--no-progress", action="store_true", help="no progress bar")
     g.set_defaults(func=_generate, _field_flags={"out_dir": "--out"})  # twin.dataset.generate's argument
 
@@ -70,11 +73,14 @@ def _generate(args: argparse.Namespace) -> int:
     spec = load_spec(spec_arg(args.spec))
     t = time.perf_counter()
     info = generate(spec, args.out, workers=resolve_workers(args.workers), scheduler=args.scheduler, limit=args.limit,
-                    progress=not args.no_progress and sys.stderr.isatty())
+                    progress=not args.no_progress and sys.stderr.isatty(), warm_start=not args.no_warm_start)
     g = info["generation"]
     on = {"processes": "worker processes", "threads": "threads"}.get(g["scheduler"], f"{g['scheduler']} workers")
+    shared = g.get("engine_runs_this_call", g["runs_this_call"])
+    shared = (f"; {shared} engine run{'s' if shared != 1 else ''}, the repeats sharing theirs"
+              if shared < g["runs_this_call"] else "")
     print(f"{args.out}: {g['runs_this_call']} runs simulated ({g['failed_this_call']} failed) on {g['workers']} "
-          f"{on} in {time.perf_counter() - t:.1f} s")
+          f"{on} in {time.perf_counter() - t:.1f} s{shared}")
     print(describe(args.out))
     return 0
 
@@ -113,9 +119,10 @@ def _plan(args: argparse.Namespace) -> int:
         from twin.dataset.estimate import estimate_wall
 
         est = estimate_wall(spec, runs, workers)
+        shared = f"; {est['engine_runs']} engine runs, the repeats sharing theirs" if est["engine_runs"] < len(runs) else ""
         print(f"  estimated wall time on {workers} workers: {est['wall_s'] / 60:.1f} min "
               f"({est['per_sim_s']:.2f} s per simulated second per worker, measured on {est['probes']} short "
-              f"runs; {est['overhead_s']:.2f} s per run of set-up)")
+              f"runs; {est['overhead_s']:.2f} s per run of set-up{shared})")
     return 0
 
 

@@ -473,8 +473,8 @@ class Contact:
             for name in names:
                 default = self.__dataclass_fields__[name].default
                 _check(getattr(self, name) == default, name,
-                       f"is used by {field_of} = {law!r} only, not {getattr(self, field_of)!r}; leave it out "
-                       f"(default {default!r}), got {getattr(self, name)!r}")
+                       f"is used by {field_of} = {law!r} only, not {getattr(self, field_of)!r}; leave it out or set "
+                       f"it back to its default {default!r}, got {getattr(self, name)!r}")
 
 
     def stiffness_of(self, joint: str) -> float:

@@ -41,7 +41,10 @@ def _probe_config(r: RunPlan, duration: float):
                                "drive.ramp_s": 0.02, "simulation.duration_s": duration})
 
 
-def estimate_wall(spec: DatasetSpec, runs: list[RunPlan], workers: int) -> dict[str, Any]:
+def estimate_wall(spec: DatasetSpec, runs: list[RunPlan], workers: int, warm_start: bool = True) -> dict[str, Any]:
+    """The estimate (module docstring). With ``warm_start`` (as ``twin dataset generate`` runs by
+    default), a run that shares its group's engine run (:func:`twin.warm.share_groups`) is counted
+    without the engine's stepping (the probes' engine time per simulated second)."""
     from twin.dataset.generate import dataset_columns
     from twin.dataset.worker import run_one
 
@@ -52,20 +55,33 @@ def estimate_wall(spec: DatasetSpec, runs: list[RunPlan], workers: int) -> dict[
             cls = r.labels["fault"]
             if cls in per_class:
                 continue
-            walls = []
+            walls, engine = [], []
             for k, T in enumerate((WARMUP_S, *PROBES_S)):
                 cfg = _probe_config(r, T)
                 res = run_one({"run_id": f"probe{k}", "index": 0, "config_toml": cfg.to_toml(), "data_dir": d,
                                "columns": columns, "instrumented": list(spec.outputs.instrumented)})
                 walls.append(res["wall_s"])
+                engine.append(res.get("sim_wall_s") or 0.0)
                 Path(d, f"probe{k}.parquet").unlink(missing_ok=True)
             w0, w1 = walls[1:]  # the warm-up's time is not used
             b = max((w1 - w0) / (PROBES_S[1] - PROBES_S[0]), 0.0)
             a = max(w0 - b * PROBES_S[0], 0.0)
-            per_class[cls] = (a, b)
-    total = sum(per_class[r.labels["fault"]][0] + per_class[r.labels["fault"]][1] * r.config.duration_s for r in runs)
+            e = min(max((engine[2] - engine[1]) / (PROBES_S[1] - PROBES_S[0]), 0.0), b)
+            per_class[cls] = (a, b, e)
+    shares = [False] * len(runs)  # the run reuses its group's engine run
+    if warm_start:
+        from twin.warm import share_groups
+
+        for g in share_groups([r.config for r in runs]):
+            for i in g[1:]:
+                shares[i] = True
+    total = 0.0
+    for r, shared in zip(runs, shares):
+        a, b, e = per_class[r.labels["fault"]]
+        total += a + (b - e if shared else b) * r.config.duration_s
     wall = START_S + total / (workers * EFFICIENCY)
     sim = sum(r.config.duration_s for r in runs)
     return {"wall_s": wall, "probes": (1 + len(PROBES_S)) * len(per_class),
             "per_sim_s": sum(per_class[r.labels["fault"]][1] * r.config.duration_s for r in runs) / sim if sim else 0.0,
-            "overhead_s": sum(per_class[r.labels["fault"]][0] for r in runs) / len(runs)}
+            "overhead_s": sum(per_class[r.labels["fault"]][0] for r in runs) / len(runs),
+            "engine_runs": len(runs) - sum(shares)}

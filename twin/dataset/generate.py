@@ -227,9 +227,34 @@ def task_of(p: Prepared, r: RunPlan) -> dict[str, Any]:
             "labels": [(k, t, label_value(labels.get(k), t)) for k, t in p.label_types.items()]}
 
 
+def group_tasks(p: Prepared, runs: list[RunPlan], warm_start: bool = True) -> list[dict[str, Any]]:
+    """The tasks of ``runs``: with ``warm_start``, runs of one :func:`twin.warm.mechanical_key` (the
+    repeats of a design point: they differ in their noise seed only) are one task whose members share
+    one engine run (each file the bytes of its run alone); groups in the order of their first run.
+    Without, one task per run."""
+    if not warm_start:
+        return [task_of(p, r) for r in runs]
+    from twin.warm import share_groups
+
+    tasks = []
+    for g in share_groups([r.config for r in runs]):
+        members = [task_of(p, runs[i]) for i in g]
+        tasks.append(members[0] if len(members) == 1 else
+                     {"run_id": members[0]["run_id"], "index": members[0]["index"], "members": members})
+    return tasks
+
+
+def _results(res: dict[str, Any]) -> list[dict[str, Any]]:
+    """The run results of one task's result (a group's, or a run's)."""
+    return list(res["group"]) if "group" in res else [res]
+
+
 # ---------------------------------------------------------------------- executors
 def _crashed(task: dict, why: str) -> dict:
-    """The result of a run whose worker process died (a segmentation fault, the OOM killer)."""
+    """The result of a run whose worker process died (a segmentation fault, the OOM killer); of each
+    member of a group task (:func:`group_tasks`)."""
+    if "members" in task:
+        return {"group": [_crashed(m, why) for m in task["members"]]}
     return {"run_id": task["run_id"], "index": task["index"], "status": "failed",
             "reason": f"the worker process died while simulating it ({why})", "wall_s": 0.0}
 
@@ -406,8 +431,11 @@ def executor(scheduler: str | None, workers: int) -> Callable[[list[dict]], Iter
 
 # ------------------------------------------------------------------------ driver
 def generate(spec: DatasetSpec, out_dir: str | Path, workers: int | None = None, scheduler: str | None = None,
-             limit: int | None = None, progress: bool = True) -> dict[str, Any]:
-    """Generate (or finish) the dataset of ``spec`` in ``out_dir``; returns the info dict."""
+             limit: int | None = None, progress: bool = True, warm_start: bool = True) -> dict[str, Any]:
+    """Generate (or finish) the dataset of ``spec`` in ``out_dir``; returns the info dict.
+
+    ``warm_start`` (default on: it changes no byte of any file): the runs to do that share their
+    engine run (:func:`group_tasks`) are simulated once per group."""
     from twin.util import resolve_workers
 
     workers = resolve_workers(workers)
@@ -420,11 +448,11 @@ def generate(spec: DatasetSpec, out_dir: str | Path, workers: int | None = None,
     # of a holder that died (SIGKILL included), so a later run takes it over
     with FolderLock(p.out, "out_dir", "twin dataset generate"):
         p = prepare(spec, out_dir)  # again under the lock: runs the previous holder finished count as done
-        return _generate_locked(p, workers, scheduler, run_tasks, limit, progress)
+        return _generate_locked(p, workers, scheduler, run_tasks, limit, progress, warm_start)
 
 
 def _generate_locked(p: Prepared, workers: int, scheduler: str | None, run_tasks, limit: int | None,
-                     progress: bool) -> dict[str, Any]:
+                     progress: bool, warm_start: bool = True) -> dict[str, Any]:
     out = p.out
     check_writable(out)  # before anything is written: a complete dataset is never marked incomplete in vain
     todo = p.pending[:limit] if limit is not None else p.pending
@@ -438,23 +466,26 @@ def _generate_locked(p: Prepared, workers: int, scheduler: str | None, run_tasks
     sim_total = sum(r.config.duration_s for r in todo)
     bar = _Progress(len(todo), sim_total, progress)
     failed = 0
+    tasks = group_tasks(p, todo, warm_start)
     try:
-        for res in run_tasks([task_of(p, r) for r in todo]):
-            rid = res["run_id"]
-            if res["status"] == "io-error":  # a full disk or a refused write: stop, keep what is done
-                finish(p)
-                raise DatasetError(f"run {rid}: {res['reason']}; the {len(p.done)} runs finished so far are kept, "
-                                   "run the same command again once there is room")
-            atomic_write_json(out / "results" / f"{rid}.json", res)
-            p.done[rid] = res
-            failed += res["status"] != "ok"
-            bar.update(res)
+        for task_res in run_tasks(tasks):
+            for res in _results(task_res):
+                rid = res["run_id"]
+                if res["status"] == "io-error":  # a full disk or a refused write: stop, keep what is done
+                    finish(p)
+                    raise DatasetError(f"run {rid}: {res['reason']}; the {len(p.done)} runs finished so far are "
+                                       "kept, run the same command again once there is room")
+                atomic_write_json(out / "results" / f"{rid}.json", res)
+                p.done[rid] = res
+                failed += res["status"] != "ok"
+                bar.update(res)
     finally:
         bar.close()
     info = finish(p)
     info["generation"] = {"runs_this_call": len(todo), "failed_this_call": failed,
                           "wall_s": time.perf_counter() - t_start, "workers": workers,
-                          "scheduler": scheduler or default_scheduler(workers)}
+                          "scheduler": scheduler or default_scheduler(workers), "warm_start": warm_start,
+                          "engine_runs_this_call": len(tasks)}
     return info
 
 

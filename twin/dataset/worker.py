@@ -103,44 +103,79 @@ def run_one(task: dict[str, Any], stop: Any = None) -> dict[str, Any]:
     ``config_toml``, ``data_dir``, ``columns`` (fields of :class:`~twin.dataset.storage.ColumnSpec`),
     ``instrumented``, ``labels`` (fields of :class:`~twin.dataset.storage.LabelColumn`: the run's
     label columns). ``stop``: a :class:`threading.Event` of a driver that runs runs on threads;
-    once set, the run is interrupted at its next chunk (KeyboardInterrupt: its file is removed)."""
+    once set, the run is interrupted at its next chunk (KeyboardInterrupt: its file is removed).
+
+    A task with ``members`` (a list of such tasks, of one :func:`twin.warm.mechanical_key`: a warm
+    start) is a group: one engine run feeds every member's sensor chain and file
+    (:func:`twin.warm.simulate_shared`; each file the bytes of the member's run alone), and the
+    result is ``{"group": [one result per member]}``. The first member's result carries the
+    engine's stepping time (``sim_wall_s``), the others 0; each member's ``wall_s`` is the group's
+    divided by its size."""
+    if "members" in task:
+        return {"group": _run_members(task["members"], stop)}
+    return _run_members([task], stop)[0]
+
+
+def _run_members(tasks: list[dict[str, Any]], stop: Any) -> list[dict[str, Any]]:
     from twin.config import config_from_toml
     from twin.dataset.storage import ColumnSpec, LabelColumn, ParquetRunWriter, WriteError
     from twin.util import file_sha256
     from twin.simulation import ThreadedSink, simulate
 
     t0 = time.perf_counter()
-    rid = task["run_id"]
-    path = Path(task["data_dir"]) / f"{rid}.parquet"
-    out: dict[str, Any] = {"run_id": rid, "index": task["index"], "status": "ok", "reason": ""}
+    paths = [Path(t["data_dir"]) / f"{t['run_id']}.parquet" for t in tasks]
+    outs: list[dict[str, Any]] = [{"run_id": t["run_id"], "index": t["index"], "status": "ok", "reason": ""}
+                                  for t in tasks]
     try:
-        cfg = config_from_toml(task["config_toml"])
-        columns = [ColumnSpec(*c) for c in task["columns"]]
-        labels = [LabelColumn(*lab) for lab in task.get("labels", ())]
-        writer = ParquetRunWriter(path, columns, rid, {"name": cfg.name, "config_toml": cfg.to_toml()}, labels)
-        # the sensor chain and the Parquet writer run on a thread, overlapping the stepping
-        sink = ThreadedSink(InstrumentSink(cfg, columns, writer, tuple(task["instrumented"])))
-        outcome = simulate(cfg, [_Stop(stop), sink] if stop is not None else [sink])
+        cfgs, writers, sinks = [], [], []
+        for task, path in zip(tasks, paths):
+            cfg = config_from_toml(task["config_toml"])
+            columns = [ColumnSpec(*c) for c in task["columns"]]
+            labels = [LabelColumn(*lab) for lab in task.get("labels", ())]
+            writer = ParquetRunWriter(path, columns, task["run_id"], {"name": cfg.name, "config_toml": cfg.to_toml()},
+                                      labels)
+            # the sensor chain and the Parquet writer run on a thread, overlapping the stepping
+            sink = ThreadedSink(InstrumentSink(cfg, columns, writer, tuple(task["instrumented"])))
+            cfgs.append(cfg)
+            writers.append(writer)
+            sinks.append([_Stop(stop), sink] if stop is not None else [sink])
+        if len(tasks) == 1:
+            outcome = simulate(cfgs[0], sinks[0])
+        else:
+            from twin.warm import simulate_shared
+
+            outcome = simulate_shared(cfgs, sinks)
         warnings = outcome.meta.get("warnings") or {}
         if warnings:
-            path.unlink(missing_ok=True)
+            for path in paths:
+                path.unlink(missing_ok=True)
             raise _Failed("MuJoCo warnings: " + ", ".join(f"{k}({v})" for k, v in warnings.items()))
-        out.update(rows=writer.rows, bytes=path.stat().st_size, sha256=file_sha256(path),
-                   summary=_small_summary(outcome.summary), stats=writer.stats.d,
-                   sim_wall_s=outcome.meta.get("wall_s"), simulated_s=writer.rows / cfg.output_rate_hz)
+        for i, (out, cfg, writer, path) in enumerate(zip(outs, cfgs, writers, paths)):
+            out.update(rows=writer.rows, bytes=path.stat().st_size, sha256=file_sha256(path),
+                       summary=_small_summary(outcome.summary), stats=writer.stats.d,
+                       sim_wall_s=outcome.meta.get("wall_s") if i == 0 else 0.0,
+                       simulated_s=writer.rows / cfg.output_rate_hz)
+            if len(tasks) > 1:
+                out["shared"] = {"runs": len(tasks), "engine_run_of": tasks[0]["run_id"]}
     except _Failed as err:
-        out.update(status="failed", reason=str(err))
+        for out in outs:
+            out.update(status="failed", reason=str(err))
     except (WriteError, OSError) as err:  # the file system, not the run: the driver stops
-        out.update(status="io-error", reason=f"{type(err).__name__}: {err}".splitlines()[0][:500])
+        for out in outs:
+            out.update(status="io-error", reason=f"{type(err).__name__}: {err}".splitlines()[0][:500])
     except Exception as err:  # noqa: BLE001 - recorded with its reason; the dataset goes on
         reason = f"{type(err).__name__}: {err}".splitlines()[0]
         if not isinstance(err, (ValueError, RuntimeError)) and "TwinError" not in [c.__name__ for c in type(err).__mro__]:
             reason += " | " + traceback.format_exc(limit=2).replace("\n", " ")[-300:]
-        out.update(status="failed", reason=reason[:500])
-    out["wall_s"] = time.perf_counter() - t0
+        for out in outs:
+            out.update(status="failed", reason=reason[:500])
+    wall = (time.perf_counter() - t0) / len(tasks)
     # the worker process's peak so far (it runs many runs): an upper bound of this run's
-    out["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
-    return out
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    for out in outs:
+        out["wall_s"] = wall
+        out["peak_rss_mb"] = peak
+    return outs
 
 
 class _Failed(Exception):

@@ -57,9 +57,9 @@ def _one_line(err: BaseException) -> str:
 def write_model(path: str | Path, meta: dict[str, Any], estimators: dict[str, TreeEnsemble]) -> Path:
     """Write ``model.json`` (``meta`` as JSON) and each estimator's arrays as ``NAME.ARRAY`` members,
     atomically (a temporary file renamed into place)."""
-    from twin.util import atomic_write_bytes, json_text
+    from twin.util import atomic_write_bytes, json_default
 
-    members = {"model.json": np.array(json_text(meta, indent=None))}
+    members = {"model.json": np.array(json.dumps(meta, default=json_default))}  # the loader refuses NaN
     for name, e in estimators.items():
         members.update({f"{name}.{k}": a for k, a in e.arrays().items()})
     buf = BytesIO()

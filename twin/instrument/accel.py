@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -159,6 +160,21 @@ class AccelStream:
         if inst.noise_scale != 1.0:  # (the default leaves sigma as it was, bit for bit)
             self.sigma *= inst.noise_scale
         self._zi: np.ndarray | None = None  # response filter state; None until the first sample
+
+    def get_state(self) -> dict[str, Any]:
+        """The stream's state (the response filter's ``zi`` as a list or None, the noise
+        generator's ``bit_generator.state``): plain JSON data, for :meth:`set_state`."""
+        return {"zi": None if self._zi is None else [float(x) for x in self._zi],
+                "rng": None if self.rng is None else self.rng.bit_generator.state}
+
+    def set_state(self, state: dict[str, Any]) -> None:
+        """Continue from :meth:`get_state` of a stream of the same sensor and instrumentation."""
+        zi = state["zi"]
+        self._zi = None if zi is None else np.array(zi, dtype=np.float64)
+        if (state["rng"] is None) != (self.rng is None):
+            raise ValueError(f"{self.sensor}: the saved sensor state and this stream differ in having noise")
+        if self.rng is not None:
+            self.rng.bit_generator.state = state["rng"]
 
     def process(self, a_mps2: np.ndarray) -> np.ndarray:
         """Output voltage [V] (float64) for the next samples ``a_mps2`` of proper acceleration [m/s²]."""

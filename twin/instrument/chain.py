@@ -32,7 +32,7 @@ whole runs.
 
 from __future__ import annotations
 
-from typing import Iterable
+from typing import Any, Iterable
 
 import numpy as np
 
@@ -177,6 +177,30 @@ class ChainStream:
         meta = {"chain": "twin.instrument", "chain_seed": inst.seed, "chain_stream": self.stream,
                 "source_rate_hz": self.rate_hz, "samples": self.made}
         return Run(self.t0 + first / self.rate_hz, inst.daq_rate_hz, {c.name: c for c in chans}, self.cfg, meta)
+
+    def get_state(self) -> dict[str, Any]:
+        """The stream's whole state after the chunks so far (start time, samples seen and made,
+        truth channels used, each accelerometer's filter and noise generator, each DAQ input's
+        filter and phase): plain JSON data, for :meth:`set_state` of a new stream of the same
+        configuration, rate, stream number and command flag."""
+        return {"t0": self.t0, "seen": self.seen, "made": self.made,
+                "inputs": None if self._inputs is None else list(self._inputs),
+                "accel": {n: {"sensor": a.get_state(), "daq": s.get_state()} for n, (a, s) in self._accel.items()}}
+
+    def set_state(self, state: dict[str, Any]) -> None:
+        """Continue from :meth:`get_state` (see there); the next chunk must follow the last one
+        the saved stream processed."""
+        if state["inputs"] is None:
+            return  # the saved stream had seen no chunk
+        # set up as the first chunk would (channels, generators, the drive program), then overwrite
+        probe = Run(float(state["t0"]), self.rate_hz, {n: Channel(n, "", "", np.zeros(0)) for n in state["inputs"]})
+        self._start(probe)
+        if sorted(self._accel) != sorted(state["accel"]):
+            raise RecordingError("sensor chain: the saved state is of other accelerometers")
+        for name, (accel, sampler) in self._accel.items():
+            accel.set_state(state["accel"][name]["sensor"])
+            sampler.set_state(state["accel"][name]["daq"])
+        self.seen, self.made = int(state["seen"]), int(state["made"])
 
     def _check(self, chunk: Run) -> None:
         have = tuple(a for a in (*ACCELEROMETERS, "encoder_angle") if a in chunk)

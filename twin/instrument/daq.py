@@ -15,6 +15,8 @@ and decimation phase carried; same samples bit for bit); :func:`quantize` is per
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from twin.config import DAQ_RANGES, Instrumentation
@@ -59,6 +61,21 @@ class DaqSampler:
         self.seen = 0  # run samples seen so far
         self._sos: np.ndarray | None = None
         self._zi: np.ndarray | None = None  # anti-alias filter state; None until the first sample
+
+    def get_state(self) -> dict[str, Any]:
+        """The sampler's state (run samples seen, the anti-alias filter's ``zi`` as a list or None):
+        plain JSON data, for :meth:`set_state`."""
+        return {"seen": int(self.seen), "zi": None if self._zi is None else np.asarray(self._zi).tolist()}
+
+    def set_state(self, state: dict[str, Any]) -> None:
+        """Continue from :meth:`get_state` of a sampler of the same rates and instrumentation."""
+        self.seen = int(state["seen"])
+        zi = state["zi"]
+        self._zi = None if zi is None else np.array(zi, dtype=np.float64)
+        if self._zi is not None and self._sos is None:
+            from scipy.signal import butter
+
+            self._sos = butter(self.inst.anti_alias_order, self.inst.anti_alias_hz, fs=self.run_rate_hz, output="sos")
 
     def process(self, x: np.ndarray) -> np.ndarray:
         """DAQ samples among the next run samples ``x`` (float64)."""

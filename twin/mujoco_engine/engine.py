@@ -104,10 +104,12 @@ class MujocoEngine:
         self._sens = np.empty((1, 0, self.model.nsensordata))
         # accelerometers from the recorded state (mujoco.accelerometers = "posthoc", Euler)
         self._accel = None
-        if posthoc:  # the flexible structure's tree: the generic planar recursion (twin.mujoco_engine.accel_tree)
-            from twin.mujoco_engine.accel_tree import TreeAccelerometers
+        if posthoc and cfg.structure.flexible:  # the flexible structure's tree: the generic planar recursion
+            from twin.mujoco_engine.accel_tree import TreeAccelerometers  # numba: imported only where used
 
-            self._accel = (TreeAccelerometers if cfg.structure.flexible else PosthocAccelerometers)(self.model)
+            self._accel = TreeAccelerometers(self.model)
+        elif posthoc:
+            self._accel = PosthocAccelerometers(self.model)
         self._states = np.empty((1, 0, self._nstate))
         self._k = 0  # integration steps taken since reset
         self._mount = None

@@ -165,6 +165,41 @@ class ReferenceEngine:
         if self._train is not None:
             self._train.reset()
 
+    def snapshot(self) -> tuple[int, dict[str, np.ndarray]]:
+        """The run's whole state: (integration steps since reset, arrays): the state vector ``st``
+        (coordinates, velocities, PID integral, contact events with their stored impact speeds,
+        guide state), the parameter vector ``P`` as resolved at reset (a check on restore) and,
+        with a drive train, its state ``train_ds`` and parameters ``train_D``."""
+        if self._st is None:
+            self.reset()
+        arrays = {"st": self._st.copy(), "P": self.P.copy()}
+        if self._train is not None:
+            arrays["train_ds"] = self._train.ds.copy()
+            arrays["train_D"] = self._train.D.copy()
+        return self._k, arrays
+
+    def restore(self, snap: tuple[int, dict[str, np.ndarray]]) -> None:
+        """Continue from :meth:`snapshot` of an engine of the same configuration (this one or
+        another): reset (which resolves the contact parameters as the snapshot's engine did), then
+        the state; a snapshot of another configuration (other parameters or layout) is refused."""
+        k, arrays = snap
+        self.reset()
+        want = {"st": self._st, "P": self.P}
+        if self._train is not None:
+            want.update(train_ds=self._train.ds, train_D=self._train.D)
+        if set(arrays) != set(want):
+            raise ValueError(f"{self.cfg.name}: the snapshot holds {sorted(arrays)}, this engine needs {sorted(want)}")
+        for name, mine in want.items():
+            a = np.asarray(arrays[name], dtype=np.float64)
+            if a.shape != mine.shape:
+                raise ValueError(f"{self.cfg.name}: the snapshot's {name} has shape {a.shape}, expected {mine.shape}")
+            if name in ("P", "train_D") and a.tobytes() != mine.tobytes():
+                raise ValueError(f"{self.cfg.name}: the snapshot is of another configuration (its {name} differs)")
+        self._st[:] = arrays["st"]
+        if self._train is not None:
+            self._train.ds[:] = arrays["train_ds"]
+        self._k = int(k)
+
     def advance(self, theta_ref: np.ndarray, omega_ref: np.ndarray, stride: int) -> dict[str, np.ndarray]:
         """One call of the compiled loop over ``len(theta_ref)`` steps (see
         :meth:`twin.simulation.Engine.advance`)."""

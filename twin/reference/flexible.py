@@ -35,7 +35,10 @@ Clearance joints: the contact force on the rod acts on the eye's centre (B' or C
 the end segment (the rigid model spreads a force on the rod over B' and C, which on a flexible rod would add a
 spurious axial pair R_b f_N / L). Where it differs from the rigid model's conventions: the friction's sliding speed
 uses the chord's angular velocity (C − B') for the eye's spin, not the end segment's (a difference of the rod's
-deformation rate); the contact stiffnesses are resolved with the rigid rod's effective mass.
+deformation rate); the contact stiffnesses are resolved with the rigid rod's effective mass; the law's (explicit)
+damping is bounded at the dead-beat value m̂/(2h), m̂ the flexible model's effective mass along the normal
+(:func:`_bound_damping`, as the MuJoCo engine's force path): unbounded, against the light housing it rang at the
+step's Nyquist rate.
 Scope: every drive (crank PID, prescribed crank, motor and torque through the drive train), symplectic Euler,
 clearances at B and C (A and the guide ideal).
 """
@@ -48,18 +51,19 @@ import math
 import numpy as np
 
 from twin.jit import njit
-from twin.natural_coordinates import (N_Q, N_Z, P_CLR_B, P_CLR_C, P_DOFF, P_FGUIDE, P_GX, P_GY, P_H, P_IMAX,
-                                      P_KI, P_KP, P_KV, P_L, P_M1, P_M2, P_M3, P_NEWTON_MAXIT, P_NEWTON_TOL,
-                                      P_OUT_ENERGY, P_R, P_RBUSH_B, P_RBUSH_C, P_SENS, P_V0, P_V1, P_XG1, P_XG2, S_I, S_IN_A, S_IN_B,
-                                      S_IN_C, S_Q, S_QD, S_VIMP_A, S_VIMP_B, S_VIMP_C, energy, independent_rows,
-                                      kinetic_energy, mass_times, quadratic_terms, residual, solve_aug)
-from twin.reference.model import (N_OUT, NEWTON_FAILED, NOT_FINITE, O_ACC, O_EKIN, O_EPOT, OK, _cholesky_solve,
-                                  _outputs, _rod_force, generalized_forces)
+from twin.natural_coordinates import (N_Q, N_Z, P_CLR_B, P_CLR_C, P_FGUIDE, P_GX, P_GY, P_H, P_IMAX, P_KI, P_KP,
+                                      P_KV, P_L, P_M1, P_M2, P_M3, P_OUT_ENERGY, P_R, P_RBUSH_B, P_RBUSH_C, P_V0,
+                                      P_V1, P_XG1, P_XG2, S_I, S_IN_A, S_IN_B, S_IN_C, S_Q, S_QD, S_VIMP_A,
+                                      S_VIMP_B, S_VIMP_C)
+from twin.reference.model import N_OUT, NEWTON_FAILED, NOT_FINITE, O_EKIN, O_EPOT, OK, _outputs, generalized_forces
 from twin.reference import drivetrain as DT
 from twin.reference.guide import N_GUIDE_OUT
+from twin.reference.flexible_kernels import (G_CF, G_CG, G_FLEX_A, G_FLEX_G, G_KF, G_KG, G_MF, G_MG, factor,
+                                             _eye_contact, normal_mobility, _bound_damping, chain_forces,
+                                             flex_energy, flex_rows, flex_project, flex_mass, flex_solve_acc,
+                                             _rod_sensors, _slider_sensors)
 
-# ----------------------------------------------------------------- the supports' parameters ``G`` (build())
-G_KF, G_CF, G_MF, G_KG, G_CG, G_MG, G_FLEX_A, G_FLEX_G = 0, 1, 2, 3, 4, 5, 6, 7
+# the supports' parameters ``G`` (build()): indices G_KF … G_FLEX_G, defined with the kernels that read them
 N_G = 8
 
 
@@ -148,503 +152,6 @@ def build(cfg, chain) -> FlexLayout:
 
 
 # --------------------------------------------------------------------------------------------- kernels
-@njit(cache=True)
-def _cross(ax, ay, bx, by):
-    return ax * by - ay * bx
-
-
-@njit(cache=True)
-def chain_jacobian(q, segs, slides, indep, A):
-    """Rows of the chain (n − 12 of them) over all n coordinates into ``A`` (zeroed here)."""
-    A[:, :] = 0.0
-    r = 0
-    for j in range(segs.shape[0]):
-        a, b = segs[j, 0], segs[j, 1]
-        ux, uy = q[b] - q[a], q[b + 1] - q[a + 1]
-        A[r, a] -= 2.0 * ux
-        A[r, a + 1] -= 2.0 * uy
-        A[r, b] += 2.0 * ux
-        A[r, b + 1] += 2.0 * uy
-        r += 1
-    for k in range(slides.shape[0]):
-        p, c, s = slides[k, 0], slides[k, 1], slides[k, 2]
-        a, b = segs[s, 0], segs[s, 1]
-        dx, dy = q[c] - q[p], q[c + 1] - q[p + 1]
-        wx, wy = q[b] - q[a], q[b + 1] - q[a + 1]
-        # f = d × w: ∂/∂c = (w_y, −w_x), ∂/∂p = −that, ∂/∂b = (−d_y, d_x), ∂/∂a = −that
-        A[r, c] += wy
-        A[r, c + 1] -= wx
-        A[r, p] -= wy
-        A[r, p + 1] += wx
-        A[r, b] -= dy
-        A[r, b + 1] += dx
-        A[r, a] += dy
-        A[r, a + 1] -= dx
-        r += 1
-    for k in range(indep.shape[0]):
-        if indep[k, 0] == 0:
-            A[r, indep[k, 1] + 1] = 1.0
-        else:
-            A[r, indep[k, 1]] = 1.0
-            A[r, indep[k, 2]] = -1.0
-        r += 1
-
-
-@njit(cache=True)
-def chain_residual(q, segs, seg_f, slides, out):
-    """Constraint residuals of the chain's rows (independent rows 0)."""
-    out[:] = 0.0
-    r = 0
-    for j in range(segs.shape[0]):
-        a, b = segs[j, 0], segs[j, 1]
-        ux, uy = q[b] - q[a], q[b + 1] - q[a + 1]
-        out[r] = ux * ux + uy * uy - seg_f[j, 1] * seg_f[j, 1]
-        r += 1
-    for k in range(slides.shape[0]):
-        p, c, s = slides[k, 0], slides[k, 1], slides[k, 2]
-        a, b = segs[s, 0], segs[s, 1]
-        out[r] = _cross(q[c] - q[p], q[c + 1] - q[p + 1], q[b] - q[a], q[b + 1] - q[a + 1])
-        r += 1
-
-
-@njit(cache=True)
-def chain_quadratic(qd, segs, slides, out):
-    """−Φ̇_q q̇ of the chain's rows (zero for the independent rows)."""
-    out[:] = 0.0
-    r = 0
-    for j in range(segs.shape[0]):
-        a, b = segs[j, 0], segs[j, 1]
-        vx, vy = qd[b] - qd[a], qd[b + 1] - qd[a + 1]
-        out[r] = -2.0 * (vx * vx + vy * vy)
-        r += 1
-    for k in range(slides.shape[0]):
-        p, c, s = slides[k, 0], slides[k, 1], slides[k, 2]
-        a, b = segs[s, 0], segs[s, 1]
-        out[r] = -2.0 * _cross(qd[c] - qd[p], qd[c + 1] - qd[p + 1], qd[b] - qd[a], qd[b + 1] - qd[a + 1])
-        r += 1
-
-
-@njit(cache=True)
-def lu_factor(A, piv, n):
-    """In-place LU with partial pivoting of the n × n matrix A; returns False if singular."""
-    for k in range(n):
-        p = k
-        big = abs(A[k, k])
-        for i in range(k + 1, n):
-            if abs(A[i, k]) > big:
-                big = abs(A[i, k])
-                p = i
-        if big == 0.0:
-            return False
-        piv[k] = p
-        if p != k:
-            for j in range(n):
-                t = A[k, j]
-                A[k, j] = A[p, j]
-                A[p, j] = t
-        inv = 1.0 / A[k, k]
-        for i in range(k + 1, n):
-            A[i, k] *= inv
-            f = A[i, k]
-            if f != 0.0:
-                for j in range(k + 1, n):
-                    A[i, j] -= f * A[k, j]
-    return True
-
-
-@njit(cache=True)
-def lu_solve(LU, piv, n, b):
-    """Solve with the factors of :func:`lu_factor` (b overwritten by x)."""
-    for k in range(n):
-        p = piv[k]
-        if p != k:
-            t = b[k]
-            b[k] = b[p]
-            b[p] = t
-    for i in range(n):
-        acc = b[i]
-        for j in range(i):
-            acc -= LU[i, j] * b[j]
-        b[i] = acc
-    for i in range(n - 1, -1, -1):
-        acc = b[i]
-        for j in range(i + 1, n):
-            acc -= LU[i, j] * b[j]
-        b[i] = acc / LU[i, i]
-
-
-@njit(cache=True)
-def flex_solve(q, s, c, A, LU, piv, b, out, tmp):
-    """Solve the whole augmented system for v: the rigid twelve in closed form, then the chain block (A holds
-    the chain's rows over all coordinates, LU/piv the factors of its chain columns)."""
-    nc = A.shape[0]
-    rigid = False
-    for k in range(N_Q):
-        if b[k] != 0.0:
-            rigid = True
-            break
-    if rigid:
-        solve_aug(q, s, c, b, out)
-        for r in range(nc):   # the chain's rows reach the rigid coordinates through B' and C only (q_2 … q_5)
-            tmp[r] = b[N_Q + r] - A[r, 2] * out[2] - A[r, 3] * out[3] - A[r, 4] * out[4] - A[r, 5] * out[5]
-    else:   # a chain-only right-hand side (the chain's independent columns of R): the rigid block's answer is 0
-        for k in range(N_Q):
-            out[k] = 0.0
-        for r in range(nc):
-            tmp[r] = b[N_Q + r]
-    lu_solve(LU, piv, nc, tmp)
-    for r in range(nc):
-        out[N_Q + r] = tmp[r]
-
-
-@njit(cache=True)
-def factor(q, segs, slides, indep, A, LU, piv):
-    """Chain rows at q into A and the LU of their chain columns into LU; False if singular."""
-    chain_jacobian(q, segs, slides, indep, A)
-    nc = A.shape[0]
-    for i in range(nc):
-        for j in range(nc):
-            LU[i, j] = A[i, N_Q + j]
-    return lu_factor(LU, piv, nc)
-
-
-@njit(cache=True)
-def flex_mass_times(P, segs, seg_f, G, v, out):
-    """out = M v: the rigid model's blocks (the rod as its two end masses), the segments' bars, the supports."""
-    mass_times(P, v[:N_Q], out[:N_Q])
-    for i in range(N_Q, v.shape[0]):
-        out[i] = 0.0
-    if G[G_FLEX_A] > 0.5:
-        out[8] += G[G_MF] * v[8]
-        out[9] += G[G_MF] * v[9]
-    if G[G_FLEX_G] > 0.5:
-        out[10] += G[G_MG] * v[10]
-    for j in range(segs.shape[0]):
-        a, b = segs[j, 0], segs[j, 1]
-        m3, m6 = seg_f[j, 0] / 3.0, seg_f[j, 0] / 6.0
-        for d in range(2):
-            out[a + d] += m3 * v[a + d] + m6 * v[b + d]
-            out[b + d] += m6 * v[a + d] + m3 * v[b + d]
-
-
-@njit(cache=True)
-def _seg_angle_rate(q, qd, a, b):
-    ux, uy = q[b] - q[a], q[b + 1] - q[a + 1]
-    vx, vy = qd[b] - qd[a], qd[b + 1] - qd[a + 1]
-    return ux, uy, _cross(ux, uy, vx, vy) / (ux * ux + uy * uy)
-
-
-@njit(cache=True)
-def _moment(q, a, b, m, Q):
-    """A moment m about z on the bar a→b as the force pair ±m R₉₀u/|u|² on b and a."""
-    ux, uy = q[b] - q[a], q[b + 1] - q[a + 1]
-    f = m / (ux * ux + uy * uy)
-    Q[b] += -uy * f
-    Q[b + 1] += ux * f
-    Q[a] -= -uy * f
-    Q[a + 1] -= ux * f
-
-
-@njit(cache=True)
-def _eye_contact(P, qs, q, jo, eye, rb, a, b, Q):
-    """Move a clearance joint's contact force on the rod from the rigid rod's distribution over B' and C
-    (:func:`twin.reference.model._rod_force`, which the joint's element applied) to the eye it acts on: the force at
-    the eye's centre (index ``eye``: 2 for B', 4 for C) and its moment about it, −R_b f_T, on the end segment a→b
-    (the housing turns with it)."""
-    ex, ey = jo[0], jo[1]
-    d = math.sqrt(ex * ex + ey * ey)
-    if d > 0.0:
-        nx, ny = ex / d, ey / d
-    else:
-        nx, ny = 1.0, 0.0
-    fx = -jo[3] * nx - jo[4] * ny      # on the pin: −f_N n + f_T t, t = (−n_y, n_x)
-    fy = -jo[3] * ny + jo[4] * nx
-    _rod_force(P, qs, fx, fy, qs[eye] + rb * nx, qs[eye + 1] + rb * ny, Q)   # undoes the element's −F
-    Q[eye] -= fx
-    Q[eye + 1] -= fy
-    _moment(q, a, b, -rb * jo[4], Q)
-
-
-@njit(cache=True)
-def chain_forces(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G, Q):
-    """Add the chain's gravity, hinges and slides and the supports' springs and dampers to Q; returns the power
-    the dampers dissipate [W] (≥ 0)."""
-    gx, gy = P[P_GX], P[P_GY]
-    for j in range(segs.shape[0]):
-        a, b = segs[j, 0], segs[j, 1]
-        w = 0.5 * seg_f[j, 0]
-        Q[a] += w * gx
-        Q[a + 1] += w * gy
-        Q[b] += w * gx
-        Q[b + 1] += w * gy
-    diss = 0.0
-    for k in range(hinges.shape[0]):
-        i0, i1 = hinges[k, 0], hinges[k, 1]
-        a0, b0, a1, b1 = segs[i0, 0], segs[i0, 1], segs[i1, 0], segs[i1, 1]
-        u0x, u0y, w0 = _seg_angle_rate(q, qd, a0, b0)
-        u1x, u1y, w1 = _seg_angle_rate(q, qd, a1, b1)
-        delta = math.atan2(_cross(u0x, u0y, u1x, u1y), u0x * u1x + u0y * u1y)
-        rate = w1 - w0
-        m = -hinge_f[k, 0] * delta - hinge_f[k, 1] * rate
-        diss += hinge_f[k, 1] * rate * rate
-        _moment(q, a1, b1, m, Q)
-        _moment(q, a0, b0, -m, Q)
-    for k in range(slides.shape[0]):
-        p, c, s = slides[k, 0], slides[k, 1], slides[k, 2]
-        a, b = segs[s, 0], segs[s, 1]
-        wx, wy = q[b] - q[a], q[b + 1] - q[a + 1]
-        wn = math.sqrt(wx * wx + wy * wy)
-        ex, ey = wx / wn, wy / wn
-        d = (q[c] - q[p]) * ex + (q[c + 1] - q[p + 1]) * ey
-        dd = (qd[c] - qd[p]) * ex + (qd[c + 1] - qd[p + 1]) * ey
-        f = -slide_f[k, 0] * d - slide_f[k, 1] * dd
-        diss += slide_f[k, 1] * dd * dd
-        Q[c] += f * ex
-        Q[c + 1] += f * ey
-        Q[p] -= f * ex
-        Q[p + 1] -= f * ey
-    if G[G_FLEX_A] > 0.5:
-        for i in (8, 9):
-            Q[i] += -G[G_KF] * q[i] - G[G_CF] * qd[i]
-            diss += G[G_CF] * qd[i] * qd[i]
-    if G[G_FLEX_G] > 0.5:
-        Q[10] += -G[G_KG] * q[10] - G[G_CG] * qd[10] + (P[P_M3] + G[G_MG]) * gy
-        diss += G[G_CG] * qd[10] * qd[10]
-    return diss
-
-
-@njit(cache=True)
-def flex_energy(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G):
-    """(T, V) [J]: kinetic energy (all masses) and potential (gravity as the rigid model's, the segments, the
-    supports' springs with the guide's weight, the hinges and slides)."""
-    n = q.shape[0]
-    mv = np.empty(n)
-    flex_mass_times(P, segs, seg_f, G, qd, mv)
-    T = 0.0
-    for i in range(n):
-        T += 0.5 * qd[i] * mv[i]
-    V = energy(P, q[:N_Q], qd[:N_Q]) - kinetic_energy(P, q[:N_Q], qd[:N_Q])
-    gx, gy = P[P_GX], P[P_GY]
-    for j in range(segs.shape[0]):
-        a, b = segs[j, 0], segs[j, 1]
-        w = 0.5 * seg_f[j, 0]
-        V -= w * (gx * (q[a] + q[b]) + gy * (q[a + 1] + q[b + 1]))
-    for k in range(hinges.shape[0]):
-        i0, i1 = hinges[k, 0], hinges[k, 1]
-        a0, b0, a1, b1 = segs[i0, 0], segs[i0, 1], segs[i1, 0], segs[i1, 1]
-        u0x, u0y = q[b0] - q[a0], q[b0 + 1] - q[a0 + 1]
-        u1x, u1y = q[b1] - q[a1], q[b1 + 1] - q[a1 + 1]
-        delta = math.atan2(_cross(u0x, u0y, u1x, u1y), u0x * u1x + u0y * u1y)
-        V += 0.5 * hinge_f[k, 0] * delta * delta
-    for k in range(slides.shape[0]):
-        p, c, s = slides[k, 0], slides[k, 1], slides[k, 2]
-        a, b = segs[s, 0], segs[s, 1]
-        wx, wy = q[b] - q[a], q[b + 1] - q[a + 1]
-        wn = math.sqrt(wx * wx + wy * wy)
-        d = ((q[c] - q[p]) * wx + (q[c + 1] - q[p + 1]) * wy) / wn
-        V += 0.5 * slide_f[k, 0] * d * d
-    if G[G_FLEX_A] > 0.5:
-        V += 0.5 * G[G_KF] * (q[8] * q[8] + q[9] * q[9])
-    if G[G_FLEX_G] > 0.5:
-        V += 0.5 * G[G_KG] * q[10] * q[10] - (P[P_M3] + G[G_MG]) * gy * q[10]
-    return T, V
-
-
-@njit(cache=True)
-def flex_rows(P, G, indep, rows):
-    """Independent rows of the whole set: the rigid model's (θ and the clearance eccentricities), the rod's
-    stretch (row 2), the supports (rows 8–9, 10) and the chain's independent rows; returns their number."""
-    nz = independent_rows(P, rows)
-    rows[nz] = 2
-    nz += 1
-    if G[G_FLEX_A] > 0.5:
-        rows[nz] = 8
-        rows[nz + 1] = 9
-        nz += 2
-    if G[G_FLEX_G] > 0.5:
-        rows[nz] = 10
-        nz += 1
-    return nz
-
-
-@njit(cache=True)
-def _independent_values(P, G, q, qd, segs, slides, indep, b):
-    """Right-hand side of the velocity projection: the independent coordinates' rates from q̇."""
-    n = q.shape[0]
-    for i in range(n):
-        b[i] = 0.0
-    b[7] = qd[7]
-    if P[P_CLR_B] > 0.5:
-        b[3] = qd[0] - qd[2]
-        b[4] = qd[1] - qd[3]
-    if P[P_CLR_C] > 0.5:
-        b[5] = qd[6] - qd[4]
-        b[6] = qd[10] - qd[5]
-    b[2] = 2.0 * ((q[4] - q[2]) * (qd[4] - qd[2]) + (q[5] - q[3]) * (qd[5] - qd[3]))
-    if G[G_FLEX_A] > 0.5:
-        b[8] = qd[8]
-        b[9] = qd[9]
-    if G[G_FLEX_G] > 0.5:
-        b[10] = qd[10]
-    r0 = N_Q + segs.shape[0] + slides.shape[0]
-    for k in range(indep.shape[0]):
-        if indep[k, 0] == 0:
-            b[r0 + k] = qd[indep[k, 1] + 1]
-        else:
-            b[r0 + k] = qd[indep[k, 1]] - qd[indep[k, 2]]
-
-
-@njit(cache=True)
-def flex_project(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, res, dq, b, tmp):
-    """Newton on the constraints with the independent coordinates held, then q̇ ← R ż (as the rigid
-    :func:`twin.natural_coordinates.project`). On return A and LU hold the chain's rows at the final q (the
-    next step's acceleration solve reuses them). Returns the iterations, −1 if no convergence."""
-    n = q.shape[0]
-    nc = A.shape[0]
-    tol = P[P_NEWTON_TOL]
-    maxit = int(P[P_NEWTON_MAXIT])
-    it = 0
-    conv = False
-    # modified Newton: the chain block factored once at the predicted q (a step moves it by h q̇, so the
-    # iteration contracts by ~|ΔA|/|A| per pass); the velocity projection below refactors at the final q
-    if not factor(q, segs, slides, indep, A, LU, piv):
-        return -1
-    while it < maxit:
-        s, c = math.sin(q[7]), math.cos(q[7])
-        residual(P, q[:N_Q], s, c, res[:N_Q])
-        res[2] = 0.0
-        if G[G_FLEX_A] > 0.5:
-            res[8] = 0.0
-            res[9] = 0.0
-        if G[G_FLEX_G] > 0.5:
-            res[10] = 0.0
-            if P[P_CLR_C] < 0.5:   # the ideal joint C on the moving guide: C' at d_off + y_g
-                res[6] = P[P_DOFF] + q[10] - q[5]
-        chain_residual(q, segs, seg_f, slides, res[N_Q:])
-        for i in range(n):
-            res[i] = -res[i]
-        flex_solve(q, s, c, A, LU, piv, res, dq, tmp)
-        big = 0.0
-        for i in range(n):
-            q[i] += dq[i]
-            if abs(dq[i]) > big:
-                big = abs(dq[i])
-        it += 1
-        if big <= tol:
-            conv = True
-            break
-    if not conv:
-        return -1
-    s, c = math.sin(q[7]), math.cos(q[7])
-    if not factor(q, segs, slides, indep, A, LU, piv):
-        return -1
-    _independent_values(P, G, q, qd, segs, slides, indep, b)
-    flex_solve(q, s, c, A, LU, piv, b, dq, tmp)
-    for i in range(n):
-        qd[i] = dq[i]
-    return it
-
-
-@njit(cache=True)
-def flex_accelerations(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, Q, rows, nz, Rt, S, Mb, rhs, MR,
-                       b, tmp, qdd, prescribed, alpha, tau):
-    """q̈ = R z̈ + Ṙż from Rᵀ M R z̈ = Rᵀ (Q − M Ṙż), A already factored at q. False if not SPD. With
-    ``prescribed`` the crank angle is a driving constraint (θ̈ = ``alpha``, the first independent coordinate):
-    the other rows are solved with it known and the drive torque (its multiplier) written to ``tau[0]``, as
-    :func:`twin.reference.model.accelerations_prescribed`."""
-    n = q.shape[0]
-    s, c = math.sin(q[7]), math.cos(q[7])
-    for j in range(nz):
-        for i in range(n):
-            b[i] = 0.0
-        b[rows[j]] = 1.0
-        flex_solve(q, s, c, A, LU, piv, b, Rt[j], tmp)
-        flex_mass_times(P, segs, seg_f, G, Rt[j], MR[j])
-    quadratic_terms(q[:N_Q], qd[:N_Q], s, c, b[:N_Q])
-    # (row 2, the stretch s = |C − B'|² − L², is an independent coordinate defined by a nonlinear expression: its
-    # row keeps −Φ̇_q q̇ = −2|Ċ − Ḃ'|², as quadratic_terms writes it)
-    chain_quadratic(qd, segs, slides, b[N_Q:])
-    flex_solve(q, s, c, A, LU, piv, b, S, tmp)
-    flex_mass_times(P, segs, seg_f, G, S, tmp[:n])
-    for i in range(n):
-        b[i] = Q[i] - tmp[i]
-    for j in range(nz):
-        acc = 0.0
-        for k in range(n):
-            acc += Rt[j, k] * b[k]
-        rhs[j] = acc
-    for j in range(nz):
-        for i in range(j, nz):
-            acc = 0.0
-            for k in range(n):
-                acc += Rt[i, k] * MR[j, k]
-            Mb[i, j] = acc
-            Mb[j, i] = acc
-    if prescribed:
-        m = nz - 1
-        W = np.empty((m, m))
-        rw = np.empty(m)
-        for i in range(m):
-            rw[i] = rhs[i + 1] - Mb[i + 1, 0] * alpha
-            for j in range(m):
-                W[i, j] = Mb[i + 1, j + 1]
-        if not _cholesky_solve(W, rw, m):
-            return False
-        t = Mb[0, 0] * alpha - rhs[0]
-        for j in range(m):
-            t += Mb[0, j + 1] * rw[j]
-        tau[0] = t
-        rhs[0] = alpha
-        for j in range(m):
-            rhs[j + 1] = rw[j]
-    elif not _cholesky_solve(Mb, rhs, nz):
-        return False
-    for i in range(n):
-        acc = S[i]
-        for j in range(nz):
-            acc += Rt[j, i] * rhs[j]
-        qdd[i] = acc
-    return True
-
-
-@njit(cache=True)
-def _rod_sensors(P, q, qdd, segs, sens, row):
-    """Overwrite the rod's accelerometers of the output row with their segment's reading."""
-    gx, gy = P[P_GX], P[P_GY]
-    for i in range(6):
-        seg = int(sens[i, 0])
-        if seg < 0:
-            continue
-        a, b = segs[seg, 0], segs[seg, 1]
-        ux, uy = q[b] - q[a], q[b + 1] - q[a + 1]
-        ln = math.sqrt(ux * ux + uy * uy)
-        hx, hy = ux / ln, uy / ln
-        xi, eta = sens[i, 1] / ln, sens[i, 2] / ln
-        uax, uay = qdd[b] - qdd[a], qdd[b + 1] - qdd[a + 1]
-        ax = qdd[a] + xi * uax - eta * uay - gx
-        ay = qdd[a + 1] + xi * uay + eta * uax - gy
-        axis = int(sens[i, 3])
-        v = ax * hx + ay * hy if axis < 2 else -ax * hy + ay * hx
-        if axis == 1 or axis == 3:
-            v = -v
-        row[O_ACC + i] = v
-
-
-@njit(cache=True)
-def _slider_sensors(P, qdd, sens, row):
-    """The slider's accelerometers with the guide rails moving normal to the guide (y_g)."""
-    gx, gy = P[P_GX], P[P_GY]
-    for i in range(6):
-        base = P_SENS + 4 * i
-        if P[base] < 0.5:
-            continue
-        axis = int(P[base + 3])
-        v = (qdd[6] - gx) if axis < 2 else (qdd[10] - gy)
-        if axis == 1 or axis == 3:
-            v = -v
-        row[O_ACC + i] = v
-
-
 @njit(cache=True, nogil=True)
 def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sens, st, x, theta_ref, omega_ref,
                  stride, out, want_out, D, ds, setpoint, dout, alpha_ref):
@@ -698,6 +205,10 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
     A = np.empty((nc, n))
     LU = np.empty((nc, nc))
     piv = np.empty(nc, dtype=np.int64)
+    Bm = np.empty((nc, nz + 1))
+    RtT = np.empty((n, nz))
+    gmob = np.empty(2 * nz)
+    Wmob = np.empty((nz, nz))
     motor = D.shape[0] > 0
     prescribed = alpha_ref.shape[0] > 0
     nsteps = setpoint.shape[0] if motor else (alpha_ref.shape[0] if prescribed else theta_ref.shape[0])
@@ -729,13 +240,28 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
         if shift:   # the joint C's pin C' rides on the guide: its eccentricity is measured from d_off + y_g
             qs[5] -= q[10]
             qds[5] -= qd[10]
+        if k == 0 and not factor(q, segs, slides, indep, A, LU, piv):   # later steps: the projection's
+            status = NOT_FINITE
+            break
+        flex_mass(P, G, q, qd, segs, seg_f, slides, A, LU, piv, rows, nz, Rt, S, Mb, MR, b, Bm, RtT)
         generalized_forces(P, qs, qds, tau, cst_a, cst_b, cst_c, Q[:N_Q], ja, jb, jc)
-        # the contact forces on the rod act on its eyes (end_B, end_C), not spread as on a rigid rod
-        if P[P_CLR_B] > 0.5 and jb[3] > 0.0:
-            _eye_contact(P, qs, q, jb, 2, P[P_RBUSH_B], segs[0, 0], segs[0, 1], Q)
-        if P[P_CLR_C] > 0.5 and jc[3] > 0.0:
-            last = segs.shape[0] - 1
-            _eye_contact(P, qs, q, jc, 4, P[P_RBUSH_C], segs[last, 0], segs[last, 1], Q)
+        # the contact forces on the rod act on its eyes (end_B, end_C), not spread as on a rigid rod, with the
+        # law's damping bounded by the pair's effective mass (_bound_damping)
+        if P[P_CLR_B] > 0.5 and jb[2] > 0.0:
+            d = math.sqrt(jb[0] * jb[0] + jb[1] * jb[1])
+            mob = normal_mobility(Rt, Mb, nz, prescribed, 0, 1, 2, 3, jb[0] / d, jb[1] / d, gmob, Wmob) \
+                if d > 0.0 else 0.0
+            fn0, ft0 = _bound_damping(P, qs, qds, True, cst_b, jb, mob, h, Q)
+            if fn0 > 0.0 or jb[3] > 0.0:
+                _eye_contact(P, qs, q, jb, fn0, ft0, 2, P[P_RBUSH_B], segs[0, 0], segs[0, 1], Q)
+        if P[P_CLR_C] > 0.5 and jc[2] > 0.0:
+            d = math.sqrt(jc[0] * jc[0] + jc[1] * jc[1])
+            mob = normal_mobility(Rt, Mb, nz, prescribed, 6, 10 if shift else -1, 4, 5, jc[0] / d, jc[1] / d, gmob,
+                                  Wmob) if d > 0.0 else 0.0
+            fn0, ft0 = _bound_damping(P, qs, qds, False, cst_c, jc, mob, h, Q)
+            if fn0 > 0.0 or jc[3] > 0.0:
+                last = segs.shape[0] - 1
+                _eye_contact(P, qs, q, jc, fn0, ft0, 4, P[P_RBUSH_C], segs[last, 0], segs[last, 1], Q)
         if shift and jc[3] > 0.0:   # the contact's normal component on the pin, which the ideal guide took, moves it
             ex, ey = jc[0], jc[1]
             d = math.sqrt(ex * ex + ey * ey)
@@ -744,11 +270,8 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
         for i in range(N_Q):   # the mechanism's own forces (the drive train's accounts read them)
             Qb[i] = Q[i]
         diss = chain_forces(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G, Q)
-        if k == 0 and not factor(q, segs, slides, indep, A, LU, piv):   # later steps: the projection's
-            status = NOT_FINITE
-            break
-        if not flex_accelerations(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, Q, rows, nz, Rt, S, Mb, rhs,
-                                  MR, b, tmp, qdd, prescribed, alpha_ref[k] if prescribed else 0.0, tau_p):
+        if not flex_solve_acc(q, Q, nz, Rt, RtT, S, Mb, rhs, b, tmp, qdd, P, segs, seg_f, G, prescribed,
+                              alpha_ref[k] if prescribed else 0.0, tau_p):
             status = NOT_FINITE
             break
         if prescribed:

@@ -1,0 +1,342 @@
+"""``twin.calibrate``: fit configuration fields to bench recordings (see docs/calibration.md).
+
+Steps: check every input (recordings, fields, bounds, options, output folder) before any simulation;
+prepare each recording for the short and the full stage (:mod:`twin.calibration.objective`); term
+scales from the repeats; time the base point in both stages and state the wall-time estimate; the
+search (:mod:`twin.calibration.search`); intervals (:mod:`twin.calibration.uncertainty`); the
+outputs in the folder: ``calibrated.toml``, ``report.json``, ``report.md``, ``evaluations.jsonl``
+(the resumable log) and PNG figures, each written atomically.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Iterable, Mapping
+
+import numpy as np
+
+from twin.config import BenchConfig
+from twin.errors import ConfigError
+from twin.calibration.params import overlay  # noqa: F401 - part of this module's API
+
+#: the files a calibration writes in its output folder
+OUTPUT_FILES = ("calibrated.toml", "report.json", "report.md", "evaluations.jsonl", "spectra.png",
+                "windows.png", "history.png", "profiles.png")
+
+
+@dataclass(frozen=True)
+class CalibrationOptions:
+    """Settings of a calibration.
+
+    Attributes:
+        n_global: Sobol points of the global stage (short windows).
+        local_short: Nelder–Mead evaluations on short windows.
+        local_full: Nelder–Mead evaluations on the whole recordings.
+        profile_steps: offsets of the profile points in normalized coordinates (each ± around the best point).
+        short_fraction: share of each recording simulated in the short stage (0.1-1).
+        drive: "trace" (the encoder trace drives the crank PID, as ``twin replay``) or "program" (the
+            configuration's own drive program: synthetic recordings, or bench runs whose program is known).
+        workers: local worker processes (1 = this process).
+        seed: seed of the Sobol sample.
+        dtw_max_s: DTW on at most this much of each window [s].
+        dtw_window_s: Sakoe–Chiba half-width of the DTW [s].
+        delta_j: rise of the objective that bounds an interval (1 = one term moved by one scatter).
+        plots: write the PNG figures.
+        progress: progress bars on standard error.
+    """
+
+    n_global: int = 16
+    local_short: int = 20
+    local_full: int = 12
+    profile_steps: tuple[float, ...] = (0.03, 0.1, 0.25)
+    short_fraction: float = 0.5
+    drive: str = "trace"
+    workers: int = 1
+    seed: int = 0
+    dtw_max_s: float = 0.05
+    dtw_window_s: float = 0.002
+    delta_j: float = 1.0
+    plots: bool = True
+    progress: bool = False
+
+    def __post_init__(self) -> None:
+        for name, lo, hi in (("n_global", 0, 4096), ("local_short", 0, 10_000), ("local_full", 0, 10_000),
+                             ("workers", 1, 1024), ("seed", 0, 2 ** 31 - 1)):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
+                raise ConfigError(name, f"must be an integer in [{lo}, {hi}], got {v!r}")
+        for name, lo, hi in (("short_fraction", 0.1, 1.0), ("dtw_max_s", 0.001, 10.0), ("dtw_window_s", 0.0, 1.0),
+                             ("delta_j", 1e-6, 1e6)):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not (math.isfinite(v) and lo <= v <= hi):
+                raise ConfigError(name, f"must be a number in [{lo:g}, {hi:g}], got {v!r}")
+        if self.drive not in ("trace", "program"):
+            raise ConfigError("drive", f"must be trace or program, got {self.drive!r}")
+        steps = self.profile_steps
+        if not isinstance(steps, tuple) or not all(isinstance(s, (int, float)) and not isinstance(s, bool)
+                                                   and 0 < s <= 0.5 for s in steps):
+            raise ConfigError("profile_steps", f"must be a tuple of numbers in (0, 0.5], got {steps!r}")
+
+
+@dataclass(frozen=True)
+class FittedParameter:
+    """A fitted field: value, interval, base value, warnings [the field's unit]."""
+
+    field: str
+    value: float
+    lo: float
+    hi: float
+    base: float
+    bounds: tuple[float, float]
+    method: str
+    flat: bool
+    on_bound: str
+
+    def to_dict(self) -> dict[str, Any]:
+        return {**self.__dict__, "bounds": list(self.bounds)}
+
+
+@dataclass(frozen=True)
+class CalibrationResult:
+    """What :func:`calibrate` found and wrote.
+
+    Attributes:
+        parameters: the fitted fields with their intervals.
+        objective_before, objective_after: objective at the base and the fitted values (full length).
+        terms_before, terms_after: the raw terms per recording at those points.
+        scales: the term scales and where they come from (``scales_note``).
+        correlated_pairs: pairs of fields the recordings cannot tell apart.
+        warnings: fitted values on a bound, flat profiles, failed evaluations.
+        evaluations: evaluations used (simulated now + read back from the log).
+        simulated: evaluations simulated by this call; resumed: read back from the log.
+        seconds_per_evaluation: mean wall time of a short and a full evaluation [s].
+        wall_s: wall time of the call [s].
+        out_dir: the output folder.
+        report: the report dict (report.json).
+    """
+
+    parameters: tuple[FittedParameter, ...]
+    objective_before: float
+    objective_after: float
+    terms_before: list[dict[str, float]]
+    terms_after: list[dict[str, float]]
+    scales: dict[str, float]
+    scales_note: str
+    correlated_pairs: list[dict[str, Any]]
+    warnings: list[str]
+    evaluations: int
+    simulated: int
+    resumed: int
+    seconds_per_evaluation: dict[str, float]
+    wall_s: float
+    out_dir: Path
+    report: dict[str, Any] = field(repr=False, default_factory=dict)
+
+    def values(self) -> dict[str, float]:
+        """Fitted value by field."""
+        return {p.field: p.value for p in self.parameters}
+
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-able dict."""
+        return {"parameters": [p.to_dict() for p in self.parameters], "objective_before": self.objective_before,
+                "objective_after": self.objective_after, "terms_before": self.terms_before,
+                "terms_after": self.terms_after, "scales": self.scales, "scales_note": self.scales_note,
+                "correlated_pairs": self.correlated_pairs, "warnings": self.warnings,
+                "evaluations": self.evaluations, "simulated": self.simulated, "resumed": self.resumed,
+                "seconds_per_evaluation": self.seconds_per_evaluation, "wall_s": self.wall_s,
+                "out_dir": str(self.out_dir)}
+
+
+def _check_recordings(recordings: Iterable[str | Path]) -> list[str]:
+    if isinstance(recordings, (str, Path)):
+        recordings = [recordings]
+    recs = [str(r) for r in recordings]
+    if not recs:
+        raise ConfigError("recordings", "give one or more bench recordings (.mcap)")
+    for r in recs:
+        if not Path(r).is_file():
+            raise ConfigError("recordings", f"{r} is not a file")
+    if len(set(Path(r).resolve() for r in recs)) != len(recs):
+        raise ConfigError("recordings", "a recording is given twice")
+    return recs
+
+
+def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[str] | str, out: str | Path, *,
+              config: BenchConfig | None = None, bounds: Mapping[str, tuple[float, float]] | None = None,
+              options: CalibrationOptions = CalibrationOptions(),
+              note: Callable[[str], None] | None = None) -> CalibrationResult:
+    """Fit the configuration fields ``params`` (dotted paths) to ``recordings`` and write the results
+    in the folder ``out`` (module docstring). ``config``: the configuration the fields are set in for
+    every recording (default: each recording's own); ``bounds``: {field: (low, high)} (default: the
+    documented ranges); ``note``: called with one-line messages (the wall-time estimate, resumed
+    evaluations). A folder holding a previous calibration's log with the same inputs resumes it."""
+    from twin.calibration import objective as obj
+    from twin.calibration import search, uncertainty
+    from twin.calibration.params import make_parameters
+    from twin.provenance import stamp
+    from twin.util import check_output_dir
+
+    wall0 = time.perf_counter()
+    say = note or (lambda s: None)
+    if not isinstance(options, CalibrationOptions):
+        raise TypeError(f"options: must be a CalibrationOptions, got {type(options).__name__}")
+    if config is not None and not isinstance(config, BenchConfig):
+        raise TypeError(f"config: must be a BenchConfig or None, got {type(config).__name__}")
+    recs = _check_recordings(recordings)
+    out_dir = check_output_dir(out, "out", need_parent=False)
+    base_toml = config.to_toml() if config is not None else None
+    motor = any(str(f).strip().startswith("drivetrain.") for f in
+                (params.split(",") if isinstance(params, str) else params))
+    ripple = motor or any(str(f).strip().startswith("pid.") for f in
+                          (params.split(",") if isinstance(params, str) else params))
+    targets = {st: [obj.get_target(r, base_toml, frac, options.dtw_max_s, motor, options.drive) for r in recs]
+               for st, frac in (("short", options.short_fraction), ("full", 1.0))}
+    first = targets["full"][0].base
+    P = make_parameters(params, first, bounds)
+    for t in targets["full"][1:]:
+        make_parameters([p.field for p in P], t.base, {p.field: (p.lo, p.hi) for p in P})
+    fields = [p.field for p in P]
+    out_dir.mkdir(parents=True, exist_ok=True)  # every input checked: the first thing written
+    scales, scales_note = {}, ""
+    for st in ("short", "full"):
+        scales[st], scales_note = obj.repeat_scales(targets[st], options.dtw_window_s, ripple)
+
+    header = {"format": search.LOG_FORMAT, "version": search.LOG_VERSION,
+              "recordings": [obj.recording_key(r) for r in recs],
+              "parameters": [{"field": p.field, "lo": p.lo, "hi": p.hi, "log": p.log} for p in P],
+              "base_config": base_toml, "options": {"short_fraction": options.short_fraction, "drive": options.drive,
+                                                    "dtw_max_s": options.dtw_max_s,
+                                                    "dtw_window_s": options.dtw_window_s}}
+
+    def make_task(stage: str, u: np.ndarray, i: int) -> dict[str, Any]:
+        # run_id and index: what the dataset pool's report of a crashed worker names a task by
+        return {"id": i, "run_id": f"evaluation-{i}", "index": i, "recordings": recs, "base_toml": base_toml,
+                "fraction": options.short_fraction if stage == "short" else 1.0,
+                "dtw_max_s": options.dtw_max_s, "dtw_window_s": options.dtw_window_s, "motor": motor,
+                "ripple": ripple, "drive": options.drive, "fields": fields,
+                "values": [p.from_unit(x) for p, x in zip(P, u)]}
+
+    run = (search.in_process(obj.evaluate_task) if options.workers == 1
+           else search.local_pool(options.workers, obj.evaluate_task))
+    ev = search.Evaluator(out_dir / "evaluations.jsonl", header, P, make_task, scales, run, options.progress,
+                          run_single=search.in_process(obj.evaluate_task))
+    try:
+        if ev.resumed:
+            say(f"resuming: {ev.resumed} evaluations read back from {out_dir / 'evaluations.jsonl'}")
+        for n in ev.notes:
+            say(n)
+        base_vals = [t.base for t in targets["full"]]
+        x0 = [min(p.hi, max(p.lo, float(obj_field(first, p.field)))) for p in P]
+        u0 = np.asarray([p.to_unit(x) for p, x in zip(P, x0)])
+        # the base point in both stages: the "before" numbers and the timing of the estimate
+        j0_short = ev.one("short", u0)
+        j0_full = ev.one("full", u0)
+        t_short = search.timing(ev.cache[search._key("short", u0)])
+        t_full = search.timing(ev.cache[search._key("full", u0)])
+        n_prof = 2 * len(options.profile_steps) * len(P)
+        est = search.estimate_wall_s(t_short, t_full, options.local_short, options.local_full, options.workers,
+                                     options.n_global, n_prof)
+        say(f"one evaluation takes {t_short:.2f} s (short windows) and {t_full:.2f} s (full length) for "
+            f"{len(recs)} recording(s); about {options.n_global + options.local_short + options.local_full + n_prof} "
+            f"evaluations: about {est / 60:.1f} min on {options.workers} worker(s)"
+            + (" (logged ones are not simulated again)" if ev.resumed else ""))
+        # 1. global stage, short windows
+        pts = search.sobol_points(len(P), options.n_global, options.seed)
+        js = ev.many("short", pts, "global (Sobol, short windows)")
+        cand = [(j0_short, u0)] + list(zip(js, pts))
+        u_g = min(cand, key=lambda c: c[0])[1]
+        u_s = search.nelder_mead(ev, "short", u_g, options.local_short, 0.1)
+        # 2. full length
+        u_f = search.nelder_mead(ev, "full", u_s, options.local_full, 0.05)
+        # this run's path only (ev.history, cached or not): a resumed run retraces the same steps
+        fulls = [(np.asarray(e["u"]), ev.value(e)) for e in ev.history if e["stage"] == "full"]
+        u_best = min(fulls, key=lambda c: c[1])[0] if fulls else u_f
+        prof = []
+        for i in range(len(P)):
+            for s in options.profile_steps:
+                for sign in (-1, 1):
+                    v = u_best.copy()
+                    v[i] = v[i] + sign * s
+                    if 0 <= v[i] <= 1:
+                        prof.append(v)
+        u_centre = u_best.copy()
+        ev.many("full", prof, "profiles (full length)")
+        seen: dict[tuple, tuple[np.ndarray, float]] = {}
+        for e in ev.history:
+            if e["stage"] == "full":
+                seen[search._key("full", np.asarray(e["u"]))] = (np.asarray(e["u"]), ev.value(e))
+        fulls = list(seen.values())
+        u_best, j_best = min(fulls, key=lambda c: c[1])
+        if not np.array_equal(u_best, np.clip(u_best, 0, 1)):
+            u_best = np.clip(u_best, 0, 1)
+        # the rise that bounds an interval: delta_j, inflated by the misfit per term where the best
+        # point's terms exceed their scales (J*/n > 1: the scatter understates the model's error)
+        n_terms = max(1, sum(len(t) for t in ev.cache[search._key("full", u_best)]["terms"]))
+        inflation = max(1.0, float(j_best) / n_terms)
+        unc = uncertainty.analyse(P, u_best, fulls, options.delta_j * inflation, centre=u_centre)
+        unc["inflation"] = inflation
+        unc["profile_centre_is_best"] = bool(np.array_equal(u_centre, u_best))
+        e_before = ev.cache[search._key("full", u0)]
+        e_after = ev.cache[search._key("full", u_best)]
+    finally:
+        ev.close()
+
+    from twin.calibration.report import write_outputs
+
+    fitted = tuple(FittedParameter(p.field, iv.value, iv.lo, iv.hi, x, (p.lo, p.hi), iv.method, iv.flat, iv.on_bound)
+                   for p, iv, x in zip(P, unc["intervals"], x0))
+    warnings = []
+    for f in fitted:
+        if f.on_bound:
+            warnings.append(f"{f.field}: the fitted value {f.value:.4g} sits on its {f.on_bound} bound "
+                            f"({f.bounds[0]:g}..{f.bounds[1]:g}): the optimum may lie outside; widen the bounds")
+        if f.flat:
+            warnings.append(f"{f.field}: flat profile: these recordings do not tell its value (the objective "
+                            f"moves by less than {options.delta_j:g} across the range)")
+    for pr in unc["correlated_pairs"]:
+        warnings.append(f"{pr['a']} and {pr['b']} are correlated ({pr['correlation']:+.2f}): the recordings "
+                        "cannot tell them apart")
+    if not unc["profile_centre_is_best"]:
+        warnings.append("a profile point was better than the point the profiles were taken around: the fitted "
+                        "values are that point's, the slices are around the earlier one; more local evaluations "
+                        "(--local-full) would settle it")
+    failed = sum(1 for e in ev.cache.values() if e["status"] != "ok")
+    if failed:
+        warnings.append(f"{failed} evaluation(s) failed (simulation error; counted as a very bad objective)")
+    times = {st: float(np.mean([e["wall_s"] for e in ev.cache.values() if e["stage"] == st] or [math.nan]))
+             for st in ("short", "full")}
+    report = {
+        "provenance": stamp(),
+        "recordings": header["recordings"],
+        "parameters": [f.to_dict() for f in fitted],
+        "objective": {"before": j0_full, "after": j_best, "terms_before": e_before["terms"],
+                      "terms_after": e_after["terms"], "scales": scales["full"], "scales_note": scales_note,
+                      "delta_j": options.delta_j, "delta_j_used": unc["delta_j"]},
+        "uncertainty": {k: v for k, v in unc.items() if k != "intervals"},
+        "warnings": warnings,
+        "evaluations": {"total": len(ev.cache), "simulated_now": ev.simulated, "resumed": ev.resumed,
+                        "failed": failed, "seconds_per_evaluation": times,
+                        "estimate_s": est},
+        "options": {k: (list(v) if isinstance(v, tuple) else v) for k, v in options.__dict__.items()},
+        "base_config": "given (--config)" if config is not None else "each recording's own",
+    }
+    result_wall = time.perf_counter() - wall0
+    write_outputs(out_dir, report, targets["full"], P, x0, [f.value for f in fitted], config, ev, options,
+                  base_vals)
+    report["wall_s"] = time.perf_counter() - wall0
+    from twin.util import atomic_write_json
+
+    atomic_write_json(out_dir / "report.json", report)
+    del result_wall
+    return CalibrationResult(fitted, j0_full, j_best, e_before["terms"], e_after["terms"], scales["full"],
+                             scales_note, unc["correlated_pairs"], warnings, len(ev.cache), ev.simulated,
+                             ev.resumed, times, report["wall_s"], out_dir, report)
+
+
+def obj_field(cfg: BenchConfig, f: str) -> float:
+    from twin.calibration.params import field_value
+
+    return field_value(cfg, f)

@@ -1,0 +1,343 @@
+"""The calibration objective: how far a configuration's replay is from a recording, in what the
+recording can tell.
+
+One evaluation replays the recording as ``twin replay`` does (:mod:`twin.bench_replay`: the encoder
+trace drives the crank PID, in memory; the virtual accelerometers go through the sensor chain and the
+bench's calibration) and compares, over the analysis window, per accelerometer:
+
+* ``bands``: third-octave band energies (Welch PSD, Hann, 50 % overlap) from 200 Hz up to 10 kHz (or
+  the Nyquist frequency) [dB]; raw term = RMS of the simulated − recorded differences [dB];
+* ``peaks``: impact peaks near the acceleration reversals: at each sign change of the low-passed
+  (< 150 Hz) acceleration, the largest high-passed (> 500 Hz) |acceleration| within ±3 ms and the
+  ratio of its RMS 3-8 ms after the peak to 0-3 ms (decay); raw term = RMS of the differences of
+  log10(median peak), log10(90th-percentile peak), log10(median decay ratio);
+* ``dtw``: the paper's normalized DTW distance [%] of the window's first ``dtw_max_s`` (Sakoe–Chiba
+  band ``dtw_window_s``), mean over the sensors;
+* ``ripple`` (drive-train and PID fields only): amplitudes of the crank-speed harmonics 1-4 of the
+  crank rate, simulated vs recorded [rad/s], RMS of the differences.
+
+Each raw term is divided by a scale so that none dominates by its units: the repeat-to-repeat scatter
+of that term when several recordings of one configuration are given (the term between two repeats,
+floored at a quarter of the default), else the documented default (:data:`DEFAULT_SCALES`). The
+objective is the mean over recordings of the sum of squared scaled terms; a rise of 1 means one term
+moved by one scatter (used for the intervals, :mod:`twin.calibration.uncertainty`).
+
+Common random numbers: every evaluation uses the same sensor-noise realization (noise stream 2 and
+the configuration's ``instrumentation.seed``; the calibration's static recording stream 3, computed
+once), so the objective is a deterministic, smooth-as-the-physics function of the parameters.
+
+Sensors whose recorded window is nearly constant (:func:`twin.bench_replay.near_constant`) are left
+out: they compare noise with noise.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+#: scale of each term when no repeats give one (documented defaults): 2 dB of band energy, 0.1 in
+#: log10 of peak statistics (26 %), 5 % DTW distance, 0.02 rad/s of a speed harmonic
+DEFAULT_SCALES: dict[str, float] = {"bands": 2.0, "peaks": 0.1, "dtw": 5.0, "ripple": 0.02}
+#: lowest and highest third-octave band centres [Hz]
+BAND_F_MIN_HZ, BAND_F_MAX_HZ = 200.0, 10_000.0
+
+
+def third_octave_bands(rate_hz: float) -> list[tuple[float, float, float]]:
+    """(centre, low, high) of the base-2 third-octave bands from 200 Hz to 10 kHz within Nyquist [Hz]."""
+    out = []
+    for k in range(0, 40):
+        fc = BAND_F_MIN_HZ * 2.0 ** (k / 3.0)
+        if fc > BAND_F_MAX_HZ * 1.0001:
+            break
+        lo, hi = fc * 2 ** (-1 / 6), fc * 2 ** (1 / 6)
+        if hi <= rate_hz / 2:
+            out.append((fc, lo, hi))
+    return out
+
+
+def band_levels_db(x: np.ndarray, rate_hz: float) -> np.ndarray:
+    """Third-octave band energies [dB re 1 (m/s²)²] of ``x`` (Welch PSD, integrated over each band)."""
+    from scipy.signal import welch
+
+    nper = int(min(len(x), 2 ** int(math.log2(max(16, rate_hz / 25.0)))))  # ~25 Hz resolution
+    f, p = welch(x - np.mean(x), fs=rate_hz, window="hann", nperseg=nper, noverlap=nper // 2)
+    df = f[1] - f[0]
+    out = []
+    for _fc, lo, hi in third_octave_bands(rate_hz):
+        sel = (f >= lo) & (f < hi)
+        e = float(np.sum(p[sel]) * df) if np.any(sel) else 0.0
+        out.append(10.0 * math.log10(max(e, 1e-30)))
+    return np.asarray(out)
+
+
+def peak_stats(x: np.ndarray, rate_hz: float) -> np.ndarray | None:
+    """log10 of (median peak, 90th-percentile peak, median decay ratio) of the impact peaks near the
+    acceleration reversals (module docstring); None when the window holds fewer than 2 reversals."""
+    from scipy.signal import butter, sosfiltfilt
+
+    nyq = rate_hz / 2
+    if nyq <= 600:
+        return None
+    low = sosfiltfilt(butter(2, min(150.0, 0.4 * nyq) / nyq, output="sos"), x - np.mean(x))
+    high = sosfiltfilt(butter(4, 500.0 / nyq, btype="high", output="sos"), x)
+    s = np.signbit(low)
+    rev = np.flatnonzero(s[1:] != s[:-1])
+    w, d0, d1 = int(0.003 * rate_hz), int(0.003 * rate_hz), int(0.008 * rate_hz)
+    peaks, decays = [], []
+    last = -10 * w
+    for i in rev:
+        if i - last < 2 * w or i - w < 0 or i + w + d1 >= len(x):
+            continue
+        last = i
+        seg = np.abs(high[i - w:i + w])
+        k = i - w + int(np.argmax(seg))
+        peaks.append(float(seg.max()))
+        early = float(np.sqrt(np.mean(high[k:k + d0] ** 2)))
+        late = float(np.sqrt(np.mean(high[k + d0:k + d1] ** 2)))
+        decays.append(late / early if early > 0 else 1.0)
+    if len(peaks) < 2:
+        return None
+    p = np.asarray(peaks)
+    return np.log10(np.maximum([np.median(p), np.percentile(p, 90), np.median(decays)], 1e-12))
+
+
+def speed_harmonics(angle: np.ndarray, rate_hz: float, n: int = 4) -> np.ndarray:
+    """Amplitudes of the crank-speed harmonics 1..n of the mean crank rate [rad/s] (Hann window)."""
+    from twin.signals import hann_spectrum
+
+    speed = np.gradient(np.asarray(angle, dtype=np.float64)) * rate_hz
+    f_rot = abs(float(angle[-1] - angle[0])) / (2 * math.pi) / (len(angle) / rate_hz)
+    f, a = hann_spectrum(speed, rate_hz, remove_mean=True)
+    df = f[1] - f[0]
+    out = []
+    for k in range(1, n + 1):
+        j = int(round(k * f_rot / df))
+        out.append(float(np.max(a[max(0, j - 1):j + 2])) if 0 < j < len(a) - 1 else 0.0)
+    return np.asarray(out)
+
+
+@dataclass
+class Features:
+    """What a window of accelerations (and crank angle) shows, for one recording or simulation."""
+
+    bands: dict[str, np.ndarray]
+    peaks: dict[str, np.ndarray | None]
+    signals: dict[str, np.ndarray]  # the DTW part of each sensor's window [m/s²]
+    ripple: np.ndarray
+
+
+def features(acc: dict[str, np.ndarray], angle: np.ndarray, rate_hz: float, dtw_n: int) -> Features:
+    return Features({a: band_levels_db(x, rate_hz) for a, x in acc.items()},
+                    {a: peak_stats(x, rate_hz) for a, x in acc.items()},
+                    {a: np.asarray(x[:dtw_n], dtype=np.float64) for a, x in acc.items()},
+                    speed_harmonics(angle, rate_hz))
+
+
+def raw_terms(sim: Features, rec: Features, rate_hz: float, dtw_window_s: float,
+              ripple: bool) -> dict[str, float]:
+    """Unscaled discrepancies of ``sim`` from ``rec`` (module docstring); a term without data is omitted."""
+    from twin.signals import dtw_compare
+
+    sensors = list(rec.bands)
+    out: dict[str, float] = {}
+    d = np.concatenate([sim.bands[a] - rec.bands[a] for a in sensors]) if sensors else np.zeros(0)
+    if d.size:
+        out["bands"] = float(np.sqrt(np.mean(d * d)))
+    pk = [sim.peaks[a] - rec.peaks[a] for a in sensors if sim.peaks[a] is not None and rec.peaks[a] is not None]
+    if pk:
+        v = np.concatenate(pk)
+        out["peaks"] = float(np.sqrt(np.mean(v * v)))
+    dd = []
+    for a in sensors:
+        x, y = rec.signals[a], sim.signals[a]
+        if np.ptp(x) > 0:
+            dd.append(dtw_compare(x, y, rate_hz, dtw_window_s).distance_pct)
+    if dd:
+        out["dtw"] = float(np.mean(dd))
+    if ripple:
+        r = sim.ripple - rec.ripple
+        out["ripple"] = float(np.sqrt(np.mean(r * r)))
+    return out
+
+
+def combine(terms: dict[str, float], scales: dict[str, float]) -> float:
+    """Sum of squared scaled terms."""
+    return float(sum((v / scales[k]) ** 2 for k, v in terms.items()))
+
+
+# --------------------------------------------------------------------------- targets
+@dataclass
+class Target:
+    """A recording prepared for one stage: its drive inputs, window, and recorded features."""
+
+    path: str
+    base: Any  # BenchConfig: the configuration the parameters are applied to
+    rate: float
+    n_sim: int
+    window: tuple[int, int]
+    inputs: Any  # DriveInputs
+    zero_g: dict[str, float]
+    sensors: list[str]
+    recorded: Features
+    rec_acc: dict[str, np.ndarray]
+    phi: np.ndarray
+    dtw_n: int
+    motor: bool
+    command: tuple[np.ndarray, np.ndarray] | None
+    drive: str = "trace"
+    cal: Any = None  # simulated calibration (computed once: common random numbers)
+
+
+def prepare_target(path: str, base_toml: str | None, fraction: float, dtw_max_s: float,
+                   motor: bool, drive: str = "trace") -> Target:
+    """Read and check ``path`` and compute its features over the stage's window: the first
+    ``fraction`` of the recording is simulated, the window is its second half (at most 1 s), ending
+    2/``drive.trace_filter_hz`` before its end (edge of the trace filter), as ``twin replay``'s default."""
+    from twin.bench_replay import _window_indices, check_motion, near_constant, sensor_noise_rms
+    from twin.config import ACCELEROMETERS, config_from_toml
+    from twin.errors import RecordingError
+    from twin.instrument import counts_to_angle, measured_accel
+    from twin.recording import read_recording
+    from twin.tracefile import DriveInputs
+
+    rec, info, _repairs = read_recording(path)
+    check_motion(rec, str(path))
+    if info.calibration is None:
+        raise RecordingError(f"{path}: no calibration data; import it again with a static recording in the "
+                             "calibration pose or the six sensors' known zero-g offsets")
+    base = config_from_toml(base_toml) if base_toml else rec.config
+    if abs(base.instrumentation.daq_rate_hz - rec.rate_hz) > 1e-6 * rec.rate_hz:
+        raise RecordingError(f"{path}: instrumentation.daq_rate_hz ({base.instrumentation.daq_rate_hz:g} Hz) differs "
+                             f"from the recording's rate ({rec.rate_hz:g} Hz)")
+    if motor and "motor_command" not in rec:
+        raise RecordingError(f"{path}: drive-train fields need the recording's motor_command channel; it has none")
+    rate = rec.rate_hz
+    n_sim = max(16, min(rec.n, int(round(fraction * rec.n))))
+    inst = base.instrumentation
+    phi = counts_to_angle(rec["encoder_counts"], inst.encoder_counts_per_rev, centre=inst.encoder_quantization)
+    t = np.arange(rec.n) / rate
+    cmd = (t, np.asarray(rec["motor_command"], dtype=np.float64)) if motor else None
+    if drive == "program":  # the configuration's own program (the motor, if any, follows it)
+        inputs = None
+    else:
+        inputs = DriveInputs(trace=(t, phi), command=cmd) if motor else DriveInputs(trace=(t, phi))
+    edge = 2.0 / base.drive.trace_filter_hz if base.drive.trace_filter_hz > 0 else 0.0
+    window = _window_indices(n_sim, rate, None, edge)
+    i0, i1 = window
+    rec_meas = measured_accel(rec, info.calibration)
+    sensors = [a for a in ACCELEROMETERS if f"meas_{a}" in rec_meas
+               and not near_constant(np.asarray(rec_meas[f"meas_{a}"][i0:i1], dtype=np.float64),
+                                     sensor_noise_rms(base, a, rate))]
+    if not sensors:
+        raise RecordingError(f"{path}: every accelerometer is nearly constant over the window; nothing to fit")
+    acc = {a: np.asarray(rec_meas[f"meas_{a}"][i0:i1], dtype=np.float64) for a in sensors}
+    dtw_n = min(i1 - i0, max(16, int(round(dtw_max_s * rate))))
+    return Target(str(path), base, rate, n_sim, window, inputs, dict(info.calibration.zero_g_v), sensors,
+                  features(acc, phi[i0:i1], rate, dtw_n), acc, phi, dtw_n, motor, cmd, drive)
+
+
+def sim_config(target: Target, cfg):
+    """The replay configuration of ``cfg`` for ``target``'s stage (twin.bench_replay.replay_config;
+    with ``drive`` "program" the configuration's own drive program instead of the encoder trace)."""
+    from twin.config import CHANNEL_GROUPS
+
+    over = {"drive.program": "trace", "drive.trace_file": "encoder_trace.npz"} if target.drive == "trace" else {}
+    over |= {"simulation.duration_s": target.n_sim / target.rate,
+            "sensors.output_rate_hz": target.rate, "sensors.channels": list(CHANNEL_GROUPS),
+            "instrumentation.zero_g_v": dict(target.zero_g)}
+    if target.motor:  # drive-train fields: the motor model drives the crank
+        groups = list(CHANNEL_GROUPS) + (["motor"] if "motor" not in CHANNEL_GROUPS else [])
+        over.update({"drive.mode": "motor", "sensors.channels": groups})
+        if target.drive == "trace":  # on the recorded motor command (twin replay's motor drive)
+            over["drivetrain.command_file"] = "motor_command_trace.npz"  # in memory: never read
+    return cfg.replace(**over)
+
+
+def simulate_target(target: Target, cfg) -> tuple[dict[str, np.ndarray], np.ndarray, float]:
+    """Replay ``cfg`` (already holding the parameters) on ``target``: the windowed calibrated
+    accelerations by sensor [m/s²], the crank angle over the window [rad] and the simulation's wall time [s]."""
+    from twin.instrument import apply_chain, measured_accel, simulated_calibration
+    from twin.simulation import simulate_run
+
+    scfg = sim_config(target, cfg)
+    t0 = time.perf_counter()
+    sim = simulate_run(scfg, inputs=target.inputs)
+    wall = time.perf_counter() - t0
+    if target.cal is None:  # common random numbers: one static calibration (stream 3) for every evaluation
+        target.cal = simulated_calibration(scfg, 1.0, stream=3)
+    daq = apply_chain(sim, scfg, prefix="sim_", stream=2, drive_inputs=target.inputs)
+    meas = measured_accel(daq, target.cal, prefix="sim_")
+    i0, i1 = target.window
+    acc = {a: np.asarray(meas[f"sim_meas_{a}"][i0:i1], dtype=np.float64) for a in target.sensors}
+    return acc, np.asarray(sim["crank_angle"][i0:i1], dtype=np.float64), wall
+
+
+# --------------------------------------------------------------------------- worker
+_TARGETS: dict[tuple, Target] = {}
+
+
+def get_target(path: str, base_toml: str | None, fraction: float, dtw_max_s: float, motor: bool,
+               drive: str = "trace") -> Target:
+    """Prepared targets, cached per process (a worker prepares each recording once per stage)."""
+    key = (path, base_toml, float(fraction), float(dtw_max_s), bool(motor), drive)
+    if key not in _TARGETS:
+        _TARGETS[key] = prepare_target(path, base_toml, fraction, dtw_max_s, motor, drive)
+    return _TARGETS[key]
+
+
+def evaluate_task(task: dict[str, Any]) -> dict[str, Any]:
+    """One evaluation, as plain data (what a worker process runs): ``task`` holds the recordings,
+    the base configuration's TOML (or None per recording: its own), the stage's fraction, the fields
+    and values; returns the raw terms per recording and the wall times."""
+    t0 = time.perf_counter()
+    out: dict[str, Any] = {"id": task["id"], "terms": [], "sim_wall_s": 0.0}
+    try:
+        for path in task["recordings"]:
+            tg = get_target(path, task["base_toml"], task["fraction"], task["dtw_max_s"], task["motor"], task["drive"])
+            cfg = tg.base.replace(**dict(zip(task["fields"], task["values"])))
+            acc, angle, wall = simulate_target(tg, cfg)
+            f = features(acc, angle, tg.rate, tg.dtw_n)
+            out["terms"].append(raw_terms(f, tg.recorded, tg.rate, task["dtw_window_s"], task["ripple"]))
+            out["sim_wall_s"] += wall
+        out["status"] = "ok"
+    except Exception as err:  # a failed simulation (unstable parameters) is a bad point, not a crash
+        out["status"] = "failed"
+        out["error"] = f"{type(err).__name__}: {err}"
+    out["wall_s"] = time.perf_counter() - t0
+    return out
+
+
+def repeat_scales(targets: list[Target], dtw_window_s: float, ripple: bool) -> tuple[dict[str, float], str]:
+    """Term scales: the repeat-to-repeat scatter where recordings of one configuration repeat (the raw
+    term between each pair of repeats, averaged, floored at a quarter of the default), else the
+    defaults; and a note saying which."""
+    groups: dict[str, list[Target]] = {}
+    for t in targets:
+        # repeats: the same configuration but for the noise seed (a bench's repeats differ in their noise)
+        groups.setdefault(t.base.replace(**{"instrumentation.seed": 0}).digest(), []).append(t)
+    pairs = [(a, b) for g in groups.values() for i, a in enumerate(g) for b in g[i + 1:]
+             if a.sensors == b.sensors and a.window == b.window]
+    if not pairs:
+        return dict(DEFAULT_SCALES), "documented defaults (no repeated recording of one configuration)"
+    acc: dict[str, list[float]] = {}
+    for a, b in pairs:
+        for k, v in raw_terms(a.recorded, b.recorded, a.rate, dtw_window_s, ripple).items():
+            acc.setdefault(k, []).append(v)
+    scales = dict(DEFAULT_SCALES)
+    for k, vs in acc.items():
+        scales[k] = max(0.25 * DEFAULT_SCALES[k], float(np.mean(vs)))
+    return scales, f"repeat-to-repeat scatter of {len(pairs)} pair(s) of repeats (floored at 1/4 of the defaults)"
+
+
+def recording_key(path: str | Path) -> dict[str, Any]:
+    """Identity of a recording file for the evaluation log: resolved path, size and SHA-256 prefix."""
+    import hashlib
+
+    p = Path(path).resolve()
+    h = hashlib.sha256(p.read_bytes()).hexdigest()[:16]
+    return {"path": str(p), "bytes": p.stat().st_size, "sha256_16": h}

@@ -1,0 +1,673 @@
+"""Compiled kernels of the reference engine's flexible structure (:mod:`twin.reference.flexible`): the chain's
+Jacobian, residuals and quadratic velocity terms, a small LU with partial pivoting, the reduced mass matrix and
+accelerations on the R-matrix formulation, the elastic joints' and supports' forces and energy, the clearance
+contact on the rod's eyes with its damping bound, and the accelerometers on the segments. The model, the
+coordinates and the rows are described in :mod:`twin.reference.flexible`; the stepping loop lives there.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from twin.jit import njit
+from twin.natural_coordinates import (N_Q, P_CLIN_B, P_CLIN_C, P_CLR_G, P_DMAX, P_E, P_FRIC_LAW, P_K_B, P_K_C,
+                                      P_LAW, P_MU0, P_MUS, P_N, P_RPIN_B, P_VD, P_VS, P_CLR_B, P_CLR_C, P_DOFF,
+                                      P_GX, P_GY, P_M3, P_NEWTON_MAXIT, P_NEWTON_TOL, P_RBUSH_B, P_RBUSH_C, P_SENS,
+                                      P_V0, P_V1, energy, independent_rows, kinetic_energy, mass_times,
+                                      quadratic_terms, residual, solve_aug)
+from twin.physics.contact import adams_friction_force, friction_force, normal_force
+from twin.reference.model import O_ACC, _cholesky_solve, _rod_force
+
+# ----------------------------------------------------------------- the supports' parameters ``G`` (build())
+G_KF, G_CF, G_MF, G_KG, G_CG, G_MG, G_FLEX_A, G_FLEX_G = 0, 1, 2, 3, 4, 5, 6, 7
+
+
+@njit(cache=True)
+def _cross(ax, ay, bx, by):
+    return ax * by - ay * bx
+
+
+@njit(cache=True)
+def chain_jacobian(q, segs, slides, indep, A):
+    """Rows of the chain (n − 12 of them) over all n coordinates into ``A`` (zeroed here)."""
+    A[:, :] = 0.0
+    r = 0
+    for j in range(segs.shape[0]):
+        a, b = segs[j, 0], segs[j, 1]
+        ux, uy = q[b] - q[a], q[b + 1] - q[a + 1]
+        A[r, a] -= 2.0 * ux
+        A[r, a + 1] -= 2.0 * uy
+        A[r, b] += 2.0 * ux
+        A[r, b + 1] += 2.0 * uy
+        r += 1
+    for k in range(slides.shape[0]):
+        p, c, s = slides[k, 0], slides[k, 1], slides[k, 2]
+        a, b = segs[s, 0], segs[s, 1]
+        dx, dy = q[c] - q[p], q[c + 1] - q[p + 1]
+        wx, wy = q[b] - q[a], q[b + 1] - q[a + 1]
+        # f = d × w: ∂/∂c = (w_y, −w_x), ∂/∂p = −that, ∂/∂b = (−d_y, d_x), ∂/∂a = −that
+        A[r, c] += wy
+        A[r, c + 1] -= wx
+        A[r, p] -= wy
+        A[r, p + 1] += wx
+        A[r, b] -= dy
+        A[r, b + 1] += dx
+        A[r, a] += dy
+        A[r, a + 1] -= dx
+        r += 1
+    for k in range(indep.shape[0]):
+        if indep[k, 0] == 0:
+            A[r, indep[k, 1] + 1] = 1.0
+        else:
+            A[r, indep[k, 1]] = 1.0
+            A[r, indep[k, 2]] = -1.0
+        r += 1
+
+
+@njit(cache=True)
+def chain_residual(q, segs, seg_f, slides, out):
+    """Constraint residuals of the chain's rows (independent rows 0)."""
+    out[:] = 0.0
+    r = 0
+    for j in range(segs.shape[0]):
+        a, b = segs[j, 0], segs[j, 1]
+        ux, uy = q[b] - q[a], q[b + 1] - q[a + 1]
+        out[r] = ux * ux + uy * uy - seg_f[j, 1] * seg_f[j, 1]
+        r += 1
+    for k in range(slides.shape[0]):
+        p, c, s = slides[k, 0], slides[k, 1], slides[k, 2]
+        a, b = segs[s, 0], segs[s, 1]
+        out[r] = _cross(q[c] - q[p], q[c + 1] - q[p + 1], q[b] - q[a], q[b + 1] - q[a + 1])
+        r += 1
+
+
+@njit(cache=True)
+def chain_quadratic(qd, segs, slides, out):
+    """−Φ̇_q q̇ of the chain's rows (zero for the independent rows)."""
+    out[:] = 0.0
+    r = 0
+    for j in range(segs.shape[0]):
+        a, b = segs[j, 0], segs[j, 1]
+        vx, vy = qd[b] - qd[a], qd[b + 1] - qd[a + 1]
+        out[r] = -2.0 * (vx * vx + vy * vy)
+        r += 1
+    for k in range(slides.shape[0]):
+        p, c, s = slides[k, 0], slides[k, 1], slides[k, 2]
+        a, b = segs[s, 0], segs[s, 1]
+        out[r] = -2.0 * _cross(qd[c] - qd[p], qd[c + 1] - qd[p + 1], qd[b] - qd[a], qd[b + 1] - qd[a + 1])
+        r += 1
+
+
+@njit(cache=True)
+def lu_factor(A, piv, n):
+    """In-place LU with partial pivoting of the n × n matrix A; returns False if singular."""
+    for k in range(n):
+        p = k
+        big = abs(A[k, k])
+        for i in range(k + 1, n):
+            if abs(A[i, k]) > big:
+                big = abs(A[i, k])
+                p = i
+        if big == 0.0:
+            return False
+        piv[k] = p
+        if p != k:
+            for j in range(n):
+                t = A[k, j]
+                A[k, j] = A[p, j]
+                A[p, j] = t
+        inv = 1.0 / A[k, k]
+        for i in range(k + 1, n):
+            A[i, k] *= inv
+            f = A[i, k]
+            if f != 0.0:
+                for j in range(k + 1, n):
+                    A[i, j] -= f * A[k, j]
+    return True
+
+
+@njit(cache=True)
+def lu_solve(LU, piv, n, b):
+    """Solve with the factors of :func:`lu_factor` (b overwritten by x)."""
+    for k in range(n):
+        p = piv[k]
+        if p != k:
+            t = b[k]
+            b[k] = b[p]
+            b[p] = t
+    for i in range(n):
+        acc = b[i]
+        for j in range(i):
+            acc -= LU[i, j] * b[j]
+        b[i] = acc
+    for i in range(n - 1, -1, -1):
+        acc = b[i]
+        for j in range(i + 1, n):
+            acc -= LU[i, j] * b[j]
+        b[i] = acc / LU[i, i]
+
+
+@njit(cache=True)
+def flex_solve(q, s, c, A, LU, piv, b, out, tmp):
+    """Solve the whole augmented system for v: the rigid twelve in closed form, then the chain block (A holds
+    the chain's rows over all coordinates, LU/piv the factors of its chain columns)."""
+    nc = A.shape[0]
+    rigid = False
+    for k in range(N_Q):
+        if b[k] != 0.0:
+            rigid = True
+            break
+    if rigid:
+        solve_aug(q, s, c, b, out)
+        for r in range(nc):   # the chain's rows reach the rigid coordinates through B' and C only (q_2 … q_5)
+            tmp[r] = b[N_Q + r] - A[r, 2] * out[2] - A[r, 3] * out[3] - A[r, 4] * out[4] - A[r, 5] * out[5]
+    else:   # a chain-only right-hand side (the chain's independent columns of R): the rigid block's answer is 0
+        for k in range(N_Q):
+            out[k] = 0.0
+        for r in range(nc):
+            tmp[r] = b[N_Q + r]
+    lu_solve(LU, piv, nc, tmp)
+    for r in range(nc):
+        out[N_Q + r] = tmp[r]
+
+
+@njit(cache=True)
+def factor(q, segs, slides, indep, A, LU, piv):
+    """Chain rows at q into A and the LU of their chain columns into LU; False if singular."""
+    chain_jacobian(q, segs, slides, indep, A)
+    nc = A.shape[0]
+    for i in range(nc):
+        for j in range(nc):
+            LU[i, j] = A[i, N_Q + j]
+    return lu_factor(LU, piv, nc)
+
+
+@njit(cache=True)
+def flex_mass_times(P, segs, seg_f, G, v, out):
+    """out = M v: the rigid model's blocks (the rod as its two end masses), the segments' bars, the supports."""
+    mass_times(P, v[:N_Q], out[:N_Q])
+    for i in range(N_Q, v.shape[0]):
+        out[i] = 0.0
+    if G[G_FLEX_A] > 0.5:
+        out[8] += G[G_MF] * v[8]
+        out[9] += G[G_MF] * v[9]
+    if G[G_FLEX_G] > 0.5:
+        out[10] += G[G_MG] * v[10]
+    for j in range(segs.shape[0]):
+        a, b = segs[j, 0], segs[j, 1]
+        m3, m6 = seg_f[j, 0] / 3.0, seg_f[j, 0] / 6.0
+        for d in range(2):
+            out[a + d] += m3 * v[a + d] + m6 * v[b + d]
+            out[b + d] += m6 * v[a + d] + m3 * v[b + d]
+
+
+@njit(cache=True)
+def _seg_angle_rate(q, qd, a, b):
+    ux, uy = q[b] - q[a], q[b + 1] - q[a + 1]
+    vx, vy = qd[b] - qd[a], qd[b + 1] - qd[a + 1]
+    return ux, uy, _cross(ux, uy, vx, vy) / (ux * ux + uy * uy)
+
+
+@njit(cache=True)
+def _moment(q, a, b, m, Q):
+    """A moment m about z on the bar a→b as the force pair ±m R₉₀u/|u|² on b and a."""
+    ux, uy = q[b] - q[a], q[b + 1] - q[a + 1]
+    f = m / (ux * ux + uy * uy)
+    Q[b] += -uy * f
+    Q[b + 1] += ux * f
+    Q[a] -= -uy * f
+    Q[a + 1] -= ux * f
+
+
+@njit(cache=True)
+def _eye_contact(P, qs, q, jo, fn0, ft0, eye, rb, a, b, Q):
+    """Move a clearance joint's contact force on the rod from the rigid rod's distribution over B' and C
+    (:func:`twin.reference.model._rod_force`, which the joint's element applied with the forces ``fn0``, ``ft0``) to
+    the eye it acts on: the force of ``jo`` (f_N, f_T: the element's, or the damping-bounded ones of
+    :func:`_bound_damping`) at the eye's centre (index ``eye``: 2 for B', 4 for C) and its moment about it,
+    −R_b f_T, on the end segment a→b (the housing turns with it)."""
+    ex, ey = jo[0], jo[1]
+    d = math.sqrt(ex * ex + ey * ey)
+    if d > 0.0:
+        nx, ny = ex / d, ey / d
+    else:
+        nx, ny = 1.0, 0.0
+    fx = -fn0 * nx - ft0 * ny      # on the pin: −f_N n + f_T t, t = (−n_y, n_x)
+    fy = -fn0 * ny + ft0 * nx
+    _rod_force(P, qs, fx, fy, qs[eye] + rb * nx, qs[eye + 1] + rb * ny, Q)   # undoes the element's −F
+    fx = -jo[3] * nx - jo[4] * ny
+    fy = -jo[3] * ny + jo[4] * nx
+    Q[eye] -= fx
+    Q[eye + 1] -= fy
+    _moment(q, a, b, -rb * jo[4], Q)
+
+
+@njit(cache=True)
+def normal_mobility(Rt, Mb, nz, prescribed, pin_x, pin_y, eye_x, eye_y, nx, ny, g, W):
+    """1/m̂ [1/kg]: the relative normal acceleration of a clearance joint's pin (coordinates ``pin_x``, ``pin_y``;
+    ``pin_y`` −1 if the pin cannot move along y) from its eye (``eye_x``, ``eye_y``) per newton of a contact force
+    pair along n = (nx, ny): J R (Rᵀ M R)⁻¹ Rᵀ Jᵀ from :func:`flex_mass`'s Rᵀ and Rᵀ M R (with ``prescribed`` the
+    crank angle, a driving constraint, does not move). m̂ is the flexible model's effective mass along the
+    normal (the rod's light housing, the chain behind it, the crank or the slider). ``g``, ``W`` scratch."""
+    j0 = 1 if prescribed else 0
+    m = nz - j0
+    for j in range(m):
+        r = Rt[j + j0]
+        vy = r[pin_y] if pin_y >= 0 else 0.0
+        g[j] = nx * (r[pin_x] - r[eye_x]) + ny * (vy - r[eye_y])
+        W[j, :m] = Mb[j + j0, j0:nz]
+    y = g[m:2 * m]
+    y[:] = g[:m]
+    if not _cholesky_solve(W, y, m):
+        return 0.0
+    mob = 0.0
+    for j in range(m):
+        mob += g[j] * y[j]
+    return mob
+
+
+@njit(cache=True)
+def _bound_damping(P, qs, qds, pin_b, cst, jo, mob, h, Q):
+    """Bound the contact law's damping at joint B (``pin_b``) or C at the dead-beat value m̂/(2h) (m̂ = 1/``mob``,
+    :func:`normal_mobility`; h the step), as the MuJoCo engine's force source does: the law's damping c (its
+    force at unit approach rate less its elastic force) beyond m̂/(2h) is scaled to it — the law evaluated at the
+    rate δ̇ m̂/(2 h c) — and the friction follows the new normal force. An explicit damping c acting on the mass
+    m̂ decays the rate by 1 − c h/m̂ per step: beyond 2m̂/h it diverges, beyond m̂/h it alternates (the step's
+    Nyquist ringing); at m̂/(2h) the rate halves each step. The element's forces (``jo`` [3:5], which it applied
+    to ``Q`` on both bodies) are replaced in ``jo`` and on the pin's side of ``Q`` (the crank, or the slider); the
+    rod's side is :func:`_eye_contact`'s. Returns the element's (f_N, f_T)."""
+    fn0, ft0 = jo[3], jo[4]
+    delta = jo[2]
+    if not (delta > 0.0 and mob > 0.0):
+        return fn0, ft0
+    if pin_b:
+        edx, edy = qds[0] - qds[2], qds[1] - qds[3]
+        K, clin, rb = P[P_K_B], P[P_CLIN_B], P[P_RBUSH_B]
+    else:
+        edx = qds[6] - qds[4]
+        edy = (qds[10] - qds[5]) if P[P_CLR_G] > 0.5 else -qds[5]
+        K, clin, rb = P[P_K_C], P[P_CLIN_C], P[P_RBUSH_C]
+    ex, ey = jo[0], jo[1]
+    d = math.sqrt(ex * ex + ey * ey)
+    nx, ny = (ex / d, ey / d) if d > 0.0 else (1.0, 0.0)
+    code = int(P[P_LAW])
+    fe = normal_force(code, delta, 0.0, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX])
+    c = normal_force(code, delta, 1.0, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX]) - fe
+    cmax = 0.5 / (h * mob)
+    if not c > cmax:
+        return fn0, ft0
+    rate = (nx * edx + ny * edy) * (cmax / c)
+    fn = normal_force(code, delta, rate, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX])
+    tx, ty = -ny, nx
+    ux, uy = qs[4] - qs[2], qs[5] - qs[3]
+    w2 = (ux * (qds[5] - qds[3]) - uy * (qds[4] - qds[2])) / (ux * ux + uy * uy)
+    vt = edx * tx + edy * ty - w2 * rb
+    if pin_b:
+        vt += qds[7] * P[P_RPIN_B]
+    if fn <= 0.0:
+        ft = 0.0
+    elif P[P_FRIC_LAW] > 0.5:
+        ft = adams_friction_force(vt, fn, P[P_MUS], P[P_MU0], P[P_VS], P[P_VD])
+    else:
+        ft = friction_force(vt, fn, P[P_MU0], P[P_V0], P[P_V1])
+    dfx = -(fn - fn0) * nx + (ft - ft0) * tx   # the change of the force on the pin
+    dfy = -(fn - fn0) * ny + (ft - ft0) * ty
+    if pin_b:
+        pcx, pcy = qs[0] - qs[8] + P[P_RPIN_B] * nx, qs[1] - qs[9] + P[P_RPIN_B] * ny
+        Q[7] += pcx * dfy - pcy * dfx
+        Q[8] += dfx
+        Q[9] += dfy
+    else:
+        Q[6] += dfx
+        if P[P_CLR_G] > 0.5:
+            Q[10] += dfy
+    jo[3] = fn
+    jo[4] = ft
+    return fn0, ft0
+
+
+@njit(cache=True)
+def chain_forces(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G, Q):
+    """Add the chain's gravity, hinges and slides and the supports' springs and dampers to Q; returns the power
+    the dampers dissipate [W] (≥ 0)."""
+    gx, gy = P[P_GX], P[P_GY]
+    for j in range(segs.shape[0]):
+        a, b = segs[j, 0], segs[j, 1]
+        w = 0.5 * seg_f[j, 0]
+        Q[a] += w * gx
+        Q[a + 1] += w * gy
+        Q[b] += w * gx
+        Q[b + 1] += w * gy
+    diss = 0.0
+    for k in range(hinges.shape[0]):
+        i0, i1 = hinges[k, 0], hinges[k, 1]
+        a0, b0, a1, b1 = segs[i0, 0], segs[i0, 1], segs[i1, 0], segs[i1, 1]
+        u0x, u0y, w0 = _seg_angle_rate(q, qd, a0, b0)
+        u1x, u1y, w1 = _seg_angle_rate(q, qd, a1, b1)
+        delta = math.atan2(_cross(u0x, u0y, u1x, u1y), u0x * u1x + u0y * u1y)
+        rate = w1 - w0
+        m = -hinge_f[k, 0] * delta - hinge_f[k, 1] * rate
+        diss += hinge_f[k, 1] * rate * rate
+        _moment(q, a1, b1, m, Q)
+        _moment(q, a0, b0, -m, Q)
+    for k in range(slides.shape[0]):
+        p, c, s = slides[k, 0], slides[k, 1], slides[k, 2]
+        a, b = segs[s, 0], segs[s, 1]
+        wx, wy = q[b] - q[a], q[b + 1] - q[a + 1]
+        wn = math.sqrt(wx * wx + wy * wy)
+        ex, ey = wx / wn, wy / wn
+        d = (q[c] - q[p]) * ex + (q[c + 1] - q[p + 1]) * ey
+        dd = (qd[c] - qd[p]) * ex + (qd[c + 1] - qd[p + 1]) * ey
+        f = -slide_f[k, 0] * d - slide_f[k, 1] * dd
+        diss += slide_f[k, 1] * dd * dd
+        Q[c] += f * ex
+        Q[c + 1] += f * ey
+        Q[p] -= f * ex
+        Q[p + 1] -= f * ey
+    if G[G_FLEX_A] > 0.5:
+        for i in (8, 9):
+            Q[i] += -G[G_KF] * q[i] - G[G_CF] * qd[i]
+            diss += G[G_CF] * qd[i] * qd[i]
+    if G[G_FLEX_G] > 0.5:
+        Q[10] += -G[G_KG] * q[10] - G[G_CG] * qd[10] + (P[P_M3] + G[G_MG]) * gy
+        diss += G[G_CG] * qd[10] * qd[10]
+    return diss
+
+
+@njit(cache=True)
+def flex_energy(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G):
+    """(T, V) [J]: kinetic energy (all masses) and potential (gravity as the rigid model's, the segments, the
+    supports' springs with the guide's weight, the hinges and slides)."""
+    n = q.shape[0]
+    mv = np.empty(n)
+    flex_mass_times(P, segs, seg_f, G, qd, mv)
+    T = 0.0
+    for i in range(n):
+        T += 0.5 * qd[i] * mv[i]
+    V = energy(P, q[:N_Q], qd[:N_Q]) - kinetic_energy(P, q[:N_Q], qd[:N_Q])
+    gx, gy = P[P_GX], P[P_GY]
+    for j in range(segs.shape[0]):
+        a, b = segs[j, 0], segs[j, 1]
+        w = 0.5 * seg_f[j, 0]
+        V -= w * (gx * (q[a] + q[b]) + gy * (q[a + 1] + q[b + 1]))
+    for k in range(hinges.shape[0]):
+        i0, i1 = hinges[k, 0], hinges[k, 1]
+        a0, b0, a1, b1 = segs[i0, 0], segs[i0, 1], segs[i1, 0], segs[i1, 1]
+        u0x, u0y = q[b0] - q[a0], q[b0 + 1] - q[a0 + 1]
+        u1x, u1y = q[b1] - q[a1], q[b1 + 1] - q[a1 + 1]
+        delta = math.atan2(_cross(u0x, u0y, u1x, u1y), u0x * u1x + u0y * u1y)
+        V += 0.5 * hinge_f[k, 0] * delta * delta
+    for k in range(slides.shape[0]):
+        p, c, s = slides[k, 0], slides[k, 1], slides[k, 2]
+        a, b = segs[s, 0], segs[s, 1]
+        wx, wy = q[b] - q[a], q[b + 1] - q[a + 1]
+        wn = math.sqrt(wx * wx + wy * wy)
+        d = ((q[c] - q[p]) * wx + (q[c + 1] - q[p + 1]) * wy) / wn
+        V += 0.5 * slide_f[k, 0] * d * d
+    if G[G_FLEX_A] > 0.5:
+        V += 0.5 * G[G_KF] * (q[8] * q[8] + q[9] * q[9])
+    if G[G_FLEX_G] > 0.5:
+        V += 0.5 * G[G_KG] * q[10] * q[10] - (P[P_M3] + G[G_MG]) * gy * q[10]
+    return T, V
+
+
+@njit(cache=True)
+def flex_rows(P, G, indep, rows):
+    """Independent rows of the whole set: the rigid model's (θ and the clearance eccentricities), the rod's
+    stretch (row 2), the supports (rows 8–9, 10) and the chain's independent rows; returns their number."""
+    nz = independent_rows(P, rows)
+    rows[nz] = 2
+    nz += 1
+    if G[G_FLEX_A] > 0.5:
+        rows[nz] = 8
+        rows[nz + 1] = 9
+        nz += 2
+    if G[G_FLEX_G] > 0.5:
+        rows[nz] = 10
+        nz += 1
+    return nz
+
+
+@njit(cache=True)
+def _independent_values(P, G, q, qd, segs, slides, indep, b):
+    """Right-hand side of the velocity projection: the independent coordinates' rates from q̇."""
+    n = q.shape[0]
+    for i in range(n):
+        b[i] = 0.0
+    b[7] = qd[7]
+    if P[P_CLR_B] > 0.5:
+        b[3] = qd[0] - qd[2]
+        b[4] = qd[1] - qd[3]
+    if P[P_CLR_C] > 0.5:
+        b[5] = qd[6] - qd[4]
+        b[6] = qd[10] - qd[5]
+    b[2] = 2.0 * ((q[4] - q[2]) * (qd[4] - qd[2]) + (q[5] - q[3]) * (qd[5] - qd[3]))
+    if G[G_FLEX_A] > 0.5:
+        b[8] = qd[8]
+        b[9] = qd[9]
+    if G[G_FLEX_G] > 0.5:
+        b[10] = qd[10]
+    r0 = N_Q + segs.shape[0] + slides.shape[0]
+    for k in range(indep.shape[0]):
+        if indep[k, 0] == 0:
+            b[r0 + k] = qd[indep[k, 1] + 1]
+        else:
+            b[r0 + k] = qd[indep[k, 1]] - qd[indep[k, 2]]
+
+
+@njit(cache=True)
+def flex_project(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, res, dq, b, tmp):
+    """Newton on the constraints with the independent coordinates held, then q̇ ← R ż (as the rigid
+    :func:`twin.natural_coordinates.project`). On return A and LU hold the chain's rows at the final q (the
+    next step's acceleration solve reuses them). Returns the iterations, −1 if no convergence."""
+    n = q.shape[0]
+    nc = A.shape[0]
+    tol = P[P_NEWTON_TOL]
+    maxit = int(P[P_NEWTON_MAXIT])
+    it = 0
+    conv = False
+    # modified Newton: the chain block factored once at the predicted q (a step moves it by h q̇, so the
+    # iteration contracts by ~|ΔA|/|A| per pass); the velocity projection below refactors at the final q
+    if not factor(q, segs, slides, indep, A, LU, piv):
+        return -1
+    while it < maxit:
+        s, c = math.sin(q[7]), math.cos(q[7])
+        residual(P, q[:N_Q], s, c, res[:N_Q])
+        res[2] = 0.0
+        if G[G_FLEX_A] > 0.5:
+            res[8] = 0.0
+            res[9] = 0.0
+        if G[G_FLEX_G] > 0.5:
+            res[10] = 0.0
+            if P[P_CLR_C] < 0.5:   # the ideal joint C on the moving guide: C' at d_off + y_g
+                res[6] = P[P_DOFF] + q[10] - q[5]
+        chain_residual(q, segs, seg_f, slides, res[N_Q:])
+        for i in range(n):
+            res[i] = -res[i]
+        flex_solve(q, s, c, A, LU, piv, res, dq, tmp)
+        big = 0.0
+        for i in range(n):
+            q[i] += dq[i]
+            if abs(dq[i]) > big:
+                big = abs(dq[i])
+        it += 1
+        if big <= tol:
+            conv = True
+            break
+    if not conv:
+        return -1
+    s, c = math.sin(q[7]), math.cos(q[7])
+    if not factor(q, segs, slides, indep, A, LU, piv):
+        return -1
+    _independent_values(P, G, q, qd, segs, slides, indep, b)
+    flex_solve(q, s, c, A, LU, piv, b, dq, tmp)
+    for i in range(n):
+        qd[i] = dq[i]
+    return it
+
+
+@njit(cache=True)
+def lu_solve_many(LU, piv, n, B, m):
+    """:func:`lu_solve` on the first ``m`` columns of B (n × ≥ m) at once, B overwritten. Each column's arithmetic
+    is :func:`lu_solve`'s, operation for operation (bit for bit the same result); the columns being independent,
+    the inner loops run across them instead of along one dependent sum."""
+    for k in range(n):
+        p = piv[k]
+        if p != k:
+            for c in range(m):
+                t = B[k, c]
+                B[k, c] = B[p, c]
+                B[p, c] = t
+    for i in range(n):
+        for j in range(i):
+            f = LU[i, j]
+            for c in range(m):
+                B[i, c] -= f * B[j, c]
+    for i in range(n - 1, -1, -1):
+        for j in range(i + 1, n):
+            f = LU[i, j]
+            for c in range(m):
+                B[i, c] -= f * B[j, c]
+        d = LU[i, i]
+        for c in range(m):
+            B[i, c] = B[i, c] / d
+
+
+@njit(cache=True)
+def flex_mass(P, G, q, qd, segs, seg_f, slides, A, LU, piv, rows, nz, Rt, S, Mb, MR, b, Bm, RtT):
+    """The force-independent part of the accelerations q̈ = R z̈ + Ṙż (Rᵀ M R z̈ = Rᵀ (Q − M Ṙż), A already
+    factored at q): Rᵀ (rows of R, the unit right-hand sides of the independent rows) into ``Rt`` and its
+    transpose ``RtT``, M R into ``MR``, Ṙż into ``S`` and Rᵀ M R into ``Mb``. Each column as
+    :func:`flex_solve` would give it, the chain block's solves done together (:func:`lu_solve_many`; ``Bm``
+    (n − 12) × (nz + 1) scratch). :func:`flex_solve_acc` completes the step with the forces."""
+    n = q.shape[0]
+    nc = A.shape[0]
+    s, c = math.sin(q[7]), math.cos(q[7])
+    for j in range(nz + 1):
+        if j < nz:
+            for i in range(n):
+                b[i] = 0.0
+            b[rows[j]] = 1.0
+            out = Rt[j]
+        else:
+            quadratic_terms(q[:N_Q], qd[:N_Q], s, c, b[:N_Q])
+            # (row 2, the stretch s = |C − B'|² − L², is an independent coordinate defined by a nonlinear
+            # expression: its row keeps −Φ̇_q q̇ = −2|Ċ − Ḃ'|², as quadratic_terms writes it)
+            chain_quadratic(qd, segs, slides, b[N_Q:])
+            out = S
+        rigid = False
+        for k in range(N_Q):
+            if b[k] != 0.0:
+                rigid = True
+                break
+        if rigid:   # as flex_solve: the rigid block in closed form, its effect on the chain's rows
+            solve_aug(q, s, c, b, out)
+            for r in range(nc):
+                Bm[r, j] = b[N_Q + r] - A[r, 2] * out[2] - A[r, 3] * out[3] - A[r, 4] * out[4] - A[r, 5] * out[5]
+        else:
+            for k in range(N_Q):
+                out[k] = 0.0
+            for r in range(nc):
+                Bm[r, j] = b[N_Q + r]
+    lu_solve_many(LU, piv, nc, Bm, nz + 1)
+    for r in range(nc):
+        for j in range(nz):
+            Rt[j, N_Q + r] = Bm[r, j]
+        S[N_Q + r] = Bm[r, nz]
+    for j in range(nz):
+        flex_mass_times(P, segs, seg_f, G, Rt[j], MR[j])
+    for k in range(n):
+        for j in range(nz):
+            RtT[k, j] = Rt[j, k]
+    for j in range(nz):   # (independent dot products: the processor overlaps them)
+        for i in range(j, nz):
+            acc = 0.0
+            for k in range(n):
+                acc += Rt[i, k] * MR[j, k]
+            Mb[i, j] = acc
+            Mb[j, i] = acc
+
+
+@njit(cache=True)
+def flex_solve_acc(q, Q, nz, Rt, RtT, S, Mb, rhs, b, tmp, qdd, P, segs, seg_f, G, prescribed, alpha, tau):
+    """The force-dependent part of the accelerations (after :func:`flex_mass`): z̈ from Rᵀ M R z̈ = Rᵀ (Q − M Ṙż),
+    q̈ = R z̈ + Ṙż into ``qdd``; False if Rᵀ M R is not SPD. With ``prescribed`` the crank angle is a driving
+    constraint (θ̈ = ``alpha``, the first independent coordinate): the other rows are solved with it known and the
+    drive torque (its multiplier) written to ``tau[0]``, as :func:`twin.reference.model.accelerations_prescribed`.
+    Mb is overwritten."""
+    n = q.shape[0]
+    flex_mass_times(P, segs, seg_f, G, S, tmp[:n])
+    for i in range(n):
+        b[i] = Q[i] - tmp[i]
+    for j in range(nz):   # rhs[j] = Σ_k Rt[j, k] b[k], k ascending
+        rhs[j] = 0.0
+    for k in range(n):
+        bk = b[k]
+        for j in range(nz):
+            rhs[j] += RtT[k, j] * bk
+    if prescribed:
+        m = nz - 1
+        W = np.empty((m, m))
+        rw = np.empty(m)
+        for i in range(m):
+            rw[i] = rhs[i + 1] - Mb[i + 1, 0] * alpha
+            for j in range(m):
+                W[i, j] = Mb[i + 1, j + 1]
+        if not _cholesky_solve(W, rw, m):
+            return False
+        t = Mb[0, 0] * alpha - rhs[0]
+        for j in range(m):
+            t += Mb[0, j + 1] * rw[j]
+        tau[0] = t
+        rhs[0] = alpha
+        for j in range(m):
+            rhs[j + 1] = rw[j]
+    elif not _cholesky_solve(Mb, rhs, nz):
+        return False
+    for i in range(n):   # qdd[i] = S[i] + Σ_j Rt[j, i] rhs[j], j ascending
+        qdd[i] = S[i]
+    for j in range(nz):
+        rj = rhs[j]
+        for i in range(n):
+            qdd[i] += Rt[j, i] * rj
+    return True
+
+
+@njit(cache=True)
+def _rod_sensors(P, q, qdd, segs, sens, row):
+    """Overwrite the rod's accelerometers of the output row with their segment's reading."""
+    gx, gy = P[P_GX], P[P_GY]
+    for i in range(6):
+        seg = int(sens[i, 0])
+        if seg < 0:
+            continue
+        a, b = segs[seg, 0], segs[seg, 1]
+        ux, uy = q[b] - q[a], q[b + 1] - q[a + 1]
+        ln = math.sqrt(ux * ux + uy * uy)
+        hx, hy = ux / ln, uy / ln
+        xi, eta = sens[i, 1] / ln, sens[i, 2] / ln
+        uax, uay = qdd[b] - qdd[a], qdd[b + 1] - qdd[a + 1]
+        ax = qdd[a] + xi * uax - eta * uay - gx
+        ay = qdd[a + 1] + xi * uay + eta * uax - gy
+        axis = int(sens[i, 3])
+        v = ax * hx + ay * hy if axis < 2 else -ax * hy + ay * hx
+        if axis == 1 or axis == 3:
+            v = -v
+        row[O_ACC + i] = v
+
+
+@njit(cache=True)
+def _slider_sensors(P, qdd, sens, row):
+    """The slider's accelerometers with the guide rails moving normal to the guide (y_g)."""
+    gx, gy = P[P_GX], P[P_GY]
+    for i in range(6):
+        base = P_SENS + 4 * i
+        if P[base] < 0.5:
+            continue
+        axis = int(P[base + 3])
+        v = (qdd[6] - gx) if axis < 2 else (qdd[10] - gy)
+        if axis == 1 or axis == 3:
+            v = -v
+        row[O_ACC + i] = v
