@@ -87,7 +87,7 @@ def digests(quick: bool = False, native: bool = False) -> dict[str, str]:
             run = twin.simulate(twin.preset(test).replace(**overrides), duration=0.06)
             out[f"native {name}"] = _digest_run(run)
             print(f"  native {name}: done", file=sys.stderr, flush=True)
-    answer = dict(twin.identify(twin.samples.path("test6")))
+    answer = twin.identify(twin.samples.path("test6")).to_dict()
     answer.pop("seconds", None)  # wall time of the answer, not an output
     answer["recording"] = Path(str(answer.get("recording", ""))).name  # where the checkout is, not an output
     out["identify sample:test6"] = _digest_json(answer)

@@ -35,13 +35,13 @@ def main(argv: list[str] | None = None) -> int:
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(args.keep) if args.keep else Path(tmp) / "replay"
         report = twin.replay(rec, folder, plots=not args.small)
-        s = report["sensors"][args.sensor]
+        s = report.sensors[args.sensor]
         print(f"{rec.name}: {args.sensor} NRMSE {s['nrmse_pct']:.2f} %, correlation {s['correlation']:.4f} "
-              f"over {report['window_s'][0]:.3f}-{report['window_s'][1]:.3f} s")
+              f"over {report.window_s[0]:.3f}-{report.window_s[1]:.3f} s")
         from twin.mcapfile import read_run
 
         both = read_run(folder / "replay.mcap", groups=["meas_accel", "sim_meas_accel"])
-    t0, t1 = report["window_s"]
+    t0, t1 = report.window_s
     w = both.window(both.t0 + t0, both.t0 + t1)
     t = w.time - both.t0
 

@@ -110,11 +110,11 @@ def test_to_pandas_without_pandas_names_the_install(monkeypatch):
 def test_identify_answers_for_a_sample_recording():
     a = twin.identify(ROOT / "recordings" / "test6_synthetic.mcap")
     # the recording is synthetic test 6: 0.1 mm at C only; the shipped model's location answer
-    assert a["fault"] == "C" and a["clearance_b_mm"] == 0.0
-    lo, hi = a["clearance_c_interval_mm"]
-    assert 0 < lo <= a["clearance_c_mm"] <= hi
-    held = a["clearance_c_size_held_out"]  # the docstring's keys: how often sizes held at this speed
-    assert held["within_factor"] == 1.5 and 0 <= held["share"] <= 1 and held["runs"] > 0
+    assert a.fault == "C" and a.joint("B").size_mm == 0.0
+    lo, hi = a.joint("C").interval_mm
+    assert 0 < lo <= a.joint("C").size_mm <= hi
+    held = a.joint("C").size_held_out  # the docstring's attributes: how often sizes held at this speed
+    assert held.within_factor == 1.5 and 0 <= held.share <= 1 and held.runs > 0
     with pytest.raises(TwinError, match="no such model file"):
         twin.identify(ROOT / "recordings" / "test6_synthetic.mcap", model=ROOT / "nope.joblib")
 

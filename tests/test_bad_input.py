@@ -361,7 +361,8 @@ def test_every_twin_error_survives_a_process_boundary():
     import importlib
 
     for mod in ("twin.cli", "twin.dataset.generate", "twin.dataset.spec", "twin.dataset.storage",
-                "twin.identification.features", "twin.identification.model", "twin.signals"):  # each defines a TwinError
+                "twin.identification.features", "twin.identification.model", "twin.identification.training",
+                "twin.signals"):  # each defines a TwinError
         importlib.import_module(mod)
     from twin.errors import ConfigError, TwinError
 

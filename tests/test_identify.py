@@ -19,6 +19,7 @@ import pytest
 
 from twin.cli import main
 from twin.identification.features import CRANK_RADIUS_M, IdentifyError, feature_names, features, steady_windows
+from twin.identification.results import IdentifyResult
 
 ROOT = Path(__file__).resolve().parent.parent
 REC = ROOT / "recordings"
@@ -199,7 +200,7 @@ def test_a_model_finds_large_clearances_in_runs_it_never_saw(small, capsys):
     assert all(v == 1.0 for v in r["recall"].values())
     assert (d / "rep" / "confusion.png").stat().st_size > 0 and "Confusion matrix" in (d / "rep" / "report.md").read_text()
     # the size at each joint where the sensors resolve it: the runs of the map's speeds and orientations, no other
-    from twin.identification.model import size_resolved
+    from twin.identification.intervals import size_resolved
 
     for J in ("B", "C"):
         j_runs = [p for p in r["predictions"] if p[f"true_{J.lower()}_mm"] > 0]
@@ -242,8 +243,8 @@ def test_identify_refuses_what_it_cannot_answer(small, tmp_path, capsys):
     # answered, with a warning
     js = tmp_path / "a.json"
     assert main(["identify", "clearance", str(REC / "test3_synthetic.mcap"), "--model", str(model), "--json", str(js)]) == 0
-    a = json.loads(js.read_text())
-    assert any("outside the training range" in w for w in a["warnings"])
+    a = IdentifyResult.from_json(js.read_text())
+    assert any("outside the training range" in w for w in a.warnings)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.json", "bad.npz", "old.npz", "short.mcap"]
 
 
@@ -281,7 +282,8 @@ def test_several_datasets_pool_into_one_model_and_must_agree(small, tmp_path, ca
 def test_a_location_only_dataset_leaves_the_size_regressors_as_they_were(small, tmp_path):
     """``--location-only DS``: its runs join the location model's training, not the size regressors'
     nor their intervals: the size answers are bit for bit those of a model trained without it."""
-    from twin.identification.model import ClearanceModel, pooled_features
+    from twin.identification.inputs import pooled_features
+    from twin.identification.model import ClearanceModel
 
     d, model = small
     both = tmp_path / "both.npz"
@@ -303,7 +305,8 @@ def test_a_dataset_for_one_joints_size_leaves_the_other_joints_regressor_as_it_w
     answers and half widths are bit for bit those of a model trained without it, and the runs behind each joint's
     held-out table (every run with a clearance there answered out of fold) are B's of both datasets, C's of the
     first alone."""
-    from twin.identification.model import ClearanceModel, pooled_features
+    from twin.identification.inputs import pooled_features
+    from twin.identification.model import ClearanceModel
 
     d, model = small
     at_b = tmp_path / "at_b.npz"
@@ -333,17 +336,18 @@ def test_train_refuses_an_unknown_fault_split_in_one_line(tmp_path, capsys):
 
 
 def test_a_size_only_set_of_an_unknown_joint_or_a_folder_named_twice_is_refused():
-    from twin.identification.model import ModelError, train
+    from twin.identification.model import ModelError
+    from twin.identification.training import TrainOptions, train
 
     with pytest.raises(ModelError, match="size_only_at: joint 'A'; allowed: B, C"):
-        train("nowhere", size_only_at={"A": ["nowhere"]})
+        TrainOptions(size_only_at={"A": ["nowhere"]})
     # the same folder as a training set and a size-only set: refused before any feature is computed
     with pytest.raises(ModelError, match="given twice"):
-        train("nowhere", size_only_at={"B": ["./nowhere"]})
+        train("nowhere", TrainOptions(size_only_at={"B": ["./nowhere"]}))
     with pytest.raises(ModelError, match="given twice"):
-        train(["a", "b"], location_only=["a"])
+        train(["a", "b"], TrainOptions(location_only=["a"]))
     with pytest.raises(ModelError, match="fault_split: \\['A'\\]; allowed: true, false, or a list of distinct joints"):
-        train("nowhere", fault_split=["A"])
+        TrainOptions(fault_split=["A"])
 
 
 @pytest.mark.long  # trains on the module's small dataset: run by CI and with -m long
@@ -351,7 +355,8 @@ def test_an_evaluation_pools_datasets_and_keeps_each_ones_figures(small):
     """``twin identify evaluate MODEL DS1 DS2`` (a test set and its extension): the pooled report holds
     every run of both, each run answered as alone, and the location accuracy of each dataset."""
     from twin.identification.evaluate import evaluate
-    from twin.identification.model import ClearanceModel, held_out_at
+    from twin.identification.intervals import held_out_at
+    from twin.identification.model import ClearanceModel
 
     d, model = small
     m = ClearanceModel.load(model)
@@ -377,7 +382,9 @@ def test_a_trained_model_stores_its_training_ranges_and_its_interval_rule(small)
     encoder and the noise level, and stores their ranges, the orientations, the training windows' feature
     quartiles and the runs' own far-out count; its intervals are the split-conformal half widths of the answer's
     side of the size-resolution map and size band (no normalized scales unless asked for)."""
-    from twin.identification.model import ClearanceModel, pooled_features, resolution
+    from twin.identification.inputs import pooled_features
+    from twin.identification.intervals import resolution
+    from twin.identification.model import ClearanceModel
 
     d, model = small
     m = ClearanceModel.load(model)
@@ -398,8 +405,8 @@ def test_a_trained_model_stores_its_training_ranges_and_its_interval_rule(small)
         res = resolution(row["orientation"], row["crank_hz"])
         a = m.identify(Xr, res)
         for j in ("B", "C"):
-            lo, hi = a[f"clearance_{j.lower()}_if_faulty_mm"]["interval_90"]
-            mid = a[f"clearance_{j.lower()}_if_faulty_mm"]["median"]
+            lo, hi = a.joint(j).interval_if_faulty_mm
+            mid = a.joint(j).size_if_faulty_mm
             side = j if res[j] or f"{j}_unresolved" not in m.interval_log10 else f"{j}_unresolved"
             w = _half_width(m, side, mid, len(Xr))
             assert math.log10(hi / mid) == pytest.approx(w, abs=1e-9)
@@ -418,7 +425,7 @@ def test_normalized_intervals_hold_their_coverage_at_every_difficulty():
     90 % than the fixed-width interval of the same data (which holds nearly all easy answers and too few
     hard ones). The offset beta (the median spread) keeps one-window answers (spread 0) from a zero width
     and makes the adaptation partial: the hardest third is held at about 82 %, not 90 %."""
-    from twin.identification.model import conformal_half_width, normalized_scale
+    from twin.identification.intervals import conformal_half_width, normalized_scale
 
     rng = np.random.default_rng(5)
 
@@ -449,7 +456,8 @@ def test_out_of_range_warnings_fire_outside_each_range_and_not_inside(small):
     interval widened to the clearances trained on (0.5 mm: the interval is the hull with it); speed outside:
     the test above on the 750 rpm sample."""
     from twin.config import preset
-    from twin.identification.model import ClearanceModel, identify_inputs, simulated_inputs
+    from twin.identification.inputs import simulated_inputs
+    from twin.identification.model import ClearanceModel, identify_inputs
     from twin.simulation import simulate_run
 
     d, model = small
@@ -463,20 +471,20 @@ def test_out_of_range_warnings_fire_outside_each_range_and_not_inside(small):
         return identify_inputs(m, *simulated_inputs(run, cfg), orientation, "sim"), run
 
     a, run = answer(base)
-    assert a["warnings"] == [] and not a["evidence"]["training_data_check"]["outside_training_data"]
-    assert a["evidence"]["training_data_check"]["feature_distance"]["beyond_far_out_fences"] < 0.05 * len(m.feature_names)
+    assert a.warnings == () and not a.evidence.training_data_check["outside_training_data"]
+    assert a.evidence.training_data_check["feature_distance"]["beyond_far_out_fences"] < 0.05 * len(m.feature_names)
     noisy = base.replace(**{"instrumentation.noise_scale": 4.0})
     b, _ = answer(noisy, run=run)  # the same motion, four times the noise density
-    assert len(b["warnings"]) >= 1 and "sensor noise level" in b["warnings"][0]
+    assert len(b.warnings) >= 1 and "sensor noise level" in b.warnings[0]
     c, _ = answer(base, "x", run=run)
-    assert any(w.startswith("orientation x was not in the training data") for w in c["warnings"])
+    assert any(w.startswith("orientation x was not in the training data") for w in c.warnings)
     rip, _ = answer(base.replace(**{"drive.ripple_pct": (3.0,), "drive.ripple_phase_rad": (0.5,)}))
-    assert rip["warnings"][0].startswith("within-turn speed ripple ") and " % at 1x" in rip["warnings"][0]
-    got = rip["evidence"]["training_data_check"]["measured"]["ripple_pct"][0]
+    assert rip.warnings[0].startswith("within-turn speed ripple ") and " % at 1x" in rip.warnings[0]
+    got = rip.evidence.training_data_check["measured"]["ripple_pct"][0]
     assert got == pytest.approx(3.0, abs=0.3)  # the PID tracks the rippled reference closely
     for x in (b, c, rip):
-        lo, hi = x["clearance_c_if_faulty_mm"]["interval_90"]
-        assert lo <= 0.5 <= hi and x["evidence"]["training_data_check"]["outside_training_data"]
+        lo, hi = x.joint("C").interval_if_faulty_mm
+        assert lo <= 0.5 <= hi and x.evidence.training_data_check["outside_training_data"]
 
 
 # ------------------------------------------------------------- the shipped model
@@ -493,19 +501,19 @@ def test_the_shipped_model_identifies_the_sample_recordings(rec, fault, c_mm, tm
     the recording inside the training data and gives the calibrated interval."""
     js = tmp_path / "a.json"
     assert main(["identify", "clearance", str(REC / rec), "--json", str(js)]) == 0
-    a = json.loads(js.read_text())
-    assert a["fault"] == fault and a["warnings"] == []
-    check = a["evidence"]["training_data_check"]
+    a = IdentifyResult.from_json(js.read_text())
+    assert a.fault == fault and a.warnings == ()
+    check = a.evidence.training_data_check
     assert not check["outside_training_data"]
     assert check["measured"]["ripple_pct"][:2] == pytest.approx([1.5, 2.5], abs=0.05)
     if not c_mm:  # no clearance found means no size at either joint
-        assert a["clearance_c_mm"] == 0.0 and a["clearance_b_mm"] == 0.0
+        assert a.joint("C").size_mm == 0.0 and a.joint("B").size_mm == 0.0
     # every number printed comes with what it is: a word or unit right before or after it
     import re
 
     out = capsys.readouterr().out
     assert f"fault {fault}, probability " in out and "class probabilities: none " in out
-    assert f"identification time {a['seconds']:.2f} s" in out
+    assert f"identification time {a.seconds:.2f} s" in out
     for line in out.splitlines()[1:]:
         for m in re.finditer(r"(?<![\w.-])\d+(\.\d+)?(?![\w.])", line):
             before, after = line[:m.start()].rstrip(), line[m.end():]
@@ -519,9 +527,9 @@ def test_the_shipped_models_interval_holds_the_clearance_of_the_test6_sample(tmp
     at C, inside the training data, and the 90 % interval holds 0.1 mm."""
     js = tmp_path / "a.json"
     assert main(["identify", "clearance", str(REC / "test6_synthetic.mcap"), "--json", str(js)]) == 0
-    a = json.loads(js.read_text())
-    lo, hi = a["clearance_c_interval_mm"]
-    assert a["fault"] == "C" and not a["evidence"]["training_data_check"]["outside_training_data"]
+    a = IdentifyResult.from_json(js.read_text())
+    lo, hi = a.joint("C").interval_mm
+    assert a.fault == "C" and not a.evidence.training_data_check["outside_training_data"]
     assert lo <= 0.1 <= hi
 
 
@@ -530,8 +538,8 @@ def test_the_shipped_model_sizes_the_clearance_of_the_test6_sample_within_a_fact
     """The size target on the sample of test 6: within a factor 1.5 of the truth (0.1 mm at C)."""
     js = tmp_path / "a.json"
     assert main(["identify", "clearance", str(REC / "test6_synthetic.mcap"), "--json", str(js)]) == 0
-    a = json.loads(js.read_text())
-    assert 0.1 / 1.5 <= a["clearance_c_mm"] <= 0.1 * 1.5
+    a = IdentifyResult.from_json(js.read_text())
+    assert 0.1 / 1.5 <= a.joint("C").size_mm <= 0.1 * 1.5
 
 
 @pytest.mark.parametrize("rec", ["test6_repeat1_synthetic.mcap", "test6_repeat2_synthetic.mcap",
@@ -545,16 +553,16 @@ def test_the_short_repeats_of_test6_are_located_and_their_intervals_hold_the_tru
     0.1 mm."""
     js = tmp_path / "a.json"
     assert main(["identify", "clearance", str(REC / rec), "--json", str(js)]) == 0
-    a = json.loads(js.read_text())
-    lo, hi = a["clearance_c_interval_mm"]
-    check = a["evidence"]["training_data_check"]
-    assert a["fault"] == "C" and 0.2 <= check["measured"]["ripple_pct"][3] <= 0.5
+    a = IdentifyResult.from_json(js.read_text())
+    lo, hi = a.joint("C").interval_mm
+    check = a.evidence.training_data_check
+    assert a.fault == "C" and 0.2 <= check["measured"]["ripple_pct"][3] <= 0.5
     from twin.identification.model import ClearanceModel
 
     assert check["measured"]["ripple_pct"][3] < ClearanceModel.load(DEFAULT).trained_on["ranges"]["ripple_pct"][3][1]
     assert lo <= 0.1 <= hi
     # one window of two turns: the interval is that of answers from one window, and the answer says so
-    assert a["evidence"]["windows"] == 1 and "answers from their first 1 window " in check["interval_rule"]
+    assert a.evidence.windows == 1 and "answers from their first 1 window " in check["interval_rule"]
 
 
 def test_the_size_target_is_half_the_catalogue_gap_there():
@@ -618,7 +626,7 @@ def test_regression_guard_the_size_resolution_map_is_the_committed_studies(joint
     SIZE_RESOLVED_FROM_RPM[joint] is, per vertical axis, the stricter of the maps measured with every
     run started at crank angle 0 and with the start angle drawn over a turn (``*_start.json``); at C the
     two are the same map, at B the start angle moves y from 250 to 300 rpm."""
-    from twin.identification.model import SIZE_RESOLVED_FROM_RPM, size_resolved
+    from twin.identification.intervals import SIZE_RESOLVED_FROM_RPM, size_resolved
 
     at0, drawn = (_measured_map(s, joint) for s in studies)
     assert {o: max(at0[o], drawn[o]) for o in at0} == SIZE_RESOLVED_FROM_RPM[joint]
@@ -664,7 +672,7 @@ def _half_width(m, side: str, size_mm: float, windows: int) -> float:
     """The conformal half width [log10] the model gives an answer of ``size_mm`` from ``windows`` windows on
     ``side`` ("B", "B_unresolved", ...): that of the answer's size band (model.band_half_width) in the table of
     answers from that many windows where the model holds one for the joint, else in its main table."""
-    from twin.identification.model import band_half_width
+    from twin.identification.intervals import band_half_width
 
     few = (m.trained_on["interval"].get("half_width_log10_by_windows") or {}).get(str(windows), {})
     table = few if side[0] in few else m.interval_log10
@@ -674,17 +682,18 @@ def _half_width(m, side: str, size_mm: float, windows: int) -> float:
 def test_an_answer_at_C_where_the_size_is_not_resolved_says_so(tmp_path, monkeypatch):
     """The test-6 sample (C, y vertical, 750 motor rpm) is resolved by the measured map; with the
     threshold for y put over its speed the same answer carries the flag and a warning."""
+    from twin.identification.intervals import SIZE_RESOLVED_FROM_RPM
     import twin.identification.model as id_model
-    from twin.commands.identify import default_model_path
+    from twin.identification.model import default_model_path
 
     m = id_model.ClearanceModel.load(default_model_path())
     a = id_model.identify_recording(m, REC / "test6_synthetic.mcap")
-    assert a["fault"] == "C" and a["clearance_c_size_resolved"] and a["warnings"] == []
-    assert a["clearance_b_size_resolved"]
-    monkeypatch.setitem(id_model.SIZE_RESOLVED_FROM_RPM["C"], "y", 800.0)
+    assert a.fault == "C" and a.joint("C").size_resolved and a.warnings == ()
+    assert a.joint("B").size_resolved
+    monkeypatch.setitem(SIZE_RESOLVED_FROM_RPM["C"], "y", 800.0)
     b = id_model.identify_recording(m, REC / "test6_synthetic.mcap")
-    assert not b["clearance_c_size_resolved"] and b["clearance_c_mm"] == a["clearance_c_mm"]
-    assert len(b["warnings"]) == 1 and "not resolved at 750 motor rpm with y vertical" in b["warnings"][0]
+    assert not b.joint("C").size_resolved and b.joint("C").size_mm == a.joint("C").size_mm
+    assert len(b.warnings) == 1 and "not resolved at 750 motor rpm with y vertical" in b.warnings[0]
 
 
 def test_an_answer_takes_the_windows_of_its_models_hop():
@@ -694,19 +703,21 @@ def test_an_answer_takes_the_windows_of_its_models_hop():
     answers over exactly those windows."""
     import dataclasses
 
+    from twin.identification.inputs import recording_inputs
+    from twin.identification.intervals import size_answer
     import twin.identification.model as id_model
-    from twin.commands.identify import default_model_path
+    from twin.identification.model import default_model_path
 
     m = id_model.ClearanceModel.load(default_model_path())
-    acc, counts, rate, cpr, cfg = id_model.recording_inputs(REC / "test6_synthetic.mcap")
+    acc, counts, rate, cpr, cfg = recording_inputs(REC / "test6_synthetic.mcap")
     a = id_model.identify_recording(m, REC / "test6_synthetic.mcap")
-    assert m.hop_revs == 2.0 and a["evidence"]["windows"] == len(steady_windows(counts, rate, cpr).windows)
+    assert m.hop_revs == 2.0 and a.evidence.windows == len(steady_windows(counts, rate, cpr).windows)
     half = dataclasses.replace(m, trained_on=m.trained_on | {"answer_hop_revs": 0.5})
     b = id_model.identify_recording(half, REC / "test6_synthetic.mcap")
     n = len(steady_windows(counts, rate, cpr, hop_revs=0.5).windows)
-    assert b["evidence"]["windows"] == n > a["evidence"]["windows"]
+    assert b.evidence.windows == n > a.evidence.windows
     X, _ = features(acc, counts, rate, cpr, orientation=cfg.mechanism.orientation, hop_revs=0.5)
-    assert len(X) == n and b["clearance_c_if_faulty_mm"]["median"] == id_model.size_answer(m.size["C"], X)
+    assert len(X) == n and b.joint("C").size_if_faulty_mm == size_answer(m.size["C"], X)
 
 
 def test_an_answer_says_how_often_the_models_sizes_held_at_its_speed_and_orientation():
@@ -715,21 +726,22 @@ def test_an_answer_says_how_often_the_models_sizes_held_at_its_speed_and_orienta
     crank rate; a model without the table answers None there and is otherwise unchanged."""
     import dataclasses
 
+    from twin.identification.intervals import held_out_at
     import twin.identification.model as id_model
-    from twin.commands.identify import default_model_path
+    from twin.identification.model import default_model_path
 
     m = id_model.ClearanceModel.load(default_model_path())
     table = m.trained_on["held_out_size_accuracy"]
     assert all(set(table[j]) == {"x", "y", "z"} for j in "BC")
     a = id_model.identify_recording(m, REC / "test6_synthetic.mcap")
     for j in "BC":
-        held = a[f"clearance_{j.lower()}_size_held_out"]
-        assert held == id_model.held_out_at(table[j], "y", a["evidence"]["crank_hz"])
-        lo, hi = held["training_crank_hz"]
-        assert lo <= a["evidence"]["crank_hz"] <= hi and 0.0 <= held["share"] <= 1.0 and held["runs"] >= 40
+        held = a.joint(j).size_held_out
+        assert held.to_dict() == held_out_at(table[j], "y", a.evidence.crank_hz)
+        lo, hi = held.training_crank_hz
+        assert lo <= a.evidence.crank_hz <= hi and 0.0 <= held.share <= 1.0 and held.runs >= 40
     bare = dataclasses.replace(m, trained_on={k: v for k, v in m.trained_on.items() if k != "held_out_size_accuracy"})
     b = id_model.identify_recording(bare, REC / "test6_synthetic.mcap")
-    assert b["clearance_c_size_held_out"] is None and b["clearance_c_interval_mm"] == a["clearance_c_interval_mm"]
+    assert b.joint("C").size_held_out is None and b.joint("C").interval_mm == a.joint("C").interval_mm
 
 
 def test_an_answer_at_B_below_its_map_says_so_and_takes_the_wide_interval(monkeypatch):
@@ -739,25 +751,26 @@ def test_an_answer_at_B_below_its_map_says_so_and_takes_the_wide_interval(monkey
     of B's unresolved half width around the same size; C is untouched."""
     import dataclasses
 
+    from twin.identification.intervals import SIZE_RESOLVED_FROM_RPM
     import twin.identification.model as id_model
-    from twin.commands.identify import default_model_path
+    from twin.identification.model import default_model_path
 
     shipped = id_model.ClearanceModel.load(default_model_path())
     m = dataclasses.replace(shipped, classifier=_FixedClassifier([0.9, 0.05, 0.05, 0.0], ("BC", "C", "B", "none")))
     assert "B_unresolved" in m.interval_log10 and m.interval_log10["B_unresolved"] > m.interval_log10["B"]
     a = id_model.identify_recording(m, REC / "test6_synthetic.mcap")
-    assert a["fault"] == "BC" and a["clearance_b_size_resolved"] and a["warnings"] == []
-    monkeypatch.setitem(id_model.SIZE_RESOLVED_FROM_RPM["B"], "y", 800.0)
+    assert a.fault == "BC" and a.joint("B").size_resolved and a.warnings == ()
+    monkeypatch.setitem(SIZE_RESOLVED_FROM_RPM["B"], "y", 800.0)
     b = id_model.identify_recording(m, REC / "test6_synthetic.mcap")
-    assert not b["clearance_b_size_resolved"] and b["clearance_c_size_resolved"]
-    assert len(b["warnings"]) == 1 and "size at B is not resolved at 750 motor rpm" in b["warnings"][0]
-    size = a["clearance_b_mm"]
-    n = a["evidence"]["windows"]
+    assert not b.joint("B").size_resolved and b.joint("C").size_resolved
+    assert len(b.warnings) == 1 and "size at B is not resolved at 750 motor rpm" in b.warnings[0]
+    size = a.joint("B").size_mm
+    n = a.evidence.windows
     w, w0 = _half_width(m, "B_unresolved", size, n), _half_width(m, "B", size, n)
     assert w > w0
-    assert b["clearance_b_mm"] == size and b["clearance_b_interval_mm"] == pytest.approx([size / 10 ** w, size * 10 ** w])
-    assert a["clearance_b_interval_mm"] == pytest.approx([size / 10 ** w0, size * 10 ** w0])
-    assert b["clearance_c_interval_mm"] == a["clearance_c_interval_mm"]
+    assert b.joint("B").size_mm == size and b.joint("B").interval_mm == pytest.approx([size / 10 ** w, size * 10 ** w])
+    assert a.joint("B").interval_mm == pytest.approx([size / 10 ** w0, size * 10 ** w0])
+    assert b.joint("C").interval_mm == a.joint("C").interval_mm
 
 
 def test_interval_folds_by_speed_leave_each_speed_out_and_each_joint_is_split_by_resolution():
@@ -765,7 +778,9 @@ def test_interval_folds_by_speed_leave_each_speed_out_and_each_joint_is_split_by
     three speeds or an unknown grouping is refused. The answer's interval at each joint takes the
     unresolved half width below that joint's map, the resolved one on it, and a model without the
     split one width; a resolution flag missing for a joint is refused."""
-    from twin.identification.model import ClearanceModel, ModelError, _conformal_folds, train
+    from twin.identification.intervals import _conformal_folds
+    from twin.identification.model import ClearanceModel, ModelError
+    from twin.identification.training import TrainOptions
 
     rows = [{"motor_rpm": rpm, "crank_hz": rpm / 238.2} for rpm in (250.0, 500.0, 250.0, 750.0, 500.0, 750.0)]
     f = _conformal_folds(rows, np.arange(6), "speed", 0)
@@ -775,9 +790,9 @@ def test_interval_folds_by_speed_leave_each_speed_out_and_each_joint_is_split_by
     with pytest.raises(ModelError, match="3 speeds"):
         _conformal_folds(rows[:2], np.arange(2), "speed", 0)
     with pytest.raises(ModelError, match="interval_folds.*allowed: runs, speed"):
-        train("nowhere", interval_folds="rpm")
+        TrainOptions(interval_folds="rpm")
     with pytest.raises(ModelError, match="size_regressor: 'forest'; allowed: mean, median"):
-        train("nowhere", interval_folds="speed", size_regressor="forest")
+        TrainOptions(interval_folds="speed", size_regressor="forest")
 
     def Clf():  # located C (0.7), the classes in another order than CLASSES
         return _FixedClassifier([0.1, 0.7, 0.1, 0.1], ("BC", "C", "B", "none"))
@@ -787,35 +802,35 @@ def test_interval_folds_by_speed_leave_each_speed_out_and_each_joint_is_split_by
                        {"B": 0.3, "B_unresolved": 0.6, "C": 0.2, "C_unresolved": 0.8})
     X = np.zeros((2, 3))
     on, off = m.identify(X, {"B": True, "C": True}), m.identify(X, {"B": True, "C": False})
-    assert on["fault"] == off["fault"] == "C" and on["clearance_c_mm"] == off["clearance_c_mm"] == 0.1
-    assert on["clearance_c_interval_mm"] == pytest.approx([0.1 / 10 ** 0.2, 0.1 * 10 ** 0.2])
-    assert off["clearance_c_interval_mm"] == pytest.approx([0.1 / 10 ** 0.8, 0.1 * 10 ** 0.8])
-    assert on["clearance_b_if_faulty_mm"] == off["clearance_b_if_faulty_mm"]
-    b_off = m.identify(X, {"B": False, "C": True})["clearance_b_if_faulty_mm"]["interval_90"]
+    assert on.fault == off.fault == "C" and on.joint("C").size_mm == off.joint("C").size_mm == 0.1
+    assert on.joint("C").interval_mm == pytest.approx([0.1 / 10 ** 0.2, 0.1 * 10 ** 0.2])
+    assert off.joint("C").interval_mm == pytest.approx([0.1 / 10 ** 0.8, 0.1 * 10 ** 0.8])
+    assert on.joint("B") == off.joint("B")
+    b_off = m.identify(X, {"B": False, "C": True}).joint("B").interval_if_faulty_mm
     assert b_off == pytest.approx([0.1 / 10 ** 0.6, 0.1 * 10 ** 0.6])
-    assert on["clearance_b_if_faulty_mm"]["interval_90"] == pytest.approx([0.1 / 10 ** 0.3, 0.1 * 10 ** 0.3])
+    assert on.joint("B").interval_if_faulty_mm == pytest.approx([0.1 / 10 ** 0.3, 0.1 * 10 ** 0.3])
     one = ClearanceModel(Clf(), {"B": Reg(), "C": Reg()}, {"B": 0.3, "C": 0.2})
     both_off = one.identify(X, {"B": False, "C": False})
-    assert both_off["clearance_c_interval_mm"] == on["clearance_c_interval_mm"]
-    assert both_off["clearance_b_if_faulty_mm"] == on["clearance_b_if_faulty_mm"]
+    assert both_off.joint("C").interval_mm == on.joint("C").interval_mm
+    assert both_off.joint("B") == on.joint("B")
     with pytest.raises(ModelError, match="resolved.*B and C"):
         m.identify(X, {"C": True})
     # a recording rippling beyond RIPPLE_BAND_PCT at some harmonic takes its side's "_rippled" half width where
     # the model has one, and the ripple-less one otherwise
-    from twin.identification.model import RIPPLE_BAND_PCT
+    from twin.identification.intervals import RIPPLE_BAND_PCT
 
     r = ClearanceModel(Clf(), {"B": Reg(), "C": Reg()}, {"B": 0.3, "B_rippled": 0.5, "C": 0.2, "C_unresolved": 0.8,
                                                          "C_unresolved_rippled": 0.9})
     calm, wavy = [1.0, 2.0, 0.5, 0.0], [1.0, RIPPLE_BAND_PCT + 0.1, 0.5, 0.0]
-    assert r.identify(X, {"B": True, "C": True}, calm)["clearance_b_if_faulty_mm"]["interval_90"] == pytest.approx(
+    assert r.identify(X, {"B": True, "C": True}, calm).joint("B").interval_if_faulty_mm == pytest.approx(
         [0.1 / 10 ** 0.3, 0.1 * 10 ** 0.3])
-    assert r.identify(X, {"B": True, "C": True}, wavy)["clearance_b_if_faulty_mm"]["interval_90"] == pytest.approx(
+    assert r.identify(X, {"B": True, "C": True}, wavy).joint("B").interval_if_faulty_mm == pytest.approx(
         [0.1 / 10 ** 0.5, 0.1 * 10 ** 0.5])
-    assert r.identify(X, {"B": True, "C": True}, wavy)["clearance_c_interval_mm"] == pytest.approx(
+    assert r.identify(X, {"B": True, "C": True}, wavy).joint("C").interval_mm == pytest.approx(
         [0.1 / 10 ** 0.2, 0.1 * 10 ** 0.2])  # no "C_rippled": the resolved side's own
-    assert r.identify(X, {"B": True, "C": False}, wavy)["clearance_c_interval_mm"] == pytest.approx(
+    assert r.identify(X, {"B": True, "C": False}, wavy).joint("C").interval_mm == pytest.approx(
         [0.1 / 10 ** 0.9, 0.1 * 10 ** 0.9])
-    assert r.identify(X, {"B": True, "C": False}, None)["clearance_c_interval_mm"] == pytest.approx(
+    assert r.identify(X, {"B": True, "C": False}, None).joint("C").interval_mm == pytest.approx(
         [0.1 / 10 ** 0.8, 0.1 * 10 ** 0.8])
 
 
@@ -824,8 +839,8 @@ def test_half_widths_split_by_the_fault_where_both_sides_have_enough_runs():
     split made only where each side holds MONDRIAN_MIN_RUNS runs; each half width is the conformal rank of its own
     runs' scores; an answer located B+C takes its side's ``_both`` width where the model stores one and the model says
     it split, the others (and a model that did not split) the one-joint width."""
-    from twin.identification.model import (MONDRIAN_MIN_RUNS, ClearanceModel, _half_widths, _interval_parts,
-                                           conformal_half_width)
+    from twin.identification.intervals import MONDRIAN_MIN_RUNS, _half_widths, _interval_parts, conformal_half_width
+    from twin.identification.model import ClearanceModel
 
     n = 2 * MONDRIAN_MIN_RUNS + 4
     rows = [{"fault": "BC" if i % 2 else "C", "orientation": "z", "crank_hz": 3.0} for i in range(n)]
@@ -848,15 +863,15 @@ def test_half_widths_split_by_the_fault_where_both_sides_have_enough_runs():
         split = {"interval": {"fault_split": recorded}}
         for fault, wb, wc in (("BC", 0.6, 0.5), ("C", 0.3, 0.2)):
             a = ClearanceModel(Clf(fault), {"B": Reg(), "C": Reg()}, widths, trained_on=split).identify(X, on)
-            assert a["fault"] == fault
-            assert a["clearance_c_if_faulty_mm"]["interval_90"] == pytest.approx([0.1 / 10 ** wc, 0.1 * 10 ** wc])
-            assert a["clearance_b_if_faulty_mm"]["interval_90"] == pytest.approx([0.1 / 10 ** wb, 0.1 * 10 ** wb])
+            assert a.fault == fault
+            assert a.joint("C").interval_if_faulty_mm == pytest.approx([0.1 / 10 ** wc, 0.1 * 10 ** wc])
+            assert a.joint("B").interval_if_faulty_mm == pytest.approx([0.1 / 10 ** wb, 0.1 * 10 ** wb])
     only_c = ClearanceModel(Clf("BC"), {"B": Reg(), "C": Reg()}, widths,
                             trained_on={"interval": {"fault_split": ["C"]}}).identify(X, on)  # the shipped rule
-    assert only_c["clearance_c_interval_mm"] == pytest.approx([0.1 / 10 ** 0.5, 0.1 * 10 ** 0.5])
-    assert only_c["clearance_b_interval_mm"] == pytest.approx([0.1 / 10 ** 0.3, 0.1 * 10 ** 0.3])  # B's not split
+    assert only_c.joint("C").interval_mm == pytest.approx([0.1 / 10 ** 0.5, 0.1 * 10 ** 0.5])
+    assert only_c.joint("B").interval_mm == pytest.approx([0.1 / 10 ** 0.3, 0.1 * 10 ** 0.3])  # B's not split
     plain = ClearanceModel(Clf("BC"), {"B": Reg(), "C": Reg()}, widths).identify(X, on)
-    assert plain["clearance_c_interval_mm"] == pytest.approx([0.1 / 10 ** 0.2, 0.1 * 10 ** 0.2])
+    assert plain.joint("C").interval_mm == pytest.approx([0.1 / 10 ** 0.2, 0.1 * 10 ** 0.2])
 
 
 def test_half_widths_by_windows_are_calibrated_on_as_many_windows():
@@ -864,7 +879,8 @@ def test_half_widths_by_windows_are_calibrated_on_as_many_windows():
     out-of-fold runs' answers from their first n windows (the median of those windows' log10 answers; a run with
     fewer windows answers from all of its own), split as :func:`_half_widths` splits; an answer from n windows takes
     that table, one from more windows (or a count the model has no table for) the model's main table, per joint."""
-    from twin.identification.model import ClearanceModel, _half_widths, _half_widths_by_windows, conformal_half_width
+    from twin.identification.intervals import _half_widths, _half_widths_by_windows, conformal_half_width
+    from twin.identification.model import ClearanceModel
 
     rng = np.random.default_rng(3)
     n = 60
@@ -886,14 +902,14 @@ def test_half_widths_by_windows_are_calibrated_on_as_many_windows():
     on = {"B": True, "C": True}
     for windows, wc, wb in ((1, 0.4, 0.1), (2, 0.3, 0.35), (3, 0.2, 0.1), (5, 0.2, 0.1)):
         a = m.identify(np.zeros((windows, 3)), on)
-        assert a["clearance_c_interval_mm"] == pytest.approx([0.1 / 10 ** wc, 0.1 * 10 ** wc])
-        assert a["clearance_b_if_faulty_mm"]["interval_90"] == pytest.approx([0.1 / 10 ** wb, 0.1 * 10 ** wb])
+        assert a.joint("C").interval_mm == pytest.approx([0.1 / 10 ** wc, 0.1 * 10 ** wc])
+        assert a.joint("B").interval_if_faulty_mm == pytest.approx([0.1 / 10 ** wb, 0.1 * 10 ** wb])
 
 
 def test_fault_split_names_its_joints():
     """``train(fault_split=...)`` and a model file's ``interval.fault_split``: True (both joints), False or None
     (none), or a list of distinct joints; anything else refused, naming the allowed values."""
-    from twin.identification.model import FAULT_SPLIT_JOINTS, fault_split_joints
+    from twin.identification.intervals import FAULT_SPLIT_JOINTS, fault_split_joints
 
     assert fault_split_joints(True) == ("B", "C") and fault_split_joints(False) == () == fault_split_joints(None)
     assert fault_split_joints(["C", "B"]) == ("B", "C") and fault_split_joints(("C",)) == ("C",) == FAULT_SPLIT_JOINTS
@@ -914,14 +930,15 @@ def test_an_interval_ending_on_a_trained_value_holds_it():
     m = ClearanceModel(_FixedClassifier.sure("BC"), {"B": Const(math.log10(0.05)), "C": Const(math.log10(0.02))},
                        {"B": w, "C": 0.0})
     a = m.identify(np.zeros((3, 4)), {"B": True, "C": True})
-    assert a["fault"] == "BC"
-    assert a["clearance_b_mm"] == 0.05 and a["clearance_b_interval_mm"] == [0.02, 0.125]
-    assert a["clearance_c_mm"] == 0.02 and a["clearance_c_interval_mm"] == [0.02, 0.02]
+    assert a.fault == "BC"
+    assert a.joint("B").size_mm == 0.05 and a.joint("B").interval_mm == (0.02, 0.125)
+    assert a.joint("C").size_mm == 0.02 and a.joint("C").interval_mm == (0.02, 0.02)
 
 
 def test_the_interval_is_the_conformal_rank_of_the_out_of_fold_scores():
     """Split-conformal rank: with n scores, the ceil((n + 1) 0.9)-th smallest (Romano et al. 2019)."""
-    from twin.identification.model import ModelError, conformal_half_width
+    from twin.identification.intervals import conformal_half_width
+    from twin.identification.model import ModelError
 
     scores = np.arange(1, 20) / 100.0  # n = 19: rank ceil(20 * 0.9) = 18
     assert conformal_half_width(np.random.default_rng(1).permutation(scores)) == 0.18
@@ -959,7 +976,8 @@ def test_pooled_features_shift_run_indices_and_refuse_datasets_that_disagree():
     may span), datasets of another sample rate or encoder resolution are refused in one line."""
     from types import SimpleNamespace
 
-    from twin.identification.model import ModelError, pool_features
+    from twin.identification.inputs import pool_features
+    from twin.identification.model import ModelError
 
     def ds(engine, rate, name):
         return SimpleNamespace(info={"identity": {"engine": engine}, "name": name}, rate_hz=rate, path=name)
@@ -980,7 +998,7 @@ def test_half_widths_by_engine_hold_each_engines_runs_alone():
     conformal rank lies between the engines'; by engine, every half width is the largest of the pooled one and
     each engine's own (the conformal rank of its scores), so each engine's runs are covered at the nominal rate;
     an engine of too few runs, or a single engine, leaves the pooled half widths as they are."""
-    from twin.identification.model import COVERAGE, _half_widths, conformal_half_width
+    from twin.identification.intervals import COVERAGE, _half_widths, conformal_half_width
 
     rng = np.random.default_rng(3)
     n = 200
@@ -1006,8 +1024,7 @@ def test_size_bands_give_each_band_its_own_conformal_half_width():
     rate; the catalogue's bands calibrate each on its own runs, so every size is covered at the nominal rate (the
     conformal rank of its own scores). A band of too few runs stays with the band above it, and an answer is
     given the half width of the deepest band the model has."""
-    from twin.identification.model import (CATALOGUE_BANDS_MM, COVERAGE, _half_widths, band_half_width,
-                                           conformal_half_width)
+    from twin.identification.intervals import (CATALOGUE_BANDS_MM, COVERAGE, _half_widths, band_half_width, conformal_half_width)
 
     # the geometric means of the catalogue's neighbours at least a factor 2 apart: 0.02|0.05, 0.1|0.5, 0.5|1.0 mm
     assert CATALOGUE_BANDS_MM == (0.0316, 0.2236, 0.7071)
@@ -1054,7 +1071,7 @@ def test_held_out_accuracy_is_the_share_within_the_factor_per_speed_and_reads_be
     """Out-of-fold scores of runs at two speeds with y vertical and one with z: per orientation and speed the share
     of scores within log10(1.5) and the runs; a recording between two speeds reads the line between their shares,
     one beyond them the nearest speed's, an orientation without runs nothing."""
-    from twin.identification.model import held_out_accuracy, held_out_at
+    from twin.identification.intervals import held_out_accuracy, held_out_at
 
     lim = math.log10(1.5)
     rows = ([{"orientation": "y", "crank_hz": 1.00 + 0.002 * i, "motor_rpm": 240.0} for i in range(4)]
@@ -1080,8 +1097,9 @@ def test_train_calibrates_the_bands_on_its_out_of_fold_answers_and_hands_them_ou
     boundaries and loads back with the same intervals."""
     from types import SimpleNamespace
 
-    from twin.identification.model import (CATALOGUE_BANDS_MM, FAULT_SPLIT_JOINTS, ClearanceModel, _half_widths,
-                                           band_half_width, train)
+    from twin.identification.intervals import CATALOGUE_BANDS_MM, FAULT_SPLIT_JOINTS, _half_widths, band_half_width
+    from twin.identification.model import ClearanceModel
+    from twin.identification.training import TrainOptions, train
 
     rng = np.random.default_rng(11)
     nf = len(feature_names())
@@ -1101,7 +1119,7 @@ def test_train_calibrates_the_bands_on_its_out_of_fold_answers_and_hands_them_ou
         owner.append(i)
     ds = SimpleNamespace(info={"name": "synthetic", "identity": {"engine": "reference"}}, rate_hz=100000.0, path=tmp_path)
     oof: dict = {}
-    m, info = train([tmp_path], interval_folds="speed", size_regressor="median",
+    m, info = train([tmp_path], TrainOptions(interval_folds="speed", size_regressor="median"),
                     features=(np.array(X), rows, owner, [], [ds]), out_of_fold=oof)
     assert info["interval"]["size_band_mm"] == sorted(CATALOGUE_BANDS_MM, reverse=True)
     for j in "BC":
@@ -1126,7 +1144,7 @@ def test_train_calibrates_the_bands_on_its_out_of_fold_answers_and_hands_them_ou
     assert back.trained_on["held_out_size_accuracy"] == json.loads(json.dumps(info["held_out_size_accuracy"]))
     Xr = np.array(X[:1])  # run 0: B faulty
     a = back.identify(Xr, {"B": True, "C": True})
-    size = a["clearance_b_if_faulty_mm"]["median"]
+    size = a.joint("B").size_if_faulty_mm
     few = back.trained_on["interval"]["half_width_log10_by_windows"].get("1", {})
     w = band_half_width(few if "B" in few else back.interval_log10, "B", size, back.trained_on["interval"]["size_band_mm"])
-    assert a["clearance_b_if_faulty_mm"]["interval_90"] == pytest.approx([size / 10 ** w, size * 10 ** w])
+    assert a.joint("B").interval_if_faulty_mm == pytest.approx([size / 10 ** w, size * 10 ** w])

@@ -121,7 +121,7 @@ def test_the_shipped_model_of_format_2_exports_as_scikit_learn_answers(tmp_path)
     features with NaNs; where the shipped file was converted from it, its arrays are the export's."""
     import joblib
 
-    from twin.identification.model import recording_inputs
+    from twin.identification.inputs import recording_inputs
     from twin.identification.features import features
 
     src = _git_old_model(tmp_path)
@@ -473,10 +473,10 @@ def test_the_shipped_model_answers_without_scikit_learn_or_joblib():
 
     code = ("import sys, json; sys.modules['sklearn'] = sys.modules['joblib'] = None\n"
             "from twin.identification.model import ClearanceModel, identify_recording\n"
-            f"a = identify_recording(ClearanceModel.load({str(SHIPPED)!r}), {str(REC)!r}); a.pop('seconds')\n"
+            f"a = identify_recording(ClearanceModel.load({str(SHIPPED)!r}), {str(REC)!r}).to_dict(); a.pop('seconds')\n"
             "print(json.dumps(a, default=float))")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
     assert r.returncode == 0, r.stderr
-    a = identify_recording(ClearanceModel.load(SHIPPED), REC)
+    a = identify_recording(ClearanceModel.load(SHIPPED), REC).to_dict()
     a.pop("seconds")
     assert json.loads(r.stdout) == json.loads(json.dumps(a, default=float))

@@ -53,24 +53,24 @@ def clearance(tmp_path_factory):
 def test_replay_recovers_the_crank_motion(ideal):
     _, truth, report, out = ideal
     rep = read_run(out / "replay.mcap")
-    i0, i1 = (int(round(x * 1e5)) for x in report["window_s"])
-    assert report["window_s"][0] == pytest.approx(0.2)  # steady speed after the 0.1 s ramp
+    i0, i1 = (int(round(x * 1e5)) for x in report.window_s)
+    assert report.window_s[0] == pytest.approx(0.2)  # steady speed after the 0.1 s ramp
     # simulated crank vs the true crank motion behind the counts: well below one count
     err = (rep["encoder_angle"][i0:i1] - truth["encoder_angle"][i0:i1]) / COUNT
     assert np.max(np.abs(err)) < 0.5
     # vs the recorded counts (count centres, +-0.5 count of quantization): below one count
-    assert report["tracking"]["sim_vs_recorded_max_counts"] < 1.0
-    assert report["tracking"]["sim_vs_recorded_rms_counts"] < 0.45
-    assert report["tracking"]["sim_vs_reference_max_counts"] < 0.5
-    assert abs(report["time_lag_s"]) <= 2e-5  # aligned by construction (the noise decides +-1 sample)
-    assert report["crank_rate_hz"] == pytest.approx(750 / 3.97 / 60, rel=0.03)  # rippled speed around nominal
+    assert report.tracking.sim_vs_recorded_max_counts < 1.0
+    assert report.tracking.sim_vs_recorded_rms_counts < 0.45
+    assert report.tracking.sim_vs_reference_max_counts < 0.5
+    assert abs(report.time_lag_s) <= 2e-5  # aligned by construction (the noise decides +-1 sample)
+    assert report.crank_rate_hz == pytest.approx(750 / 3.97 / 60, rel=0.03)  # rippled speed around nominal
 
 
 def test_replay_with_the_same_model_reproduces_the_accelerations(ideal):
     _, _, report, _ = ideal
-    assert report["configuration"]["same_as_recording"]
+    assert report.configuration.same_as_recording
     for a in ("AC1", "AC2", "AC3", "AC4", "AC6"):
-        m = report["sensors"][a]
+        m = report.sensors[a]
         # the virtual sensors' noise is independent of the recording's: the error is about
         # sqrt(2) x 0.066 m/s^2 (ADXL1001) / 0.055 m/s^2 (ADXL1002) of noise, plus the physics
         assert m["rms_error_mps2"] < 0.15, a
@@ -83,9 +83,9 @@ def test_replay_with_the_same_model_reproduces_the_accelerations(ideal):
     # AC5 (slider, vertical) reads a nearly constant 1 g: its error is the difference of two
     # independent noise records of 25 ug/sqrt(Hz) over 50 kHz: sqrt(2) * 0.055 m/s^2
     sigma = 25e-6 * 9.80665 * math.sqrt(50_000)
-    assert report["sensors"]["AC5"]["rms_error_mps2"] == pytest.approx(math.sqrt(2) * sigma, rel=0.1)
-    assert report["calibration"]["recorded"]["zero_g_v"] == pytest.approx(OFFSETS, abs=3e-5)
-    assert report["calibration"]["simulated"]["zero_g_v"] == pytest.approx(OFFSETS, abs=3e-5)
+    assert report.sensors["AC5"]["rms_error_mps2"] == pytest.approx(math.sqrt(2) * sigma, rel=0.1)
+    assert report.calibration["recorded"]["zero_g_v"] == pytest.approx(OFFSETS, abs=3e-5)
+    assert report.calibration["simulated"]["zero_g_v"] == pytest.approx(OFFSETS, abs=3e-5)
 
 
 def test_clearance_model_shows_impacts_the_ideal_model_does_not(clearance):
@@ -94,14 +94,14 @@ def test_clearance_model_shows_impacts_the_ideal_model_does_not(clearance):
     opts = ReplayOptions(window_s=(0.1, 0.43), plots=False)
     same = replay(path, tmp / "same", opts=opts)
     ideal = replay(path, tmp / "ideal", lambda c: c.replace(**{"joints.clearance_c_mm": 0.0}), opts)
-    assert not ideal["configuration"]["same_as_recording"]
+    assert not ideal.configuration.same_as_recording
     for a in ("AC4", "AC6"):
-        rec_db = same["sensors"][a]["bands"][0]["recorded_db"]  # 0.8-1.2 kHz
-        assert abs(same["sensors"][a]["bands"][0]["difference_db"]) < 3.0, a
-        assert ideal["sensors"][a]["bands"][0]["simulated_db"] < rec_db - 15.0, a
-        assert ideal["sensors"][a]["recorded_peak_mps2"] == same["sensors"][a]["recorded_peak_mps2"]
+        rec_db = same.sensors[a]["bands"][0]["recorded_db"]  # 0.8-1.2 kHz
+        assert abs(same.sensors[a]["bands"][0]["difference_db"]) < 3.0, a
+        assert ideal.sensors[a]["bands"][0]["simulated_db"] < rec_db - 15.0, a
+        assert ideal.sensors[a]["recorded_peak_mps2"] == same.sensors[a]["recorded_peak_mps2"]
     # AC6 (slider, horizontal): the impact spikes; the ideal model stays smooth (Fig. 16)
-    s6, i6 = same["sensors"]["AC6"], ideal["sensors"]["AC6"]
+    s6, i6 = same.sensors["AC6"], ideal.sensors["AC6"]
     assert s6["simulated_peak_mps2"] > 1.5 * i6["simulated_peak_mps2"]
     # pointwise NRMSE punishes an impact spike shifted by a few samples (the replayed crank follows
     # the quantized counts, so impact instants move by ~10-50 us with the soft calibrated contact);
@@ -109,7 +109,7 @@ def test_clearance_model_shows_impacts_the_ideal_model_does_not(clearance):
     assert i6["dtw_distance_pct"] > 5.0 * s6["dtw_distance_pct"]
     assert i6["nrmse_pct"] > s6["nrmse_pct"]
     # the crank input is the same for both models
-    assert ideal["tracking"]["sim_vs_recorded_max_counts"] < 1.0
+    assert ideal.tracking.sim_vs_recorded_max_counts < 1.0
 
 
 def test_cli_replay_writes_side_by_side_mcap_report_and_plots(clearance, capsys):
@@ -190,3 +190,25 @@ def test_replay_errors(clearance, tmp_path, capsys):
     with pytest.raises(RecordingError, match="50000"):
         replay(path, tmp_path / "o3", lambda c: c.replace(**{"instrumentation.daq_rate_hz": 50000.0}))
     assert not (tmp_path / "o3").exists()
+
+
+def test_the_replay_result_is_the_report_file_and_has_the_golden_layout(ideal):
+    """The replay returns a :class:`~twin.replay_result.ReplayResult` whose ``to_dict()`` is ``report.json`` plus
+    the report files' own entry, with the keys of the report captured before the typed result (tests/golden,
+    the same recording) in the same order: top level, configuration, tracking and every sensor's figures."""
+    from pathlib import Path
+
+    from twin.replay_result import ReplayResult
+
+    _, _, report, out = ideal
+    assert isinstance(report, ReplayResult)
+    d = report.to_dict()
+    golden = json.loads((Path(__file__).resolve().parent / "golden" / "replay_t3.json").read_text())
+    assert list(d) == list(golden)
+    for part in ("configuration", "tracking", "simulation", "files", "time_lag_estimate"):
+        assert list(d[part]) == list(golden[part]), part
+    assert list(d["sensors"]) == list(golden["sensors"])
+    assert all(list(d["sensors"][a]) == list(golden["sensors"][a]) for a in d["sensors"])
+    on_disk = json.loads((out / "report.json").read_text())
+    assert d["files"].pop("report") == ["report.json", "report.md"]
+    assert json.loads(json.dumps(d, default=float)) == on_disk

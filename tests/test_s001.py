@@ -208,7 +208,7 @@ def test_sweep_starts_must_be_a_whole_number_of_at_least_one():
     from twin.identification.restitution import SweepOptions
 
     for bad in (0, -1, 1.5):
-        with pytest.raises(ConfigError, match="--starts"):
+        with pytest.raises(ConfigError, match="^starts: must be a whole number"):
             SweepOptions(starts=bad)
 
 

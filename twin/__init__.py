@@ -10,14 +10,14 @@ The Python API (each name is imported on first use, so ``import twin`` stays qui
   sensor chain (DAQ volts, encoder counts, motor command, static calibration), as the bench's DAQ
   would; returns a :class:`twin.bench_record.RecordResult`;
 * ``twin.replay(recording, out_dir)``: replay a bench recording through the twin; returns the
-  report (a dict) and writes the comparison folder;
+  report (a :class:`twin.replay_result.ReplayResult`; ``.to_dict()``) and writes the comparison folder;
 * ``twin.dataset.open(DIR)``: a generated dataset (:class:`twin.dataset.Dataset`: manifest,
   signals, training windows as numpy arrays);
 * ``twin.calibrate(recordings, ["contact.mu0"], "out_dir")``: fit configuration fields to bench
   recordings, with intervals; returns a :class:`twin.calibration.CalibrationResult` and writes
   ``calibrated.toml`` and a report;
 * ``twin.identify(recording)``: locate and size the clearance faults of a recording; returns the
-  answer (a dict);
+  answer (a :class:`twin.identification.results.IdentifyResult`: ``.fault``, ``.joint("C").size_mm``, ...);
 * ``twin.samples.path("test6")``, ``twin.samples.spec_path("tiny")``: the sample recordings and
   dataset specs that ship with the package, by name;
 * ``twin.plot(source, "fig.png")``: draw a run file, recording, replay folder or run as a PNG

@@ -18,11 +18,15 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
 from twin.config import BenchConfig
 from twin.errors import ConfigError
 from twin.run import Run
+
+if TYPE_CHECKING:
+    from twin.identification.results import IdentifyResult
+    from twin.replay_result import ReplayResult
 
 
 def _path(value: Any, name: str) -> Path:
@@ -148,7 +152,7 @@ def simulate(cfg: BenchConfig | int | str | None = None, duration: float | None 
 
 
 def replay(recording: str | Path, out_dir: str | Path, *, overrides: Mapping[str, Any] | None = None,
-           window_s: tuple[float, float] | None = None, plots: bool = True, progress: bool = False) -> dict[str, Any]:
+           window_s: tuple[float, float] | None = None, plots: bool = True, progress: bool = False) -> ReplayResult:
     """Replay a bench recording through the twin, as ``twin replay`` does.
 
     The recorded encoder angle drives the simulation; the simulated accelerations go through the
@@ -158,9 +162,10 @@ def replay(recording: str | Path, out_dir: str | Path, *, overrides: Mapping[str
     name (``{"joints.clearance_c_mm": 0.0}`` replays with an ideal joint C).
 
     Writes ``out_dir`` (``replay.mcap``, ``report.json``, ``report.md``, PNG plots unless
-    ``plots=False``) and returns the report as a dict: ``"sensors"`` (per accelerometer: RMS
-    error, NRMSE, correlation, DTW distance, harmonics, band energies), ``"time_lag_s"``,
-    ``"tracking"`` (crank tracking error), ``"window_s"`` (the analysis window), ...
+    ``plots=False``) and returns the report as a :class:`twin.replay_result.ReplayResult`:
+    ``.sensors`` (per accelerometer: RMS error, NRMSE, correlation, DTW distance, harmonics, band
+    energies), ``.time_lag_s``, ``.tracking`` (crank tracking error), ``.window_s`` (the analysis
+    window [s]), ...; ``.to_dict()`` is the report as ``report.json`` holds it
     (``recordings/FORMAT.md`` describes the files).
     """
     from twin.bench_replay import ReplayOptions
@@ -199,22 +204,26 @@ def plot(source: str | Path | Run, out: str | Path, *, channels: Sequence[str] |
     return draw_png(source, out, channels=channels, window=window, spectrum=spectrum, size_px=size_px)
 
 
-def identify(recording: str | Path, model: str | Path | None = None) -> dict[str, Any]:
+def identify(recording: str | Path, model: str | Path | None = None) -> IdentifyResult:
     """Locate and size the clearance faults of a bench recording, as ``twin identify clearance``.
 
     ``model``: a model file made by ``twin identify train`` (default: the model shipped with the
-    twin). Returns a dict: ``"fault"`` (``"none"``, ``"B"``, ``"C"`` or ``"BC"``),
-    ``"probabilities"`` per class, ``"clearance_b_mm"`` and ``"clearance_c_mm"`` (0 for a ball
-    bearing) with their 90 % ``"clearance_b_interval_mm"`` / ``"clearance_c_interval_mm"``,
-    ``"clearance_b_size_held_out"`` / ``"clearance_c_size_held_out"`` (how often the model's sizes held
-    within x1.5 at this speed and orientation in training runs left out; None for a model without that
-    table), ``"warnings"`` (e.g. a size the bench's sensors do not resolve at that speed), ``"evidence"``
-    (windows, revolutions, crank rate, model) and ``"seconds"``.
+    twin). Returns a :class:`twin.identification.results.IdentifyResult`: ``.fault`` (``"none"``,
+    ``"B"``, ``"C"`` or ``"BC"``), ``.probabilities`` per class, ``.joint("B")`` and ``.joint("C")``
+    (``.size_mm``, 0 for a ball bearing, with its 90 % ``.interval_mm`` [mm]; ``.size_resolved``;
+    ``.size_held_out``: how often the model's sizes held within x1.5 at this speed and orientation in
+    training runs left out, None for a model without that table), ``.warnings`` (e.g. a size the
+    bench's sensors do not resolve at that speed), ``.evidence`` (windows, revolutions, crank rate,
+    model) and ``.seconds``; ``.to_dict()`` and ``.to_json()`` give the answer as ``--json`` writes it.
 
     A model file is plain arrays and JSON: loading one runs no code from it (a pickle is refused).
+
+    >>> import twin
+    >>> a = twin.identify(twin.samples.path("test6"))
+    >>> a.fault, a.joint("C").size_mm > 0, a.joint("B").size_mm
+    ('C', True, 0.0)
     """
-    from twin.commands.identify import default_model_path
-    from twin.identification.model import ClearanceModel, ModelError, identify_recording
+    from twin.identification.model import ClearanceModel, ModelError, default_model_path, identify_recording
 
     recording = _path(recording, "recording")
     path = _path(model, "model") if model is not None else default_model_path()

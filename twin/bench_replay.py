@@ -50,6 +50,7 @@ from twin.errors import ConfigError, RecordingError, TwinError
 from twin.instrument import (apply_chain, counts_to_angle, measured_accel, simulated_calibration)
 from twin.instrument.encoder import count_step_rad
 from twin.recording import read_recording
+from twin.replay_result import ReplayResult
 from twin.run import Channel, Run
 from twin.signals import band_energy_db, dtw_compare, hann_spectrum
 from twin.tracefile import DriveInputs
@@ -244,8 +245,9 @@ REPLAY_FILES = frozenset({"replay.mcap", "report.json", "report.md", "encoder_tr
 
 def replay(recording: str | Path, out_dir: str | Path,
            configure: Callable[[BenchConfig], BenchConfig] | None = None,
-           opts: ReplayOptions = ReplayOptions()) -> dict[str, Any]:
-    """Replay ``recording`` (see the module docstring); returns the report dict.
+           opts: ReplayOptions = ReplayOptions()) -> ReplayResult:
+    """Replay ``recording`` (see the module docstring); returns the report
+    (:class:`~twin.replay_result.ReplayResult`; ``.to_dict()`` as ``report.json`` holds it).
 
     ``configure`` maps the recording's bench configuration to the one to simulate (CLI
     overrides); None keeps it.
@@ -289,7 +291,7 @@ def replay(recording: str | Path, out_dir: str | Path,
 
         shutil.rmtree(tmp, ignore_errors=True)
         raise
-    return report
+    return ReplayResult.from_dict(report)
 
 
 def _replay_into(out: Path, recording: str | Path, rec: Run, info: Any, repairs: list[str],

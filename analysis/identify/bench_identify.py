@@ -39,8 +39,9 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--model", help="model file (default: the shipped one)")
     args = ap.parse_args()
-    from twin.commands.identify import default_model_path
-    from twin.identification.model import ClearanceModel, identify_recording, recording_inputs
+    from twin.identification.model import default_model_path
+    from twin.identification.inputs import recording_inputs
+    from twin.identification.model import ClearanceModel, identify_recording
 
     model = ClearanceModel.load(args.model or default_model_path())
     with tempfile.TemporaryDirectory() as d:
@@ -54,8 +55,8 @@ def main() -> None:
             t = time.perf_counter()
             a = identify_recording(model, rec)
             ids.append(time.perf_counter() - t)
-    print(f"2 s recording of test 12 (answer: {a['fault']}, B {a['clearance_b_mm']:.3g} mm, C {a['clearance_c_mm']:.3g} mm, "
-          f"{a['evidence']['windows']} windows)")
+    print(f"2 s recording of test 12 (answer: {a.fault}, B {a.joint('B').size_mm:.3g} mm, C {a.joint('C').size_mm:.3g} mm, "
+          f"{a.evidence.windows} windows)")
     print(f"identify: best {min(ids):.3f} s, median {statistics.median(ids):.3f} s (target <= 2 s on one core); "
           f"reading and calibrating alone: best {min(reads):.3f} s")
 

@@ -50,7 +50,7 @@ ROOT = Path(__file__).resolve().parents[2]
 def recording_features() -> dict[str, np.ndarray]:
     """Window features of every sample recording that has them (the calibration-only one has none)."""
     from twin.identification.features import IdentifyError, features
-    from twin.identification.model import recording_inputs
+    from twin.identification.inputs import recording_inputs
 
     out = {}
     for rec in sorted((ROOT / "recordings").glob("*.mcap")):
@@ -148,7 +148,7 @@ def main() -> int:
         answers = {}
         for rec in sorted((ROOT / "recordings").glob("*.mcap")):
             try:
-                a, b = (identify_recording(m, rec) for m in (old, back))
+                a, b = (identify_recording(m, rec).to_dict() for m in (old, back))
             except Exception as err:  # noqa: BLE001 - the calibration-only sample is refused by both
                 answers[rec.name] = {"refused": str(err)}
                 continue

@@ -47,7 +47,7 @@ FAULTS = ({}, {"joints.clearance_b_mm": 0.5, "joints.clearance_c_mm": 0.5, "join
 def measured_like_training() -> list[dict]:
     from twin.config import preset
     from twin.identification.features import steady_windows
-    from twin.identification.model import simulated_inputs
+    from twin.identification.inputs import simulated_inputs
     from twin.identification.ranges import recording_measures
     from twin.simulation import simulate_run
 
@@ -78,7 +78,9 @@ def main() -> None:
     ap.add_argument("--out", default=str(ROOT / "analysis" / "results" / "identify" / "ranges_shipped.json"))
     args = ap.parse_args()
     from twin.identification.features import features
-    from twin.identification.model import (ESTIMATORS, MODEL_FORMAT, ClearanceModel, recording_inputs, resolution)
+    from twin.identification.inputs import recording_inputs
+    from twin.identification.intervals import resolution
+    from twin.identification.model import ESTIMATORS, MODEL_FORMAT, ClearanceModel
     from twin.identification.modelfile import read_model, write_model
 
     path = Path(args.model)
@@ -109,7 +111,7 @@ def main() -> None:
         acc, counts, rate, cpr, cfg = recording_inputs(rec)
         X, w = features(acc, counts, rate, cpr, orientation=cfg.mechanism.orientation)
         res = resolution(cfg.mechanism.orientation, w.crank_hz)
-        a, b = old.identify(X, res), new.identify(X, res)
+        a, b = old.identify(X, res).to_dict(), new.identify(X, res).to_dict()
         if json.dumps(a, sort_keys=True) != json.dumps(b, sort_keys=True):
             tmp.unlink()
             raise SystemExit(f"{rec.name}: the converted model answers differently: {a} vs {b}")

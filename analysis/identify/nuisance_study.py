@@ -119,10 +119,11 @@ import numpy as np
 
 from twin.identification.evaluate import evaluate
 from twin.identification.features import FEATURE_VERSION, REVS_PER_WINDOW
-from twin.identification.model import (CATALOGUE_BANDS_MM, SIZE_BAND_MM, ClearanceModel, _half_widths,
-                                       _half_widths_by_windows,
-                                       catalogue_bands, fault_split_joints, pool_features, pooled_features,
-                                       recorded_size_bands, train)
+from twin.identification.inputs import pool_features, pooled_features
+from twin.identification.intervals import (CATALOGUE_BANDS_MM, SIZE_BAND_MM, _half_widths, _half_widths_by_windows,
+                                           catalogue_bands, fault_split_joints, recorded_size_bands)
+from twin.identification.model import ClearanceModel
+from twin.identification.training import TrainOptions, train
 from twin.provenance import stamped
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -316,9 +317,10 @@ def main() -> None:
             only = opts["size_only_at"]  # sets teaching one joint's size: pooled after the others, as train() takes them
             only_sets = [n for j in ("B", "C") for n in only.get(j, ())]
             both = [n for n in sets if n not in only_sets]
-            model, info = train([work / n for n in both], workers=args.workers, interval_folds="speed",
-                                features=pool_features([feats[n] for n in both + only_sets]), out_of_fold=oof,
-                                **(opts | {"size_only_at": {j: [work / n for n in v] for j, v in only.items()}}))
+            options = TrainOptions(workers=args.workers, interval_folds="speed",
+                                   **(opts | {"size_only_at": {j: [work / n for n in v] for j, v in only.items()}}))
+            model, info = train([work / n for n in both], options,
+                                features=pool_features([feats[n] for n in both + only_sets]), out_of_fold=oof)
             fitted[key] = (model, info, oof)
         if args.save and args.save.split(":", 1)[0] == v:
             model.save(ROOT / args.save.split(":", 1)[1])

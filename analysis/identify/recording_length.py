@@ -42,7 +42,9 @@ KS = (1, 2, 3, 4, 7)  # windows used, from the end of the steady part
 def main(argv: list[str] | None = None) -> int:
     from twin.dataset import open as open_dataset
     from twin.identification.evaluate import half_gap_mm, within_factor
-    from twin.identification.model import ClearanceModel, dataset_features, resolution
+    from twin.identification.inputs import dataset_features
+    from twin.identification.intervals import resolution
+    from twin.identification.model import ClearanceModel
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("dataset")
@@ -52,7 +54,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--joint", choices=("B", "C"), default="C", help="the joint whose size is read (default C)")
     args = ap.parse_args(argv)
     if args.model is None:
-        from twin.commands.identify import default_model_path
+        from twin.identification.model import default_model_path
 
         args.model = str(default_model_path())
     model = ClearanceModel.load(args.model)
@@ -71,10 +73,10 @@ def main(argv: list[str] | None = None) -> int:
             if k > len(Xr):
                 continue
             a = model.identify(Xr[-k:], resolution(r["orientation"], r["crank_hz"]))
-            est = a[f"clearance_{j}_if_faulty_mm"]["median"]
-            lo, hi = a[f"clearance_{j}_if_faulty_mm"]["interval_90"]
+            est = a.joint(J).size_if_faulty_mm
+            lo, hi = a.joint(J).interval_if_faulty_mm
             per.setdefault((r["motor_rpm"], c, k), []).append(
-                {"located": J in a["fault"], "err": abs(est - c), "within": within_factor(est, c),
+                {"located": a.joint(J).faulty, "err": abs(est - c), "within": within_factor(est, c),
                  "covered": lo <= c <= hi, "spread": float(10 ** (logs[-k:].max() - logs[-k:].min())),
                  "orientation": r["orientation"]})
     out = {"dataset": str(args.dataset), "model": str(args.model), "joint": J, "runs": len(rows),

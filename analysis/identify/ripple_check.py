@@ -62,9 +62,9 @@ def one(tmp: Path, ripple: tuple[float, ...] | None, seed: int, duration: float,
     path = write_recording(tmp / f"r{seed}.mcap", daq, info)
     a = identify_recording(model, path)
     path.unlink()
-    return {"drive": "constant program" if ripple is None else "trace", "ripple": list(ripple or ()), "seed": seed, "duration_s": duration, "fault": a["fault"],
-            "c_mm": a["clearance_c_if_faulty_mm"]["median"], "c_interval_mm": a["clearance_c_if_faulty_mm"]["interval_90"],
-            "windows": a["evidence"]["windows"]}
+    return {"drive": "constant program" if ripple is None else "trace", "ripple": list(ripple or ()), "seed": seed, "duration_s": duration, "fault": a.fault,
+            "c_mm": a.joint("C").size_if_faulty_mm, "c_interval_mm": list(a.joint("C").interval_if_faulty_mm),
+            "windows": a.evidence.windows}
 
 
 def main() -> None:

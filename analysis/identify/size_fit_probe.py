@@ -32,7 +32,9 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from nuisance_study import ROOT, VARIANTS, cached_features  # noqa: E402
 
-from twin.identification.model import SIZE_REGRESSORS, pool_features, resolution  # noqa: E402
+from twin.identification.inputs import pool_features
+from twin.identification.intervals import resolution
+from twin.identification.training import SIZE_REGRESSORS
 
 DEV = ("clearance_id_fresh4_in", "clearance_id_fresh3_in", "clearance_id_fresh2_in", "clearance_id_fresh_in",
        "clearance_id_nuisance_dev")

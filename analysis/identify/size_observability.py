@@ -91,7 +91,7 @@ def one_run(job: tuple) -> dict:
         "instrumentation.seed": 1000 + k, **over})
     run = simulate_run(cfg)
     if sensed:  # the bench's chain: sensor response, noise, 18-bit DAQ, encoder, static calibration
-        from twin.identification.model import simulated_inputs
+        from twin.identification.inputs import simulated_inputs
 
         acc, counts, rate, cpr = simulated_inputs(run, cfg)
     else:

@@ -72,7 +72,7 @@ def main() -> None:
     from sklearn.ensemble import HistGradientBoostingRegressor
     from sklearn.model_selection import KFold, cross_val_predict
 
-    from twin.identification.model import SIZE_REGRESSORS
+    from twin.identification.training import SIZE_REGRESSORS
 
     X, y, rows = slow_runs(Path(args.work))
     tol = np.log10(FACTOR)

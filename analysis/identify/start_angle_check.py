@@ -28,7 +28,9 @@ def one(job: tuple) -> dict:
     engine, angle, model_path = job
     from twin.config import preset
     from twin.identification.features import features
-    from twin.identification.model import ClearanceModel, simulated_inputs, size_answer
+    from twin.identification.inputs import simulated_inputs
+    from twin.identification.intervals import size_answer
+    from twin.identification.model import ClearanceModel
     from twin.simulation import simulate_run
 
     cfg = preset(6).replace(**{"simulation.engine": engine, "simulation.duration_s": 5.5, "drive.ramp_s": 0.4,
@@ -46,7 +48,7 @@ def one(job: tuple) -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from twin.commands.identify import default_model_path
+    from twin.identification.model import default_model_path
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--angles", default="0,1,2,3,4,5", help="start angles [rad], comma-separated")

@@ -3,22 +3,13 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
 from twin.commands.inputs import RECORDING_HELP, recording
 from twin.errors import TwinError
+from twin.identification.model import default_model_path
 from twin.util import resolve_workers
-
-#: the model that ships with the package (analysis/identify/train_default.py makes it)
-DEFAULT_MODEL = "identify_default.npz"
-
-
-def default_model_path() -> Path:
-    from importlib.resources import files
-
-    return Path(str(files("twin") / "data" / DEFAULT_MODEL))
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -109,14 +100,16 @@ def _splits(text: str) -> tuple[str, ...]:
 
 
 def _train(args: argparse.Namespace) -> int:
-    from twin.identification.model import MODEL_SUFFIX, train
+    from twin.identification.model import MODEL_SUFFIX
+    from twin.identification.training import TrainOptions, train
     from twin.util import check_output_file
 
     out = check_output_file(args.out, "--out", MODEL_SUFFIX)
-    model, info = train(list(args.dataset), _splits(args.splits), resolve_workers(args.workers),
-                        interval_folds=args.interval_folds, location_only=list(args.location_only),
-                        size_only_at={"B": list(args.b_size_only), "C": list(args.c_size_only)},
-                        fault_split=[j for j in args.fault_split if j in "BC"])  # "none": no joint
+    opts = TrainOptions(splits=_splits(args.splits), workers=resolve_workers(args.workers),
+                        interval_folds=args.interval_folds, location_only=tuple(args.location_only),
+                        size_only_at={"B": tuple(args.b_size_only), "C": tuple(args.c_size_only)},
+                        fault_split=tuple(j for j in args.fault_split if j in "BC"))  # "none": no joint
+    model, info = train(list(args.dataset), opts)
     model.save(out)
     print(f"{out}: trained on {info['runs']} runs ({info['windows']} windows) of dataset {info['dataset']} "
           f"({info['engine']}); classes {info['classes']}; crank {info['crank_hz_range'][0]:.2f}-"
@@ -159,7 +152,7 @@ def _recording_and_json(args: argparse.Namespace) -> tuple[Path, Path | None]:
 
 def _clearance(args: argparse.Namespace) -> int:
     from twin.identification.model import ClearanceModel, identify_recording
-    from twin.util import atomic_write_json
+    from twin.util import atomic_write_text
 
     rec, js = _recording_and_json(args)
     path = Path(args.model) if args.model else default_model_path()
@@ -167,32 +160,31 @@ def _clearance(args: argparse.Namespace) -> int:
         raise TwinError(f"no default model in this installation ({path}); give --model MODEL.npz")
     model = ClearanceModel.load(path)
     a = identify_recording(model, rec)
-    p = a["probabilities"]
-    print(f"{args.recording}: fault {a['fault']}, probability {p[a['fault']]:.2f} (class probabilities: "
+    p = a.probabilities
+    print(f"{args.recording}: fault {a.fault}, probability {p[a.fault]:.2f} (class probabilities: "
           + ", ".join(f"{k} {v:.2f}" for k, v in p.items()) + ")")
-    for j in ("b", "c"):
-        lo, hi = a[f"clearance_{j}_interval_mm"]
-        v = a[f"clearance_{j}_mm"]
-        held = a.get(f"clearance_{j}_size_held_out")
-        print(f"  clearance {j.upper()}: " + (f"{v:.3g} mm (90 % interval {lo:.3g}-{hi:.3g} mm)" if v > 0
-                                                else "none (ball bearing)")
-              + (f"; at this speed and orientation the model's sizes held within x{held['within_factor']:g} in "
-                 f"{held['share'] * 100:.0f} % of {held['runs']} training runs left out" if v > 0 and held else ""))
-    ev = a["evidence"]
-    lo_hz, hi_hz = ev["model"]["crank_hz_range"]
-    print(f"  evidence: {ev['windows']} window{'s' if ev['windows'] != 1 else ''}, {ev['revolutions']} crank revolutions, {ev['steady_s']:.2f} s of "
-          f"steady running at a crank rate of {ev['crank_hz']:.3f} Hz")
-    print(f"  model: trained on dataset {ev['model']['dataset']} at crank rates {lo_hz:.2f}-{hi_hz:.2f} Hz; "
-          f"identification time {a['seconds']:.2f} s")
-    check = ev["training_data_check"]
-    if check["outside_training_data"]:
-        n = sum("extrapolation" in w or "unlike the training data" in w for w in a["warnings"])
+    for j in a.joints:
+        lo, hi = j.interval_mm
+        v = j.size_mm
+        held = j.size_held_out
+        print(f"  clearance {j.joint}: " + (f"{v:.3g} mm (90 % interval {lo:.3g}-{hi:.3g} mm)" if v > 0
+                                            else "none (ball bearing)")
+              + (f"; at this speed and orientation the model's sizes held within x{held.within_factor:g} in "
+                 f"{held.share * 100:.0f} % of {held.runs} training runs left out" if v > 0 and held else ""))
+    ev = a.evidence
+    lo_hz, hi_hz = ev.model["crank_hz_range"]
+    print(f"  evidence: {ev.windows} window{'s' if ev.windows != 1 else ''}, {ev.revolutions} crank revolutions, "
+          f"{ev.steady_s:.2f} s of steady running at a crank rate of {ev.crank_hz:.3f} Hz")
+    print(f"  model: trained on dataset {ev.model['dataset']} at crank rates {lo_hz:.2f}-{hi_hz:.2f} Hz; "
+          f"identification time {a.seconds:.2f} s")
+    if ev.training_data_check["outside_training_data"]:
+        n = sum("extrapolation" in w or "unlike the training data" in w for w in a.warnings)
         print(f"  outside the training data: {n} reason{'s' if n != 1 else ''} (warnings below); the intervals are "
               "widened to every clearance the model was trained on at that joint")
-    for w in a["warnings"]:
+    for w in a.warnings:
         print(f"  WARNING: {w}", file=sys.stderr)
     if js is not None:
-        atomic_write_json(js, json.loads(json.dumps(a, default=float)))
+        atomic_write_text(js, a.to_json() + "\n")
     return 0
 
 

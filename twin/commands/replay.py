@@ -13,6 +13,7 @@ from twin.cli import MODEL_OPTIONS, SELECT_OPTIONS, add_config_args, config_from
 from twin.commands.inputs import RECORDING_HELP, recording
 from twin.config import BenchConfig
 from twin.errors import TwinError
+from twin.replay_result import ReplayResult
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -79,29 +80,29 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _print(r: dict, out: Path) -> None:
+def _print(r: ReplayResult, out: Path) -> None:
     from twin.bench_replay import _lag_text
 
-    c, tr = r["configuration"], r["tracking"]
-    print(f"{r['recording']}: {r['duration_s']:.3f} s at {r['sample_rate_hz']:g} Hz; model {c['name']} "
-          f"({c['engine']}, B {c['clearance_b_mm']:g} mm, C {c['clearance_c_mm']:g} mm"
-          f"{'' if c['same_as_recording'] else ', differs from the recording'})")
-    for rep in r["repairs"]:
+    c, tr = r.configuration, r.tracking
+    print(f"{r.recording}: {r.duration_s:.3f} s at {r.sample_rate_hz:g} Hz; model {c.name} "
+          f"({c.engine}, B {c.clearance_b_mm:g} mm, C {c.clearance_c_mm:g} mm"
+          f"{'' if c.same_as_recording else ', differs from the recording'})")
+    for rep in r.repairs:
         print(f"  repair: {rep}")
-    print(f"  window {r['window_s'][0]:.3f}-{r['window_s'][1]:.3f} s, crank {r['crank_rate_hz']:.3f} Hz, "
-          f"lag {_lag_text(r)}; tracking sim-recorded max {tr['sim_vs_recorded_max_counts']:.2f} "
-          f"counts (RMS {tr['sim_vs_recorded_rms_counts']:.2f})")
+    print(f"  window {r.window_s[0]:.3f}-{r.window_s[1]:.3f} s, crank {r.crank_rate_hz:.3f} Hz, "
+          f"lag {_lag_text(r.to_dict())}; tracking sim-recorded max {tr.sim_vs_recorded_max_counts:.2f} "
+          f"counts (RMS {tr.sim_vs_recorded_rms_counts:.2f})")
     print("  sensor  NRMSE%   corr    DTW%  " + "  ".join(f"{lo / 1e3:g}-{hi / 1e3:g}kHz rec/sim dB"
-                                                      for lo, hi in r["bands_hz"]))
-    for a, m in r["sensors"].items():
+                                                      for lo, hi in r.bands_hz))
+    for a, m in r.sensors.items():
         bands = "  ".join(f"{b['recorded_db']:8.1f}/{b['simulated_db']:<8.1f}" for b in m["bands"])
         if m.get("near_constant"):  # NRMSE, correlation and DTW of noise against noise: not shown
             print(f"  {a:6s} nearly constant ({m['near_constant_note']}): not compared")
             continue
         print(f"  {a:6s} {m['nrmse_pct']:7.2f} {m['correlation']:7.4f} {m['dtw_distance_pct']:7.3f}  {bands}")
-    md = r.get("motor_drive")
+    md = r.motor_drive
     if md:
         print(f"  motor drive (recorded command): tracking max {md['tracking']['sim_vs_recorded_max_counts']:.1f} counts "
               f"(PID {md['tracking']['pid_sim_vs_recorded_max_counts']:.1f}); NRMSE% motor/PID "
               + ", ".join(f"{a} {m['nrmse_pct']:.1f}/{m['pid_nrmse_pct']:.1f}" for a, m in md["sensors"].items()))
-    print(f"  wrote {out}/: {', '.join([r['files']['mcap'], *r['files'].get('report', []), *r['files'].get('plots', [])])}")
+    print(f"  wrote {out}/: {', '.join([r.files['mcap'], *r.files.get('report', []), *r.files.get('plots', [])])}")

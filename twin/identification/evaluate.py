@@ -18,8 +18,9 @@ from typing import Any
 import numpy as np
 
 from twin.config import CATALOGUE_DIAMETRAL_MM
-from twin.identification.model import (CLASSES, SIZE_RESOLVED_FROM_RPM, ClearanceModel, held_out_at, pooled_features,
-                                       resolution, training_check)
+from twin.identification.inputs import pooled_features
+from twin.identification.intervals import SIZE_RESOLVED_FROM_RPM, held_out_at, resolution
+from twin.identification.model import CLASSES, ClearanceModel, training_check
 
 
 def half_gap_mm(c: float) -> float:
@@ -46,7 +47,7 @@ def evaluate(model: ClearanceModel, dataset_dir: str | Path | list[str | Path], 
     sample rate and encoder resolution; e.g. a test set and its extension by another seed),
     with the location accuracy of each beside the pooled figures; each run answered from the windows a
     recording's answer takes (``model.hop_revs``). ``features``: what
-    :func:`twin.identification.model.pooled_features` returns for them with that hop, computed before."""
+    :func:`twin.identification.inputs.pooled_features` returns for them with that hop, computed before."""
     t0 = time.perf_counter()
     dirs = [dataset_dir] if isinstance(dataset_dir, (str, Path)) else list(dataset_dir)
     X, rows, owner, skipped, dss = features if features is not None else \
@@ -59,16 +60,17 @@ def evaluate(model: ClearanceModel, dataset_dir: str | Path | list[str | Path], 
         held = {j: held_out_at(table.get(j), r["orientation"], r["crank_hz"]) for j in ("B", "C")}
         a = model.identify(X[owner == i], resolved, r["measures"]["ripple_pct"])
         # the checks against the training data, as a recording's answer makes them (intervals widened outside)
-        warned, _ = training_check(model, a, r["measures"], r["orientation"], X[owner == i])
-        preds.append({"warnings": warned, "outside_training_data": bool(warned), "measures": r["measures"],"run_id": r["run_id"], "true_fault": r["fault"], "fault": a["fault"],
+        a, warned, _ = training_check(model, a, r["measures"], r["orientation"], X[owner == i])
+        b, c = a.joint("B"), a.joint("C")
+        preds.append({"warnings": warned, "outside_training_data": bool(warned), "measures": r["measures"],"run_id": r["run_id"], "true_fault": r["fault"], "fault": a.fault,
                       "true_b_mm": r["clearance_b_mm"], "true_c_mm": r["clearance_c_mm"],
-                      "b_mm": a["clearance_b_if_faulty_mm"]["median"], "b_int": a["clearance_b_if_faulty_mm"]["interval_90"],
-                      "c_mm": a["clearance_c_if_faulty_mm"]["median"], "c_int": a["clearance_c_if_faulty_mm"]["interval_90"],
+                      "b_mm": b.size_if_faulty_mm, "b_int": list(b.interval_if_faulty_mm),
+                      "c_mm": c.size_if_faulty_mm, "c_int": list(c.interval_if_faulty_mm),
                       "crank_hz": r["crank_hz"], "motor_rpm": r.get("motor_rpm"), "orientation": r["orientation"],
                       "b_resolved": resolved["B"], "c_resolved": resolved["C"], "dataset": r["dataset"],
                       "b_held_out": held["B"]["share"] if held["B"] else None,
                       "c_held_out": held["C"]["share"] if held["C"] else None,
-                      "probabilities": a["probabilities"]})
+                      "probabilities": dict(a.probabilities)})
     t_pred = time.perf_counter() - t0
     y = [p["true_fault"] for p in preds]
     yhat = [p["fault"] for p in preds]
@@ -169,7 +171,7 @@ def size_by_speed(faulty: list[dict[str, Any]], j: str) -> dict[str, dict[str, d
 
 def size_where_resolved(preds: list[dict[str, Any]], j: str) -> dict[str, Any]:
     """Size figures at joint ``j`` ("b" or "c") per clearance value over the runs whose speed and
-    orientation the bench's sensors resolve the size at (:func:`twin.identification.model.size_resolved`),
+    orientation the bench's sensors resolve the size at (:func:`twin.identification.intervals.size_resolved`),
     and how many are not."""
     faulty = [p for p in preds if p[f"true_{j}_mm"] > 0]
     ok = [p for p in faulty if p[f"{j}_resolved"]]

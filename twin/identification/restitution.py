@@ -100,15 +100,16 @@ class SweepOptions:
 
     def __post_init__(self) -> None:
         if not (isinstance(self.starts, int) and self.starts >= 1):
-            raise ConfigError("--starts", f"must be a whole number >= 1, got {self.starts!r}")
+            raise ConfigError("starts", f"must be a whole number >= 1, got {self.starts!r}")
         if self.sensor not in ACCELEROMETERS:
-            raise ConfigError("--sensor", f"must be one of {', '.join(ACCELEROMETERS)}, got {self.sensor!r}")
+            raise ConfigError("sensor", f"must be one of {', '.join(ACCELEROMETERS)}, got {self.sensor!r}")
         if not (math.isfinite(self.start_s) and self.start_s >= 0):
-            raise ConfigError("--start", f"must be a time >= 0 s, got {self.start_s!r}")
+            raise ConfigError("start_s", f"must be a time >= 0 s, got {self.start_s!r}")
         if not (math.isfinite(self.stop_s) and (self.stop_s == 0 or self.stop_s > self.start_s)):
-            raise ConfigError("--stop", f"must be 0 (the end) or a time > --start ({self.start_s} s), got {self.stop_s!r}")
+            raise ConfigError("stop_s", f"must be 0 (the end) or a time > `start_s` ({self.start_s} s), "
+                                        f"got {self.stop_s!r}")
         if self.parameter not in PARAMETERS:
-            raise ConfigError("--parameter", f"must be one of {', '.join(PARAMETERS)}, got {self.parameter!r}")
+            raise ConfigError("parameter", f"must be one of {', '.join(PARAMETERS)}, got {self.parameter!r}")
         _, grid, step, (lo, hi), _, unit = PARAMETERS[self.parameter]
         if not self.coarse:
             object.__setattr__(self, "coarse", grid)
@@ -117,17 +118,17 @@ class SweepOptions:
         if self.fine_half_width == 0:
             object.__setattr__(self, "fine_half_width", 5 * self.fine_step)
         if len(self.coarse) < 2 or not all(isinstance(e, (int, float)) and lo < e <= hi for e in self.coarse):
-            raise ConfigError("--grid", f"must hold 2+ {self.parameter} values in ({lo:g}, {hi:g}] {unit}, "
-                                        f"got {list(self.coarse)!r}")
+            raise ConfigError("coarse", f"must hold 2+ {self.parameter} values in ({lo:g}, {hi:g}] {unit}, "
+                                  f"got {list(self.coarse)!r}")
         if not (math.isfinite(self.fine_step) and 0 <= self.fine_step < (hi - lo) / 2
                 and 0 <= self.fine_half_width < (hi - lo) / 2):
-            raise ConfigError("--fine-step", f"must lie in [0, {(hi - lo) / 2:g}) {unit}, got {self.fine_step!r}")
+            raise ConfigError("fine_step", f"must lie in [0, {(hi - lo) / 2:g}) {unit}, got {self.fine_step!r}")
         if self.engine not in ("", "mujoco", "reference"):
-            raise ConfigError("--engine", f"must be mujoco or reference, got {self.engine!r}")
+            raise ConfigError("engine", f"must be mujoco or reference, got {self.engine!r}")
         if not (math.isfinite(self.lowpass_hz) and self.lowpass_hz >= 0):
-            raise ConfigError("--lowpass", f"must be a frequency >= 0 Hz (0 = full band), got {self.lowpass_hz!r}")
+            raise ConfigError("lowpass_hz", f"must be a frequency >= 0 Hz (0 = full band), got {self.lowpass_hz!r}")
         if not (math.isfinite(self.max_lag_s) and 0 <= self.max_lag_s <= 0.5):
-            raise ConfigError("--max-lag", f"must lie in [0, 0.5] s, got {self.max_lag_s!r}")
+            raise ConfigError("max_lag_s", f"must lie in [0, 0.5] s, got {self.max_lag_s!r}")
 
 
 @dataclass
@@ -229,17 +230,17 @@ def sweep_restitution(path: str | Path, opts: SweepOptions = SweepOptions(), pro
         want = "the adams-impact law" if law == "adams-impact" else "a hysteresis law (restitution sets its damping)"
         raise ConfigError("contact.law", f"a {opts.parameter} sweep needs a clearance joint and {want} in the "
                                          f"recording's configuration; got law {cfg.contact.law!r}, clearance joints "
-                                         f"{list(cfg.joints.clearance_joints) or 'none'} (--set contact.law=... in "
-                                         "'twin import' records it)")
+                                         f"{list(cfg.joints.clearance_joints) or 'none'} (the recording's configuration "
+                                         "is set when it is imported)")
     n = rec.size
     i0 = int(round(opts.start_s * rate))
     if opts.stop_s > n / rate + 1e-9:
-        raise ConfigError("--stop", f"{opts.stop_s:g} s lies beyond the recording's end ({n / rate:.3f} s)")
+        raise ConfigError("stop_s", f"{opts.stop_s:g} s lies beyond the recording's end ({n / rate:.3f} s)")
     if opts.start_s >= n / rate:
-        raise ConfigError("--start", f"{opts.start_s:g} s lies at or beyond the recording's end ({n / rate:.3f} s)")
+        raise ConfigError("start_s", f"{opts.start_s:g} s lies at or beyond the recording's end ({n / rate:.3f} s)")
     i1 = n if opts.stop_s == 0 else min(n, int(round(opts.stop_s * rate)))
     if i1 - i0 < 10:
-        raise ConfigError("--start", f"the window holds {max(i1 - i0, 0)} samples of the {n / rate:.3f} s recording; "
+        raise ConfigError("start_s", f"the window holds {max(i1 - i0, 0)} samples of the {n / rate:.3f} s recording; "
                                      "it needs at least 10")
     engine = opts.engine or cfg.simulation.engine
     # each candidate's run is reduced at once to its two mismatches (full band, low-passed): no
