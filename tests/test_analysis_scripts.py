@@ -21,14 +21,9 @@ from twin.provenance import PROVENANCE_KEY, figure_metadata, git_commit, stamp_l
 ROOT = Path(__file__).resolve().parents[1]
 ANALYSIS = ROOT / "analysis"
 
-#: script -> (private names it still imports, why). Each entry is a known gap, not a permission: the
-#: modules they come from are being rewritten on other branches, where the names become public (the
-#: identification package's interval helpers; the native module's library look-up); the entries go with
-#: those merges (the test below fails on an entry that is no longer needed).
-PENDING_PRIVATE: dict[str, tuple[set[str], str]] = {
-    "identify/nuisance_study": ({"_half_widths", "_half_widths_by_windows"},
-                                "twin.identification's interval helpers (split on the identification branch)"),
-}
+#: script -> (private names it still imports, why): each entry a known gap, not a permission, to be closed by
+#: making the name public (the test below fails on an entry that is no longer needed). None at present.
+PENDING_PRIVATE: dict[str, tuple[set[str], str]] = {}
 
 #: writes of a script that are not results files (a cache, a work folder, a spec, the docs page in place)
 NOT_RESULTS = {

@@ -839,7 +839,7 @@ def test_half_widths_split_by_the_fault_where_both_sides_have_enough_runs():
     split made only where each side holds MONDRIAN_MIN_RUNS runs; each half width is the conformal rank of its own
     runs' scores; an answer located B+C takes its side's ``_both`` width where the model stores one and the model says
     it split, the others (and a model that did not split) the one-joint width."""
-    from twin.identification.intervals import MONDRIAN_MIN_RUNS, _half_widths, _interval_parts, conformal_half_width
+    from twin.identification.intervals import MONDRIAN_MIN_RUNS, half_widths, _interval_parts, conformal_half_width
     from twin.identification.model import ClearanceModel
 
     n = 2 * MONDRIAN_MIN_RUNS + 4
@@ -849,7 +849,7 @@ def test_half_widths_split_by_the_fault_where_both_sides_have_enough_runs():
     parts, _ = _interval_parts("C", rows, answers, None, False, fault_split=True)
     both = np.arange(n) % 2 == 1
     assert np.array_equal(parts["C_both"], both) and np.array_equal(parts["C"], ~both)
-    half = _half_widths("C", scores, rows, answers, None, False, False, fault_split=True)
+    half = half_widths("C", scores, rows, answers, None, False, False, fault_split=True)
     assert half == {"C": conformal_half_width(scores[~both]), "C_both": conformal_half_width(scores[both])}
     assert half["C_both"] > half["C"]
     few = [dict(r, fault="C") for r in rows[:-MONDRIAN_MIN_RUNS]] + rows[-MONDRIAN_MIN_RUNS + 1:]  # too few B+C runs
@@ -875,11 +875,11 @@ def test_half_widths_split_by_the_fault_where_both_sides_have_enough_runs():
 
 
 def test_half_widths_by_windows_are_calibrated_on_as_many_windows():
-    """``_half_widths_by_windows``: for n = 1 .. (most windows of a run) - 1, the conformal half widths of the
+    """``half_widths_by_windows``: for n = 1 .. (most windows of a run) - 1, the conformal half widths of the
     out-of-fold runs' answers from their first n windows (the median of those windows' log10 answers; a run with
-    fewer windows answers from all of its own), split as :func:`_half_widths` splits; an answer from n windows takes
+    fewer windows answers from all of its own), split as :func:`half_widths` splits; an answer from n windows takes
     that table, one from more windows (or a count the model has no table for) the model's main table, per joint."""
-    from twin.identification.intervals import _half_widths, _half_widths_by_windows, conformal_half_width
+    from twin.identification.intervals import half_widths, half_widths_by_windows, conformal_half_width
     from twin.identification.model import ClearanceModel
 
     rng = np.random.default_rng(3)
@@ -887,13 +887,13 @@ def test_half_widths_by_windows_are_calibrated_on_as_many_windows():
     rows = [{"fault": "C", "orientation": "z", "crank_hz": 3.0, "clearance_c_mm": 0.1} for _ in range(n)]
     # four windows per run whose answers scatter about the truth; the median of more windows scatters less
     logs = [-1.0 + rng.normal(0, 0.2, 4 if i % 3 else 2) for i in range(n)]
-    tables = _half_widths_by_windows("C", logs, rows, None, False, False)
+    tables = half_widths_by_windows("C", logs, rows, None, False, False)
     assert sorted(tables) == ["1", "2", "3"]
     for k in (1, 2, 3):
         answers = np.array([10 ** np.median(w[:k]) for w in logs])
         scores = np.abs(np.log10(answers) + 1.0)
         assert tables[str(k)] == pytest.approx({"C": conformal_half_width(scores)}, rel=1e-9)
-        assert tables[str(k)] == pytest.approx(_half_widths("C", scores, rows, answers, None, False, False), rel=1e-9)
+        assert tables[str(k)] == pytest.approx(half_widths("C", scores, rows, answers, None, False, False), rel=1e-9)
     assert tables["1"]["C"] > conformal_half_width(np.abs(np.array([np.median(w) for w in logs]) + 1.0))
 
     Reg = _ConstantRegressor  # 0.1 mm
@@ -998,7 +998,7 @@ def test_half_widths_by_engine_hold_each_engines_runs_alone():
     conformal rank lies between the engines'; by engine, every half width is the largest of the pooled one and
     each engine's own (the conformal rank of its scores), so each engine's runs are covered at the nominal rate;
     an engine of too few runs, or a single engine, leaves the pooled half widths as they are."""
-    from twin.identification.intervals import COVERAGE, _half_widths, conformal_half_width
+    from twin.identification.intervals import COVERAGE, half_widths, conformal_half_width
 
     rng = np.random.default_rng(3)
     n = 200
@@ -1006,16 +1006,16 @@ def test_half_widths_by_engine_hold_each_engines_runs_alone():
              "engine": "mujoco" if i < n else "reference"} for i in range(2 * n)]
     scores = np.abs(np.concatenate([rng.normal(0, 0.05, n), rng.normal(0, 0.2, n)]))
     answers = np.full(2 * n, 0.5)  # no answer below the size band: one part per side
-    pooled = _half_widths("B", scores, runs, answers, 0.2, True, False)
-    both = _half_widths("B", scores, runs, answers, 0.2, True, True)
+    pooled = half_widths("B", scores, runs, answers, 0.2, True, False)
+    both = half_widths("B", scores, runs, answers, 0.2, True, True)
     assert set(pooled) == set(both) == {"B"}
     mj, ref = conformal_half_width(scores[:n]), conformal_half_width(scores[n:])
     assert mj < pooled["B"] < ref and both["B"] == ref
     assert np.mean(scores[n:] <= both["B"]) >= COVERAGE and np.mean(scores[n:] <= pooled["B"]) < COVERAGE
     few = runs[:n] + runs[n:n + 10]
-    assert _half_widths("B", scores[:n + 10], few, answers[:n + 10], 0.2, True, True) == \
-        _half_widths("B", scores[:n + 10], few, answers[:n + 10], 0.2, True, False)
-    assert _half_widths("B", scores[n:], runs[n:], answers[n:], 0.2, True, True) == {"B": ref}  # one engine
+    assert half_widths("B", scores[:n + 10], few, answers[:n + 10], 0.2, True, True) == \
+        half_widths("B", scores[:n + 10], few, answers[:n + 10], 0.2, True, False)
+    assert half_widths("B", scores[n:], runs[n:], answers[n:], 0.2, True, True) == {"B": ref}  # one engine
 
 
 def test_size_bands_give_each_band_its_own_conformal_half_width():
@@ -1024,7 +1024,7 @@ def test_size_bands_give_each_band_its_own_conformal_half_width():
     rate; the catalogue's bands calibrate each on its own runs, so every size is covered at the nominal rate (the
     conformal rank of its own scores). A band of too few runs stays with the band above it, and an answer is
     given the half width of the deepest band the model has."""
-    from twin.identification.intervals import (CATALOGUE_BANDS_MM, COVERAGE, _half_widths, band_half_width, conformal_half_width)
+    from twin.identification.intervals import (CATALOGUE_BANDS_MM, COVERAGE, half_widths, band_half_width, conformal_half_width)
 
     # the geometric means of the catalogue's neighbours at least a factor 2 apart: 0.02|0.05, 0.1|0.5, 0.5|1.0 mm
     assert CATALOGUE_BANDS_MM == (0.0316, 0.2236, 0.7071)
@@ -1034,10 +1034,10 @@ def test_size_bands_give_each_band_its_own_conformal_half_width():
     scores = np.abs(np.concatenate([rng.normal(0, 0.03, n), rng.normal(0, 0.2, n), rng.normal(0, 0.1, n)]))
     runs = [{"orientation": "z", "crank_hz": 3.0, "measures": {"ripple_pct": [1.0, 0.0, 0.0, 0.0]},
              "engine": "reference"} for _ in range(3 * n)]
-    one = _half_widths("B", scores, runs, answers, 0.2, True, False)
+    one = half_widths("B", scores, runs, answers, 0.2, True, False)
     assert set(one) == {"B", "B_small"} and one["B"] == conformal_half_width(scores[2 * n:])
     assert np.mean(scores[n:2 * n] <= one["B_small"]) < COVERAGE  # 0.05 mm under-covered when pooled with 0.02
-    cat = _half_widths("B", scores, runs, answers, CATALOGUE_BANDS_MM, True, False)
+    cat = half_widths("B", scores, runs, answers, CATALOGUE_BANDS_MM, True, False)
     # no answer above 0.71 mm: that boundary is not used, 0.22 and 0.032 mm are
     assert cat["B"] == conformal_half_width(scores[2 * n:])
     for size, s in ((0.02, scores[:n]), (0.05, scores[n:2 * n]), (0.5, scores[2 * n:])):
@@ -1045,7 +1045,7 @@ def test_size_bands_give_each_band_its_own_conformal_half_width():
         assert w == conformal_half_width(s) and np.mean(s <= w) >= COVERAGE
     assert band_half_width(cat, "B", 0.01, CATALOGUE_BANDS_MM) == band_half_width(cat, "B", 0.02, CATALOGUE_BANDS_MM)
     few = np.concatenate([scores[:10], scores[n:]])  # ten answers at 0.02 mm: too few for a band of their own
-    f = _half_widths("B", few, runs[:10] + runs[n:], np.concatenate([answers[:10], answers[n:]]),
+    f = half_widths("B", few, runs[:10] + runs[n:], np.concatenate([answers[:10], answers[n:]]),
                      CATALOGUE_BANDS_MM, True, False)
     assert band_half_width(f, "B", 0.02, CATALOGUE_BANDS_MM) == band_half_width(f, "B", 0.05, CATALOGUE_BANDS_MM) \
         == conformal_half_width(np.concatenate([scores[:10], scores[n:2 * n]]))
@@ -1097,7 +1097,7 @@ def test_train_calibrates_the_bands_on_its_out_of_fold_answers_and_hands_them_ou
     boundaries and loads back with the same intervals."""
     from types import SimpleNamespace
 
-    from twin.identification.intervals import CATALOGUE_BANDS_MM, FAULT_SPLIT_JOINTS, _half_widths, band_half_width
+    from twin.identification.intervals import CATALOGUE_BANDS_MM, FAULT_SPLIT_JOINTS, half_widths, band_half_width
     from twin.identification.model import ClearanceModel
     from twin.identification.training import TrainOptions, train
 
@@ -1123,7 +1123,7 @@ def test_train_calibrates_the_bands_on_its_out_of_fold_answers_and_hands_them_ou
                     features=(np.array(X), rows, owner, [], [ds]), out_of_fold=oof)
     assert info["interval"]["size_band_mm"] == sorted(CATALOGUE_BANDS_MM, reverse=True)
     for j in "BC":
-        again = _half_widths(j, oof[j]["scores"], oof[j]["runs"], oof[j]["answers"], CATALOGUE_BANDS_MM, True, True,
+        again = half_widths(j, oof[j]["scores"], oof[j]["runs"], oof[j]["answers"], CATALOGUE_BANDS_MM, True, True,
                              j in FAULT_SPLIT_JOINTS)  # train()'s default: C's parts split by the fault
         assert again == {k: v for k, v in m.interval_log10.items() if k.split("_")[0] == j}
         assert len(oof[j]["runs"]) == 120 and (f"{j}_both" in again) == (j == "C")

@@ -193,7 +193,7 @@ def test_train_takes_its_options_as_one_value():
 def test_train_makes_the_tables_by_windows_when_asked_and_not_by_default(tmp_path):
     """``by_windows``: synthetic features (two windows per run, the first column log10 of B's clearance, the second
     C's): asked for, the model holds the half widths of answers from one window, calibrated on the out-of-fold runs'
-    first windows (equal to :func:`_half_widths_by_windows` on the out-of-fold answers it hands out); by default the
+    first windows (equal to :func:`half_widths_by_windows` on the out-of-fold answers it hands out); by default the
     table is empty, as ``train`` has always written it."""
     import math
     from types import SimpleNamespace
@@ -201,7 +201,7 @@ def test_train_makes_the_tables_by_windows_when_asked_and_not_by_default(tmp_pat
     import numpy as np
 
     from twin.identification.features import feature_names
-    from twin.identification.intervals import _half_widths_by_windows
+    from twin.identification.intervals import half_widths_by_windows
     from twin.identification.training import TrainOptions, train
 
     rng = np.random.default_rng(5)
@@ -227,7 +227,7 @@ def test_train_makes_the_tables_by_windows_when_asked_and_not_by_default(tmp_pat
     table = info["interval"]["half_width_log10_by_windows"]
     assert list(table) == ["1"]
     for j in "BC":
-        again = _half_widths_by_windows(j, oof[j]["window_logs"], oof[j]["runs"], m.trained_on["interval"]["size_band_mm"],
+        again = half_widths_by_windows(j, oof[j]["window_logs"], oof[j]["runs"], m.trained_on["interval"]["size_band_mm"],
                                         True, True, j == "C")
         assert again["1"] == {k: v for k, v in table["1"].items() if k[0] == j}
     _, plain = train([tmp_path], TrainOptions(**opts), features=(np.array(X), rows, owner, [], [ds]))

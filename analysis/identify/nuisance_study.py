@@ -120,7 +120,7 @@ import numpy as np
 from twin.identification.evaluate import evaluate
 from twin.identification.features import FEATURE_VERSION, REVS_PER_WINDOW
 from twin.identification.inputs import pool_features, pooled_features
-from twin.identification.intervals import (CATALOGUE_BANDS_MM, SIZE_BAND_MM, _half_widths, _half_widths_by_windows,
+from twin.identification.intervals import (CATALOGUE_BANDS_MM, SIZE_BAND_MM, half_widths, half_widths_by_windows,
                                            catalogue_bands, fault_split_joints, recorded_size_bands)
 from twin.identification.model import ClearanceModel
 from twin.identification.training import TrainOptions, train
@@ -246,10 +246,10 @@ def recalibrated(model: ClearanceModel, info: dict, oof: dict, opts: dict) -> tu
     split_by_fault = fault_split_joints(opts["fault_split"])
     for j in ("B", "C"):
         split = j in split_by_fault
-        half |= _half_widths(j, oof[j]["scores"], oof[j]["runs"], oof[j]["answers"], band,
+        half |= half_widths(j, oof[j]["scores"], oof[j]["runs"], oof[j]["answers"], band,
                              opts.get("ripple_split", True), opts["interval_by_engine"], split)
         if opts["by_windows"] and float(opts["answer_hop_revs"]) == REVS_PER_WINDOW:
-            for n, h in _half_widths_by_windows(j, oof[j]["window_logs"], oof[j]["runs"], band,
+            for n, h in half_widths_by_windows(j, oof[j]["window_logs"], oof[j]["runs"], band,
                                                 opts.get("ripple_split", True), opts["interval_by_engine"],
                                                 split).items():
                 by_windows.setdefault(n, {}).update(h)

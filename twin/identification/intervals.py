@@ -20,9 +20,9 @@ this order, each split adding a suffix to the key of the half width (``"B"``, ``
   group of catalogue values): ``_small``, ``_small2``, ... below each boundary used (:func:`band_half_width`).
 
 Variants recorded in the model file's ``trained_on.interval``: ``by_engine`` (each half width the largest of the
-pooled runs' and each engine's runs', :func:`_half_widths`), ``half_width_log10_by_windows`` (the same parts
+pooled runs' and each engine's runs', :func:`half_widths`), ``half_width_log10_by_windows`` (the same parts
 calibrated on the out-of-fold runs' answers from their first n windows, for recordings answered from n windows,
-:func:`_half_widths_by_windows`) and ``normalized`` (normalized conformal scales q·(spread + beta),
+:func:`half_widths_by_windows`) and ``normalized`` (normalized conformal scales q·(spread + beta),
 :func:`normalized_scale`; not the default: a recording of one or two windows has no measurable spread).
 
 The held-out size accuracy (:func:`held_out_accuracy`, :func:`held_out_at`) comes from the same out-of-fold
@@ -273,7 +273,7 @@ def band_half_width(half: dict[str, float], side: str, answer_mm: float,
     return half[side]
 
 
-def _half_widths(j: str, scores: np.ndarray, held_runs: list[dict[str, Any]], answers: np.ndarray,
+def half_widths(j: str, scores: np.ndarray, held_runs: list[dict[str, Any]], answers: np.ndarray,
                  size_band_mm: float | list[float] | None, ripple_split: bool, by_engine: bool,
                  fault_split: bool = False) -> dict[str, float]:
     """Conformal half width [log10] of each part of :func:`_interval_parts` from the out-of-fold scores; with
@@ -297,16 +297,16 @@ def _half_widths(j: str, scores: np.ndarray, held_runs: list[dict[str, Any]], an
 
 def window_table(interval: dict[str, Any], windows: int) -> dict[str, float]:
     """The half widths [log10] of answers from ``windows`` windows in a model's ``interval`` record
-    (``half_width_log10_by_windows``, :func:`_half_widths_by_windows`); empty where it holds none for that count
+    (``half_width_log10_by_windows``, :func:`half_widths_by_windows`); empty where it holds none for that count
     (an answer then takes the main table)."""
     return (interval.get("half_width_log10_by_windows") or {}).get(str(windows), {})
 
 
-def _half_widths_by_windows(j: str, window_logs: list[np.ndarray], held_runs: list[dict[str, Any]],
+def half_widths_by_windows(j: str, window_logs: list[np.ndarray], held_runs: list[dict[str, Any]],
                             size_band_mm: float | list[float] | None, ripple_split: bool, by_engine: bool,
                             fault_split: bool = False) -> dict[str, dict[str, float]]:
     """Half widths [log10] of answers made from fewer windows than the training runs hold: for n = 1, 2, ... up to
-    one less than the most windows of a run, those of :func:`_half_widths` calibrated on each out-of-fold run's
+    one less than the most windows of a run, those of :func:`half_widths` calibrated on each out-of-fold run's
     answer from its first n windows (all of them where it has fewer; ``window_logs``: per run, the regressor's
     per-window answers [log10]), keyed by str(n). A recording answered from n windows takes the n-window table: its
     answer scatters as a training run's first n windows do, more than the run's answer from all of its windows (a
@@ -317,7 +317,7 @@ def _half_widths_by_windows(j: str, window_logs: list[np.ndarray], held_runs: li
     for n in range(1, most):
         answers = np.array([logs_answer(w[:n]) for w in window_logs])
         scores = np.abs(np.log10(answers) - truth)
-        out[str(n)] = _half_widths(j, scores, held_runs, answers, size_band_mm, ripple_split, by_engine, fault_split)
+        out[str(n)] = half_widths(j, scores, held_runs, answers, size_band_mm, ripple_split, by_engine, fault_split)
     return out
 
 

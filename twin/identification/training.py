@@ -32,7 +32,7 @@ from twin.errors import ConfigError
 from twin.identification.features import MIN_HOP_REVS, REVS_PER_WINDOW, hop_ok
 from twin.identification.inputs import pooled_features
 from twin.identification.intervals import (CATALOGUE_BANDS_MM, COVERAGE, FAULT_SPLIT_JOINTS, HELD_OUT_FACTOR,
-                                           RIPPLE_BAND_PCT, _conformal_folds, _half_widths, _half_widths_by_windows,
+                                           RIPPLE_BAND_PCT, _conformal_folds, half_widths, half_widths_by_windows,
                                            _interval_parts, fault_split_joints,
                                            held_out_accuracy, logs_answer, logs_spread, normalized_scale,
                                            recorded_size_bands)
@@ -298,10 +298,10 @@ def _fit_size(j: str, X: np.ndarray, rows: list[dict[str, Any]], owner: np.ndarr
     split = j in o.fault_split
     if o.normalized_intervals:
         cal.normalized[j] = normalized_scale(scores, spread)
-    cal.half_width |= _half_widths(j, scores, held_runs, answers, o.size_band_mm, o.ripple_split,
+    cal.half_width |= half_widths(j, scores, held_runs, answers, o.size_band_mm, o.ripple_split,
                                    o.interval_by_engine, split)
     if o.by_windows and float(o.answer_hop_revs) == REVS_PER_WINDOW:
-        for n, half in _half_widths_by_windows(j, window_logs, held_runs, o.size_band_mm, o.ripple_split,
+        for n, half in half_widths_by_windows(j, window_logs, held_runs, o.size_band_mm, o.ripple_split,
                                                o.interval_by_engine, split).items():
             cal.by_windows.setdefault(n, {}).update(half)
     cal.held_out[j] = held_out_accuracy(scores, held_runs)
