@@ -221,7 +221,12 @@ class HeadlessViewer:
                 if time.monotonic() > deadline:
                     raise self.error(f"did not listen on port {self.port} within {timeout_s:g} s") from None
                 time.sleep(min(POLL_S, max(deadline - time.monotonic(), 0.0)) or 0.01)
-        self.client = rr.experimental.ViewerClient(f"rerun+http://127.0.0.1:{self.port}/proxy")
+        try:
+            self.client = rr.experimental.ViewerClient(f"rerun+http://127.0.0.1:{self.port}/proxy")
+        except Exception as err:  # noqa: BLE001 - the viewer went away between the port check and the connection
+            # (rerun raises its own transport errors, not OSError): the viewer's state and log say why
+            raise self.error(f"did not answer ({type(err).__name__}: "
+                             f"{' '.join(str(err).split()) or 'no message'})") from None
         return self.client
 
     def stop(self) -> None:
@@ -306,7 +311,7 @@ def screenshot(rrd: str | Path, png: str | Path, *, at_s: float | None = None, w
                     img, settled = capture(client, lambda: viewer.status() is None, float(wait_s))
                 except TwinError:
                     raise viewer.error("stopped while loading") from None
-                except (OSError, RuntimeError, ValueError) as err:  # ConnectionError, TimeoutError: OSError
+                except Exception as err:  # noqa: BLE001 - OSError, RuntimeError, rerun's transport errors
                     raise viewer.error(f"did not answer ({type(err).__name__}: "
                                        f"{' '.join(str(err).split()) or 'no message'})") from None
             if not img.startswith(b"\x89PNG\r\n\x1a\n"):
