@@ -522,3 +522,18 @@ def initial_state(cfg: BenchConfig, theta: float, omega: float = 0.0, P: np.ndar
             raise ValueError("the initial pose does not satisfy the constraints")
         st[S_Q:S_Q + N_Q], st[S_QD:S_QD + N_Q] = q, qd
     return st
+
+
+@njit(cache=True)
+def reduced_mass_into(Rt, MR, nz, n, Mb):
+    """Rᵀ M R into ``Mb[:nz, :nz]`` from ``Rt`` = Rᵀ and ``MR`` whose row j is M R[:, j] (the first ``n``
+    coordinates of each; symmetric, each entry one dot product): the reduced mass matrix of the R-matrix
+    formulation (:func:`reduced_mass` computes it from q alone) in the steps of the rigid and the flexible
+    reference engines."""
+    for j in range(nz):
+        for i in range(j, nz):
+            acc = 0.0
+            for k in range(n):
+                acc += Rt[i, k] * MR[j, k]
+            Mb[i, j] = acc
+            Mb[j, i] = acc

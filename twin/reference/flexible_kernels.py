@@ -16,7 +16,7 @@ from twin.natural_coordinates import (N_Q, P_CLIN_B, P_CLIN_C, P_CLR_G, P_DMAX, 
                                       P_LAW, P_MU0, P_MUS, P_N, P_RPIN_B, P_VD, P_VS, P_CLR_B, P_CLR_C, P_DOFF,
                                       P_GX, P_GY, P_M3, P_NEWTON_MAXIT, P_NEWTON_TOL, P_RBUSH_B, P_RBUSH_C, P_SENS,
                                       P_V0, P_V1, energy, independent_rows, kinetic_energy, mass_times,
-                                      quadratic_terms, residual, solve_aug)
+                                      quadratic_terms, reduced_mass_into, residual, solve_aug)
 from twin.physics.contact import adams_friction_force, friction_force, normal_force
 from twin.reference.model import O_ACC, _cholesky_solve, _rod_force
 
@@ -581,13 +581,7 @@ def flex_mass(P, G, q, qd, segs, seg_f, slides, A, LU, piv, rows, nz, Rt, S, Mb,
     for k in range(n):
         for j in range(nz):
             RtT[k, j] = Rt[j, k]
-    for j in range(nz):   # (independent dot products: the processor overlaps them)
-        for i in range(j, nz):
-            acc = 0.0
-            for k in range(n):
-                acc += Rt[i, k] * MR[j, k]
-            Mb[i, j] = acc
-            Mb[j, i] = acc
+    reduced_mass_into(Rt, MR, nz, n, Mb)
 
 
 @njit(cache=True)

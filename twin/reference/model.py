@@ -67,6 +67,7 @@ from twin.natural_coordinates import (
     P_PRESCRIBED, P_R, P_RBUSH_A, P_RBUSH_B, P_RBUSH_C, P_RPIN_A, P_RPIN_B, P_RPIN_C, P_SENS, P_V0, P_V1, P_VD,
     P_VMIN, P_VS, P_XG1, P_XG2, S_GUIDE, S_I, S_IN_A, S_IN_B, S_IN_C, S_Q, S_QD, S_VIMP_A, S_VIMP_B, S_VIMP_C,
     constraint_norm, effective_masses, energy, independent_rows, kinetic_energy, mass_times, mechanism_params,
+    reduced_mass_into,
     project, quadratic_terms, solve_aug, velocity_constraint_norm)
 from twin.reference import drivetrain as DT
 from twin.reference.guide import N_GUIDE_OUT, guide_forces
@@ -285,13 +286,7 @@ def _assemble(P, q, qd, s, c, Q, rows, nz, Rt, S, Mb, rhs, tmp):
         for k in range(nq):
             acc += Rt[j, k] * b[k]
         rhs[j] = acc
-    for j in range(nz):
-        for i in range(j, nz):
-            acc = 0.0
-            for k in range(nq):
-                acc += Rt[i, k] * tmp[j, k]
-            Mb[i, j] = acc
-            Mb[j, i] = acc
+    reduced_mass_into(Rt, tmp, nz, nq, Mb)
 
 
 @njit(cache=True)
