@@ -23,10 +23,8 @@ from __future__ import annotations
 import argparse
 import hashlib
 import os
-import subprocess
 import threading
 import time
-from pathlib import Path
 
 import mujoco
 import numpy as np
@@ -34,6 +32,7 @@ from mujoco import rollout
 
 import twin
 from twin.config import preset
+from twin.provenance import git_commit
 
 
 def _digest(run) -> str:
@@ -110,20 +109,12 @@ def two_scenes(duration: float) -> dict[str, float]:
             "ratio": wall / sum(solo), "perfect": max(solo) / sum(solo), "cpu": cpu / wall}
 
 
-def _commit() -> str:
-    try:
-        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
-                              cwd=Path(__file__).parent, check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
-
-
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--duration", type=float, default=0.2, help="simulated time of each scene [s] (default 0.2)")
     p.add_argument("--nstep", type=int, default=20000, help="steps of the rollout of measurement 1 (default 20000)")
     a = p.parse_args(argv)
-    print(f"twin {twin.__version__} ({_commit()}), mujoco {mujoco.__version__}, {os.cpu_count()} CPUs, "
+    print(f"twin {twin.__version__} ({git_commit()}), mujoco {mujoco.__version__}, {os.cpu_count()} CPUs, "
           f"load average {os.getloadavg()[0]:.1f}")
     alone, during, wall = gil_ratio(a.nstep)
     print(f"1. GIL: Python loop {alone:.3g}/s alone, {during:.3g}/s during a {wall:.2f} s rollout "

@@ -22,13 +22,12 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import subprocess
 import tempfile
 from pathlib import Path
 
 import numpy as np
 
-from twin.provenance import figure_metadata, stamped
+from twin.provenance import figure_metadata, git_commit, stamped
 
 from twin import __version__
 from twin.config import preset
@@ -38,14 +37,6 @@ OUT = Path(__file__).resolve().parent / "results" / "structure_fig15"
 BAND_HZ = 250.0
 F_MAX = 5000.0
 G = 9.80665
-
-
-def _commit() -> str:
-    try:
-        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
-                              cwd=Path(__file__).parent, check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
 
 
 def run_case(test: int, mode: str, duration: float, drive: str):
@@ -136,7 +127,7 @@ def main() -> None:
         r3, r6, f3, f6 = res[("rigid", 3)][i], res[("rigid", 6)][i], res[("flexible", 3)][i], res[("flexible", 6)][i]
         print(f"{lo:5.0f}-{hi:5.0f} | {r3:12.1f} {r6:7.1f} {r6 - r3:6.1f} | {f3:15.1f} {f6:7.1f} {f6 - f3:6.1f}")
         lines.append(f"{lo:.0f}-{hi:.0f},{r3:.2f},{r6:.2f},{r6 - r3:.2f},{f3:.2f},{f6:.2f},{f6 - f3:.2f}")
-    summary = {"version": __version__, "commit": _commit(), "drive_mode": a.drive, "duration_s": a.duration,
+    summary = {"version": __version__, "commit": git_commit(), "drive_mode": a.drive, "duration_s": a.duration,
                "window_s": a.window,
                "repeats": a.repeats, "band_hz": BAND_HZ}
     for mode in ("rigid", "flexible"):
