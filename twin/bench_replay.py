@@ -110,6 +110,23 @@ class ReplayOptions:
             raise ConfigError("drive", f"must be pid or motor, got {self.drive!r}")
 
 
+def check_replayable(rec: Run, info: Any, base: BenchConfig, where: str, command: str | None = None) -> None:
+    """What a recording must hold before the twin replays it under ``base`` (``twin replay``, ``twin calibrate``):
+    whole crank turns (:func:`check_motion`), calibration data, the DAQ rate of ``base``'s instrumentation, and
+    the motor command where ``command`` (what needs it, for the message) is given. One-line
+    :class:`RecordingError` starting with ``where`` otherwise."""
+    check_motion(rec, where)
+    if info.calibration is None:
+        raise RecordingError(f"{where}: no calibration data; import it again with a static recording in the "
+                             "calibration pose or the six sensors' known zero-g offsets")
+    inst = base.instrumentation
+    if abs(inst.daq_rate_hz - rec.rate_hz) > 1e-6 * rec.rate_hz:
+        raise RecordingError(f"{where}: instrumentation.daq_rate_hz ({inst.daq_rate_hz:g} Hz) differs from the "
+                             f"recording's rate ({rec.rate_hz:g} Hz)")
+    if command is not None and "motor_command" not in rec:
+        raise RecordingError(f"{where}: {command} needs the recording's motor_command channel; it has none")
+
+
 def replay_config(rec_cfg: BenchConfig, trace_file: Path, rec: Run, zero_g_v: dict[str, float]) -> BenchConfig:
     """Simulation configuration of a replay: ``rec_cfg`` driven by the trace at the recording's rate."""
     return rec_cfg.replace(**{
@@ -259,19 +276,10 @@ def replay(recording: str | Path, out_dir: str | Path,
     # (never the recording, never the user's other files), and the recording must not lie inside it
     final = check_output_dir(out_dir, need_parent=False, own=lambda n: n in REPLAY_FILES, inputs=(recording,))
     rec, info, repairs = read_recording(recording, nan=opts.nan)
-    check_motion(rec, str(recording))
-    if info.calibration is None:
-        raise RecordingError(f"{recording}: no calibration data; import it again with a static recording in the "
-                             "calibration pose or the six sensors' known zero-g offsets")
     rec_cfg = rec.config
     base = configure(rec_cfg) if configure is not None else rec_cfg
-    inst = base.instrumentation
-    if abs(inst.daq_rate_hz - rec.rate_hz) > 1e-6 * rec.rate_hz:
-        raise RecordingError(f"instrumentation.daq_rate_hz ({inst.daq_rate_hz:g} Hz) differs from the recording's "
-                             f"rate ({rec.rate_hz:g} Hz)")
+    check_replayable(rec, info, base, str(recording), "`drive` motor" if opts.drive == "motor" else None)
     trace = final / "encoder_trace.npz"
-    if opts.drive == "motor" and "motor_command" not in rec:
-        raise RecordingError(f"{recording}: `drive` motor needs the recording's motor_command channel; it has none")
     # the simulated configuration (checked before anything is written) and the analysis window
     cfg = replay_config(base, trace, rec, dict(info.calibration.zero_g_v))
     if opts.drive == "motor":

@@ -198,7 +198,7 @@ def prepare_target(path: str, base_toml: str | None, fraction: float, dtw_max_s:
     """Read and check ``path`` and compute its features over the stage's window: the first
     ``fraction`` of the recording is simulated, the window is its second half (at most 1 s), ending
     2/``drive.trace_filter_hz`` before its end (edge of the trace filter), as ``twin replay``'s default."""
-    from twin.bench_replay import _window_indices, check_motion, near_constant, sensor_noise_rms
+    from twin.bench_replay import _window_indices, check_replayable, near_constant, sensor_noise_rms
     from twin.config import ACCELEROMETERS, config_from_toml
     from twin.errors import RecordingError
     from twin.instrument import counts_to_angle, measured_accel
@@ -206,16 +206,8 @@ def prepare_target(path: str, base_toml: str | None, fraction: float, dtw_max_s:
     from twin.tracefile import DriveInputs
 
     rec, info, _repairs = read_recording(path)
-    check_motion(rec, str(path))
-    if info.calibration is None:
-        raise RecordingError(f"{path}: no calibration data; import it again with a static recording in the "
-                             "calibration pose or the six sensors' known zero-g offsets")
     base = config_from_toml(base_toml) if base_toml else rec.config
-    if abs(base.instrumentation.daq_rate_hz - rec.rate_hz) > 1e-6 * rec.rate_hz:
-        raise RecordingError(f"{path}: instrumentation.daq_rate_hz ({base.instrumentation.daq_rate_hz:g} Hz) differs "
-                             f"from the recording's rate ({rec.rate_hz:g} Hz)")
-    if motor and "motor_command" not in rec:
-        raise RecordingError(f"{path}: drive-train fields need the recording's motor_command channel; it has none")
+    check_replayable(rec, info, base, str(path), "fitting drive-train fields" if motor else None)
     rate = rec.rate_hz
     n_sim = max(16, min(rec.n, int(round(fraction * rec.n))))
     inst = base.instrumentation
