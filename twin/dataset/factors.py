@@ -6,8 +6,11 @@ values are checked by building the configuration. Factors drawn per run (sensor 
 errors, random speed profiles) take their randomness from the run's own seed, so a run is
 reproducible from its configuration alone (the configuration records what was drawn).
 
-Labels: ``fault`` ∈ {none, B, C, BC} and ``clearance_b_mm``/``clearance_c_mm`` (diametral, 0 for
-a ball bearing) are read back from the resolved configuration, whatever factors produced it.
+Labels: ``fault`` ∈ {none, B, C, BC, G, BG, CG, BCG} and ``clearance_b_mm``/``clearance_c_mm`` (diametral, 0 for
+a ball bearing) are read back from the resolved configuration, whatever factors produced it; a run whose slider
+guide has play (``joints.clearance_guide_mm`` > 0) has G in its fault and the label ``clearance_guide_mm`` (the
+guide's two-sided play [mm]; a dataset without guide play anywhere has no such column, as before the guide was a
+fault location, and a run without it in a dataset with it holds NaN there: read it as 0).
 """
 
 from __future__ import annotations
@@ -24,8 +27,8 @@ from twin.config.structure import STRUCTURE_MODES
 from twin.dataset.spec import SpecError
 from twin.errors import did_you_mean
 
-#: fault classes: which joints have a clearance
-FAULTS = ("none", "B", "C", "BC")
+#: fault classes: which locations have a clearance (B, C: the revolute joints; G: the slider guide)
+FAULTS = ("none", "B", "C", "BC", "G", "BG", "CG", "BCG")
 #: clearance of a faulty joint whose size is not varied [mm] (Table 4's 0.1 mm)
 DEFAULT_FAULT_CLEARANCE_MM = 0.1
 
@@ -79,11 +82,13 @@ def _crank_rpm(v, ov, rng, base):  # noqa: ARG001
 
 def _fault(v, ov, rng, base):  # noqa: ARG001
     # applied after every other factor (twin.dataset.design.resolve_config): a faulty joint keeps the
-    # size a clearance factor gave it, else 0.1 mm; a healthy joint gets 0 whatever it was given
-    for j in "BC":
-        key = f"joints.clearance_{j.lower()}_mm"
+    # size a clearance factor gave it, else 0.1 mm; a healthy joint gets 0 whatever it was given (the guide, G,
+    # likewise: its play as clearance_guide_mm gave it, else 0.1 mm)
+    for j in "BCG":
+        key = "joints.clearance_guide_mm" if j == "G" else f"joints.clearance_{j.lower()}_mm"
+        now = base.joints.clearance_guide_mm if j == "G" else base.joints.diametral_mm(j)
         if j in v:
-            if ov.get(key, base.joints.diametral_mm(j)) == 0:
+            if ov.get(key, now) == 0:
                 ov[key] = DEFAULT_FAULT_CLEARANCE_MM
         else:
             ov[key] = 0.0
@@ -131,7 +136,8 @@ def _ripple(k: int):
 
 #: the named factors, in the order they are applied (``fault`` is applied last, after the sizes)
 NAMED: dict[str, Factor] = {f.name: f for f in (
-    Factor("fault", "joints with a clearance: none, B, C or BC (size: clearance_b_mm/_c_mm, else 0.1 mm)",
+    Factor("fault", "locations with a clearance: none, B, C, BC, G (the slider guide), BG, CG or BCG (size: "
+           "clearance_b_mm/_c_mm/clearance_guide_mm, else 0.1 mm)",
            FAULTS, None, _fault),
     Factor("clearance_b_mm", "diametral clearance at B [mm], 0 = ball bearing; any value in [0, 1] "
            "(non-catalogue values allowed)", None, (0.0, 1.0), _clearance("B")),
@@ -239,10 +245,14 @@ def check_value(f: Factor, value: Any, key: str) -> Any:
 
 
 def labels(cfg: BenchConfig) -> dict[str, Any]:
-    """Labels of a resolved configuration: fault class and diametral clearances [mm]."""
-    b, c = cfg.joints.clearance_b_mm, cfg.joints.clearance_c_mm
-    fault = ("B" if b > 0 else "") + ("C" if c > 0 else "") or "none"
-    return {"fault": fault, "clearance_b_mm": float(b), "clearance_c_mm": float(c)}
+    """Labels of a resolved configuration: fault class and diametral clearances [mm] (with the guide's play
+    where it has some: module docstring)."""
+    b, c, g = cfg.joints.clearance_b_mm, cfg.joints.clearance_c_mm, cfg.joints.clearance_guide_mm
+    fault = ("B" if b > 0 else "") + ("C" if c > 0 else "") + ("G" if g > 0 else "") or "none"
+    out = {"fault": fault, "clearance_b_mm": float(b), "clearance_c_mm": float(c)}
+    if g > 0:
+        out["clearance_guide_mm"] = float(g)
+    return out
 
 
 def random_profile(rng: np.random.Generator, duration_s: float, rpm: tuple[float, float],

@@ -145,7 +145,7 @@ MANIFEST_COLUMNS = {"run_id": "string", "split": "string", "status": "string", "
                     "file": "string"}
 #: allowed values of the manifest's categorical columns
 MANIFEST_VALUES = {"split": ("train", "val", "test"), "status": ("ok", "failed", "pending"),
-                   "fault": ("none", "B", "C", "BC")}
+                   "fault": ("none", "B", "C", "BC", "G", "BG", "CG", "BCG")}
 #: the channel dtypes a data file may hold
 CHANNEL_DTYPES = ("float32", "float64", "int32", "int64")
 
@@ -417,7 +417,7 @@ def summary(path: str | Path) -> dict[str, Any]:
     info = ds.info
     rows = ds.runs.to_pylist()
     labels = run_label_names(rows)
-    faults = sorted({r["fault"] for r in rows}, key=["none", "B", "C", "BC"].index)
+    faults = sorted({r["fault"] for r in rows}, key=list(MANIFEST_VALUES["fault"]).index)
     splits = {}
     for s in ("train", "val", "test"):
         rs = [r for r in rows if r["split"] == s]
