@@ -220,13 +220,16 @@ def _interval_parts(j: str, held_runs: list[dict[str, Any]], answers: np.ndarray
     parts before the split by size (those of the normalized scales)."""
     everything = np.ones(len(held_runs), bool)
     parts = {j: everything}
-    on = np.array([size_resolved(j, row["orientation"], row["crank_hz"]) for row in held_runs], bool)
+    # a location without a size-resolution map (the guide G): one part, no split by it
+    on = np.array([j not in SIZE_RESOLVED_FROM_RPM or size_resolved(j, row["orientation"], row["crank_hz"])
+                   for row in held_runs], bool)
     split = _mondrian([(j, everything)], ~on, "_unresolved")
     if ripple_split:
         split = _mondrian(split, np.array([rippled(row.get("measures", {}).get("ripple_pct")) for row in held_runs],
                                           bool), "_rippled")
     if fault_split:
-        split = _mondrian(split, np.array([row.get("fault") == "BC" for row in held_runs], bool), "_both")
+        split = _mondrian(split, np.array([{"B", "C"} <= set(row.get("fault") or "") for row in held_runs], bool),
+                          "_both")
     for side, m in split:
         parts[side] = m
         rest, upper = m, side  # answers below the last boundary used, and their key

@@ -2,10 +2,12 @@
 
 A :class:`ClearanceModel` holds
 
-* the fault location: gradient-boosted trees over the classes none, B, C, BC (:data:`CLASSES`) on the window
-  features (:mod:`twin.identification.features`); a recording's class probabilities are the mean over its windows
+* the fault location: gradient-boosted trees over the classes none, B, C, BC, G, BG, CG, BCG (:data:`CLASSES`: which
+  of the revolute joints B and C and the slider guide G have play; a model of format 4 knows none, B, C, BC) on the
+  window features (:mod:`twin.identification.features`); a recording's class probabilities are the mean over its windows
   and the located fault the most probable class;
-* per joint, the clearance size: gradient-boosted trees on log10 of the diametral clearance; a recording's size is
+* per joint (B, C and, in a format-5 model trained on runs with guide play, the guide G), the clearance size:
+  gradient-boosted trees on log10 of the diametral clearance (at G: the guide's two-sided play); a recording's size is
   the median over its windows (:func:`twin.identification.intervals.logs_answer`);
 * per joint, the conformal half widths of the 90 % interval (:mod:`twin.identification.intervals`), and what it was
   trained on (``trained_on``: datasets, rates, clearances, orientations, ranges, held-out size accuracy).
@@ -18,12 +20,14 @@ training data (:mod:`twin.identification.ranges`): a recording outside it (crank
 feature distance) gets one warning per reason and each interval widened to every clearance trained on at that
 joint. :mod:`twin.identification.training` makes a model.
 
-Model file (format ``twin-identify-model/4``, suffix ``.npz``; :meth:`ClearanceModel.save`,
+Model file (format ``twin-identify-model/5``, suffix ``.npz``; :meth:`ClearanceModel.save`,
 :meth:`ClearanceModel.load`): a NumPy ``.npz`` archive (a zip of ``.npy`` members, each with its
 CRC-32) of plain arrays and one JSON text, read with ``allow_pickle=False``: loading it runs no code
 from the file, and answering needs no scikit-learn. Members:
 
-* ``model.json``: a 0-d unicode array holding JSON: ``format`` (``twin-identify-model/4``),
+* ``model.json``: a 0-d unicode array holding JSON: ``format`` (``twin-identify-model/5``), ``joints`` (the
+  locations the model sizes, in the mechanism's order: ["B", "C", "G"], or ["B", "C"] for a model trained without
+  guide play),
   ``feature_version`` and ``feature_names`` (:mod:`twin.identification.features`), ``interval_log10`` (the
   conformal half widths [log10], :mod:`twin.identification.intervals`), ``trained_on`` (the training data, with ``versions``:
   twin, scikit-learn and numpy of the training; ``ranges``: the training runs' ranges of crank rate,
@@ -31,7 +35,7 @@ from the file, and answering needs no scikit-learn. Members:
   the training windows' feature quartiles, or null where unknown; ``interval.normalized``: the normalized
   conformal scale per joint, where trained; ``held_out_size_accuracy``
   (:func:`twin.identification.intervals.held_out_accuracy`) and ``answer_hop_revs``, where recorded), and ``estimators``: per estimator (``classifier``,
-  ``size_B``, ``size_C``) its kind (link: ``softmax`` for the classifier, ``identity`` for the size
+  ``size_B``, ``size_C``, ``size_G`` where the model sizes G) its kind (link: ``softmax`` for the classifier, ``identity`` for the size
   regressors), number of features, trees per iteration, classes and source
   (:meth:`twin.identification.trees.TreeEnsemble.meta`);
 * per estimator E, the arrays ``E.baseline``, ``E.tree_nodes``, ``E.feature``, ``E.threshold``,
@@ -41,7 +45,7 @@ from the file, and answering needs no scikit-learn. Members:
 Loading refuses, in one line naming the file: anything but a zip archive (a pickle or ``.joblib``
 file, as model format 2 was, is named as such and never unpickled), a damaged archive (CRC, truncation),
 another format version (format 3 lacked the training ranges: ``analysis/identify/convert_model_ranges.py``
-adds them), other members, an array of another dtype (object arrays included: never
+adds them; format 4, the same file without ``joints`` and with B and C only, is read as such), other members, an array of another dtype (object arrays included: never
 unpickled), trees that a walk could not use safely, and a feature version this twin does not compute.
 The scikit-learn estimators of the training are exported by :func:`twin.identification.trees.from_sklearn`,
 whose answers are checked equal bit for bit on the training windows.
@@ -69,13 +73,37 @@ from twin.identification.trees import ModelError, TreeEnsemble, from_sklearn
 __all__ = ["CLASSES", "ClearanceModel", "DEFAULT_MODEL", "MODEL_FORMAT", "MODEL_SUFFIX", "ModelError",
            "default_model_path", "identify_inputs", "identify_recording", "training_check"]
 
-CLASSES = ("none", "B", "C", "BC")
-JOINTS = ("B", "C")  # the clearance locations the model answers, in the mechanism's order
-MODEL_FORMAT = "twin-identify-model/4"
+CLASSES = ("none", "B", "C", "BC", "G", "BG", "CG", "BCG")
+#: the clearance locations a model may answer, in the mechanism's order: the revolute joints B and C, the slider guide G
+JOINTS = ("B", "C", "G")
+MODEL_FORMAT = "twin-identify-model/5"
+#: the format before the guide was a location (B and C only), still read
+MODEL_FORMAT_4 = "twin-identify-model/4"
+ESTIMATORS = ("classifier", "size_B", "size_C")  # those of a model of B and C (format 4, or 5 without G)
 MODEL_SUFFIX = ".npz"
-ESTIMATORS = ("classifier", "size_B", "size_C")
 #: the model that ships with the package (analysis/identify/train_default.py makes it)
 DEFAULT_MODEL = "identify_default.npz"
+
+
+def label_key(joint: str) -> str:
+    """The dataset label of a location's diametral clearance [mm]: ``clearance_b_mm``, ``clearance_c_mm``,
+    ``clearance_guide_mm`` (G: the guide's two-sided play)."""
+    return "clearance_guide_mm" if joint == "G" else f"clearance_{joint.lower()}_mm"
+
+
+def label_mm(row: dict[str, Any], joint: str) -> float:
+    """A run's clearance at ``joint`` [mm] from its labels (a missing or NaN guide label: no guide play, 0)."""
+    v = row.get(label_key(joint))
+    return 0.0 if v is None or (isinstance(v, float) and math.isnan(v)) else float(v)
+
+
+def _file_estimators(meta: dict[str, Any]) -> tuple[str, ...]:
+    """The estimators a format-5 file holds: the classifier and one size regressor per joint it lists."""
+    joints = meta["joints"]
+    if not (isinstance(joints, list) and joints[:2] == ["B", "C"] and set(joints) <= set(JOINTS)
+            and len(set(joints)) == len(joints)):
+        raise ValueError(f"joints: {joints!r}; allowed: [B, C] or [B, C, G]")
+    return ("classifier",) + tuple(f"size_{j}" for j in joints)
 
 
 def default_model_path() -> Path:
@@ -108,21 +136,22 @@ class ClearanceModel:
         scikit-learn estimators are exported first (:func:`twin.identification.trees.from_sklearn`)."""
         from twin.identification.modelfile import write_model
 
-        est = {"classifier": self.classifier, "size_B": self.size["B"], "size_C": self.size["C"]}
+        est = {"classifier": self.classifier} | {f"size_{j}": self.size[j] for j in self.joints}
         est = {k: v if isinstance(v, TreeEnsemble) else from_sklearn(v) for k, v in est.items()}
-        meta = {"format": MODEL_FORMAT, "feature_version": self.feature_version,
+        meta = {"format": MODEL_FORMAT, "joints": list(self.joints), "feature_version": self.feature_version,
                 "feature_names": list(self.feature_names), "interval_log10": dict(self.interval_log10),
                 "trained_on": self.trained_on, "estimators": {k: v.meta() for k, v in est.items()}}
         return write_model(path, meta, est)
 
     @staticmethod
     def load(path: str | Path) -> "ClearanceModel":
-        """Read a model file, refusing in one line anything but a ``twin-identify-model/4`` file of this
-        twin's features (module docstring); nothing in the file is run."""
+        """Read a model file, refusing in one line anything but a ``twin-identify-model/5`` (or ``/4``) file of
+        this twin's features (module docstring); nothing in the file is run."""
         from twin.identification.modelfile import read_model
 
         p = Path(path)
-        meta, est = read_model(p, MODEL_FORMAT, ESTIMATORS)
+        meta, est = read_model(p, {MODEL_FORMAT: _file_estimators, MODEL_FORMAT_4: ESTIMATORS})
+        joints = tuple(e[5:] for e in est if e.startswith("size_"))
         try:
             names, version = meta["feature_names"], meta["feature_version"]
             half = {str(k): float(v) for k, v in meta["interval_log10"].items()}
@@ -162,13 +191,27 @@ class ClearanceModel:
         if version != FEATURE_VERSION or names != feature_names():
             raise ModelError(f"{p}: made for features {version!r}, this twin computes {FEATURE_VERSION!r}; "
                              "retrain it with 'twin identify train'")
+        classes = CLASSES if "G" in joints else tuple(c for c in CLASSES if "G" not in c)
         if any(e.n_features != len(names) for e in est.values()) or est["classifier"].kind == "identity" or \
-                not set(est["classifier"].classes) <= set(CLASSES) or est["size_B"].kind != "identity" or \
-                est["size_C"].kind != "identity":
+                not set(est["classifier"].classes) <= set(classes) or \
+                any(est[f"size_{j}"].kind != "identity" for j in joints):
             raise ModelError(f"{p}: not a readable identification model (estimators do not fit its "
-                             f"{len(names)} features and classes {', '.join(CLASSES)})")
-        return ClearanceModel(est["classifier"], {"B": est["size_B"], "C": est["size_C"]}, half,
+                             f"{len(names)} features and classes {', '.join(classes)})")
+        if "G" in joints and not ("G" in half and "G" in trained_on.get("clearances_mm", {})):
+            raise ModelError(f"{p}: not a readable identification model (it sizes G without its interval or "
+                             "clearances trained on)")
+        return ClearanceModel(est["classifier"], {j: est[f"size_{j}"] for j in joints}, half,
                               feature_version=version, feature_names=names, trained_on=trained_on)
+
+    @property
+    def joints(self) -> tuple[str, ...]:
+        """The locations this model answers, in the mechanism's order: B, C and, where trained on guide play, G."""
+        return tuple(j for j in JOINTS if j in self.size)
+
+    @property
+    def classes(self) -> tuple[str, ...]:
+        """The fault classes this model answers (those over its joints, :data:`CLASSES`)."""
+        return tuple(c for c in CLASSES if c == "none" or set(c) <= set(self.joints))
 
     @property
     def hop_revs(self) -> float:
@@ -191,11 +234,12 @@ class ClearanceModel:
         rippled recordings where the model has them. The half widths are those of answers from as many windows as
         ``X`` holds where the model has such a table for the joint (``interval.half_width_log10_by_windows``), else
         the main ones; those of recordings located B+C where the model split them so (``interval.fault_split``)."""
-        if set(resolved) != set(JOINTS):
-            raise ModelError(f"resolved: {sorted(resolved)}; needs a flag for each of B and C")
+        if not {"B", "C"} <= set(resolved) or not set(resolved) <= set(JOINTS):
+            raise ModelError(f"resolved: {sorted(resolved)}; needs a flag for each of B and C (G: optional, no "
+                             "size-resolution map)")
         proba = self.classifier.predict_proba(X).mean(axis=0)
         classes = list(self.classifier.classes_)
-        p = {c: float(proba[classes.index(c)]) if c in classes else 0.0 for c in CLASSES}
+        p = {c: float(proba[classes.index(c)]) if c in classes else 0.0 for c in self.classes}
         fault = max(p, key=p.get)
         interval = self.trained_on.get("interval", {})
         norm = interval.get("normalized") or {}
@@ -204,14 +248,14 @@ class ClearanceModel:
         split_by_fault = fault_split_joints(interval.get("fault_split", False))
         few = window_table(interval, len(X))
         joints = []
-        for j in JOINTS:
+        for j in self.joints:
             logs = self.size[j].predict(X)
             mid = logs_answer(logs)
             half = few if j in few else self.interval_log10
-            side = j if resolved[j] or f"{j}_unresolved" not in half else f"{j}_unresolved"
+            side = j if resolved.get(j, True) or f"{j}_unresolved" not in half else f"{j}_unresolved"
             if wavy and f"{side}_rippled" in half:
                 side = f"{side}_rippled"
-            if fault == "BC" and j in split_by_fault and f"{side}_both" in half:
+            if {"B", "C"} <= set(fault) and j in split_by_fault and f"{side}_both" in half:
                 side = f"{side}_both"  # both joints located faulty: the other joint's impacts reach this one's sensors
             w = band_half_width(half, side, mid, band)
             if side in norm:  # normalized conformal: the half width scales with the recording's difficulty
@@ -313,8 +357,9 @@ def identify_inputs(model: ClearanceModel, acc: dict[str, np.ndarray], counts: n
         j = a.joint
         # how often the model's answers at this joint, speed and orientation held in training runs left out
         held = HeldOut.from_dict(held_out_at(table.get(j), orientation, w.crank_hz))
-        joints.append(dataclasses.replace(a, size_resolved=resolved[j], size_held_out=held))
-        if a.faulty and not resolved[j]:
+        # G: no size-resolution map (None: not checked; the held-out accuracy says how its sizes held)
+        joints.append(dataclasses.replace(a, size_resolved=resolved.get(j), size_held_out=held))
+        if a.faulty and resolved.get(j) is False:
             warnings.append(f"the size at {j} is not resolved at {w.crank_hz * 60 * BELT_RATIO:.0f} motor rpm with "
                             f"{orientation} vertical: the bench's sensors tell 0.05-0.1 mm at {j} apart from "
                             f"{SIZE_RESOLVED_FROM_RPM[j].get(orientation, float('nan')):g} rpm on (model card); "

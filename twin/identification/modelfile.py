@@ -73,9 +73,13 @@ def write_model(path: str | Path, meta: dict[str, Any], estimators: dict[str, Tr
     return atomic_write_bytes(path, buf.getvalue())
 
 
-def read_model(path: Path, fmt: str, estimators: tuple[str, ...]) -> tuple[dict[str, Any], dict[str, TreeEnsemble]]:
+def read_model(path: Path, fmt: str | dict[str, Any], estimators: tuple[str, ...] = ()
+               ) -> tuple[dict[str, Any], dict[str, TreeEnsemble]]:
     """The metadata and estimators of a model file of format ``fmt`` holding ``estimators``; refuses
-    anything else in one line (module docstring)."""
+    anything else in one line (module docstring). ``fmt`` may also map each readable format to its estimators,
+    or to a function of the file's metadata giving them (a format whose estimators the file lists)."""
+    formats = fmt if isinstance(fmt, dict) else {fmt: estimators}
+    fmt = " or ".join(formats)
     p = Path(path)
     if not p.is_file():
         raise ModelError(f"{p}: no such model file")
@@ -110,9 +114,15 @@ def read_model(path: Path, fmt: str, estimators: tuple[str, ...]) -> tuple[dict[
     except Exception as err:  # noqa: BLE001 - a damaged or foreign archive, whatever broke: one line
         raise ModelError(f"{no} ({_one_line(err)})") from None
     found = meta.get("format") if isinstance(meta, dict) else None
-    if found != fmt:
+    if found not in formats:
         raise ModelError(f"{p}: a model of format {found!r}, this twin reads {fmt!r}; retrain it with "
                          "'twin identify train'")
+    estimators = formats[found]
+    if callable(estimators):
+        try:
+            estimators = tuple(estimators(meta))
+        except (KeyError, TypeError, ValueError) as err:
+            raise ModelError(f"{no} (its estimators: {_one_line(err)})") from None
     want = {"model.json"} | {f"{e}.{k}" for e in estimators for k in ARRAYS}
     if set(npz.files) != want:
         odd = sorted(set(npz.files) ^ want)

@@ -3,9 +3,9 @@
 :func:`train` fits, on the window features of the ok runs of one dataset or several pooled
 (:func:`twin.identification.inputs.pooled_features`):
 
-* the fault location: scikit-learn's ``HistGradientBoostingClassifier`` over the classes none, B, C, BC, classes
-  weighted to balance;
-* per joint, the clearance size: a ``HistGradientBoostingRegressor`` on log10 of the diametral clearance
+* the fault location: scikit-learn's ``HistGradientBoostingClassifier`` over the classes of the runs (none, B, C,
+  BC and, with guide play, G, BG, CG, BCG), classes weighted to balance;
+* per joint (B, C, and the slider guide G where some runs have guide play), the clearance size: a ``HistGradientBoostingRegressor`` on log10 of the diametral clearance
   (:data:`SIZE_REGRESSORS`), trained on the windows of the runs where that joint has a clearance;
 * per joint, the conformal 90 % half widths from out-of-fold answers (:mod:`twin.identification.intervals`) and the
   held-out size accuracy.
@@ -36,7 +36,7 @@ from twin.identification.intervals import (CATALOGUE_BANDS_MM, COVERAGE, FAULT_S
                                            _interval_parts, fault_split_joints,
                                            held_out_accuracy, logs_answer, logs_spread, normalized_scale,
                                            recorded_size_bands)
-from twin.identification.model import CLASSES, JOINTS, ClearanceModel
+from twin.identification.model import CLASSES, JOINTS, ClearanceModel, label_mm
 from twin.identification.ranges import feature_reference, training_ranges
 from twin.identification.trees import ModelError, from_sklearn
 
@@ -142,7 +142,7 @@ class TrainOptions:
                                      "from B, C") from None
         if not isinstance(self.size_only_at, Mapping):
             raise bad("size_only_at", f"{self.size_only_at!r}; allowed: a mapping of joints B, C to dataset folders")
-        wrong = [j for j in self.size_only_at if j not in JOINTS]
+        wrong = [j for j in self.size_only_at if j not in ("B", "C")]
         if wrong:
             raise bad("size_only_at", f"joint {wrong[0]!r}; allowed: B, C")
         object.__setattr__(self, "size_only_at", {j: tuple(v) for j, v in self.size_only_at.items()})
@@ -234,10 +234,14 @@ def train(dataset_dir: str | Path | list[str | Path], options: TrainOptions | No
     classifier = from_sklearn(clf, check=X)  # what the file holds: answers equal bit for bit, checked
     size: dict[str, Any] = {}
     cal = _Calibration()
-    for j in JOINTS:
+    # the guide G is sized where the training runs have guide play (G sizes taught by the datasets teaching both
+    # joints' sizes); a model trained without guide play answers B and C only, as before the guide was a location
+    size_names["G"] = set(names[:n_both])
+    joints = [j for j in JOINTS if j != "G" or any(label_mm(r, "G") > 0 for r in rows)]
+    for j in joints:
         for_size = np.array([rows[i]["dataset"] in size_names[j] for i in owner])
         size[j] = _fit_size(j, X, rows, np.asarray(owner), for_size, o, cal, out_of_fold, dirs)
-    trained_on = _trained_on(dss, dirs, rows, X, owner, y, skipped, size_names, o, cal)
+    trained_on = _trained_on(dss, dirs, rows, X, owner, y, skipped, size_names, o, cal, tuple(size))
     trained_on |= {"feature_seconds": t_feat, "fit_seconds": time.perf_counter() - t0 - t_feat}
     return ClearanceModel(classifier, size, cal.half_width, trained_on=trained_on), trained_on
 
@@ -263,8 +267,7 @@ def _fit_size(j: str, X: np.ndarray, rows: list[dict[str, Any]], owner: np.ndarr
     Returns the regressor as plain arrays (:class:`twin.identification.trees.TreeEnsemble`)."""
     from sklearn.ensemble import HistGradientBoostingRegressor
 
-    key = f"clearance_{j.lower()}_mm"  # the dataset's label column
-    truth = np.array([rows[i][key] for i in owner], float)
+    truth = np.array([label_mm(rows[i], j) for i in owner], float)  # the dataset's label column
     sel = (truth > 0) & for_size
     if sel.sum() < 10:
         raise ModelError(f"{', '.join(map(str, dirs))}: fewer than 10 windows with a clearance at {j}: cannot "
@@ -289,7 +292,7 @@ def _fit_size(j: str, X: np.ndarray, rows: list[dict[str, Any]], owner: np.ndarr
         for r in np.unique(owner[held]):
             window_logs.append(reg.predict(X[owner == r]))  # one prediction per run: its answer and spread
             answers.append(logs_answer(window_logs[-1]))
-            scores.append(abs(math.log10(answers[-1]) - math.log10(rows[int(r)][key])))
+            scores.append(abs(math.log10(answers[-1]) - math.log10(label_mm(rows[int(r)], j))))
             spread.append(logs_spread(window_logs[-1]))
             held_runs.append(rows[int(r)])
     scores, spread, answers = np.array(scores), np.array(spread), np.array(answers)
@@ -313,7 +316,7 @@ def _fit_size(j: str, X: np.ndarray, rows: list[dict[str, Any]], owner: np.ndarr
 
 def _trained_on(dss: list[Any], dirs: list[str | Path], rows: list[dict[str, Any]], X: np.ndarray, owner: list[int],
                 y: np.ndarray, skipped: list[dict[str, Any]], size_names: dict[str, set[str]], o: TrainOptions,
-                cal: _Calibration) -> dict[str, Any]:
+                cal: _Calibration, joints: tuple[str, ...] = ("B", "C")) -> dict[str, Any]:
     """The model file's ``trained_on`` record (module docstring of :mod:`twin.identification.model`), but the
     seconds spent."""
     import sklearn
@@ -333,9 +336,9 @@ def _trained_on(dss: list[Any], dirs: list[str | Path], rows: list[dict[str, Any
         "counts_per_rev": float(infos[0].get("encoder_counts_per_rev") or 32768),
         "splits": list(o.splits), "runs": len(rows), "windows": int(len(X)), "runs_left_out": skipped,
         "crank_hz_range": [float(hz.min()), float(hz.max())],
-        "clearances_mm": {j: _clearances_seen([float(r[f"clearance_{j.lower()}_mm"]) for r in rows]) for j in JOINTS},
+        "clearances_mm": {j: _clearances_seen([label_mm(r, j) for r in rows]) for j in joints},
         "orientations": sorted({r["orientation"] for r in rows}),
-        "classes": {c: int(np.sum(y == c)) for c in CLASSES},
+        "classes": {c: int(np.sum(y == c)) for c in CLASSES if "G" not in c or "G" in joints},
         "versions": {"twin": __version__, "sklearn": sklearn.__version__, "numpy": np.__version__},
         "size_regressor": o.size_regressor,
         "answer_hop_revs": float(o.answer_hop_revs),
