@@ -218,7 +218,7 @@ def test_a_saved_model_loads_back_with_the_same_answers_and_is_plain_arrays(smal
         for name in z.namelist():
             arr = np.lib.format.read_array(io.BytesIO(z.read(name)), allow_pickle=False)
             assert arr.dtype.kind in "fiubU" and not arr.dtype.hasobject, name
-    assert json.loads(str(np.load(small_model)["model.json"][()]))["format"] == MODEL_FORMAT == "twin-identify-model/4"
+    assert json.loads(str(np.load(small_model)["model.json"][()]))["format"] == MODEL_FORMAT == "twin-identify-model/5"
 
 
 def test_the_training_ranges_and_feature_quartiles_load_back_and_malformed_ones_are_refused(small_model, tmp_path):
@@ -412,7 +412,7 @@ def test_another_format_other_members_and_unsafe_trees_are_refused_in_one_line(s
 
     cases = [
         (meta_of(lambda m: m.update(format="twin-identify-model/3")),
-         ("a model of format 'twin-identify-model/3', this twin reads 'twin-identify-model/4'", "retrain")),
+         ("a model of format 'twin-identify-model/3', this twin reads 'twin-identify-model/5 or twin-identify-model/4'", "retrain")),
         (meta_of(lambda m: m.update(feature_version="twin-identify-features/0")), ("made for features", "retrain")),
         (meta_of(lambda m: m.pop("interval_log10")), ("metadata: KeyError",)),
         (lambda n, d: None if n == "size_B.value.npy" else d, ("size_B.value missing or unexpected",)),

@@ -1,0 +1,112 @@
+"""Train the whole-bench clearance identification (B, C and the slider guide G) and choose it on the development sets.
+
+Steps (plain ``twin`` commands and :func:`twin.identification.training.train`):
+
+1. the training sets ``clearance_id_bench_motor.toml`` (reference engine, motor speed loop and V-belt with its
+   placeholders drawn), ``clearance_id_bench_pid.toml`` (reference, crank PID with ripple) and
+   ``clearance_id_bench_mujoco.toml`` (MuJoCo, motor + V-belt), and the development sets
+   ``clearance_id_bench_dev_{motor,pid,mujoco}.toml``: ``twin dataset generate SPEC --out WORK/NAME --workers N``
+   (skipped where the folder is complete);
+2. the window features of the training runs, computed once; each variant (``--variants``) trained on them
+   (:class:`twin.identification.training.TrainOptions`), saved to ``WORK/bench_VARIANT.npz``, its wall time printed;
+3. each variant, and the previous default model (``--baseline``), answered on the development sets through the
+   recording answer path (``analysis/identify/bench_eval.py``), the figures printed and written to
+   ``WORK/dev_VARIANT.json``;
+4. ``--save VARIANT:PATH`` copies that variant's model file to PATH (the choice, made on step 3's figures only).
+
+Run: ``python analysis/identify/train_bench.py --work DIR [--workers 2] [--variants base runs] [--save base:PATH]``.
+The whole-bench fresh look (``analysis/identify/FRESH_TEST_WHOLE_BENCH.md``) is not run here.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+TRAIN = ("clearance_id_bench_motor", "clearance_id_bench_pid", "clearance_id_bench_mujoco")
+DEV = ("clearance_id_bench_dev_motor", "clearance_id_bench_dev_pid", "clearance_id_bench_dev_mujoco")
+#: the variants tried on the development sets (TrainOptions fields)
+VARIANTS = {
+    "base": dict(interval_folds="runs"),
+    "speed": dict(interval_folds="speed"),
+    "median": dict(interval_folds="runs", size_regressor="median"),
+    "nosplit": dict(interval_folds="runs", fault_split=False, size_band_mm=None),
+}
+
+
+def generate(work: Path, name: str, workers: str) -> Path:
+    d = work / name
+    subprocess.run([str(Path(sys.executable).parent / "twin"), "dataset", "generate", f"analysis/datasets/{name}.toml", "--out",
+                    str(d), "--workers", workers, "--no-progress"], cwd=ROOT, check=True)
+    return d
+
+
+def dev_eval(model: Path, work: Path, out: Path, workers: str) -> dict:
+    subprocess.run([sys.executable, str(ROOT / "analysis" / "identify" / "bench_eval.py"), str(model),
+                    *[str(work / d) for d in DEV], "--out", str(out), "--workers", workers], check=True,
+                   stdout=subprocess.DEVNULL)
+    return json.loads(out.read_text())
+
+
+def summary(rep: dict) -> str:
+    f = rep["all"]
+    s = lambda d: "-" if d["share"] is None else f"{100 * d['share']:.0f}% ({d['hits']}/{d['n']})"  # noqa: E731
+    parts = [f"location {s(f['location'])}", f"refused {s(f['refused_of_turning'])}",
+             "recall " + " ".join(f"{c}:{s(v)}" for c, v in f["recall"].items()),
+             "presence " + " ".join(f"{j}:{s(v)}" for j, v in f["presence_recall"].items()),
+             "x1.5 " + " ".join(f"{j}:{s(v)}" for j, v in f["within_1_5"].items()),
+             "cover " + " ".join(f"{j}:{s(v)}" for j, v in f["coverage"].items()), f"warned {s(f['warned'])}"]
+    return "\n    ".join(parts)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--work", required=True, help="folder of the datasets and the variants' models")
+    ap.add_argument("--workers", default="2")
+    ap.add_argument("--variants", nargs="+", default=["base"], choices=sorted(VARIANTS))
+    ap.add_argument("--baseline", default=str(ROOT / "twin" / "data" / "identify_default.npz"),
+                    help="the model to compare with on the development sets ('' for none)")
+    ap.add_argument("--save", metavar="VARIANT:PATH", help="copy the chosen variant's model file to PATH")
+    ap.add_argument("--no-generate", action="store_true", help="use the dataset folders as they are")
+    args = ap.parse_args()
+    from twin.identification.inputs import pooled_features
+    from twin.identification.training import TrainOptions, train
+
+    work = Path(args.work)
+    dirs = [work / n for n in TRAIN] if args.no_generate else [generate(work, n, args.workers) for n in TRAIN]
+    if not args.no_generate:
+        for n in DEV:
+            generate(work, n, args.workers)
+    dirs = [d for d in dirs if (d / "info.json").is_file()]
+    t0 = time.perf_counter()
+    feats = pooled_features(dirs, ("train", "val"), int(args.workers))
+    t_feat = time.perf_counter() - t0
+    print(f"features of {len(feats[1])} runs ({len(feats[0])} windows, {len(feats[3])} runs without windows) from "
+          f"{', '.join(d.name for d in dirs)}: {t_feat:.0f} s on {args.workers} workers", flush=True)
+    for v in args.variants:
+        t1 = time.perf_counter()
+        model, tr = train(dirs, TrainOptions(workers=int(args.workers), **VARIANTS[v]), features=feats)
+        fit = time.perf_counter() - t1
+        path = work / f"bench_{v}.npz"
+        model.save(path)
+        print(f"variant {v}: fit {fit:.0f} s (+ features {t_feat:.0f} s), joints {model.joints}, classes "
+              f"{tr['classes']}", flush=True)
+        rep = dev_eval(path, work, work / f"dev_{v}.json", args.workers)
+        print(f"  dev {v}:\n    {summary(rep)}", flush=True)
+    if args.baseline:
+        rep = dev_eval(Path(args.baseline), work, work / "dev_baseline.json", args.workers)
+        print(f"  dev baseline ({args.baseline}):\n    {summary(rep)}", flush=True)
+    if args.save:
+        v, dest = args.save.split(":", 1)
+        shutil.copyfile(work / f"bench_{v}.npz", dest)
+        print(f"saved {v} to {dest}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,164 @@
+"""The slider guide G as a clearance location of the identification: dataset labels and fault classes, the model
+file with a G size regressor (format 5) and the format before it (4, B and C only), and the shipped model on
+simulated runs with guide play only and with no play."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from twin.identification.features import feature_names
+from twin.identification.model import CLASSES, MODEL_FORMAT, ClearanceModel, ModelError, label_mm
+from twin.identification.ranges import feature_reference
+from twin.identification.results import IdentifyResult
+
+ROOT = Path(__file__).resolve().parent.parent
+DEFAULT = ROOT / "twin" / "data" / "identify_default.npz"
+RANGES = {"source": "random", "runs": 160, "crank_hz": [1.0, 3.0], "ripple_pct": [[0.0, 0.5]],
+          "noise_ug_rthz": [28.0, 33.0], "orientations": ["y", "z"]}
+
+
+def test_a_run_with_guide_play_is_labelled_with_G_and_its_play():
+    from twin.config import preset
+    from twin.dataset.factors import NAMED, labels
+
+    base = preset(1)
+    assert "clearance_guide_mm" not in labels(base) and labels(base)["fault"] == "none"
+    g = labels(base.replace(**{"joints.clearance_guide_mm": 0.15}))
+    assert g["fault"] == "G" and g["clearance_guide_mm"] == 0.15
+    bg = labels(base.replace(**{"joints.clearance_guide_mm": 0.15, "joints.clearance_b_mm": 0.1}))
+    assert bg["fault"] == "BG"
+    # the fault factor: a location it names keeps the size given it (else 0.1 mm), one it leaves out gets 0
+    ov: dict = {"joints.clearance_guide_mm": 0.3}
+    NAMED["fault"].apply("CG", ov, np.random.default_rng(0), base)
+    assert ov["joints.clearance_guide_mm"] == 0.3 and ov["joints.clearance_c_mm"] == 0.1 and \
+        ov["joints.clearance_b_mm"] == 0.0
+    ov = {"joints.clearance_guide_mm": 0.3}
+    NAMED["fault"].apply("B", ov, np.random.default_rng(0), base)
+    assert ov["joints.clearance_guide_mm"] == 0.0
+    assert label_mm({"clearance_guide_mm": float("nan")}, "G") == 0.0 and label_mm({}, "G") == 0.0
+
+
+def _small(joints: tuple[str, ...]) -> ClearanceModel:
+    """A model of tiny trees on this twin's features over ``joints`` (random data: its answers mean nothing)."""
+    from sklearn.ensemble import HistGradientBoostingClassifier as C
+    from sklearn.ensemble import HistGradientBoostingRegressor as R
+
+    nf = len(feature_names())
+    X = np.random.default_rng(1).standard_normal((240, nf))
+    classes = [c for c in CLASSES if c == "none" or set(c) <= set(joints)]
+    y = np.array(classes)[np.arange(len(X)) % len(classes)]
+    clf = C(max_iter=3, max_leaf_nodes=4, random_state=0).fit(X, y)
+    reg = R(max_iter=3, max_leaf_nodes=4).fit(X, X[:, 2] - 1)
+    seen = {j: {"min": 0.0125, "max": 0.4 if j == "G" else 1.6, "distinct": 50, "ball_bearing": True} for j in joints}
+    return ClearanceModel(clf, {j: reg for j in joints}, {j: 0.2 for j in joints},
+                          trained_on={"rate_hz": 100000.0, "crank_hz_range": [1.0, 3.0], "dataset": "random",
+                                      "ranges": RANGES, "feature_reference": feature_reference(X),
+                                      "clearances_mm": seen})
+
+
+def test_a_model_with_the_guide_saves_and_loads_back_with_its_G_answer(tmp_path):
+    m = _small(("B", "C", "G"))
+    p = m.save(tmp_path / "g.npz")
+    meta = json.loads(str(np.load(p)["model.json"][()]))
+    assert meta["format"] == MODEL_FORMAT == "twin-identify-model/5" and meta["joints"] == ["B", "C", "G"]
+    back = ClearanceModel.load(p)
+    assert back.joints == ("B", "C", "G") and back.classes == CLASSES
+    X = np.random.default_rng(2).standard_normal((4, len(feature_names())))
+    a, b = m.identify(X, {"B": True, "C": True}), back.identify(X, {"B": True, "C": True})
+    assert a == b and [j.joint for j in b.joints] == ["B", "C", "G"] and set(b.probabilities) == set(CLASSES)
+    g = b.joint("G")
+    assert 0 < g.interval_if_faulty_mm[0] < g.size_if_faulty_mm < g.interval_if_faulty_mm[1]
+    d = b.to_dict()
+    assert {"clearance_g_mm", "clearance_g_interval_mm", "clearance_g_if_faulty_mm"} <= set(d)
+    assert IdentifyResult.from_json(b.to_json()) == b
+
+
+def test_a_model_of_B_and_C_only_answers_the_four_classes_and_a_format_4_file_still_loads(tmp_path):
+    from twin.identification.modelfile import write_model
+    from twin.identification.trees import from_sklearn
+
+    m = _small(("B", "C"))
+    p = m.save(tmp_path / "bc.npz")
+    back = ClearanceModel.load(p)
+    assert back.joints == ("B", "C") and back.classes == ("none", "B", "C", "BC")
+    # a format-4 file: the same members, no joints list (as models were before the guide was a location)
+    meta = json.loads(str(np.load(p)["model.json"][()]))
+    meta["format"] = "twin-identify-model/4"
+    del meta["joints"]
+    est = {"classifier": from_sklearn(m.classifier), "size_B": from_sklearn(m.size["B"]),
+           "size_C": from_sklearn(m.size["C"])}
+    old = write_model(tmp_path / "old.npz", meta, est)
+    four = ClearanceModel.load(old)
+    X = np.random.default_rng(3).standard_normal((3, len(feature_names())))
+    assert four.joints == ("B", "C") and four.identify(X, {"B": True, "C": True}) == back.identify(X, {"B": True,
+                                                                                                        "C": True})
+
+
+@pytest.mark.parametrize("joints", [["G"], ["B", "C", "G", "G"], ["B", "C", "D"], "BCG"])
+def test_a_model_file_listing_other_joints_is_refused_in_one_line(tmp_path, joints):
+    from twin.identification.modelfile import write_model
+    from twin.identification.trees import from_sklearn
+
+    m = _small(("B", "C", "G"))
+    p = m.save(tmp_path / "g.npz")
+    meta = json.loads(str(np.load(p)["model.json"][()]))
+    meta["joints"] = joints
+    est = {"classifier": from_sklearn(m.classifier)} | {f"size_{j}": from_sklearn(m.size[j]) for j in "BCG"}
+    bad = write_model(tmp_path / "bad.npz", meta, est)
+    with pytest.raises(ModelError) as e:
+        ClearanceModel.load(bad)
+    assert "\n" not in str(e.value) and str(e.value).startswith(f"{bad}: ")
+
+
+def test_a_format_3_file_is_refused_in_one_line_naming_its_version(tmp_path):
+    from twin.identification.modelfile import write_model
+    from twin.identification.trees import from_sklearn
+
+    m = _small(("B", "C"))
+    p = m.save(tmp_path / "bc.npz")
+    meta = json.loads(str(np.load(p)["model.json"][()])) | {"format": "twin-identify-model/3"}
+    est = {"classifier": from_sklearn(m.classifier), "size_B": from_sklearn(m.size["B"]),
+           "size_C": from_sklearn(m.size["C"])}
+    bad = write_model(tmp_path / "three.npz", meta, est)
+    with pytest.raises(ModelError, match=r"format 'twin-identify-model/3'") as e:
+        ClearanceModel.load(bad)
+    assert "\n" not in str(e.value)
+
+
+def _shipped_with_guide() -> ClearanceModel:
+    if not DEFAULT.is_file():
+        pytest.skip("no default model committed")
+    m = ClearanceModel.load(DEFAULT)
+    if "G" not in m.joints:
+        pytest.skip("the shipped model does not locate the guide")
+    return m
+
+
+@pytest.mark.parametrize("guide_mm, fault", [(0.2, "G"), (0.0, "none")])
+def test_the_shipped_model_locates_guide_play_alone_and_leaves_a_tight_bench_healthy(guide_mm, fault):
+    """Regression guard of the shipped model (no independent basis: the located class is the model's): a simulated
+    run of the reference engine with play only in the slider guide (0.2 mm, y vertical, 550 motor rpm, crank PID,
+    3 s through the sensor chain) is located G with a proper interval at G (0 < lo < size < hi, lo no lower than the
+    smallest guide play trained on); the same bench with a tight guide stays none."""
+    from twin.config import preset
+    from twin.identification.inputs import simulated_inputs
+    from twin.identification.model import identify_inputs
+    from twin.simulation import simulate_run
+
+    m = _shipped_with_guide()
+    cfg = preset(1).replace(**{"simulation.engine": "reference", "simulation.duration_s": 3.0, "drive.ramp_s": 0.3,
+                               "drive.motor_rpm": 550.0, "joints.clearance_b_mm": 0.0, "joints.clearance_c_mm": 0.0,
+                               "joints.clearance_guide_mm": guide_mm, "sensors.channels": ("accel", "encoder")})
+    a = identify_inputs(m, *simulated_inputs(simulate_run(cfg), cfg), "y", "sim")
+    assert a.fault == fault, a.probabilities
+    g = a.joint("G")
+    lo, hi = g.interval_if_faulty_mm
+    if fault == "G":
+        assert g.faulty and g.size_mm > 0 and 0 < lo < g.size_mm < hi
+        assert lo >= m.trained_on["clearances_mm"]["G"]["min"] * (1 - 1e-9) or a.warnings
+    else:
+        assert not g.faulty and g.size_mm == 0.0 and g.interval_mm == (0.0, 0.0)
