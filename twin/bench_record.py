@@ -53,16 +53,25 @@ class RecordResult:
         return {**dataclasses.asdict(self), "path": str(self.path), "channels": list(self.channels)}
 
 
-class _ChainSink:
-    """Sink that puts each chunk of a simulated run through the sensor chain and keeps only the DAQ
-    channels (the chain streams: chunks of any length give the same samples as the whole run)."""
+class RecordingSink:
+    """Sink that puts each chunk of a simulated run through the sensor chain, keeps only the DAQ channels
+    (the chain streams: chunks of any length give the same samples as the whole run) and, when the run
+    closes, writes them as a bench recording to ``path`` (:func:`write_recorded`). :func:`record` and the
+    dataset generator's ``outputs.recordings`` use it; ``cfg`` must hold the chain's channel groups
+    (:func:`recording_config`).
 
-    def __init__(self, cfg: BenchConfig):
+    ``written`` is the recording's path once written, ``daq`` the DAQ run."""
+
+    def __init__(self, cfg: BenchConfig, path: str | Path, notes: str = "", static_s: float = 1.0,
+                 created_by: str = "twin record"):
         self.cfg = cfg
+        self.path = Path(path)
+        self.notes, self.static_s, self.created_by = notes, float(static_s), created_by
         self.stream = None
         self.parts: list[Run] = []
         self.daq: Run | None = None
         self.meta: dict[str, Any] = {}
+        self.written: Path | None = None
 
     def write(self, chunk: Run) -> None:
         from twin.instrument.chain import ChainStream
@@ -77,9 +86,22 @@ class _ChainSink:
         self.daq = Run.concat(self.parts)
         self.parts = []
         self.meta = dict(meta)
+        self.daq, self.written = write_recorded(self.path, self.daq, self.cfg, self.meta, self.notes, self.static_s,
+                                                self.created_by)
 
     def abort(self) -> None:
         self.parts = []
+
+
+def write_recorded(path: Path, daq: Run, cfg: BenchConfig, meta: dict[str, Any], notes: str, static_s: float,
+                   created_by: str) -> tuple[Run, Path]:
+    """Write the DAQ channels ``daq`` of a simulated run of ``cfg`` (engine metadata ``meta``) as a bench
+    recording with the calibration of a simulated static recording of ``static_s`` [s], validated as an import
+    is, atomically. Returns the recording's run and path."""
+    from twin.recording import synthetic_daq_recording, write_recording
+
+    rec, info = synthetic_daq_recording(daq, cfg, meta, notes=notes, static_s=static_s, created_by=created_by)
+    return rec, write_recording(path, rec, info)
 
 
 def recording_config(cfg: BenchConfig) -> BenchConfig:
@@ -104,7 +126,6 @@ def record(cfg: BenchConfig, out: str | Path, *, notes: str = "", static_s: floa
     import math
 
     from twin.errors import ConfigError
-    from twin.recording import synthetic_daq_recording, write_recording
     from twin.simulation import simulate
     from twin.util import check_output_file
 
@@ -116,11 +137,9 @@ def record(cfg: BenchConfig, out: str | Path, *, notes: str = "", static_s: floa
             or not 0.1 <= static_s <= 60.0:
         raise ConfigError("static_s", f"must lie in [0.1, 60] s (the static calibration recording), got {static_s!r}")
     path = check_output_file(out, "out", ".mcap")
-    sink = _ChainSink(cfg)
+    sink = RecordingSink(cfg, path, notes=notes, static_s=float(static_s))
     simulate(cfg, [sink], progress=progress)
-    assert sink.daq is not None
-    daq, info = synthetic_daq_recording(sink.daq, cfg, sink.meta, notes=notes, static_s=float(static_s),
-                                        created_by="twin record")
-    written = write_recording(path, daq, info)
+    assert sink.daq is not None and sink.written is not None
+    daq, written = sink.daq, sink.written
     return RecordResult(written, daq.duration_s, daq.rate_hz, tuple(daq.channels), str(sink.meta.get("engine", "")),
                         written.stat().st_size, time.perf_counter() - t0)

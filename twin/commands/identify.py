@@ -159,7 +159,12 @@ def _clearance(args: argparse.Namespace) -> int:
     if not args.model and not path.is_file():
         raise TwinError(f"no default model in this installation ({path}); give --model MODEL.npz")
     model = ClearanceModel.load(path)
-    a = identify_recording(model, rec)
+    try:
+        a = identify_recording(model, rec)
+    except TwinError as err:  # a refusal: the --json file says so too (exit status 2, as every bad input)
+        if js is not None:
+            atomic_write_text(js, refusal_json(str(args.recording), str(err)) + "\n")
+        raise
     p = a.probabilities
     print(f"{args.recording}: fault {a.fault}, probability {p[a.fault]:.2f} (class probabilities: "
           + ", ".join(f"{k} {v:.2f}" for k, v in p.items()) + ")")
@@ -186,6 +191,13 @@ def _clearance(args: argparse.Namespace) -> int:
     if js is not None:
         atomic_write_text(js, a.to_json() + "\n")
     return 0
+
+
+def refusal_json(recording: str, reason: str) -> str:
+    """The ``--json`` record of a refused recording: ``refused: true``, the one-line reason, the recording."""
+    from twin.util import json_text
+
+    return json_text({"refused": True, "reason": reason, "recording": recording})
 
 
 def _restitution(args: argparse.Namespace) -> int:

@@ -200,7 +200,7 @@ def resolve_config(spec: DatasetSpec, base: BenchConfig, values: dict[str, Any],
     ov["simulation.duration_s"] = duration
     ov["instrumentation.seed"] = int(seed % (2**63))
     groups = list(spec.outputs.truth)
-    if spec.outputs.instrumented:
+    if spec.outputs.instrumented or spec.outputs.recordings:  # the sensor chain reads these
         groups += ["accel", "encoder"]
     ov["sensors.channels"] = [g for g in dict.fromkeys(groups)]
     try:

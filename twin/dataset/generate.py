@@ -45,6 +45,8 @@ from twin.util import (_TMP_RE, FolderLock, atomic_write_json, atomic_write_byte
                        remove_stale_temps_in)
 
 FORMAT = "twin-dataset/2"
+#: folder of a dataset's bench recordings (``outputs.recordings``), one ``<run_id>.mcap`` per run
+RECORDINGS_DIR = "recordings"
 #: formats this version reads: twin-dataset/1 (data files hold the channels only, no ``run_id``,
 #: ``t`` and label columns) is read as it is, never added to
 READABLE = ("twin-dataset/1", FORMAT)
@@ -173,7 +175,9 @@ def _read_done(out: Path, ids: set[str]) -> dict[str, dict[str, Any]]:
             done[rid] = r
         elif r.get("status") == "ok":
             f = out / "data" / f"{rid}.parquet"
-            if f.is_file() and f.stat().st_size == r.get("bytes"):
+            rec = r.get("recording")  # outputs.recordings: the run's bench recording too
+            if f.is_file() and f.stat().st_size == r.get("bytes") and \
+                    (not rec or (out / rec["file"]).is_file() and (out / rec["file"]).stat().st_size == rec["bytes"]):
                 done[rid] = r
     return done
 
@@ -224,6 +228,7 @@ def task_of(p: Prepared, r: RunPlan) -> dict[str, Any]:
     return {"run_id": r.run_id, "index": r.index, "config_toml": r.config.to_toml(),
             "data_dir": str(p.out / "data"), "columns": [tuple(vars(c).values()) for c in p.columns],
             "instrumented": list(p.spec.outputs.instrumented),
+            "recordings_dir": str(p.out / RECORDINGS_DIR) if p.spec.outputs.recordings else "",
             "labels": [(k, t, label_value(labels.get(k), t)) for k, t in p.label_types.items()]}
 
 
@@ -458,9 +463,10 @@ def _generate_locked(p: Prepared, workers: int, scheduler: str | None, run_tasks
     todo = p.pending[:limit] if limit is not None else p.pending
     if todo or not (out / "info.json").is_file():
         _write_info(p, complete=False)  # first: a folder with info.json is this dataset's, whatever happens next
-    (out / "data").mkdir(exist_ok=True)
-    (out / "results").mkdir(exist_ok=True)
-    for d in (out, out / "data", out / "results"):
+    dirs = [out, out / "data", out / "results"] + ([out / RECORDINGS_DIR] if p.spec.outputs.recordings else [])
+    for d in dirs[1:]:
+        d.mkdir(exist_ok=True)
+    for d in dirs:
         remove_stale_temps_in(d)  # leftovers of killed processes, whatever they were writing
     t_start = time.perf_counter()
     sim_total = sum(r.config.duration_s for r in todo)
@@ -503,7 +509,7 @@ def check_writable(out: Path) -> None:
     from twin.util import show
 
     places = [(d, _stat.S_ISDIR, "is not a folder (a file or link where the dataset keeps its runs)")
-              for d in (out, out / "data", out / "results")]
+              for d in (out, out / "data", out / "results", out / RECORDINGS_DIR)]
     places += [(out / n, _stat.S_ISREG, "is not a regular file (a link or folder where the dataset writes its own "
                                         "file)") for n in OWN_FILES]
     for path, kind_ok, what in places:
@@ -634,7 +640,8 @@ def _write_info(p: Prepared, complete: bool) -> dict[str, Any]:
         "versions": {"twin": __version__, "mujoco": mujoco.__version__, "pyarrow": pyarrow.__version__,
                      "python": sys.version.split()[0]},
         "files": {"runs": "runs.parquet", "stats": "stats.json", "data": "data/<run_id>.parquet",
-                  "results": "results/<run_id>.json"},
+                  "results": "results/<run_id>.json",
+                  **({"recordings": f"{RECORDINGS_DIR}/<run_id>.mcap"} if p.spec.outputs.recordings else {})},
     }
     atomic_write_json(p.out / "info.json", info)
     return info

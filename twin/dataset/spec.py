@@ -37,6 +37,7 @@ A spec is a TOML file (examples in ``analysis/datasets/``; every key is document
     instrumented = true                       # raw volts, encoder counts, motor command, meas_AC
     rate_hz = 100000.0
     dtype = "auto"           # auto (float32 where lossless or the channel is float32) | float32
+    recordings = false       # true: also a bench recording per run, recordings/<run_id>.mcap (as twin record)
 
     [splits]
     train = 0.7
@@ -130,6 +131,7 @@ class Outputs:
     instrumented: tuple[str, ...] = INSTRUMENTED
     rate_hz: float = 100_000.0
     dtype: str = "auto"
+    recordings: bool = False
 
 
 @dataclass(frozen=True)
@@ -168,6 +170,8 @@ class DatasetSpec:
         d.pop("source")
         if d["base_preset"] is None:  # specs without one keep the identity they had before the key existed
             d.pop("base_preset")
+        if not d["outputs"]["recordings"]:  # likewise specs without bench recordings
+            d["outputs"].pop("recordings")
         for f in d["factors"]:  # likewise factors without an excluded band
             if f.get("exclude") is None:
                 f.pop("exclude", None)
@@ -308,7 +312,7 @@ def parse_spec(data: Mapping[str, Any], source: str = "") -> DatasetSpec:
             if not f.discrete:
                 raise SpecError(f"factors.{f.name}", "a grid needs values or a range with levels")
 
-    out = _table(data, "outputs", ("truth", "instrumented", "rate_hz", "dtype"))
+    out = _table(data, "outputs", ("truth", "instrumented", "rate_hz", "dtype", "recordings"))
     truth = out.get("truth", list(Outputs.truth))
     if not (isinstance(truth, list) and all(isinstance(g, str) for g in truth)):
         raise SpecError("outputs.truth", f"must be a list of channel groups, got {truth!r}")
@@ -318,15 +322,19 @@ def parse_spec(data: Mapping[str, Any], source: str = "") -> DatasetSpec:
     if not (isinstance(inst, list) and all(i in INSTRUMENTED for i in inst)):
         raise SpecError("outputs.instrumented", f"must be true, false or a list of {', '.join(INSTRUMENTED)}; "
                                                 f"got {out.get('instrumented')!r}")
-    if not truth and not inst:
-        raise SpecError("outputs", "stores nothing: give truth groups or instrumented channels")
+    recs = out.get("recordings", False)
+    if not isinstance(recs, bool):
+        raise SpecError("outputs.recordings", f"must be true or false (a bench recording per run), got {recs!r}")
+    if not truth and not inst and not recs:
+        raise SpecError("outputs", "stores nothing: give truth groups, instrumented channels or recordings = true")
     rate = out.get("rate_hz", 100_000.0)
     if not (_num(rate) and 0 < rate <= 1e6):
         raise SpecError("outputs.rate_hz", f"must lie in (0, 1e6] Hz, got {rate!r}")
     dtype = out.get("dtype", "auto")
     if dtype not in DTYPES:
         raise SpecError("outputs.dtype", f"must be one of {', '.join(DTYPES)}; got {dtype!r}")
-    outputs = Outputs(tuple(dict.fromkeys(truth)), tuple(i for i in INSTRUMENTED if i in inst), float(rate), dtype)
+    outputs = Outputs(tuple(dict.fromkeys(truth)), tuple(i for i in INSTRUMENTED if i in inst), float(rate), dtype,
+                      recs)
 
     sp = _table(data, "splits", SPLITS + ("holdout",))
     fr = tuple(sp.get(s, d) for s, d in zip(SPLITS, Splits.fractions))

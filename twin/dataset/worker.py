@@ -120,12 +120,14 @@ def _run_members(tasks: list[dict[str, Any]], stop: Any) -> list[dict[str, Any]]
     from twin.config import config_from_toml
     from twin.dataset.storage import ColumnSpec, LabelColumn, ParquetRunWriter, WriteError
     from twin.util import file_sha256
+    from twin.bench_record import RecordingSink
     from twin.simulation import ThreadedSink, simulate
 
     t0 = time.perf_counter()
     paths = [Path(t["data_dir"]) / f"{t['run_id']}.parquet" for t in tasks]
     outs: list[dict[str, Any]] = [{"run_id": t["run_id"], "index": t["index"], "status": "ok", "reason": ""}
                                   for t in tasks]
+    recs: list[Any] = []
     try:
         cfgs, writers, sinks = [], [], []
         for task, path in zip(tasks, paths):
@@ -136,9 +138,15 @@ def _run_members(tasks: list[dict[str, Any]], stop: Any) -> list[dict[str, Any]]
                                       labels)
             # the sensor chain and the Parquet writer run on a thread, overlapping the stepping
             sink = ThreadedSink(InstrumentSink(cfg, columns, writer, tuple(task["instrumented"])))
+            run_sinks = [_Stop(stop), sink] if stop is not None else [sink]
+            if task.get("recordings_dir"):  # outputs.recordings: a bench recording as twin record writes it
+                rec = RecordingSink(cfg, Path(task["recordings_dir"]) / f"{task['run_id']}.mcap",
+                                    notes=f"dataset run {task['run_id']}", created_by="twin dataset generate")
+                recs.append(rec)
+                run_sinks.append(ThreadedSink(rec))
             cfgs.append(cfg)
             writers.append(writer)
-            sinks.append([_Stop(stop), sink] if stop is not None else [sink])
+            sinks.append(run_sinks)
         if len(tasks) == 1:
             outcome = simulate(cfgs[0], sinks[0])
         else:
@@ -147,7 +155,7 @@ def _run_members(tasks: list[dict[str, Any]], stop: Any) -> list[dict[str, Any]]
             outcome = simulate_shared(cfgs, sinks)
         warnings = outcome.meta.get("warnings") or {}
         if warnings:
-            for path in paths:
+            for path in paths + [r.path for r in recs]:
                 path.unlink(missing_ok=True)
             raise _Failed("MuJoCo warnings: " + ", ".join(f"{k}({v})" for k, v in warnings.items()))
         for i, (out, cfg, writer, path) in enumerate(zip(outs, cfgs, writers, paths)):
@@ -157,6 +165,8 @@ def _run_members(tasks: list[dict[str, Any]], stop: Any) -> list[dict[str, Any]]
                        simulated_s=writer.rows / cfg.output_rate_hz)
             if len(tasks) > 1:
                 out["shared"] = {"runs": len(tasks), "engine_run_of": tasks[0]["run_id"]}
+        for out, rec in zip(outs, recs):
+            out["recording"] = {"file": f"{rec.path.parent.name}/{rec.path.name}", "bytes": rec.path.stat().st_size}
     except _Failed as err:
         for out in outs:
             out.update(status="failed", reason=str(err))
@@ -169,6 +179,9 @@ def _run_members(tasks: list[dict[str, Any]], stop: Any) -> list[dict[str, Any]]
             reason += " | " + traceback.format_exc(limit=2).replace("\n", " ")[-300:]
         for out in outs:
             out.update(status="failed", reason=reason[:500])
+    if any(out["status"] != "ok" for out in outs):
+        for rec in recs:  # no recording of a run that failed
+            rec.path.unlink(missing_ok=True)
     wall = (time.perf_counter() - t0) / len(tasks)
     # the worker process's peak so far (it runs many runs): an upper bound of this run's
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0

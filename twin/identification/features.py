@@ -101,6 +101,8 @@ class Windows:
         revolutions: crank turns in the steady part.
         crank_hz: crank rate of the windows (their whole turns over their duration) [Hz].
         direction: +1 or -1 (encoder counting direction of the motion).
+        swing: the crank rate's swing in steady running: the 95th percentile over the recording's last half of
+            the 50 ms rate's deviation from its median there [-] (0.4: the rate swings ±40 %).
     """
 
     steady: tuple[int, int]
@@ -108,6 +110,7 @@ class Windows:
     revolutions: float
     crank_hz: float
     direction: int
+    swing: float = 0.0
 
 
 #: averaging time of the crank rate that decides what is steady [s]
@@ -118,9 +121,15 @@ RATE_WINDOW_S = 0.05
 #: its speed within a few percent (the sample recordings' belt and motor model: ±3 %), a spin-up
 #: leaves it by far more
 SPEED_TOL = 0.10
-#: allowance above a rippled recording's own rate spread, and the largest tolerance a ripple may give [-]
+#: allowance above a swinging recording's own rate spread [-]
 RIPPLE_ALLOWANCE = 0.05
-MAX_SPEED_TOL = 0.30
+#: the largest tolerance of the 50 ms rate [-]: a rate that falls below 5 % of the steady rate is a stop, not a
+#: swing (no cap on the swing itself: a recording that turns through whole turns is answered, however much its
+#: speed swings within a turn; :mod:`twin.identification.ranges` warns beyond the swing the bench gives)
+MAX_SPEED_TOL = 0.95
+#: where the tolerance is widened for a swing, how far a whole turn's mean rate may stray from the last half's
+#: mean rate before the steady part starts [-] (a spin-up's turns are left out)
+TURN_TOL = SPEED_TOL
 
 
 #: shortest hop between the ends of successive windows [turns]: at most 16 windows end per crank turn, so the
@@ -142,9 +151,14 @@ def steady_windows(counts: np.ndarray, rate_hz: float, counts_per_rev: float, sk
 
     The crank rate is the encoder's turns over 50 ms; the steady part is the longest stretch, after
     ``skip_s``, where it stays within a tolerance of the median rate of the last half of the recording
-    (a spin-up or a stop is left out): ``speed_tol``, or, where the speed ripples within a turn, the
-    last half's own spread (95th percentile of the rate's deviation) plus :data:`RIPPLE_ALLOWANCE`, at
-    most :data:`MAX_SPEED_TOL`. Windows are cut back to back from the end of that
+    (a spin-up or a stop is left out): ``speed_tol``, or, where the speed swings within a turn (a motor
+    speed loop through the V-belt, the slider lifted against gravity), the last half's own spread (95th
+    percentile of the rate's deviation, :attr:`Windows.swing`) plus :data:`RIPPLE_ALLOWANCE`, at most
+    :data:`MAX_SPEED_TOL` (a rate near 0 is a stop). Where the tolerance is so widened, the 50 ms rate no longer
+    tells the end of a spin-up from the swing (and a swing's peaks may pass it once a turn), and whole turns do:
+    the steady part ends at the last 50 ms rate within the tolerance and is made of the whole turns, counted
+    back from there, whose mean rate lies within :data:`TURN_TOL` of the last half's mean rate
+    (:func:`_first_steady_turn`). Windows are cut back to back from the end of that
     stretch (the most settled part), at any crank angle: order amplitudes do not depend on where a
     revolution starts; with ``hop_revs`` below REVS_PER_WINDOW [turns] each window ends that many turns before
     the next one ends (overlapping windows). At least REVS_PER_WINDOW steady turns are needed.
@@ -172,17 +186,27 @@ def steady_windows(counts: np.ndarray, rate_hz: float, counts_per_rev: float, sk
     spread = float(np.quantile(np.abs(hz[len(hz) // 2:] / ref - 1.0), 0.95))
     tol = max(speed_tol, min(spread + RIPPLE_ALLOWANCE, MAX_SPEED_TOL))
     ok = np.abs(hz / ref - 1.0) <= tol
-    # longest run of steady rate samples
-    edges = np.flatnonzero(np.diff(np.concatenate([[0], ok.astype(np.int8), [0]])))
-    runs = edges.reshape(-1, 2)
-    a, b = max(runs, key=lambda r: r[1] - r[0]) if len(runs) else (0, 0)
-    b = b + L - 1  # the last rate sample covers L samples of position
     direction = 1 if ref > 0 else -1
+    widened = tol > speed_tol
+    if widened:
+        # a swing's peaks may pass the tolerance once a turn and cut the 50 ms stretch into single turns: whole
+        # turns decide, back from the last steady rate sample (a stop at the end is left out)
+        last = np.flatnonzero(ok)
+        b = int(last[-1]) + L if last.size else 0
+        a = _first_steady_turn(direction * turns, 0, b) if b > 0 else 0
+    else:
+        # longest run of steady rate samples
+        edges = np.flatnonzero(np.diff(np.concatenate([[0], ok.astype(np.int8), [0]])))
+        runs = edges.reshape(-1, 2)
+        a, b = max(runs, key=lambda r: r[1] - r[0]) if len(runs) else (0, 0)
+        b = b + L - 1  # the last rate sample covers L samples of position
     pos = direction * turns[a:b + 1]
     steady_turns = float(pos[-1] - pos[0])
     if steady_turns < REVS_PER_WINDOW:
-        raise IdentifyError(f"too little steady motion: {steady_turns:.2f} crank revolutions within "
-                            f"{tol:.0%} of {abs(ref):.2f} Hz (at least {REVS_PER_WINDOW} are needed)")
+        raise IdentifyError(f"too little steady motion: {steady_turns:.2f} crank revolutions "
+                            + (f"whose mean rate lies within {TURN_TOL:.0%} of the steady rate" if widened else
+                               f"within {tol:.0%} of {abs(ref):.2f} Hz")
+                            + f" (at least {REVS_PER_WINDOW} are needed)")
     run_min = np.minimum.accumulate(pos[::-1])[::-1]  # monotone from the end backwards
     wins: list[tuple[int, int]] = []
     stop = len(pos) - 1
@@ -206,7 +230,29 @@ def steady_windows(counts: np.ndarray, rate_hz: float, counts_per_rev: float, sk
     if wins:
         w0, w1 = wins[0][0], wins[-1][1]
         rate = abs(turns[w1 - start] - turns[w0 - start]) * rate_hz / max(w1 - w0, 1)
-    return Windows((start + a, start + b + 1), wins, steady_turns, rate, direction)
+    return Windows((start + a, start + b + 1), wins, steady_turns, rate, direction, spread)
+
+
+def _first_steady_turn(pos: np.ndarray, a: int, b: int) -> int:
+    """Where the steady part of [a, b] starts when judged by whole turns: whole turns of ``pos`` [turns,
+    increasing with the motion] are taken back to back from ``b`` backwards while each one's mean rate lies
+    within :data:`TURN_TOL` of the mean rate over the last half of [a, b]; the start of the earliest such turn
+    (a turn that strays is left out with all before it; the part before the first whole turn is kept where its
+    own mean rate lies within :data:`TURN_TOL`)."""
+    mid = (a + b) // 2
+    if b - mid < 2 or pos[b] - pos[mid] <= 0:
+        return a
+    mean = (pos[b] - pos[mid]) / (b - mid)  # [turns per sample]
+    run_min = np.minimum.accumulate(pos[a:b + 1][::-1])[::-1]  # monotone from the end backwards
+    end = b - a
+    while True:
+        k = int(np.searchsorted(run_min[:end + 1], pos[a + end] - 1.0, side="right")) - 1
+        if k < 0:  # less than a whole turn left: kept where it too turns at the steady rate
+            rest = (pos[a + end] - pos[a]) / end / mean - 1.0 if end > 0 else 0.0
+            return a if abs(rest) <= TURN_TOL else a + end
+        if abs((pos[a + end] - pos[a + k]) / (end - k) / mean - 1.0) > TURN_TOL:
+            return a + end  # a turn off the steady rate: the steady part starts after it
+        end = k
 
 
 def _kurtosis(x: np.ndarray) -> float:

@@ -23,8 +23,16 @@ def recording_inputs(path: str | Path) -> tuple[dict[str, np.ndarray], np.ndarra
     """Calibrated accelerations, encoder counts, rate, counts per turn and configuration of a bench
     recording (any recording ``twin replay`` accepts)."""
     from twin.instrument.calibration import measured_accel
-    from twin.recording import read_recording
+    from twin.mcapfile import read_metadata
+    from twin.recording import RECORDING_RECORD, read_recording
 
+    records = read_metadata(Path(path))
+    if RECORDING_RECORD not in records and "twin.config" in records:
+        # a run file of twin simulate: the engine's own signals, without the sensor chain's response, noise, DAQ
+        # and the static calibration the model was trained through; answering it would claim what it is not
+        raise IdentifyError(f"{path}: a run file of 'twin simulate' (the engine's signals, not what the bench's "
+                            "sensors and DAQ record); make a bench recording of the configuration with 'twin record' "
+                            "(the options of 'twin simulate' and --out REC.mcap) and identify that")
     rec, info, _ = read_recording(path)
     if "encoder_counts" not in rec:
         raise IdentifyError(f"{path}: the recording has no encoder_counts channel")

@@ -66,7 +66,7 @@ from twin.identification.features import FEATURE_VERSION, MIN_HOP_REVS, REVS_PER
 from twin.identification.intervals import (BELT_RATIO, RIPPLE_BAND_PCT, SIZE_RESOLVED_FROM_RPM, band_half_width,
                                            fault_split_joints, held_out_at, logs_answer, logs_spread, resolution,
                                            rippled, window_table)
-from twin.identification.ranges import out_of_range, recording_measures, widen
+from twin.identification.ranges import clip_to_hull, out_of_range, recording_measures, widen
 from twin.identification.results import Evidence, HeldOut, IdentifyResult, JointAnswer
 from twin.identification.trees import ModelError, TreeEnsemble, from_sklearn
 
@@ -302,18 +302,27 @@ def training_check(model: ClearanceModel, answer: IdentifyResult, measures: dict
                    X: np.ndarray) -> tuple[IdentifyResult, list[str], dict[str, Any]]:
     """Check a recording's ``measures`` (:func:`twin.identification.ranges.recording_measures`), orientation and
     window features ``X`` [windows, features] against the model's training data
-    (:func:`twin.identification.ranges.out_of_range`). Returns the answer (outside the training data: each
-    joint's interval widened to every clearance trained on there, :func:`twin.identification.ranges.widen`), the
+    (:func:`twin.identification.ranges.out_of_range`). Returns the answer (each joint's size and interval held
+    within the clearances trained on there, :func:`twin.identification.ranges.clip_to_hull`; outside the training
+    data the interval is all of them, :func:`twin.identification.ranges.widen`), the
     warnings (one per reason) and the check's evidence."""
     tr = model.trained_on
     warnings, checks = out_of_range(measures, orientation, tr.get("ranges"), np.median(X, axis=0),
                                     tr.get("feature_reference"), model.feature_names)
     outside = bool(warnings)
-    if outside:
-        answer = dataclasses.replace(answer, joints=tuple(
-            dataclasses.replace(a, interval_if_faulty_mm=tuple(widen(list(a.interval_if_faulty_mm),
-                                                                     tr["clearances_mm"][a.joint])))
-            for a in answer.joints))
+    seen = tr.get("clearances_mm") or {}
+    joints = []
+    for a in answer.joints:
+        if a.joint not in seen:
+            joints.append(a)
+            continue
+        # never below the smallest size trained at the joint nor above the largest; outside the training data the
+        # interval is that hull itself, the same for every recording
+        interval = widen(list(a.interval_if_faulty_mm), seen[a.joint]) if outside else \
+            clip_to_hull(a.interval_if_faulty_mm, seen[a.joint])
+        size = clip_to_hull([a.size_if_faulty_mm] * 2, seen[a.joint])[0]
+        joints.append(dataclasses.replace(a, size_if_faulty_mm=size, interval_if_faulty_mm=tuple(interval)))
+    answer = dataclasses.replace(answer, joints=tuple(joints))
     checks["outside_training_data"] = outside
     few = f", calibrated on the training runs' answers from their first {len(X)} window{'s' * (len(X) > 1)} (as many " \
           "as this recording has)" if window_table(tr.get("interval", {}), len(X)) else ""
@@ -357,9 +366,10 @@ def identify_inputs(model: ClearanceModel, acc: dict[str, np.ndarray], counts: n
         j = a.joint
         # how often the model's answers at this joint, speed and orientation held in training runs left out
         held = HeldOut.from_dict(held_out_at(table.get(j), orientation, w.crank_hz))
-        # G: no size-resolution map (None: not checked; the held-out accuracy says how its sizes held)
-        joints.append(dataclasses.replace(a, size_resolved=resolved.get(j), size_held_out=held))
-        if a.faulty and resolved.get(j) is False:
+        # G (the guide) has no size-resolution map: resolved at every speed trained on (its held-out accuracy and
+        # the model card's figures say how far its sizes hold)
+        joints.append(dataclasses.replace(a, size_resolved=bool(resolved.get(j, True)), size_held_out=held))
+        if a.faulty and not resolved.get(j, True):
             warnings.append(f"the size at {j} is not resolved at {w.crank_hz * 60 * BELT_RATIO:.0f} motor rpm with "
                             f"{orientation} vertical: the bench's sensors tell 0.05-0.1 mm at {j} apart from "
                             f"{SIZE_RESOLVED_FROM_RPM[j].get(orientation, float('nan')):g} rpm on (model card); "

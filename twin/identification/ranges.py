@@ -10,6 +10,9 @@ in the model file) and on every recording answered:
 * **noise level** [µg/√Hz]: the accelerometers' noise floor above the sensors' resonance
   (:func:`measure_noise`);
 * **orientation**: the bench axis that points up (the recording's configuration);
+* **speed swing** [%]: the 50 ms crank rate's swing in steady running (:attr:`twin.identification.features.
+  Windows.swing`): it widens the steady part's tolerance without a cap below a stop, so a recording that turns
+  through whole turns is answered however it swings;
 * **distance in feature space**: how many of the recording's features lie beyond Tukey's far-out fences
   (quartiles ± 3 interquartile ranges) of the training windows' (:func:`feature_outliers`), where the model
   stores those quartiles.
@@ -28,10 +31,18 @@ margin for its measurement, stated here and never tuned on an answer:
 * orientation: not among the training runs';
 * features: more features beyond the training windows' far-out fences than 99 % of the training runs have
   (``max_outliers``, stored by :func:`feature_reference`); a model without that count: at least
-  :data:`FEATURE_OUTLIER_SHARE` (5 %) of the features.
+  :data:`FEATURE_OUTLIER_SHARE` (5 %) of the features; and, whatever the training runs reach, a third of the
+  features or more (:data:`FEATURE_FAR_SHARE`: judged on the recording itself, a confident answer resting on
+  so many features the trees never saw there is not);
+* speed swing (the 50 ms crank rate's swing in steady running, :attr:`twin.identification.features.Windows.swing`):
+  beyond :data:`BENCH_SWING_PCT` (85 %, the most the bench's motor drive gives, measured), or, where the model
+  stores the training runs' range, beyond its top by :data:`SWING_MARGIN_PCT` (5 points).
 
-**What an answer outside says.** One warning per reason, and, at each joint, the interval widened to hold every
-clearance the model was trained on at that joint (:func:`widen`): outside the training data the conformal
+**What an answer says of sizes.** Every size and interval lies within the clearances the model was trained on at
+that joint (:func:`clip_to_hull`: never below the smallest trained size, never above the largest).
+
+**What an answer outside says.** One warning per reason, and, at each joint, the interval replaced by every
+clearance the model was trained on at that joint, the same for every recording (:func:`widen`): outside the training data the conformal
 guarantee (exchangeability with the training runs) no longer holds, and nothing the model stores tells how far
 its answer may stray, save that a tree ensemble answers within the values it was trained on. The widened
 interval is honest and says little; the fault location is still given, with the warnings.
@@ -52,8 +63,23 @@ SPEED_MARGIN = 0.03
 RIPPLE_MARGIN_PCT = 0.25
 #: factor of allowance on the noise level's training range [-]
 NOISE_MARGIN = 1.15
-#: share of features beyond the training windows' far-out fences that makes a recording outside [-]
+#: share of features beyond the training windows' far-out fences that makes a recording outside, for a model
+#: that stores no ``max_outliers`` [-]
 FEATURE_OUTLIER_SHARE = 0.05
+#: share of features beyond the training windows' far-out fences that makes a recording outside whatever the
+#: training runs' own counts (a third: the answer then rests on features the trees never split on there) [-]
+FEATURE_FAR_SHARE = 1.0 / 3.0
+#: the largest crank-rate swing of steady running the bench's motor drive gives [%]: the 95th percentile of the
+#: 50 ms rate's deviation from its median over the last half of a recording (:attr:`twin.identification.features.
+#: Windows.swing`), measured on 60 motor-drive runs that turn (of 72; 3 s, MuJoCo) with the drive train's
+#: placeholders drawn over their documented ranges, x/y/z vertical, 250-800 rpm: median 28 %, 90th percentile
+#: 46 %, largest 75.7 % (x vertical, a soft speed loop); the threshold is that largest plus the steady part's
+#: allowance RIPPLE_ALLOWANCE (5 points), rounded up to 5 % (``analysis/identify/speed_swing.py``, result
+#: ``analysis/identify/speed_swing.json``). A recording that swings more is answered with a warning
+BENCH_SWING_PCT = 85.0
+#: allowance above the training runs' largest swing [percentage points]: the allowance the steady part's
+#: tolerance gives a recording's own spread (:data:`twin.identification.features.RIPPLE_ALLOWANCE`)
+SWING_MARGIN_PCT = 5.0
 #: Tukey's far-out fences: quartiles ± this many interquartile ranges
 FENCE_IQR = 3.0
 #: noise band [Hz]: above the accelerometers' 21 kHz resonance, below the 50 kHz Nyquist rate of the DAQ
@@ -141,7 +167,8 @@ def recording_measures(acc: dict[str, np.ndarray], counts: np.ndarray, rate_hz: 
     a, b = ripple_span(counts, windows)
     return {"crank_hz": float(windows.crank_hz),
             "ripple_pct": [round(v, 4) for v in measure_ripple(counts, rate_hz, counts_per_rev, a, b)],
-            "noise_ug_rthz": round(measure_noise(acc, rate_hz, a, b), 3)}
+            "noise_ug_rthz": round(measure_noise(acc, rate_hz, a, b), 3),
+            "speed_swing_pct": round(100.0 * float(getattr(windows, "swing", 0.0)), 3)}
 
 
 def training_ranges(measures: list[dict[str, Any]], orientations: list[str], source: str) -> dict[str, Any]:
@@ -149,8 +176,10 @@ def training_ranges(measures: list[dict[str, Any]], orientations: list[str], sou
     r = np.array([m["ripple_pct"] for m in measures], float)
     nz = np.array([m["noise_ug_rthz"] for m in measures], float)
     hz = np.array([m["crank_hz"] for m in measures], float)
+    sw = np.array([m.get("speed_swing_pct", np.nan) for m in measures], float)
+    swing = {"speed_swing_pct": [float(np.nanmin(sw)), float(np.nanmax(sw))]} if np.isfinite(sw).any() else {}
     return {"source": source, "runs": len(measures),
-            "crank_hz": [float(hz.min()), float(hz.max())],
+            "crank_hz": [float(hz.min()), float(hz.max())], **swing,
             "ripple_pct": [[float(r[:, k].min()), float(r[:, k].max())] for k in range(r.shape[1])],
             "noise_ug_rthz": [float(np.nanmin(nz)), float(np.nanmax(nz))],
             "orientations": sorted(set(orientations))}
@@ -219,6 +248,14 @@ def out_of_range(measures: dict[str, Any], orientation: str, ranges: dict[str, A
     if math.isfinite(nz) and not (nlo / NOISE_MARGIN <= nz <= nhi * NOISE_MARGIN):
         warnings.append(f"sensor noise level {nz:.1f} ug/rtHz is outside the training range {nlo:.1f}-{nhi:.1f} "
                         "ug/rtHz: the answer is an extrapolation")
+    sw = measures.get("speed_swing_pct")
+    if sw is not None and sw > BENCH_SWING_PCT:
+        warnings.append(f"the crank rate swings {sw:.0f} % within 50 ms, more than the bench's motor drive gives in "
+                        f"steady running (up to {BENCH_SWING_PCT:.0f} %, measured): a spin-up, a stall or a drive "
+                        "unlike the bench's; the answer is an extrapolation")
+    elif sw is not None and "speed_swing_pct" in ranges and sw > ranges["speed_swing_pct"][1] + SWING_MARGIN_PCT:
+        warnings.append(f"the crank rate swings {sw:.0f} % within 50 ms, outside the training range 0-"
+                        f"{ranges['speed_swing_pct'][1]:.0f} %: the answer is an extrapolation")
     if orientation not in ranges["orientations"]:
         warnings.append(f"orientation {orientation} was not in the training data: the answer is an extrapolation")
     if features_ref is None:
@@ -228,20 +265,39 @@ def out_of_range(measures: dict[str, Any], orientation: str, ranges: dict[str, A
         limit = features_ref.get("max_outliers")
         ev["feature_distance"] = {"beyond_far_out_fences": n, "of": int(x_median.size),
                                   "training_runs_max": limit}
-        if (n > limit) if limit is not None else (n >= FEATURE_OUTLIER_SHARE * x_median.size):
+        far = n >= FEATURE_FAR_SHARE * x_median.size
+        if far or ((n > limit) if limit is not None else (n >= FEATURE_OUTLIER_SHARE * x_median.size)):
             names = [feature_names[i] for i in idx[:3]] if feature_names else []
             warnings.append(f"{n} of {x_median.size} features lie beyond the training windows' far-out fences "
                             f"(e.g. {', '.join(names)}): the recording is unlike the training data")
     return warnings, ev
 
 
-def widen(interval: list[float], seen: Any) -> list[float]:
-    """The interval widened to hold every clearance the model was trained on at that joint [mm] (``seen``:
-    ``trained_on["clearances_mm"][joint]``, a list of values or {min, max, ...}); see the module docstring."""
+def trained_hull(seen: Any) -> tuple[float, float] | None:
+    """The smallest and largest clearance the model was trained on at a joint [mm] (``seen``:
+    ``trained_on["clearances_mm"][joint]``, a list of values or {min, max, ...}; 0, a ball bearing, is not a
+    size); None where nothing was trained there."""
     if isinstance(seen, dict):
         vals = [float(seen["min"]), float(seen["max"])]
     else:
         vals = [float(v) for v in seen if float(v) > 0]
-    if not vals:
+    return (min(vals), max(vals)) if vals else None
+
+
+def clip_to_hull(interval: list[float] | tuple[float, float], seen: Any) -> list[float]:
+    """The interval [mm] held within the clearances the model was trained on at that joint (:func:`trained_hull`):
+    a tree ensemble answers within the values it was trained on, so no end of an interval lies below the
+    smallest trained size or above the largest."""
+    hull = trained_hull(seen)
+    if hull is None:
         return list(interval)
-    return [min(interval[0], min(vals)), max(interval[1], max(vals))]
+    lo, hi = hull
+    return [min(max(float(interval[0]), lo), hi), min(max(float(interval[1]), lo), hi)]
+
+
+def widen(interval: list[float], seen: Any) -> list[float]:
+    """The interval outside the training data: every clearance the model was trained on at that joint
+    (:func:`trained_hull`) [mm], the same for every recording (``seen``: ``trained_on["clearances_mm"][joint]``);
+    see the module docstring. ``interval`` where nothing was trained at that joint."""
+    hull = trained_hull(seen)
+    return list(hull) if hull is not None else list(interval)

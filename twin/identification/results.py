@@ -158,8 +158,9 @@ class IdentifyResult:
         raise KeyError(f"{name!r}: no such clearance location; the answer has {have}")
 
     def to_dict(self) -> dict[str, Any]:
-        """The answer as the plain dict of the JSON file (keys in the file's order)."""
-        out: dict[str, Any] = {"fault": self.fault, "probabilities": dict(self.probabilities)}
+        """The answer as the plain dict of the JSON file (keys in the file's order; ``refused`` false: a refused
+        recording's file holds ``refused: true`` and the reason instead, ``twin identify clearance --json``)."""
+        out: dict[str, Any] = {"refused": False, "fault": self.fault, "probabilities": dict(self.probabilities)}
         for j in self.joints:
             k = _key(j.joint)
             out[f"{k}_mm"] = j.size_mm
@@ -167,7 +168,7 @@ class IdentifyResult:
             out[f"{k}_if_faulty_mm"] = {"median": j.size_if_faulty_mm, "interval_90": list(j.interval_if_faulty_mm)}
         for j in self.joints:
             k = _key(j.joint)
-            out[f"{k}_size_resolved"] = j.size_resolved
+            out[f"{k}_size_resolved"] = None if j.size_resolved is None else bool(j.size_resolved)
             out[f"{k}_size_held_out"] = None if j.size_held_out is None else j.size_held_out.to_dict()
         out["recording"] = self.recording
         out["warnings"] = list(self.warnings)
