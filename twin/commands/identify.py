@@ -172,8 +172,8 @@ def _clearance(args: argparse.Namespace) -> int:
         lo, hi = j.interval_mm
         v = j.size_mm
         held = j.size_held_out
-        print(f"  clearance {j.joint}: " + (f"{v:.3g} mm (90 % interval {lo:.3g}-{hi:.3g} mm)" if v > 0
-                                            else "none (ball bearing)")
+        name, healthy = ("G (slider guide play)", "none (tight guide)") if j.joint == "G" else (j.joint, "none (ball bearing)")
+        print(f"  clearance {name}: " + (f"{v:.3g} mm (90 % interval {lo:.3g}-{hi:.3g} mm)" if v > 0 else healthy)
               + (f"; at this speed and orientation the model's sizes held within x{held.within_factor:g} in "
                  f"{held.share * 100:.0f} % of {held.runs} training runs left out" if v > 0 and held else ""))
     ev = a.evidence

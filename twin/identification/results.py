@@ -56,7 +56,7 @@ class JointAnswer:
     """The answer at one clearance location.
 
     Attributes:
-        joint: the location's name ("B", "C").
+        joint: the location's name ("B", "C", or "G": the slider guide, whose size is its two-sided play).
         faulty: whether the location answer (the most probable class) names this joint.
         size_if_faulty_mm: the size the regressor reads, the median over the windows [mm] (diametral clearance),
             whether or not the joint is located faulty.
@@ -131,7 +131,8 @@ class IdentifyResult:
     """The clearance identification of one recording (``twin.identify``, ``twin identify clearance``).
 
     Attributes:
-        fault: the located fault, the most probable class: "none", "B", "C" or "BC".
+        fault: the located fault, the most probable class: "none", or the locations with play among B, C and the
+            slider guide G ("B", "C", "BC", "G", "BG", "CG", "BCG"; a model trained without guide play: no G).
         probabilities: class -> probability, the mean over the windows [-].
         joints: one :class:`JointAnswer` per clearance location, in the mechanism's order.
         recording: the recording answered ("" for inputs not read from a file).
@@ -150,7 +151,7 @@ class IdentifyResult:
     seconds: float | None = None
 
     def joint(self, name: str) -> JointAnswer:
-        """The answer at the location ``name`` ("B", "C"); KeyError naming the locations there are."""
+        """The answer at the location ``name`` ("B", "C", "G"); KeyError naming the locations there are."""
         for j in self.joints:
             if j.joint == name:
                 return j
