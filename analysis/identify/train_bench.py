@@ -48,10 +48,36 @@ def generate(work: Path, name: str, workers: str) -> Path:
 
 
 def dev_eval(model: Path, work: Path, out: Path, workers: str) -> dict:
+    dev = [str(work / d) for d in DEV if (work / d / "runs.parquet").is_file()]
     subprocess.run([sys.executable, str(ROOT / "analysis" / "identify" / "bench_eval.py"), str(model),
-                    *[str(work / d) for d in DEV], "--out", str(out), "--workers", workers], check=True,
+                    *dev, "--out", str(out), "--workers", workers], check=True,
                    stdout=subprocess.DEVNULL)
     return json.loads(out.read_text())
+
+
+def cached_features(d: Path, workers: int) -> tuple:
+    """:func:`twin.identification.inputs.dataset_features` of one dataset's train and val runs, kept beside it
+    (``features_cache.npz`` + ``.json``, plain arrays and JSON; keyed by its manifest's digest) and read back."""
+    import hashlib
+
+    import numpy as np
+
+    from twin.dataset import open as open_dataset
+    from twin.identification.inputs import dataset_features
+
+    ds = open_dataset(d)
+    key = hashlib.sha256((d / "runs.parquet").read_bytes()).hexdigest()
+    npz, js = d / "features_cache.npz", d / "features_cache.json"
+    if npz.is_file() and js.is_file():
+        meta = json.loads(js.read_text())
+        if meta["key"] == key:
+            z = np.load(npz, allow_pickle=False)
+            return z["X"], meta["rows"], z["owner"].tolist(), meta["skipped"], [ds]
+    X, rows, owner, skipped = dataset_features(ds, ("train", "val"), workers)
+    rows = [dict(r, dataset=ds.info["name"]) for r in rows]
+    np.savez(npz, X=X, owner=np.asarray(owner))
+    js.write_text(json.dumps({"key": key, "rows": rows, "skipped": skipped}, default=float))
+    return X, json.loads(json.dumps(rows, default=float)), list(owner), skipped, [ds]
 
 
 def summary(rep: dict) -> str:
@@ -74,8 +100,9 @@ def main() -> None:
                     help="the model to compare with on the development sets ('' for none)")
     ap.add_argument("--save", metavar="VARIANT:PATH", help="copy the chosen variant's model file to PATH")
     ap.add_argument("--no-generate", action="store_true", help="use the dataset folders as they are")
+    ap.add_argument("--cache-only", action="store_true", help="only compute and keep the complete training sets' features")
     args = ap.parse_args()
-    from twin.identification.inputs import pooled_features
+    from twin.identification.inputs import pool_features
     from twin.identification.training import TrainOptions, train
 
     work = Path(args.work)
@@ -83,9 +110,12 @@ def main() -> None:
     if not args.no_generate:
         for n in DEV:
             generate(work, n, args.workers)
-    dirs = [d for d in dirs if (d / "info.json").is_file()]
+    dirs = [d for d in dirs if (d / "runs.parquet").is_file()]  # complete datasets only
     t0 = time.perf_counter()
-    feats = pooled_features(dirs, ("train", "val"), int(args.workers))
+    feats = pool_features([cached_features(d, int(args.workers)) for d in dirs])
+    if args.cache_only:
+        print(f"features of {', '.join(d.name for d in dirs)} kept: {time.perf_counter() - t0:.0f} s")
+        return
     t_feat = time.perf_counter() - t0
     print(f"features of {len(feats[1])} runs ({len(feats[0])} windows, {len(feats[3])} runs without windows) from "
           f"{', '.join(d.name for d in dirs)}: {t_feat:.0f} s on {args.workers} workers", flush=True)
