@@ -29,7 +29,8 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
-TRAIN = ("clearance_id_bench_motor", "clearance_id_bench_pid", "clearance_id_bench_mujoco")
+TRAIN = ("clearance_id_bench_motor", "clearance_id_bench_pid", "clearance_id_bench_mujoco", "clearance_id_bench_motor2",
+         "clearance_id_bench_pid2")
 DEV = ("clearance_id_bench_dev_motor", "clearance_id_bench_dev_pid", "clearance_id_bench_dev_mujoco")
 #: the variants tried on the development sets (TrainOptions fields)
 VARIANTS = {

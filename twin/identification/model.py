@@ -366,10 +366,11 @@ def identify_inputs(model: ClearanceModel, acc: dict[str, np.ndarray], counts: n
         j = a.joint
         # how often the model's answers at this joint, speed and orientation held in training runs left out
         held = HeldOut.from_dict(held_out_at(table.get(j), orientation, w.crank_hz))
-        # G (the guide) has no size-resolution map: resolved at every speed trained on (its held-out accuracy and
-        # the model card's figures say how far its sizes hold)
         joints.append(dataclasses.replace(a, size_resolved=bool(resolved.get(j, True)), size_held_out=held))
-        if a.faulty and not resolved.get(j, True):
+        if a.faulty and not resolved.get(j, True) and orientation not in SIZE_RESOLVED_FROM_RPM[j]:
+            warnings.append(f"the size at {j} is not resolved with {orientation} vertical at any speed (model card): "
+                            "trust the location and the interval, not the size")
+        elif a.faulty and not resolved.get(j, True):
             warnings.append(f"the size at {j} is not resolved at {w.crank_hz * 60 * BELT_RATIO:.0f} motor rpm with "
                             f"{orientation} vertical: the bench's sensors tell 0.05-0.1 mm at {j} apart from "
                             f"{SIZE_RESOLVED_FROM_RPM[j].get(orientation, float('nan')):g} rpm on (model card); "
