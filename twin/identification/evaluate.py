@@ -20,7 +20,7 @@ import numpy as np
 from twin.config import CATALOGUE_DIAMETRAL_MM
 from twin.identification.inputs import pooled_features
 from twin.identification.intervals import SIZE_RESOLVED_FROM_RPM, held_out_at, resolution
-from twin.identification.model import CLASSES, ClearanceModel, training_check
+from twin.identification.model import ClearanceModel, training_check
 
 
 def half_gap_mm(c: float) -> float:
@@ -74,8 +74,9 @@ def evaluate(model: ClearanceModel, dataset_dir: str | Path | list[str | Path], 
     t_pred = time.perf_counter() - t0
     y = [p["true_fault"] for p in preds]
     yhat = [p["fault"] for p in preds]
-    conf = {t: {q: sum(1 for a, b in zip(y, yhat) if a == t and b == q) for q in CLASSES} for t in CLASSES}
-    recall = {c: (conf[c][c] / sum(conf[c].values())) if sum(conf[c].values()) else None for c in CLASSES}
+    classes = model.classes  # none, B, C, BC and, for a model of the guide, G, BG, CG, BCG
+    conf = {t: {q: sum(1 for a, b in zip(y, yhat) if a == t and b == q) for q in classes} for t in classes}
+    recall = {c: (conf[c][c] / sum(conf[c].values())) if sum(conf[c].values()) else None for c in classes}
     acc = float(np.mean([a == b for a, b in zip(y, yhat)])) if preds else float("nan")
     report: dict[str, Any] = {
         "dataset": "+".join(d.info["name"] for d in dss), "dataset_dir": ", ".join(map(str, dirs)),
@@ -234,6 +235,7 @@ def _meets(v: dict[str, Any]) -> str:
 
 
 def render_markdown(r: dict[str, Any]) -> str:
+    classes = list(r["confusion"])  # the model's classes
     lines = [f"# Clearance identification: model `{r['model']}` on dataset `{r['dataset']}`", "",
              f"- test data: {r['runs']} runs ({r['windows']} windows of 2 crank revolutions), engine {r['engine']}, "
              f"splits {', '.join(r['splits'])}; {len(r['runs_left_out'])} runs left out (fewer than 2 steady "
@@ -247,10 +249,10 @@ def render_markdown(r: dict[str, Any]) -> str:
                      f"({o['share'] * 100:.1f} %)")
     lines += ["",
               "## Confusion matrix (rows: truth, columns: answer)", "",
-              "| truth \\ answer | " + " | ".join(CLASSES) + " | recall |", "|---|" + "---|" * (len(CLASSES) + 1)]
-    for t in CLASSES:
+              "| truth \\ answer | " + " | ".join(classes) + " | recall |", "|---|" + "---|" * (len(classes) + 1)]
+    for t in classes:
         rc = r["recall"][t]
-        lines.append(f"| {t} | " + " | ".join(str(r["confusion"][t][q]) for q in CLASSES)
+        lines.append(f"| {t} | " + " | ".join(str(r["confusion"][t][q]) for q in classes)
                      + f" | {'–' if rc is None else f'{rc * 100:.0f} %'} |")
     lines += ["", "## Fault location by speed", "", "| speed | runs | accuracy |", "|---|---|---|"]
     for k, v in r["by_speed"].items():
@@ -329,13 +331,14 @@ def plots(r: dict[str, Any], out: Path) -> list[str]:
 
     files = []
     fig, ax = plt.subplots(figsize=(4.8, 4.2))
-    m = np.array([[r["confusion"][t][q] for q in CLASSES] for t in CLASSES], dtype=float)
+    classes = list(r["confusion"])
+    m = np.array([[r["confusion"][t][q] for q in classes] for t in classes], dtype=float)
     ax.imshow(m / np.maximum(m.sum(axis=1, keepdims=True), 1), cmap="Blues", vmin=0, vmax=1)
     for i in range(4):
         for k in range(4):
             ax.text(k, i, int(m[i, k]), ha="center", va="center")
-    ax.set_xticks(range(4), CLASSES)
-    ax.set_yticks(range(4), CLASSES)
+    ax.set_xticks(range(len(classes)), classes)
+    ax.set_yticks(range(len(classes)), classes)
     ax.set_xlabel("answer")
     ax.set_ylabel("truth")
     ax.set_title(f"fault location, accuracy {r['accuracy'] * 100:.1f} %")
