@@ -185,6 +185,10 @@ def test_a_refused_recording_writes_its_json_record_atomically_and_exits_2(tmp_p
     assert rc == 2 and err.count("\n") == 1 and "too little motion" in err
     d = json.loads(js.read_text())
     assert d["refused"] is True and "too little motion" in d["reason"] and d["recording"] == str(rec)
+    from twin.identification.results import IdentifyResult
+
+    with pytest.raises(ValueError, match="refused, no answer"):
+        IdentifyResult.from_json(js.read_text())
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.json", "short.mcap"]  # no temporary file left
 
 
@@ -216,7 +220,7 @@ def test_the_dataset_generator_writes_the_bench_recording_twin_record_writes(tmp
 
     spec = parse_spec({"dataset": {"name": "r", "seed": 5}, "base": {"test": 6, "duration_s": 0.05},
                        "design": {"kind": "grid"}, "factors": {"motor_rpm": [500.0]},
-                       "outputs": {"truth": [], "instrumented": ["counts"], "recordings": True},
+                       "outputs": {"truth": [], "instrumented": ["counts", "calibrated"], "recordings": True},
                        "splits": {"train": 1.0, "val": 0.0, "test": 0.0}})
     assert "recordings" in spec.canonical()["outputs"]
     info = generate(spec, tmp_path / "ds", workers=1, progress=False)
@@ -232,6 +236,13 @@ def test_the_dataset_generator_writes_the_bench_recording_twin_record_writes(tmp
     for name in ref_daq.channels:
         np.testing.assert_array_equal(daq[name], ref_daq[name], err_msg=name)
     assert rinfo.calibration.to_dict() == ref_info.calibration.to_dict()
+    # what the identification reads from the recording is what it reads from the dataset's columns (float32)
+    from twin.identification.inputs import recording_inputs
+
+    acc, counts, *_ = recording_inputs(rec_path)
+    cols = ds.read(row["run_id"], [f"meas_AC{i}" for i in range(1, 7)])
+    for i in range(1, 7):
+        np.testing.assert_array_equal(acc[f"AC{i}"].astype(np.float32), cols[f"meas_AC{i}"], err_msg=f"AC{i}")
 
 
 def test_a_spec_without_recordings_keeps_its_identity():
