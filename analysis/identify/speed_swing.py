@@ -26,7 +26,7 @@ seed: the first set's largest swings were all x vertical). For each run, from th
 * ``new_rule``: the same under the rule of this version (no cap below a stop, the steady part starting at the first
   whole turn within ``TURN_TOL`` of the mean rate): steady turns and windows, or the refusal.
 
-Result: ``analysis/identify/speed_swing.json`` (per run and the distribution) and a summary printed. The
+Result: ``analysis/results/identify/speed_swing.json`` (per run and the distribution) and a summary printed. The
 threshold ``twin.identification.ranges.BENCH_SWING_PCT`` (the largest swing of steady running the bench gives; a
 recording that swings more is answered with a warning, not refused) is the largest ``swing_pct`` measured on the runs
 that turn plus the allowance the rule gives a recording's own spread (``RIPPLE_ALLOWANCE``, 5 points), rounded up
@@ -36,7 +36,7 @@ Run (after generating the dataset):
 
     twin dataset generate analysis/datasets/speed_swing.toml --out speed_swing
     twin dataset generate analysis/datasets/speed_swing_x.toml --out speed_swing_x
-    python analysis/identify/speed_swing.py speed_swing speed_swing_x [--out analysis/identify/speed_swing.json]
+    python analysis/identify/speed_swing.py speed_swing speed_swing_x [--out analysis/results/identify/speed_swing.json]
 """
 
 from __future__ import annotations
@@ -126,7 +126,7 @@ def measure_run(ds, r: dict, cpr: float) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("dataset", nargs="+", help="the generated datasets of analysis/datasets/speed_swing*.toml")
-    ap.add_argument("--out", default=str(HERE / "speed_swing.json"))
+    ap.add_argument("--out", default=str(HERE.parent / "results" / "identify" / "speed_swing.json"))
     args = ap.parse_args()
 
     import twin
