@@ -129,10 +129,9 @@ def main() -> None:
     ap.add_argument("--out", default=str(HERE.parent / "results" / "identify" / "speed_swing.json"))
     args = ap.parse_args()
 
-    import twin
     from twin.dataset import open as open_dataset
     from twin.identification.features import RIPPLE_ALLOWANCE
-    from twin.provenance import git_commit
+    from twin.provenance import stamped
 
     runs = []
     names = []
@@ -151,7 +150,6 @@ def main() -> None:
         "what": "crank-rate swing of steady running, motor drive with the drive train's placeholders drawn "
                 "(analysis/identify/speed_swing.py)",
         "datasets": names, "runs": len(runs), "runs_that_turn": len(turning),
-        "twin_version": twin.__version__, "commit": git_commit(),
         "swing_pct": {"min": float(sw.min()), "median": float(np.median(sw)), "p90": float(np.quantile(sw, 0.9)),
                       "max": float(sw.max()),
                       "by_orientation": {o: ({"runs": len(v), "median": float(np.median(v)), "max": float(max(v))}
@@ -166,7 +164,7 @@ def main() -> None:
                           "rounded up to 5 %",
         "per_run": runs,
     }
-    Path(args.out).write_text(json.dumps(out, indent=1) + "\n")
+    Path(args.out).write_text(json.dumps(stamped(out), indent=1) + "\n")
     print(f"{len(runs)} motor-drive runs, {len(turning)} turn ({len(runs) - len(turning)} stall): swing (95th pct of "
           f"the 50 ms rate's deviation, last half) median {np.median(sw):.1f} %, 90th pct {np.quantile(sw, 0.9):.1f} %, "
           f"max {sw.max():.1f} %; {out['over_30_pct']} over 30 %")
