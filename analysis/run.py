@@ -119,6 +119,8 @@ SCRIPTS: dict[str, Script] = {
     "identify/recording_length": Script(f"{R}/identify/recording_length*.json (--json)", "1 min",
                                         needs="a dataset generated from clearance_id_length*.toml (argument)"),
     "identify/ripple_check": Script(f"{R}/identify/ripple.json", "~3 min"),
+    "identify/speed_swing": Script(f"{R}/identify/speed_swing.json", "6 s",
+                                   needs="the datasets of analysis/datasets/speed_swing*.toml (arguments; 8 min)"),
     "identify/size_observability": Script(f"{R}/identify/size_observability*.json (--json)", "2 min",
                                           args=("--json", f"{R}/identify/size_observability.json")),
     "identify/start_angle_check": Script(f"{R}/identify/start_angle.json (--json)", "2 min",

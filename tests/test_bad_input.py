@@ -233,7 +233,7 @@ CASES: list[tuple[str, str]] = [
     ("identify clearance {ws}/rec.mcap --model {ws}/afile", "not a readable identification model"),
     ("identify clearance {ws}/rec.mcap --model {ws}/missing.npz", "no such model file"),
     ("identify clearance {ws}/rec.mcap --json {ws}/a.txt", "--json"),
-    ("identify clearance {ws}/run.mcap", "twin.recording"),
+    ("identify clearance {ws}/run.mcap", "'twin record'"),  # a run file of twin simulate
     ("identify train {ws}/afile --out {ws}/m.npz", "not a dataset folder"),
     ("identify train {ws}/missing_ds --out {ws}/m.txt", "--out"),
     ("identify train {ws}/missing_ds --out {ws}/m.npz --splits train,dev", "--splits"),

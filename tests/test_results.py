@@ -3,7 +3,10 @@
 The golden dicts in ``tests/golden/`` were captured from the code that returned plain dicts, before the typed
 results existed (the identify answers of three sample recordings, the ``seconds`` set to null; the report of the
 replay that ``tests/test_replay.py``'s ``ideal`` fixture makes, the recording's path shortened): ``to_dict()``
-must give exactly that dict back, key order included, and the JSON text must read back to the same value.
+must give exactly that dict back, key order included, and the JSON text must read back to the same value. The
+answer's ``refused`` (false) and ``evidence.training_data_check.measured.speed_swing_pct`` were added to the
+identify answers when the answer gained them, and test3's sizes if faulty (a healthy recording, its answers below
+the smallest size trained on) clipped to that size when intervals were held within the trained hull.
 """
 
 from __future__ import annotations

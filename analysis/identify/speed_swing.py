@@ -26,7 +26,7 @@ seed: the first set's largest swings were all x vertical). For each run, from th
 * ``new_rule``: the same under the rule of this version (no cap below a stop, the steady part starting at the first
   whole turn within ``TURN_TOL`` of the mean rate): steady turns and windows, or the refusal.
 
-Result: ``analysis/identify/speed_swing.json`` (per run and the distribution) and a summary printed. The
+Result: ``analysis/results/identify/speed_swing.json`` (per run and the distribution) and a summary printed. The
 threshold ``twin.identification.ranges.BENCH_SWING_PCT`` (the largest swing of steady running the bench gives; a
 recording that swings more is answered with a warning, not refused) is the largest ``swing_pct`` measured on the runs
 that turn plus the allowance the rule gives a recording's own spread (``RIPPLE_ALLOWANCE``, 5 points), rounded up
@@ -36,7 +36,7 @@ Run (after generating the dataset):
 
     twin dataset generate analysis/datasets/speed_swing.toml --out speed_swing
     twin dataset generate analysis/datasets/speed_swing_x.toml --out speed_swing_x
-    python analysis/identify/speed_swing.py speed_swing speed_swing_x [--out analysis/identify/speed_swing.json]
+    python analysis/identify/speed_swing.py speed_swing speed_swing_x [--out analysis/results/identify/speed_swing.json]
 """
 
 from __future__ import annotations
@@ -126,13 +126,12 @@ def measure_run(ds, r: dict, cpr: float) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("dataset", nargs="+", help="the generated datasets of analysis/datasets/speed_swing*.toml")
-    ap.add_argument("--out", default=str(HERE / "speed_swing.json"))
+    ap.add_argument("--out", default=str(HERE.parent / "results" / "identify" / "speed_swing.json"))
     args = ap.parse_args()
 
-    import twin
     from twin.dataset import open as open_dataset
     from twin.identification.features import RIPPLE_ALLOWANCE
-    from twin.provenance import git_commit
+    from twin.provenance import stamped
 
     runs = []
     names = []
@@ -151,7 +150,6 @@ def main() -> None:
         "what": "crank-rate swing of steady running, motor drive with the drive train's placeholders drawn "
                 "(analysis/identify/speed_swing.py)",
         "datasets": names, "runs": len(runs), "runs_that_turn": len(turning),
-        "twin_version": twin.__version__, "commit": git_commit(),
         "swing_pct": {"min": float(sw.min()), "median": float(np.median(sw)), "p90": float(np.quantile(sw, 0.9)),
                       "max": float(sw.max()),
                       "by_orientation": {o: ({"runs": len(v), "median": float(np.median(v)), "max": float(max(v))}
@@ -166,7 +164,7 @@ def main() -> None:
                           "rounded up to 5 %",
         "per_run": runs,
     }
-    Path(args.out).write_text(json.dumps(out, indent=1) + "\n")
+    Path(args.out).write_text(json.dumps(stamped(out), indent=1) + "\n")
     print(f"{len(runs)} motor-drive runs, {len(turning)} turn ({len(runs) - len(turning)} stall): swing (95th pct of "
           f"the 50 ms rate's deviation, last half) median {np.median(sw):.1f} %, 90th pct {np.quantile(sw, 0.9):.1f} %, "
           f"max {sw.max():.1f} %; {out['over_30_pct']} over 30 %")

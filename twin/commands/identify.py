@@ -57,7 +57,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     c = ids.add_parser("clearance", help="which joint has clearance in a bench recording, and how much")
     c.add_argument("recording", metavar="REC.mcap", help=RECORDING_HELP)
     c.add_argument("--model", metavar="MODEL.npz", help="model file (default: the one shipped with twin)")
-    c.add_argument("--json", metavar="OUT.json", help="also write the answer as JSON")
+    c.add_argument("--json", metavar="OUT.json", help="also write the answer as JSON (a refused recording: its record, "
+                                                      "refused: true and the reason)")
     c.set_defaults(func=_clearance)
 
     r = ids.add_parser("restitution", help="sweep the restitution until the simulated slider acceleration matches "

@@ -193,7 +193,7 @@ def steady_windows(counts: np.ndarray, rate_hz: float, counts_per_rev: float, sk
         # turns decide, back from the last steady rate sample (a stop at the end is left out)
         last = np.flatnonzero(ok)
         b = int(last[-1]) + L if last.size else 0
-        a = _first_steady_turn(direction * turns, 0, b) if b > 0 else 0
+        a = _first_steady_turn(direction * turns, 0, b, ok, L) if b > 0 else 0
     else:
         # longest run of steady rate samples
         edges = np.flatnonzero(np.diff(np.concatenate([[0], ok.astype(np.int8), [0]])))
@@ -233,12 +233,13 @@ def steady_windows(counts: np.ndarray, rate_hz: float, counts_per_rev: float, sk
     return Windows((start + a, start + b + 1), wins, steady_turns, rate, direction, spread)
 
 
-def _first_steady_turn(pos: np.ndarray, a: int, b: int) -> int:
+def _first_steady_turn(pos: np.ndarray, a: int, b: int, ok: np.ndarray | None = None, L: int = 1) -> int:
     """Where the steady part of [a, b] starts when judged by whole turns: whole turns of ``pos`` [turns,
     increasing with the motion] are taken back to back from ``b`` backwards while each one's mean rate lies
     within :data:`TURN_TOL` of the mean rate over the last half of [a, b]; the start of the earliest such turn
     (a turn that strays is left out with all before it; the part before the first whole turn is kept where its
-    own mean rate lies within :data:`TURN_TOL`)."""
+    own mean rate lies within :data:`TURN_TOL` and, ``ok`` given, every ``L``-sample rate in it is ``ok``: a
+    spin-up from rest is not)."""
     mid = (a + b) // 2
     if b - mid < 2 or pos[b] - pos[mid] <= 0:
         return a
@@ -249,7 +250,8 @@ def _first_steady_turn(pos: np.ndarray, a: int, b: int) -> int:
         k = int(np.searchsorted(run_min[:end + 1], pos[a + end] - 1.0, side="right")) - 1
         if k < 0:  # less than a whole turn left: kept where it too turns at the steady rate
             rest = (pos[a + end] - pos[a]) / end / mean - 1.0 if end > 0 else 0.0
-            return a if abs(rest) <= TURN_TOL else a + end
+            steady_rate = ok is None or bool(np.all(ok[a:max(a + end - L + 1, a + 1)]))
+            return a if abs(rest) <= TURN_TOL and steady_rate else a + end
         if abs((pos[a + end] - pos[a + k]) / (end - k) / mean - 1.0) > TURN_TOL:
             return a + end  # a turn off the steady rate: the steady part starts after it
         end = k

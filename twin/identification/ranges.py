@@ -75,7 +75,7 @@ FEATURE_FAR_SHARE = 1.0 / 3.0
 #: placeholders drawn over their documented ranges, x/y/z vertical, 250-800 rpm: median 28 %, 90th percentile
 #: 46 %, largest 75.7 % (x vertical, a soft speed loop); the threshold is that largest plus the steady part's
 #: allowance RIPPLE_ALLOWANCE (5 points), rounded up to 5 % (``analysis/identify/speed_swing.py``, result
-#: ``analysis/identify/speed_swing.json``). A recording that swings more is answered with a warning
+#: ``analysis/results/identify/speed_swing.json``). A recording that swings more is answered with a warning
 BENCH_SWING_PCT = 85.0
 #: allowance above the training runs' largest swing [percentage points]: the allowance the steady part's
 #: tolerance gives a recording's own spread (:data:`twin.identification.features.RIPPLE_ALLOWANCE`)

@@ -185,7 +185,10 @@ class IdentifyResult:
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> "IdentifyResult":
-        """The answer of a dict as :meth:`to_dict` (or the JSON file) holds it."""
+        """The answer of a dict as :meth:`to_dict` (or the JSON file) holds it; ValueError with its reason for a
+        refused recording's record (``refused: true``)."""
+        if d.get("refused"):
+            raise ValueError(f"{d.get('recording', '')}: refused, no answer ({d.get('reason', '')})")
         names = [m.group(1).upper() for k in d if (m := re.fullmatch(r"clearance_(\w+?)_if_faulty_mm", k))]
         joints = tuple(JointAnswer(
             joint=j, faulty=j in d["fault"], size_if_faulty_mm=d[f"{_key(j)}_if_faulty_mm"]["median"],
