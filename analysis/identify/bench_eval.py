@@ -125,7 +125,9 @@ def main() -> None:
               "by_dataset": {d: figures([p for p in preds if p["dataset"] == d], model.joints)
                              for d in dict.fromkeys(p["dataset"] for p in preds)},
               "seconds": time.perf_counter() - t0, "predictions": preds}
-    Path(args.out).write_text(json.dumps(report, indent=1, default=float))
+    from twin.provenance import stamped
+
+    Path(args.out).write_text(json.dumps(stamped(report), indent=1, default=float))
     f = report["all"]
     print(json.dumps({k: v for k, v in f.items()}, indent=1, default=float))
     print(f"wrote {args.out} ({report['seconds']:.0f} s)", file=sys.stderr)

@@ -80,7 +80,8 @@ def main() -> None:
     from twin.identification.features import features
     from twin.identification.inputs import recording_inputs
     from twin.identification.intervals import resolution
-    from twin.identification.model import ESTIMATORS, MODEL_FORMAT, ClearanceModel
+    from twin.identification.model import ESTIMATORS, ClearanceModel
+    from twin.identification.model import MODEL_FORMAT_4 as MODEL_FORMAT  # this script makes format 4 (B, C)
     from twin.identification.modelfile import read_model, write_model
 
     path = Path(args.model)

@@ -65,6 +65,7 @@ def cached_features(d: Path, workers: int) -> tuple:
 
     from twin.dataset import open as open_dataset
     from twin.identification.inputs import dataset_features
+    from twin.provenance import stamped
 
     ds = open_dataset(d)
     key = hashlib.sha256((d / "runs.parquet").read_bytes()).hexdigest()
@@ -77,7 +78,7 @@ def cached_features(d: Path, workers: int) -> tuple:
     X, rows, owner, skipped = dataset_features(ds, ("train", "val"), workers)
     rows = [dict(r, dataset=ds.info["name"]) for r in rows]
     np.savez(npz, X=X, owner=np.asarray(owner))
-    js.write_text(json.dumps({"key": key, "rows": rows, "skipped": skipped}, default=float))
+    js.write_text(json.dumps(stamped({"key": key, "rows": rows, "skipped": skipped}), default=float))
     return X, json.loads(json.dumps(rows, default=float)), list(owner), skipped, [ds]
 
 
