@@ -19,8 +19,11 @@ M + 1 slide rows (P⁺ − P⁻) × (b − a)_child = 0, and N + M − 1 indepen
 parent-side point) and x(P⁺) − x(P⁻) of the slide at B and of each interior slide. The chain's rows do not enter
 the rigid twelve, so A is block lower-triangular: the rigid block is solved in closed form
 (:func:`twin.natural_coordinates.solve_aug`, row 2 taking its value from the right-hand side), the chain block
-(2 (N + M) square) by an LU factorization. The rod stays within ±12° of the guide, where the y rows and the
-length rows are independent.
+(2 (N + M) square) by an LU factorization (the projection's Newton iterations and its velocity projection). The
+rod stays within ±12° of the guide, where the y rows and the length rows are independent. The accelerations are
+the R-matrix formulation's, computed without R: by the constraint forces on the constant block-diagonal mass
+matrix (:mod:`twin.reference.flexible_kkt`; the R-matrix kernels of :mod:`twin.reference.flexible_kernels`
+remain as its check).
 
 Elastic joints as forces: a hinge's moment −k Δ − c Δ̇ (Δ the angle from the parent's axis to the child's) on
 the two bars (a moment M on a bar a→b: forces ±M R₉₀u/|u|² on b and a); a slide's force −k δ − c δ̇ along the
@@ -196,6 +199,7 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
     Wk = np.empty((mk, mk))
     lam = np.empty(mk)
     uk = np.empty(2 * mk)
+    sck = np.empty((3, 5, 5))
     qdd = np.empty(n)
     res = np.empty(n)
     dq = np.empty(n)
@@ -240,7 +244,7 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
         # the constraint rows and the mobility W = Φ_c M̃⁻¹ Φ_cᵀ at (q, q̇) (flexible_kkt: the R matrix's q̈ to
         # round-off)
         kkt_rows(P, q, qd, segs, slides, crow, pat, pn, alpha_ref[k] if prescribed else 0.0, PhiV, gam)
-        if not kkt_factor(P, q, crow, pat, pn, PhiV, Minv, cols, cn, Mcrank, kaug, Yk, Wk):
+        if not kkt_factor(P, q, crow, pat, pn, PhiV, Minv, cols, cn, Mcrank, kaug, Yk, Wk, sck):
             status = NOT_FINITE
             break
         generalized_forces(P, qs, qds, tau, cst_a, cst_b, cst_c, Q[:N_Q], ja, jb, jc)

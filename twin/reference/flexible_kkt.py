@@ -246,22 +246,22 @@ def _put(pat, pn, i, col, v, PhiV):
 
 
 @njit(cache=True)
-def kkt_factor(P, q, crow, pat, pn, PhiV, Minv, cols, cn, Mcrank, kaug, Y, W):
+def kkt_factor(P, q, crow, pat, pn, PhiV, Minv, cols, cn, Mcrank, kaug, Y, W, sc):
     """M̃'s crank block inverted into ``Minv`` (the rest of ``Minv`` is constant), Y = M̃⁻¹ Φ_cᵀ (n × m) and the
-    Cholesky factor of W = Φ_c Y into ``W``'s lower triangle; False if W is not positive definite."""
+    Cholesky factor of W = Φ_c Y into ``W``'s lower triangle; False if W is not positive definite. ``sc``:
+    scratch, (3, 5, 5) (no allocation in the step)."""
     m = crow.shape[0]
     # the crank block: M + k0 Φ0ᵀΦ0 + k1 Φ1ᵀΦ1 on (x_B, y_B, θ, x_A, y_A)
     s, c = math.sin(q[7]), math.cos(q[7])
     dxB, dyB = q[0] - q[8], q[1] - q[9]
-    g0 = np.empty(5)
-    g1 = np.empty(5)
+    Mc, L, gv = sc[0], sc[1], sc[2]
+    g0, g1, x5 = gv[0], gv[1], gv[2]
     g0[0], g0[1], g0[2], g0[3], g0[4] = 2.0 * dxB, 2.0 * dyB, 0.0, -2.0 * dxB, -2.0 * dyB
     g1[0], g1[1], g1[2], g1[3], g1[4] = s, -c, dxB * c + dyB * s, -s, c
-    Mc = np.empty((5, 5))
     for i in range(5):
         for j in range(5):
             Mc[i, j] = Mcrank[i, j] + kaug[0] * g0[i] * g0[j] + kaug[1] * g1[i] * g1[j]
-    if not _spd_inverse(Mc, 5):
+    if not _spd_inverse(Mc, 5, L, x5):
         return False
     for i in range(5):
         for j in range(5):
@@ -289,9 +289,9 @@ CRANK_C = CRANK
 
 
 @njit(cache=True)
-def _spd_inverse(A, n):
-    """A ← A⁻¹ for a small SPD matrix (Cholesky, then the inverse column by column); False if not SPD."""
-    L = np.zeros((n, n))
+def _spd_inverse(A, n, L, x):
+    """A ← A⁻¹ for a small SPD matrix (Cholesky into ``L``, then the inverse column by column, ``x`` scratch);
+    False if not SPD."""
     for j in range(n):
         sacc = A[j, j]
         for k in range(j):
@@ -304,7 +304,6 @@ def _spd_inverse(A, n):
             for k in range(j):
                 t -= L[i, k] * L[j, k]
             L[i, j] = t / L[j, j]
-    x = np.empty(n)
     for col in range(n):
         for i in range(n):
             t = 1.0 if i == col else 0.0
@@ -359,15 +358,9 @@ def kkt_mobility(pat, pn, PhiV, Minv, cols, cn, Y, W, m, pin_x, pin_y, eye_x, ey
     """J N Jᵀ [1/kg], J = n·(pin − eye) on the coordinates (``pin_y`` −1: the pin does not move along y), N the
     constrained inverse mass (module docstring); ``u`` scratch (≥ m)."""
     # y = M̃⁻¹ Jᵀ is read through Minv's columns; J y and Φ_c y
-    jc = np.empty(4, dtype=np.int64)
-    jv = np.empty(4)
-    jc[0], jv[0] = pin_x, nx
-    jc[1], jv[1] = eye_x, -nx
-    jc[2], jv[2] = eye_y, -ny
-    nj = 3
-    if pin_y >= 0:
-        jc[3], jv[3] = pin_y, ny
-        nj = 4
+    nj = 4 if pin_y >= 0 else 3
+    jc = (pin_x, eye_x, eye_y, pin_y if pin_y >= 0 else pin_x)
+    jv = (nx, -nx, -ny, ny)
     jy = 0.0
     for a in range(nj):
         for b in range(nj):
