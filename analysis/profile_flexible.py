@@ -159,7 +159,7 @@ def main() -> None:
                                                                             kk.cn, Y, W, m, u),
         "step now: kkt_accelerations": lambda R: _t_kacc(R, q, Q, kk.crow, kk.pat, kk.pn, PhiV, gam, kk.Minv,
                                                           kk.cols, kk.cn, kk.kaug, Y, W, qdd2, Qt, lam),
-        "step before: flex_mass (R, M R, Rᵀ M R)": lambda R: _t_mass(R, P, G, q, qd, segs, seg_f, slides, A, LU, piv,
+        "step before: flex_mass (R, M R, Rᵀ M R; chain solves now block-tridiagonal)": lambda R: _t_mass(R, P, G, q, qd, segs, seg_f, slides, A, LU, piv,
                                                                      rows, nz, Rt, S, Mb, MR, b, Bm, RtT),
         "step before: normal_mobility (per joint in contact)": lambda R: _t_mob(R, Rt, Mb0, nz, gm, W2),
         "step before: flex_solve_acc": lambda R: _t_acc(R, q, Q, nz, Rt, RtT, S, Mb, Mb0, rhs, b, tmp, qdd, P, segs,
@@ -168,7 +168,7 @@ def main() -> None:
             R, P, q, qd, segs, seg_f, lay.hinges, lay.hinge_f, slides, lay.slide_f, G, Q),
         "both: flex_project (Newton + velocity projection)": lambda R: _t_proj(
             R, P, G, q, qd, qdd, h, segs, seg_f, slides, indep, A, LU, piv, res, dq, b, tmp),
-        "  of which: factor (chain Jacobian, dense LU 16 × 16)": lambda R: _t_factor(R, q, segs, slides, indep, A,
+        "  of which: factor (chain Jacobian, block-tridiagonal LU)": lambda R: _t_factor(R, q, segs, slides, indep, A,
                                                                                      LU, piv),
         "both: flex_energy (per output sample, channel group energy)": lambda R: _t_energy(
             R, P, q, qd, segs, seg_f, lay.hinges, lay.hinge_f, slides, lay.slide_f, G),

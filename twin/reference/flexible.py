@@ -19,7 +19,8 @@ M + 1 slide rows (P⁺ − P⁻) × (b − a)_child = 0, and N + M − 1 indepen
 parent-side point) and x(P⁺) − x(P⁻) of the slide at B and of each interior slide. The chain's rows do not enter
 the rigid twelve, so A is block lower-triangular: the rigid block is solved in closed form
 (:func:`twin.natural_coordinates.solve_aug`, row 2 taking its value from the right-hand side), the chain block
-(2 (N + M) square) by an LU factorization (the projection's Newton iterations and its velocity projection). The
+(2 (N + M) square) by a block-tridiagonal LU, one 2 × 2 block per chain point (the projection's Newton
+iterations and its velocity projection; :func:`twin.reference.flexible_kernels.chain_order`). The
 rod stays within ±12° of the guide, where the y rows and the length rows are independent. The accelerations are
 the R-matrix formulation's, computed without R: by the constraint forces on the constant block-diagonal mass
 matrix (:mod:`twin.reference.flexible_kkt`; the R-matrix kernels of :mod:`twin.reference.flexible_kernels`
