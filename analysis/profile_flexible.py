@@ -145,7 +145,7 @@ def main() -> None:
     K.flex_solve_acc(q, Q, nz, Rt, RtT, S, Mb, rhs, b, tmp, qdd, P, segs, seg_f, G, False, 0.0, taup)
     kk = fr.kkt(False)
     m = kk.crow.shape[0]
-    PhiV, gam, Y, W = np.zeros((m, kk.pat.shape[1])), np.empty(m), np.empty((n, m)), np.empty((m, m))
+    PhiV, gam, Y, W = np.zeros((m, kk.pat.shape[1])), np.empty(m), np.empty((m, n)), np.empty((m, m))
     u, Qt, lam, qdd2 = np.empty(2 * m), np.empty(n), np.empty(m), np.empty(n)
     KK.kkt_rows(P, q, qd, segs, slides, kk.crow, kk.pat, kk.pn, 0.0, PhiV, gam)
     sc = np.empty((3, 5, 5))

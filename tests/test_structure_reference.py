@@ -291,7 +291,7 @@ def test_sparse_constraint_force_solve_equals_the_r_matrix_solve(test_id, prescr
         assert F.flex_solve_acc(q, Q, nz, Rt, RtT, S, Mb.copy(), np.empty(nz), np.empty(n), np.empty(n), qdd, P,
                                 lay.segs, lay.seg_f, G, prescribed, alpha, tau)
 
-        PhiV, gam, Y, W = np.zeros((m, kk.pat.shape[1])), np.empty(m), np.empty((n, m)), np.empty((m, m))
+        PhiV, gam, Y, W = np.zeros((m, kk.pat.shape[1])), np.empty(m), np.empty((m, n)), np.empty((m, m))
         KK.kkt_rows(P, q, qd, lay.segs, lay.slides, kk.crow, kk.pat, kk.pn, alpha, PhiV, gam)
         assert KK.kkt_factor(P, q, kk.crow, kk.pat, kk.pn, PhiV, kk.Minv, kk.cols, kk.cn, kk.Mcrank, kk.kaug, Y, W,
                              np.empty((3, 5, 5)))

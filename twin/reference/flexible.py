@@ -196,7 +196,7 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
     mk = crow.shape[0]
     PhiV = np.zeros((mk, pat.shape[1]))
     gam = np.empty(mk)
-    Yk = np.empty((n, mk))
+    Yk = np.empty((mk, n))
     Wk = np.empty((mk, mk))
     lam = np.empty(mk)
     uk = np.empty(2 * mk)
@@ -399,6 +399,7 @@ class FlexibleRun:
         self.mounts = MountFilter(st.mount_frequency_hz, st.mount_damping_ratio, cfg.sensors.output_rate_hz)
         self.x: np.ndarray | None = None
         self._kkt: dict[bool, KKTLayout] = {}
+        self.kkt(cfg.drive.mode == "prescribed")   # built here, not in the first chunk's stepping time
 
     def reset(self, st_rigid: np.ndarray) -> None:
         """Start from the rigid model's state (the straight, unstretched rod on its pose), the contact stiffnesses

@@ -248,8 +248,9 @@ def _put(pat, pn, i, col, v, PhiV):
 @njit(cache=True)
 def kkt_factor(P, q, crow, pat, pn, PhiV, Minv, cols, cn, Mcrank, kaug, Y, W, sc):
     """M̃'s crank block inverted into ``Minv`` (the rest of ``Minv`` is constant), Y = M̃⁻¹ Φ_cᵀ (n × m) and the
-    Cholesky factor of W = Φ_c Y into ``W``'s lower triangle; False if W is not positive definite. ``sc``:
-    scratch, (3, 5, 5) (no allocation in the step)."""
+    Cholesky factor of W = Φ_c Y into ``W``'s lower triangle; False if W is not positive definite. ``Y`` is held
+    transposed, m × n (a constraint row's M̃⁻¹ Φ_rᵀ contiguous); ``sc``: scratch, (3, 5, 5) (no allocation in the
+    step)."""
     m = crow.shape[0]
     # the crank block: M + k0 Φ0ᵀΦ0 + k1 Φ1ᵀΦ1 on (x_B, y_B, θ, x_A, y_A)
     s, c = math.sin(q[7]), math.cos(q[7])
@@ -268,19 +269,21 @@ def kkt_factor(P, q, crow, pat, pn, PhiV, Minv, cols, cn, Mcrank, kaug, Y, W, sc
             Minv[CRANK_C[i], CRANK_C[j]] = Mc[i, j]
     n = q.shape[0]
     for r in range(m):
+        Yr = Y[r]
         for i in range(n):
-            Y[i, r] = 0.0
+            Yr[i] = 0.0
         for t in range(pn[r]):
             k = pat[r, t]
             v = PhiV[r, t]
             for u in range(cn[k]):
                 i = cols[k, u]
-                Y[i, r] += Minv[i, k] * v
+                Yr[i] += Minv[k, i] * v   # M̃⁻¹ symmetric: its row k
     for r in range(m):
         for s2 in range(r + 1):
+            Ys = Y[s2]
             acc = 0.0
             for t in range(pn[r]):
-                acc += PhiV[r, t] * Y[pat[r, t], s2]
+                acc += PhiV[r, t] * Ys[pat[r, t]]
             W[r, s2] = acc
     return _cholesky(W, m)
 
@@ -368,7 +371,7 @@ def kkt_mobility(pat, pn, PhiV, Minv, cols, cn, Y, W, m, pin_x, pin_y, eye_x, ey
     for r in range(m):   # (Φ_c M̃⁻¹ Jᵀ)_r = Y[:, r] · Jᵀ (M̃⁻¹ symmetric)
         acc = 0.0
         for a in range(nj):
-            acc += Y[jc[a], r] * jv[a]
+            acc += Y[r, jc[a]] * jv[a]
         u[r] = acc
     v = u[m:2 * m]
     v[:] = u[:m]
@@ -406,8 +409,9 @@ def kkt_accelerations(q, Q, crow, pat, pn, PhiV, gam, Minv, cols, cn, kaug, Y, W
     _chol_solve(W, m, lam)
     for r in range(m):
         lr = lam[r]
+        Yr = Y[r]
         for i in range(n):
-            qdd[i] -= Y[i, r] * lr
+            qdd[i] -= Yr[i] * lr
     mu = 0.0
     for r in range(m):
         if crow[r] == 7:
