@@ -6,7 +6,7 @@ of a step (:mod:`twin.reference.flexible_kernels`, :mod:`twin.reference.flexible
 For comparison the R-matrix kernels the step used before (``flex_mass`` building R and the dense Rᵀ M R,
 ``normal_mobility``, ``flex_solve_acc``) are timed on the same state. The projection is timed after a step
 (q ← q + h q̇ with q̇ ← q̇ + h q̈, then Newton and the velocity projection), its iterations counted.
-Only ratios within one run mean anything on a shared machine.
+Times are CPU time (``time.process_time``: on a shared machine the wall clock also counts the waits for a core).
 
 Run: ``python analysis/profile_flexible.py [--calls N] [--repeats R]``.
 """
@@ -83,8 +83,9 @@ def _t_energy(R, P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G):
 
 @njit
 def _t_rows(R, P, q, qd, segs, slides, crow, pat, pn, PhiV, gam):
+    qt = np.empty(N_Q)
     for _ in range(R):
-        KK.kkt_rows(P, q, qd, segs, slides, crow, pat, pn, 0.0, PhiV, gam)
+        KK.kkt_rows(P, q, qd, segs, slides, crow, pat, pn, 0.0, PhiV, gam, qt)
 
 
 @njit
@@ -147,7 +148,7 @@ def main() -> None:
     m = kk.crow.shape[0]
     PhiV, gam, Y, W = np.zeros((m, kk.pat.shape[1])), np.empty(m), np.empty((m, n)), np.empty((m, m))
     u, Qt, lam, qdd2 = np.empty(2 * m), np.empty(n), np.empty(m), np.empty(n)
-    KK.kkt_rows(P, q, qd, segs, slides, kk.crow, kk.pat, kk.pn, 0.0, PhiV, gam)
+    KK.kkt_rows(P, q, qd, segs, slides, kk.crow, kk.pat, kk.pn, 0.0, PhiV, gam, np.empty(12))
     sc = np.empty((3, 5, 5))
     KK.kkt_factor(P, q, kk.crow, kk.pat, kk.pn, PhiV, kk.Minv, kk.cols, kk.cn, kk.Mcrank, kk.kaug, Y, W, sc)
     tests = {
@@ -183,9 +184,9 @@ def main() -> None:
     for name, f in tests.items():
         best = float("inf")
         for _ in range(a.repeats):
-            t0 = time.perf_counter()
+            t0 = time.process_time()
             f(a.calls)
-            best = min(best, time.perf_counter() - t0)
+            best = min(best, time.process_time() - t0)
         print(f"| {name} | {best / a.calls * 1e6:.3f} |")
 
 

@@ -292,7 +292,7 @@ def test_sparse_constraint_force_solve_equals_the_r_matrix_solve(test_id, prescr
                                 lay.segs, lay.seg_f, G, prescribed, alpha, tau)
 
         PhiV, gam, Y, W = np.zeros((m, kk.pat.shape[1])), np.empty(m), np.empty((m, n)), np.empty((m, m))
-        KK.kkt_rows(P, q, qd, lay.segs, lay.slides, kk.crow, kk.pat, kk.pn, alpha, PhiV, gam)
+        KK.kkt_rows(P, q, qd, lay.segs, lay.slides, kk.crow, kk.pat, kk.pn, alpha, PhiV, gam, np.empty(12))
         assert KK.kkt_factor(P, q, kk.crow, kk.pat, kk.pn, PhiV, kk.Minv, kk.cols, kk.cn, kk.Mcrank, kk.kaug, Y, W,
                              np.empty((3, 5, 5)))
         mobs2 = [KK.kkt_mobility(kk.pat, kk.pn, PhiV, kk.Minv, kk.cols, kk.cn, Y, W, m, *j, 0.6, 0.8,

@@ -201,6 +201,7 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
     lam = np.empty(mk)
     uk = np.empty(2 * mk)
     sck = np.empty((3, 5, 5))
+    qs2 = np.empty(N_Q)
     qdd = np.empty(n)
     res = np.empty(n)
     dq = np.empty(n)
@@ -244,7 +245,7 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
             break
         # the constraint rows and the mobility W = Φ_c M̃⁻¹ Φ_cᵀ at (q, q̇) (flexible_kkt: the R matrix's q̈ to
         # round-off)
-        kkt_rows(P, q, qd, segs, slides, crow, pat, pn, alpha_ref[k] if prescribed else 0.0, PhiV, gam)
+        kkt_rows(P, q, qd, segs, slides, crow, pat, pn, alpha_ref[k] if prescribed else 0.0, PhiV, gam, qs2)
         if not kkt_factor(P, q, crow, pat, pn, PhiV, Minv, cols, cn, Mcrank, kaug, Yk, Wk, sck):
             status = NOT_FINITE
             break

@@ -165,11 +165,10 @@ class KKTLayout:
 
 
 @njit(cache=True)
-def kkt_rows(P, q, qd, segs, slides, crow, pat, pn, alpha, PhiV, gam):
+def kkt_rows(P, q, qd, segs, slides, crow, pat, pn, alpha, PhiV, gam, qt):
     """The constraint rows' values on their structural columns (``PhiV``) and γ_c = −Φ̇_c q̇ (``gam``); θ's row (if
-    in ``crow``) is the prescribed acceleration ``alpha``."""
+    in ``crow``) is the prescribed acceleration ``alpha``. ``qt``: scratch (≥ 12)."""
     s, c = math.sin(q[7]), math.cos(q[7])
-    qt = np.empty(N_Q)
     quadratic_terms(q[:N_Q], qd[:N_Q], s, c, qt)
     nseg = segs.shape[0]
     dxB, dyB = q[0] - q[8], q[1] - q[9]
