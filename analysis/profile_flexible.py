@@ -103,9 +103,9 @@ def _t_kmob(R, pat, pn, PhiV, Minv, cols, cn, Y, W, m, u):
 
 
 @njit
-def _t_kacc(R, q, Q, crow, pat, pn, PhiV, gam, Minv, cols, cn, kaug, Y, W, qdd, Qt, lam):
+def _t_kacc(R, q, Q, crow, pat, pn, PhiV, gam, Minv, cols, cn, Y, W, qdd, lam):
     for _ in range(R):
-        KK.kkt_accelerations(q, Q, crow, pat, pn, PhiV, gam, Minv, cols, cn, kaug, Y, W, qdd, Qt, lam)
+        KK.kkt_accelerations(q, Q, crow, pat, pn, PhiV, gam, Minv, cols, cn, Y, W, qdd, lam)
 
 
 def main() -> None:
@@ -159,7 +159,7 @@ def main() -> None:
         "step now: kkt_mobility (per joint in contact)": lambda R: _t_kmob(R, kk.pat, kk.pn, PhiV, kk.Minv, kk.cols,
                                                                             kk.cn, Y, W, m, u),
         "step now: kkt_accelerations": lambda R: _t_kacc(R, q, Q, kk.crow, kk.pat, kk.pn, PhiV, gam, kk.Minv,
-                                                          kk.cols, kk.cn, kk.kaug, Y, W, qdd2, Qt, lam),
+                                                          kk.cols, kk.cn, Y, W, qdd2, lam),
         "step before: flex_mass (R, M R, Rᵀ M R; chain solves now block-tridiagonal)": lambda R: _t_mass(R, P, G, q, qd, segs, seg_f, slides, A, LU, piv,
                                                                      rows, nz, Rt, S, Mb, MR, b, Bm, RtT),
         "step before: normal_mobility (per joint in contact)": lambda R: _t_mob(R, Rt, Mb0, nz, gm, W2),

@@ -249,24 +249,26 @@ def test_normal_mobility_is_the_relative_acceleration_per_newton():
     assert 0.1 < m_hat < cfg.bodies.rod.mass_kg + cfg.bodies.slider.mass_kg + cfg.bodies.crank.mass_kg, m_hat
 
 
-@pytest.mark.parametrize("test_id", [6, 12])
+@pytest.mark.parametrize("test_id, chain", [(6, (6, 2)), (12, (6, 2)), (12, (16, 1)), (12, (4, 4))])
 @pytest.mark.parametrize("prescribed", [False, True])
-def test_sparse_constraint_force_solve_equals_the_r_matrix_solve(test_id, prescribed):
+def test_sparse_constraint_force_solve_equals_the_r_matrix_solve(test_id, chain, prescribed):
     """The step's sparse solve (twin.reference.flexible_kkt: Lagrange multipliers, block-diagonal M̃) against the
     dense R-matrix one (flex_mass, flex_solve_acc, normal_mobility: Rᵀ M R z̈ = Rᵀ (Q − M Ṙż)) on random
     configurations near a running pose (coordinates moved off the constraint manifold, random velocities and
     forces): the same q̈, drive torque of the prescribed crank and contact mobilities at B and C to round-off.
     Independent basis: the two are different algebra for the same equations (Gauss's principle), the R matrix
-    a basis of the allowed motions, the multipliers its complement."""
+    a basis of the allowed motions, the multipliers its complement. Chains (rod_segments, rod_axial_groups): the
+    default, one axial group of 16 segments (a 17-point mass block), a slide at every node."""
     from twin.natural_coordinates import N_Q, N_Z
     from twin.reference import flexible_kernels as F
     from twin.reference import flexible_kkt as KK
 
-    cfg = preset(test_id).replace(**{"structure.mode": "flexible"})
+    cfg = preset(test_id).replace(**{"structure.mode": "flexible", "structure.rod_segments": chain[0],
+                                     "structure.rod_axial_groups": chain[1], "simulation.timestep_s": 1e-7})
     run, _ = _run(cfg, 0.7, drive=True)
     lay, P, G = run.layout, run.P, run.layout.G
     n, nc = lay.n, lay.n - N_Q
-    rng = np.random.default_rng(43 + test_id + 2 * prescribed)
+    rng = np.random.default_rng(43 + test_id + 2 * prescribed + chain[0])
     kk = KK.KKTLayout(P, G, lay.segs, lay.seg_f, lay.slides, n, prescribed)
     m = kk.crow.shape[0]
     for _ in range(3):
@@ -298,8 +300,8 @@ def test_sparse_constraint_force_solve_equals_the_r_matrix_solve(test_id, prescr
         mobs2 = [KK.kkt_mobility(kk.pat, kk.pn, PhiV, kk.Minv, kk.cols, kk.cn, Y, W, m, *j, 0.6, 0.8,
                                  np.empty(2 * m)) for j in ((0, 1, 2, 3), (6, -1, 4, 5))]
         qdd2 = np.empty(n)
-        mu = KK.kkt_accelerations(q, Q, kk.crow, kk.pat, kk.pn, PhiV, gam, kk.Minv, kk.cols, kk.cn, kk.kaug, Y, W,
-                                  qdd2, np.empty(n), np.empty(m))
+        mu = KK.kkt_accelerations(q, Q, kk.crow, kk.pat, kk.pn, PhiV, gam, kk.Minv, kk.cols, kk.cn, Y, W, qdd2,
+                                  np.empty(m))
         assert np.max(np.abs(qdd2 - qdd)) <= 1e-10 * np.max(np.abs(qdd)), np.max(np.abs(qdd2 - qdd))
         assert mobs2 == pytest.approx(mobs, rel=1e-10)
         if prescribed:

@@ -275,7 +275,7 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
         for i in range(N_Q):   # the mechanism's own forces (the drive train's accounts read them)
             Qb[i] = Q[i]
         diss = chain_forces(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G, Q)
-        mu = kkt_accelerations(q, Q, crow, pat, pn, PhiV, gam, Minv, cols, cn, kaug, Yk, Wk, qdd, tmp, lam)
+        mu = kkt_accelerations(q, Q, crow, pat, pn, PhiV, gam, Minv, cols, cn, Yk, Wk, qdd, lam)
         if prescribed:   # the drive torque: minus the multiplier of the driving constraint
             tau = -mu
         if want_out and k % stride == 0:

@@ -11,16 +11,18 @@ quadratic terms. Rᵀ M R z̈ = Rᵀ (Q − M Ṙż) and the Lagrange form
     M q̈ + Φ_cᵀ λ = Q,   Φ_c q̈ = γ_c
 
 give the same q̈ (exactly; here to round-off). The natural-coordinate mass matrix is constant, except that θ
-carries no mass (rows 0–1 tie it to the crank): the crank's rows are added as a penalty that vanishes on the
-constraint manifold, M̃ = M + Σ k_r Φ_rᵀ Φ_r, Q̃ = Q + Σ k_r Φ_rᵀ γ_r (r = 0, 1; both sides of the first equation
-change by Φ_rᵀ k_r (Φ_r q̈ − γ_r) = 0), so that M̃ is positive definite. M̃ is block diagonal: the crank's five
+carries no mass (rows 0–1 tie it to the crank): the crank's rows are added to it as a penalty,
+M̃ = M + Σ k_r Φ_rᵀ Φ_r (r = 0, 1), so that M̃ is positive definite. The solution's q̈ does not change: the rows
+stay constraints, Φ_r q̈ = γ_r, so the added force Φ_rᵀ k_r Φ_r q̈ = Φ_rᵀ k_r γ_r only shifts the rows' own
+multipliers by k_r γ_r (neither q̈ nor θ's multiplier reads them). M̃ is block diagonal: the crank's five
 coordinates (θ, A', B; its block changes with θ and is inverted each step, 5 × 5) and constant blocks (the rod's
 housings, the slider, the supports, the chain's groups of segments) inverted once. Then, with Y = M̃⁻¹ Φ_cᵀ and
 W = Φ_c Y (the constraints' mobility, 12 × 12 for the bench's chain of 6 segments):
 
-    W λ = Φ_c M̃⁻¹ Q̃ − γ_c,   q̈ = M̃⁻¹ Q̃ − Y λ.
+    W λ = Φ_c M̃⁻¹ Q − γ_c,   q̈ = M̃⁻¹ Q − Y λ.
 
-Sparse: each constraint row touches at most eight coordinates, each coordinate's column of M̃⁻¹ at most eight.
+Sparse: each constraint row touches at most eight coordinates, each coordinate's column of M̃⁻¹ only its block
+(x or y of the points of one axial group of segments: 4 for the default chain of 6 segments in 2 groups).
 With the crank angle prescribed (a driving constraint) θ's row e₇ joins Φ_c with γ = α and the drive torque is
 −λ₇ (:func:`twin.reference.flexible_kernels.flex_solve_acc` gives R₀ᵀ (M q̈ − Q), the same number).
 The normal mobility of a clearance joint (:func:`twin.reference.flexible_kernels.normal_mobility`,
@@ -130,16 +132,14 @@ class KKTLayout:
             for j in range(nr):
                 if Mr[i, j] != 0.0:
                     comp[root(i)] = root(j)
-        self.Minv = np.zeros((n, n))
-        self.cols = np.zeros((n, max(_MAXNZ, 5)), dtype=np.int64)
-        self.cn = np.zeros(n, dtype=np.int64)
         groups: dict[int, list[int]] = {}
         for i in range(nr):
             groups.setdefault(root(i), []).append(i)
+        self.Minv = np.zeros((n, n))
+        self.cols = np.zeros((n, max([5] + [len(g) for g in groups.values()])), dtype=np.int64)
+        self.cn = np.zeros(n, dtype=np.int64)
         for members in groups.values():
             idx = [rest[i] for i in members]
-            if len(idx) > self.cols.shape[1]:
-                raise ValueError("a block of the mass matrix is larger than the sparse solve's tables")
             blk = M[np.ix_(idx, idx)].copy()
             if len(idx) == 1 and blk[0, 0] == 0.0 and idx[0] in (10, 11) and idx[0] in self.crow:
                 # a massless coordinate held by its own unit row (φ = 0 with the ideal guide): the penalty
@@ -382,23 +382,16 @@ def kkt_mobility(pat, pn, PhiV, Minv, cols, cn, Y, W, m, pin_x, pin_y, eye_x, ey
 
 
 @njit(cache=True)
-def kkt_accelerations(q, Q, crow, pat, pn, PhiV, gam, Minv, cols, cn, kaug, Y, W, qdd, Qt, lam):
-    """q̈ from W λ = Φ_c M̃⁻¹ Q̃ − γ_c, q̈ = M̃⁻¹ Q̃ − Y λ (after :func:`kkt_factor`); returns the multiplier of θ's
+def kkt_accelerations(q, Q, crow, pat, pn, PhiV, gam, Minv, cols, cn, Y, W, qdd, lam):
+    """q̈ from W λ = Φ_c M̃⁻¹ Q − γ_c, q̈ = M̃⁻¹ Q − Y λ (after :func:`kkt_factor`); returns the multiplier of θ's
     row if it is a constraint (the prescribed crank: the drive torque is its negative), else 0."""
     n = q.shape[0]
     m = crow.shape[0]
-    for i in range(n):
-        Qt[i] = Q[i]
-    # the penalty's right-hand side Σ k_r Φ_rᵀ γ_r (rows 0 and 1, the first two constraint rows)
-    for i in range(2):
-        kg = kaug[crow[i]] * gam[i]
-        for t in range(pn[i]):
-            Qt[pat[i, t]] += kg * PhiV[i, t]
-    for i in range(n):   # a = M̃⁻¹ Q̃ (block by block)
+    for i in range(n):   # a = M̃⁻¹ Q (block by block; the penalty needs no right-hand side, module docstring)
         acc = 0.0
         for u in range(cn[i]):
             k = cols[i, u]
-            acc += Minv[i, k] * Qt[k]
+            acc += Minv[i, k] * Q[k]
         qdd[i] = acc
     for r in range(m):
         acc = 0.0
