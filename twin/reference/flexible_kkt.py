@@ -38,7 +38,7 @@ import numpy as np
 
 from twin.jit import njit
 from twin.natural_coordinates import N_Q, P_CLR_A, P_CLR_B, P_CLR_C, P_CLR_G, P_MC, P_R, quadratic_terms
-from twin.reference.flexible_kernels import G_FLEX_A, G_FLEX_G, chain_quadratic, flex_mass_times
+from twin.reference.flexible_kernels import G_FLEX_A, G_FLEX_G, flex_mass_times
 
 #: the crank's coordinates (x_B, y_B, θ, x_A, y_A): the block of M̃ that changes with θ
 CRANK = np.array([0, 1, 7, 8, 9], dtype=np.int64)
