@@ -46,19 +46,20 @@ SCENES = {"ideal (test 3)": 3, "C only (test 6)": 6, "B+C (test 12)": 12}
 SETTINGS = ("sensor", "posthoc")  # mujoco.accelerometers
 
 
-def prepare(test_id: int, steps: int, channels=None, accelerometers: str = "sensor"):
+def prepare(test_id: int, steps: int, channels=None, accelerometers: str = "sensor", structure: str = "rigid"):
     """Compiled model, a state at full speed and the control sequence that continues it
     (``analysis/profile_stages.py`` and ``profile_scenes.py`` take theirs from here; MuJoCo's
-    accelerometer sensors unless ``accelerometers = "posthoc"``)."""
-    return prepare_posthoc(test_id, steps, channels, accelerometers)[:3]
+    accelerometer sensors unless ``accelerometers = "posthoc"``; ``structure``: ``structure.mode``)."""
+    return prepare_posthoc(test_id, steps, channels, accelerometers, structure=structure)[:3]
 
 
 def prepare_posthoc(test_id: int, steps: int, channels=None, accelerometers: str = "posthoc",
-                    contact_source: str = "law"):
+                    contact_source: str = "law", structure: str = "rigid"):
     """:func:`prepare` and the engine's after-the-rollout accelerometers (None with the sensors);
-    ``contact_source``: ``mujoco.contact_source`` ("law", the default, or "force")."""
+    ``contact_source``: ``mujoco.contact_source`` ("law", the default, or "force"); ``structure``:
+    ``structure.mode`` ("rigid", the default, or "flexible")."""
     over = {"simulation.duration_s": 0.4, "drive.ramp_s": 0.2, "mujoco.accelerometers": accelerometers,
-            "mujoco.contact_source": contact_source}
+            "mujoco.contact_source": contact_source, "structure.mode": structure}
     if channels is not None:
         over["sensors.channels"] = channels
     eng = MujocoEngine(preset(test_id).replace(**over))

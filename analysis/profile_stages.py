@@ -229,12 +229,19 @@ def main() -> None:
     ap.add_argument("--json", metavar="FILE", help="also write the numbers as JSON")
     ap.add_argument("--accelerometers", choices=("posthoc", "sensor"), default="posthoc",
                     help="mujoco.accelerometers of the profiled models (default: the twin's default, posthoc)")
+    ap.add_argument("--structure", choices=("rigid", "flexible", "both"), default="rigid",
+                    help="structure.mode of the profiled models; both: test 12 rigid and flexible side by side")
     args = ap.parse_args()
+    global SCENES
+    if args.structure == "both":
+        SCENES = {"test 12 rigid": (12, "rigid"), "test 12 flexible": (12, "flexible")}
+    else:
+        SCENES = {label: (tid, args.structure) for label, tid in SCENES.items()}
     shims = Shims()  # before any model is built: reads MuJoCo's own clock (mjcb_time) as the library set it
     mujoco_clock = shims.clock
     variants: dict[str, dict[str, tuple]] = {}
-    for label, tid in SCENES.items():
-        m, s, c = prepare(tid, args.steps, accelerometers=args.accelerometers)
+    for label, (tid, structure) in SCENES.items():
+        m, s, c = prepare(tid, args.steps, accelerometers=args.accelerometers, structure=structure)
         floor = copy.copy(m)
         floor.opt.disableflags |= D.mjDSBL_CONSTRAINT
         raw = copy.copy(floor)

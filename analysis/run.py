@@ -136,7 +136,12 @@ SCRIPTS: dict[str, Script] = {
     "structure_cost": Script("prints flexible / rigid cost per simulated second, test 12, per engine", "~3 min"),
     "structure_stability": Script("prints the flexible structure's stability over random scenes, both engines",
                                   "~5 min"),
-    "bench_structure": Script(f"{R}/structure/bench_structure.md (flexible / rigid cost, side by side)", "~5 min"),
+    "bench_structure": Script(f"{R}/structure/bench_structure.md (flexible / rigid cost, tests 3, 6, 12, side by "
+                              "side)", "~5 min"),
+    "profile_flexible": Script("prints where a step of the reference's flexible structure goes, kernel by kernel",
+                               "~1 min"),
+    "mujoco_flexible_options": Script("prints MuJoCo stepping options for the flexible structure: cost and output "
+                                      "difference", "~2 min"),
     "structure_agreement": Script(f"{R}/structure/agreement.md, .json (third-octave bands, MuJoCo against the "
                                   "reference)", "~10 min"),
     "structure_fig15": Script(f"{R}/structure_fig15/motor (S003 Fig. 15 and §6 rigid against flexible)", "~20 min",

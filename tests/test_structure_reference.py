@@ -247,3 +247,100 @@ def test_normal_mobility_is_the_relative_acceleration_per_newton():
     assert rel_acc(Q1) - rel_acc(Q0) == pytest.approx(-mob, rel=1e-9)
     m_hat = 1.0 / mob
     assert 0.1 < m_hat < cfg.bodies.rod.mass_kg + cfg.bodies.slider.mass_kg + cfg.bodies.crank.mass_kg, m_hat
+
+
+@pytest.mark.parametrize("test_id, chain", [(6, (6, 2)), (12, (6, 2)), (12, (16, 1)), (12, (4, 4))])
+@pytest.mark.parametrize("prescribed", [False, True])
+def test_sparse_constraint_force_solve_equals_the_r_matrix_solve(test_id, chain, prescribed):
+    """The step's sparse solve (twin.reference.flexible_kkt: Lagrange multipliers, block-diagonal M̃) against the
+    dense R-matrix one (flex_mass, flex_solve_acc, normal_mobility: Rᵀ M R z̈ = Rᵀ (Q − M Ṙż)) on random
+    configurations near a running pose (coordinates moved off the constraint manifold, random velocities and
+    forces): the same q̈, drive torque of the prescribed crank and contact mobilities at B and C to round-off.
+    Independent basis: the two are different algebra for the same equations (Gauss's principle), the R matrix
+    a basis of the allowed motions, the multipliers its complement. Chains (rod_segments, rod_axial_groups): the
+    default, one axial group of 16 segments (a 17-point mass block), a slide at every node."""
+    from twin.natural_coordinates import N_Q, N_Z
+    from twin.reference import flexible_kernels as F
+    from twin.reference import flexible_kkt as KK
+
+    cfg = preset(test_id).replace(**{"structure.mode": "flexible", "structure.rod_segments": chain[0],
+                                     "structure.rod_axial_groups": chain[1], "simulation.timestep_s": 1e-7})
+    run, _ = _run(cfg, 0.7, drive=True)
+    lay, P, G = run.layout, run.P, run.layout.G
+    n, nc = lay.n, lay.n - N_Q
+    rng = np.random.default_rng(43 + test_id + 2 * prescribed + chain[0])
+    kk = KK.KKTLayout(P, G, lay.segs, lay.seg_f, lay.slides, n, prescribed)
+    m = kk.crow.shape[0]
+    for _ in range(3):
+        q = run.x[:n] + rng.normal(scale=1e-3, size=n)
+        qd = run.x[n:2 * n] + rng.normal(scale=0.5, size=n)
+        Q = rng.normal(scale=50.0, size=n)
+        alpha = float(rng.normal(scale=100.0))
+        rows = np.empty(N_Z + 4 + nc, dtype=np.int64)
+        nz = F.flex_rows(P, G, lay.indep, rows)
+        for k in range(lay.indep.shape[0]):
+            rows[nz] = N_Q + lay.segs.shape[0] + lay.slides.shape[0] + k
+            nz += 1
+        A, LU, piv = np.empty((nc, n)), np.empty((nc, nc)), np.empty(nc, dtype=np.int64)
+        assert F.factor(q, lay.segs, lay.slides, lay.indep, A, LU, piv)
+        Rt, MR, Mb, S = np.empty((nz, n)), np.empty((nz, n)), np.empty((nz, nz)), np.empty(n)
+        RtT = np.empty((n, nz))
+        F.flex_mass(P, G, q, qd, lay.segs, lay.seg_f, lay.slides, A, LU, piv, rows, nz, Rt, S, Mb, MR, np.empty(n),
+                    np.empty((nc, nz + 1)), RtT)
+        mobs = [F.normal_mobility(Rt, Mb, nz, prescribed, *j, 0.6, 0.8, np.empty(2 * nz), np.empty((nz, nz)))
+                for j in ((0, 1, 2, 3), (6, -1, 4, 5))]
+        qdd, tau = np.empty(n), np.zeros(1)
+        assert F.flex_solve_acc(q, Q, nz, Rt, RtT, S, Mb.copy(), np.empty(nz), np.empty(n), np.empty(n), qdd, P,
+                                lay.segs, lay.seg_f, G, prescribed, alpha, tau)
+
+        PhiV, gam, Y, W = np.zeros((m, kk.pat.shape[1])), np.empty(m), np.empty((m, n)), np.empty((m, m))
+        KK.kkt_rows(P, q, qd, lay.segs, lay.slides, kk.crow, kk.pat, kk.pn, alpha, PhiV, gam, np.empty(12))
+        assert KK.kkt_factor(P, q, kk.crow, kk.pat, kk.pn, PhiV, kk.Minv, kk.cols, kk.cn, kk.Mcrank, kk.kaug, Y, W,
+                             np.empty((3, 5, 5)))
+        mobs2 = [KK.kkt_mobility(kk.pat, kk.pn, PhiV, kk.Minv, kk.cols, kk.cn, Y, W, m, *j, 0.6, 0.8,
+                                 np.empty(2 * m)) for j in ((0, 1, 2, 3), (6, -1, 4, 5))]
+        qdd2 = np.empty(n)
+        mu = KK.kkt_accelerations(q, Q, kk.crow, kk.pat, kk.pn, PhiV, gam, kk.Minv, kk.cols, kk.cn, Y, W, qdd2,
+                                  np.empty(m))
+        assert np.max(np.abs(qdd2 - qdd)) <= 1e-10 * np.max(np.abs(qdd)), np.max(np.abs(qdd2 - qdd))
+        assert mobs2 == pytest.approx(mobs, rel=1e-10)
+        if prescribed:
+            assert qdd2[7] == pytest.approx(alpha, rel=1e-12)
+            assert -mu == pytest.approx(tau[0], rel=1e-9, abs=1e-9 * np.max(np.abs(Q)))
+
+
+def test_chain_block_solve_equals_a_dense_solve_for_every_chain():
+    """The projection's chain block solved block-tridiagonally (flexible_kernels.chain_order, bt_factor, bt_solve)
+    against numpy's dense LU with partial pivoting on the same rows, for every (rod_segments, rod_axial_groups) the
+    configuration allows, at a pose moved off the straight rod at random: no row reaches beyond the points next
+    to its own (the band the block LU assumes), and the solutions agree to round-off."""
+    from twin.natural_coordinates import N_Q
+    from twin.reference import flexible_kernels as F
+
+    rng = np.random.default_rng(7)
+    checked = 0
+    for N in range(2, 25):
+        for M in [m for m in range(1, N + 1) if N % m == 0]:
+            cfg = preset(12).replace(**{"structure.mode": "flexible", "structure.rod_segments": N,
+                                        "structure.rod_axial_groups": M, "simulation.timestep_s": 1e-7})
+            prm = lambda c: RM.build_params(c, drive=False, guide_friction=False)  # noqa: E731
+            run = FlexibleRun(cfg, prm(cfg), prm)
+            run.reset(initial_state(cfg, 0.7, 0.0, run.P))
+            lay = run.layout
+            n, nc = lay.n, lay.n - N_Q
+            q = run.x[:n] + rng.normal(scale=1e-4, size=n)
+            A, LU, piv = np.empty((nc, n)), np.empty((nc, nc)), np.empty(nc, dtype=np.int64)
+            assert F.factor(q, lay.segs, lay.slides, lay.indep, A, LU, piv), (N, M)
+            Ac = A[:, N_Q:][piv]
+            band = np.zeros(Ac.shape, dtype=bool)
+            for k in range(nc // 2):
+                lo, hi = max(0, k - 1), min(nc // 2, k + 2)
+                band[2 * k:2 * k + 2, 2 * lo:2 * hi] = True
+            assert not np.any(Ac[~band]), (N, M)
+            b = rng.normal(size=nc)
+            x = np.empty(nc)
+            F.bt_solve(LU, piv, nc, b, x)
+            ref = np.linalg.solve(A[:, N_Q:], b)
+            assert np.max(np.abs(x - ref)) <= 1e-12 * np.max(np.abs(ref)), (N, M)
+            checked += 1
+    assert checked == sum(sum(1 for m in range(1, N + 1) if N % m == 0) for N in range(2, 25))

@@ -19,8 +19,12 @@ M + 1 slide rows (P⁺ − P⁻) × (b − a)_child = 0, and N + M − 1 indepen
 parent-side point) and x(P⁺) − x(P⁻) of the slide at B and of each interior slide. The chain's rows do not enter
 the rigid twelve, so A is block lower-triangular: the rigid block is solved in closed form
 (:func:`twin.natural_coordinates.solve_aug`, row 2 taking its value from the right-hand side), the chain block
-(2 (N + M) square) by an LU factorization. The rod stays within ±12° of the guide, where the y rows and the
-length rows are independent.
+(2 (N + M) square) by a block-tridiagonal LU, one 2 × 2 block per chain point (the projection's Newton
+iterations and its velocity projection; :func:`twin.reference.flexible_kernels.chain_order`). The
+rod stays within ±12° of the guide, where the y rows and the length rows are independent. The accelerations are
+the R-matrix formulation's, computed without R: by the constraint forces on the constant block-diagonal mass
+matrix (:mod:`twin.reference.flexible_kkt`; the R-matrix kernels of :mod:`twin.reference.flexible_kernels`
+remain as its check).
 
 Elastic joints as forces: a hinge's moment −k Δ − c Δ̇ (Δ the angle from the parent's axis to the child's) on
 the two bars (a moment M on a bar a→b: forces ±M R₉₀u/|u|² on b and a); a slide's force −k δ − c δ̇ along the
@@ -51,7 +55,7 @@ import math
 import numpy as np
 
 from twin.jit import njit
-from twin.natural_coordinates import (N_Q, N_Z, P_CLR_B, P_CLR_C, P_FGUIDE, P_GX, P_GY, P_H, P_IMAX, P_KI, P_KP,
+from twin.natural_coordinates import (N_Q, P_CLR_B, P_CLR_C, P_FGUIDE, P_GX, P_GY, P_H, P_IMAX, P_KI, P_KP,
                                       P_KV, P_L, P_M1, P_M2, P_M3, P_OUT_ENERGY, P_R, P_RBUSH_B, P_RBUSH_C, P_V0,
                                       P_V1, P_XG1, P_XG2, S_I, S_IN_A, S_IN_B, S_IN_C, S_Q, S_QD, S_VIMP_A,
                                       S_VIMP_B, S_VIMP_C)
@@ -59,9 +63,9 @@ from twin.reference.model import N_OUT, NEWTON_FAILED, NOT_FINITE, O_EKIN, O_EPO
 from twin.reference import drivetrain as DT
 from twin.reference.guide import N_GUIDE_OUT
 from twin.reference.flexible_kernels import (G_CF, G_CG, G_FLEX_A, G_FLEX_G, G_KF, G_KG, G_MF, G_MG, factor,
-                                             _eye_contact, normal_mobility, _bound_damping, chain_forces,
-                                             flex_energy, flex_rows, flex_project, flex_mass, flex_solve_acc,
+                                             _eye_contact, _bound_damping, chain_forces, flex_energy, flex_project,
                                              _rod_sensors, _slider_sensors)
+from twin.reference.flexible_kkt import KKTLayout, kkt_accelerations, kkt_factor, kkt_mobility, kkt_rows
 
 # the supports' parameters ``G`` (build()): indices G_KF … G_FLEX_G, defined with the kernels that read them
 N_G = 8
@@ -154,7 +158,8 @@ def build(cfg, chain) -> FlexLayout:
 # --------------------------------------------------------------------------------------------- kernels
 @njit(cache=True, nogil=True)
 def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sens, st, x, theta_ref, omega_ref,
-                 stride, out, want_out, D, ds, setpoint, dout, alpha_ref):
+                 stride, out, want_out, D, ds, setpoint, dout, alpha_ref, crow, pat, pn, Minv, cols, cn, Mcrank,
+                 kaug):
     """Integrate ``len(theta_ref)`` steps of the flexible bench from the rigid state ``st`` (PID integral,
     contact events; its q, q̇ unused) and the full coordinates ``x`` = [q (n), q̇ (n), dissipated energy]
     (updated in place). Crank PID drive, or with ``D`` non-empty the drive train (:mod:`twin.reference.drivetrain`,
@@ -163,7 +168,9 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
     :func:`twin.reference.model.run_steps`. With ``alpha_ref`` non-empty the crank angle is prescribed as
     :func:`twin.reference.model.run_prescribed` does (``theta_ref``, ``omega_ref`` hold the program at t_0 … t_n,
     ``alpha_ref`` its acceleration at t_0 … t_{n−1}; the drive torque goes to the torque column). Returns
-    (status, steps done)."""
+    (status, steps done). The accelerations by the sparse constraint-force solve of
+    :mod:`twin.reference.flexible_kkt` (``crow`` to ``kaug``: its :class:`~twin.reference.flexible_kkt.KKTLayout`,
+    with θ's row among the constraints when the crank is prescribed)."""
     n = (x.shape[0] - 1) // 2
     nc = n - N_Q
     h = P[P_H]
@@ -186,17 +193,15 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
     ja = np.zeros(5)
     jb = np.zeros(5)
     jc = np.zeros(5 + N_GUIDE_OUT)
-    rows = np.empty(N_Z + 4 + nc, dtype=np.int64)
-    nz = flex_rows(P, G, indep, rows)
-    r0 = N_Q + segs.shape[0] + slides.shape[0]
-    for k in range(indep.shape[0]):
-        rows[nz] = r0 + k
-        nz += 1
-    Rt = np.empty((nz, n))
-    MR = np.empty((nz, n))
-    S = np.empty(n)
-    Mb = np.empty((nz, nz))
-    rhs = np.empty(nz)
+    mk = crow.shape[0]
+    PhiV = np.zeros((mk, pat.shape[1]))
+    gam = np.empty(mk)
+    Yk = np.empty((mk, n))
+    Wk = np.empty((mk, mk))
+    lam = np.empty(mk)
+    uk = np.empty(2 * mk)
+    sck = np.empty((3, 5, 5))
+    qs2 = np.empty(N_Q)
     qdd = np.empty(n)
     res = np.empty(n)
     dq = np.empty(n)
@@ -205,14 +210,9 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
     A = np.empty((nc, n))
     LU = np.empty((nc, nc))
     piv = np.empty(nc, dtype=np.int64)
-    Bm = np.empty((nc, nz + 1))
-    RtT = np.empty((n, nz))
-    gmob = np.empty(2 * nz)
-    Wmob = np.empty((nz, nz))
     motor = D.shape[0] > 0
     prescribed = alpha_ref.shape[0] > 0
     nsteps = setpoint.shape[0] if motor else (alpha_ref.shape[0] if prescribed else theta_ref.shape[0])
-    tau_p = np.zeros(1)
     dtmp = np.empty(3)
     Qb = np.empty(N_Q)
     qd0 = np.empty(N_Q)
@@ -243,21 +243,26 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
         if k == 0 and not factor(q, segs, slides, indep, A, LU, piv):   # later steps: the projection's
             status = NOT_FINITE
             break
-        flex_mass(P, G, q, qd, segs, seg_f, slides, A, LU, piv, rows, nz, Rt, S, Mb, MR, b, Bm, RtT)
+        # the constraint rows and the mobility W = Φ_c M̃⁻¹ Φ_cᵀ at (q, q̇) (flexible_kkt: the R matrix's q̈ to
+        # round-off)
+        kkt_rows(P, q, qd, segs, slides, crow, pat, pn, alpha_ref[k] if prescribed else 0.0, PhiV, gam, qs2)
+        if not kkt_factor(P, q, crow, pat, pn, PhiV, Minv, cols, cn, Mcrank, kaug, Yk, Wk, sck):
+            status = NOT_FINITE
+            break
         generalized_forces(P, qs, qds, tau, cst_a, cst_b, cst_c, Q[:N_Q], ja, jb, jc)
         # the contact forces on the rod act on its eyes (end_B, end_C), not spread as on a rigid rod, with the
         # law's damping bounded by the pair's effective mass (_bound_damping)
         if P[P_CLR_B] > 0.5 and jb[2] > 0.0:
             d = math.sqrt(jb[0] * jb[0] + jb[1] * jb[1])
-            mob = normal_mobility(Rt, Mb, nz, prescribed, 0, 1, 2, 3, jb[0] / d, jb[1] / d, gmob, Wmob) \
+            mob = kkt_mobility(pat, pn, PhiV, Minv, cols, cn, Yk, Wk, mk, 0, 1, 2, 3, jb[0] / d, jb[1] / d, uk) \
                 if d > 0.0 else 0.0
             fn0, ft0 = _bound_damping(P, qs, qds, True, cst_b, jb, mob, h, Q)
             if fn0 > 0.0 or jb[3] > 0.0:
                 _eye_contact(P, qs, q, jb, fn0, ft0, 2, P[P_RBUSH_B], segs[0, 0], segs[0, 1], Q)
         if P[P_CLR_C] > 0.5 and jc[2] > 0.0:
             d = math.sqrt(jc[0] * jc[0] + jc[1] * jc[1])
-            mob = normal_mobility(Rt, Mb, nz, prescribed, 6, 10 if shift else -1, 4, 5, jc[0] / d, jc[1] / d, gmob,
-                                  Wmob) if d > 0.0 else 0.0
+            mob = kkt_mobility(pat, pn, PhiV, Minv, cols, cn, Yk, Wk, mk, 6, 10 if shift else -1, 4, 5, jc[0] / d,
+                               jc[1] / d, uk) if d > 0.0 else 0.0
             fn0, ft0 = _bound_damping(P, qs, qds, False, cst_c, jc, mob, h, Q)
             if fn0 > 0.0 or jc[3] > 0.0:
                 last = segs.shape[0] - 1
@@ -270,12 +275,9 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
         for i in range(N_Q):   # the mechanism's own forces (the drive train's accounts read them)
             Qb[i] = Q[i]
         diss = chain_forces(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G, Q)
-        if not flex_solve_acc(q, Q, nz, Rt, RtT, S, Mb, rhs, b, tmp, qdd, P, segs, seg_f, G, prescribed,
-                              alpha_ref[k] if prescribed else 0.0, tau_p):
-            status = NOT_FINITE
-            break
-        if prescribed:
-            tau = tau_p[0]
+        mu = kkt_accelerations(q, Q, crow, pat, pn, PhiV, gam, Minv, cols, cn, Yk, Wk, qdd, lam)
+        if prescribed:   # the drive torque: minus the multiplier of the driving constraint
+            tau = -mu
         if want_out and k % stride == 0:
             row = out[k // stride]
             _outputs(P, q[:N_Q], qd[:N_Q], qdd[:N_Q], tau, ja, jb, jc, row)
@@ -397,6 +399,8 @@ class FlexibleRun:
         self.P_rigid = P_rigid
         self.mounts = MountFilter(st.mount_frequency_hz, st.mount_damping_ratio, cfg.sensors.output_rate_hz)
         self.x: np.ndarray | None = None
+        self._kkt: dict[bool, KKTLayout] = {}
+        self.kkt(cfg.drive.mode == "prescribed")   # built here, not in the first chunk's stepping time
 
     def reset(self, st_rigid: np.ndarray) -> None:
         """Start from the rigid model's state (the straight, unstretched rod on its pose), the contact stiffnesses
@@ -421,9 +425,20 @@ class FlexibleRun:
         else:
             sp = dbuf = D = ds = np.empty(0)
             dbuf = np.empty((0, 1))
+        kk = self.kkt(alpha_ref is not None)
         return run_flexible(self.P, lay.G, lay.segs, lay.seg_f, lay.hinges, lay.hinge_f, lay.slides, lay.slide_f,
                             lay.indep, lay.sensors, st, self.x, theta_ref, omega_ref, stride, buf, True, D, ds, sp,
-                            dbuf, np.empty(0) if alpha_ref is None else alpha_ref)
+                            dbuf, np.empty(0) if alpha_ref is None else alpha_ref, kk.crow, kk.pat, kk.pn, kk.Minv,
+                            kk.cols, kk.cn, kk.Mcrank, kk.kaug)
+
+    def kkt(self, prescribed: bool) -> KKTLayout:
+        """The sparse acceleration solve's tables (:class:`twin.reference.flexible_kkt.KKTLayout`), built once per
+        drive kind (with the crank prescribed θ's row is a constraint)."""
+        kk = self._kkt.get(prescribed)
+        if kk is None:
+            lay = self.layout
+            kk = self._kkt[prescribed] = KKTLayout(self.P, lay.G, lay.segs, lay.seg_f, lay.slides, lay.n, prescribed)
+        return kk
 
 
 def tap_response(cfg, speed_mps: float = 0.01, duration_s: float = 0.2, every: int = 5, theta0: float = 0.3,

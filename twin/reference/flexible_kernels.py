@@ -1,6 +1,7 @@
 """Compiled kernels of the reference engine's flexible structure (:mod:`twin.reference.flexible`): the chain's
-Jacobian, residuals and quadratic velocity terms, a small LU with partial pivoting, the reduced mass matrix and
-accelerations on the R-matrix formulation, the elastic joints' and supports' forces and energy, the clearance
+Jacobian, residuals and quadratic velocity terms, the chain block's block-tridiagonal LU (2 × 2 blocks, one per
+chain point, O(N)), the reduced mass matrix and accelerations on the R-matrix formulation (the step computes them
+by :mod:`twin.reference.flexible_kkt`; these are its check), the elastic joints' and supports' forces and energy, the clearance
 contact on the rod's eyes with its damping bound, and the accelerometers on the segments. The model, the
 coordinates and the rows are described in :mod:`twin.reference.flexible`; the stepping loop lives there.
 """
@@ -101,58 +102,105 @@ def chain_quadratic(qd, segs, slides, out):
 
 
 @njit(cache=True)
-def lu_factor(A, piv, n):
-    """In-place LU with partial pivoting of the n × n matrix A; returns False if singular."""
-    for k in range(n):
-        p = k
-        big = abs(A[k, k])
-        for i in range(k + 1, n):
-            if abs(A[i, k]) > big:
-                big = abs(A[i, k])
-                p = i
-        if big == 0.0:
+def chain_order(segs, slides, indep, piv):
+    """The chain block as block tridiagonal: the two rows of A (indices into the chain's rows) of each chain point
+    k into ``piv[2k]``, ``piv[2k + 1]``, in chain order (the point's columns are 12 + 2k, 12 + 2k + 1). A point
+    owns the length row of the segment it ends and its y row, or, as a slide's P⁺, that slide's row and its
+    x(P⁺) − x(P⁻) row; the last point (P⁻ at C) owns the last segment's length row and the slide at C. Every row
+    then reaches only its point and the two next to it (its segment's start, a slide's P⁻ and its child's end;
+    checked for every chain the configuration allows by ``tests/test_structure_reference.py``). False if a
+    point does not own exactly two rows."""
+    nseg, nsl = segs.shape[0], slides.shape[0]
+    nc = piv.shape[0]
+    for i in range(nc):
+        piv[i] = -1
+    for r in range(nc):
+        if r < nseg:
+            owner = segs[r, 1]
+        elif r < nseg + nsl:
+            k = r - nseg
+            owner = slides[k, 1] if slides[k, 1] >= N_Q else slides[k, 0]
+        else:
+            owner = indep[r - nseg - nsl, 1]
+        b = owner - N_Q
+        if b < 0 or b >= nc or b % 2 != 0:
             return False
-        piv[k] = p
-        if p != k:
-            for j in range(n):
-                t = A[k, j]
-                A[k, j] = A[p, j]
-                A[p, j] = t
-        inv = 1.0 / A[k, k]
-        for i in range(k + 1, n):
-            A[i, k] *= inv
-            f = A[i, k]
-            if f != 0.0:
-                for j in range(k + 1, n):
-                    A[i, j] -= f * A[k, j]
+        if piv[b] < 0:
+            piv[b] = r
+        elif piv[b + 1] < 0:
+            piv[b + 1] = r
+        else:
+            return False
+    for i in range(nc):
+        if piv[i] < 0:
+            return False
     return True
 
 
 @njit(cache=True)
-def lu_solve(LU, piv, n, b):
-    """Solve with the factors of :func:`lu_factor` (b overwritten by x)."""
-    for k in range(n):
-        p = piv[k]
-        if p != k:
-            t = b[k]
-            b[k] = b[p]
-            b[p] = t
-    for i in range(n):
-        acc = b[i]
-        for j in range(i):
-            acc -= LU[i, j] * b[j]
-        b[i] = acc
-    for i in range(n - 1, -1, -1):
-        acc = b[i]
-        for j in range(i + 1, n):
-            acc -= LU[i, j] * b[j]
-        b[i] = acc / LU[i, i]
+def bt_factor(A, piv, LU):
+    """Block LU (2 × 2 blocks, no pivoting between blocks) of the chain block of A in the order of
+    :func:`chain_order` (``piv``): per point k, E_k⁻¹ into ``LU[2k:2k+2, 0:2]``, G_k = L_k E_{k−1}⁻¹ into
+    ``[2k:2k+2, 2:4]``, the upper block U_k into ``[2k:2k+2, 4:6]`` (E_k = D_k − G_k U_{k−1}, D, L, U the
+    diagonal, lower and upper blocks). The diagonal blocks dominate (a length row's 2l along the rod and a y row,
+    or a slide's l across it and an x row); the upper blocks are a slide's stretch, ~0. False if a block is
+    singular."""
+    nc = A.shape[0]
+    nb = nc // 2
+    for k in range(nb):
+        r0, r1 = piv[2 * k], piv[2 * k + 1]
+        c = N_Q + 2 * k
+        d00, d01, d10, d11 = A[r0, c], A[r0, c + 1], A[r1, c], A[r1, c + 1]
+        i0 = 2 * k
+        if k > 0:
+            l00, l01, l10, l11 = A[r0, c - 2], A[r0, c - 1], A[r1, c - 2], A[r1, c - 1]
+            e00, e01, e10, e11 = LU[i0 - 2, 0], LU[i0 - 2, 1], LU[i0 - 1, 0], LU[i0 - 1, 1]
+            g00, g01 = l00 * e00 + l01 * e10, l00 * e01 + l01 * e11
+            g10, g11 = l10 * e00 + l11 * e10, l10 * e01 + l11 * e11
+            LU[i0, 2], LU[i0, 3], LU[i0 + 1, 2], LU[i0 + 1, 3] = g00, g01, g10, g11
+            u00, u01, u10, u11 = LU[i0 - 2, 4], LU[i0 - 2, 5], LU[i0 - 1, 4], LU[i0 - 1, 5]
+            d00 -= g00 * u00 + g01 * u10
+            d01 -= g00 * u01 + g01 * u11
+            d10 -= g10 * u00 + g11 * u10
+            d11 -= g10 * u01 + g11 * u11
+        if k < nb - 1:
+            LU[i0, 4], LU[i0, 5] = A[r0, c + 2], A[r0, c + 3]
+            LU[i0 + 1, 4], LU[i0 + 1, 5] = A[r1, c + 2], A[r1, c + 3]
+        else:
+            LU[i0, 4] = LU[i0, 5] = LU[i0 + 1, 4] = LU[i0 + 1, 5] = 0.0
+        det = d00 * d11 - d01 * d10
+        if not (det != 0.0 and math.isfinite(det)):
+            return False
+        LU[i0, 0], LU[i0, 1], LU[i0 + 1, 0], LU[i0 + 1, 1] = d11 / det, -d01 / det, -d10 / det, d00 / det
+    return True
+
+
+@njit(cache=True)
+def bt_solve(LU, piv, nc, b, x):
+    """Solve the chain block with :func:`bt_factor`'s factors: ``b`` indexed by the chain's rows, the solution
+    into ``x`` indexed by its columns (b is not changed)."""
+    nb = nc // 2
+    for k in range(nb):   # forward: y_k = b_k − G_k y_{k−1} (into x)
+        i0 = 2 * k
+        y0, y1 = b[piv[i0]], b[piv[i0 + 1]]
+        if k > 0:
+            y0 -= LU[i0, 2] * x[i0 - 2] + LU[i0, 3] * x[i0 - 1]
+            y1 -= LU[i0 + 1, 2] * x[i0 - 2] + LU[i0 + 1, 3] * x[i0 - 1]
+        x[i0], x[i0 + 1] = y0, y1
+    for k in range(nb - 1, -1, -1):   # backward: x_k = E_k⁻¹ (y_k − U_k x_{k+1})
+        i0 = 2 * k
+        y0, y1 = x[i0], x[i0 + 1]
+        if k < nb - 1:
+            y0 -= LU[i0, 4] * x[i0 + 2] + LU[i0, 5] * x[i0 + 3]
+            y1 -= LU[i0 + 1, 4] * x[i0 + 2] + LU[i0 + 1, 5] * x[i0 + 3]
+        x[i0] = LU[i0, 0] * y0 + LU[i0, 1] * y1
+        x[i0 + 1] = LU[i0 + 1, 0] * y0 + LU[i0 + 1, 1] * y1
 
 
 @njit(cache=True)
 def flex_solve(q, s, c, A, LU, piv, b, out, tmp):
     """Solve the whole augmented system for v: the rigid twelve in closed form, then the chain block (A holds
-    the chain's rows over all coordinates, LU/piv the factors of its chain columns)."""
+    the chain's rows over all coordinates, LU/piv the block factors of its chain columns, :func:`factor`)."""
     nc = A.shape[0]
     rigid = False
     for k in range(N_Q):
@@ -168,20 +216,17 @@ def flex_solve(q, s, c, A, LU, piv, b, out, tmp):
             out[k] = 0.0
         for r in range(nc):
             tmp[r] = b[N_Q + r]
-    lu_solve(LU, piv, nc, tmp)
-    for r in range(nc):
-        out[N_Q + r] = tmp[r]
+    bt_solve(LU, piv, nc, tmp, out[N_Q:])
 
 
 @njit(cache=True)
 def factor(q, segs, slides, indep, A, LU, piv):
-    """Chain rows at q into A and the LU of their chain columns into LU; False if singular."""
+    """Chain rows at q into A and the block-tridiagonal LU of their chain columns into LU (:func:`bt_factor`, the
+    rows' order in ``piv``, :func:`chain_order`); False if singular."""
     chain_jacobian(q, segs, slides, indep, A)
-    nc = A.shape[0]
-    for i in range(nc):
-        for j in range(nc):
-            LU[i, j] = A[i, N_Q + j]
-    return lu_factor(LU, piv, nc)
+    if not chain_order(segs, slides, indep, piv):
+        return False
+    return bt_factor(A, piv, LU)
 
 
 @njit(cache=True)
@@ -509,39 +554,11 @@ def flex_project(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, res, dq, b
 
 
 @njit(cache=True)
-def lu_solve_many(LU, piv, n, B, m):
-    """:func:`lu_solve` on the first ``m`` columns of B (n × ≥ m) at once, B overwritten. Each column's arithmetic
-    is :func:`lu_solve`'s, operation for operation (bit for bit the same result); the columns being independent,
-    the inner loops run across them instead of along one dependent sum."""
-    for k in range(n):
-        p = piv[k]
-        if p != k:
-            for c in range(m):
-                t = B[k, c]
-                B[k, c] = B[p, c]
-                B[p, c] = t
-    for i in range(n):
-        for j in range(i):
-            f = LU[i, j]
-            for c in range(m):
-                B[i, c] -= f * B[j, c]
-    for i in range(n - 1, -1, -1):
-        for j in range(i + 1, n):
-            f = LU[i, j]
-            for c in range(m):
-                B[i, c] -= f * B[j, c]
-        d = LU[i, i]
-        for c in range(m):
-            B[i, c] = B[i, c] / d
-
-
-@njit(cache=True)
 def flex_mass(P, G, q, qd, segs, seg_f, slides, A, LU, piv, rows, nz, Rt, S, Mb, MR, b, Bm, RtT):
     """The force-independent part of the accelerations q̈ = R z̈ + Ṙż (Rᵀ M R z̈ = Rᵀ (Q − M Ṙż), A already
     factored at q): Rᵀ (rows of R, the unit right-hand sides of the independent rows) into ``Rt`` and its
     transpose ``RtT``, M R into ``MR``, Ṙż into ``S`` and Rᵀ M R into ``Mb``. Each column as
-    :func:`flex_solve` would give it, the chain block's solves done together (:func:`lu_solve_many`; ``Bm``
-    (n − 12) × (nz + 1) scratch). :func:`flex_solve_acc` completes the step with the forces."""
+    :func:`flex_solve` would give it (``Bm`` (n − 12) × (nz + 1) scratch). :func:`flex_solve_acc` completes the step with the forces."""
     n = q.shape[0]
     nc = A.shape[0]
     s, c = math.sin(q[7]), math.cos(q[7])
@@ -571,11 +588,11 @@ def flex_mass(P, G, q, qd, segs, seg_f, slides, A, LU, piv, rows, nz, Rt, S, Mb,
                 out[k] = 0.0
             for r in range(nc):
                 Bm[r, j] = b[N_Q + r]
-    lu_solve_many(LU, piv, nc, Bm, nz + 1)
-    for r in range(nc):
-        for j in range(nz):
-            Rt[j, N_Q + r] = Bm[r, j]
-        S[N_Q + r] = Bm[r, nz]
+    col = np.empty(nc)
+    for j in range(nz + 1):
+        for r in range(nc):
+            col[r] = Bm[r, j]
+        bt_solve(LU, piv, nc, col, Rt[j, N_Q:] if j < nz else S[N_Q:])
     for j in range(nz):
         flex_mass_times(P, segs, seg_f, G, Rt[j], MR[j])
     for k in range(n):
