@@ -127,7 +127,7 @@ SCRIPTS: dict[str, Script] = {
                                          args=("--json", f"{R}/identify/start_angle.json")),
     "identify/bench_identify": Script("prints the time to identify a 2 s recording against reading it", "~1 min"),
     "identify/train_bench": Script("WORK/bench_VARIANT.npz, WORK/dev_VARIANT.json (the whole-bench model of B, C and "
-                                   "the guide; analysis/identify/identify_bench.npz by --save)", "66 min of data + 13 min",
+                                   "the guide; twin/data/identify_bench.npz by --save)", "66 min of data + 13 min",
                                    long=True, needs="a work folder (--work)"),
     "identify/bench_eval": Script(f"{R}/identify/bench_*.json (--out): whole-bench figures through the answer path",
                                   "20 s per 100 runs", needs="a model file and dataset folders (arguments)"),

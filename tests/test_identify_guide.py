@@ -129,12 +129,12 @@ def test_a_format_3_file_is_refused_in_one_line_naming_its_version(tmp_path):
     assert "\n" not in str(e.value)
 
 
-BENCH = ROOT / "analysis" / "identify" / "identify_bench.npz"
+BENCH = ROOT / "twin" / "data" / "identify_bench.npz"
 
 
 def _shipped_with_guide() -> ClearanceModel:
-    """The repository's model that locates the guide: the default where it does, else the whole-bench model kept
-    beside the analysis (analysis/identify/FRESH_TEST_WHOLE_BENCH.md), else skip."""
+    """The shipped model that locates the guide: the default where it does, else the whole-bench model shipped
+    beside it as ``bench`` (analysis/identify/FRESH_TEST_WHOLE_BENCH.md), else skip."""
     for path in (DEFAULT, BENCH):
         if path.is_file():
             m = ClearanceModel.load(path)
@@ -169,3 +169,17 @@ def test_the_guide_model_locates_guide_play_alone_and_leaves_a_tight_bench_healt
         assert lo >= m.trained_on["clearances_mm"]["G"]["min"]  # never below the smallest play trained on
     else:
         assert not g.faulty and g.size_mm == 0.0 and g.interval_mm == (0.0, 0.0)
+
+
+def test_a_shipped_model_is_named_by_its_name_and_an_unknown_name_is_refused_in_one_line(tmp_path):
+    """``--model bench`` / ``model="bench"`` is the whole-bench model shipped in the package (it locates G), no name is
+    the default (B and C); an unknown shipped name raises naming the field and the allowed names."""
+    from twin.identification.model import SHIPPED_MODELS, resolve_model, shipped_model_path
+
+    assert resolve_model(None) == shipped_model_path("default")
+    assert resolve_model("bench") == BENCH and BENCH.is_file()
+    assert "G" in ClearanceModel.load(resolve_model("bench")).joints
+    assert resolve_model(str(tmp_path / "m.npz")) == tmp_path / "m.npz"  # anything else is a file
+    with pytest.raises(ModelError, match=r"^model: unknown shipped model 'nope'; allowed: default, bench") as e:
+        shipped_model_path("nope")
+    assert "\n" not in str(e.value) and set(SHIPPED_MODELS) == {"default", "bench"}

@@ -207,9 +207,11 @@ def plot(source: str | Path | Run, out: str | Path, *, channels: Sequence[str] |
 def identify(recording: str | Path, model: str | Path | None = None) -> IdentifyResult:
     """Locate and size the clearance faults of a bench recording, as ``twin identify clearance``.
 
-    ``model``: a model file made by ``twin identify train`` (default: the model shipped with the
-    twin). Returns a :class:`twin.identification.results.IdentifyResult`: ``.fault`` (``"none"``,
-    ``"B"``, ``"C"`` or ``"BC"``), ``.probabilities`` per class, ``.joint("B")`` and ``.joint("C")``
+    ``model``: a model file made by ``twin identify train``, or a shipped model by name: ``"default"``
+    (B and C; used when None) or ``"bench"`` (B, C and the slider guide G, trained on recordings of the
+    whole bench). Returns a :class:`twin.identification.results.IdentifyResult`: ``.fault`` (``"none"``,
+    ``"B"``, ``"C"``, ``"BC"``; with the bench model also ``"G"``, ``"BG"``, ``"CG"``, ``"BCG"``),
+    ``.probabilities`` per class, ``.joint("B")``, ``.joint("C")`` (and ``.joint("G")``)
     (``.size_mm``, 0 for a ball bearing, with its 90 % ``.interval_mm`` [mm]; ``.size_resolved``;
     ``.size_held_out``: how often the model's sizes held within x1.5 at this speed and orientation in
     training runs left out, None for a model without that table), ``.warnings`` (e.g. a size the
@@ -223,10 +225,11 @@ def identify(recording: str | Path, model: str | Path | None = None) -> Identify
     >>> a.fault, a.joint("C").size_mm > 0, a.joint("B").size_mm
     ('C', True, 0.0)
     """
-    from twin.identification.model import ClearanceModel, ModelError, default_model_path, identify_recording
+    from twin.identification.model import SHIPPED_MODELS, ClearanceModel, ModelError, identify_recording, resolve_model
 
     recording = _path(recording, "recording")
-    path = _path(model, "model") if model is not None else default_model_path()
+    path = resolve_model(model if isinstance(model, str) and model in SHIPPED_MODELS else
+                         (_path(model, "model") if model is not None else None))
     if model is None and not path.is_file():
         raise ModelError(f"no default model in this installation ({path}); give model=PATH")
     return identify_recording(ClearanceModel.load(path), recording)

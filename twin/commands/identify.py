@@ -8,7 +8,7 @@ from pathlib import Path
 
 from twin.commands.inputs import RECORDING_HELP, recording
 from twin.errors import TwinError
-from twin.identification.model import default_model_path
+from twin.identification.model import resolve_model
 from twin.util import resolve_workers
 
 
@@ -56,7 +56,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     c = ids.add_parser("clearance", help="which joint has clearance in a bench recording, and how much")
     c.add_argument("recording", metavar="REC.mcap", help=RECORDING_HELP)
-    c.add_argument("--model", metavar="MODEL.npz", help="model file (default: the one shipped with twin)")
+    c.add_argument("--model", metavar="MODEL", help="a model file (.npz) or a shipped model: 'default' (B and C) or "
+                   "'bench' (B, C and the slider guide G, trained on the whole bench); default: 'default'")
     c.add_argument("--json", metavar="OUT.json", help="also write the answer as JSON (a refused recording: its record, "
                                                       "refused: true and the reason)")
     c.set_defaults(func=_clearance)
@@ -156,7 +157,7 @@ def _clearance(args: argparse.Namespace) -> int:
     from twin.util import atomic_write_text
 
     rec, js = _recording_and_json(args)
-    path = Path(args.model) if args.model else default_model_path()
+    path = resolve_model(args.model)
     if not args.model and not path.is_file():
         raise TwinError(f"no default model in this installation ({path}); give --model MODEL.npz")
     model = ClearanceModel.load(path)

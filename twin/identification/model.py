@@ -71,7 +71,7 @@ from twin.identification.results import Evidence, HeldOut, IdentifyResult, Joint
 from twin.identification.trees import ModelError, TreeEnsemble, from_sklearn
 
 __all__ = ["CLASSES", "ClearanceModel", "DEFAULT_MODEL", "MODEL_FORMAT", "MODEL_SUFFIX", "ModelError",
-           "default_model_path", "identify_inputs", "identify_recording", "training_check"]
+           "default_model_path", "shipped_model_path", "resolve_model", "identify_inputs", "identify_recording", "training_check"]
 
 CLASSES = ("none", "B", "C", "BC", "G", "BG", "CG", "BCG")
 #: the clearance locations a model may answer, in the mechanism's order: the revolute joints B and C, the slider guide G
@@ -83,6 +83,10 @@ ESTIMATORS = ("classifier", "size_B", "size_C")  # those of a model of B and C (
 MODEL_SUFFIX = ".npz"
 #: the model that ships with the package (analysis/identify/train_default.py makes it)
 DEFAULT_MODEL = "identify_default.npz"
+#: the models that ship with the package, by the name ``--model``/``model=`` accepts: "default" (B and C,
+#: trained on the crank PID and the motor drive with a tight guide) and "bench" (B, C and the slider guide G,
+#: trained on recordings of the whole bench; analysis/identify/train_bench.py makes it)
+SHIPPED_MODELS = {"default": DEFAULT_MODEL, "bench": "identify_bench.npz"}
 
 
 def label_key(joint: str) -> str:
@@ -108,9 +112,26 @@ def _file_estimators(meta: dict[str, Any]) -> tuple[str, ...]:
 
 def default_model_path() -> Path:
     """The file of the model that ships with the package (it may be missing from a source checkout)."""
+    return shipped_model_path("default")
+
+
+def shipped_model_path(name: str) -> Path:
+    """The file of a model shipped with the package, by its name in :data:`SHIPPED_MODELS`."""
     from importlib.resources import files
 
-    return Path(str(files("twin") / "data" / DEFAULT_MODEL))
+    if name not in SHIPPED_MODELS:
+        raise ModelError(f"unknown shipped model {name!r}; allowed: {', '.join(SHIPPED_MODELS)} or a model file "
+                         f"(.npz)", field="model")
+    return Path(str(files("twin") / "data" / SHIPPED_MODELS[name]))
+
+
+def resolve_model(model: str | Path | None) -> Path:
+    """A model argument as a file: None is the default model, a shipped model's name its file, else a path."""
+    if model is None:
+        return default_model_path()
+    if isinstance(model, str) and model in SHIPPED_MODELS:
+        return shipped_model_path(model)
+    return Path(model)
 
 
 @dataclass
