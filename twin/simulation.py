@@ -32,7 +32,7 @@ from twin.channels import channel_specs, encoder_from_bench
 from twin.config import ENGINE_CLASSES, BenchConfig
 from twin.errors import SimulationError, raise_terminated
 from twin.run import Channel, Run
-from twin.tracefile import DriveInputs
+from twin.tracefile import DriveInputs, with_trace_duration
 
 #: channels the loop computes itself (from the drive reference and the crank angle)
 LOOP_CHANNELS = ("theta_ref", "omega_ref", "encoder_angle")
@@ -182,6 +182,7 @@ def make_engine(cfg: BenchConfig, inputs: DriveInputs | None = None) -> Engine:
     a configuration names are read and checked here, before an engine is built (a bad file is refused
     before the reference engine compiles), and reach the engine as arrays."""
     inputs = _read_drive_files(cfg, inputs)
+    cfg = with_trace_duration(cfg, inputs)
     if cfg.spatial.enabled:  # the spatial mechanism has its own pair of engines
         from twin.spatial import SPATIAL_ENGINE_CLASSES
 
@@ -242,6 +243,9 @@ def run_chunks(cfg: BenchConfig, engine: Engine | None = None, progress: bool = 
     output samples of the run (default: the run's end)."""
     from twin.drive import DriveReference
 
+    if cfg.trace_length_pending:  # the run lasts as long as its trace
+        inputs = _read_drive_files(cfg, inputs)
+        cfg = with_trace_duration(cfg, inputs)
     engine = engine if engine is not None else make_engine(cfg, inputs)
     ref = DriveReference(cfg, inputs)
     h, stride, rate, n_out = cfg.simulation.timestep_s, cfg.output_stride, cfg.output_rate_hz, cfg.n_samples
@@ -323,6 +327,9 @@ def simulate(cfg: BenchConfig, sinks: Iterable[Sink] = (), progress: bool = Fals
     sinks = list(sinks)
     closed = 0
     t0 = time.perf_counter()
+    if cfg.trace_length_pending:  # the run lasts as long as its trace (read once, here)
+        inputs = _read_drive_files(cfg, inputs)
+        cfg = with_trace_duration(cfg, inputs)
     try:
         with _sigterm_interrupts():
             engine = engine if engine is not None else make_engine(cfg, inputs)
