@@ -231,7 +231,7 @@ class Progress:
             self.bar.close()
 
 
-def run_chunks(cfg: BenchConfig, engine: Engine | None = None, progress: bool = False,
+def run_chunks(cfg: BenchConfig, engine: Engine | None = None, progress: bool = False, *,
                inputs: DriveInputs | None = None, start: Any = None, until: int | None = None) -> Iterator[Run]:
     """The chunk loop (see the module docstring): yields consecutive chunks of the run of ``cfg``
     on ``engine`` (default: a new engine of ``cfg.simulation.engine``). ``engine.meta`` holds the
@@ -309,7 +309,7 @@ def _sigterm_interrupts() -> Iterator[None]:
         signal.signal(signal.SIGTERM, previous)
 
 
-def simulate(cfg: BenchConfig, sinks: Iterable[Sink] = (), progress: bool = False,
+def simulate(cfg: BenchConfig, sinks: Iterable[Sink] = (), progress: bool = False, *,
              engine: Engine | None = None, inputs: DriveInputs | None = None, start: Any = None) -> Outcome:
     """Run ``cfg`` to the end, streaming every chunk to ``sinks``; returns metadata and summary.
     ``inputs``: recorded drive inputs in memory (the encoder trace of a "trace" program, the motor
@@ -334,7 +334,7 @@ def simulate(cfg: BenchConfig, sinks: Iterable[Sink] = (), progress: bool = Fals
         with _sigterm_interrupts():
             engine = engine if engine is not None else make_engine(cfg, inputs)
             acc = SummaryAccumulator(cfg)
-            for chunk in run_chunks(cfg, engine, progress, inputs, start=start):
+            for chunk in run_chunks(cfg, engine, progress, inputs=inputs, start=start):
                 acc.update(chunk)
                 for s in sinks:
                     s.write(chunk)

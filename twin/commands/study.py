@@ -178,12 +178,12 @@ def _run_doe(args: argparse.Namespace) -> int:
     res = run_study(opts, log=lambda m: print(m, file=sys.stderr, flush=True))
     print(f"wrote {out / 'doe.md'}, {out / 'doe.json'}, " + ", ".join(str(out / f) for f in res.figures))
     for r, s in res.responses.items():
-        o = s["optimum"]
-        print(f"  {r:18s} LOO RMSE/std {s['loo_stats']['rmse_over_std']:.3f}  {doe.goal} "
+        o = s.optimum
+        print(f"  {r:18s} LOO RMSE/std {s.loo_stats['rmse_over_std']:.3f}  {doe.goal} "
               + ", ".join(f"{n}={v:.4g}" for n, v in o["factors"].items()) + f" -> {o['predicted']:.4g}")
     for c in res.checks:
-        print(f"  {c['kind']:8s} " + ", ".join(f"{n}={v:.4g}" for n, v in c["factors"].items()) + ": "
-              + ", ".join(f"{r} {c['responses'][r]:.3g} (pred {c['predicted'][r]['mean']:.3g})" for r in res.responses))
+        print(f"  {c.kind:8s} " + ", ".join(f"{n}={v:.4g}" for n, v in c.factors.items()) + ": "
+              + ", ".join(f"{r} {c.responses[r]:.3g} (pred {c.predicted[r]['mean']:.3g})" for r in res.responses))
     return 0
 
 
