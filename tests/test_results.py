@@ -4,7 +4,8 @@ The golden dicts in ``tests/golden/`` were captured from the code that returned 
 results existed (the identify answers of three sample recordings, the ``seconds`` set to null; the report of the
 replay that ``tests/test_replay.py``'s ``ideal`` fixture makes, the recording's path shortened; the ``doe.json`` of
 a 4-point DOE as ``tests/test_doe.py``'s spec with 0.015 s runs writes it, the spec's path shortened and the wall
-times set to null): ``to_dict()``
+times set to null; the continuous-contact study's JSON for S004 over 0.02 s; the committed
+``analysis/results/accuracy/accuracy.json``): ``to_dict()``
 must give exactly that dict back, key order included, and the JSON text must read back to the same value.
 """
 
@@ -204,6 +205,34 @@ def test_a_doe_result_gives_back_the_golden_doe_json_with_typed_rows():
     assert r.to_dict() == golden  # a copy: the result is unchanged
     with pytest.raises(dataclasses.FrozenInstanceError):
         r.checks[0].kind = "optimum"
+
+
+# ------------------------------------------------------------------ studies' summaries
+def test_an_accuracy_result_gives_back_the_committed_accuracy_json_with_typed_rows():
+    """The committed ``accuracy.json`` (written from plain dicts before the typed rows) reads into an
+    :class:`AccuracyResult` whose summary rows are :class:`VariantSummary` values and back to the same dict."""
+    from twin.studies.accuracy import AccuracyResult, VariantSummary
+
+    golden = json.loads((ROOT / "analysis" / "results" / "accuracy" / "accuracy.json").read_text())
+    golden.pop("provenance", None)  # a stamp, if the file is ever rebuilt, is the file's, not the result's
+    r = AccuracyResult.from_dict(golden)
+    assert r.to_dict() == golden and _layout(r.to_dict()) == _layout(golden)
+    assert all(isinstance(v, VariantSummary) for v in r.summary) and len(r.summary) == len(golden["summary"])
+    default = next(v for v in r.summary if v.key == r.default)
+    assert default.pareto == r.default_on_pareto_front and default.engine == "mujoco"
+    assert all(v.pareto is None for v in r.summary if v.engine == "reference")
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        default.score = 0.0
+
+
+def test_the_continuous_contact_summary_gives_back_the_golden_json():
+    """``tests/golden/continuous_contact_s004_0.02s.json``: the file the dict code wrote for S004 over 0.02 s."""
+    from twin.studies.continuous_contact import ContinuousContactSummary
+
+    golden = json.loads((GOLDEN / "continuous_contact_s004_0.02s.json").read_text())
+    sm = ContinuousContactSummary.from_dict(golden)
+    assert sm.to_dict() == golden and list(sm.to_dict()) == list(golden)
+    assert sm.valid_until_crank_deg == golden["valid_until_crank_deg"] and sm.clearance_radial_m == 0.0005
 
 
 # ------------------------------------------------------------------ training options
