@@ -1,9 +1,9 @@
-"""Package layout and the build of the native bushing collider (twin.mujoco_engine._bore).
+"""Package layout and the build of the native bushing collider (twin.native._bore).
 
 Metadata and dependencies are declared in pyproject.toml. The collider is compiled against the
 C headers shipped in the mujoco-core wheel (a build requirement), located without importing
 mujoco. It does not link the MuJoCo library: at run time it calls the library the ``mujoco``
-module loaded (twin.mujoco_engine.collider), so a wheel of twin needs no MuJoCo library path.
+module loaded (twin.native.collider), so a wheel of twin needs no MuJoCo library path.
 GCC and Clang compile it with ``-Wall -Wextra -Werror`` (a warning fails the build), MSVC with
 ``/W3 /WX``.
 
@@ -53,7 +53,7 @@ setup(
     packages=find_namespace_packages(include=["twin*"]) + list(MAPPED),
     package_dir=MAPPED,
     package_data={
-        "twin": ["data/*.toml", "data/*.json", "data/*.xml", "data/*.npz", "mujoco_engine/*.c", "mujoco_engine/*.h",
+        "twin": ["data/*.toml", "data/*.json", "data/*.xml", "data/*.npz", "native/*.c", "native/*.h",
                  "dataset/*.md", "config/presets/*.toml"],
         "twin.mjcf": ["*.xml"],
         "twin.sample_recordings": ["*.mcap", "FORMAT.md"],
@@ -61,10 +61,9 @@ setup(
     },
     ext_modules=[
         Extension(
-            "twin.mujoco_engine._bore",
-            sources=["twin/mujoco_engine/_bore.c", "twin/mujoco_engine/_socket.c"],
-            depends=["twin/mujoco_engine/_native.h", "twin/mujoco_engine/_guide.h",
-                     "twin/mujoco_engine/_drivetrain.h"],
+            "twin.native._bore",
+            sources=["twin/native/_bore.c", "twin/native/_socket.c"],
+            depends=["twin/native/_native.h", "twin/native/_guide.h", "twin/native/_drivetrain.h"],
             include_dirs=[include],
         )
     ],

@@ -1,4 +1,4 @@
-"""Do two MuJoCo twins step at the same time on two threads? (the native hooks, twin/mujoco_engine/collider.py)
+"""Do two MuJoCo twins step at the same time on two threads? (the native hooks, twin/native/collider.py)
 
 Two measurements, side by side in one run:
 

@@ -12,7 +12,7 @@ For the ideal (Table 4 test 3), C-only (test 6) and B+C (test 12) scenes at h = 
   them with the rollout; ``sensor``: MuJoCo's ``<accelerometer>`` sensors);
 * ``timed``: the same rollout with MuJoCo's own stage timers on (``mjData.timer``; MuJoCo
   only times when the global ``mjcb_time`` is set, so the script installs a native clock) and
-  the three native callbacks of ``twin/mujoco_engine/_bore.c`` wrapped by native timing
+  the three native callbacks of ``twin/native/_bore.c`` wrapped by native timing
   shims: the bore collider (entry ``mjCOLLISIONFUNC[cylinder][cylinder]``, called in the
   narrow phase), ``mjcb_passive`` (friction and impact-speed damping, called at the end of
   ``mj_passive`` in the velocity stage; it also writes the friction sensors) and ``mjcb_sensor``
@@ -61,7 +61,7 @@ from mujoco import rollout
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_mujoco import SCENES, prepare  # noqa: E402
 
-from twin.mujoco_engine.collider import mujoco_library  # noqa: E402
+from twin.native.collider import mujoco_library  # noqa: E402
 from twin.provenance import stamped  # noqa: E402
 
 D = mujoco.mjtDisableBit

@@ -10,8 +10,9 @@ Names are the script's path under ``analysis/`` without ``.py`` (``s004_report``
 ``identify/held_out_plot``). Costs are rough wall times on the project's two-core machine, from the
 scripts' own docstrings where they give one (``~`` marks an estimate). A script marked LONG runs
 only with ``--long`` beside its name. Every results file a script writes carries the package
-version and the git commit (:mod:`twin.provenance`); ``docs/reproductions.md`` says which committed
-files predate that stamp.
+version and the git commit (:mod:`twin.provenance`); ``analysis/made_before_stamping.txt`` names the
+committed files that predate that stamp (a list that may only shrink: rebuilding a file through this
+driver stamps it and takes it off).
 
 The study commands (``twin study ...``) write the other folders of ``analysis/results/``
 (accuracy, formulations, stability, ...); :data:`STUDY_OUTPUTS` names them with their command.
@@ -162,6 +163,9 @@ STUDY_OUTPUTS: dict[str, str] = {
     "identify/dev*, identify/fresh*": "twin dataset generate + twin identify evaluate (identify/train_default)",
 }
 
+#: the committed list of results files made before the stamp (tests/test_result_stamps.py: it may only shrink)
+MADE_BEFORE_STAMPING = "made_before_stamping.txt"
+
 #: modules of analysis/ that are not scripts (imported by the scripts or installed as package data)
 NOT_SCRIPTS = ("run.py", "datasets/__init__.py")
 
@@ -198,8 +202,12 @@ def listing() -> str:
 def is_stamped(path: Path) -> bool | None:
     """Whether a results file carries the version and commit (:mod:`twin.provenance`; the ``commit``
     and ``version`` keys some scripts wrote before it count too); None for a kind that carries none
-    (CSV: read by other programs, stamped through the JSON written beside it)."""
+    (CSV: read by other programs, stamped through the JSON written beside it; a folder's README.md:
+    a page of documentation about the results, not one of them)."""
     import json
+
+    if path.name == "README.md":
+        return None
 
     if path.suffix == ".json":
         try:
@@ -227,8 +235,8 @@ def unstamped() -> str:
     old = [p for p, s in state.items() if s is False]
     per_dir = Counter(p.parent.relative_to(ROOT).as_posix() for p in old)
     lines = [f"{len(old)} of {sum(s is not None for s in state.values())} results files carry no version and commit "
-             f"(written before the stamp; {sum(s is None for s in state.values())} CSV files are stamped through "
-             "the JSON beside them):"]
+             f"(written before the stamp, named in analysis/{MADE_BEFORE_STAMPING}; "
+             f"{sum(s is None for s in state.values())} CSV files and folder READMEs carry none by design):"]
     lines += [f"  {d}: {n}" for d, n in sorted(per_dir.items())]
     return "\n".join(lines)
 

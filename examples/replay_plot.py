@@ -36,7 +36,7 @@ def main(argv: list[str] | None = None) -> int:
         folder = Path(args.keep) if args.keep else Path(tmp) / "replay"
         report = twin.replay(rec, folder, plots=not args.small)
         s = report.sensors[args.sensor]
-        print(f"{rec.name}: {args.sensor} NRMSE {s['nrmse_pct']:.2f} %, correlation {s['correlation']:.4f} "
+        print(f"{rec.name}: {args.sensor} NRMSE {s.nrmse_pct:.2f} %, correlation {s.correlation:.4f} "
               f"over {report.window_s[0]:.3f}-{report.window_s[1]:.3f} s")
         from twin.mcapfile import read_run
 

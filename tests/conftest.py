@@ -20,7 +20,7 @@ def bore_bias_acceleration(m, d, pin: int, bore: int, qvel: np.ndarray) -> float
     (mj_jacDot) at the kinematics in ``d`` and the velocity ``qvel``: the part of the
     penetration's acceleration that does not depend on q̈, n·(J̇_pin(x_p) − J̇_bore(x_b)) q̇ +
     |ė_⊥|²/|e| (e the pin centre minus the bore centre in the bore's plane, n = e/|e|), which the
-    native module applies to the law's rate (twin/mujoco_engine/_bore.c, "Rates")."""
+    native module applies to the law's rate (twin/native/_bore.c, "Rates")."""
     import mujoco
 
     xp, xb = d.geom_xpos[pin].copy(), d.geom_xpos[bore].copy()

@@ -8,7 +8,7 @@ import pytest
 
 from twin import simulation as simulate_mod
 from twin.cli import main
-from twin.errors import SimulationError
+from twin.errors import ConfigError, SimulationError
 from twin.mcapfile import read_run, read_summary
 
 
@@ -146,16 +146,33 @@ def test_set_with_a_table_sets_its_fields_only(capsys, tmp_path):
 
 
 def test_a_trace_config_without_duration_runs_for_the_trace(tmp_path):
+    """A configuration file with the trace program and no duration runs for the trace's length: the
+    command line's ``--config`` fills it in from the trace; the library's loader opens no data file
+    (its configuration keeps 0, "the trace's length", and the run fills it in from the trace it reads)."""
     import numpy as np
 
+    from twin.cli import load_config_file
     from twin.config import load_config
+    from twin.tracefile import with_trace_duration
 
     np.savez(tmp_path / "tr.npz", t=np.linspace(0, 0.75, 751), angle=np.linspace(0, 1, 751))
     (tmp_path / "c.toml").write_text(f'[drive]\nprogram = "trace"\ntrace_file = "{tmp_path / "tr.npz"}"\n')
-    assert load_config(tmp_path / "c.toml").simulation.duration_s == pytest.approx(0.75)
+    assert load_config_file(str(tmp_path / "c.toml")).simulation.duration_s == 0.75
+    loaded = load_config(tmp_path / "c.toml")
+    assert loaded.simulation.duration_s == 0 and loaded.trace_length_pending
+    assert with_trace_duration(loaded).simulation.duration_s == 0.75
+    assert with_trace_duration(loaded).to_dict() == load_config_file(str(tmp_path / "c.toml")).to_dict()
+    with pytest.raises(ConfigError, match="simulation.duration_s: is 0, the trace's length"):
+        loaded.duration_s  # noqa: B018 - asked before the trace is read: one line, naming the field
     (tmp_path / "d.toml").write_text(f'[drive]\nprogram = "trace"\ntrace_file = "{tmp_path / "tr.npz"}"\n'
                                      "[simulation]\nduration_s = 0.5\n")
     assert load_config(tmp_path / "d.toml").simulation.duration_s == 0.5
+    assert load_config_file(str(tmp_path / "d.toml")).simulation.duration_s == 0.5
+    # the loader reads no data file: a trace that does not exist loads, and is refused when read
+    (tmp_path / "e.toml").write_text(f'[drive]\nprogram = "trace"\ntrace_file = "{tmp_path / "absent.npz"}"\n')
+    assert load_config(tmp_path / "e.toml").trace_length_pending
+    with pytest.raises(ConfigError, match="drive.trace_file: no such file"):
+        load_config_file(str(tmp_path / "e.toml"))
 
 
 def test_check_contact_wiring(tmp_path, monkeypatch, capsys):

@@ -101,3 +101,25 @@ def test_replay_does_not_read_back_its_own_files(tmp_path, monkeypatch):
     assert report.motor_drive is not None
     with np.load(out / "encoder_trace.npz") as z:  # the output holds the trace the drive followed
         assert z["t"].size == daq.n
+
+
+def test_a_trace_without_duration_runs_for_the_trace_length(tmp_path):
+    """``simulation.duration_s = 0`` with the trace program: the run lasts as long as the trace (last
+    minus first time stamp), read from the file or taken from memory, and both give the run of the
+    same configuration with that duration written out."""
+    t, phi = _trace(0.03)
+    length = float(t[-1] - t[0])
+    np.savez(tmp_path / "trace.npz", t=t, angle=phi)
+    pending = _trace_cfg(str(tmp_path / "trace.npz"), 0.0)
+    assert pending.trace_length_pending
+    explicit = simulate_run(_trace_cfg(str(tmp_path / "trace.npz"), length))
+    from_file = simulate_run(pending)
+    absent = _trace_cfg(str(tmp_path / "absent.npz"), 0.0)
+    in_memory = simulate_run(absent, inputs=DriveInputs(trace=(t, phi)))
+    assert len(explicit.time) == round(length * explicit.rate_hz) and from_file.config.duration_s == length
+    for run in (from_file, in_memory):
+        assert run.config.simulation.duration_s == length
+        for name in explicit.channels:
+            assert np.array_equal(explicit[name], run[name]), name
+    with pytest.raises(ConfigError, match="drive.trace_file: no such file"):
+        simulate_run(absent)

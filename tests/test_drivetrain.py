@@ -209,8 +209,8 @@ def test_replay_compares_the_motor_drive(tmp_path):
     r = replay(rec, tmp_path / "out", lambda c: c.replace(**{"simulation.engine": "reference"}),
                ReplayOptions(plots=False, drive="motor"))
     md = r.motor_drive
-    assert set(md["sensors"]) == set(r.sensors)
-    assert md["sensors"]["AC4"]["pid_nrmse_pct"] == r.sensors["AC4"]["nrmse_pct"]
+    assert set(md.sensors) == set(r.sensors)
+    assert md.sensors["AC4"].pid_nrmse_pct == r.sensors["AC4"].nrmse_pct
     assert (tmp_path / "out" / "motor_command_trace.npz").is_file()
     assert "Drives compared" in (tmp_path / "out" / "report.md").read_text()
 

@@ -3,13 +3,14 @@
 The three engine packages: the planar reference (``twin.reference``), the planar MuJoCo twin
 (``twin.mujoco_engine``) and the spatial mechanism in both engines (``twin.spatial``). None imports
 another, at module level or inside a function. What they share lives in neutral modules: the
-contact laws and the MuJoCo parameters in :mod:`twin.physics`, the contact constants
+contact laws and the MuJoCo parameters in :mod:`twin.physics`, the native MuJoCo hooks in
+:mod:`twin.native`, the contact constants
 (``twin.contact_params``, ``twin.impact``) and the planar coordinates (``twin.natural_coordinates``);
 these import no engine, and neither does the configuration (``twin.config``).
 
-One edge is allowed and named: the spatial MuJoCo model installs the native colliders through
-``twin.mujoco_engine.collider`` (the C module of both MuJoCo models is built inside the planar
-package); :data:`ALLOWED` lists it so that any other edge fails.
+No edge is allowed, not even inside a function: the native hooks that both MuJoCo models run
+(the C module, its colliders and callbacks, and their installer) live in :mod:`twin.native`, a
+neutral package that imports no engine, not in either engine's package.
 
 Method: parse every module of the packages with :mod:`ast` and collect every import
 statement anywhere in it (``import x``, ``from x import y``, relative imports resolved, and
@@ -27,10 +28,9 @@ import twin
 
 PACKAGE = Path(twin.__file__).parent
 ENGINES = ("twin.reference", "twin.mujoco_engine", "twin.spatial")
-#: (importing package, imported module) edges between engines that are allowed, with the reason above
-ALLOWED = {("twin.spatial", "twin.mujoco_engine.collider")}
 #: packages and modules that every engine may use and that import no engine
-NEUTRAL = ("twin.physics", "twin.config", "twin.contact_params", "twin.natural_coordinates", "twin.impact")
+NEUTRAL = ("twin.physics", "twin.native", "twin.config", "twin.contact_params", "twin.natural_coordinates",
+           "twin.impact")
 
 
 def _module_name(path: Path) -> str:
@@ -107,16 +107,17 @@ def test_engine_does_not_import_another_engine(engine):
     modules = _engine_modules(engine)
     assert modules, f"no modules found for {engine}"
     edges = [f"{_module_name(p)} -> {name}" for p in modules for name in sorted(imported_modules(p))
-             if any(_is_within(name, o) for o in others)
-             and not any(e == engine and _is_within(name, t) for e, t in ALLOWED)]
+             if any(_is_within(name, o) for o in others)]
     assert not edges, "engine-to-engine imports:\n" + "\n".join(edges)
 
 
-def test_allowed_edges_are_still_needed():
-    """An allowed edge that no module uses any more is taken off :data:`ALLOWED` (so the list stays true)."""
-    for engine, target in ALLOWED:
-        used = any(target in imported_modules(p) for p in _engine_modules(engine))
-        assert used, f"{engine} no longer imports {target}: remove it from ALLOWED"
+def test_both_mujoco_models_reach_the_native_hooks_through_the_neutral_package():
+    """The planar and the spatial MuJoCo models install the native hooks from :mod:`twin.native`
+    (guards the test above against passing because the hooks moved out of sight)."""
+    for engine in ("twin.mujoco_engine", "twin.spatial"):
+        used = set().union(*(imported_modules(p) for p in _engine_modules(engine)))
+        assert "twin.native.collider" in used, engine
+    assert not list((PACKAGE / "mujoco_engine").glob("_bore*")), "the native module is built in twin/native"
 
 
 @pytest.mark.parametrize("name", NEUTRAL)
@@ -157,3 +158,36 @@ def test_no_arrow_back_up(name):
     bad = [f"{_module_name(f)} -> {n}" for f in files for n in sorted(imported_modules(f))
            if any(_is_within(n, a) for a in ABOVE)]
     assert not bad, f"{name} imports a layer above it:\n" + "\n".join(bad)
+
+
+def _all_modules() -> dict[str, Path]:
+    return {_module_name(p): p for p in sorted(PACKAGE.rglob("*.py"))}
+
+
+def _closure(start: str, modules: dict[str, Path]) -> set[str]:
+    """Every module of the package that ``start`` (a package or module) reaches through imports, at
+    any depth (an edge to ``pkg.name`` counts for the longest module it lies in)."""
+    def resolve(name: str) -> str | None:
+        parts = name.split(".")
+        while parts and ".".join(parts) not in modules:
+            parts.pop()
+        return ".".join(parts) or None
+
+    todo = [m for m in modules if _is_within(m, start)]
+    seen: set[str] = set()
+    while todo:
+        m = todo.pop()
+        if m in seen:
+            continue
+        seen.add(m)
+        todo.extend(r for r in map(resolve, imported_modules(modules[m], m)) if r and r not in seen)
+    return seen
+
+
+@pytest.mark.parametrize("name", ENGINES + NEUTRAL)
+def test_no_engine_reached_indirectly(name):
+    """Through any chain of imports (a neutral module importing a module that imports an engine),
+    an engine reaches no other engine, and a neutral module (the configuration included) none."""
+    reached = _closure(name, _all_modules())
+    bad = sorted(m for m in reached for e in ENGINES if e != name and _is_within(m, e))
+    assert not bad, f"{name} reaches another engine through its imports: {bad}"

@@ -468,7 +468,7 @@ def test_out_of_range_warnings_fire_outside_each_range_and_not_inside(small):
 
     def answer(cfg, orientation="y", run=None):
         run = run if run is not None else simulate_run(cfg)
-        return identify_inputs(m, *simulated_inputs(run, cfg), orientation, "sim"), run
+        return identify_inputs(m, *simulated_inputs(run, cfg), orientation=orientation, source="sim"), run
 
     a, run = answer(base)
     assert a.warnings == () and not a.evidence.training_data_check["outside_training_data"]
@@ -822,15 +822,15 @@ def test_interval_folds_by_speed_leave_each_speed_out_and_each_joint_is_split_by
     r = ClearanceModel(Clf(), {"B": Reg(), "C": Reg()}, {"B": 0.3, "B_rippled": 0.5, "C": 0.2, "C_unresolved": 0.8,
                                                          "C_unresolved_rippled": 0.9})
     calm, wavy = [1.0, 2.0, 0.5, 0.0], [1.0, RIPPLE_BAND_PCT + 0.1, 0.5, 0.0]
-    assert r.identify(X, {"B": True, "C": True}, calm).joint("B").interval_if_faulty_mm == pytest.approx(
+    assert r.identify(X, {"B": True, "C": True}, ripple_pct=calm).joint("B").interval_if_faulty_mm == pytest.approx(
         [0.1 / 10 ** 0.3, 0.1 * 10 ** 0.3])
-    assert r.identify(X, {"B": True, "C": True}, wavy).joint("B").interval_if_faulty_mm == pytest.approx(
+    assert r.identify(X, {"B": True, "C": True}, ripple_pct=wavy).joint("B").interval_if_faulty_mm == pytest.approx(
         [0.1 / 10 ** 0.5, 0.1 * 10 ** 0.5])
-    assert r.identify(X, {"B": True, "C": True}, wavy).joint("C").interval_mm == pytest.approx(
+    assert r.identify(X, {"B": True, "C": True}, ripple_pct=wavy).joint("C").interval_mm == pytest.approx(
         [0.1 / 10 ** 0.2, 0.1 * 10 ** 0.2])  # no "C_rippled": the resolved side's own
-    assert r.identify(X, {"B": True, "C": False}, wavy).joint("C").interval_mm == pytest.approx(
+    assert r.identify(X, {"B": True, "C": False}, ripple_pct=wavy).joint("C").interval_mm == pytest.approx(
         [0.1 / 10 ** 0.9, 0.1 * 10 ** 0.9])
-    assert r.identify(X, {"B": True, "C": False}, None).joint("C").interval_mm == pytest.approx(
+    assert r.identify(X, {"B": True, "C": False}, ripple_pct=None).joint("C").interval_mm == pytest.approx(
         [0.1 / 10 ** 0.8, 0.1 * 10 ** 0.8])
 
 

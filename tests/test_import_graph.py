@@ -102,7 +102,17 @@ def test_graph_reads_the_package():
     graph = import_graph()
     assert {"twin.config", "twin.config.loading", "twin.simulation", "twin.drive", "twin.channels"} <= set(graph)
     assert "twin.config" in graph["twin.drive"]  # module level: from twin.config import BenchConfig
-    assert "twin.tracefile" in graph["twin.config.loading"]
+    assert "twin.tracefile" in graph["twin.simulation"]  # module level: the run reads the drive inputs
+
+
+def test_the_configuration_imports_no_reader_of_data_files():
+    """Loading a configuration opens no trace, command or recording: no module of ``twin.config`` imports the
+    modules that read them (a trace program's length is filled in by the run, ``twin.tracefile``)."""
+    graph = import_graph()
+    readers = {"twin.tracefile", "twin.recording", "twin.mcapfile", "twin.motor_drive", "twin.drive"}
+    bad = sorted(f"{m} -> {t}" for m, ts in graph.items() if m == "twin.config" or m.startswith("twin.config.")
+                 for t in ts if t in readers)
+    assert not bad, "the configuration imports a reader of data files:\n" + "\n".join(bad)
 
 
 def test_from_package_import_resolves_submodules(tmp_path):

@@ -47,7 +47,7 @@ from twin import model_xml
 from twin import names as mjcf_names
 from twin.config import BenchConfig
 from twin.errors import EngineUnavailableError, ModelError
-from twin.mujoco_engine import collider
+from twin.native import collider
 from twin.mujoco_engine.builder import build
 
 IDEAL = BenchConfig().replace(**{"joints.clearance_c_mm": 0.0})
@@ -318,7 +318,7 @@ def test_parser_follows_default_classes_and_mujoco_defaults(tmp_path):
 
 # ---------------------------------------------------------------- bore user data layout
 def test_bore_userdata_has_one_layout():
-    from twin.mujoco_engine import _bore
+    from twin.native import _bore
 
     assert tuple(_bore.userdata_fields()) == mjcf_names.BORE_USERDATA_FIELDS
     v = mjcf_names.bore_userdata(mu0=0.05, v0=5e-4, v1=1e-3, slot=1)

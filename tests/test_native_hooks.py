@@ -1,4 +1,4 @@
-"""The native hooks hold no state of their own (twin/mujoco_engine/collider.py, "One hook for every model").
+"""The native hooks hold no state of their own (twin/native/collider.py, "One hook for every model").
 
 MuJoCo's callbacks and collision table are process-wide; the twin's hooks must read everything from the
 model and data they are given. Independent basis: each model run alone in a fresh process (a hook that
@@ -27,7 +27,7 @@ import twin
 from twin import names
 from twin.config import preset
 from twin.errors import ModelError
-from twin.mujoco_engine.collider import check_model, ensure_installed, mujoco_library
+from twin.native.collider import check_model, ensure_installed, mujoco_library
 from twin.simulation import make_engine
 
 from conftest import short
@@ -213,7 +213,7 @@ def test_the_built_models_pass_the_check():
 @pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler")
 def test_the_native_sources_compile_without_a_warning(tmp_path):
     # the flags setup.py gives GCC and Clang; a warning fails this as it fails the build
-    here = Path(__file__).resolve().parents[1] / "twin" / "mujoco_engine"
+    here = Path(__file__).resolve().parents[1] / "twin" / "native"
     include = Path(mujoco.__file__).parent / "include"
     for src in ("_bore.c", "_socket.c"):
         out = subprocess.run(["cc", "-c", "-O2", "-Wall", "-Wextra", "-Werror", "-fPIC", f"-I{include}",

@@ -73,17 +73,17 @@ def test_replay_with_the_same_model_reproduces_the_accelerations(ideal):
         m = report.sensors[a]
         # the virtual sensors' noise is independent of the recording's: the error is about
         # sqrt(2) x 0.066 m/s^2 (ADXL1001) / 0.055 m/s^2 (ADXL1002) of noise, plus the physics
-        assert m["rms_error_mps2"] < 0.15, a
-        assert m["nrmse_pct"] < 1.5, a  # AC3 spans only ~8 m/s^2 in test 3
-        assert m["correlation"] > 0.998, a
-        assert m["dtw_distance_pct"] < 0.6, a
-        assert m["simulated_rms_mps2"] == pytest.approx(m["recorded_rms_mps2"], rel=0.01)
-        amp_r, amp_s = m["recorded_harmonic_amplitudes_mps2"][0], m["simulated_harmonic_amplitudes_mps2"][0]
+        assert m.rms_error_mps2 < 0.15, a
+        assert m.nrmse_pct < 1.5, a  # AC3 spans only ~8 m/s^2 in test 3
+        assert m.correlation > 0.998, a
+        assert m.dtw_distance_pct < 0.6, a
+        assert m.simulated_rms_mps2 == pytest.approx(m.recorded_rms_mps2, rel=0.01)
+        amp_r, amp_s = m.recorded_harmonic_amplitudes_mps2[0], m.simulated_harmonic_amplitudes_mps2[0]
         assert amp_s == pytest.approx(amp_r, rel=0.02)
     # AC5 (slider, vertical) reads a nearly constant 1 g: its error is the difference of two
     # independent noise records of 25 ug/sqrt(Hz) over 50 kHz: sqrt(2) * 0.055 m/s^2
     sigma = 25e-6 * 9.80665 * math.sqrt(50_000)
-    assert report.sensors["AC5"]["rms_error_mps2"] == pytest.approx(math.sqrt(2) * sigma, rel=0.1)
+    assert report.sensors["AC5"].rms_error_mps2 == pytest.approx(math.sqrt(2) * sigma, rel=0.1)
     assert report.calibration["recorded"]["zero_g_v"] == pytest.approx(OFFSETS, abs=3e-5)
     assert report.calibration["simulated"]["zero_g_v"] == pytest.approx(OFFSETS, abs=3e-5)
 
@@ -96,18 +96,18 @@ def test_clearance_model_shows_impacts_the_ideal_model_does_not(clearance):
     ideal = replay(path, tmp / "ideal", lambda c: c.replace(**{"joints.clearance_c_mm": 0.0}), opts)
     assert not ideal.configuration.same_as_recording
     for a in ("AC4", "AC6"):
-        rec_db = same.sensors[a]["bands"][0]["recorded_db"]  # 0.8-1.2 kHz
-        assert abs(same.sensors[a]["bands"][0]["difference_db"]) < 3.0, a
-        assert ideal.sensors[a]["bands"][0]["simulated_db"] < rec_db - 15.0, a
-        assert ideal.sensors[a]["recorded_peak_mps2"] == same.sensors[a]["recorded_peak_mps2"]
+        rec_db = same.sensors[a].bands[0].recorded_db  # 0.8-1.2 kHz
+        assert abs(same.sensors[a].bands[0].difference_db) < 3.0, a
+        assert ideal.sensors[a].bands[0].simulated_db < rec_db - 15.0, a
+        assert ideal.sensors[a].recorded_peak_mps2 == same.sensors[a].recorded_peak_mps2
     # AC6 (slider, horizontal): the impact spikes; the ideal model stays smooth (Fig. 16)
     s6, i6 = same.sensors["AC6"], ideal.sensors["AC6"]
-    assert s6["simulated_peak_mps2"] > 1.5 * i6["simulated_peak_mps2"]
+    assert s6.simulated_peak_mps2 > 1.5 * i6.simulated_peak_mps2
     # pointwise NRMSE punishes an impact spike shifted by a few samples (the replayed crank follows
     # the quantized counts, so impact instants move by ~10-50 us with the soft calibrated contact);
     # the paper's DTW distance tolerates that shift and separates the models by ~10x
-    assert i6["dtw_distance_pct"] > 5.0 * s6["dtw_distance_pct"]
-    assert i6["nrmse_pct"] > s6["nrmse_pct"]
+    assert i6.dtw_distance_pct > 5.0 * s6.dtw_distance_pct
+    assert i6.nrmse_pct > s6.nrmse_pct
     # the crank input is the same for both models
     assert ideal.tracking.sim_vs_recorded_max_counts < 1.0
 

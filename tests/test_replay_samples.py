@@ -54,9 +54,9 @@ def test_replay_of_a_sample_with_its_own_model(tmp_path, name):
     assert r.configuration.engine == "reference" and r.configuration.same_as_recording
     assert r.tracking.sim_vs_recorded_max_counts < 1.0
     for a in ("AC1", "AC2", "AC4", "AC6"):
-        assert r.sensors[a]["nrmse_pct"] < 1.5
+        assert r.sensors[a].nrmse_pct < 1.5
         if name == "test6_synthetic":
-            assert abs(r.sensors[a]["bands"][0]["difference_db"]) < 1.5
+            assert abs(r.sensors[a].bands[0].difference_db) < 1.5
     # the recorded encoder trace drives the simulation: aligned by construction, up to the
     # 10-50 us by which impact instants move with the quantized counts (test 6, clearance)
     lo, hi = r.time_lag_ci_s
@@ -66,7 +66,7 @@ def test_replay_of_a_sample_with_its_own_model(tmp_path, name):
         # the noise-only AC5 weighed as much as the other sensors in the lag search)
         assert r.time_lag_s == 0.0 and -1 / RATE <= lo <= hi <= 1 / RATE
         # two independent ADXL1001 noise records, sqrt(2) x 0.066 m/s^2, on a ~90 m/s^2 range: ~0.1 %
-        assert r.sensors["AC4"]["nrmse_pct"] < 0.3
+        assert r.sensors["AC4"].nrmse_pct < 0.3
     else:
         assert abs(r.time_lag_s) <= 5e-5 and hi - lo <= 1e-4
     assert "CI" in render_markdown(r.to_dict())

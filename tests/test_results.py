@@ -2,11 +2,14 @@
 
 The golden dicts in ``tests/golden/`` were captured from the code that returned plain dicts, before the typed
 results existed (the identify answers of three sample recordings, the ``seconds`` set to null; the report of the
-replay that ``tests/test_replay.py``'s ``ideal`` fixture makes, the recording's path shortened): ``to_dict()``
-must give exactly that dict back, key order included, and the JSON text must read back to the same value. The
-answer's ``refused`` (false) and ``evidence.training_data_check.measured.speed_swing_pct`` were added to the
-identify answers when the answer gained them, and test3's sizes if faulty (a healthy recording, its answers below
-the smallest size trained on) clipped to that size when intervals were held within the trained hull.
+replay that ``tests/test_replay.py``'s ``ideal`` fixture makes, the recording's path shortened; the ``doe.json`` of
+a 4-point DOE as ``tests/test_doe.py``'s spec with 0.015 s runs writes it, the spec's path shortened and the wall
+times set to null; the continuous-contact study's JSON for S004 over 0.02 s; the committed
+``analysis/results/accuracy/accuracy.json``): ``to_dict()`` must give exactly that dict back, key order included,
+and the JSON text must read back to the same value. The answer's ``refused`` (false) and
+``evidence.training_data_check.measured.speed_swing_pct`` were added to the identify answers when the answer
+gained them, and test3's sizes if faulty (a healthy recording, its answers below the smallest size trained on)
+clipped to that size when intervals were held within the trained hull.
 """
 
 from __future__ import annotations
@@ -146,6 +149,93 @@ def test_a_replay_results_dict_is_a_copy_and_optional_sections_appear_when_prese
         ReplayResult.from_dict(dict(REPLAY_GOLDEN, nonsense=1))
     with pytest.raises(dataclasses.FrozenInstanceError):
         r.crank_rate_hz = 0.0
+
+
+def test_the_replay_rows_are_typed_and_give_back_their_part_of_the_golden_report():
+    """Each accelerometer's comparison is a frozen :class:`SensorComparison` (bands :class:`BandComparison`), read
+    by attribute; its ``to_dict()`` is that sensor's part of the golden report, key order included."""
+    from twin.replay_result import BandComparison, SensorComparison
+
+    r = ReplayResult.from_dict(REPLAY_GOLDEN)
+    for a, m in r.sensors.items():
+        gold = REPLAY_GOLDEN["sensors"][a]
+        assert isinstance(m, SensorComparison) and all(isinstance(b, BandComparison) for b in m.bands)
+        assert m.to_dict() == gold and _layout(m.to_dict()) == _layout(gold)
+        assert m.nrmse_pct == gold["nrmse_pct"] and m.bands[0].difference_db == gold["bands"][0]["difference_db"]
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        r.sensors["AC1"].nrmse_pct = 0.0
+    with pytest.raises(KeyError, match="sensor comparison: missing key.*nrmse_pct"):
+        SensorComparison.from_dict({k: v for k, v in REPLAY_GOLDEN["sensors"]["AC1"].items() if k != "nrmse_pct"})
+
+
+def test_the_motor_drive_comparison_gives_back_its_dict():
+    """The motor-drive section (the layout :func:`twin.bench_replay._motor_drive` writes) reads into a
+    :class:`MotorDriveComparison` and back to the same dict, key order included."""
+    from twin.replay_result import MotorDriveComparison, MotorDriveSensor
+
+    row = {"nrmse_pct": 1.2, "correlation": 0.99, "dtw_distance_pct": 0.4, "simulated_rms_mps2": 30.0,
+           "simulated_peak_mps2": 44.0, "pid_nrmse_pct": 0.2, "pid_correlation": 0.999, "pid_dtw_distance_pct": 0.1}
+    md = {"note": "motor", "tracking": {"sim_vs_recorded_max_counts": 3.0, "sim_vs_recorded_rms_counts": 1.0,
+                                        "pid_sim_vs_recorded_max_counts": 0.5},
+          "crank_speed_ripple_pct": 2.5, "sensors": {"AC1": row, "AC4": dict(row, nrmse_pct=2.0)},
+          "simulation": {"wall_s": 1.0, "engine": "reference", "steps": 100, "real_time_factor": 0.1}}
+    m = MotorDriveComparison.from_dict(md)
+    assert isinstance(m.sensors["AC4"], MotorDriveSensor) and m.sensors["AC4"].nrmse_pct == 2.0
+    assert m.to_dict() == md and _layout(m.to_dict()) == _layout(md)
+    report = dict(REPLAY_GOLDEN, motor_drive=md)
+    report["wall_s"] = report.pop("wall_s")
+    back = ReplayResult.from_dict(report)
+    assert back.motor_drive == m and back.to_dict() == report
+
+
+# ------------------------------------------------------------------ DOE
+def test_a_doe_result_gives_back_the_golden_doe_json_with_typed_rows():
+    from twin.studies.doe import DoeCheck, DoePoint, DoeResponse, DoeResult
+
+    golden = json.loads((GOLDEN / "doe_small.json").read_text())
+    r = DoeResult.from_dict(golden)
+    assert r.to_dict() == golden and _layout(r.to_dict()) == _layout(golden)
+    assert all(type(p) is DoePoint for p in r.points) and all(isinstance(c, DoeCheck) for c in r.checks)
+    assert [c.kind for c in r.checks] == [c["kind"] for c in golden["checks"]] and r.checks[0].kind == "holdout"
+    for name, s in r.responses.items():
+        assert isinstance(s, DoeResponse) and s.loo_stats == golden["responses"][name]["loo_stats"]
+        assert s.optimum["factors"] == golden["responses"][name]["optimum"]["factors"]
+        assert len(s.loo) == len(r.points)
+    assert r.checks[0].predicted["max_slider_accel"]["mean"] == golden["checks"][0]["predicted"]["max_slider_accel"]["mean"]
+    d = r.to_dict()
+    d["checks"][0]["factors"]["x"] = 1.0
+    d["responses"]["max_slider_accel"]["loo"][0] = -1.0
+    assert r.to_dict() == golden  # a copy: the result is unchanged
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        r.checks[0].kind = "optimum"
+
+
+# ------------------------------------------------------------------ studies' summaries
+def test_an_accuracy_result_gives_back_the_committed_accuracy_json_with_typed_rows():
+    """The committed ``accuracy.json`` (written from plain dicts before the typed rows) reads into an
+    :class:`AccuracyResult` whose summary rows are :class:`VariantSummary` values and back to the same dict."""
+    from twin.studies.accuracy import AccuracyResult, VariantSummary
+
+    golden = json.loads((ROOT / "analysis" / "results" / "accuracy" / "accuracy.json").read_text())
+    golden.pop("provenance", None)  # a stamp, if the file is ever rebuilt, is the file's, not the result's
+    r = AccuracyResult.from_dict(golden)
+    assert r.to_dict() == golden and _layout(r.to_dict()) == _layout(golden)
+    assert all(isinstance(v, VariantSummary) for v in r.summary) and len(r.summary) == len(golden["summary"])
+    default = next(v for v in r.summary if v.key == r.default)
+    assert default.pareto == r.default_on_pareto_front and default.engine == "mujoco"
+    assert all(v.pareto is None for v in r.summary if v.engine == "reference")
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        default.score = 0.0
+
+
+def test_the_continuous_contact_summary_gives_back_the_golden_json():
+    """``tests/golden/continuous_contact_s004_0.02s.json``: the file the dict code wrote for S004 over 0.02 s."""
+    from twin.studies.continuous_contact import ContinuousContactSummary
+
+    golden = json.loads((GOLDEN / "continuous_contact_s004_0.02s.json").read_text())
+    sm = ContinuousContactSummary.from_dict(golden)
+    assert sm.to_dict() == golden and list(sm.to_dict()) == list(golden)
+    assert sm.valid_until_crank_deg == golden["valid_until_crank_deg"] and sm.clearance_radial_m == 0.0005
 
 
 # ------------------------------------------------------------------ training options

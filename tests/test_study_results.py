@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -63,6 +64,12 @@ def test_continuous_contact_result_is_its_json(tmp_path):
     res = run_study(opts)
     assert isinstance(res, ContinuousContactResult)
     assert res.to_dict() == json.loads((tmp_path / "out" / "continuous_contact.json").read_text())
+    # the golden file: what the dict code wrote for the same run (layout; values as a regression guard, 1e-9)
+    golden = json.loads((Path(__file__).resolve().parent / "golden" / "continuous_contact_s004_0.02s.json").read_text())
+    assert list(res.to_dict()) == list(golden)
+    assert all(res.to_dict()[k] == pytest.approx(v, rel=1e-9, abs=1e-300)
+               for k, v in golden.items() if k != "ft_max_abs_n")  # ft: round-off, ~1e-10 N
+    assert res.summary.valid_until_crank_deg == res.to_dict()["valid_until_crank_deg"]
     with np.load(tmp_path / "out" / "continuous_contact.npz") as z:
         assert set(z.files) == set(res.series) and np.array_equal(z["fn"], res.series["fn"])
     # the model's assumptions are the options' rules: a mechanism without clearance at B is refused

@@ -163,8 +163,8 @@ def replay(recording: str | Path, out_dir: str | Path, *, overrides: Mapping[str
 
     Writes ``out_dir`` (``replay.mcap``, ``report.json``, ``report.md``, PNG plots unless
     ``plots=False``) and returns the report as a :class:`twin.replay_result.ReplayResult`:
-    ``.sensors`` (per accelerometer: RMS error, NRMSE, correlation, DTW distance, harmonics, band
-    energies), ``.time_lag_s``, ``.tracking`` (crank tracking error), ``.window_s`` (the analysis
+    ``.sensors`` (per accelerometer a :class:`~twin.replay_result.SensorComparison`: RMS error, NRMSE,
+    correlation, DTW distance, harmonics, band energies), ``.time_lag_s``, ``.tracking`` (crank tracking error), ``.window_s`` (the analysis
     window [s]), ...; ``.to_dict()`` is the report as ``report.json`` holds it
     (``recordings/FORMAT.md`` describes the files).
     """

@@ -195,13 +195,15 @@ def load_config_file(path: str) -> BenchConfig:
     """:func:`twin.config.load_config` for the ``--config`` option: an error about the file itself
     (the library's ``path``) names ``--config``."""
     from twin.config import load_config
+    from twin.tracefile import with_trace_duration
 
     try:
-        return load_config(path)
+        cfg = load_config(path)
     except ConfigError as err:
         if err.field == "path":
             raise ConfigError("--config", err.message) from None
         raise
+    return with_trace_duration(cfg)  # a trace program without a duration: the trace's length
 
 
 def config_from_args(args: argparse.Namespace) -> BenchConfig:

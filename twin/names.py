@@ -192,8 +192,8 @@ def sensor_friction(joint: str) -> str:
 BORE_MAGIC = 7301.0
 
 #: Layout of a bushing bore's geom user data (``nuser_geom`` = its length), read by index by the
-#: native module ``twin/mujoco_engine/_bore.c`` (its ``enum bore_user``, same order; the module
-#: reports its layout and :func:`twin.mujoco_engine.collider.ensure_installed` compares them):
+#: native module ``twin/native/_bore.c`` (its ``enum bore_user``, same order; the module
+#: reports its layout and :func:`twin.native.collider.ensure_installed` compares them):
 #:
 #: * ``marker``: :data:`BORE_MAGIC` makes the native collider treat the geom as a hollow bore;
 #: * ``mu0``, ``v0``, ``v1``: regularized Coulomb friction (S003 Eq. 19-20; μ0 [-], v0, v1 [m/s]),

@@ -576,7 +576,7 @@ def _check_range(x: np.ndarray, target: str, src: str, cfg: BenchConfig, rate: f
                              f"(t = {i / rate:.6f} s), {what}; wrong column, unit or scale?")
 
 
-def import_table(path: str | Path, cfg: BenchConfig, mapping: Mapping[str, tuple[str, str | None]] | None = None,
+def import_table(path: str | Path, cfg: BenchConfig, mapping: Mapping[str, tuple[str, str | None]] | None = None, *,
                  rate_hz: float | None = None, time_column: str = "t", nan: str = "error",
                  encoder_modulus: int | None = None, require: tuple[str, ...] = REQUIRED_CHANNELS,
                  encoder_repair: bool = True) -> tuple[Run, list[str]]:
@@ -694,7 +694,7 @@ def static_calibration_from(path: str | Path, cfg: BenchConfig,
                 raise RecordingError(f"{p}: channel {c} has NaN or infinite samples")
             _check_range(x, c, c, cfg, run.rate_hz, str(p))
     else:
-        run, _ = import_table(p, cfg, mapping, rate_hz, nan=nan, require=VOLT_CHANNELS)
+        run, _ = import_table(p, cfg, mapping, rate_hz=rate_hz, nan=nan, require=VOLT_CHANNELS)
     volts = {a: run[f"volt_{a}"] for a in ACCELEROMETERS}
     try:
         cal = calibrate_static(volts, nominal_sensitivities(cfg), calibration_pose_g(cfg), source=p.name)
@@ -727,7 +727,7 @@ def calibration_from_offsets(cfg: BenchConfig, zero_g_v: Mapping[str, float], so
 
 
 # ------------------------------------------------------------------------ synthetic
-def crank_trace(motor_rpm: float, belt_ratio: float, duration_s: float, rate_hz: float, ramp_s: float = 0.3,
+def crank_trace(motor_rpm: float, belt_ratio: float, duration_s: float, rate_hz: float, *, ramp_s: float = 0.3,
                 rest_s: float = 0.0, ripple: tuple[float, ...] = (0.02, 0.01), ripple_phase: tuple[float, ...] = (0.4, 1.3),
                 direction: int = 1, phi0: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """A realistic non-constant crank motion as an encoder trace (t [s], encoder angle [rad]).

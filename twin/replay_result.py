@@ -1,21 +1,175 @@
 """The report of a bench-recording replay (:func:`twin.bench_replay.replay`, ``twin.replay``) as a typed, frozen
-value: :class:`ReplayResult`, with the simulated configuration (:class:`ReplayConfiguration`) and the crank
-tracking (:class:`ReplayTracking`).
+value: :class:`ReplayResult`, with the simulated configuration (:class:`ReplayConfiguration`), the crank
+tracking (:class:`ReplayTracking`), one :class:`SensorComparison` per accelerometer (its band energies as
+:class:`BandComparison`) and, replayed with the motor drive, the :class:`MotorDriveComparison` (one
+:class:`MotorDriveSensor` per accelerometer).
 
 ``to_dict()`` gives the report as the plain dict of ``report.json`` (``recordings/FORMAT.md`` describes its
 keys), in the file's key order, plus ``files["report"]`` (the report files, written after it); ``from_dict`` reads
-one back; ``to_json()`` is its strict JSON text. The per-sensor comparison, the calibration, the time-lag estimate
-and the motor-drive comparison stay mappings keyed as in ``report.json``.
+one back; ``to_json()`` is its strict JSON text. Each typed row's ``to_dict()`` is its part of ``report.json``,
+key order included. The calibrations, the time-lag estimate's details, the simulation's figures and the files stay
+mappings keyed as in ``report.json``.
 """
 
 from __future__ import annotations
 
 import copy
+import dataclasses
 import json
 from dataclasses import dataclass, fields
 from typing import Any, Mapping
 
-__all__ = ["ReplayConfiguration", "ReplayResult", "ReplayTracking"]
+__all__ = ["BandComparison", "MotorDriveComparison", "MotorDriveSensor", "ReplayConfiguration", "ReplayResult",
+           "ReplayTracking", "SensorComparison"]
+
+
+def _plain(row: Any) -> dict[str, Any]:
+    """A flat row's fields as a dict in field order, tuples as lists."""
+    return {f.name: list(v) if isinstance(v := getattr(row, f.name), tuple) else v for f in fields(row)}
+
+
+def _row(cls: type, d: Mapping[str, Any], where: str) -> Any:
+    """The row ``cls`` of the dict ``d``: every field, tuples for lists; KeyError or TypeError naming ``where``."""
+    names = [f.name for f in fields(cls)]
+    unknown = sorted(set(d) - set(names))
+    if unknown:
+        raise TypeError(f"{where}: unknown key(s) {', '.join(unknown)}")
+    missing = [n for n in names if n not in d]
+    if missing:
+        raise KeyError(f"{where}: missing key(s) {', '.join(missing)}")
+    return cls(**{n: tuple(v) if isinstance(v := d[n], list) else copy.deepcopy(v) for n in names})
+
+
+@dataclass(frozen=True)
+class BandComparison:
+    """The energy of one frequency band of a sensor's recorded and simulated signals (Hann PSD) [dB re 1 (m/s²)²].
+
+    Attributes:
+        f_lo_hz, f_hi_hz: the band [Hz].
+        recorded_db, simulated_db: the band energy of each signal [dB].
+        difference_db: simulated − recorded [dB].
+    """
+
+    f_lo_hz: float
+    f_hi_hz: float
+    recorded_db: float
+    simulated_db: float
+    difference_db: float
+
+    def to_dict(self) -> dict[str, Any]:
+        return _plain(self)
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> "BandComparison":
+        return _row(cls, d, "band")
+
+
+@dataclass(frozen=True)
+class SensorComparison:
+    """One accelerometer's recorded and simulated accelerations compared over the analysis window, after the time
+    lag is removed (:func:`twin.bench_replay.compare_accelerations`) [m/s² unless named otherwise].
+
+    Attributes:
+        recorded_mean_mps2, recorded_std_mps2: the recorded signal's mean and standard deviation.
+        noise_rms_mps2: the sensor's noise (NaN where unknown).
+        near_constant: whether the recorded signal is nearly constant (its NRMSE, correlation and DTW then compare
+            noise, not motion); near_constant_note: why ("" if not).
+        rms_error_mps2, max_abs_error_mps2: RMS and largest |simulated − recorded|.
+        nrmse_pct: RMS error / (max − min of the recorded signal) [%].
+        correlation: Pearson correlation [-].
+        recorded_rms_mps2, simulated_rms_mps2, recorded_peak_mps2, simulated_peak_mps2: RMS and peak |a| of each.
+        dtw_distance_pct: RMS difference along the optimal warping path / (max − min recorded) [%];
+            dtw_mean_shift_s: the path's mean time shift [s]; dtw_samples: samples compared by DTW.
+        harmonics_hz: the crank-rate harmonics compared [Hz].
+        recorded_harmonic_amplitudes_mps2, simulated_harmonic_amplitudes_mps2: their Hann amplitudes.
+        bands: the band energies compared.
+    """
+
+    recorded_mean_mps2: float
+    recorded_std_mps2: float
+    noise_rms_mps2: float
+    near_constant: bool
+    near_constant_note: str
+    rms_error_mps2: float
+    max_abs_error_mps2: float
+    nrmse_pct: float
+    correlation: float
+    recorded_rms_mps2: float
+    simulated_rms_mps2: float
+    recorded_peak_mps2: float
+    simulated_peak_mps2: float
+    dtw_distance_pct: float
+    dtw_mean_shift_s: float
+    dtw_samples: int
+    harmonics_hz: tuple[float, ...]
+    recorded_harmonic_amplitudes_mps2: tuple[float, ...]
+    simulated_harmonic_amplitudes_mps2: tuple[float, ...]
+    bands: tuple[BandComparison, ...]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {**_plain(self), "bands": [b.to_dict() for b in self.bands]}
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> "SensorComparison":
+        row = _row(cls, d, "sensor comparison")
+        return dataclasses.replace(row, bands=tuple(BandComparison.from_dict(b) for b in d["bands"]))
+
+
+@dataclass(frozen=True)
+class MotorDriveSensor:
+    """One accelerometer in the motor-driven replay beside the PID replay (same window and time lag).
+
+    Attributes:
+        nrmse_pct, correlation, dtw_distance_pct: the motor-driven run's figures (as :class:`SensorComparison`).
+        simulated_rms_mps2, simulated_peak_mps2: its simulated RMS and peak [m/s²].
+        pid_nrmse_pct, pid_correlation, pid_dtw_distance_pct: the PID replay's figures.
+    """
+
+    nrmse_pct: float
+    correlation: float
+    dtw_distance_pct: float
+    simulated_rms_mps2: float
+    simulated_peak_mps2: float
+    pid_nrmse_pct: float
+    pid_correlation: float
+    pid_dtw_distance_pct: float
+
+    def to_dict(self) -> dict[str, Any]:
+        return _plain(self)
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> "MotorDriveSensor":
+        return _row(cls, d, "motor-drive sensor")
+
+
+@dataclass(frozen=True)
+class MotorDriveComparison:
+    """The replay driven by the recorded motor command (speed loop and V-belt) beside the PID replay.
+
+    Attributes:
+        note: what the comparison is.
+        tracking: simulated vs recorded encoder angle, max and RMS, and the PID replay's max [counts].
+        crank_speed_ripple_pct: the motor run's crank speed ripple in the window, (max − min) / mean [%]; None
+            for an empty window.
+        sensors: accelerometer -> its figures.
+        simulation: wall time [s], engine, steps and real-time factor of the motor run.
+    """
+
+    note: str
+    tracking: Mapping[str, float]
+    crank_speed_ripple_pct: float | None
+    sensors: Mapping[str, MotorDriveSensor]
+    simulation: Mapping[str, Any]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"note": self.note, "tracking": dict(self.tracking), "crank_speed_ripple_pct": self.crank_speed_ripple_pct,
+                "sensors": {a: m.to_dict() for a, m in self.sensors.items()}, "simulation": copy.deepcopy(dict(self.simulation))}
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> "MotorDriveComparison":
+        row = _row(cls, d, "motor drive")
+        return dataclasses.replace(row, tracking=dict(d["tracking"]),
+                                   sensors={a: MotorDriveSensor.from_dict(m) for a, m in d["sensors"].items()})
 
 
 @dataclass(frozen=True)
@@ -116,12 +270,12 @@ class ReplayResult:
     time_lag_estimate: Mapping[str, Any]
     tracking: ReplayTracking
     calibration: Mapping[str, Any]
-    sensors: Mapping[str, Mapping[str, Any]]
+    sensors: Mapping[str, SensorComparison]
     bands_hz: tuple[tuple[float, float], ...]
     simulation: Mapping[str, Any]
     files: Mapping[str, Any]
     plots: Mapping[str, Any] | None = None
-    motor_drive: Mapping[str, Any] | None = None
+    motor_drive: MotorDriveComparison | None = None
     wall_s: Mapping[str, float] | None = None
 
     def to_dict(self) -> dict[str, Any]:
@@ -131,8 +285,10 @@ class ReplayResult:
             v = getattr(self, f.name)
             if f.name in ("plots", "motor_drive", "wall_s") and v is None:
                 continue  # absent from the report
-            if isinstance(v, (ReplayConfiguration, ReplayTracking)):
+            if isinstance(v, (ReplayConfiguration, ReplayTracking, MotorDriveComparison)):
                 v = v.to_dict()
+            elif f.name == "sensors":
+                v = {a: m.to_dict() for a, m in v.items()}
             elif f.name in ("repairs", "window_s", "time_lag_ci_s"):
                 v = list(v)
             elif f.name == "bands_hz":
@@ -158,6 +314,9 @@ class ReplayResult:
             raise TypeError(f"not a replay report: unknown key(s) {', '.join(unknown)}")
         kw["configuration"] = ReplayConfiguration(**kw["configuration"])
         kw["tracking"] = ReplayTracking(**kw["tracking"])
+        kw["sensors"] = {a: SensorComparison.from_dict(m) for a, m in kw["sensors"].items()}
+        if kw.get("motor_drive") is not None:
+            kw["motor_drive"] = MotorDriveComparison.from_dict(kw["motor_drive"])
         kw["repairs"] = tuple(kw["repairs"])
         kw["window_s"] = tuple(kw["window_s"])
         kw["time_lag_ci_s"] = tuple(kw["time_lag_ci_s"])

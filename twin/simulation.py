@@ -32,7 +32,7 @@ from twin.channels import channel_specs, encoder_from_bench
 from twin.config import ENGINE_CLASSES, BenchConfig
 from twin.errors import SimulationError, raise_terminated
 from twin.run import Channel, Run
-from twin.tracefile import DriveInputs
+from twin.tracefile import DriveInputs, with_trace_duration
 
 #: channels the loop computes itself (from the drive reference and the crank angle)
 LOOP_CHANNELS = ("theta_ref", "omega_ref", "encoder_angle")
@@ -182,6 +182,7 @@ def make_engine(cfg: BenchConfig, inputs: DriveInputs | None = None) -> Engine:
     a configuration names are read and checked here, before an engine is built (a bad file is refused
     before the reference engine compiles), and reach the engine as arrays."""
     inputs = _read_drive_files(cfg, inputs)
+    cfg = with_trace_duration(cfg, inputs)
     if cfg.spatial.enabled:  # the spatial mechanism has its own pair of engines
         from twin.spatial import SPATIAL_ENGINE_CLASSES
 
@@ -230,7 +231,7 @@ class Progress:
             self.bar.close()
 
 
-def run_chunks(cfg: BenchConfig, engine: Engine | None = None, progress: bool = False,
+def run_chunks(cfg: BenchConfig, engine: Engine | None = None, progress: bool = False, *,
                inputs: DriveInputs | None = None, start: Any = None, until: int | None = None) -> Iterator[Run]:
     """The chunk loop (see the module docstring): yields consecutive chunks of the run of ``cfg``
     on ``engine`` (default: a new engine of ``cfg.simulation.engine``). ``engine.meta`` holds the
@@ -242,6 +243,9 @@ def run_chunks(cfg: BenchConfig, engine: Engine | None = None, progress: bool = 
     output samples of the run (default: the run's end)."""
     from twin.drive import DriveReference
 
+    if cfg.trace_length_pending:  # the run lasts as long as its trace
+        inputs = _read_drive_files(cfg, inputs)
+        cfg = with_trace_duration(cfg, inputs)
     engine = engine if engine is not None else make_engine(cfg, inputs)
     ref = DriveReference(cfg, inputs)
     h, stride, rate, n_out = cfg.simulation.timestep_s, cfg.output_stride, cfg.output_rate_hz, cfg.n_samples
@@ -305,7 +309,7 @@ def _sigterm_interrupts() -> Iterator[None]:
         signal.signal(signal.SIGTERM, previous)
 
 
-def simulate(cfg: BenchConfig, sinks: Iterable[Sink] = (), progress: bool = False,
+def simulate(cfg: BenchConfig, sinks: Iterable[Sink] = (), progress: bool = False, *,
              engine: Engine | None = None, inputs: DriveInputs | None = None, start: Any = None) -> Outcome:
     """Run ``cfg`` to the end, streaming every chunk to ``sinks``; returns metadata and summary.
     ``inputs``: recorded drive inputs in memory (the encoder trace of a "trace" program, the motor
@@ -323,11 +327,14 @@ def simulate(cfg: BenchConfig, sinks: Iterable[Sink] = (), progress: bool = Fals
     sinks = list(sinks)
     closed = 0
     t0 = time.perf_counter()
+    if cfg.trace_length_pending:  # the run lasts as long as its trace (read once, here)
+        inputs = _read_drive_files(cfg, inputs)
+        cfg = with_trace_duration(cfg, inputs)
     try:
         with _sigterm_interrupts():
             engine = engine if engine is not None else make_engine(cfg, inputs)
             acc = SummaryAccumulator(cfg)
-            for chunk in run_chunks(cfg, engine, progress, inputs, start=start):
+            for chunk in run_chunks(cfg, engine, progress, inputs=inputs, start=start):
                 acc.update(chunk)
                 for s in sinks:
                     s.write(chunk)

@@ -2,13 +2,15 @@
 of ``drive.mode = "motor"``, in memory (:class:`DriveInputs`, what the library passes to the drive)
 or in the files a user names (``drive.trace_file``: ``.npz`` or ``.csv`` with ``t`` [s] and
 ``angle`` [rad]; ``drivetrain.command_file``: ``.npz`` with ``t`` [s] and ``volts`` [V]). Both are
-checked here, where the drive (:mod:`twin.drive`, :mod:`twin.motor_drive`) and the configuration
-loader (which fills in a trace program's duration from a user's file) find them."""
+checked here, where the drive (:mod:`twin.drive`, :mod:`twin.motor_drive`) finds them. A trace
+program with ``simulation.duration_s = 0`` runs for the trace's length, filled in here from the trace
+in memory (:func:`with_trace_duration`): the configuration never opens a data file."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -116,10 +118,24 @@ def check_trace_speed(t: np.ndarray, angle: np.ndarray, max_crank_rpm: float, wh
 
 
 def trace_duration(path: str | Path) -> float:
-    """Length of an encoder trace [s] (last minus first time stamp); the loaders of
-    configurations call it, so that a trace program's duration is known before the run."""
+    """Length of the encoder trace in the file ``path`` [s] (last minus first time stamp)."""
     t, _ = load_trace(path)
     return float(t[-1] - t[0])
+
+
+def with_trace_duration(cfg: Any, inputs: DriveInputs | None = None) -> Any:
+    """``cfg`` (a :class:`~twin.config.BenchConfig`) with a trace program's ``simulation.duration_s = 0``
+    ("the trace's length") replaced by that length [s], last minus first time stamp of the trace:
+    ``inputs.trace`` when given (in memory), else the file ``drive.trace_file`` names. Any other
+    configuration is returned as it is. The run (:func:`twin.simulation.simulate`) and the command
+    line's ``--config`` call it; the configuration itself reads no data file."""
+    if cfg.drive.program != "trace" or cfg.simulation.duration_s != 0:
+        return cfg
+    if inputs is not None and inputs.trace is not None:
+        t = inputs.trace[0]
+    else:
+        t, _ = load_trace(cfg.drive.trace_file)
+    return cfg.replace(**{"simulation.duration_s": float(t[-1] - t[0])})
 
 
 #: largest magnitude of a recorded motor command [V]: the DAQ's ±10 V analog output (S003 §2.3.1) with 2 % for

@@ -71,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
         raise TwinError("--calibration and --zero-g are alternatives; give one")
     mapping = parse_mapping(args.map)
     nan = "interpolate" if args.repair_nan else "error"
-    run_, repairs = import_table(args.export, cfg, mapping, args.rate, args.time_column, nan=nan,
+    run_, repairs = import_table(args.export, cfg, mapping, rate_hz=args.rate, time_column=args.time_column, nan=nan,
                                  encoder_modulus=args.encoder_modulus, encoder_repair=not args.no_encoder_repair)
     cal = None
     if args.calibration:

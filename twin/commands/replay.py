@@ -95,14 +95,14 @@ def _print(r: ReplayResult, out: Path) -> None:
     print("  sensor  NRMSE%   corr    DTW%  " + "  ".join(f"{lo / 1e3:g}-{hi / 1e3:g}kHz rec/sim dB"
                                                       for lo, hi in r.bands_hz))
     for a, m in r.sensors.items():
-        bands = "  ".join(f"{b['recorded_db']:8.1f}/{b['simulated_db']:<8.1f}" for b in m["bands"])
-        if m.get("near_constant"):  # NRMSE, correlation and DTW of noise against noise: not shown
-            print(f"  {a:6s} nearly constant ({m['near_constant_note']}): not compared")
+        bands = "  ".join(f"{b.recorded_db:8.1f}/{b.simulated_db:<8.1f}" for b in m.bands)
+        if m.near_constant:  # NRMSE, correlation and DTW of noise against noise: not shown
+            print(f"  {a:6s} nearly constant ({m.near_constant_note}): not compared")
             continue
-        print(f"  {a:6s} {m['nrmse_pct']:7.2f} {m['correlation']:7.4f} {m['dtw_distance_pct']:7.3f}  {bands}")
+        print(f"  {a:6s} {m.nrmse_pct:7.2f} {m.correlation:7.4f} {m.dtw_distance_pct:7.3f}  {bands}")
     md = r.motor_drive
     if md:
-        print(f"  motor drive (recorded command): tracking max {md['tracking']['sim_vs_recorded_max_counts']:.1f} counts "
-              f"(PID {md['tracking']['pid_sim_vs_recorded_max_counts']:.1f}); NRMSE% motor/PID "
-              + ", ".join(f"{a} {m['nrmse_pct']:.1f}/{m['pid_nrmse_pct']:.1f}" for a, m in md["sensors"].items()))
+        print(f"  motor drive (recorded command): tracking max {md.tracking['sim_vs_recorded_max_counts']:.1f} counts "
+              f"(PID {md.tracking['pid_sim_vs_recorded_max_counts']:.1f}); NRMSE% motor/PID "
+              + ", ".join(f"{a} {m.nrmse_pct:.1f}/{m.pid_nrmse_pct:.1f}" for a, m in md.sensors.items()))
     print(f"  wrote {out}/: {', '.join([r.files['mcap'], *r.files.get('report', []), *r.files.get('plots', [])])}")

@@ -102,8 +102,8 @@ def _run_accuracy(args: argparse.Namespace) -> int:
         log=lambda m: print(m, file=sys.stderr, flush=True))
     print(f"wrote {out / 'accuracy.md'}, {out / 'accuracy.json'} and {len(res.figures)} PNG plots")
     for r in res.summary:
-        print(f"  {r['key']:32s} {r['wall_per_sim_s']:7.3f} s/sim s  score {r['score']:6.2f}"
-              f"{'  (default)' if r['key'] == res.default else ''}{'  P' if r.get('pareto') else ''}")
+        print(f"  {r.key:32s} {r.wall_per_sim_s:7.3f} s/sim s  score {r.score:6.2f}"
+              f"{'  (default)' if r.key == res.default else ''}{'  P' if r.pareto else ''}")
     return 0
 
 
@@ -178,12 +178,12 @@ def _run_doe(args: argparse.Namespace) -> int:
     res = run_study(opts, log=lambda m: print(m, file=sys.stderr, flush=True))
     print(f"wrote {out / 'doe.md'}, {out / 'doe.json'}, " + ", ".join(str(out / f) for f in res.figures))
     for r, s in res.responses.items():
-        o = s["optimum"]
-        print(f"  {r:18s} LOO RMSE/std {s['loo_stats']['rmse_over_std']:.3f}  {doe.goal} "
+        o = s.optimum
+        print(f"  {r:18s} LOO RMSE/std {s.loo_stats['rmse_over_std']:.3f}  {doe.goal} "
               + ", ".join(f"{n}={v:.4g}" for n, v in o["factors"].items()) + f" -> {o['predicted']:.4g}")
     for c in res.checks:
-        print(f"  {c['kind']:8s} " + ", ".join(f"{n}={v:.4g}" for n, v in c["factors"].items()) + ": "
-              + ", ".join(f"{r} {c['responses'][r]:.3g} (pred {c['predicted'][r]['mean']:.3g})" for r in res.responses))
+        print(f"  {c.kind:8s} " + ", ".join(f"{n}={v:.4g}" for n, v in c.factors.items()) + ": "
+              + ", ".join(f"{r} {c.responses[r]:.3g} (pred {c.predicted[r]['mean']:.3g})" for r in res.responses))
     return 0
 
 
@@ -219,9 +219,9 @@ def _run_continuous_contact(args: argparse.Namespace) -> int:
     opts = ContinuousContactOptions(args.out, cfg, args.duration)
     out = check_output_dir(args.out)
     sm = run_study(opts).summary
-    print(f"continuous-contact model, c = {1e3 * sm['clearance_radial_m']:g} mm: journal on the wall up to "
-          f"{sm['valid_until_crank_deg']:.1f} deg; deviation from the ideal slider until then: "
-          f"x {1e3 * sm['dx_max_m']:.3f} mm, v {sm['dv_max_mps']:.3f} m/s, a {sm['da_max_mps2']:.0f} m/s^2; wrote {out}")
+    print(f"continuous-contact model, c = {1e3 * sm.clearance_radial_m:g} mm: journal on the wall up to "
+          f"{sm.valid_until_crank_deg:.1f} deg; deviation from the ideal slider until then: "
+          f"x {1e3 * sm.dx_max_m:.3f} mm, v {sm.dv_max_mps:.3f} m/s, a {sm.da_max_mps2:.0f} m/s^2; wrote {out}")
     return 0
 
 

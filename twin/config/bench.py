@@ -57,11 +57,10 @@ class BenchConfig:
         _check_bores_fit(self)
         _check_options_used(self)
         sim, sen = self.simulation, self.sensors
-        if sim.duration_s == 0 and self.drive.program != "protocol":
+        if sim.duration_s == 0 and self.drive.program not in ("protocol", "trace"):
             raise ConfigError("simulation.duration_s",
-                              f"must be > 0 for the {self.drive.program} program (0 = the protocol's length); "
-                              + ("configuration files (load_config) fill in the trace's length"
-                                 if self.drive.program == "trace" else "got 0"))
+                              f"must be > 0 for the {self.drive.program} program (0 = the protocol's or the "
+                              "trace's length); got 0")
         k = 1.0 / (sim.timestep_s * sen.output_rate_hz)
         stride = int(round(k))
         if stride < 1 or abs(stride - k) > 1e-6 * k:
@@ -71,7 +70,7 @@ class BenchConfig:
                               f"use a timestep of (1/output_rate)/k for an integer k, or set the output rate "
                               f"explicitly (`sensors.output_rate_hz`), e.g. {every:.10g} Hz for a "
                               "sample every step")
-        if round(self.duration_s * sen.output_rate_hz) < 1:
+        if not self.trace_length_pending and round(self.duration_s * sen.output_rate_hz) < 1:
             raise ConfigError("simulation.duration_s",
                               f"must hold at least one output sample (>= {1.0 / sen.output_rate_hz:g} s at "
                               f"{sen.output_rate_hz:g} Hz), got {sim.duration_s!r}")
@@ -117,10 +116,23 @@ class BenchConfig:
     # -- derived
     @property
     def duration_s(self) -> float:
-        """Simulated time of the run [s] (resolves ``simulation.duration_s = 0`` of the protocol)."""
+        """Simulated time of the run [s] (resolves ``simulation.duration_s = 0`` of the protocol).
+
+        A trace program's 0 (the trace's length) is known once the trace is read: the run fills it
+        in (:func:`twin.tracefile.with_trace_duration`); asked before, this raises a one-line
+        :class:`~twin.errors.ConfigError`."""
         if self.simulation.duration_s > 0:
             return float(self.simulation.duration_s)
+        if self.trace_length_pending:
+            raise ConfigError("simulation.duration_s", "is 0, the trace's length, known once the trace is read: "
+                                                       "pass the configuration through twin.tracefile."
+                                                       "with_trace_duration, or give the duration")
         return self.drive.protocol_duration_s
+
+    @property
+    def trace_length_pending(self) -> bool:
+        """True for a trace program with ``simulation.duration_s = 0`` (the trace's length, not yet read)."""
+        return self.drive.program == "trace" and self.simulation.duration_s == 0
 
     @property
     def output_rate_hz(self) -> float:

@@ -5,7 +5,7 @@ Used with ``drive.mode = "motor"`` (the motor's speed loop follows the analog co
 and the prescribed drive do not read these numbers.
 
 Model (both engines, the same equations; the dynamics are :mod:`twin.reference.drivetrain`
-and the native passive callback of the MuJoCo twin, ``twin/mujoco_engine/_bore.c``):
+and the native passive callback of the MuJoCo twin, ``twin/native/_bore.c``):
 
 * Motor rotor: one more generalized coordinate, the motor angle φ_m, with the rotor (and motor
   pulley) inertia J_m: J_m φ̈_m = τ_m − r_m F, F the belt's effective pull (tight minus slack).

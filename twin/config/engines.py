@@ -149,9 +149,9 @@ class Simulation:
     Attributes:
         engine: "mujoco" (the twin) or "reference" (R-matrix, Lankarani–Nikravesh).
         duration_s: simulated time [s]; 0 = the protocol's length (38 s for the paper's) with
-            ``drive.program = "protocol"``. The constant and trace programs need a duration > 0
-            (``twin simulate --trace FILE`` and configuration files fill in the trace's length;
-            the configuration itself never reads files).
+            ``drive.program = "protocol"``, the trace's length with ``drive.program = "trace"``
+            (filled in by the run when it reads the trace: the configuration never reads files).
+            The other programs need a duration > 0.
         timestep_s: integration step [s]. Default: mjcf/bench.xml (source S003 §4.3, matching
             the 100 kHz logging). It must divide the output period ``1/sensors.output_rate_hz``
             (an integer number of steps per output sample): a step that does not divide
@@ -170,7 +170,8 @@ class Simulation:
         check_types(self)
         _choice(self.engine, "engine", ENGINES)
         _check(isinstance(self.duration_s, (int, float)) and 0 <= self.duration_s <= 3600,
-               "duration_s", f"must lie in [0, 3600] s (0 = the protocol's length), got {self.duration_s!r}")
+               "duration_s", f"must lie in [0, 3600] s (0 = the protocol's or the trace's length), got "
+                               f"{self.duration_s!r}")
         _check(isinstance(self.timestep_s, (int, float)) and 1e-7 <= self.timestep_s <= 1e-3,
                "timestep_s", f"must lie in [1e-7, 1e-3] s, got {self.timestep_s!r}")
         _check(isinstance(self.chunk_s, (int, float)) and math.isfinite(self.chunk_s) and 1e-3 <= self.chunk_s <= 10,

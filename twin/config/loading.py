@@ -11,15 +11,15 @@ from twin.config.bench import BenchConfig
 from twin.config.convert import _deep_merge, from_dict
 from twin.config.presets import named_preset, preset
 from twin.errors import ConfigError, TwinError
-from twin.tracefile import trace_duration
 from twin.util import toml_loads
 
 
 def load_config(path: str | Path) -> BenchConfig:
     """Read a TOML configuration file (partial files override the defaults).
 
-    A file with ``drive.program = "trace"`` and no duration (or 0) gets the trace's length: the
-    loader reads the trace, the configuration never does.
+    A file with ``drive.program = "trace"`` and no duration (or 0) keeps ``simulation.duration_s = 0``,
+    "the trace's length": the run fills it in when it reads the trace
+    (:func:`twin.tracefile.with_trace_duration`); loading a configuration opens no data file.
     """
     import os
 
@@ -56,10 +56,9 @@ def load_config(path: str | Path) -> BenchConfig:
     merged = _deep_merge(base or BenchConfig().to_dict(), data)
     drive, sim = merged.get("drive"), merged.get("simulation")
     own_sim = data.get("simulation") if isinstance(data.get("simulation"), Mapping) else {}
-    no_duration = own_sim.get("duration_s", 0) == 0  # the file gives none, or 0
     if (isinstance(drive, Mapping) and isinstance(sim, Mapping) and drive.get("program") == "trace"
-            and no_duration and isinstance(drive.get("trace_file"), str) and drive["trace_file"]):
-        merged["simulation"] = {**sim, "duration_s": trace_duration(drive["trace_file"])}
+            and "duration_s" not in own_sim):
+        merged["simulation"] = {**sim, "duration_s": 0.0}  # the trace's length (a preset's duration does not apply)
     return from_dict(BenchConfig, merged)
 
 

@@ -85,7 +85,9 @@ def base_config(spec: DatasetSpec) -> BenchConfig:
     and the output rate applied; MuJoCo runs of a preset base take the bushing as a force
     (:func:`dataset_force_applies`)."""
     if spec.base_config:
-        cfg = load_config(spec.base_config)
+        from twin.tracefile import with_trace_duration
+
+        cfg = with_trace_duration(load_config(spec.base_config))  # a trace without a duration: its length
     elif spec.base_preset:
         cfg = named_preset(spec.base_preset, "base.preset")
     else:

@@ -435,7 +435,7 @@ def executor(scheduler: str | None, workers: int) -> Callable[[list[dict]], Iter
 
 
 # ------------------------------------------------------------------------ driver
-def generate(spec: DatasetSpec, out_dir: str | Path, workers: int | None = None, scheduler: str | None = None,
+def generate(spec: DatasetSpec, out_dir: str | Path, *, workers: int | None = None, scheduler: str | None = None,
              limit: int | None = None, progress: bool = True, warm_start: bool = True) -> dict[str, Any]:
     """Generate (or finish) the dataset of ``spec`` in ``out_dir``; returns the info dict.
 

@@ -84,7 +84,7 @@ class Dataset:
         std = np.array([self.stats[n]["std"] or 1.0 for n in names], dtype=np.float64)[:, None]
         return mean, std
 
-    def windows(self, split: str = "train", channels: Iterable[str] | None = None, length_s: float = 0.1,
+    def windows(self, split: str = "train", channels: Iterable[str] | None = None, *, length_s: float = 0.1,
                 hop_s: float | None = None, per_revolution: bool = False, samples_per_rev: int | None = None,
                 normalize: bool = False, skip_s: float = 0.0) -> Iterator[tuple[np.ndarray, dict[str, Any]]]:
         """(window [channels, samples] float32, labels) over the runs of ``split`` (module docstring).

@@ -58,7 +58,7 @@ def evaluate(model: ClearanceModel, dataset_dir: str | Path | list[str | Path], 
     for i, r in enumerate(rows):
         resolved = resolution(r["orientation"], r["crank_hz"])
         held = {j: held_out_at(table.get(j), r["orientation"], r["crank_hz"]) for j in ("B", "C")}
-        a = model.identify(X[owner == i], resolved, r["measures"]["ripple_pct"])
+        a = model.identify(X[owner == i], resolved, ripple_pct=r["measures"]["ripple_pct"])
         # the checks against the training data, as a recording's answer makes them (intervals widened outside)
         a, warned, _ = training_check(model, a, r["measures"], r["orientation"], X[owner == i])
         b, c = a.joint("B"), a.joint("C")

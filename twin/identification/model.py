@@ -241,7 +241,7 @@ class ClearanceModel:
         return float(self.trained_on.get("answer_hop_revs", REVS_PER_WINDOW))
 
     # ------------------------------------------------------------- predict
-    def identify(self, X: np.ndarray, resolved: dict[str, bool], ripple_pct: list[float] | None = None
+    def identify(self, X: np.ndarray, resolved: dict[str, bool], *, ripple_pct: list[float] | None = None
                  ) -> IdentifyResult:
         """The bare answer for one recording from its window features ``X`` [windows, features]: location and,
         per joint, size [mm] and 90 % interval [mm] (no evidence, warnings or training-data checks:
@@ -360,10 +360,10 @@ def identify_recording(model: ClearanceModel, path: str | Path) -> IdentifyResul
     t0 = time.perf_counter()
     acc, counts, rate, cpr, cfg = recording_inputs(path)
     orientation = cfg.mechanism.orientation if cfg is not None else "y"
-    return identify_inputs(model, acc, counts, rate, cpr, orientation, str(path), t0)
+    return identify_inputs(model, acc, counts, rate, cpr, orientation=orientation, source=str(path), t0=t0)
 
 
-def identify_inputs(model: ClearanceModel, acc: dict[str, np.ndarray], counts: np.ndarray, rate: float, cpr: float,
+def identify_inputs(model: ClearanceModel, acc: dict[str, np.ndarray], counts: np.ndarray, rate: float, cpr: float, *,
                     orientation: str, source: str = "", t0: float | None = None) -> IdentifyResult:
     """The answer for calibrated accelerations (sensor -> [n] [m/s²]) and encoder counts ([n]) at ``rate`` [Hz],
     ``cpr`` counts per crank turn (:func:`twin.identification.inputs.recording_inputs`,
@@ -379,7 +379,7 @@ def identify_inputs(model: ClearanceModel, acc: dict[str, np.ndarray], counts: n
     X, w = features(acc, counts, rate, cpr, orientation=orientation, hop_revs=model.hop_revs)
     resolved = resolution(orientation, w.crank_hz)
     measures = recording_measures(acc, counts, rate, cpr, w)
-    ans, warnings, checks = training_check(model, model.identify(X, resolved, measures["ripple_pct"]), measures,
+    ans, warnings, checks = training_check(model, model.identify(X, resolved, ripple_pct=measures["ripple_pct"]), measures,
                                            orientation, X)
     table = tr.get("held_out_size_accuracy") or {}
     joints = []

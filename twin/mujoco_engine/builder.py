@@ -55,7 +55,7 @@ from twin.errors import ModelError, TwinError
 from twin.mujoco_engine.accel import posthoc_applies
 from twin.mujoco_engine import drivetrain, flexible
 from twin.mujoco_engine import guide as guide_clearance
-from twin.mujoco_engine.collider import check_model, ensure_installed
+from twin.native.collider import check_model, ensure_installed
 from twin.physics.mujoco_params import ContactSetting, contact_setting, native_law_applies, prescribed_armature
 from twin.tracefile import DriveInputs
 
@@ -445,11 +445,11 @@ def export_xml(cfg: BenchConfig) -> str:
             f"     Clearance joints: {', '.join(cfg.joints.clearance_joints) or 'none'}; contact: "
             + "; ".join(f"{jt}: {s.law.law if s.law else s.source}" for jt, s in info.contacts.items())
             + ".\n     Bushing geoms (user=\"7301 ...\") need the twin's native bore collider, contact law and "
-              "friction (twin/mujoco_engine/_bore.c):\n     a plain MuJoCo viewer shows and simulates ideal "
+              "friction (twin/native/_bore.c):\n     a plain MuJoCo viewer shows and simulates ideal "
               "variants faithfully; simulate clearance variants with 'twin simulate'."
             + (f"\n     Drive train ({cfg.drive.mode}): the motor rotor, its command actuator and the numeric "
                "'drivetrain' are in the model;\n     the speed controller and the V-belt's pull act only through "
-               "the twin's passive callback (twin/mujoco_engine/_drivetrain.h)."
+               "the twin's passive callback (twin/native/_drivetrain.h)."
                if cfg.drive.mode in ("motor", "torque") else "")
             + " -->\n")
     xml = _exact_geom_user(spec.to_xml(), _model)

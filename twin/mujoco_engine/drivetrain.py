@@ -100,6 +100,6 @@ def finish(spec: mujoco.MjSpec, cfg: BenchConfig, model: mujoco.MjModel) -> None
         t_ctrl=T, peak=dt.peak_torque_nm, account=1.0 if "drive_energy" in cfg.sensors.channels else 0.0,
         guide_dof=guide_dof)
     spec.numeric(names.DRIVETRAIN_NUMERIC).data = [float(vals[f]) for f in names.DRIVETRAIN_FIELDS]
-    from twin.mujoco_engine import _bore
+    from twin.native import _bore
 
     spec.nuserdata = slot + _bore.drivetrain_layout()[1] + 2 * int(model.nv)

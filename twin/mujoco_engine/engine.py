@@ -59,7 +59,7 @@ def stage_timers_off() -> None:
     if _clock is None:
         import ctypes
 
-        from twin.mujoco_engine.collider import mujoco_library
+        from twin.native.collider import mujoco_library
 
         slot = ctypes.c_void_p.in_dll(mujoco_library(), "mjcb_time")
         _clock = (slot, slot.value or 0)

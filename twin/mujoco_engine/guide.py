@@ -51,7 +51,7 @@ def add_guide(spec: mujoco.MjSpec, cfg: BenchConfig) -> None:
 def finish(spec: mujoco.MjSpec, cfg: BenchConfig, model: mujoco.MjModel) -> None:
     """Write the numeric data (dof addresses from the compiled ``model``) and reserve the user
     data slots; the spec must be compiled again."""
-    from twin.mujoco_engine import _bore
+    from twin.native import _bore
 
     con, j = cfg.contact, cfg.joints
     slot = int(spec.nuserdata)

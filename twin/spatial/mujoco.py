@@ -174,7 +174,7 @@ def _compile(spec: mujoco.MjSpec, cfg: Any) -> mujoco.MjModel:
 
 def build(cfg: Any, theta0: float) -> tuple[mujoco.MjSpec, mujoco.MjModel, dict[str, Any]]:
     """(spec, model, contacts) of the spatial mechanism at crank angle θ0 [rad]: pairs, native laws."""
-    from twin.mujoco_engine.collider import check_model, ensure_installed
+    from twin.native.collider import check_model, ensure_installed
 
     if cfg.contact.law == "linear":
         raise ConfigError("contact.law", "the linear law is not available for the spatial mechanism; use a "

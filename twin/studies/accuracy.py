@@ -39,12 +39,13 @@ Outputs (``--out DIR``): ``accuracy.json`` (every variant × test metric and tim
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Sequence
+from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -303,6 +304,43 @@ class AccuracyOptions:
 
 
 @dataclass(frozen=True)
+class VariantSummary:
+    """One variant over the study's tests (a row of ``accuracy.json``'s ``summary``).
+
+    Attributes:
+        key: the variant's name; engine: "mujoco" or "reference"; family: its group in the plots.
+        overrides: the configuration fields it sets (dotted path -> value).
+        wall_per_sim_s: mean wall time per simulated second [s/s]; real_time_factor: its inverse [-].
+        mean, worst: metric name -> its mean and its largest value over the tests (:data:`METRICS`).
+        score, worst_score: :func:`score` of ``mean`` and of ``worst`` [-].
+        pareto, pareto_score: whether the variant is on the cost/metrics and on the cost/score Pareto
+            fronts of the MuJoCo variants; None for the reference variants.
+    """
+
+    key: str
+    engine: str
+    family: str
+    overrides: Mapping[str, Any]
+    wall_per_sim_s: float
+    real_time_factor: float
+    mean: Mapping[str, float]
+    worst: Mapping[str, float]
+    score: float
+    worst_score: float
+    pareto: bool | None
+    pareto_score: bool | None
+
+    def to_dict(self) -> dict[str, Any]:
+        return {f.name: dict(v) if isinstance(v := getattr(self, f.name), Mapping) else v
+                for f in dataclasses.fields(self)}
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> "VariantSummary":
+        return cls(**{f.name: dict(d[f.name]) if isinstance(d[f.name], Mapping) else d[f.name]
+                      for f in dataclasses.fields(cls)})
+
+
+@dataclass(frozen=True)
 class AccuracyResult:
     """What the study found (``accuracy.json``): per variant its mean and worst metrics over the
     tests, score and Pareto membership (``summary``), every test's rows (``per_test``)."""
@@ -312,7 +350,7 @@ class AccuracyResult:
     default: str
     default_on_pareto_front: bool
     default_on_score_front: bool
-    summary: list[dict[str, Any]]
+    summary: tuple[VariantSummary, ...]
     per_test: dict[str, Any]
     figures: tuple[str, ...] = ()
 
@@ -320,8 +358,17 @@ class AccuracyResult:
         """The JSON data of ``accuracy.json``."""
         return {"settings": self.settings, "targets": self.targets, "default": self.default,
                 "default_on_pareto_front": self.default_on_pareto_front,
-                "default_on_score_front": self.default_on_score_front, "summary": self.summary,
-                "per_test": self.per_test, "figures": list(self.figures)}
+                "default_on_score_front": self.default_on_score_front,
+                "summary": [r.to_dict() for r in self.summary], "per_test": self.per_test, "figures": list(self.figures)}
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> "AccuracyResult":
+        """The result of a dict as :meth:`to_dict` (or ``accuracy.json``) holds it."""
+        return cls(settings=d["settings"], targets=d["targets"], default=d["default"],
+                   default_on_pareto_front=d["default_on_pareto_front"],
+                   default_on_score_front=d["default_on_score_front"],
+                   summary=tuple(VariantSummary.from_dict(r) for r in d["summary"]), per_test=d["per_test"],
+                   figures=tuple(d["figures"]))
 
 
 def run_study(options: AccuracyOptions, *, log: Callable[[str], None] | None = None) -> AccuracyResult:
@@ -365,7 +412,7 @@ def run_study(options: AccuracyOptions, *, log: Callable[[str], None] | None = N
     data["figures"] = plots(out, data)
     atomic_write_json(out / "accuracy.json", data)
     atomic_write_text(out / "accuracy.md", render_markdown(data))
-    return AccuracyResult(**{**data, "figures": tuple(data["figures"])})
+    return AccuracyResult.from_dict(data)
 
 
 def aggregate(per_test: dict[int, dict[str, Any]], vs: Sequence[Variant], settings: StudySettings,

@@ -39,7 +39,7 @@ import numpy as np
 from twin.config import CATALOGUE_DIAMETRAL_MM, BenchConfig, with_overrides
 from twin.contact_params import initial_linear_law, law_stiffness
 from twin.impact import ImpactResult, impact_hysteresis, impact_linear
-from twin.mujoco_engine.collider import check_model, ensure_installed
+from twin.native.collider import check_model, ensure_installed
 from twin.names import BORE_USERDATA_FIELDS, bore_userdata, replace_bore_userdata
 
 #: impact speeds of the check [m/s] (1 mm/s to 0.5 m/s). Measured on reference runs

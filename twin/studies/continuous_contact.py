@@ -54,6 +54,7 @@ in reality leave the wall: the model's own indicator of separation.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from dataclasses import dataclass
@@ -308,17 +309,56 @@ class ContinuousContactOptions:
 
 
 @dataclass(frozen=True)
+class ContinuousContactSummary:
+    """The figures of a run of the continuous-contact model (``continuous_contact.json``).
+
+    Attributes:
+        clearance_radial_m: radial clearance c at B [m]; crank_rad_s: the crank's rate [rad/s];
+            duration_s: the run's length [s].
+        psi0_rad, psi_rate0_rad_s: the quasi-static start: the virtual rod's angle [rad] and rate [rad/s].
+        valid_until_s, valid_until_crank_deg: how long (time [s], crank angle [deg]) the journal stays on the
+            wall (f_N >= 0), the model's assumption.
+        dx_max_m, dv_max_mps, da_max_mps2: the slider's largest deviation from the ideal motion until then:
+            position [m], velocity [m/s], acceleration [m/s²].
+        fn_max_n, fn_min_n: largest and smallest normal force over the run [N]; ft_max_abs_n: largest |tangential
+            force| [N].
+    """
+
+    clearance_radial_m: float
+    crank_rad_s: float
+    duration_s: float
+    psi0_rad: float
+    psi_rate0_rad_s: float
+    valid_until_s: float
+    valid_until_crank_deg: float
+    dx_max_m: float
+    dv_max_mps: float
+    da_max_mps2: float
+    fn_max_n: float
+    fn_min_n: float
+    ft_max_abs_n: float
+
+    def to_dict(self) -> dict[str, Any]:
+        return json.loads(json.dumps({f.name: getattr(self, f.name) for f in dataclasses.fields(self)},
+                                     default=json_default))
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> "ContinuousContactSummary":
+        return cls(**{f.name: d[f.name] for f in dataclasses.fields(cls)})
+
+
+@dataclass(frozen=True)
 class ContinuousContactResult:
     """What the study found: ``summary`` is ``continuous_contact.json`` (the crank angle up to which
     the journal stays on the wall and the slider's deviation from the ideal motion until then);
     ``series`` the time series of ``continuous_contact.npz``."""
 
-    summary: dict[str, Any]
+    summary: ContinuousContactSummary
     series: dict[str, np.ndarray]
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON data of ``continuous_contact.json``."""
-        return json.loads(json.dumps(self.summary, default=json_default))
+        return self.summary.to_dict()
 
 
 def run_study(options: ContinuousContactOptions) -> ContinuousContactResult:
@@ -332,7 +372,7 @@ def run_study(options: ContinuousContactOptions) -> ContinuousContactResult:
     out = Path(options.out)
     out.mkdir(exist_ok=True)
     res = run_free(cfg, options.duration_s)
-    result = ContinuousContactResult(res["summary"], res["series"])
+    result = ContinuousContactResult(ContinuousContactSummary.from_dict(res["summary"]), res["series"])
     atomic_write_json(out / "continuous_contact.json", result.to_dict())
     buf = io.BytesIO()
     np.savez_compressed(buf, **res["series"])

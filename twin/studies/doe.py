@@ -424,29 +424,126 @@ class DoeOptions:
 
 
 @dataclass(frozen=True)
+class DoePoint:
+    """One simulated point of the design (or a check point, :class:`DoeCheck`).
+
+    Attributes:
+        run_id: the run's id in the generated dataset.
+        factors: factor name -> its value at the point (the factor's unit).
+        responses: response name -> its value from the run (:data:`RESPONSES` gives the units).
+        wall_s: wall time of the run [s] (None where the dataset does not record it).
+    """
+
+    run_id: str
+    factors: Mapping[str, float]
+    responses: Mapping[str, float]
+    wall_s: float | None
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"run_id": self.run_id, "factors": dict(self.factors), "responses": dict(self.responses),
+                "wall_s": self.wall_s}
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> "DoePoint":
+        return cls(d["run_id"], dict(d["factors"]), dict(d["responses"]), d["wall_s"])
+
+
+@dataclass(frozen=True)
+class DoeCheck(DoePoint):
+    """A hold-out point or a surrogate's optimum, simulated, with what the surrogates predicted there.
+
+    Attributes:
+        predicted: response name -> {"mean", "std"} of its Kriging prediction.
+        kind: "holdout" or "optimum".
+    """
+
+    predicted: Mapping[str, Mapping[str, float]] = dataclasses.field(default_factory=dict)
+    kind: str = "holdout"
+
+    def to_dict(self) -> dict[str, Any]:
+        return {**super().to_dict(), "predicted": {r: dict(v) for r, v in self.predicted.items()}, "kind": self.kind}
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> "DoeCheck":
+        return cls(d["run_id"], dict(d["factors"]), dict(d["responses"]), d["wall_s"],
+                   {r: dict(v) for r, v in d["predicted"].items()}, d["kind"])
+
+
+@dataclass(frozen=True)
+class DoeResponse:
+    """One response's Kriging surrogate over the design.
+
+    Attributes:
+        unit: the response's unit.
+        kernel: the fitted kernel (text).
+        length_scales: its length scales, one per factor, in the unit cube [-].
+        train_fit_max_rel: largest relative error of the surrogate at the design points [-].
+        loo: the leave-one-out predictions at the design points (response unit).
+        loo_stats: their error statistics (``rmse``, ``rmse_over_std``, ...).
+        optimum: the surrogate's optimum: ``factors``, ``predicted`` value, ``nfev``.
+        sobol: Sobol indices, ``first_order`` and ``total``, factor name -> index [-].
+        main_effects: factor name -> {"x", "y"}: the surrogate along the factor, the others at mid-range.
+    """
+
+    unit: str
+    kernel: str
+    length_scales: tuple[float, ...]
+    train_fit_max_rel: float
+    loo: tuple[float, ...]
+    loo_stats: Mapping[str, float]
+    optimum: Mapping[str, Any]
+    sobol: Mapping[str, Mapping[str, float]]
+    main_effects: Mapping[str, Mapping[str, list[float]]]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"unit": self.unit, "kernel": self.kernel, "length_scales": list(self.length_scales),
+                "train_fit_max_rel": self.train_fit_max_rel, "loo": list(self.loo), "loo_stats": dict(self.loo_stats),
+                "optimum": {**self.optimum, "factors": dict(self.optimum["factors"])},
+                "sobol": {k: dict(v) for k, v in self.sobol.items()},
+                "main_effects": {n: {"x": list(v["x"]), "y": list(v["y"])} for n, v in self.main_effects.items()}}
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> "DoeResponse":
+        return cls(d["unit"], d["kernel"], tuple(d["length_scales"]), d["train_fit_max_rel"], tuple(d["loo"]),
+                   dict(d["loo_stats"]), {**d["optimum"], "factors": dict(d["optimum"]["factors"])},
+                   {k: dict(v) for k, v in d["sobol"].items()},
+                   {n: {"x": list(v["x"]), "y": list(v["y"])} for n, v in d["main_effects"].items()})
+
+
+@dataclass(frozen=True)
 class DoeResult:
     """What the study found (``doe.json``): the simulated design ``points``, per response its
     Kriging surrogate's leave-one-out error, optimum, Sobol indices and main effects
     (``responses``), the hold-out and optimum ``checks`` simulated with their predictions."""
 
     factors: list[dict[str, Any]]
-    responses: dict[str, Any]
+    responses: dict[str, DoeResponse]
     design: str
-    points: list[dict[str, Any]]
+    points: tuple[DoePoint, ...]
     settle_s: float
     goal: str
     spec: str
-    checks: list[dict[str, Any]]
+    checks: tuple[DoeCheck, ...]
     figures: tuple[str, ...]
     lhs_strata_ok: bool | None = None  # a Latin hypercube design only
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON data of ``doe.json``."""
-        d: dict[str, Any] = {"factors": self.factors, "responses": self.responses, "design": self.design,
-                             "points": self.points, "settle_s": self.settle_s, "goal": self.goal, "spec": self.spec}
+        d: dict[str, Any] = {"factors": self.factors, "responses": {r: v.to_dict() for r, v in self.responses.items()},
+                             "design": self.design, "points": [p.to_dict() for p in self.points],
+                             "settle_s": self.settle_s, "goal": self.goal, "spec": self.spec}
         if self.lhs_strata_ok is not None:
             d["lhs_strata_ok"] = self.lhs_strata_ok
-        return d | {"checks": self.checks, "figures": list(self.figures)}
+        return d | {"checks": [c.to_dict() for c in self.checks], "figures": list(self.figures)}
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> "DoeResult":
+        """The result of a dict as :meth:`to_dict` (or ``doe.json``) holds it."""
+        return cls(factors=[dict(f) for f in d["factors"]],
+                   responses={r: DoeResponse.from_dict(v) for r, v in d["responses"].items()}, design=d["design"],
+                   points=tuple(DoePoint.from_dict(p) for p in d["points"]), settle_s=d["settle_s"], goal=d["goal"],
+                   spec=d["spec"], checks=tuple(DoeCheck.from_dict(c) for c in d["checks"]),
+                   figures=tuple(d["figures"]), lhs_strata_ok=d.get("lhs_strata_ok"))
 
 
 def run_study(options: DoeOptions, *, log: Callable[[str], None] = lambda m: None) -> DoeResult:
@@ -525,7 +622,7 @@ def run_study(options: DoeOptions, *, log: Callable[[str], None] = lambda m: Non
     result["figures"] = figures
     atomic_write_json(out / "doe.json", result)
     atomic_write_bytes(out / "doe.md", report_md(doe, result).encode())
-    return DoeResult(**{**result, "figures": tuple(figures)})
+    return DoeResult.from_dict(result)
 
 
 def is_latin_hypercube(u: np.ndarray) -> bool:

@@ -81,7 +81,7 @@ def check_model(model: mujoco.MjModel) -> None:
     laid out: the layouts of :data:`twin.names.BORE_USERDATA_FIELDS`, ``GUIDE_USERDATA_FIELDS``,
     ``DRIVETRAIN_FIELDS`` and ``GUIDE_CLEARANCE_FIELDS`` and their state slots in ``nuserdata``.
     Only what the model marks as native (the marker values) is checked."""
-    from twin.mujoco_engine import _bore
+    from twin.native import _bore
 
     problem = _bore.check_model(model._address)
     if problem is not None:
@@ -96,12 +96,12 @@ def ensure_installed() -> None:
     """
     global _addresses
     if _addresses is not None:
-        from twin.mujoco_engine import _bore
+        from twin.native import _bore
 
         _bore.install(*_addresses)
         return
     try:
-        from twin.mujoco_engine import _bore
+        from twin.native import _bore
     except ImportError as err:
         raise EngineUnavailableError(
             f"the native bushing collider is not built ({err}); reinstall with 'pip install -e .'") from None

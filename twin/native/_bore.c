@@ -162,7 +162,7 @@
 
 /* Layout of a bore geom's user data (m->geom_user row, nuser_geom = BORE_NUSER): the one
  * definition is twin/names.py BORE_USERDATA_FIELDS (same names, same order). The module reports
- * its layout (userdata_fields()) and twin/mujoco_engine/collider.py refuses to install it if
+ * its layout (userdata_fields()) and twin/native/collider.py refuses to install it if
  * the two differ. */
 enum bore_user {
   BORE_MARKER = 0,       /* BORE_MAGIC marks the geom as a bore */
@@ -857,7 +857,7 @@ static const char* el_name(const mjModel* m, const int* name_adr, int id) {
 
 /* Why the native code cannot run model m as laid out, in one line written to msg, or 0 if it can.
  * A callback cannot raise, and skips what it cannot read; twin refuses such a model before it runs
- * (twin.mujoco_engine.collider.check_model). Only what the model marks as native is checked. */
+ * (twin.native.collider.check_model). Only what the model marks as native is checked. */
 static int model_problem(const mjModel* m, char* msg, size_t n) {
   const int nu = m->nuser_geom;
   for (int g = 0; nu >= 1 && g < m->ngeom; g++) {
