@@ -160,7 +160,7 @@ def test_the_guide_model_locates_guide_play_alone_and_leaves_a_tight_bench_healt
                                "drive.motor_rpm": 550.0, "joints.clearance_b_mm": 0.0, "joints.clearance_c_mm": 0.0,
                                "joints.clearance_guide_mm": guide_mm, "mechanism.orientation": "z",
                                "sensors.channels": ("accel", "encoder")})
-    a = identify_inputs(m, *simulated_inputs(simulate_run(cfg), cfg), "z", "sim")
+    a = identify_inputs(m, *simulated_inputs(simulate_run(cfg), cfg), orientation="z", source="sim")
     assert a.fault == fault, a.probabilities
     g = a.joint("G")
     lo, hi = g.interval_if_faulty_mm

@@ -50,7 +50,7 @@ def _answer(task: tuple[str, str, str, float, dict[str, Any]]) -> dict[str, Any]
            "drive": row.get("factor_drive_mode") or "pid", "engine": row.get("engine")}
     try:
         a = identify_inputs(model, {s: cols[f"meas_{s}"] for s in ACC}, counts, float(meta["rate_hz"]), cpr,
-                            orientation, row["run_id"])
+                            orientation=orientation, source=row["run_id"])
     except TwinError as err:
         return out | {"refused": True, "reason": str(err)}
     return out | {"refused": False, "fault": a.fault, "probabilities": dict(a.probabilities),
