@@ -59,7 +59,7 @@ from twin.reference.model import N_OUT, NEWTON_FAILED, NOT_FINITE, O_EKIN, O_EPO
 from twin.reference import drivetrain as DT
 from twin.reference.guide import N_GUIDE_OUT
 from twin.reference.flexible_kernels import (G_CF, G_CG, G_FLEX_A, G_FLEX_G, G_KF, G_KG, G_MF, G_MG, factor,
-                                             _eye_contact, normal_mobility, _bound_damping, chain_forces,
+                                             _eye_contact, normal_mobility, _bound_damping, _seg_angle_rate, chain_forces,
                                              flex_energy, flex_rows, flex_project, flex_mass, flex_solve_acc,
                                              _rod_sensors, _slider_sensors)
 
@@ -251,16 +251,18 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
             d = math.sqrt(jb[0] * jb[0] + jb[1] * jb[1])
             mob = normal_mobility(Rt, Mb, nz, prescribed, 0, 1, 2, 3, jb[0] / d, jb[1] / d, gmob, Wmob) \
                 if d > 0.0 else 0.0
-            fn0, ft0 = _bound_damping(P, qs, qds, True, cst_b, jb, mob, h, Q)
+            fn0, ft0 = _bound_damping(P, qs, qds, True, cst_b, jb, mob, h,
+                                      _seg_angle_rate(q, qd, segs[0, 0], segs[0, 1])[2], Q)
             if fn0 > 0.0 or jb[3] > 0.0:
                 _eye_contact(P, qs, q, jb, fn0, ft0, 2, P[P_RBUSH_B], segs[0, 0], segs[0, 1], Q)
         if P[P_CLR_C] > 0.5 and jc[2] > 0.0:
             d = math.sqrt(jc[0] * jc[0] + jc[1] * jc[1])
             mob = normal_mobility(Rt, Mb, nz, prescribed, 6, 10 if shift else -1, 4, 5, jc[0] / d, jc[1] / d, gmob,
                                   Wmob) if d > 0.0 else 0.0
-            fn0, ft0 = _bound_damping(P, qs, qds, False, cst_c, jc, mob, h, Q)
+            last = segs.shape[0] - 1
+            fn0, ft0 = _bound_damping(P, qs, qds, False, cst_c, jc, mob, h,
+                                      _seg_angle_rate(q, qd, segs[last, 0], segs[last, 1])[2], Q)
             if fn0 > 0.0 or jc[3] > 0.0:
-                last = segs.shape[0] - 1
                 _eye_contact(P, qs, q, jc, fn0, ft0, 4, P[P_RBUSH_C], segs[last, 0], segs[last, 1], Q)
         if shift and jc[3] > 0.0:   # the contact's normal component on the pin, which the ideal guide took, moves it
             ex, ey = jc[0], jc[1]

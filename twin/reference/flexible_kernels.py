@@ -269,18 +269,26 @@ def normal_mobility(Rt, Mb, nz, prescribed, pin_x, pin_y, eye_x, eye_y, nx, ny, 
 
 
 @njit(cache=True)
-def _bound_damping(P, qs, qds, pin_b, cst, jo, mob, h, Q):
-    """Bound the contact law's damping at joint B (``pin_b``) or C at the dead-beat value m̂/(2h) (m̂ = 1/``mob``,
-    :func:`normal_mobility`; h the step), as the MuJoCo engine's force source does: the law's damping c (its
-    force at unit approach rate less its elastic force) beyond m̂/(2h) is scaled to it — the law evaluated at the
-    rate δ̇ m̂/(2 h c) — and the friction follows the new normal force. An explicit damping c acting on the mass
-    m̂ decays the rate by 1 − c h/m̂ per step: beyond 2m̂/h it diverges, beyond m̂/h it alternates (the step's
-    Nyquist ringing); at m̂/(2h) the rate halves each step. The element's forces (``jo`` [3:5], which it applied
-    to ``Q`` on both bodies) are replaced in ``jo`` and on the pin's side of ``Q`` (the crank, or the slider); the
-    rod's side is :func:`_eye_contact`'s. Returns the element's (f_N, f_T)."""
+def _bound_damping(P, qs, qds, pin_b, cst, jo, mob, h, w_eye, Q):
+    """The contact law and friction of clearance joint B (``pin_b``) or C on the flexible rod: the element of the
+    rigid model (:func:`twin.reference.model._joint`) evaluated them for a rigid rod; two things differ here.
+
+    * The eye's spin: the bore turns with its housing, which turns with the rod's end segment (no hinge at the
+      rod's end nodes), at ``w_eye`` [rad/s] (:func:`_seg_angle_rate` of the end segment), not with the chord
+      B'–C as the element assumes; the friction's sliding speed takes it (as the MuJoCo engine's native module,
+      which reads the housing body's own velocity).
+    * The law's damping is bounded at the dead-beat value m̂/(2h) (m̂ = 1/``mob``, :func:`normal_mobility`; h the
+      step), as the MuJoCo engine's force source does: the law's damping c (its force at unit approach rate less
+      its elastic force) beyond m̂/(2h) is scaled to it — the law evaluated at the rate δ̇ m̂/(2 h c). An explicit
+      damping c acting on the mass m̂ decays the rate by 1 − c h/m̂ per step: beyond 2m̂/h it diverges, beyond
+      m̂/h it alternates (the step's Nyquist ringing); at m̂/(2h) the rate halves each step.
+
+    The friction is evaluated from the (possibly bounded) normal force and that sliding speed. The element's forces
+    (``jo`` [3:5], which it applied to ``Q`` on both bodies) are replaced in ``jo`` and on the pin's side of ``Q``
+    (the crank, or the slider); the rod's side is :func:`_eye_contact`'s. Returns the element's (f_N, f_T)."""
     fn0, ft0 = jo[3], jo[4]
     delta = jo[2]
-    if not (delta > 0.0 and mob > 0.0):
+    if not delta > 0.0:
         return fn0, ft0
     if pin_b:
         edx, edy = qds[0] - qds[2], qds[1] - qds[3]
@@ -292,18 +300,17 @@ def _bound_damping(P, qs, qds, pin_b, cst, jo, mob, h, Q):
     ex, ey = jo[0], jo[1]
     d = math.sqrt(ex * ex + ey * ey)
     nx, ny = (ex / d, ey / d) if d > 0.0 else (1.0, 0.0)
-    code = int(P[P_LAW])
-    fe = normal_force(code, delta, 0.0, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX])
-    c = normal_force(code, delta, 1.0, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX]) - fe
-    cmax = 0.5 / (h * mob)
-    if not c > cmax:
-        return fn0, ft0
-    rate = (nx * edx + ny * edy) * (cmax / c)
-    fn = normal_force(code, delta, rate, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX])
+    fn = fn0
+    if mob > 0.0:
+        code = int(P[P_LAW])
+        fe = normal_force(code, delta, 0.0, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX])
+        c = normal_force(code, delta, 1.0, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX]) - fe
+        cmax = 0.5 / (h * mob)
+        if c > cmax:
+            rate = (nx * edx + ny * edy) * (cmax / c)
+            fn = normal_force(code, delta, rate, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX])
     tx, ty = -ny, nx
-    ux, uy = qs[4] - qs[2], qs[5] - qs[3]
-    w2 = (ux * (qds[5] - qds[3]) - uy * (qds[4] - qds[2])) / (ux * ux + uy * uy)
-    vt = edx * tx + edy * ty - w2 * rb
+    vt = edx * tx + edy * ty - w_eye * rb
     if pin_b:
         vt += qds[7] * P[P_RPIN_B]
     if fn <= 0.0:
@@ -312,6 +319,8 @@ def _bound_damping(P, qs, qds, pin_b, cst, jo, mob, h, Q):
         ft = adams_friction_force(vt, fn, P[P_MUS], P[P_MU0], P[P_VS], P[P_VD])
     else:
         ft = friction_force(vt, fn, P[P_MU0], P[P_V0], P[P_V1])
+    if fn == fn0 and ft == ft0:
+        return fn0, ft0
     dfx = -(fn - fn0) * nx + (ft - ft0) * tx   # the change of the force on the pin
     dfy = -(fn - fn0) * ny + (ft - ft0) * ty
     if pin_b:
