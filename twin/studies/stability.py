@@ -142,6 +142,11 @@ class StudySettings:
             raise ConfigError("seed", f"must be an integer >= 0, got {self.seed!r}")
         if self.family not in ("bench", "spatial"):
             raise ConfigError("family", f"must be bench or spatial, got {self.family!r}")
+        lo, hi = (tuple(self.duration_range_s) + (None, None))[:2]
+        if (len(self.duration_range_s) != 2 or not all(isinstance(x, (int, float)) and math.isfinite(x)
+                                                       for x in (lo, hi)) or not 0 < lo <= hi):
+            raise ConfigError("durations", "must be two numbers LO HI with 0 < LO <= HI [s], got "
+                              f"{list(self.duration_range_s)!r}")
         if self.structure and (self.bench or self.family != "bench"):
             raise ConfigError("structure", "draws the flexible structure on the planar twin's plain scenes; it "
                               "cannot be combined with bench (guide clearance and motor drive are not available "
@@ -499,6 +504,9 @@ def run_study(settings: StudySettings, *, out: str | Path | None = None, progres
     """Run the campaign of ``settings``; write ``stability.json``, ``stability.md`` and
     ``stability.png`` to the folder ``out`` when given; ``progress``: a progress bar on stderr;
     ``log``: receives one line per failed scene."""
+    from twin.provenance import git_commit
+
+    git_commit()   # the stamp names the code that ran (taken now, cached), not the tree when the run ends
     run_one = run_scene
     if settings.family == "spatial":
         from twin.studies.spatial_stability import run_scene as run_one, sample_scene as sample_spatial  # noqa: F811
@@ -535,8 +543,10 @@ def run_study(settings: StudySettings, *, out: str | Path | None = None, progres
         out.mkdir(exist_ok=True)
         res = replace(res, figures=(_figure(out, rows),))
         data = res.to_dict()
-        atomic_write_json(out / "stability.json", _jsonable(data))
-        atomic_write_text(out / "stability.md", markdown(data))
+        from twin.provenance import stamped, with_stamp_line
+
+        atomic_write_json(out / "stability.json", _jsonable(stamped(data)))
+        atomic_write_text(out / "stability.md", with_stamp_line(markdown(data)))
     return res
 
 
