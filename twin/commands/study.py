@@ -131,6 +131,9 @@ def register_stability(studies: argparse._SubParsersAction) -> None:
     p.add_argument("--durations", nargs=2, type=float, metavar=("LO", "HI"),
                    help="the scenes' simulated durations, uniform in [LO, HI] s (0 < LO <= HI; default 0.5-3.0 s, "
                         "0.3-1.0 s with --quick)")
+    p.add_argument("--first", type=int, default=0, metavar="I",
+                   help="index of the first scene (default 0): a long campaign in parts, joined by "
+                        "twin.studies.stability.merge_results")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=_run_stability)
 
@@ -147,6 +150,8 @@ def _run_stability(args: argparse.Namespace) -> int:
         settings = dataclasses.replace(settings, family=args.family, structure=args.structure)
     if args.durations is not None:
         settings = dataclasses.replace(settings, duration_range_s=tuple(args.durations))
+    if args.first:
+        settings = dataclasses.replace(settings, first=args.first)
     out = check_output_dir(args.out)
     res = run_study(settings, out=out, progress=not args.no_progress,
                     log=lambda m: print(m, file=sys.stderr, flush=True))

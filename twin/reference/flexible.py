@@ -63,8 +63,11 @@ from twin.reference.flexible_kernels import (G_CF, G_CG, G_FLEX_A, G_FLEX_G, G_K
                                              flex_energy, flex_rows, flex_project, flex_mass, flex_solve_acc,
                                              _rod_sensors, _slider_sensors)
 
-# the supports' parameters ``G`` (build()): indices G_KF … G_FLEX_G, defined with the kernels that read them
-N_G = 8
+# the supports' parameters ``G`` (build()): indices G_KF … G_FLEX_G, defined with the kernels that read them; then
+# the rod's mid-span material point for the "structure" channels (:func:`_structure_outputs`): its segment and its
+# distance from the segment's start [m]
+G_MID_SEG, G_MID_XI = 8, 9
+N_G = 10
 
 
 @dataclasses.dataclass
@@ -139,6 +142,13 @@ def build(cfg, chain) -> FlexLayout:
         sens[i] = [seg, sx - seg * l, sy, axes[mnt.axis]]
     st = cfg.structure
     G = np.zeros(N_G)
+    # the mid-span point: the chain body holding L/2 (the MuJoCo engine's rule, twin.structure.rod._body_at), at the
+    # same distance from that segment's start
+    from twin.structure.rod import _body_at
+
+    mid = _body_at(chain, L / 2) - 1
+    G[G_MID_SEG] = mid
+    G[G_MID_XI] = L / 2 - chain.bodies[mid + 1].x0_m
     G[G_FLEX_A] = G[G_FLEX_G] = 1.0
     G[G_MF] = st.frame_mass_kg
     G[G_KF] = st.support_stiffness(st.frame_mass_kg, st.frame_frequency_hz)
@@ -152,6 +162,28 @@ def build(cfg, chain) -> FlexLayout:
 
 
 # --------------------------------------------------------------------------------------------- kernels
+@njit(cache=True)
+def _structure_outputs(P, G, q, segs, row):
+    """The "structure" channels into ``row`` from column ``N_OUT + 1`` (:data:`STRUCTURE_CHANNELS`), as the MuJoCo
+    engine defines them (:func:`twin.mujoco_engine.flexible.structure_channels`): the rod's stretch |C − B'| − L, the
+    mid-span material point's distance from the chord B'–C (+ to the left of B'→C), the frame's displacement at A
+    (A' = (q_8, q_9)) and the guide's normal to the guide (y_g = q_10) [m]."""
+    bx, by, cx, cy = q[2], q[3], q[4], q[5]
+    dx, dy = cx - bx, cy - by
+    d = math.sqrt(dx * dx + dy * dy)
+    seg = int(G[G_MID_SEG])
+    a, b = segs[seg, 0], segs[seg, 1]
+    ux, uy = q[b] - q[a], q[b + 1] - q[a + 1]
+    f = G[G_MID_XI] / math.sqrt(ux * ux + uy * uy)
+    mx, my = q[a] + f * ux, q[a + 1] + f * uy
+    o = N_OUT + 1
+    row[o] = d - P[P_L]
+    row[o + 1] = (dx * (my - by) - dy * (mx - bx)) / d
+    row[o + 2] = q[8] if G[G_FLEX_A] > 0.5 else 0.0
+    row[o + 3] = q[9] if G[G_FLEX_A] > 0.5 else 0.0
+    row[o + 4] = q[10] if G[G_FLEX_G] > 0.5 else 0.0
+
+
 @njit(cache=True, nogil=True)
 def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sens, st, x, theta_ref, omega_ref,
                  stride, out, want_out, D, ds, setpoint, dout, alpha_ref):
@@ -289,6 +321,7 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
                 row[O_EKIN] = T
                 row[O_EPOT] = V
             row[N_OUT] = diss_total
+            _structure_outputs(P, G, q, segs, row)
             if motor:
                 DT.outputs(D, ds, dout[k // stride])
                 if D[DT.D_ACCOUNT] != 0.0:
@@ -338,9 +371,13 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
 
 
 # ------------------------------------------------------------------------------------------ Python side
-#: output columns of :func:`run_flexible`: the rigid model's, then the dissipated energy
+#: output columns of :func:`run_flexible`: the rigid model's, then the dissipated energy, then the "structure"
+#: channels (:data:`STRUCTURE_CHANNELS` order, :func:`_structure_outputs`)
 O_DISS = N_OUT
-N_OUT_FLEX = N_OUT + 1
+O_STRUCT = N_OUT + 1
+#: the "structure" channel group (:mod:`twin.channels`; the MuJoCo engine's, same names, meaning and units [m])
+STRUCTURE_CHANNELS = ("rod_stretch", "rod_deflection", "frame_x", "frame_y", "guide_y")
+N_OUT_FLEX = O_STRUCT + len(STRUCTURE_CHANNELS)
 
 
 def rigid_rod_body(split):
@@ -393,8 +430,10 @@ class FlexibleRun:
                           cfg.bodies.rod.inertia_kgm2, st.rod_end_inertia_kgm2)
         from twin.config.structure import StructureConfig
 
+        # (the rigid model's parameters of the rod's two housings; its "structure" channels are this runner's)
+        sensors = dataclasses.replace(cfg.sensors, channels=tuple(g for g in cfg.sensors.channels if g != "structure"))
         ends = dataclasses.replace(cfg, bodies=dataclasses.replace(cfg.bodies, rod=rigid_rod_body(split)),
-                                   structure=StructureConfig())
+                                   structure=StructureConfig(), sensors=sensors)
         self.P = params(ends)
         self.P_rigid = P_rigid
         self.mounts = MountFilter(st.mount_frequency_hz, st.mount_damping_ratio, cfg.sensors.output_rate_hz)

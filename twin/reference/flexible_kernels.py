@@ -339,8 +339,8 @@ def _bound_damping(P, qs, qds, pin_b, cst, jo, mob, h, w_eye, Q):
 
 @njit(cache=True)
 def chain_forces(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G, Q):
-    """Add the chain's gravity, hinges and slides and the supports' springs and dampers to Q; returns the power
-    the dampers dissipate [W] (≥ 0)."""
+    """Add the chain's gravity, hinges and slides and the supports' springs, dampers and weights to Q; returns the
+    power the dampers dissipate [W] (≥ 0)."""
     gx, gy = P[P_GX], P[P_GY]
     for j in range(segs.shape[0]):
         a, b = segs[j, 0], segs[j, 1]
@@ -375,10 +375,12 @@ def chain_forces(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G, Q):
         Q[c + 1] += f * ey
         Q[p] -= f * ex
         Q[p + 1] -= f * ey
-    if G[G_FLEX_A] > 0.5:
+    if G[G_FLEX_A] > 0.5:   # the frame's spring and damper, and the frame's own weight (its mass moves with A')
         for i in (8, 9):
             Q[i] += -G[G_KF] * q[i] - G[G_CF] * qd[i]
             diss += G[G_CF] * qd[i] * qd[i]
+        Q[8] += G[G_MF] * gx
+        Q[9] += G[G_MF] * gy
     if G[G_FLEX_G] > 0.5:
         Q[10] += -G[G_KG] * q[10] - G[G_CG] * qd[10] + (P[P_M3] + G[G_MG]) * gy
         diss += G[G_CG] * qd[10] * qd[10]
@@ -416,7 +418,7 @@ def flex_energy(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G):
         d = ((q[c] - q[p]) * wx + (q[c + 1] - q[p + 1]) * wy) / wn
         V += 0.5 * slide_f[k, 0] * d * d
     if G[G_FLEX_A] > 0.5:
-        V += 0.5 * G[G_KF] * (q[8] * q[8] + q[9] * q[9])
+        V += 0.5 * G[G_KF] * (q[8] * q[8] + q[9] * q[9]) - G[G_MF] * (gx * q[8] + gy * q[9])
     if G[G_FLEX_G] > 0.5:
         V += 0.5 * G[G_KG] * q[10] * q[10] - (P[P_M3] + G[G_MG]) * gy * q[10]
     return T, V
