@@ -60,7 +60,7 @@ from twin.reference import drivetrain as DT
 from twin.reference.guide import N_GUIDE_OUT
 from twin.reference.flexible_kernels import (G_CF, G_CG, G_FLEX_A, G_FLEX_G, G_KF, G_KG, G_MF, G_MG, factor,
                                              _eye_contact, normal_mobility, _bound_damping, _seg_angle_rate, chain_forces,
-                                             flex_energy, flex_rows, flex_project, flex_mass, flex_solve_acc,
+                                             law_terms, theta_damping, flex_energy, flex_rows, flex_project, flex_mass, flex_solve_acc,
                                              _rod_sensors, _slider_sensors)
 
 # the supports' parameters ``G`` (build()): indices G_KF … G_FLEX_G, defined with the kernels that read them; then
@@ -241,6 +241,9 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
     RtT = np.empty((n, nz))
     gmob = np.empty(2 * nz)
     Wmob = np.empty((nz, nz))
+    Mb0 = np.empty((nz, nz))
+    lawB = np.zeros(6)
+    lawC = np.zeros(6)
     motor = D.shape[0] > 0
     prescribed = alpha_ref.shape[0] > 0
     nsteps = setpoint.shape[0] if motor else (alpha_ref.shape[0] if prescribed else theta_ref.shape[0])
@@ -304,10 +307,22 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
         for i in range(N_Q):   # the mechanism's own forces (the drive train's accounts read them)
             Qb[i] = Q[i]
         diss = chain_forces(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G, Q)
+        # the laws' damping by the θ-method (theta_damping) after the explicit solve: the laws' terms now
+        fB = fC = 0.0
+        if P[P_CLR_B] > 0.5 and jb[2] > 0.0:
+            law_terms(P, qs, qds, True, cst_b, jb, lawB)
+            fB = jb[3]
+        if P[P_CLR_C] > 0.5 and jc[2] > 0.0:
+            law_terms(P, qs, qds, False, cst_c, jc, lawC)
+            fC = jc[3]
+        if fB > 0.0 or fC > 0.0:
+            Mb0[:nz, :nz] = Mb[:nz, :nz]
         if not flex_solve_acc(q, Q, nz, Rt, RtT, S, Mb, rhs, b, tmp, qdd, P, segs, seg_f, G, prescribed,
                               alpha_ref[k] if prescribed else 0.0, tau_p):
             status = NOT_FINITE
             break
+        if fB > 0.0 or fC > 0.0:
+            theta_damping(h, qdd, Rt, Mb0, nz, prescribed, lawB, lawC, fB, fC, shift, jb, jc)
         if prescribed:
             tau = tau_p[0]
         if want_out and k % stride == 0:
