@@ -323,10 +323,10 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
                               alpha_ref[k] if prescribed else 0.0, tau_p):
             status = NOT_FINITE
             break
-        if fB > 0.0 or fC > 0.0:
-            theta_damping(h, qdd, Rt, Mb0, nz, prescribed, lawB, lawC, fB, fC, shift, jb, jc)
         if prescribed:
             tau = tau_p[0]
+        if fB > 0.0 or fC > 0.0:
+            tau += theta_damping(h, qdd, Rt, Mb0, nz, prescribed, lawB, lawC, fB, fC, shift, jb, jc)
         if want_out and k % stride == 0:
             row = out[k // stride]
             _outputs(P, q[:N_Q], qd[:N_Q], qdd[:N_Q], tau, ja, jb, jc, row)

@@ -394,14 +394,15 @@ def theta_damping(h, qdd, Rt, Mb0, nz, prescribed, lawB, lawC, fB, fC, shift, jb
     (0: not in contact) applied; the forces' change is solved with the pairs' mobilities (both joints together,
     the same Rᵀ M R ``Mb0``, unfactored) and its accelerations added to ``qdd``; jb[3], jc[3] take the forces.
     ``lawB``, ``lawC``: :func:`law_terms`. The friction keeps the explicit force's (MuJoCo's native friction is
-    likewise a passive force evaluated before the solve)."""
+    likewise a passive force evaluated before the solve). Returns the change of the drive torque with ``prescribed``
+    (the driving constraint's multiplier, as :func:`flex_solve_acc` computes it), else 0."""
     j0 = 1 if prescribed else 0
     m = nz - j0
     act = np.zeros(2, dtype=np.bool_)
     act[0] = fB > 0.0 and lawB[1] > 0.0
     act[1] = fC > 0.0 and lawC[1] > 0.0
     if not (act[0] or act[1]):
-        return
+        return 0.0
     g = np.zeros((2, m))
     if act[0]:
         _normal_rows(Rt, nz, prescribed, 0, 1, 2, 3, lawB[4], lawB[5], g[0])
@@ -418,7 +419,7 @@ def theta_damping(h, qdd, Rt, Mb0, nz, prescribed, lawB, lawC, fB, fC, shift, jb
             y = g[k].copy()
             Lk = W.copy()
             if not _cholesky_solve(Lk, y, m):
-                return
+                return 0.0
             Y[k] = y
     Wm = np.zeros((2, 2))
     for a in range(2):
@@ -467,6 +468,7 @@ def theta_damping(h, qdd, Rt, Mb0, nz, prescribed, lawB, lawC, fB, fC, shift, jb
                     dl[o] = -f0[o]
             break
     n = qdd.shape[0]
+    dtau = 0.0
     for a in range(2):
         if not act[a] or dl[a] == 0.0:
             continue
@@ -475,8 +477,20 @@ def theta_damping(h, qdd, Rt, Mb0, nz, prescribed, lawB, lawC, fB, fC, shift, jb
             rj = Rt[j + j0]
             for i in range(n):
                 qdd[i] -= rj[i] * yj
+        if prescribed:   # τ = M_00 α − rhs_0 + Σ_j M_0j z̈_j with Δrhs = −g Δ and Δz̈ = −Y Δ
+            r0 = Rt[0]
+            lw = lawB if a == 0 else lawC
+            if a == 0:
+                g0 = lw[4] * (r0[0] - r0[2]) + lw[5] * (r0[1] - r0[3])
+            else:
+                g0 = lw[4] * (r0[6] - r0[4]) + lw[5] * ((r0[10] if shift else 0.0) - r0[5])
+            t = g0
+            for j in range(m):
+                t -= Mb0[0, j + 1] * Y[a, j]
+            dtau += t * dl[a]
     jb[3] = f0[0] + dl[0] if act[0] else jb[3]
     jc[3] = f0[1] + dl[1] if act[1] else jc[3]
+    return dtau
 
 
 @njit(cache=True)
