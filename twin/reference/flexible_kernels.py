@@ -245,6 +245,19 @@ def _eye_contact(P, qs, q, jo, fn0, ft0, eye, rb, a, b, Q):
 
 
 @njit(cache=True)
+def _normal_rows(Rt, nz, prescribed, pin_x, pin_y, eye_x, eye_y, nx, ny, g):
+    """g[j] = n·(R_pin − R_eye) over the independent coordinates (as :func:`normal_mobility`); returns their
+    number m."""
+    j0 = 1 if prescribed else 0
+    m = nz - j0
+    for j in range(m):
+        r = Rt[j + j0]
+        vy = r[pin_y] if pin_y >= 0 else 0.0
+        g[j] = nx * (r[pin_x] - r[eye_x]) + ny * (vy - r[eye_y])
+    return m
+
+
+@njit(cache=True)
 def normal_mobility(Rt, Mb, nz, prescribed, pin_x, pin_y, eye_x, eye_y, nx, ny, g, W):
     """1/m̂ [1/kg]: the relative normal acceleration of a clearance joint's pin (coordinates ``pin_x``, ``pin_y``;
     ``pin_y`` −1 if the pin cannot move along y) from its eye (``eye_x``, ``eye_y``) per newton of a contact force
@@ -252,11 +265,8 @@ def normal_mobility(Rt, Mb, nz, prescribed, pin_x, pin_y, eye_x, eye_y, nx, ny, 
     crank angle, a driving constraint, does not move). m̂ is the flexible model's effective mass along the
     normal (the rod's light housing, the chain behind it, the crank or the slider). ``g``, ``W`` scratch."""
     j0 = 1 if prescribed else 0
-    m = nz - j0
+    m = _normal_rows(Rt, nz, prescribed, pin_x, pin_y, eye_x, eye_y, nx, ny, g)
     for j in range(m):
-        r = Rt[j + j0]
-        vy = r[pin_y] if pin_y >= 0 else 0.0
-        g[j] = nx * (r[pin_x] - r[eye_x]) + ny * (vy - r[eye_y])
         W[j, :m] = Mb[j + j0, j0:nz]
     y = g[m:2 * m]
     y[:] = g[:m]
@@ -369,19 +379,6 @@ def law_terms(P, qs, qds, pin_b, cst, jo, out):
         fe, c = f1, 0.0
     vt = -ny * edx + nx * edy
     out[0], out[1], out[2], out[3], out[4], out[5] = fe, c, rate, vt * vt / d, nx, ny
-
-
-@njit(cache=True)
-def _normal_rows(Rt, nz, prescribed, pin_x, pin_y, eye_x, eye_y, nx, ny, g):
-    """g[j] = n·(R_pin − R_eye) over the independent coordinates (as :func:`normal_mobility`); returns their
-    number m."""
-    j0 = 1 if prescribed else 0
-    m = nz - j0
-    for j in range(m):
-        r = Rt[j + j0]
-        vy = r[pin_y] if pin_y >= 0 else 0.0
-        g[j] = nx * (r[pin_x] - r[eye_x]) + ny * (vy - r[eye_y])
-    return m
 
 
 @njit(cache=True)
