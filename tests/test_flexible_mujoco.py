@@ -232,30 +232,81 @@ def test_simulate_test6_flexible_runs_in_both_engines(engine, tmp_path, capsys):
     assert "structure: flexible, rod modes" in capsys.readouterr().out
     run = read_run(out)
     assert run.config.structure.mode == "flexible"
-    assert ("rod_deflection" in run.channels) == (engine == "mujoco")  # the group is the MuJoCo engine's
+    assert "rod_deflection" in run.channels   # --structure flexible adds the group, in both engines
     assert np.all(np.isfinite(run["AC4"]))
 
 
-@pytest.mark.long
-@pytest.mark.xfail(strict=True, reason=(
-    "known gap (analysis/results/structure/agreement.md): test 12's AC2 12.3 dB at 10 kHz, AC1 4.4 dB at 1.26 kHz "
-    "(the reference's step error at 1e-5 s: refining h it converges to MuJoCo's bands; its Nyquist ringing at B "
-    "is gone since the contact damping is bounded at m_hat/(2h)); test 6 within 1.65 dB (not 1); test 3's "
-    "AC5 2.2 dB at 10 kHz (MuJoCo's ideal C is a soft connect of time constant 2 steps: a likely cause, not "
-    "verified)"))
-@pytest.mark.parametrize("test", [3, 6, 12])
-def test_engines_agree_on_third_octave_band_energies(test):
-    """The issue's engine agreement: AC1-AC6 third-octave band energies, 100 Hz - 10 kHz, within 1 dB between
-    MuJoCo and the reference (0.6 s from rest, bands over t >= 0.2 s). Independent basis: the other engine."""
+def _worst_band_db(test: int, overrides: dict) -> tuple[float, dict]:
+    """The largest |10 log10(E_mujoco / E_reference)| over AC1-AC6 and the third-octave bands 100 Hz - 10 kHz
+    (0.6 s from rest, bands over t >= 0.2 s; analysis/structure_agreement.py), and the worst per sensor."""
     import sys
     from pathlib import Path
 
     sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "analysis"))
     from structure_agreement import agreement
 
-    per = agreement(test, 0.6, 0.2, {})
-    worst = max(max(abs(x) for x in v) for v in per.values())
-    assert worst <= 1.0, {k: round(max(abs(x) for x in v), 2) for k, v in per.items()}
+    per = agreement(test, 0.6, 0.2, overrides)
+    worst = {k: round(max(abs(x) for x in v), 2) for k, v in per.items()}
+    return max(worst.values()), worst
+
+
+@pytest.mark.long
+@pytest.mark.parametrize("test, timestep_s", [(6, None), (12, 2.5e-6)])
+def test_engines_agree_on_third_octave_band_energies(test, timestep_s):
+    """The issue's engine agreement, where it holds: AC1-AC6 third-octave band energies, 100 Hz - 10 kHz, within
+    1 dB between MuJoCo and the reference. Test 6 at the default step (measured 0.43 dB); test 12 (B and C) at
+    2.5e-6 s (measured 0.21 dB), where both engines' contact steps have converged. Independent basis: the other
+    engine."""
+    worst, per = _worst_band_db(test, {} if timestep_s is None else {"simulation.timestep_s": timestep_s})
+    assert worst <= 1.0, per
+
+
+@pytest.mark.long
+@pytest.mark.xfail(strict=True, reason=(
+    "known gaps (analysis/results/structure/agreement.md): test 3's AC5 2.2 dB at 10 kHz (1.4 dB at 2.5e-6 s): "
+    "MuJoCo's ideal C is a soft connect (solref 2e-5 s) where the reference's constraint is exact, and a stiffer "
+    "connect makes it worse (14.7 dB at 5e-6 s); test 12 at the default step 1.55 dB (AC5 at 1.6 kHz, AC3 at "
+    "2.5 kHz), the two engines' step errors (each converges to the other at 2.5e-6 s)"))
+@pytest.mark.parametrize("test", [3, 12])
+def test_engines_agree_on_third_octave_band_energies_at_the_default_step(test):
+    """The rest of the issue's agreement: tests 3 and 12 at the default step, within 1 dB in every band."""
+    worst, per = _worst_band_db(test, {})
+    assert worst <= 1.0, per
+
+
+@pytest.mark.long
+def test_structure_channels_mean_the_same_in_both_engines():
+    """The "structure" group (rod_stretch, rod_deflection, frame_x, frame_y, guide_y [m]) in both engines on the same
+    tap: test 12 started with the rod straight and unstretched and the supports unloaded, so gravity and the drive
+    strike the structure at t = 0 and it rings (the rod's mid-span swings by ~18 µm, the frame sags by ~2.4 µm).
+    Independent basis: the other engine's state (MuJoCo's site and joint sensors against the reference's natural
+    coordinates). Measured: every channel within 0.5 % of its peak (rod_stretch 0.44 %, the others <= 0.2 %)."""
+    import twin
+
+    runs = {}
+    for engine in ("mujoco", "reference"):
+        cfg = preset(12).replace(**{"structure.mode": "flexible", "simulation.duration_s": 0.05,
+                                    "simulation.engine": engine,
+                                    "sensors.channels": ["accel", "crank", "slider", "joints", "structure"]})
+        runs[engine] = twin.simulate(cfg)
+    mj, ref = runs["mujoco"], runs["reference"]
+    assert abs(ref["rod_stretch"][0]) < 1e-12 and abs(ref["rod_deflection"][0]) < 1e-12
+    assert np.max(np.abs(ref["rod_deflection"])) > 5e-6 and np.max(np.abs(ref["frame_y"])) > 1e-6
+    for name in ("rod_stretch", "rod_deflection", "frame_x", "frame_y", "guide_y"):
+        a, b = np.asarray(mj[name]), np.asarray(ref[name])
+        assert a.shape == b.shape
+        assert np.max(np.abs(a - b)) <= 0.01 * np.max(np.abs(b)), name
+
+
+@pytest.mark.long
+def test_stability_scenes_with_the_structure_drawn_pass_in_both_engines():
+    """Three scenes of the campaign with the structure drawn (short: 0.05-0.1 s), both engines: none diverges, none
+    creates energy (the balance with the structural dampers' dissipation counted)."""
+    from twin.studies.stability import StudySettings, run_study
+
+    res = run_study(StudySettings(scenes=3, seed=5, duration_range_s=(0.05, 0.1), structure=True))
+    assert res.summary["scenes"] == 6 and res.summary["diverged"] == 0
+    assert res.summary["energy_created"] == 0, res.summary
 
 
 def test_stability_campaign_draws_the_structure_without_changing_the_other_draws():
@@ -375,3 +426,23 @@ def test_view_draws_the_rod_bent_by_its_deflection(tmp_path):
     assert pts[0, :2] == pytest.approx([0.0, 0.0], abs=1e-12)
     assert pts[-1, 0] == pytest.approx(L + M * run["rod_stretch"][i], rel=1e-6)
     assert pts[ROD_LINE_POINTS // 2, 1] == pytest.approx(M * run["rod_deflection"][i], rel=1e-5)
+
+
+@pytest.mark.long
+def test_prescribed_crank_torque_and_contact_forces_agree_between_engines():
+    """Test 12 (B and C with clearance) with the prescribed crank, flexible, 0.3 s in both engines: the drive torque
+    (the driving constraint's multiplier, with the reference's θ-method contact damping counted in it) and the
+    contact forces at B and C agree (RMS of the difference over 0.1-0.3 s within 1 % of the RMS; measured 1e-4,
+    0.6e-4 and 0.8e-4). Independent basis: the other engine."""
+    import twin
+
+    runs = {}
+    for engine in ("mujoco", "reference"):
+        cfg = preset(12).replace(**{"structure.mode": "flexible", "simulation.duration_s": 0.3,
+                                    "simulation.engine": engine, "drive.mode": "prescribed",
+                                    "sensors.channels": ["accel", "crank", "joints", "drive"]})
+        runs[engine] = twin.simulate(cfg)
+    i0 = int(0.1 * runs["reference"].rate_hz)
+    for name in ("crank_torque", "fn_B", "fn_C"):
+        a, b = np.asarray(runs["mujoco"][name])[i0:], np.asarray(runs["reference"][name])[i0:]
+        assert np.sqrt(np.mean((a - b) ** 2)) <= 0.01 * np.sqrt(np.mean(b ** 2)), name

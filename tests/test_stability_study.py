@@ -10,6 +10,7 @@ import pytest
 from twin.channels import channel_specs
 from twin.cli import main
 from twin.config import CHANNEL_GROUPS, preset
+from twin.errors import ConfigError, TwinError
 from twin.simulation import simulate_run
 from twin.studies import stability as stability_study
 
@@ -197,3 +198,42 @@ def test_carried_restitution_inverts_each_hysteresis_law():
     assert stability_study.carried_restitution(preset(6).replace(**{"contact.law": "linear"})) is None
     # LN's χ is at most 3/4 (e -> 0): 1.3 x χ(0.4) = 0.82 is no restitution's damping
     assert stability_study.carried_restitution(preset(6).replace(**{"mujoco.contact_damping_scale": 1.3})) is None
+
+
+def test_a_campaign_in_parts_merges_to_the_whole(tmp_path):
+    """--first runs scenes first … first + N − 1 of the seed; merge_results joins consecutive parts of one commit
+    into the campaign run whole (the same rows and summary), and refuses a gap or parts of different commits."""
+    kw = dict(seed=2, duration_range_s=(0.05, 0.06))
+    whole = stability_study.run_study(stability_study.StudySettings(scenes=2, **kw), out=tmp_path / "whole")
+    for first in (0, 1):
+        stability_study.run_study(stability_study.StudySettings(scenes=1, first=first, **kw), out=tmp_path / f"p{first}")
+
+    def set_commit(part, commit):
+        p = tmp_path / part / "stability.json"
+        data = json.loads(p.read_text())
+        data["provenance"]["git_commit"] = commit
+        p.write_text(json.dumps(data))
+
+    set_commit("p0", "abc123")
+    set_commit("p1", "def456")
+    with pytest.raises(TwinError, match="different"):
+        stability_study.merge_results([tmp_path / "p0", tmp_path / "p1"], tmp_path / "m")
+    set_commit("p1", "abc123")
+    with pytest.raises(TwinError, match="missing"):   # a part twice: the scenes do not follow on
+        stability_study.merge_results([tmp_path / "p0", tmp_path / "p0"], tmp_path / "m")
+    merged = stability_study.merge_results([tmp_path / "p1", tmp_path / "p0"], tmp_path / "m")
+    drop = ("wall_s", "engine_wall_s")
+    assert {k: v for k, v in merged.summary.items() if k not in drop} == \
+        {k: v for k, v in whole.summary.items() if k not in drop}
+    assert [r["scene"] for r in merged.scenes] == [r["scene"] for r in whole.scenes]
+    assert merged.settings["parts"] == 2 and merged.settings["parts_commit"] == "abc123"
+    assert "first" not in merged.settings
+    assert json.loads((tmp_path / "m" / "stability.json").read_text())["provenance"]["twin_version"]
+
+
+@pytest.mark.parametrize("kw, field", [({"duration_range_s": (0.0, 1.0)}, "durations"),
+                                       ({"duration_range_s": (0.5, 0.2)}, "durations"),
+                                       ({"first": -1}, "first")])
+def test_settings_refuse_bad_durations_and_first(kw, field):
+    with pytest.raises(ConfigError, match=field):
+        stability_study.StudySettings(scenes=2, **kw)

@@ -285,10 +285,9 @@ def config_from_args(args: argparse.Namespace) -> BenchConfig:
                     raise ConfigError(f"--set {k}", f"does not apply to this command (it sets {r.rstrip('.')} "
                                                     "itself or does not use it)")
             ov[k] = v
-    if (_opt(args, "structure") == "flexible" and _opt(args, "channels") is None
-            and ov.get("simulation.engine", cfg.simulation.engine) == "mujoco"):
+    if _opt(args, "structure") == "flexible" and _opt(args, "channels") is None:
         groups = list(ov.get("sensors.channels", cfg.sensors.channels))
-        if "structure" not in groups:  # the flexible structure's channels (MuJoCo engine)
+        if "structure" not in groups:  # the flexible structure's channels (both engines)
             ov["sensors.channels"] = groups + ["structure"]
     if ov.get("drive.mode", cfg.drive.mode) == "torque":  # the torque drive follows its torque program, no speed
         # program: the configuration refuses drive.program/motor speed too; here the flag that set it is named

@@ -128,6 +128,12 @@ def register_stability(studies: argparse._SubParsersAction) -> None:
                         "its placeholders drawn over their documented ranges, in both engines (one row each)")
     p.add_argument("--family", choices=("bench", "spatial"), default="bench",
                    help="scene family: the bench's planar twin (default) or S002's spatial mechanism in both engines")
+    p.add_argument("--durations", nargs=2, type=float, metavar=("LO", "HI"),
+                   help="the scenes' simulated durations, uniform in [LO, HI] s (0 < LO <= HI; default 0.5-3.0 s, "
+                        "0.3-1.0 s with --quick)")
+    p.add_argument("--first", type=int, default=0, metavar="I",
+                   help="index of the first scene (default 0): a long campaign in parts, joined by "
+                        "twin.studies.stability.merge_results")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=_run_stability)
 
@@ -142,6 +148,10 @@ def _run_stability(args: argparse.Namespace) -> int:
                 else StudySettings(scenes=args.scenes, seed=args.seed, bench=args.bench))
     if args.family != "bench" or args.structure:
         settings = dataclasses.replace(settings, family=args.family, structure=args.structure)
+    if args.durations is not None:
+        settings = dataclasses.replace(settings, duration_range_s=tuple(args.durations))
+    if args.first:
+        settings = dataclasses.replace(settings, first=args.first)
     out = check_output_dir(args.out)
     res = run_study(settings, out=out, progress=not args.no_progress,
                     log=lambda m: print(m, file=sys.stderr, flush=True))

@@ -35,8 +35,9 @@ CHANNEL_GROUPS: tuple[str, ...] = ("accel", "encoder", "crank", "slider", "joint
 OPTIONAL_CHANNEL_GROUPS: tuple[str, ...] = ("energy", "motor", "drive_energy", "slider_accel", "structure")
 #: Every channel group, in canonical order (the defaults, then the optional ones).
 ALL_CHANNEL_GROUPS: tuple[str, ...] = CHANNEL_GROUPS + OPTIONAL_CHANNEL_GROUPS
-#: Optional channel groups that only some engines produce: group -> engines.
-ENGINE_ONLY_GROUPS: dict[str, tuple[str, ...]] = {"structure": ("mujoco",)}
+#: Optional channel groups that only some engines produce: group -> engines (none at present: "structure" is
+#: produced by both engines with the flexible structure).
+ENGINE_ONLY_GROUPS: dict[str, tuple[str, ...]] = {}
 #: Configuration names (they name default output files).
 _NAME_RE = re.compile(r"[A-Za-z0-9_+=@,-][A-Za-z0-9._+=@,-]*")
 #: Accelerometers of the bench (S003 Table 3).

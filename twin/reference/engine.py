@@ -277,6 +277,11 @@ class ReferenceEngine:
             cols["crank_torque"] = out[:, ref_model.O_TORQUE]
         if self._train is not None:
             cols.update(self._train.channels(out.shape[0]))
+        if self._flex is not None and "structure" in groups:
+            from twin.reference.flexible import O_STRUCT, STRUCTURE_CHANNELS
+
+            for k, name in enumerate(STRUCTURE_CHANNELS):
+                cols[name] = out[:, O_STRUCT + k]
         if self._flex is not None and "accel" in groups:   # the sensors on their mounts (one-way, exact)
             acc = self._flex.mounts.process(np.stack([cols[a] for a in ACCELEROMETERS], axis=1))
             for i, a in enumerate(ACCELEROMETERS):

@@ -290,6 +290,19 @@ def _eye_contact(P, qs, q, jo, fn0, ft0, eye, rb, a, b, Q):
 
 
 @njit(cache=True)
+def _normal_rows(Rt, nz, prescribed, pin_x, pin_y, eye_x, eye_y, nx, ny, g):
+    """g[j] = n·(R_pin − R_eye) over the independent coordinates (as :func:`normal_mobility`); returns their
+    number m."""
+    j0 = 1 if prescribed else 0
+    m = nz - j0
+    for j in range(m):
+        r = Rt[j + j0]
+        vy = r[pin_y] if pin_y >= 0 else 0.0
+        g[j] = nx * (r[pin_x] - r[eye_x]) + ny * (vy - r[eye_y])
+    return m
+
+
+@njit(cache=True)
 def normal_mobility(Rt, Mb, nz, prescribed, pin_x, pin_y, eye_x, eye_y, nx, ny, g, W):
     """1/m̂ [1/kg]: the relative normal acceleration of a clearance joint's pin (coordinates ``pin_x``, ``pin_y``;
     ``pin_y`` −1 if the pin cannot move along y) from its eye (``eye_x``, ``eye_y``) per newton of a contact force
@@ -297,11 +310,8 @@ def normal_mobility(Rt, Mb, nz, prescribed, pin_x, pin_y, eye_x, eye_y, nx, ny, 
     crank angle, a driving constraint, does not move). m̂ is the flexible model's effective mass along the
     normal (the rod's light housing, the chain behind it, the crank or the slider). ``g``, ``W`` scratch."""
     j0 = 1 if prescribed else 0
-    m = nz - j0
+    m = _normal_rows(Rt, nz, prescribed, pin_x, pin_y, eye_x, eye_y, nx, ny, g)
     for j in range(m):
-        r = Rt[j + j0]
-        vy = r[pin_y] if pin_y >= 0 else 0.0
-        g[j] = nx * (r[pin_x] - r[eye_x]) + ny * (vy - r[eye_y])
         W[j, :m] = Mb[j + j0, j0:nz]
     y = g[m:2 * m]
     y[:] = g[:m]
@@ -314,18 +324,26 @@ def normal_mobility(Rt, Mb, nz, prescribed, pin_x, pin_y, eye_x, eye_y, nx, ny, 
 
 
 @njit(cache=True)
-def _bound_damping(P, qs, qds, pin_b, cst, jo, mob, h, Q):
-    """Bound the contact law's damping at joint B (``pin_b``) or C at the dead-beat value m̂/(2h) (m̂ = 1/``mob``,
-    :func:`normal_mobility`; h the step), as the MuJoCo engine's force source does: the law's damping c (its
-    force at unit approach rate less its elastic force) beyond m̂/(2h) is scaled to it — the law evaluated at the
-    rate δ̇ m̂/(2 h c) — and the friction follows the new normal force. An explicit damping c acting on the mass
-    m̂ decays the rate by 1 − c h/m̂ per step: beyond 2m̂/h it diverges, beyond m̂/h it alternates (the step's
-    Nyquist ringing); at m̂/(2h) the rate halves each step. The element's forces (``jo`` [3:5], which it applied
-    to ``Q`` on both bodies) are replaced in ``jo`` and on the pin's side of ``Q`` (the crank, or the slider); the
-    rod's side is :func:`_eye_contact`'s. Returns the element's (f_N, f_T)."""
+def _bound_damping(P, qs, qds, pin_b, cst, jo, mob, h, w_eye, Q):
+    """The contact law and friction of clearance joint B (``pin_b``) or C on the flexible rod: the element of the
+    rigid model (:func:`twin.reference.model._joint`) evaluated them for a rigid rod; two things differ here.
+
+    * The eye's spin: the bore turns with its housing, which turns with the rod's end segment (no hinge at the
+      rod's end nodes), at ``w_eye`` [rad/s] (:func:`_seg_angle_rate` of the end segment), not with the chord
+      B'–C as the element assumes; the friction's sliding speed takes it (as the MuJoCo engine's native module,
+      which reads the housing body's own velocity).
+    * The law's damping is bounded at the dead-beat value m̂/(2h) (m̂ = 1/``mob``, :func:`normal_mobility`; h the
+      step), as the MuJoCo engine's force source does: the law's damping c (its force at unit approach rate less
+      its elastic force) beyond m̂/(2h) is scaled to it — the law evaluated at the rate δ̇ m̂/(2 h c). An explicit
+      damping c acting on the mass m̂ decays the rate by 1 − c h/m̂ per step: beyond 2m̂/h it diverges, beyond
+      m̂/h it alternates (the step's Nyquist ringing); at m̂/(2h) the rate halves each step.
+
+    The friction is evaluated from the (possibly bounded) normal force and that sliding speed. The element's forces
+    (``jo`` [3:5], which it applied to ``Q`` on both bodies) are replaced in ``jo`` and on the pin's side of ``Q``
+    (the crank, or the slider); the rod's side is :func:`_eye_contact`'s. Returns the element's (f_N, f_T)."""
     fn0, ft0 = jo[3], jo[4]
     delta = jo[2]
-    if not (delta > 0.0 and mob > 0.0):
+    if not delta > 0.0:
         return fn0, ft0
     if pin_b:
         edx, edy = qds[0] - qds[2], qds[1] - qds[3]
@@ -337,18 +355,17 @@ def _bound_damping(P, qs, qds, pin_b, cst, jo, mob, h, Q):
     ex, ey = jo[0], jo[1]
     d = math.sqrt(ex * ex + ey * ey)
     nx, ny = (ex / d, ey / d) if d > 0.0 else (1.0, 0.0)
-    code = int(P[P_LAW])
-    fe = normal_force(code, delta, 0.0, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX])
-    c = normal_force(code, delta, 1.0, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX]) - fe
-    cmax = 0.5 / (h * mob)
-    if not c > cmax:
-        return fn0, ft0
-    rate = (nx * edx + ny * edy) * (cmax / c)
-    fn = normal_force(code, delta, rate, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX])
+    fn = fn0
+    if mob > 0.0:
+        code = int(P[P_LAW])
+        fe = normal_force(code, delta, 0.0, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX])
+        c = normal_force(code, delta, 1.0, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX]) - fe
+        cmax = 0.5 / (h * mob)
+        if c > cmax:
+            rate = (nx * edx + ny * edy) * (cmax / c)
+            fn = normal_force(code, delta, rate, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX])
     tx, ty = -ny, nx
-    ux, uy = qs[4] - qs[2], qs[5] - qs[3]
-    w2 = (ux * (qds[5] - qds[3]) - uy * (qds[4] - qds[2])) / (ux * ux + uy * uy)
-    vt = edx * tx + edy * ty - w2 * rb
+    vt = edx * tx + edy * ty - w_eye * rb
     if pin_b:
         vt += qds[7] * P[P_RPIN_B]
     if fn <= 0.0:
@@ -357,6 +374,8 @@ def _bound_damping(P, qs, qds, pin_b, cst, jo, mob, h, Q):
         ft = adams_friction_force(vt, fn, P[P_MUS], P[P_MU0], P[P_VS], P[P_VD])
     else:
         ft = friction_force(vt, fn, P[P_MU0], P[P_V0], P[P_V1])
+    if fn == fn0 and ft == ft0:
+        return fn0, ft0
     dfx = -(fn - fn0) * nx + (ft - ft0) * tx   # the change of the force on the pin
     dfy = -(fn - fn0) * ny + (ft - ft0) * ty
     if pin_b:
@@ -374,9 +393,152 @@ def _bound_damping(P, qs, qds, pin_b, cst, jo, mob, h, Q):
 
 
 @njit(cache=True)
+def law_terms(P, qs, qds, pin_b, cst, jo, out):
+    """The contact law of clearance joint B (``pin_b``) or C at the step's state, for :func:`theta_damping`:
+    ``out`` = [F_e, c, δ̇, b, n_x, n_y] with the law's force F_e + c δ̇ (F_e its elastic part, c its damping
+    coefficient, both 0 out of contact; in the clamped branch of a hysteresis law c = 0), δ̇ the approach rate and
+    b = |ė_⊥|²/|e| the part of δ̈ that the pin's sliding along the bore's curve adds to n·ë."""
+    for i in range(6):
+        out[i] = 0.0
+    delta = jo[2]
+    if not delta > 0.0:
+        return
+    if pin_b:
+        edx, edy = qds[0] - qds[2], qds[1] - qds[3]
+        K, clin = P[P_K_B], P[P_CLIN_B]
+    else:
+        edx = qds[6] - qds[4]
+        edy = (qds[10] - qds[5]) if P[P_CLR_G] > 0.5 else -qds[5]
+        K, clin = P[P_K_C], P[P_CLIN_C]
+    ex, ey = jo[0], jo[1]
+    d = math.sqrt(ex * ex + ey * ey)
+    if not d > 0.0:
+        return
+    nx, ny = ex / d, ey / d
+    rate = nx * edx + ny * edy
+    code = int(P[P_LAW])
+    fe = normal_force(code, delta, 0.0, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX])
+    f1 = normal_force(code, delta, rate, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX])
+    c = normal_force(code, delta, 1.0, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX]) - fe
+    if c > 0.0 and abs(f1 - (fe + c * rate)) > 1e-9 * (abs(f1) + abs(fe) + 1e-300):   # clamped: no rate term
+        fe, c = f1, 0.0
+    vt = -ny * edx + nx * edy
+    out[0], out[1], out[2], out[3], out[4], out[5] = fe, c, rate, vt * vt / d, nx, ny
+
+
+@njit(cache=True)
+def theta_damping(h, qdd, Rt, Mb0, nz, prescribed, lawB, lawC, fB, fC, shift, jb, jc):
+    """The contact laws' damping at B and C by the θ-method, as the MuJoCo engine's contact rows integrate it
+    (``mujoco.contact_source = "law"``, ``_bore.c``): the normal force f = F_e + c [(1 − θ) δ̇ + θ δ̇_end], the
+    elastic part explicit, δ̇_end = δ̇ + h δ̈ the rate at the step's end, θ = ½ (trapezoidal) while c h ≤ 2 m̂ and
+    θ = 1 − m̂/(c h) beyond (m̂ the pair's effective mass along the normal), so the large damping of a resting
+    contact needs no step limit. ``qdd`` holds the accelerations with the explicit normal forces ``fB``, ``fC``
+    (0: not in contact) applied; the forces' change is solved with the pairs' mobilities (both joints together,
+    the same Rᵀ M R ``Mb0``, unfactored) and its accelerations added to ``qdd``; jb[3], jc[3] take the forces.
+    ``lawB``, ``lawC``: :func:`law_terms`. The friction keeps the explicit force's (MuJoCo's native friction is
+    likewise a passive force evaluated before the solve). Returns the change of the drive torque with ``prescribed``
+    (the driving constraint's multiplier, as :func:`flex_solve_acc` computes it), else 0."""
+    j0 = 1 if prescribed else 0
+    m = nz - j0
+    act = np.zeros(2, dtype=np.bool_)
+    act[0] = fB > 0.0 and lawB[1] > 0.0
+    act[1] = fC > 0.0 and lawC[1] > 0.0
+    if not (act[0] or act[1]):
+        return 0.0
+    g = np.zeros((2, m))
+    if act[0]:
+        _normal_rows(Rt, nz, prescribed, 0, 1, 2, 3, lawB[4], lawB[5], g[0])
+    if act[1]:
+        _normal_rows(Rt, nz, prescribed, 6, 10 if shift else -1, 4, 5, lawC[4], lawC[5], g[1])
+    # Y = (Rᵀ M R)⁻¹ gᵀ, W = g Y (the 2 × 2 mobility matrix)
+    W = np.empty((m, m))
+    for i in range(m):
+        for j in range(m):
+            W[i, j] = Mb0[i + j0, j + j0]
+    Y = np.zeros((2, m))
+    for k in range(2):
+        if act[k]:
+            y = g[k].copy()
+            Lk = W.copy()
+            if not _cholesky_solve(Lk, y, m):
+                return 0.0
+            Y[k] = y
+    Wm = np.zeros((2, 2))
+    for a in range(2):
+        for b in range(2):
+            if act[a] and act[b]:
+                acc = 0.0
+                for j in range(m):
+                    acc += g[a, j] * Y[b, j]
+                Wm[a, b] = acc
+    # the rows' accelerations now: a_n = n·ë (from qdd), and the right-hand sides
+    f0 = np.array([fB, fC])
+    law = (lawB, lawC)
+    A = np.zeros((2, 2))
+    r = np.zeros(2)
+    for a in range(2):
+        if not act[a]:
+            A[a, a] = 1.0
+            continue
+        lw = law[a]
+        nx, ny = lw[4], lw[5]
+        if a == 0:
+            an = nx * (qdd[0] - qdd[2]) + ny * (qdd[1] - qdd[3])
+        else:
+            an = nx * (qdd[6] - qdd[4]) + ny * ((qdd[10] if shift else 0.0) - qdd[5])
+        fe, c, rate, bb = lw[0], lw[1], lw[2], lw[3]
+        ch = c * h
+        mhat = 1.0 / Wm[a, a] if Wm[a, a] > 0.0 else 0.0
+        theta = 0.5 if ch <= 2.0 * mhat else 1.0 - mhat / ch
+        # f = fe + c rate + θ c h (an + bb − Σ_b W_ab (f_b − f0_b)): unknowns Δ_b = f_b − f0_b
+        r[a] = fe + c * rate + theta * ch * (an + bb) - f0[a]
+        A[a, a] = 1.0
+        for b in range(2):
+            if act[b]:
+                A[a, b] += theta * ch * Wm[a, b]
+    dl = np.zeros(2)
+    det = A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]
+    dl[0] = (r[0] * A[1, 1] - A[0, 1] * r[1]) / det
+    dl[1] = (A[0, 0] * r[1] - A[1, 0] * r[0]) / det
+    for a in range(2):   # a pulling force leaves its row inactive (f = 0); the other row solved with that known
+        if act[a] and f0[a] + dl[a] < 0.0:
+            o = 1 - a
+            dl[a] = -f0[a]
+            if act[o]:
+                dl[o] = (r[o] - A[o, a] * dl[a]) / A[o, o]
+                if f0[o] + dl[o] < 0.0:
+                    dl[o] = -f0[o]
+            break
+    n = qdd.shape[0]
+    dtau = 0.0
+    for a in range(2):
+        if not act[a] or dl[a] == 0.0:
+            continue
+        for j in range(m):   # q̈ += −Δ R y: the separating pair (pin along −n, eye along +n)
+            yj = Y[a, j] * dl[a]
+            rj = Rt[j + j0]
+            for i in range(n):
+                qdd[i] -= rj[i] * yj
+        if prescribed:   # τ = M_00 α − rhs_0 + Σ_j M_0j z̈_j with Δrhs = −g Δ and Δz̈ = −Y Δ
+            r0 = Rt[0]
+            lw = lawB if a == 0 else lawC
+            if a == 0:
+                g0 = lw[4] * (r0[0] - r0[2]) + lw[5] * (r0[1] - r0[3])
+            else:
+                g0 = lw[4] * (r0[6] - r0[4]) + lw[5] * ((r0[10] if shift else 0.0) - r0[5])
+            t = g0
+            for j in range(m):
+                t -= Mb0[0, j + 1] * Y[a, j]
+            dtau += t * dl[a]
+    jb[3] = f0[0] + dl[0] if act[0] else jb[3]
+    jc[3] = f0[1] + dl[1] if act[1] else jc[3]
+    return dtau
+
+
+@njit(cache=True)
 def chain_forces(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G, Q):
-    """Add the chain's gravity, hinges and slides and the supports' springs and dampers to Q; returns the power
-    the dampers dissipate [W] (≥ 0)."""
+    """Add the chain's gravity, hinges and slides and the supports' springs, dampers and weights to Q; returns the
+    power the dampers dissipate [W] (≥ 0)."""
     gx, gy = P[P_GX], P[P_GY]
     for j in range(segs.shape[0]):
         a, b = segs[j, 0], segs[j, 1]
@@ -411,10 +573,12 @@ def chain_forces(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G, Q):
         Q[c + 1] += f * ey
         Q[p] -= f * ex
         Q[p + 1] -= f * ey
-    if G[G_FLEX_A] > 0.5:
+    if G[G_FLEX_A] > 0.5:   # the frame's spring and damper, and the frame's own weight (its mass moves with A')
         for i in (8, 9):
             Q[i] += -G[G_KF] * q[i] - G[G_CF] * qd[i]
             diss += G[G_CF] * qd[i] * qd[i]
+        Q[8] += G[G_MF] * gx
+        Q[9] += G[G_MF] * gy
     if G[G_FLEX_G] > 0.5:
         Q[10] += -G[G_KG] * q[10] - G[G_CG] * qd[10] + (P[P_M3] + G[G_MG]) * gy
         diss += G[G_CG] * qd[10] * qd[10]
@@ -452,7 +616,7 @@ def flex_energy(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G):
         d = ((q[c] - q[p]) * wx + (q[c + 1] - q[p + 1]) * wy) / wn
         V += 0.5 * slide_f[k, 0] * d * d
     if G[G_FLEX_A] > 0.5:
-        V += 0.5 * G[G_KF] * (q[8] * q[8] + q[9] * q[9])
+        V += 0.5 * G[G_KF] * (q[8] * q[8] + q[9] * q[9]) - G[G_MF] * (gx * q[8] + gy * q[9])
     if G[G_FLEX_G] > 0.5:
         V += 0.5 * G[G_KG] * q[10] * q[10] - (P[P_M3] + G[G_MG]) * gy * q[10]
     return T, V

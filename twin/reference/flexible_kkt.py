@@ -409,3 +409,106 @@ def kkt_accelerations(q, Q, crow, pat, pn, PhiV, gam, Minv, cols, cn, Y, W, qdd,
         if crow[r] == 7:
             mu = lam[r]
     return mu
+
+
+@njit(cache=True)
+def _kkt_response(Minv, Y, W, m, pin_x, pin_y, eye_x, eye_y, nx, ny, z, v):
+    """The constrained response to a unit normal force: z = N Jᵀ (n), J = n·(pin − eye) as in :func:`kkt_mobility`,
+    and v = W⁻¹ Φ_c M̃⁻¹ Jᵀ (m, the constraint multipliers' change per unit force along −Jᵀ is −v)."""
+    n = z.shape[0]
+    nj = 4 if pin_y >= 0 else 3
+    jc = (pin_x, eye_x, eye_y, pin_y if pin_y >= 0 else pin_x)
+    jv = (nx, -nx, -ny, ny)
+    for i in range(n):   # M̃⁻¹ Jᵀ (M̃⁻¹ symmetric: its columns jc)
+        acc = 0.0
+        for a in range(nj):
+            acc += Minv[i, jc[a]] * jv[a]
+        z[i] = acc
+    for r in range(m):   # Φ_c M̃⁻¹ Jᵀ = Y[r, :] · Jᵀ, then W⁻¹ of it
+        acc = 0.0
+        for a in range(nj):
+            acc += Y[r, jc[a]] * jv[a]
+        v[r] = acc
+    _chol_solve(W, m, v)
+    for r in range(m):   # z = M̃⁻¹ Jᵀ − Yᵀ W⁻¹ Φ_c M̃⁻¹ Jᵀ
+        vr = v[r]
+        Yr = Y[r]
+        for i in range(n):
+            z[i] -= Yr[i] * vr
+
+
+@njit(cache=True)
+def kkt_theta_damping(h, qdd, Minv, Y, W, m, crow, lawB, lawC, fB, fC, shift, jb, jc, z, v):
+    """The contact laws' damping at B and C by the θ-method after :func:`kkt_accelerations` (the sparse form of
+    :func:`twin.reference.flexible_kernels.theta_damping`, which states the method and is its check): the normal
+    force f = F_e + c [(1 − θ) δ̇ + θ δ̇_end], θ = ½ while c h ≤ 2 m̂ and 1 − m̂/(c h) beyond; the forces' change Δ
+    solved with the pairs' mobilities W_ab = J_a N J_bᵀ (both joints together), q̈ −= Σ Δ_a N J_aᵀ; jb[3], jc[3] take
+    the forces. ``lawB``, ``lawC``: :func:`twin.reference.flexible_kernels.law_terms`; ``z`` (2 × n), ``v`` (2 × m)
+    scratch. Returns the change of the drive torque −λ₇ where θ's row is a constraint (the prescribed crank), else 0."""
+    act0 = fB > 0.0 and lawB[1] > 0.0
+    act1 = fC > 0.0 and lawC[1] > 0.0
+    if not (act0 or act1):
+        return 0.0
+    pins = ((0, 1, 2, 3), (6, 10 if shift else -1, 4, 5))
+    act = (act0, act1)
+    for a in range(2):
+        if act[a]:
+            lw = lawB if a == 0 else lawC
+            p = pins[a]
+            _kkt_response(Minv, Y, W, m, p[0], p[1], p[2], p[3], lw[4], lw[5], z[a], v[a])
+    Wm = np.zeros((2, 2))
+    for a in range(2):
+        for b in range(2):
+            if act[a] and act[b]:   # J_a z_b
+                lw = lawB if a == 0 else lawC
+                p = pins[a]
+                nx, ny = lw[4], lw[5]
+                Wm[a, b] = nx * (z[b, p[0]] - z[b, p[2]]) + ny * ((z[b, p[1]] if p[1] >= 0 else 0.0) - z[b, p[3]])
+    f0 = (fB, fC)
+    A = np.zeros((2, 2))
+    r = np.zeros(2)
+    for a in range(2):
+        if not act[a]:
+            A[a, a] = 1.0
+            continue
+        lw = lawB if a == 0 else lawC
+        p = pins[a]
+        nx, ny = lw[4], lw[5]
+        an = nx * (qdd[p[0]] - qdd[p[2]]) + ny * ((qdd[p[1]] if p[1] >= 0 else 0.0) - qdd[p[3]])
+        fe, c, rate, bb = lw[0], lw[1], lw[2], lw[3]
+        ch = c * h
+        mhat = 1.0 / Wm[a, a] if Wm[a, a] > 0.0 else 0.0
+        theta = 0.5 if ch <= 2.0 * mhat else 1.0 - mhat / ch
+        r[a] = fe + c * rate + theta * ch * (an + bb) - f0[a]
+        A[a, a] = 1.0
+        for b in range(2):
+            if act[b]:
+                A[a, b] += theta * ch * Wm[a, b]
+    dl = np.zeros(2)
+    det = A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]
+    dl[0] = (r[0] * A[1, 1] - A[0, 1] * r[1]) / det
+    dl[1] = (A[0, 0] * r[1] - A[1, 0] * r[0]) / det
+    for a in range(2):   # a pulling force leaves its row inactive (f = 0); the other row solved with that known
+        if act[a] and f0[a] + dl[a] < 0.0:
+            o = 1 - a
+            dl[a] = -f0[a]
+            if act[o]:
+                dl[o] = (r[o] - A[o, a] * dl[a]) / A[o, o]
+                if f0[o] + dl[o] < 0.0:
+                    dl[o] = -f0[o]
+            break
+    n = qdd.shape[0]
+    dtau = 0.0
+    for a in range(2):
+        if not act[a] or dl[a] == 0.0:
+            continue
+        for i in range(n):   # the separating pair: the force's change −Δ Jᵀ
+            qdd[i] -= z[a, i] * dl[a]
+        for k in range(m):   # λ changes by −Δ v; the torque −λ₇ by +Δ v₇
+            if crow[k] == 7:
+                dtau += v[a, k] * dl[a]
+    if act0:
+        jb[3] = f0[0] + dl[0]
+    if act1:
+        jc[3] = f0[1] + dl[1]
+    return dtau

@@ -126,6 +126,8 @@ class StudySettings:
             drawn uniformly over their documented ranges (:data:`twin.config.structure.EXPLORE_RANGES`) from the
             scene's own generator ``default_rng([seed, index, 43])`` (the other draws stay those of the rigid
             campaign), and run in both engines (one row each).
+        first: index of the first scene (≥ 0): the campaign runs scenes ``first`` … ``first + scenes − 1`` of its
+            seed, so a long campaign can run in parts (:func:`merge_results` joins them).
     """
 
     scenes: int = 500
@@ -134,6 +136,7 @@ class StudySettings:
     bench: bool = False
     family: str = "bench"
     structure: bool = False
+    first: int = 0
 
     def __post_init__(self) -> None:
         if isinstance(self.scenes, bool) or not isinstance(self.scenes, int) or self.scenes < 1:
@@ -142,6 +145,13 @@ class StudySettings:
             raise ConfigError("seed", f"must be an integer >= 0, got {self.seed!r}")
         if self.family not in ("bench", "spatial"):
             raise ConfigError("family", f"must be bench or spatial, got {self.family!r}")
+        if isinstance(self.first, bool) or not isinstance(self.first, int) or self.first < 0:
+            raise ConfigError("first", f"must be an integer >= 0, got {self.first!r}")
+        lo, hi = (tuple(self.duration_range_s) + (None, None))[:2]
+        if (len(self.duration_range_s) != 2 or not all(isinstance(x, (int, float)) and math.isfinite(x)
+                                                       for x in (lo, hi)) or not 0 < lo <= hi):
+            raise ConfigError("durations", "must be two numbers LO HI with 0 < LO <= HI [s], got "
+                              f"{list(self.duration_range_s)!r}")
         if self.structure and (self.bench or self.family != "bench"):
             raise ConfigError("structure", "draws the flexible structure on the planar twin's plain scenes; it "
                               "cannot be combined with bench (guide clearance and motor drive are not available "
@@ -499,14 +509,17 @@ def run_study(settings: StudySettings, *, out: str | Path | None = None, progres
     """Run the campaign of ``settings``; write ``stability.json``, ``stability.md`` and
     ``stability.png`` to the folder ``out`` when given; ``progress``: a progress bar on stderr;
     ``log``: receives one line per failed scene."""
+    from twin.provenance import git_commit
+
+    git_commit()   # the stamp names the code that ran (taken now, cached), not the tree when the run ends
     run_one = run_scene
     if settings.family == "spatial":
         from twin.studies.spatial_stability import run_scene as run_one, sample_scene as sample_spatial  # noqa: F811
 
-        scenes = [sample_spatial(settings.seed, i, settings.duration_range_s) for i in range(settings.scenes)]
+        scenes = [sample_spatial(settings.seed, i, settings.duration_range_s) for i in _indices(settings)]
     else:
         scenes = [sample_scene(settings.seed, i, settings.duration_range_s, settings.bench, settings.structure)
-                  for i in range(settings.scenes)]
+                  for i in _indices(settings)]
         if settings.bench or settings.structure:  # every bench or structure scene in both engines: one row each
             scenes = [{**sc, "engine": e} for sc in scenes for e in ENGINES]
     rows = []
@@ -527,17 +540,62 @@ def run_study(settings: StudySettings, *, out: str | Path | None = None, progres
     finally:
         if bar is not None:
             bar.close()
-    kept = {k: v for k, v in asdict(settings).items() if k != "structure" or v}  # rigid campaigns: as before
+    # rigid campaigns from scene 0: the settings as before
+    kept = {k: v for k, v in asdict(settings).items() if k not in ("structure", "first") or v}
     res = StabilityResult({**kept, "pen_limit": PEN_LIMIT, "energy_tol": ENERGY_TOL},
                           summarize(rows, time.perf_counter() - t0), rows)
     if out is not None:
         out = Path(out)
         out.mkdir(exist_ok=True)
-        res = replace(res, figures=(_figure(out, rows),))
-        data = res.to_dict()
-        atomic_write_json(out / "stability.json", _jsonable(data))
-        atomic_write_text(out / "stability.md", markdown(data))
+        res = _write(res, out)
     return res
+
+
+def _indices(settings: StudySettings) -> range:
+    return range(settings.first, settings.first + settings.scenes)
+
+
+def _write(res: StabilityResult, out: Path) -> StabilityResult:
+    """Write ``stability.json`` (stamped), ``stability.md`` and ``stability.png`` of ``res`` into the folder ``out``."""
+    from twin.provenance import stamped, with_stamp_line
+
+    out.mkdir(exist_ok=True)
+    res = replace(res, figures=(_figure(out, res.scenes),))
+    data = res.to_dict()
+    atomic_write_json(out / "stability.json", _jsonable(stamped(data)))
+    atomic_write_text(out / "stability.md", with_stamp_line(markdown(data)))
+    return res
+
+
+def merge_results(parts: list[str | Path], out: str | Path) -> StabilityResult:
+    """Join the ``stability.json`` of campaigns run in parts (the same seed, durations and draws; consecutive
+    ``first`` … ranges, :attr:`StudySettings.first`) into one campaign written to ``out``. The parts' provenance must
+    name one commit (the same code ran every part); a part of other settings or a gap in the scenes is refused."""
+    import json
+
+    datas = [json.loads((Path(p) / "stability.json").read_text()) for p in parts]
+    datas.sort(key=lambda d: d["settings"].get("first", 0))
+    commits = {d.get("provenance", {}).get("git_commit") for d in datas}
+    if len(commits) != 1 or None in commits or any(str(c).endswith("-dirty") for c in commits):
+        raise TwinError(f"stability parts: ran from different or unrecorded commits {sorted(map(str, commits))}")
+    base = {k: v for k, v in datas[0]["settings"].items() if k not in ("scenes", "first")}
+    nxt = datas[0]["settings"].get("first", 0)
+    for d in datas:
+        st = d["settings"]
+        if {k: v for k, v in st.items() if k not in ("scenes", "first")} != base:
+            raise TwinError(f"stability parts: settings differ ({st} against {base})")
+        if st.get("first", 0) != nxt:
+            raise TwinError(f"stability parts: scenes from {nxt} missing (a part starts at {st.get('first', 0)})")
+        nxt += st["scenes"]
+    rows = [r for d in datas for r in d["scenes"]]
+    for r in rows:   # JSON wrote non-finite floats as null
+        r["metrics"] = {k: float("nan") if v is None and k == "max_pen_over_c" else v for k, v in r["metrics"].items()}
+    first = datas[0]["settings"].get("first", 0)
+    settings = {**base, "scenes": nxt - first, **({"first": first} if first else {}),
+                "parts": len(datas), "parts_commit": commits.pop()}
+    wall = sum(d["summary"].get("wall_s", 0.0) for d in datas)
+    res = StabilityResult(settings, summarize(rows, wall), rows)
+    return _write(res, Path(out))
 
 
 def _jsonable(o: Any) -> Any:
