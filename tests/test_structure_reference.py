@@ -255,7 +255,9 @@ def test_sparse_constraint_force_solve_equals_the_r_matrix_solve(test_id, chain,
     """The step's sparse solve (twin.reference.flexible_kkt: Lagrange multipliers, block-diagonal M̃) against the
     dense R-matrix one (flex_mass, flex_solve_acc, normal_mobility: Rᵀ M R z̈ = Rᵀ (Q − M Ṙż)) on random
     configurations near a running pose (coordinates moved off the constraint manifold, random velocities and
-    forces): the same q̈, drive torque of the prescribed crank and contact mobilities at B and C to round-off.
+    forces): the same q̈, drive torque of the prescribed crank and contact mobilities at B and C to round-off, and
+    the same change of q̈, contact forces and drive torque by the contact damping's θ-method (kkt_theta_damping
+    against theta_damping).
     Independent basis: the two are different algebra for the same equations (Gauss's principle), the R matrix
     a basis of the allowed motions, the multipliers its complement. Chains (rod_segments, rod_axial_groups): the
     default, one axial group of 16 segments (a 17-point mass block), a slide at every node."""
@@ -307,6 +309,22 @@ def test_sparse_constraint_force_solve_equals_the_r_matrix_solve(test_id, chain,
         if prescribed:
             assert qdd2[7] == pytest.approx(alpha, rel=1e-12)
             assert -mu == pytest.approx(tau[0], rel=1e-9, abs=1e-9 * np.max(np.abs(Q)))
+        # the contact damping's θ-method after the solve: the sparse form against the R-matrix one, the joints with a
+        # clearance in contact, B's damping trapezoidal (c h ≤ 2 m̂) and C's beyond it (θ = 1 − m̂/(c h))
+        fB = 120.0 if cfg.joints.clearance_b_mm > 0 else 0.0
+        lawB = np.array([100.0, 5e3, 0.01, 0.5, 0.6, 0.8])
+        lawC = np.array([80.0, 3e7, -0.02, -0.3, 0.8, -0.6])
+        jb1, jc1, jb2, jc2 = np.zeros(6), np.zeros(6), np.zeros(6), np.zeros(6)
+        q1, q2 = qdd.copy(), qdd2.copy()
+        d1 = F.theta_damping(1e-5, q1, Rt, Mb, nz, prescribed, lawB, lawC, fB, 90.0, False, jb1, jc1)
+        d2 = KK.kkt_theta_damping(1e-5, q2, kk.Minv, Y, W, m, kk.crow, lawB, lawC, fB, 90.0, False, jb2, jc2,
+                                  np.empty((2, n)), np.empty((2, m)))
+        assert jc1[3] != 90.0 and (fB == 0.0 or jb1[3] != fB)   # the method changed the forces in contact
+        assert (jb2[3], jc2[3]) == pytest.approx((jb1[3], jc1[3]), rel=1e-9)
+        assert np.max(np.abs(q2 - q1)) <= 1e-9 * np.max(np.abs(q1)), np.max(np.abs(q2 - q1))
+        assert d2 == pytest.approx(d1, rel=1e-8, abs=1e-12 * max(1.0, abs(d1)))
+        if not prescribed:
+            assert d1 == 0.0 and d2 == 0.0
 
 
 def test_chain_block_solve_equals_a_dense_solve_for_every_chain():
