@@ -1,0 +1,117 @@
+"""Approximate warm starts (twin.warm_approx): the grouping, the state carried over, the first member's
+exactness, and the stated approximation — the identification's features of a switched run differ from its
+fresh run's by less than two fresh runs of one configuration differ (another noise seed and start angle)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from twin.config import preset
+from twin.simulation import Collector, make_engine, run_chunks, simulate
+from twin.warm_approx import (ApproxWarmError, approx_groups, approx_key, compare_case, eligible, read_state,
+                              set_state, simulate_approx, valid_from_s)
+
+
+def _bench(duration: float = 0.5, **ov):
+    """Table 4 test 1 as the nuisance spec's base (pid drive, constant program, ramp 0.3 s), B and C faulty."""
+    base = {"simulation.duration_s": duration, "drive.ramp_s": 0.3, "drive.program": "constant",
+            "drive.motor_rpm": 800.0, "joints.clearance_b_mm": 0.2, "joints.clearance_c_mm": 0.3,
+            "joints.allow_noncatalogue": True, "mujoco.contact_source": "force",
+            "sensors.channels": ["accel", "encoder"]}
+    base.update(ov)
+    return preset(1).replace(**base)
+
+
+def test_groups_ignore_the_switched_fields_only():
+    a = _bench()
+    b = a.replace(**{"joints.clearance_b_mm": 0.05, "contact.restitution": 0.35, "contact.mu0": 0.03,
+                     "mechanism.guide_friction_n": 5.0, "drive.initial_encoder_angle_rad": 2.0,
+                     "drive.ripple_pct": [2.0], "drive.ripple_phase_rad": [1.0], "instrumentation.seed": 9})
+    assert approx_key(a) == approx_key(b)
+    # what decides the spin-up's mechanism state keeps runs apart
+    for ov in ({"drive.motor_rpm": 500.0}, {"mechanism.orientation": "x"}, {"joints.clearance_c_mm": 0.0},
+               {"simulation.timestep_s": 5e-6}):
+        assert approx_key(a.replace(**ov)) != approx_key(a), ov
+    assert approx_groups([a, a.replace(**{"drive.motor_rpm": 500.0}), b]) == [[0, 2], [1]]
+    # runs the approximation does not cover run alone
+    motor = a.replace(**{"drive.mode": "motor"})
+    assert not eligible(motor) and not eligible(a.replace(**{"simulation.engine": "reference"}))
+    assert approx_groups([motor, motor]) == [[0], [1]]
+    with pytest.raises(ApproxWarmError):
+        simulate_approx([motor, motor], [[], []])
+
+
+def test_switch_time_must_follow_the_ramp():
+    a = _bench()
+    with pytest.raises(ApproxWarmError, match="switch_s"):
+        simulate_approx([a, a], [[], []], switch_s=0.1)
+
+
+def test_valid_from_s_reads_the_file_metadata():
+    assert valid_from_s({}) == 0.0
+    assert valid_from_s({"warm_start": {"valid_from_s": 0.45}}) == 0.45
+    assert valid_from_s({"warm_start": '{"valid_from_s": 0.5}'}) == 0.5
+    assert valid_from_s({"warm_start": {"valid_from_s": float("nan")}}) == 0.0
+
+
+def test_the_state_carried_over_is_the_spin_ups_own_for_the_same_configuration():
+    """Independent basis: the engine's own coordinates. Reading the mechanism state (crank, eccentricities
+    at B and C in the bench frame, their rates) and setting it into a new engine of the same configuration
+    gives back the spin-up's qpos and qvel (the loop's kinematics rebuild the rod and the slider)."""
+    cfg = _bench(0.4)
+    eng = make_engine(cfg)
+    n = int(round(0.35 * cfg.output_rate_hz))
+    for _ in run_chunks(cfg, eng, until=n):
+        pass
+    s = read_state(eng, cfg, n)
+    other = make_engine(cfg)
+    set_state(other, cfg, s, cfg)
+    assert np.allclose(other.data.qpos, eng.data.qpos, rtol=0, atol=1e-12)
+    assert np.allclose(other.data.qvel, eng.data.qvel, rtol=1e-9, atol=1e-9)
+    assert np.array_equal(other.data.act, eng.data.act)
+    assert other.data.time == pytest.approx(eng.data.time, abs=1e-12)
+
+
+def test_the_first_member_is_its_fresh_run_bit_for_bit():
+    a = _bench(0.45)
+    b = a.replace(**{"joints.clearance_b_mm": 0.1, "contact.restitution": 0.5, "drive.initial_encoder_angle_rad": 1.0})
+    fresh = Collector()
+    simulate(a, [fresh])
+    ca, cb = Collector(), Collector()
+    outs = simulate_approx([a, b], [[ca], [cb]])
+    for k in fresh.run.channels:
+        assert np.array_equal(ca.run[k], fresh.run[k]), k
+    assert "warm_start" not in outs[0].meta
+    ws = outs[1].meta["warm_start"]
+    assert ws["approximate"] and ws["valid_from_s"] == pytest.approx(0.45) and ws["spin_up_of"] == a.name
+    assert len(cb.run["AC1"]) == len(fresh.run["AC1"])
+
+
+@pytest.mark.long
+def test_features_of_a_switched_run_differ_less_than_a_repeat():
+    """The stated approximation, on two cases (another clearance set, contact, guide friction, ripple and start
+    angle than the spin-up's): the identification's features (mean over windows) of the switched run, read from
+    its valid_from_s, against its fresh run, standardized by each feature's spread over the fresh runs; their
+    RMS distance below that of a repeat (the same configuration with another noise seed and start angle, from
+    rest: the scatter between two recordings of one configuration, the independent basis)."""
+    ref = _bench(1.5)
+    cases = [ref.replace(**{"joints.clearance_b_mm": 0.08, "joints.clearance_c_mm": 0.5, "contact.restitution": 0.55,
+                            "contact.mu0": 0.03, "mechanism.guide_friction_n": 4.0, "drive.ripple_pct": [2.0, 1.0],
+                            "drive.ripple_phase_rad": [0.5, 2.0], "drive.initial_encoder_angle_rad": 4.0}),
+             ref.replace(**{"joints.clearance_b_mm": 0.6, "joints.clearance_c_mm": 0.1, "contact.restitution": 0.35,
+                            "contact.stiffness_scale": 1.7, "mechanism.guide_friction_n": 1.5,
+                            "drive.initial_encoder_angle_rad": 1.0, "instrumentation.seed": 11})]
+    rows = []
+    for k, c in enumerate(cases):
+        rep = c.replace(**{"instrumentation.seed": 1000 + k,
+                           "drive.initial_encoder_angle_rad": c.drive.initial_encoder_angle_rad + 2.5})
+        rows.append(compare_case(ref, c, rep))
+    F = np.array([r["fresh"] for r in rows])
+    R = np.array([r["repeat"] for r in rows])
+    A = np.array([r["approx"] for r in rows])
+    scale = np.concatenate([F, R]).std(axis=0, ddof=1)
+    ok = scale > 1e-9 * (1 + np.abs(F).max(axis=0))
+    d_approx = np.sqrt(np.mean(((A - F)[:, ok] / scale[ok]) ** 2, axis=1))
+    d_repeat = np.sqrt(np.mean(((R - F)[:, ok] / scale[ok]) ** 2, axis=1))
+    assert d_approx.mean() < d_repeat.mean(), (d_approx, d_repeat)
