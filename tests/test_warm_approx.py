@@ -71,7 +71,7 @@ def test_the_state_carried_over_is_the_spin_ups_own_for_the_same_configuration()
     set_state(other, cfg, s, cfg)
     assert np.allclose(other.data.qpos, eng.data.qpos, rtol=0, atol=1e-12)
     assert np.allclose(other.data.qvel, eng.data.qvel, rtol=1e-9, atol=1e-9)
-    assert np.array_equal(other.data.act, eng.data.act)
+    assert np.array_equal(other.data.act, eng.data.act) and np.array_equal(other.data.userdata, eng.data.userdata)
     assert other.data.time == pytest.approx(eng.data.time, abs=1e-12)
 
 
@@ -129,21 +129,21 @@ def _distances() -> tuple[np.ndarray, np.ndarray]:
             np.sqrt(np.mean(((R - F)[:, ok] / scale[ok]) ** 2, axis=1)))
 
 
+#: measured gaps (D of the switched run against D of a repeat) of the cases where the stated approximation does not
+#: hold: the switched run is another draw of the joints' chaotic rattling, one that runs from rest (whatever their
+#: start angle and noise seed) do not take
+_GAPS = {1: "D 0.90 against a repeat's 0.55 (B 0.15, C 0.075 mm radial, 1 % ripple)",
+         2: "D 2.30 against a repeat's 0.64: the C pin (0.25 mm radial) rattles in another pattern than the fresh "
+            "run's for the whole run, orders 4-8 of AC1/AC4 about 2x the fresh run's window after window"}
+
+
 @pytest.mark.long
-@pytest.mark.parametrize("case", (0, 1))
+@pytest.mark.parametrize("case", [pytest.param(k, marks=[pytest.mark.xfail(strict=True, reason=f"measured: {_GAPS[k]}")]
+                                               if k in _GAPS else []) for k in range(len(_CASES))])
 def test_features_of_a_switched_run_differ_less_than_a_repeat(case):
     """The stated approximation: the identification's features (mean over windows) of the switched run, read from
     its valid_from_s, closer to its fresh run's than a repeat's are (the scatter between two recordings of one
-    configuration: the independent basis)."""
+    configuration: the independent basis). It holds for the first case and for the six nuisance-spec cases of
+    analysis/warm_approx_check.py, not for the two marked (docs/datasets.md): the approximation stays opt-in."""
     d_approx, d_repeat = _distances()
     assert d_approx[case] < d_repeat[case], (d_approx, d_repeat)
-
-
-@pytest.mark.long
-@pytest.mark.xfail(strict=True, reason="measured: the switched run's C pin (0.25 mm radial, 800 rpm) rattles in "
-                   "another pattern than the fresh run's for the whole run (orders 4-8 of AC1/AC4 about 2x the fresh "
-                   "run's, window after window to 2 s): D 2.41 against a repeat's 0.73; runs from rest, whatever "
-                   "their start angle, settle into the same pattern")
-def test_a_large_c_clearance_switched_differs_less_than_a_repeat():
-    d_approx, d_repeat = _distances()
-    assert d_approx[2] < d_repeat[2], (d_approx, d_repeat)

@@ -130,6 +130,9 @@ class MechanismState:
         act: the actuators' states (the PID's integral).
         ecc: joint -> (e, ė): eccentricity pin − bushing [m] and its rate [m/s], for B and C.
         theta_ref, omega_ref: the spin-up's drive reference at t_s [rad], [rad/s].
+        userdata: the native contact's stored speeds (per clearance joint: the impact speed of a contact
+            event under way, the previous step's normal velocity), carried over as they are: a joint in
+            contact keeps its penetration, so its event goes on.
     """
 
     t_s: float
@@ -140,6 +143,7 @@ class MechanismState:
     ecc: dict[str, tuple[np.ndarray, np.ndarray]]
     theta_ref: float
     omega_ref: float
+    userdata: np.ndarray
 
 
 def _rot(a: float) -> np.ndarray:
@@ -187,7 +191,8 @@ def read_state(engine: Any, cfg: BenchConfig, samples: int) -> MechanismState:
     ecc["C"] = (c_pin - c_bush, c_pin_d - c_bush_d) if cfg.joints.diametral_mm("C") > 0 else (np.zeros(2), np.zeros(2))
     t = samples / cfg.output_rate_hz
     tr, wr = DriveReference(cfg)(np.array([t]))
-    return MechanismState(t, int(samples), th, om, np.array(d.act, dtype=np.float64), ecc, float(tr[0]), float(wr[0]))
+    return MechanismState(t, int(samples), th, om, np.array(d.act, dtype=np.float64), ecc, float(tr[0]), float(wr[0]),
+                          np.array(d.userdata, dtype=np.float64))
 
 
 def _map_ecc(e: np.ndarray, ed: np.ndarray, c_from: float, c_to: float) -> tuple[np.ndarray, np.ndarray]:
@@ -207,8 +212,6 @@ def _map_ecc(e: np.ndarray, ed: np.ndarray, c_from: float, c_to: float) -> tuple
 def set_state(engine: Any, cfg: BenchConfig, s: MechanismState, s_cfg: BenchConfig) -> None:
     """Put a MuJoCo ``engine`` of ``cfg`` into the spin-up state ``s`` (of ``s_cfg``), mapped to
     ``cfg`` as the module docstring says."""
-    import mujoco
-
     from twin import names
     from twin.drive import DriveReference
 
@@ -246,9 +249,14 @@ def set_state(engine: Any, cfg: BenchConfig, s: MechanismState, s_cfg: BenchConf
     d.qvel[_v(m, names.SLIDER_SLIDE)] = c_pin_d[0]
     if d.act.shape == s.act.shape:
         d.act[:] = s.act
+    if d.userdata.shape == s.userdata.shape:
+        # the contact events under way go on (a fresh v_imp at the impact-speed floor would make a resting
+        # contact's damping the largest the force source allows, for as long as the contact lasts)
+        d.userdata[:] = s.userdata
     k = s.samples * cfg.output_stride
     d.time = k * cfg.simulation.timestep_s
-    mujoco.mj_forward(m, d)
+    # no forward pass: the rollout starts from this state (a forward pass would run the contact's callback,
+    # which updates the stored speeds), as WarmState's restore does
     engine._k = k
 
 
