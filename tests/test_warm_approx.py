@@ -131,7 +131,8 @@ def _distances() -> tuple[np.ndarray, np.ndarray]:
 
 #: measured gaps (D of the switched run against D of a repeat) of the cases where the stated approximation does not
 #: hold: the switched run is another draw of the joints' chaotic rattling, one that runs from rest (whatever their
-#: start angle and noise seed) do not take
+#: start angle and noise seed) do not take. The figures were measured before the native contact's stored speeds were
+#: carried over with the state; both cases still fail after it (measured: strict xfails)
 _GAPS = {1: "D 0.90 against a repeat's 0.55 (B 0.15, C 0.075 mm radial, 1 % ripple)",
          2: "D 2.30 against a repeat's 0.64: the C pin (0.25 mm radial) rattles in another pattern than the fresh "
             "run's for the whole run, orders 4-8 of AC1/AC4 about 2x the fresh run's window after window"}
