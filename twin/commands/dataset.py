@@ -39,6 +39,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--no-warm-start", action="store_true",
                    help="simulate every run alone (default: the repeats of a design point, which differ in their "
                         "sensor-noise seed only, share one engine run; the files are the same bytes either way)")
+    g.add_argument("--approx-warm-start", action="store_true",
+                   help="an approximation, off by default: runs that differ only in clearance sizes, contact, "
+                        "guide friction, ripple, start angle or sensor mounts share one spin-up and switch to their "
+                        "own parameters after it; each file's metadata says from when it holds its own physics "
+                        "(docs/datasets.md)")
     g.add_argument("--no-progress", action="store_true", help="no progress bar")
     g.set_defaults(func=_generate, _field_flags={"out_dir": "--out"})  # twin.dataset.generate's argument
 
@@ -73,7 +78,8 @@ def _generate(args: argparse.Namespace) -> int:
     spec = load_spec(spec_arg(args.spec))
     t = time.perf_counter()
     info = generate(spec, args.out, workers=resolve_workers(args.workers), scheduler=args.scheduler, limit=args.limit,
-                    progress=not args.no_progress and sys.stderr.isatty(), warm_start=not args.no_warm_start)
+                    progress=not args.no_progress and sys.stderr.isatty(), warm_start=not args.no_warm_start,
+                    approx_warm_start=args.approx_warm_start)
     g = info["generation"]
     on = {"processes": "worker processes", "threads": "threads"}.get(g["scheduler"], f"{g['scheduler']} workers")
     shared = g.get("engine_runs_this_call", g["runs_this_call"])

@@ -232,11 +232,24 @@ def task_of(p: Prepared, r: RunPlan) -> dict[str, Any]:
             "labels": [(k, t, label_value(labels.get(k), t)) for k, t in p.label_types.items()]}
 
 
-def group_tasks(p: Prepared, runs: list[RunPlan], warm_start: bool = True) -> list[dict[str, Any]]:
+def group_tasks(p: Prepared, runs: list[RunPlan], warm_start: bool = True,
+                approx_warm_start: bool = False) -> list[dict[str, Any]]:
     """The tasks of ``runs``: with ``warm_start``, runs of one :func:`twin.warm.mechanical_key` (the
     repeats of a design point: they differ in their noise seed only) are one task whose members share
     one engine run (each file the bytes of its run alone); groups in the order of their first run.
-    Without, one task per run."""
+    Without, one task per run. ``approx_warm_start`` (opt-in, an approximation): runs of one
+    :func:`twin.warm_approx.approx_key` are one task (``"approx": True``) whose members share one
+    spin-up (:func:`twin.warm_approx.simulate_approx`)."""
+    if approx_warm_start:
+        from twin.warm_approx import approx_groups
+
+        tasks = []
+        for g in approx_groups([r.config for r in runs]):
+            members = [task_of(p, runs[i]) for i in g]
+            tasks.append(members[0] if len(members) == 1 else
+                         {"run_id": members[0]["run_id"], "index": members[0]["index"], "members": members,
+                          "approx": True})
+        return tasks
     if not warm_start:
         return [task_of(p, r) for r in runs]
     from twin.warm import share_groups
@@ -436,11 +449,14 @@ def executor(scheduler: str | None, workers: int) -> Callable[[list[dict]], Iter
 
 # ------------------------------------------------------------------------ driver
 def generate(spec: DatasetSpec, out_dir: str | Path, *, workers: int | None = None, scheduler: str | None = None,
-             limit: int | None = None, progress: bool = True, warm_start: bool = True) -> dict[str, Any]:
+             limit: int | None = None, progress: bool = True, warm_start: bool = True,
+             approx_warm_start: bool = False) -> dict[str, Any]:
     """Generate (or finish) the dataset of ``spec`` in ``out_dir``; returns the info dict.
 
     ``warm_start`` (default on: it changes no byte of any file): the runs to do that share their
-    engine run (:func:`group_tasks`) are simulated once per group."""
+    engine run (:func:`group_tasks`) are simulated once per group. ``approx_warm_start`` (opt-in: an
+    approximation, docs/datasets.md): runs that differ in their nuisance parameters share one spin-up
+    (:mod:`twin.warm_approx`); each such file's metadata says from when it holds its own physics."""
     from twin.util import resolve_workers
 
     workers = resolve_workers(workers)
@@ -453,11 +469,11 @@ def generate(spec: DatasetSpec, out_dir: str | Path, *, workers: int | None = No
     # of a holder that died (SIGKILL included), so a later run takes it over
     with FolderLock(p.out, "out_dir", "twin dataset generate"):
         p = prepare(spec, out_dir)  # again under the lock: runs the previous holder finished count as done
-        return _generate_locked(p, workers, scheduler, run_tasks, limit, progress, warm_start)
+        return _generate_locked(p, workers, scheduler, run_tasks, limit, progress, warm_start, approx_warm_start)
 
 
 def _generate_locked(p: Prepared, workers: int, scheduler: str | None, run_tasks, limit: int | None,
-                     progress: bool, warm_start: bool = True) -> dict[str, Any]:
+                     progress: bool, warm_start: bool = True, approx_warm_start: bool = False) -> dict[str, Any]:
     out = p.out
     check_writable(out)  # before anything is written: a complete dataset is never marked incomplete in vain
     todo = p.pending[:limit] if limit is not None else p.pending
@@ -472,7 +488,7 @@ def _generate_locked(p: Prepared, workers: int, scheduler: str | None, run_tasks
     sim_total = sum(r.config.duration_s for r in todo)
     bar = _Progress(len(todo), sim_total, progress)
     failed = 0
-    tasks = group_tasks(p, todo, warm_start)
+    tasks = group_tasks(p, todo, warm_start, approx_warm_start)
     try:
         for task_res in run_tasks(tasks):
             for res in _results(task_res):
@@ -490,7 +506,7 @@ def _generate_locked(p: Prepared, workers: int, scheduler: str | None, run_tasks
     info = finish(p)
     info["generation"] = {"runs_this_call": len(todo), "failed_this_call": failed,
                           "wall_s": time.perf_counter() - t_start, "workers": workers,
-                          "scheduler": scheduler or default_scheduler(workers), "warm_start": warm_start,
+                          "scheduler": scheduler or default_scheduler(workers), "warm_start": "approximate" if approx_warm_start else warm_start,
                           "engine_runs_this_call": len(tasks)}
     return info
 

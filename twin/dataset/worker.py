@@ -112,11 +112,11 @@ def run_one(task: dict[str, Any], stop: Any = None) -> dict[str, Any]:
     engine's stepping time (``sim_wall_s``), the others 0; each member's ``wall_s`` is the group's
     divided by its size."""
     if "members" in task:
-        return {"group": _run_members(task["members"], stop)}
+        return {"group": _run_members(task["members"], stop, approx=bool(task.get("approx")))}
     return _run_members([task], stop)[0]
 
 
-def _run_members(tasks: list[dict[str, Any]], stop: Any) -> list[dict[str, Any]]:
+def _run_members(tasks: list[dict[str, Any]], stop: Any, approx: bool = False) -> list[dict[str, Any]]:
     from twin.config import config_from_toml
     from twin.dataset.storage import ColumnSpec, LabelColumn, ParquetRunWriter, WriteError
     from twin.util import file_sha256
@@ -130,12 +130,21 @@ def _run_members(tasks: list[dict[str, Any]], stop: Any) -> list[dict[str, Any]]
     recs: list[Any] = []
     try:
         cfgs, writers, sinks = [], [], []
-        for task, path in zip(tasks, paths):
+        approx_info = None
+        for i, (task, path) in enumerate(zip(tasks, paths)):
             cfg = config_from_toml(task["config_toml"])
             columns = [ColumnSpec(*c) for c in task["columns"]]
             labels = [LabelColumn(*lab) for lab in task.get("labels", ())]
-            writer = ParquetRunWriter(path, columns, task["run_id"], {"name": cfg.name, "config_toml": cfg.to_toml()},
-                                      labels)
+            file_meta = {"name": cfg.name, "config_toml": cfg.to_toml()}
+            if approx and i > 0:
+                # an approximate warm start: from when the file holds this run's own physics
+                from twin.warm_approx import SETTLE_S, switch_time
+
+                t_sw = round(switch_time(cfgs[0]) * cfg.output_rate_hz) / cfg.output_rate_hz
+                approx_info = {"approximate": True, "switch_s": t_sw, "settle_s": SETTLE_S,
+                               "valid_from_s": t_sw + SETTLE_S, "spin_up_of": cfgs[0].name}
+                file_meta["warm_start"] = approx_info
+            writer = ParquetRunWriter(path, columns, task["run_id"], file_meta, labels)
             # the sensor chain and the Parquet writer run on a thread, overlapping the stepping
             sink = ThreadedSink(InstrumentSink(cfg, columns, writer, tuple(task["instrumented"])))
             run_sinks = [_Stop(stop), sink] if stop is not None else [sink]
@@ -147,23 +156,32 @@ def _run_members(tasks: list[dict[str, Any]], stop: Any) -> list[dict[str, Any]]
             cfgs.append(cfg)
             writers.append(writer)
             sinks.append(run_sinks)
+        outcomes = None
         if len(tasks) == 1:
             outcome = simulate(cfgs[0], sinks[0])
+        elif approx:
+            from twin.warm_approx import simulate_approx
+
+            outcomes = simulate_approx(cfgs, sinks)
+            outcome = outcomes[0]
         else:
             from twin.warm import simulate_shared
 
             outcome = simulate_shared(cfgs, sinks)
-        warnings = outcome.meta.get("warnings") or {}
+        warnings = {k: v for o in (outcomes or [outcome]) for k, v in (o.meta.get("warnings") or {}).items()}
         if warnings:
             for path in paths + [r.path for r in recs]:
                 path.unlink(missing_ok=True)
             raise _Failed("MuJoCo warnings: " + ", ".join(f"{k}({v})" for k, v in warnings.items()))
         for i, (out, cfg, writer, path) in enumerate(zip(outs, cfgs, writers, paths)):
+            mine = outcomes[i] if outcomes is not None else outcome
             out.update(rows=writer.rows, bytes=path.stat().st_size, sha256=file_sha256(path),
-                       summary=_small_summary(outcome.summary), stats=writer.stats.d,
-                       sim_wall_s=outcome.meta.get("wall_s") if i == 0 else 0.0,
+                       summary=_small_summary(mine.summary), stats=writer.stats.d,
+                       sim_wall_s=mine.meta.get("wall_s") if (i == 0 or outcomes is not None) else 0.0,
                        simulated_s=writer.rows / cfg.output_rate_hz)
-            if len(tasks) > 1:
+            if outcomes is not None and i > 0:
+                out["warm_start"] = mine.meta.get("warm_start")
+            elif len(tasks) > 1:
                 out["shared"] = {"runs": len(tasks), "engine_run_of": tasks[0]["run_id"]}
         for out, rec in zip(outs, recs):
             out["recording"] = {"file": f"{rec.path.parent.name}/{rec.path.name}", "bytes": rec.path.stat().st_size}

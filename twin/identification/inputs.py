@@ -74,6 +74,9 @@ def run_features(path: str, skip_s: float, counts_per_rev: float, orientation: s
     meta = read_meta(path)
     cols = read_columns(path, [f"meas_{s}" for s in ("AC1", "AC2", "AC3", "AC4", "AC5", "AC6")] + ["encoder_counts"])
     acc = {k[5:]: v for k, v in cols.items() if k.startswith("meas_")}
+    from twin.warm_approx import valid_from_s
+
+    skip_s = max(skip_s, valid_from_s(meta))  # an approximate warm start: its own physics from then on
     try:
         X, w = features(acc, cols["encoder_counts"], float(meta["rate_hz"]), counts_per_rev, skip_s, orientation,
                         hop_revs=hop_revs)

@@ -702,15 +702,25 @@ static void force_bore(const mjModel* m, mjData* d, int gb, const mjtNum* user, 
   if (gp >= m->ngeom || !(law == LAW_HYSTERESIS || law == LAW_LINEAR || law == LAW_IMPACT || law == LAW_CYLINDER))
     return;
   const mjtNum* xp = d->geom_xpos + 3 * gp;
-  mjtNum e[3], a[3];
-  const mjtNum ecc = bore_eccentricity(d, gb, gp, e, a);
+  /* a socket (a marked sphere, _socket.c): the ball's centre relative to the socket's in 3D, the
+   * point at the ball's centre and the friction along the slip, as the socket collider's contact */
+  const int socket = m->geom_type[gb] == mjGEOM_SPHERE;
+  mjtNum e[3], a[3] = {0, 0, 0};
+  mjtNum ecc;
+  if (socket) {
+    const mjtNum* xs = d->geom_xpos + 3 * gb;
+    e[0] = xp[0] - xs[0]; e[1] = xp[1] - xs[1]; e[2] = xp[2] - xs[2];
+    ecc = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+  } else {
+    ecc = bore_eccentricity(d, gb, gp, e, a);
+  }
   const mjtNum delta = ecc - (m->geom_size[3 * gb] - m->geom_size[3 * gp]);
   if (!(ecc > 1e-300)) {                          /* centred: no direction, no contact */
     if (has_slot) d->userdata[slot] = 0;
     return;
   }
   const mjtNum n[3] = {e[0] / ecc, e[1] / ecc, e[2] / ecc};  /* bore centre -> pin */
-  const mjtNum s = m->geom_size[3 * gp] - 0.5 * delta;       /* pin centre -> midpoint of the surfaces */
+  const mjtNum s = socket ? 0 : m->geom_size[3 * gp] - 0.5 * delta;  /* pin centre -> midpoint of the surfaces */
   const mjtNum p[3] = {xp[0] + s * n[0], xp[1] + s * n[1], xp[2] + s * n[2]};
   const int bp = m->geom_bodyid[gp], bb = m->geom_bodyid[gb];
   mjtNum vp[3], vb[3];
@@ -745,7 +755,8 @@ static void force_bore(const mjModel* m, mjData* d, int gb, const mjtNum* user, 
   }
   mjtNum fn = fe + c * rate;
   if (fn < 0) fn = 0;                            /* the law never pulls */
-  const mjtNum t[3] = {a[1] * n[2] - a[2] * n[1], a[2] * n[0] - a[0] * n[2], a[0] * n[1] - a[1] * n[0]};
+  mjtNum t[3] = {a[1] * n[2] - a[2] * n[1], a[2] * n[0] - a[0] * n[2], a[0] * n[1] - a[1] * n[0]};
+  if (socket) twin_socket_tangent(vp, vb, n, t);  /* along the slip */
   const mjtNum vt = dv[0] * t[0] + dv[1] * t[1] + dv[2] * t[2];
   const mjtNum mu = friction_coefficient(user, fabs(vt));
   const mjtNum ft = twin_oppose(vt, mu * fn);   /* on the pin along t */

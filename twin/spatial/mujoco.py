@@ -179,16 +179,24 @@ def build(cfg: Any, theta0: float) -> tuple[mujoco.MjSpec, mujoco.MjModel, dict[
     if cfg.contact.law == "linear":
         raise ConfigError("contact.law", "the linear law is not available for the spatial mechanism; use a "
                                          "hysteresis law or adams-impact")
-    if cfg.mujoco.bushing != "bore" or cfg.mujoco.contact_source != "law":
-        raise ConfigError("mujoco.bushing", "the spatial mechanism takes the native law on its own colliders only "
-                                            "(mujoco.bushing = \"bore\", mujoco.contact_source = \"law\")")
+    if cfg.mujoco.bushing != "bore" or cfg.mujoco.contact_source not in ("law", "force"):
+        raise ConfigError("mujoco.bushing", "the spatial mechanism takes the native law on its own colliders or as "
+                                            "passive forces only (mujoco.bushing = \"bore\", mujoco.contact_source = "
+                                            "\"law\" or \"force\")")
     ensure_installed()
     spec = _spec(cfg, theta0)
     joints = cfg.joints.clearance_joints
+    # "force": the law and friction as passive forces between pin and bore/socket (_bore.c, "Force"; a
+    # socket's point at the ball's centre, its friction along the slip, as the collider's contact), no pair,
+    # no collision; 2 user data slots per joint (v_imp and the previous step's normal velocity)
+    force = cfg.mujoco.contact_source == "force"
+    per_joint = 2 if force else 1
     for jt in joints:
         spec.add_pair(name=f"spatial_pair_{jt}", geomname1=PIN[jt], geomname2=BUSH[jt], condim=1)
     model = _compile(spec, cfg)
-    spec.nuserdata = len(joints)
+    spec.nuserdata = per_joint * len(joints)
+    if force:
+        spec.option.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
     contacts: dict[str, Any] = {}
     for slot, jt in enumerate(joints):
         a_hat = float(model.body_invweight0[model.geom_bodyid[model.geom(PIN[jt]).id], 0]
@@ -197,7 +205,11 @@ def build(cfg: Any, theta0: float) -> tuple[mujoco.MjSpec, mujoco.MjModel, dict[
         p = spec.pair(f"spatial_pair_{jt}")
         p.solref, p.solimp = list(setting.solref), list(setting.solimp)
         spec.geom(BUSH[jt]).userdata = names.bore_userdata(mu0=cfg.contact.mu0, v0=cfg.contact.v0_mps,
-                                                       v1=cfg.contact.v1_mps, **setting.law.userdata(slot))
+                                                       v1=cfg.contact.v1_mps, **setting.law.userdata(per_joint * slot))
+        if force:
+            from twin.mujoco_engine.builder import as_passive_force
+
+            as_passive_force(spec, p, spec.geom(BUSH[jt]), int(model.geom(PIN[jt]).id), f"s_contact_{jt}")
         contacts[jt] = {"kind": "journal in bearing" if jt == "A" else "ball in socket", **setting.to_json()}
     model = _compile(spec, cfg)
     check_model(model)  # the layout the native code reads, or a one-line refusal
