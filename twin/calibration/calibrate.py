@@ -44,6 +44,9 @@ class CalibrationOptions:
         dtw_max_s: DTW on at most this much of each window [s].
         dtw_window_s: Sakoe–Chiba half-width of the DTW [s].
         delta_j: rise of the objective that bounds an interval (1 = one term moved by one scatter).
+        replicates: noise replicates per full-length evaluation (other sensor-noise realizations of
+            the same simulation; their minimizers' scatter is the noise's share of each interval,
+            :func:`twin.calibration.uncertainty.replicate_spread`); 0 = the ΔJ rule alone.
         plots: write the PNG figures.
         progress: progress bars on standard error.
     """
@@ -51,7 +54,7 @@ class CalibrationOptions:
     n_global: int = 16
     local_short: int = 20
     local_full: int = 12
-    profile_steps: tuple[float, ...] = (0.03, 0.1, 0.25)
+    profile_steps: tuple[float, ...] = (0.01, 0.03, 0.1, 0.25)
     short_fraction: float = 0.5
     drive: str = "trace"
     workers: int = 1
@@ -59,12 +62,13 @@ class CalibrationOptions:
     dtw_max_s: float = 0.05
     dtw_window_s: float = 0.002
     delta_j: float = 1.0
+    replicates: int = 4
     plots: bool = True
     progress: bool = False
 
     def __post_init__(self) -> None:
         for name, lo, hi in (("n_global", 0, 4096), ("local_short", 0, 10_000), ("local_full", 0, 10_000),
-                             ("workers", 1, 1024), ("seed", 0, 2 ** 31 - 1)):
+                             ("workers", 1, 1024), ("seed", 0, 2 ** 31 - 1), ("replicates", 0, 64)):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
                 raise ConfigError(name, f"must be an integer in [{lo}, {hi}], got {v!r}")
@@ -94,9 +98,14 @@ class FittedParameter:
     method: str
     flat: bool
     on_bound: str
+    noise_lo: float = math.nan
+    noise_hi: float = math.nan
 
     def to_dict(self) -> dict[str, Any]:
-        return {**self.__dict__, "bounds": list(self.bounds)}
+        d = {**self.__dict__, "bounds": list(self.bounds)}
+        for k in ("noise_lo", "noise_hi"):
+            d[k] = None if not math.isfinite(d[k]) else d[k]
+        return d
 
 
 @dataclass(frozen=True)
@@ -201,15 +210,16 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
     fields = [p.field for p in P]
     out_dir.mkdir(parents=True, exist_ok=True)  # every input checked: the first thing written
     scales, scales_note = {}, ""
-    for st in ("short", "full"):
-        scales[st], scales_note = obj.repeat_scales(targets[st], options.dtw_window_s, ripple)
+    for st, floor in (("short", obj.SEARCH_FLOOR), ("full", obj.SCALE_FLOOR)):
+        scales[st], scales_note = obj.repeat_scales(targets[st], options.dtw_window_s, ripple, floor)
 
     header = {"format": search.LOG_FORMAT, "version": search.LOG_VERSION,
               "recordings": [obj.recording_key(r) for r in recs],
               "parameters": [{"field": p.field, "lo": p.lo, "hi": p.hi, "log": p.log} for p in P],
               "base_config": base_toml, "options": {"short_fraction": options.short_fraction, "drive": options.drive,
                                                     "dtw_max_s": options.dtw_max_s,
-                                                    "dtw_window_s": options.dtw_window_s}}
+                                                    "dtw_window_s": options.dtw_window_s,
+                                                    "replicates": options.replicates}}
 
     def make_task(stage: str, u: np.ndarray, i: int) -> dict[str, Any]:
         # run_id and index: what the dataset pool's report of a crashed worker names a task by
@@ -217,10 +227,12 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
                 "fraction": options.short_fraction if stage == "short" else 1.0,
                 "dtw_max_s": options.dtw_max_s, "dtw_window_s": options.dtw_window_s, "motor": motor,
                 "ripple": ripple, "drive": options.drive, "fields": fields,
+                "replicates": options.replicates if stage == "full" else 0,
                 "values": [p.from_unit(x) for p, x in zip(P, u)]}
 
-    run = (search.in_process(obj.evaluate_task) if options.workers == 1
-           else search.local_pool(options.workers, obj.evaluate_task))
+    # one pool for every stage (spawned once; its workers keep their prepared recordings)
+    pool = search.PersistentPool(options.workers, obj.evaluate_task) if options.workers > 1 else None
+    run = pool if pool is not None else search.in_process(obj.evaluate_task)
     ev = search.Evaluator(out_dir / "evaluations.jsonl", header, P, make_task, scales, run, options.progress,
                           run_single=search.in_process(obj.evaluate_task))
     try:
@@ -269,6 +281,12 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
             if e["stage"] == "full":
                 seen[search._key("full", np.asarray(e["u"]))] = (np.asarray(e["u"]), ev.value(e))
         fulls = list(seen.values())
+        reps = None
+        if options.replicates:
+            full_es = {search._key("full", np.asarray(e["u"])): e for e in ev.history if e["stage"] == "full"}
+            cols = [ev.replicate_values(full_es[k]) for k in seen]
+            if cols and all(len(c) == options.replicates for c in cols):
+                reps = np.asarray(cols, dtype=np.float64).T  # (K, n)
         u_best, j_best = min(fulls, key=lambda c: c[1])
         if not np.array_equal(u_best, np.clip(u_best, 0, 1)):
             u_best = np.clip(u_best, 0, 1)
@@ -276,17 +294,21 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
         # point's terms exceed their scales (J*/n > 1: the scatter understates the model's error)
         n_terms = max(1, sum(len(t) for t in ev.cache[search._key("full", u_best)]["terms"]))
         inflation = max(1.0, float(j_best) / n_terms)
-        unc = uncertainty.analyse(P, u_best, fulls, options.delta_j * inflation, centre=u_centre)
+        unc = uncertainty.analyse(P, u_best, fulls, options.delta_j * inflation, centre=u_centre,
+                                  replicates=reps)
         unc["inflation"] = inflation
         unc["profile_centre_is_best"] = bool(np.array_equal(u_centre, u_best))
         e_before = ev.cache[search._key("full", u0)]
         e_after = ev.cache[search._key("full", u_best)]
     finally:
         ev.close()
+        if pool is not None:
+            pool.close()
 
     from twin.calibration.report import write_outputs
 
-    fitted = tuple(FittedParameter(p.field, iv.value, iv.lo, iv.hi, x, (p.lo, p.hi), iv.method, iv.flat, iv.on_bound)
+    fitted = tuple(FittedParameter(p.field, iv.value, iv.lo, iv.hi, x, (p.lo, p.hi), iv.method, iv.flat, iv.on_bound,
+                                   iv.noise_lo, iv.noise_hi)
                    for p, iv, x in zip(P, unc["intervals"], x0))
     warnings = []
     for f in fitted:
