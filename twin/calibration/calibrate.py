@@ -338,6 +338,7 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
                       "terms_after": e_after["terms"], "scales": scales["full"], "scales_note": scales_note,
                       "delta_j": options.delta_j, "delta_j_used": unc["delta_j"]},
         "uncertainty": {k: v for k, v in unc.items() if k != "intervals"},
+        "identifiability": identifiability(P, unc["intervals"], unc["correlated_pairs"], unc["delta_j"]),
         "warnings": warnings,
         "evaluations": {"total": len(ev.cache), "simulated_now": ev.simulated, "resumed": ev.resumed,
                         "failed": failed, "seconds_per_evaluation": times,
@@ -356,6 +357,24 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
     return CalibrationResult(fitted, j0_full, j_best, e_before["terms"], e_after["terms"], scales["full"],
                              scales_note, unc["correlated_pairs"], warnings, len(ev.cache), ev.simulated,
                              ev.resumed, times, report["wall_s"], out_dir, report)
+
+
+def identifiability(params, intervals, pairs, delta_j: float) -> list[dict[str, Any]]:
+    """Per parameter, what the recordings tell: ``told`` (the interval is under a quarter of the range),
+    ``weak`` (under the whole range but wider), ``flat`` (not told: the objective does not rise by ΔJ
+    across the range), with the objective's rise along the profile, the interval's share of the range,
+    the noise interval's share of it and the correlated partners."""
+    out = []
+    for p, iv in zip(params, intervals):
+        share = (p.to_unit(iv.hi) - p.to_unit(iv.lo)) if iv.hi > iv.lo else 0.0
+        noise = (p.to_unit(iv.noise_hi) - p.to_unit(iv.noise_lo)) if math.isfinite(iv.noise_lo) else math.nan
+        verdict = "flat" if iv.flat else "told" if share <= 0.25 else "weak"
+        partners = [q["b"] if q["a"] == p.field else q["a"] for q in pairs if p.field in (q["a"], q["b"])]
+        out.append({"field": p.field, "verdict": verdict, "profile_rise": iv.rise, "delta_j": delta_j,
+                    "interval_share_of_range": share,
+                    "noise_share_of_range": None if not math.isfinite(noise) else noise,
+                    "correlated_with": partners})
+    return out
 
 
 def obj_field(cfg: BenchConfig, f: str) -> float:

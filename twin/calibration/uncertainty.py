@@ -66,6 +66,7 @@ class Interval:
     noise_lo: float = math.nan
     noise_hi: float = math.nan
     noise_minimizers: tuple[float, ...] = ()
+    rise: float = math.nan  # largest rise of the objective along the parameter's slice (profile) above its minimum
 
     def to_dict(self) -> dict[str, Any]:
         d = dict(self.__dict__)
@@ -285,8 +286,9 @@ def analyse(params, u_best: np.ndarray, points: list[tuple[np.ndarray, float]], 
             lo, hi = min(lo, nlo_u, u_best[i]), max(hi, nhi_u, u_best[i])
             method += "+noise"
             flat = flat or (lo <= 0.0 and hi >= 1.0)
+        rise = float(np.max(J[on]) - np.min(J[on])) if np.any(on) else math.nan
         intervals.append(Interval(p.field, p.from_unit(u_best[i]), p.from_unit(lo), p.from_unit(hi), method, flat,
-                                  bound, p.from_unit(slo), p.from_unit(shi), nlo, nhi, mins))
+                                  bound, p.from_unit(slo), p.from_unit(shi), nlo, nhi, mins, rise))
     pairs = []
     if corr is not None:
         for i, k in itertools.combinations(range(d), 2):
