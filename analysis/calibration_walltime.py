@@ -5,7 +5,7 @@ machine's load, printed before and after each).
     python analysis/calibration_walltime.py --work DIR [--workers 2]
 
 Recordings: two repeats (noise seeds 1, 2) of Table 4 test 6 with the motor drive, joint C 0.5 mm,
-1000 motor rpm, 0.5 s, made with known values off the defaults; the calibration starts from the
+1000 motor rpm, 0.6 s, made with known values off the defaults; the calibration starts from the
 defaults (``--config``), default budget, ``--drive program``. Prints one JSON line per calibration.
 """
 
@@ -24,7 +24,7 @@ TRUTH = {"contact.mu0": 0.1, "contact.restitution": 0.6, "contact.stiffness_scal
 def config(seed: int, truth: bool):
     from twin.config import preset
 
-    cfg = preset(6).replace(**{"simulation.engine": "reference", "simulation.duration_s": 0.5,
+    cfg = preset(6).replace(**{"simulation.engine": "reference", "simulation.duration_s": 0.6,
                                "drive.motor_rpm": 1000.0, "drive.ramp_s": 0.05, "drive.mode": "motor",
                                "joints.clearance_c_mm": 0.5, "instrumentation.seed": seed})
     return cfg.replace(**TRUTH) if truth else cfg

@@ -266,25 +266,42 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
         # this run's path only (ev.history, cached or not): a resumed run retraces the same steps
         fulls = [(np.asarray(e["u"]), ev.value(e)) for e in ev.history if e["stage"] == "full"]
         u_best = min(fulls, key=lambda c: c[1])[0] if fulls else u_f
-        prof = []
-        for i in range(len(P)):
-            for s in options.profile_steps:
-                for sign in (-1, 1):
-                    v = u_best.copy()
-                    v[i] = v[i] + sign * s
-                    if 0 <= v[i] <= 1:
-                        prof.append(v)
+
+        def profile(centre: np.ndarray) -> None:
+            prof = []
+            for i in range(len(P)):
+                for s in options.profile_steps:
+                    for sign in (-1, 1):
+                        v = centre.copy()
+                        v[i] = v[i] + sign * s
+                        if 0 <= v[i] <= 1:
+                            prof.append(v)
+            ev.many("full", prof, "profiles (full length)")
+
+        def full_points() -> dict[tuple, tuple[np.ndarray, float]]:
+            out: dict[tuple, tuple[np.ndarray, float]] = {}
+            for e in ev.history:
+                if e["stage"] == "full":
+                    out[search._key("full", np.asarray(e["u"]))] = (np.asarray(e["u"]), ev.value(e))
+            return out
+
         u_centre = u_best.copy()
-        ev.many("full", prof, "profiles (full length)")
-        seen: dict[tuple, tuple[np.ndarray, float]] = {}
-        for e in ev.history:
-            if e["stage"] == "full":
-                seen[search._key("full", np.asarray(e["u"]))] = (np.asarray(e["u"]), ev.value(e))
+        profile(u_centre)
+        seen = full_points()
+        u_new = min(seen.values(), key=lambda c: c[1])[0]
+        if not np.array_equal(u_new, u_centre):
+            # a profile point beat the centre: the local search stopped short. Once more: Nelder-Mead
+            # from it (half the full-length budget) and the profiles around the new best
+            u_f = search.nelder_mead(ev, "full", u_new, max(2, options.local_full // 2), 0.02)
+            seen = full_points()
+            u_centre = min(seen.values(), key=lambda c: c[1])[0].copy()
+            profile(u_centre)
+            seen = full_points()
         fulls = list(seen.values())
         reps = None
         if options.replicates:
             full_es = {search._key("full", np.asarray(e["u"])): e for e in ev.history if e["stage"] == "full"}
-            cols = [ev.replicate_values(full_es[k]) for k in seen]
+            cols = [ev.replicate_values(full_es[k], options.replicates) for k in seen]
             if cols and all(len(c) == options.replicates for c in cols):
                 reps = np.asarray(cols, dtype=np.float64).T  # (K, n)
         u_best, j_best = min(fulls, key=lambda c: c[1])

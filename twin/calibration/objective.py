@@ -142,14 +142,18 @@ def speed_harmonics(angle: np.ndarray, rate_hz: float, n: int = 4) -> np.ndarray
 
 def lowpassed_speed(angle: np.ndarray, rate_hz: float, cutoff_hz: float = COMMAND_LOWPASS_HZ) -> np.ndarray:
     """Crank speed [rad/s] from a crank angle [rad] sampled at ``rate_hz``: central differences, then a
-    zero-phase 2nd-order Butterworth low-pass at ``cutoff_hz`` (none when it is at or above Nyquist)."""
+    zero-phase 2nd-order Butterworth low-pass at ``cutoff_hz`` (none when it is at or above Nyquist),
+    without its first and last 1/``cutoff_hz`` seconds (the filter's edge transients: on a
+    count-quantized encoder angle they reach 15 rad/s and would dominate the term)."""
     from scipy.signal import butter, sosfiltfilt
 
     w = np.gradient(np.asarray(angle, dtype=np.float64)) * rate_hz
     nyq = rate_hz / 2
     if cutoff_hz >= nyq or len(w) < 16:
         return w
-    return sosfiltfilt(butter(2, cutoff_hz / nyq, output="sos"), w)
+    w = sosfiltfilt(butter(2, cutoff_hz / nyq, output="sos"), w)
+    edge = int(round(rate_hz / cutoff_hz))
+    return w[edge:len(w) - edge] if len(w) > 4 * edge else w
 
 
 def command_term(sim_speed: np.ndarray, rec_speed: np.ndarray) -> float:

@@ -38,7 +38,8 @@ from twin.errors import TwinError
 LOG_FORMAT = "twin-calibration-log"
 LOG_VERSION = 1
 #: objective value given to a point whose simulation failed (unstable parameters): worse than any real one
-FAILED_J = 1e6
+#: (the terms are scaled by the repeats' scatter, so a real objective can reach 1e6 and more)
+FAILED_J = 1e300
 
 
 def _key(stage: str, u: np.ndarray) -> tuple:
@@ -132,10 +133,10 @@ class Evaluator:
             return FAILED_J
         return float(sum(combine(t, self.scales[e["stage"]]) for t in e["terms"]))
 
-    def replicate_values(self, e: dict[str, Any]) -> list[float]:
-        """The objective at ``e`` under each noise replicate (empty if it has none)."""
+    def replicate_values(self, e: dict[str, Any], k: int) -> list[float]:
+        """The objective at ``e`` under each of its ``k`` noise replicates (empty if it has none)."""
         if e["status"] != "ok":
-            return [FAILED_J] * len(e.get("terms_rep", []))
+            return [FAILED_J] * k
         return [float(sum(combine(t, self.scales[e["stage"]]) for t in rep)) for rep in e.get("terms_rep", [])]
 
     def many(self, stage: str, us: list[np.ndarray], desc: str = "") -> list[float]:

@@ -116,8 +116,8 @@ def slice_interval(u_best: float, du: np.ndarray, j: np.ndarray, delta_j: float)
     lo = bounds[0] if rises[0] else min(du[0], centre - half)
     hi = bounds[1] if rises[1] else max(du[-1], centre + half)
     lo, hi = u_best + lo, u_best + hi
-    flat = not any(rises) and (lo <= 0.0 and hi >= 1.0)
-    return max(0.0, lo), min(1.0, hi), flat
+    flat = bool(not any(rises) and (lo <= 0.0 and hi >= 1.0))
+    return float(max(0.0, lo)), float(min(1.0, hi)), flat
 
 
 def quadratic_model(U: np.ndarray, J: np.ndarray, u_best: np.ndarray) -> tuple[np.ndarray, float] | None:
@@ -145,6 +145,8 @@ def quadratic_model(U: np.ndarray, J: np.ndarray, u_best: np.ndarray) -> tuple[n
     return H, r2
 
 
+#: objective values at or above this are failed evaluations (twin.calibration.search.FAILED_J)
+FAILED = 1e299
 #: two-sided level of the noise interval
 NOISE_ALPHA = 0.10
 #: normalized distances from the profile centre within which slice points enter a replicate's parabola:
@@ -234,10 +236,10 @@ def analyse(params, u_best: np.ndarray, points: list[tuple[np.ndarray, float]], 
     centre = u_best if centre is None else np.asarray(centre, dtype=np.float64)
     U = np.asarray([p[0] for p in points])
     J = np.asarray([p[1] for p in points])
-    ok = J < 1e5
+    ok = J < FAILED
     if replicates is not None:  # (K, n): the replicate objectives at the same points
         R = np.asarray(replicates, dtype=np.float64).reshape(-1, len(points))
-        ok &= np.all(R < 1e5, axis=0)
+        ok &= np.all(R < FAILED, axis=0)
         R = R[:, ok]
     U, J = U[ok], J[ok]
     d = len(params)
@@ -272,7 +274,7 @@ def analyse(params, u_best: np.ndarray, points: list[tuple[np.ndarray, float]], 
         if cov is not None:
             half = math.sqrt(2 * delta_j * cov[i, i])
             lo, hi, method = max(0.0, u_best[i] - half), min(1.0, u_best[i] + half), "marginal"
-            flat = u_best[i] - half <= 0 and u_best[i] + half >= 1
+            flat = bool(u_best[i] - half <= 0 and u_best[i] + half >= 1)
         else:
             lo, hi, method, flat = slo, shi, "slice", sflat
         bound = "low" if u_best[i] <= ON_BOUND else "high" if u_best[i] >= 1 - ON_BOUND else ""
@@ -285,7 +287,7 @@ def analyse(params, u_best: np.ndarray, points: list[tuple[np.ndarray, float]], 
             mins = tuple(p.from_unit(float(m)) for m in noise["minimizers"][:, i])
             lo, hi = min(lo, nlo_u, u_best[i]), max(hi, nhi_u, u_best[i])
             method += "+noise"
-            flat = flat or (lo <= 0.0 and hi >= 1.0)
+            flat = bool(flat or (lo <= 0.0 and hi >= 1.0))
         rise = float(np.max(J[on]) - np.min(J[on])) if np.any(on) else math.nan
         intervals.append(Interval(p.field, p.from_unit(u_best[i]), p.from_unit(lo), p.from_unit(hi), method, flat,
                                   bound, p.from_unit(slo), p.from_unit(shi), nlo, nhi, mins, rise))
