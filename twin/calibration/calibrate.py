@@ -219,7 +219,8 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
               "base_config": base_toml, "options": {"short_fraction": options.short_fraction, "drive": options.drive,
                                                     "dtw_max_s": options.dtw_max_s,
                                                     "dtw_window_s": options.dtw_window_s,
-                                                    "replicates": options.replicates}}
+                                                    "replicates": options.replicates,
+                                                    "trace_filter_hz": obj.TRACE_FILTER_HZ}}
 
     def make_task(stage: str, u: np.ndarray, i: int) -> dict[str, Any]:
         # run_id and index: what the dataset pool's report of a crashed worker names a task by
