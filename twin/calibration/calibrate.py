@@ -22,6 +22,8 @@ from twin.config import BenchConfig
 from twin.errors import ConfigError
 from twin.calibration.params import overlay  # noqa: F401 - part of this module's API
 
+#: misfit per term (J*/n) above which the report warns that the fit did not reach the recordings' scatter
+MISFIT_WARN = 10.0
 #: the files a calibration writes in its output folder
 OUTPUT_FILES = ("calibrated.toml", "report.json", "report.md", "evaluations.jsonl", "spectra.png",
                 "windows.png", "history.png", "profiles.png")
@@ -343,6 +345,11 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
         warnings.append("a profile point was better than the point the profiles were taken around: the fitted "
                         "values are that point's, the slices are around the earlier one; more local evaluations "
                         "(--local-full) would settle it")
+    if unc["inflation"] > MISFIT_WARN:
+        warnings.append(f"the best point misses the recordings by {math.sqrt(unc['inflation']):.3g} scatters per term "
+                        f"(J*/n = {unc['inflation']:.3g}): the search did not reach the recordings' scatter — a local "
+                        "minimum, too small a budget, or a model that cannot match them; the intervals hold only if "
+                        "this is the right basin (more --global-points / --local-full, fewer fields)")
     failed = sum(1 for e in ev.cache.values() if e["status"] != "ok")
     if failed:
         warnings.append(f"{failed} evaluation(s) failed (simulation error; counted as a very bad objective)")
