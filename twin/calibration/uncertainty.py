@@ -120,29 +120,32 @@ def slice_interval(u_best: float, du: np.ndarray, j: np.ndarray, delta_j: float)
     return float(max(0.0, lo)), float(min(1.0, hi)), flat
 
 
-def quadratic_model(U: np.ndarray, J: np.ndarray, u_best: np.ndarray) -> tuple[np.ndarray, float] | None:
-    """Hessian of a full quadratic fitted to (U, J) around ``u_best`` and the fit's R²; None if
-    under-determined."""
+def _quadratic_fit(U: np.ndarray, J: np.ndarray, centre: np.ndarray):
+    """A full quadratic fitted by least squares to (U, J) around ``centre``: (gradient, Hessian, R²)
+    at the centre; None if under-determined."""
     d = U.shape[1]
     pairs = list(itertools.combinations_with_replacement(range(d), 2))
     n_coef = 1 + d + len(pairs)
     if len(U) < n_coef + 2:
         return None
-    D = U - u_best
-    cols = [np.ones(len(U))] + [D[:, i] for i in range(d)] + [D[:, i] * D[:, k] for i, k in pairs]
-    A = np.stack(cols, axis=1)
-    coef, *_ = np.linalg.lstsq(A, J, rcond=None)
+    D = U - centre
+    A = np.stack([np.ones(len(U))] + [D[:, i] for i in range(d)] + [D[:, i] * D[:, k] for i, k in pairs], axis=1)
     if np.linalg.matrix_rank(A) < n_coef:
         return None
+    coef = np.linalg.lstsq(A, J, rcond=None)[0]
     ss = float(np.sum((J - J.mean()) ** 2))
     r2 = 1.0 - float(np.sum((A @ coef - J) ** 2)) / ss if ss > 0 else 0.0
     H = np.zeros((d, d))
     for c, (i, k) in zip(coef[1 + d:], pairs):
-        if i == k:
-            H[i, i] = 2 * c
-        else:
-            H[i, k] = H[k, i] = c
-    return H, r2
+        H[i, k] = H[k, i] = (2 * c) if i == k else c
+    return coef[1:1 + d], H, r2
+
+
+def quadratic_model(U: np.ndarray, J: np.ndarray, u_best: np.ndarray) -> tuple[np.ndarray, float] | None:
+    """Hessian of a full quadratic fitted to (U, J) around ``u_best`` and the fit's R²; None if
+    under-determined."""
+    fit = _quadratic_fit(U, J, u_best)
+    return None if fit is None else (fit[1], fit[2])
 
 
 #: objective values at or above this are failed evaluations (twin.calibration.search.FAILED_J)
@@ -165,22 +168,10 @@ def _slice_minimum(du: np.ndarray, j: np.ndarray) -> float:
 
 def _quadratic_minimum(U: np.ndarray, J: np.ndarray, centre: np.ndarray) -> np.ndarray | None:
     """Minimizer of a full quadratic fitted to (U, J) around ``centre``; None if not positive definite."""
-    d = U.shape[1]
-    pairs = list(itertools.combinations_with_replacement(range(d), 2))
-    n_coef = 1 + d + len(pairs)
-    if len(U) < n_coef + 2:
+    fit = _quadratic_fit(U, J, centre)
+    if fit is None or not np.all(np.linalg.eigvalsh(fit[1]) > 0):
         return None
-    D = U - centre
-    A = np.stack([np.ones(len(U))] + [D[:, i] for i in range(d)] + [D[:, i] * D[:, k] for i, k in pairs], axis=1)
-    if np.linalg.matrix_rank(A) < n_coef:
-        return None
-    coef = np.linalg.lstsq(A, J, rcond=None)[0]
-    H = np.zeros((d, d))
-    for c, (i, k) in zip(coef[1 + d:], pairs):
-        H[i, k] = H[k, i] = (2 * c) if i == k else c
-    if not np.all(np.linalg.eigvalsh(H) > 0):
-        return None
-    return centre - np.linalg.solve(H, coef[1:1 + d])
+    return centre - np.linalg.solve(fit[1], fit[0])
 
 
 def replicate_spread(U: np.ndarray, Js: np.ndarray, centre: np.ndarray, alpha: float = NOISE_ALPHA,
