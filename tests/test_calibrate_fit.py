@@ -18,7 +18,8 @@ from twin.config import load_config, preset
 from twin.errors import ConfigError, TwinError
 
 TRUE_MU0 = 0.1
-OPTS = dict(n_global=4, local_short=6, local_full=6, profile_steps=(0.05, 0.2), drive="program", plots=True)
+OPTS = dict(n_global=4, local_short=6, local_full=6, profile_steps=(0.01, 0.03, 0.1), drive="program", plots=True,
+            replicates=3)
 
 
 def _truth():
@@ -50,9 +51,19 @@ def test_recovers_known_friction(fitted):
     assert p.field == "contact.mu0" and p.base == 0.05
     assert abs(p.value - TRUE_MU0) <= 0.25 * TRUE_MU0  # the issue's target for friction coefficients
     assert not p.flat and not p.on_bound
+    assert p.method == "slice+noise" and p.noise_lo < p.noise_hi
     assert res.objective_after < res.objective_before
     assert "repeat-to-repeat" in res.scales_note  # two repeats: the scales come from their scatter
     assert any("one evaluation takes" in n for n in notes)  # the wall-time estimate before the search
+
+
+@pytest.mark.xfail(reason="known gap: on this case the interval (0.0987-0.0998) misses the truth 0.1 by 0.2 % "
+                          "(measured; the noise replicates' parabola minimizers are biased by the profile's "
+                          "asymmetry, docs/calibration.md); an interval method that holds it is still to do",
+                   strict=False)
+def test_interval_holds_known_friction(fitted):
+    (p,) = fitted[3].parameters
+    assert p.lo <= TRUE_MU0 <= p.hi
 
 
 def test_outputs_and_overlay_round_trip(fitted):
@@ -176,7 +187,7 @@ def test_cli_resumes_the_same_calibration(fitted, tmp_path, capsys):
     (tmp_path / "base.toml").write_text(base.to_toml())
     args = ["calibrate", *map(str, recs), "--params", "contact.mu0", "--config", str(tmp_path / "base.toml"),
             "--bounds", "contact.mu0=0:0.3", "--drive", "program", "--global-points", "4", "--local-short", "6",
-            "--local-full", "6", "--profile-steps", "0.05,0.2", "--out", str(out), "--no-plots", "--no-progress"]
+            "--local-full", "6", "--profile-steps", "0.01,0.03,0.1", "--replicates", "3", "--out", str(out), "--no-plots", "--no-progress"]
     assert main(args) == 0
     cap = capsys.readouterr()
     assert "(0 simulated" in cap.out and "| contact.mu0 | 0.05 |" in cap.out

@@ -22,6 +22,8 @@ from twin.config import BenchConfig
 from twin.errors import ConfigError
 from twin.calibration.params import overlay  # noqa: F401 - part of this module's API
 
+#: misfit per term (J*/n) above which the report warns that the fit did not reach the recordings' scatter
+MISFIT_WARN = 10.0
 #: the files a calibration writes in its output folder
 OUTPUT_FILES = ("calibrated.toml", "report.json", "report.md", "evaluations.jsonl", "spectra.png",
                 "windows.png", "history.png", "profiles.png")
@@ -44,6 +46,9 @@ class CalibrationOptions:
         dtw_max_s: DTW on at most this much of each window [s].
         dtw_window_s: Sakoe–Chiba half-width of the DTW [s].
         delta_j: rise of the objective that bounds an interval (1 = one term moved by one scatter).
+        replicates: noise replicates per full-length evaluation (other sensor-noise realizations of
+            the same simulation; their minimizers' scatter is the noise's share of each interval,
+            :func:`twin.calibration.uncertainty.replicate_spread`); 0 = the ΔJ rule alone.
         plots: write the PNG figures.
         progress: progress bars on standard error.
     """
@@ -51,7 +56,7 @@ class CalibrationOptions:
     n_global: int = 16
     local_short: int = 20
     local_full: int = 12
-    profile_steps: tuple[float, ...] = (0.03, 0.1, 0.25)
+    profile_steps: tuple[float, ...] = (0.01, 0.03, 0.1, 0.25)
     short_fraction: float = 0.5
     drive: str = "trace"
     workers: int = 1
@@ -59,12 +64,13 @@ class CalibrationOptions:
     dtw_max_s: float = 0.05
     dtw_window_s: float = 0.002
     delta_j: float = 1.0
+    replicates: int = 4
     plots: bool = True
     progress: bool = False
 
     def __post_init__(self) -> None:
         for name, lo, hi in (("n_global", 0, 4096), ("local_short", 0, 10_000), ("local_full", 0, 10_000),
-                             ("workers", 1, 1024), ("seed", 0, 2 ** 31 - 1)):
+                             ("workers", 1, 1024), ("seed", 0, 2 ** 31 - 1), ("replicates", 0, 64)):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
                 raise ConfigError(name, f"must be an integer in [{lo}, {hi}], got {v!r}")
@@ -94,9 +100,14 @@ class FittedParameter:
     method: str
     flat: bool
     on_bound: str
+    noise_lo: float = math.nan
+    noise_hi: float = math.nan
 
     def to_dict(self) -> dict[str, Any]:
-        return {**self.__dict__, "bounds": list(self.bounds)}
+        d = {**self.__dict__, "bounds": list(self.bounds)}
+        for k in ("noise_lo", "noise_hi"):
+            d[k] = None if not math.isfinite(d[k]) else d[k]
+        return d
 
 
 @dataclass(frozen=True)
@@ -201,15 +212,17 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
     fields = [p.field for p in P]
     out_dir.mkdir(parents=True, exist_ok=True)  # every input checked: the first thing written
     scales, scales_note = {}, ""
-    for st in ("short", "full"):
-        scales[st], scales_note = obj.repeat_scales(targets[st], options.dtw_window_s, ripple)
+    for st, floor in (("short", obj.SEARCH_FLOOR), ("full", obj.SCALE_FLOOR)):
+        scales[st], scales_note = obj.repeat_scales(targets[st], options.dtw_window_s, ripple, floor)
 
     header = {"format": search.LOG_FORMAT, "version": search.LOG_VERSION,
               "recordings": [obj.recording_key(r) for r in recs],
               "parameters": [{"field": p.field, "lo": p.lo, "hi": p.hi, "log": p.log} for p in P],
               "base_config": base_toml, "options": {"short_fraction": options.short_fraction, "drive": options.drive,
                                                     "dtw_max_s": options.dtw_max_s,
-                                                    "dtw_window_s": options.dtw_window_s}}
+                                                    "dtw_window_s": options.dtw_window_s,
+                                                    "replicates": options.replicates,
+                                                    "trace_filter_hz": obj.TRACE_FILTER_HZ}}
 
     def make_task(stage: str, u: np.ndarray, i: int) -> dict[str, Any]:
         # run_id and index: what the dataset pool's report of a crashed worker names a task by
@@ -217,10 +230,12 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
                 "fraction": options.short_fraction if stage == "short" else 1.0,
                 "dtw_max_s": options.dtw_max_s, "dtw_window_s": options.dtw_window_s, "motor": motor,
                 "ripple": ripple, "drive": options.drive, "fields": fields,
+                "replicates": options.replicates if stage == "full" else 0,
                 "values": [p.from_unit(x) for p, x in zip(P, u)]}
 
-    run = (search.in_process(obj.evaluate_task) if options.workers == 1
-           else search.local_pool(options.workers, obj.evaluate_task))
+    # one pool for every stage (spawned once; its workers keep their prepared recordings)
+    pool = search.PersistentPool(options.workers, obj.evaluate_task) if options.workers > 1 else None
+    run = pool if pool is not None else search.in_process(obj.evaluate_task)
     ev = search.Evaluator(out_dir / "evaluations.jsonl", header, P, make_task, scales, run, options.progress,
                           run_single=search.in_process(obj.evaluate_task))
     try:
@@ -254,21 +269,44 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
         # this run's path only (ev.history, cached or not): a resumed run retraces the same steps
         fulls = [(np.asarray(e["u"]), ev.value(e)) for e in ev.history if e["stage"] == "full"]
         u_best = min(fulls, key=lambda c: c[1])[0] if fulls else u_f
-        prof = []
-        for i in range(len(P)):
-            for s in options.profile_steps:
-                for sign in (-1, 1):
-                    v = u_best.copy()
-                    v[i] = v[i] + sign * s
-                    if 0 <= v[i] <= 1:
-                        prof.append(v)
+
+        def profile(centre: np.ndarray) -> None:
+            prof = []
+            for i in range(len(P)):
+                for s in options.profile_steps:
+                    for sign in (-1, 1):
+                        v = centre.copy()
+                        v[i] = v[i] + sign * s
+                        if 0 <= v[i] <= 1:
+                            prof.append(v)
+            ev.many("full", prof, "profiles (full length)")
+
+        def full_points() -> dict[tuple, tuple[np.ndarray, float]]:
+            out: dict[tuple, tuple[np.ndarray, float]] = {}
+            for e in ev.history:
+                if e["stage"] == "full":
+                    out[search._key("full", np.asarray(e["u"]))] = (np.asarray(e["u"]), ev.value(e))
+            return out
+
         u_centre = u_best.copy()
-        ev.many("full", prof, "profiles (full length)")
-        seen: dict[tuple, tuple[np.ndarray, float]] = {}
-        for e in ev.history:
-            if e["stage"] == "full":
-                seen[search._key("full", np.asarray(e["u"]))] = (np.asarray(e["u"]), ev.value(e))
+        profile(u_centre)
+        seen = full_points()
+        u_new = min(seen.values(), key=lambda c: c[1])[0]
+        if not np.array_equal(u_new, u_centre):
+            # a profile point beat the centre: the local search stopped short. Once more: Nelder-Mead
+            # from it (half the full-length budget) and the profiles around the new best
+            u_f = search.nelder_mead(ev, "full", u_new, max(2, options.local_full // 2), 0.02)
+            seen = full_points()
+            u_centre = min(seen.values(), key=lambda c: c[1])[0].copy()
+            profile(u_centre)
+            seen = full_points()
         fulls = list(seen.values())
+        reps = None
+        if options.replicates:
+            full_es = {search._key("full", np.asarray(e["u"])): e for e in ev.history if e["stage"] == "full"}
+            cols = [ev.replicate_values(full_es[k], options.replicates) for k in seen]
+            if cols and all(len(c) == options.replicates for c in cols):
+                reps = np.asarray(cols, dtype=np.float64).T  # (K, n)
         u_best, j_best = min(fulls, key=lambda c: c[1])
         if not np.array_equal(u_best, np.clip(u_best, 0, 1)):
             u_best = np.clip(u_best, 0, 1)
@@ -276,17 +314,21 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
         # point's terms exceed their scales (J*/n > 1: the scatter understates the model's error)
         n_terms = max(1, sum(len(t) for t in ev.cache[search._key("full", u_best)]["terms"]))
         inflation = max(1.0, float(j_best) / n_terms)
-        unc = uncertainty.analyse(P, u_best, fulls, options.delta_j * inflation, centre=u_centre)
+        unc = uncertainty.analyse(P, u_best, fulls, options.delta_j * inflation, centre=u_centre,
+                                  replicates=reps)
         unc["inflation"] = inflation
         unc["profile_centre_is_best"] = bool(np.array_equal(u_centre, u_best))
         e_before = ev.cache[search._key("full", u0)]
         e_after = ev.cache[search._key("full", u_best)]
     finally:
         ev.close()
+        if pool is not None:
+            pool.close()
 
     from twin.calibration.report import write_outputs
 
-    fitted = tuple(FittedParameter(p.field, iv.value, iv.lo, iv.hi, x, (p.lo, p.hi), iv.method, iv.flat, iv.on_bound)
+    fitted = tuple(FittedParameter(p.field, iv.value, iv.lo, iv.hi, x, (p.lo, p.hi), iv.method, iv.flat, iv.on_bound,
+                                   iv.noise_lo, iv.noise_hi)
                    for p, iv, x in zip(P, unc["intervals"], x0))
     warnings = []
     for f in fitted:
@@ -303,6 +345,11 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
         warnings.append("a profile point was better than the point the profiles were taken around: the fitted "
                         "values are that point's, the slices are around the earlier one; more local evaluations "
                         "(--local-full) would settle it")
+    if unc["inflation"] > MISFIT_WARN:
+        warnings.append(f"the best point misses the recordings by {math.sqrt(unc['inflation']):.3g} scatters per term "
+                        f"(J*/n = {unc['inflation']:.3g}): the search did not reach the recordings' scatter — a local "
+                        "minimum, too small a budget, or a model that cannot match them; the intervals hold only if "
+                        "this is the right basin (more --global-points / --local-full, fewer fields)")
     failed = sum(1 for e in ev.cache.values() if e["status"] != "ok")
     if failed:
         warnings.append(f"{failed} evaluation(s) failed (simulation error; counted as a very bad objective)")
@@ -316,6 +363,7 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
                       "terms_after": e_after["terms"], "scales": scales["full"], "scales_note": scales_note,
                       "delta_j": options.delta_j, "delta_j_used": unc["delta_j"]},
         "uncertainty": {k: v for k, v in unc.items() if k != "intervals"},
+        "identifiability": identifiability(P, unc["intervals"], unc["correlated_pairs"], unc["delta_j"]),
         "warnings": warnings,
         "evaluations": {"total": len(ev.cache), "simulated_now": ev.simulated, "resumed": ev.resumed,
                         "failed": failed, "seconds_per_evaluation": times,
@@ -334,6 +382,24 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
     return CalibrationResult(fitted, j0_full, j_best, e_before["terms"], e_after["terms"], scales["full"],
                              scales_note, unc["correlated_pairs"], warnings, len(ev.cache), ev.simulated,
                              ev.resumed, times, report["wall_s"], out_dir, report)
+
+
+def identifiability(params, intervals, pairs, delta_j: float) -> list[dict[str, Any]]:
+    """Per parameter, what the recordings tell: ``told`` (the interval is under a quarter of the range),
+    ``weak`` (under the whole range but wider), ``flat`` (not told: the objective does not rise by ΔJ
+    across the range), with the objective's rise along the profile, the interval's share of the range,
+    the noise interval's share of it and the correlated partners."""
+    out = []
+    for p, iv in zip(params, intervals):
+        share = (p.to_unit(iv.hi) - p.to_unit(iv.lo)) if iv.hi > iv.lo else 0.0
+        noise = (p.to_unit(iv.noise_hi) - p.to_unit(iv.noise_lo)) if math.isfinite(iv.noise_lo) else math.nan
+        verdict = "flat" if iv.flat else "told" if share <= 0.25 else "weak"
+        partners = [q["b"] if q["a"] == p.field else q["a"] for q in pairs if p.field in (q["a"], q["b"])]
+        out.append({"field": p.field, "verdict": verdict, "profile_rise": iv.rise, "delta_j": delta_j,
+                    "interval_share_of_range": share,
+                    "noise_share_of_range": None if not math.isfinite(noise) else noise,
+                    "correlated_with": partners})
+    return out
 
 
 def obj_field(cfg: BenchConfig, f: str) -> float:

@@ -33,6 +33,10 @@ def documented_ranges() -> dict[str, tuple[float, float]]:
     }
     for _name, field, _doc, bounds in EXPLORE_RANGES:
         out[f"drivetrain.{field}"] = (float(bounds[0]), float(bounds[1]))
+    from twin.config.structure import EXPLORE_RANGES as STRUCTURE_RANGES
+
+    for _name, field, _doc, bounds in STRUCTURE_RANGES:  # the flexible structure's placeholders
+        out[f"structure.{field}"] = (float(bounds[0]), float(bounds[1]))
     # the PID gains: the dataset's pid_scale factor (0.1 - 10 times the default gains)
     from twin.config.drive import PID
 
@@ -46,7 +50,12 @@ def documented_ranges() -> dict[str, tuple[float, float]]:
 
 #: fields searched on a logarithmic scale (they span decades); others are linear
 LOG_FIELDS = frozenset({"contact.stiffness_scale", "drivetrain.belt_ea_n", "drivetrain.rotor_inertia_kgm2",
-                        "drivetrain.speed_kp_nms", "drivetrain.speed_filter_hz", "pid.kp", "pid.kv", "pid.ki"})
+                        "drivetrain.speed_kp_nms", "drivetrain.speed_filter_hz", "pid.kp", "pid.kv", "pid.ki",
+                        "structure.rod_youngs_modulus_pa", "structure.frame_mass_kg", "structure.frame_frequency_hz",
+                        "structure.guide_mass_kg", "structure.guide_frequency_hz", "structure.mount_frequency_hz",
+                        "structure.bending_damping_ratio", "structure.axial_damping_ratio",
+                        "structure.frame_damping_ratio", "structure.guide_damping_ratio",
+                        "structure.mount_damping_ratio"})
 
 #: fields a calibration may not fit: they describe the recording, not the bench's uncertain numbers
 NOT_FITTABLE_PREFIXES = ("simulation.", "sensors.", "drive.", "name", "instrumentation.daq_rate_hz",
@@ -141,6 +150,9 @@ def make_parameters(fields: Iterable[str], base: BenchConfig,
             raise ConfigError("params", f"{f!r} describes the recording or its drive, not an uncertain number of "
                                         "the bench; it cannot be fitted")
         field_value(base, f)
+        if f.startswith("structure.") and base.structure.mode != "flexible":
+            raise ConfigError("params", f"{f!r} acts only with structure.mode = \"flexible\"; the base configuration "
+                                        f"is {base.structure.mode!r} (give --config with a flexible structure)")
         if f in bounds:
             lo, hi = bounds[f]
         elif f in known:

@@ -79,11 +79,26 @@ def render_markdown(r: dict[str, Any]) -> str:
             notes.append(f"on its {p['on_bound']} bound")
         lines.append(f"| {p['field']} | {_fmt(p['base'])} | {_fmt(p['value'])} | {_fmt(p['lo'])} – {_fmt(p['hi'])} | "
                      f"{p['method']} | {p['bounds'][0]:g} – {p['bounds'][1]:g} | {'; '.join(notes)} |")
+    nrep = r["uncertainty"].get("noise_replicates", 0)
     lines += ["", f"Intervals: where the objective stays within ΔJ = {o['delta_j_used']:.3g} of its minimum "
-              f"({o['delta_j']:g} × max(1, misfit per term J*/n)); {r['uncertainty']['note']}. Heuristic: "
-              "see docs/calibration.md.", ""]
+              f"({o['delta_j']:g} × max(1, misfit per term J*/n)); {r['uncertainty']['note']}"
+              + (f"; widened to hold the 90 % noise interval from {nrep} noise replicates (method +noise)" if nrep else "")
+              + ". Their coverage on known truths: docs/calibration.md.", ""]
     if r["warnings"]:
         lines += ["## Warnings", ""] + [f"- {w}" for w in r["warnings"]] + [""]
+    if r.get("identifiability"):
+        lines += ["## Identifiability", "",
+                  "What these recordings tell about each field: **told** (interval under a quarter of the range), "
+                  "**weak** (wider), **FLAT** (the objective does not rise by ΔJ across the range: the fitted "
+                  "number means nothing; fix the field from another source or record what shows it).", "",
+                  "| field | verdict | objective rise along its profile | interval / range | noise interval / range "
+                  "| correlated with |", "|---|---|---|---|---|---|"]
+        for d in r["identifiability"]:
+            lines.append(f"| {d['field']} | {d['verdict'].upper() if d['verdict'] == 'flat' else d['verdict']} | "
+                         f"{_fmt(d['profile_rise'], '.3g')} (ΔJ {_fmt(d['delta_j'], '.3g')}) | "
+                         f"{_fmt(d['interval_share_of_range'], '.2f')} | {_fmt(d['noise_share_of_range'], '.2g')} | "
+                         f"{', '.join(d['correlated_with']) or '–'} |")
+        lines.append("")
     lines += ["## Objective", "", f"Total (full length): before {_fmt(o['before'])}, after {_fmt(o['after'])}. "
               f"Term scales: {', '.join(f'{k} {v:.3g}' for k, v in o['scales'].items())} ({o['scales_note']}).", "",
               "| recording | term | before | after |", "|---|---|---|---|"]
@@ -92,7 +107,8 @@ def render_markdown(r: dict[str, Any]) -> str:
             lines.append(f"| {i + 1} | {k} | {_fmt(tb[k])} | {_fmt(ta.get(k))} |")
     lines += ["", "Terms: bands = RMS third-octave band energy difference [dB]; peaks = RMS difference of log10 "
               "impact-peak statistics; dtw = mean normalized DTW distance [%]; ripple = RMS crank-speed harmonic "
-              "difference [rad/s].", "", "## Replay metrics per accelerometer (before → after)", ""]
+              "difference [rad/s]; command = RMS difference of the low-passed crank speed over the whole run [rad/s].", "",
+              "## Replay metrics per accelerometer (before → after)", ""]
     for m in r.get("replay_metrics", []):
         lines += [f"`{m['recording']}`, window {m['window_s'][0]:.3f}–{m['window_s'][1]:.3f} s:", "",
                   "| sensor | NRMSE % | correlation | DTW % | RMS error m/s² |", "|---|---|---|---|---|"]

@@ -38,7 +38,8 @@ from twin.errors import TwinError
 LOG_FORMAT = "twin-calibration-log"
 LOG_VERSION = 1
 #: objective value given to a point whose simulation failed (unstable parameters): worse than any real one
-FAILED_J = 1e6
+#: (the terms are scaled by the repeats' scatter, so a real objective can reach 1e6 and more)
+FAILED_J = 1e300
 
 
 def _key(stage: str, u: np.ndarray) -> tuple:
@@ -77,7 +78,9 @@ def read_log(path: Path, header: dict[str, Any], d: int) -> tuple[list[dict[str,
                   and len(e["u"]) == d and all(isinstance(x, (int, float)) and 0 <= x <= 1 for x in e["u"])
                   and e.get("status") in ("ok", "failed") and isinstance(e.get("terms"), list)
                   and all(isinstance(t, dict) and all(isinstance(v, (int, float)) for v in t.values())
-                          for t in e["terms"]))
+                          for t in e["terms"])
+                  and all(isinstance(r, list) and all(isinstance(t, dict) for t in r)
+                          for r in e.get("terms_rep", [])))
         except json.JSONDecodeError:
             ok = False
         if not ok:
@@ -130,6 +133,12 @@ class Evaluator:
             return FAILED_J
         return float(sum(combine(t, self.scales[e["stage"]]) for t in e["terms"]))
 
+    def replicate_values(self, e: dict[str, Any], k: int) -> list[float]:
+        """The objective at ``e`` under each of its ``k`` noise replicates (empty if it has none)."""
+        if e["status"] != "ok":
+            return [FAILED_J] * k
+        return [float(sum(combine(t, self.scales[e["stage"]]) for t in rep)) for rep in e.get("terms_rep", [])]
+
     def many(self, stage: str, us: list[np.ndarray], desc: str = "") -> list[float]:
         """Objective values at the points ``us`` of ``stage``; new points simulated (in parallel)."""
         us = [np.clip(np.asarray(u, dtype=np.float64), 0.0, 1.0) for u in us]
@@ -152,10 +161,11 @@ class Evaluator:
                     e = {"stage": stage, "u": [float(x) for x in u],
                          "x": [p.from_unit(x) for p, x in zip(self.params, u)],
                          "status": r["status"], "terms": r.get("terms", []),
+                         "terms_rep": r.get("terms_rep", []),
                          "error": r.get("error") or r.get("reason"),
                          "wall_s": r.get("wall_s", 0.0), "sim_wall_s": r.get("sim_wall_s", 0.0)}
                     if e["status"] != "ok":
-                        e["terms"] = []
+                        e["terms"], e["terms_rep"] = [], []
                     self.cache[k] = e
                     self.log.write(json.dumps(e) + "\n")
                     self.log.flush()
@@ -185,10 +195,71 @@ def in_process(fn: Callable[[dict], dict]) -> Callable[[list[dict]], Iterator[di
 
 
 def local_pool(workers: int, fn: Callable[[dict], dict]) -> Callable[[list[dict]], Iterator[dict]]:
-    """The dataset machinery's local process pool (spawned workers; a crashed worker fails only its task)."""
+    """The dataset machinery's local process pool (spawned workers; a crashed worker fails only its task).
+    A new pool per call: see :class:`PersistentPool` for one kept across the stages."""
     from twin.dataset.generate import _local
 
     return _local(workers, fn)
+
+
+class PersistentPool:
+    """A local process pool kept across calls (the calibration's stages): the workers are spawned
+    once and keep their prepared recordings (:func:`twin.calibration.objective.get_target` caches per
+    process), so a batch costs its simulations only. A worker that dies fails the tasks in flight (each
+    is reported ``failed``, as the dataset pool reports a crashed run) and the pool is started again.
+    Call :meth:`close` at the end (or use it as a context manager)."""
+
+    def __init__(self, workers: int, fn: Callable[[dict], dict]):
+        self.workers, self.fn = int(workers), fn
+        self.ex = None
+
+    def _pool(self):
+        import multiprocessing as mp
+        from concurrent.futures import ProcessPoolExecutor
+
+        from twin.dataset.worker import watch_parent
+
+        if self.ex is None:
+            self.ex = ProcessPoolExecutor(max_workers=self.workers, mp_context=mp.get_context("spawn"),
+                                          initializer=watch_parent)
+        return self.ex
+
+    def __call__(self, tasks: list[dict]) -> Iterator[dict]:
+        from concurrent.futures import FIRST_COMPLETED, wait
+        from concurrent.futures.process import BrokenProcessPool
+
+        queue = list(tasks)[::-1]
+        pending: dict = {}
+        while queue or pending:
+            ex = self._pool()
+            while queue and len(pending) < 2 * self.workers:
+                t = queue.pop()
+                pending[ex.submit(self.fn, t)] = t
+            finished, _ = wait(set(pending), return_when=FIRST_COMPLETED)
+            broken = False
+            for f in finished:
+                t = pending.pop(f)
+                try:
+                    yield f.result()
+                except BrokenProcessPool as err:
+                    broken = True
+                    yield {"id": t["id"], "status": "failed", "error": f"worker process died: {err}"}
+            if broken:  # every task in flight died with the pool
+                for t in pending.values():
+                    yield {"id": t["id"], "status": "failed", "error": "worker process died"}
+                pending = {}
+                self.close()
+
+    def close(self) -> None:
+        if self.ex is not None:
+            self.ex.shutdown(wait=True, cancel_futures=True)
+            self.ex = None
+
+    def __enter__(self) -> "PersistentPool":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
 
 
 def nelder_mead(ev: Evaluator, stage: str, u0: np.ndarray, maxfev: int, step: float) -> np.ndarray:

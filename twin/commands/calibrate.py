@@ -36,12 +36,16 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="Nelder-Mead evaluations on short windows (default 20)")
     p.add_argument("--local-full", type=int, default=12, metavar="N",
                    help="Nelder-Mead evaluations on the whole recordings (default 12)")
-    p.add_argument("--profile-steps", default="0.03,0.1,0.25", metavar="D,D",
-                   help="offsets of the profile points, as shares of each parameter's range (default 0.03,0.1,0.25)")
+    p.add_argument("--profile-steps", default="0.01,0.03,0.1,0.25", metavar="D,D",
+                   help="offsets of the profile points, as shares of each parameter's range (default 0.01,0.03,0.1,0.25)")
     p.add_argument("--short-fraction", type=float, default=0.5, metavar="F",
                    help="share of each recording simulated in the short stage (default 0.5)")
     p.add_argument("--workers", type=int, default=1, metavar="N", help="worker processes (default 1)")
     p.add_argument("--seed", type=int, default=0, help="seed of the Sobol sample (default 0)")
+    p.add_argument("--replicates", type=int, default=4, metavar="K",
+                   help="noise replicates per full-length evaluation: other sensor-noise realizations of the same "
+                        "simulation, whose minimizers' scatter widens each interval by the noise's share "
+                        "(default 4; 0: the objective-rise rule alone)")
     p.add_argument("--no-plots", action="store_true", help="no PNG figures")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
     p.set_defaults(func=run, _field_flags={"params": "--params", "bounds": "--bounds", "recordings": "RECORDING...",
@@ -65,6 +69,7 @@ def run(args: argparse.Namespace) -> int:
         raise TwinError(f"expected numbers separated by commas, got {args.profile_steps!r}",
                         field="--profile-steps") from None
     opts = CalibrationOptions(profile_steps=steps, n_global=args.n_global, local_short=args.local_short, local_full=args.local_full,
+                              replicates=args.replicates,
                               short_fraction=args.short_fraction, drive=args.drive, workers=workers, seed=args.seed,
                               plots=not args.no_plots, progress=not args.no_progress and sys.stderr.isatty())
     cfg = load_config_file(args.config) if args.config else None
