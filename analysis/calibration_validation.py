@@ -99,10 +99,10 @@ def make(work: Path) -> None:
         sys.exit(f"{truth_path} exists: the set is made once")
     HERE.mkdir(parents=True, exist_ok=True)
     cases = draw_truths()
-    from twin.provenance import stamp
+    from twin.provenance import stamped
 
-    truth_path.write_text(json.dumps({"provenance": stamp(), "seed": SEED, "duration_s": DURATION_S,
-                                      "motor_rpm": MOTOR_RPM, "ramp_s": RAMP_S, "cases": cases}, indent=1) + "\n")
+    truth_path.write_text(json.dumps(stamped({"seed": SEED, "duration_s": DURATION_S, "motor_rpm": MOTOR_RPM,
+                                              "ramp_s": RAMP_S, "cases": cases}), indent=1) + "\n")
     work.mkdir(parents=True, exist_ok=True)
     twin_exe = str(Path(sys.executable).with_name("twin"))
     for case in cases:
@@ -207,7 +207,7 @@ def run(work: Path, deadline_utc: str | None) -> None:
     jobs = [(c, "program") for c in doc["cases"]] + [(c, "trace") for c in doc["cases"] if c["case"] in TRACE_CASES]
     from datetime import datetime, timezone
 
-    from twin.provenance import stamp
+    from twin.provenance import stamped, with_stamp_line
 
     for case, drive in jobs:
         if (case["case"], drive) in done:
@@ -217,9 +217,9 @@ def run(work: Path, deadline_utc: str | None) -> None:
             continue
         r = run_case(case, work, drive)
         results.append(r)
-        res_path.write_text(json.dumps({"provenance": stamp(), "budget": BUDGET, "results": results,
-                                        "summary": summary(results)}, indent=1, default=str) + "\n")
-        (HERE / "table.md").write_text(table(results))
+        res_path.write_text(json.dumps(stamped({"budget": BUDGET, "results": results, "summary": summary(results)}),
+                                       indent=1, default=str) + "\n")
+        (HERE / "table.md").write_text(with_stamp_line(table(results)))
         print(f"{case['case']} ({drive}): {r.get('wall_s', 0):.0f} s "
               + ("; ".join(f"{p['field']} {fmt(p['truth'])} -> {fmt(p['value'])} [{fmt(p['lo'])}, {fmt(p['hi'])}]"
                            for p in r.get("params", [])) or r.get("error", "")), flush=True)

@@ -153,6 +153,14 @@ SCRIPTS: dict[str, Script] = {
                                   "reference)", "~10 min"),
     "structure_fig15": Script(f"{R}/structure_fig15/motor (S003 Fig. 15 and §6 rigid against flexible)", "~20 min",
                               long=True),
+    "structure_sensitivity": Script(f"{R}/structure/sensitivity.md (which structure placeholder moves which band)",
+                                    "~15 min", long=True, args=("--runs",)),
+    # ---- calibration
+    "calibration_walltime": Script("prints the wall time of a two-recording, five-field calibration", "~15 min",
+                                   long=True, needs="a work folder (--work)"),
+    "calibration_validation": Script("analysis/calibration_validation/truth.json, results.json, table.md (the "
+                                     "validation on synthetic recordings: `make`, then `run`)", "~2 h", long=True,
+                                     needs="a step and a work folder (make|run --work DIR)"),
 }
 
 #: folders of analysis/results/ written by a twin command rather than a script here

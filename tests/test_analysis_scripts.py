@@ -35,6 +35,7 @@ NOT_RESULTS = {
     ("bit_identical", "a.save"),              # a digest list for --against, not a result
     ("bench_threads", "gen_file"),            # a dataset spec in a temporary folder
     ("s002_paper_tables", "out / 'responses_reconstructed.csv'"),  # CSV read by twin study mcdm/taguchi
+    ("calibration_validation", "toml"),       # a case's configuration in the work folder, read by twin record
 }
 
 

@@ -25,7 +25,7 @@ ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "analysis" / "results"
 LIST = ROOT / "analysis" / "made_before_stamping.txt"
 #: the list's length when last shrunk; lower it with the list, never raise it
-CEILING = 330
+CEILING = 325
 
 
 def _driver():
