@@ -213,6 +213,7 @@ def test_normal_mobility_is_the_relative_acceleration_per_newton():
     flexible model's own accelerations; and m̂ lies between the housing's mass and the whole mechanism's."""
     from twin.natural_coordinates import N_Q, N_Z
     from twin.reference import flexible_kernels as F
+    from twin.reference import flexible_rmatrix as FR
 
     cfg = preset(12).replace(**{"structure.mode": "flexible"})
     run, _ = _run(cfg, 0.7, drive=True)
@@ -220,7 +221,7 @@ def test_normal_mobility_is_the_relative_acceleration_per_newton():
     n, nc = lay.n, lay.n - N_Q
     q, qd = run.x[:n].copy(), run.x[n:2 * n].copy()
     rows = np.empty(N_Z + 4 + nc, dtype=np.int64)
-    nz = F.flex_rows(P, G, lay.indep, rows)
+    nz = FR.flex_rows(P, G, lay.indep, rows)
     r0 = N_Q + lay.segs.shape[0] + lay.slides.shape[0]
     for k in range(lay.indep.shape[0]):
         rows[nz] = r0 + k
@@ -229,14 +230,14 @@ def test_normal_mobility_is_the_relative_acceleration_per_newton():
     assert F.factor(q, lay.segs, lay.slides, lay.indep, A, LU, piv)
     Rt, MR, Mb, S = np.empty((nz, n)), np.empty((nz, n)), np.empty((nz, nz)), np.empty(n)
     RtT, Bm = np.empty((n, nz)), np.empty((nc, nz + 1))
-    F.flex_mass(P, G, q, qd, lay.segs, lay.seg_f, lay.slides, A, LU, piv, rows, nz, Rt, S, Mb, MR, np.empty(n),
+    FR.flex_mass(P, G, q, qd, lay.segs, lay.seg_f, lay.slides, A, LU, piv, rows, nz, Rt, S, Mb, MR, np.empty(n),
                 Bm, RtT)
     nx, ny = 0.6, 0.8
-    mob = F.normal_mobility(Rt, Mb, nz, False, 0, 1, 2, 3, nx, ny, np.empty(2 * nz), np.empty((nz, nz)))
+    mob = FR.normal_mobility(Rt, Mb, nz, False, 0, 1, 2, 3, nx, ny, np.empty(2 * nz), np.empty((nz, nz)))
 
     def rel_acc(Q):
         qdd = np.empty(n)
-        assert F.flex_solve_acc(q, Q, nz, Rt, RtT, S, Mb.copy(), np.empty(nz), np.empty(n), np.empty(n), qdd, P,
+        assert FR.flex_solve_acc(q, Q, nz, Rt, RtT, S, Mb.copy(), np.empty(nz), np.empty(n), np.empty(n), qdd, P,
                                 lay.segs, lay.seg_f, G, False, 0.0, np.zeros(1))
         return nx * (qdd[0] - qdd[2]) + ny * (qdd[1] - qdd[3])
 
@@ -263,6 +264,7 @@ def test_sparse_constraint_force_solve_equals_the_r_matrix_solve(test_id, chain,
     default, one axial group of 16 segments (a 17-point mass block), a slide at every node."""
     from twin.natural_coordinates import N_Q, N_Z
     from twin.reference import flexible_kernels as F
+    from twin.reference import flexible_rmatrix as FR
     from twin.reference import flexible_kkt as KK
 
     cfg = preset(test_id).replace(**{"structure.mode": "flexible", "structure.rod_segments": chain[0],
@@ -279,7 +281,7 @@ def test_sparse_constraint_force_solve_equals_the_r_matrix_solve(test_id, chain,
         Q = rng.normal(scale=50.0, size=n)
         alpha = float(rng.normal(scale=100.0))
         rows = np.empty(N_Z + 4 + nc, dtype=np.int64)
-        nz = F.flex_rows(P, G, lay.indep, rows)
+        nz = FR.flex_rows(P, G, lay.indep, rows)
         for k in range(lay.indep.shape[0]):
             rows[nz] = N_Q + lay.segs.shape[0] + lay.slides.shape[0] + k
             nz += 1
@@ -287,12 +289,12 @@ def test_sparse_constraint_force_solve_equals_the_r_matrix_solve(test_id, chain,
         assert F.factor(q, lay.segs, lay.slides, lay.indep, A, LU, piv)
         Rt, MR, Mb, S = np.empty((nz, n)), np.empty((nz, n)), np.empty((nz, nz)), np.empty(n)
         RtT = np.empty((n, nz))
-        F.flex_mass(P, G, q, qd, lay.segs, lay.seg_f, lay.slides, A, LU, piv, rows, nz, Rt, S, Mb, MR, np.empty(n),
+        FR.flex_mass(P, G, q, qd, lay.segs, lay.seg_f, lay.slides, A, LU, piv, rows, nz, Rt, S, Mb, MR, np.empty(n),
                     np.empty((nc, nz + 1)), RtT)
-        mobs = [F.normal_mobility(Rt, Mb, nz, prescribed, *j, 0.6, 0.8, np.empty(2 * nz), np.empty((nz, nz)))
+        mobs = [FR.normal_mobility(Rt, Mb, nz, prescribed, *j, 0.6, 0.8, np.empty(2 * nz), np.empty((nz, nz)))
                 for j in ((0, 1, 2, 3), (6, -1, 4, 5))]
         qdd, tau = np.empty(n), np.zeros(1)
-        assert F.flex_solve_acc(q, Q, nz, Rt, RtT, S, Mb.copy(), np.empty(nz), np.empty(n), np.empty(n), qdd, P,
+        assert FR.flex_solve_acc(q, Q, nz, Rt, RtT, S, Mb.copy(), np.empty(nz), np.empty(n), np.empty(n), qdd, P,
                                 lay.segs, lay.seg_f, G, prescribed, alpha, tau)
 
         PhiV, gam, Y, W = np.zeros((m, kk.pat.shape[1])), np.empty(m), np.empty((m, n)), np.empty((m, m))
@@ -316,7 +318,7 @@ def test_sparse_constraint_force_solve_equals_the_r_matrix_solve(test_id, chain,
         lawC = np.array([80.0, 3e7, -0.02, -0.3, 0.8, -0.6])
         jb1, jc1, jb2, jc2 = np.zeros(6), np.zeros(6), np.zeros(6), np.zeros(6)
         q1, q2 = qdd.copy(), qdd2.copy()
-        d1 = F.theta_damping(1e-5, q1, Rt, Mb, nz, prescribed, lawB, lawC, fB, 90.0, False, jb1, jc1)
+        d1 = FR.theta_damping(1e-5, q1, Rt, Mb, nz, prescribed, lawB, lawC, fB, 90.0, False, jb1, jc1)
         d2 = KK.kkt_theta_damping(1e-5, q2, kk.Minv, Y, W, m, kk.crow, lawB, lawC, fB, 90.0, False, jb2, jc2,
                                   np.empty((2, n)), np.empty((2, m)))
         assert jc1[3] != 90.0 and (fB == 0.0 or jb1[3] != fB)   # the method changed the forces in contact

@@ -49,6 +49,7 @@ from typing import Any, Iterable, Sequence
 import numpy as np
 
 from twin.config import BenchConfig
+from twin.dataset.storage import valid_from_s  # noqa: F401 - where the run files' metadata is read
 from twin.errors import TwinError
 
 #: configuration fields a group's members may differ in ("section.field"; the sensor chain's fields
@@ -104,19 +105,6 @@ def approx_groups(cfgs: Sequence[BenchConfig]) -> list[list[int]]:
 def switch_time(cfg: BenchConfig, switch_s: float | None = None) -> float:
     """The switch time [s] (default: the drive's ramp plus :data:`SWITCH_AFTER_RAMP_S`)."""
     return cfg.drive.ramp_s + SWITCH_AFTER_RAMP_S if switch_s is None else float(switch_s)
-
-
-def valid_from_s(meta: dict[str, Any]) -> float:
-    """Time from which a run file's samples are its own physics [s]: ``warm_start.valid_from_s`` of
-    its metadata (an approximate warm start), else 0."""
-    ws = meta.get("warm_start") if isinstance(meta, dict) else None
-    if isinstance(ws, str):
-        try:
-            ws = json.loads(ws)
-        except ValueError:
-            return 0.0
-    v = ws.get("valid_from_s") if isinstance(ws, dict) else None
-    return float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) else 0.0
 
 
 # ------------------------------------------------------------------------------------ mechanism state

@@ -152,7 +152,7 @@ def make_parameters(fields: Iterable[str], base: BenchConfig,
         field_value(base, f)
         if f.startswith("structure.") and base.structure.mode != "flexible":
             raise ConfigError("params", f"{f!r} acts only with structure.mode = \"flexible\"; the base configuration "
-                                        f"is {base.structure.mode!r} (give --config with a flexible structure)")
+                                        f"is {base.structure.mode!r} (start from a configuration with a flexible structure)")
         if f in bounds:
             lo, hi = bounds[f]
         elif f in known:

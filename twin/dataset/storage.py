@@ -30,6 +30,7 @@ update) are kept while writing, for the training split's normalization statistic
 from __future__ import annotations
 
 import json
+import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -326,3 +327,16 @@ def read_run(path: str | Path, columns: Iterable[str] | None = None) -> Run:
              if not (v.dtype.kind == "f" and v.size and np.isnan(v[0]) and np.all(np.isnan(v)))}
     cfg = config_from_toml(meta["config_toml"]) if meta.get("config_toml") else None
     return Run(float(meta.get("t0", 0.0)), float(meta["rate_hz"]), chans, cfg, {"run_id": meta["run_id"]})
+
+
+def valid_from_s(meta: dict[str, Any]) -> float:
+    """Time from which a run file's samples are its own physics [s]: ``warm_start.valid_from_s`` of
+    its metadata (an approximate warm start), else 0."""
+    ws = meta.get("warm_start") if isinstance(meta, dict) else None
+    if isinstance(ws, str):
+        try:
+            ws = json.loads(ws)
+        except ValueError:
+            return 0.0
+    v = ws.get("valid_from_s") if isinstance(ws, dict) else None
+    return float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) else 0.0

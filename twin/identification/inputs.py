@@ -32,7 +32,7 @@ def recording_inputs(path: str | Path) -> tuple[dict[str, np.ndarray], np.ndarra
         # and the static calibration the model was trained through; answering it would claim what it is not
         raise IdentifyError(f"{path}: a run file of 'twin simulate' (the engine's signals, not what the bench's "
                             "sensors and DAQ record); make a bench recording of the configuration with 'twin record' "
-                            "(the options of 'twin simulate' and --out REC.mcap) and identify that")
+                            "(twin.record) and identify that")
     rec, info, _ = read_recording(path)
     if "encoder_counts" not in rec:
         raise IdentifyError(f"{path}: the recording has no encoder_counts channel")
@@ -69,13 +69,11 @@ def run_features(path: str, skip_s: float, counts_per_rev: float, orientation: s
     (:func:`twin.identification.ranges.recording_measures`), or the reason it has none."""
     from twin.identification.ranges import recording_measures
 
-    from twin.dataset.storage import read_columns, read_meta
+    from twin.dataset.storage import read_columns, read_meta, valid_from_s
 
     meta = read_meta(path)
     cols = read_columns(path, [f"meas_{s}" for s in ("AC1", "AC2", "AC3", "AC4", "AC5", "AC6")] + ["encoder_counts"])
     acc = {k[5:]: v for k, v in cols.items() if k.startswith("meas_")}
-    from twin.warm_approx import valid_from_s
-
     skip_s = max(skip_s, valid_from_s(meta))  # an approximate warm start: its own physics from then on
     try:
         X, w = features(acc, cols["encoder_counts"], float(meta["rate_hz"]), counts_per_rev, skip_s, orientation,

@@ -55,7 +55,7 @@ from twin.errors import ModelError, TwinError
 from twin.mujoco_engine.accel import posthoc_applies
 from twin.mujoco_engine import drivetrain, flexible
 from twin.mujoco_engine import guide as guide_clearance
-from twin.native.collider import check_model, ensure_installed
+from twin.native.collider import as_passive_force, check_model, ensure_installed
 from twin.physics.mujoco_params import ContactSetting, contact_setting, native_law_applies, prescribed_armature
 from twin.tracefile import DriveInputs
 
@@ -85,22 +85,6 @@ class BuildInfo:
     contacts: dict[str, ContactSetting] = field(default_factory=dict)
     sensors: list[str] = field(default_factory=list)
     a_hat: dict[str, float] = field(default_factory=dict)
-
-
-def as_passive_force(spec: mujoco.MjSpec, pair: mujoco.MjsPair, bore: mujoco.MjsGeom, pin_id: int,
-                     sensor: str | None) -> None:
-    """Turn a native-law pin/bore ``pair`` into ``mujoco.contact_source = "force"``: the pair is
-    deleted (no collision, no contact row), the bore's ``force_pin`` user data field names the
-    pin's geom id ``pin_id`` (geom ids do not change when pairs and sensors do), and the contact
-    sensor ``sensor`` (if the spec has it) becomes a position-stage user sensor of dimension 4 on
-    the bore that the native module fills with [found, normal force, 0, 0] (``_bore.c``, "Force")."""
-    spec.delete(pair)
-    bore.userdata = mjcf_names.replace_bore_userdata(list(bore.userdata), force_pin=float(pin_id))
-    if sensor is not None and spec.sensor(sensor) is not None:
-        spec.delete(spec.sensor(sensor))
-        spec.add_sensor(name=sensor, type=mujoco.mjtSensor.mjSENS_USER, objtype=mujoco.mjtObj.mjOBJ_GEOM,
-                        objname=bore.name, dim=4, needstage=mujoco.mjtStage.mjSTAGE_POS,
-                        datatype=mujoco.mjtDataType.mjDATATYPE_REAL)
 
 
 # --------------------------------------------------------------------------- builder

@@ -142,3 +142,19 @@ def ensure_installed() -> None:
     solve_m = ctypes.cast(lib.mj_solveM, ctypes.c_void_p).value
     _addresses = (table, passive, sensor, apply_ft, solve_m)
     _bore.install(*_addresses)
+
+
+def as_passive_force(spec: mujoco.MjSpec, pair: mujoco.MjsPair, bore: mujoco.MjsGeom, pin_id: int,
+                     sensor: str | None) -> None:
+    """Turn a native-law pin/bore ``pair`` into ``mujoco.contact_source = "force"``: the pair is
+    deleted (no collision, no contact row), the bore's ``force_pin`` user data field names the
+    pin's geom id ``pin_id`` (geom ids do not change when pairs and sensors do), and the contact
+    sensor ``sensor`` (if the spec has it) becomes a position-stage user sensor of dimension 4 on
+    the bore that the native module fills with [found, normal force, 0, 0] (``_bore.c``, "Force")."""
+    spec.delete(pair)
+    bore.userdata = names.replace_bore_userdata(list(bore.userdata), force_pin=float(pin_id))
+    if sensor is not None and spec.sensor(sensor) is not None:
+        spec.delete(spec.sensor(sensor))
+        spec.add_sensor(name=sensor, type=mujoco.mjtSensor.mjSENS_USER, objtype=mujoco.mjtObj.mjOBJ_GEOM,
+                        objname=bore.name, dim=4, needstage=mujoco.mjtStage.mjSTAGE_POS,
+                        datatype=mujoco.mjtDataType.mjDATATYPE_REAL)

@@ -43,7 +43,7 @@ native module, from the housing body); the contact stiffnesses are resolved with
 law's explicit damping is bounded at the dead-beat value m̂/(2h), m̂ the flexible model's effective mass along the
 normal (:func:`_bound_damping`, as the MuJoCo engine's force path: unbounded, against the light housing it rang at
 the step's Nyquist rate), and after the explicit solve the law's damping is integrated by the θ-method as the MuJoCo
-engine's contact rows do (:func:`theta_damping`): the explicit damping had been the largest step error against
+engine's contact rows do (:func:`twin.reference.flexible_kkt.kkt_theta_damping`): the explicit damping had been the largest step error against
 MuJoCo (test 12, 12 dB at 10 kHz).
 Scope: every drive (crank PID, prescribed crank, motor and torque through the drive train), symplectic Euler,
 clearances at B and C (A and the guide ideal).

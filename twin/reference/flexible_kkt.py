@@ -1,7 +1,7 @@
 r"""The flexible reference engine's accelerations by the constraint forces (a sparse KKT solve) instead of the
 R matrix: the same q̈ to round-off, at a fraction of the cost.
 
-:func:`twin.reference.flexible_kernels.flex_mass` builds the R matrix column by column (one solve of the
+:func:`twin.reference.flexible_rmatrix.flex_mass` builds the R matrix column by column (one solve of the
 augmented Jacobian per independent coordinate) and the dense Rᵀ M R (r²n): with the chain's 28 coordinates and
 16 independent ones that was most of a step. The accelerations do not depend on the basis of the motions the
 constraints allow: q̈ is the unique minimizer of ½ q̈ᵀ M q̈ − Qᵀ q̈ on {Φ_c q̈ = γ_c} (Gauss's principle), Φ_c the
@@ -24,8 +24,8 @@ W = Φ_c Y (the constraints' mobility, 12 × 12 for the bench's chain of 6 segme
 Sparse: each constraint row touches at most eight coordinates, each coordinate's column of M̃⁻¹ only its block
 (x or y of the points of one axial group of segments: 4 for the default chain of 6 segments in 2 groups).
 With the crank angle prescribed (a driving constraint) θ's row e₇ joins Φ_c with γ = α and the drive torque is
-−λ₇ (:func:`twin.reference.flexible_kernels.flex_solve_acc` gives R₀ᵀ (M q̈ − Q), the same number).
-The normal mobility of a clearance joint (:func:`twin.reference.flexible_kernels.normal_mobility`,
+−λ₇ (:func:`twin.reference.flexible_rmatrix.flex_solve_acc` gives R₀ᵀ (M q̈ − Q), the same number).
+The normal mobility of a clearance joint (:func:`twin.reference.flexible_rmatrix.normal_mobility`,
 J R (Rᵀ M R)⁻¹ Rᵀ Jᵀ) is J N Jᵀ with N = M̃⁻¹ − Y W⁻¹ Yᵀ the constrained inverse mass matrix.
 ``tests/test_structure_reference.py`` checks the three against the R-matrix kernels on random states.
 """
@@ -440,7 +440,7 @@ def _kkt_response(Minv, Y, W, m, pin_x, pin_y, eye_x, eye_y, nx, ny, z, v):
 @njit(cache=True)
 def kkt_theta_damping(h, qdd, Minv, Y, W, m, crow, lawB, lawC, fB, fC, shift, jb, jc, z, v):
     """The contact laws' damping at B and C by the θ-method after :func:`kkt_accelerations` (the sparse form of
-    :func:`twin.reference.flexible_kernels.theta_damping`, which states the method and is its check): the normal
+    :func:`twin.reference.flexible_rmatrix.theta_damping`, which states the method and is its check): the normal
     force f = F_e + c [(1 − θ) δ̇ + θ δ̇_end], θ = ½ while c h ≤ 2 m̂ and 1 − m̂/(c h) beyond; the forces' change Δ
     solved with the pairs' mobilities W_ab = J_a N J_bᵀ (both joints together), q̈ −= Σ Δ_a N J_aᵀ; jb[3], jc[3] take
     the forces. ``lawB``, ``lawC``: :func:`twin.reference.flexible_kernels.law_terms`; ``z`` (2 × n), ``v`` (2 × m)

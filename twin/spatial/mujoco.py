@@ -207,7 +207,7 @@ def build(cfg: Any, theta0: float) -> tuple[mujoco.MjSpec, mujoco.MjModel, dict[
         spec.geom(BUSH[jt]).userdata = names.bore_userdata(mu0=cfg.contact.mu0, v0=cfg.contact.v0_mps,
                                                        v1=cfg.contact.v1_mps, **setting.law.userdata(per_joint * slot))
         if force:
-            from twin.mujoco_engine.builder import as_passive_force
+            from twin.native.collider import as_passive_force
 
             as_passive_force(spec, p, spec.geom(BUSH[jt]), int(model.geom(PIN[jt]).id), f"s_contact_{jt}")
         contacts[jt] = {"kind": "journal in bearing" if jt == "A" else "ball in socket", **setting.to_json()}

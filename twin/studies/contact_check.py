@@ -64,7 +64,7 @@ def probe_model(cfg: BenchConfig, joint: str, m_eff: float, preload_n: float = 0
     inside ``joint``'s bore, with the twin's contact setting for ``cfg`` (native law or soft
     contact, exactly as the builder resolves it), frictionless; ``preload_n`` presses the pin
     into the wall (gravity along +x)."""
-    from twin.mujoco_engine.builder import as_passive_force
+    from twin.native.collider import as_passive_force
     from twin.physics.mujoco_params import FLAT_SOLIMP, contact_setting, native_law_applies
 
     ensure_installed()
