@@ -393,6 +393,46 @@ def law_terms(P, qs, qds, pin_b, cst, jo, out):
 
 
 @njit(cache=True)
+def theta_forces(h, Wm, act, f0, lawB, lawC, an, dl):
+    """The contact laws' normal forces at B and C by the θ-method, given the pairs' 2 × 2 mobility matrix ``Wm``
+    [1/kg] (rows of inactive pairs unused), which pairs act (``act``), the explicit forces ``f0`` [N], the laws'
+    terms (:func:`law_terms`) and the normal separation accelerations ``an`` [m/s²] the explicit forces give:
+    f = F_e + c [(1 − θ) δ̇ + θ δ̇_end], θ = ½ while c h ≤ 2 m̂ and 1 − m̂/(c h) beyond (m̂ = 1/W_aa), both pairs
+    solved together; a pulling force leaves its pair inactive (f = 0) and the other is solved with that known.
+    Writes the forces' change into ``dl`` (2). Shared by the step's sparse form
+    (:func:`twin.reference.flexible_kkt.kkt_theta_damping`) and its R-matrix check."""
+    A = np.zeros((2, 2))
+    r = np.zeros(2)
+    for a in range(2):
+        if not act[a]:
+            A[a, a] = 1.0
+            continue
+        lw = lawB if a == 0 else lawC
+        fe, c, rate, bb = lw[0], lw[1], lw[2], lw[3]
+        ch = c * h
+        mhat = 1.0 / Wm[a, a] if Wm[a, a] > 0.0 else 0.0
+        theta = 0.5 if ch <= 2.0 * mhat else 1.0 - mhat / ch
+        # f = fe + c rate + θ c h (an + bb − Σ_b W_ab (f_b − f0_b)): unknowns Δ_b = f_b − f0_b
+        r[a] = fe + c * rate + theta * ch * (an[a] + bb) - f0[a]
+        A[a, a] = 1.0
+        for b in range(2):
+            if act[b]:
+                A[a, b] += theta * ch * Wm[a, b]
+    det = A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]
+    dl[0] = (r[0] * A[1, 1] - A[0, 1] * r[1]) / det
+    dl[1] = (A[0, 0] * r[1] - A[1, 0] * r[0]) / det
+    for a in range(2):
+        if act[a] and f0[a] + dl[a] < 0.0:
+            o = 1 - a
+            dl[a] = -f0[a]
+            if act[o]:
+                dl[o] = (r[o] - A[o, a] * dl[a]) / A[o, o]
+                if f0[o] + dl[o] < 0.0:
+                    dl[o] = -f0[o]
+            break
+
+
+@njit(cache=True)
 def chain_forces(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G, Q):
     """Add the chain's gravity, hinges and slides and the supports' springs, dampers and weights to Q; returns the
     power the dampers dissipate [W] (≥ 0)."""

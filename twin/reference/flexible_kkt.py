@@ -38,7 +38,8 @@ import numpy as np
 
 from twin.jit import njit
 from twin.natural_coordinates import N_Q, P_CLR_A, P_CLR_B, P_CLR_C, P_CLR_G, P_MC, P_R, quadratic_terms
-from twin.reference.flexible_kernels import G_FLEX_A, G_FLEX_G, flex_mass_times
+from twin.reference.flexible_kernels import G_FLEX_A, G_FLEX_G, flex_mass_times, theta_forces
+from twin.reference.model import cholesky_factor, cholesky_solve_factored
 
 #: the crank's coordinates (x_B, y_B, θ, x_A, y_A): the block of M̃ that changes with θ
 CRANK = np.array([0, 1, 7, 8, 9], dtype=np.int64)
@@ -284,7 +285,7 @@ def kkt_factor(P, q, crow, pat, pn, PhiV, Minv, cols, cn, Mcrank, kaug, Y, W, sc
             for t in range(pn[r]):
                 acc += PhiV[r, t] * Ys[pat[r, t]]
             W[r, s2] = acc
-    return _cholesky(W, m)
+    return cholesky_factor(W, m)
 
 
 CRANK_C = CRANK
@@ -294,65 +295,18 @@ CRANK_C = CRANK
 def _spd_inverse(A, n, L, x):
     """A ← A⁻¹ for a small SPD matrix (Cholesky into ``L``, then the inverse column by column, ``x`` scratch);
     False if not SPD."""
-    for j in range(n):
-        sacc = A[j, j]
-        for k in range(j):
-            sacc -= L[j, k] * L[j, k]
-        if not sacc > 0.0:
-            return False
-        L[j, j] = math.sqrt(sacc)
-        for i in range(j + 1, n):
-            t = A[i, j]
-            for k in range(j):
-                t -= L[i, k] * L[j, k]
-            L[i, j] = t / L[j, j]
+    for i in range(n):
+        for j in range(n):
+            L[i, j] = A[i, j]
+    if not cholesky_factor(L, n):
+        return False
     for col in range(n):
         for i in range(n):
-            t = 1.0 if i == col else 0.0
-            for k in range(i):
-                t -= L[i, k] * x[k]
-            x[i] = t / L[i, i]
-        for i in range(n - 1, -1, -1):
-            t = x[i]
-            for k in range(i + 1, n):
-                t -= L[k, i] * x[k]
-            x[i] = t / L[i, i]
+            x[i] = 1.0 if i == col else 0.0
+        cholesky_solve_factored(L, n, x)
         for i in range(n):
             A[i, col] = x[i]
     return True
-
-
-@njit(cache=True)
-def _cholesky(W, m):
-    """In-place Cholesky of the lower triangle of W (m × m); False if not positive definite."""
-    for j in range(m):
-        sacc = W[j, j]
-        for k in range(j):
-            sacc -= W[j, k] * W[j, k]
-        if not sacc > 0.0:
-            return False
-        ljj = math.sqrt(sacc)
-        W[j, j] = ljj
-        for i in range(j + 1, m):
-            t = W[i, j]
-            for k in range(j):
-                t -= W[i, k] * W[j, k]
-            W[i, j] = t / ljj
-    return True
-
-
-@njit(cache=True)
-def _chol_solve(W, m, b):
-    for i in range(m):
-        t = b[i]
-        for k in range(i):
-            t -= W[i, k] * b[k]
-        b[i] = t / W[i, i]
-    for i in range(m - 1, -1, -1):
-        t = b[i]
-        for k in range(i + 1, m):
-            t -= W[k, i] * b[k]
-        b[i] = t / W[i, i]
 
 
 @njit(cache=True)
@@ -374,7 +328,7 @@ def kkt_mobility(pat, pn, PhiV, Minv, cols, cn, Y, W, m, pin_x, pin_y, eye_x, ey
         u[r] = acc
     v = u[m:2 * m]
     v[:] = u[:m]
-    _chol_solve(W, m, v)
+    cholesky_solve_factored(W, m, v)
     acc = 0.0
     for r in range(m):
         acc += u[r] * v[r]
@@ -398,7 +352,7 @@ def kkt_accelerations(q, Q, crow, pat, pn, PhiV, gam, Minv, cols, cn, Y, W, qdd,
         for t in range(pn[r]):
             acc += PhiV[r, t] * qdd[pat[r, t]]
         lam[r] = acc - gam[r]
-    _chol_solve(W, m, lam)
+    cholesky_solve_factored(W, m, lam)
     for r in range(m):
         lr = lam[r]
         Yr = Y[r]
@@ -429,7 +383,7 @@ def _kkt_response(Minv, Y, W, m, pin_x, pin_y, eye_x, eye_y, nx, ny, z, v):
         for a in range(nj):
             acc += Y[r, jc[a]] * jv[a]
         v[r] = acc
-    _chol_solve(W, m, v)
+    cholesky_solve_factored(W, m, v)
     for r in range(m):   # z = M̃⁻¹ Jᵀ − Yᵀ W⁻¹ Φ_c M̃⁻¹ Jᵀ
         vr = v[r]
         Yr = Y[r]
@@ -445,58 +399,32 @@ def kkt_theta_damping(h, qdd, Minv, Y, W, m, crow, lawB, lawC, fB, fC, shift, jb
     solved with the pairs' mobilities W_ab = J_a N J_bᵀ (both joints together), q̈ −= Σ Δ_a N J_aᵀ; jb[3], jc[3] take
     the forces. ``lawB``, ``lawC``: :func:`twin.reference.flexible_kernels.law_terms`; ``z`` (2 × n), ``v`` (2 × m)
     scratch. Returns the change of the drive torque −λ₇ where θ's row is a constraint (the prescribed crank), else 0."""
-    act0 = fB > 0.0 and lawB[1] > 0.0
-    act1 = fC > 0.0 and lawC[1] > 0.0
-    if not (act0 or act1):
+    act = np.zeros(2, dtype=np.bool_)
+    act[0] = fB > 0.0 and lawB[1] > 0.0
+    act[1] = fC > 0.0 and lawC[1] > 0.0
+    if not (act[0] or act[1]):
         return 0.0
     pins = ((0, 1, 2, 3), (6, 10 if shift else -1, 4, 5))
-    act = (act0, act1)
     for a in range(2):
         if act[a]:
             lw = lawB if a == 0 else lawC
             p = pins[a]
             _kkt_response(Minv, Y, W, m, p[0], p[1], p[2], p[3], lw[4], lw[5], z[a], v[a])
     Wm = np.zeros((2, 2))
-    for a in range(2):
-        for b in range(2):
-            if act[a] and act[b]:   # J_a z_b
-                lw = lawB if a == 0 else lawC
-                p = pins[a]
-                nx, ny = lw[4], lw[5]
-                Wm[a, b] = nx * (z[b, p[0]] - z[b, p[2]]) + ny * ((z[b, p[1]] if p[1] >= 0 else 0.0) - z[b, p[3]])
-    f0 = (fB, fC)
-    A = np.zeros((2, 2))
-    r = np.zeros(2)
+    an = np.zeros(2)
     for a in range(2):
         if not act[a]:
-            A[a, a] = 1.0
             continue
         lw = lawB if a == 0 else lawC
         p = pins[a]
         nx, ny = lw[4], lw[5]
-        an = nx * (qdd[p[0]] - qdd[p[2]]) + ny * ((qdd[p[1]] if p[1] >= 0 else 0.0) - qdd[p[3]])
-        fe, c, rate, bb = lw[0], lw[1], lw[2], lw[3]
-        ch = c * h
-        mhat = 1.0 / Wm[a, a] if Wm[a, a] > 0.0 else 0.0
-        theta = 0.5 if ch <= 2.0 * mhat else 1.0 - mhat / ch
-        r[a] = fe + c * rate + theta * ch * (an + bb) - f0[a]
-        A[a, a] = 1.0
+        an[a] = nx * (qdd[p[0]] - qdd[p[2]]) + ny * ((qdd[p[1]] if p[1] >= 0 else 0.0) - qdd[p[3]])
         for b in range(2):
-            if act[b]:
-                A[a, b] += theta * ch * Wm[a, b]
+            if act[b]:   # J_a z_b
+                Wm[a, b] = nx * (z[b, p[0]] - z[b, p[2]]) + ny * ((z[b, p[1]] if p[1] >= 0 else 0.0) - z[b, p[3]])
+    f0 = np.array([fB, fC])
     dl = np.zeros(2)
-    det = A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]
-    dl[0] = (r[0] * A[1, 1] - A[0, 1] * r[1]) / det
-    dl[1] = (A[0, 0] * r[1] - A[1, 0] * r[0]) / det
-    for a in range(2):   # a pulling force leaves its row inactive (f = 0); the other row solved with that known
-        if act[a] and f0[a] + dl[a] < 0.0:
-            o = 1 - a
-            dl[a] = -f0[a]
-            if act[o]:
-                dl[o] = (r[o] - A[o, a] * dl[a]) / A[o, o]
-                if f0[o] + dl[o] < 0.0:
-                    dl[o] = -f0[o]
-            break
+    theta_forces(h, Wm, act, f0, lawB, lawC, an, dl)
     n = qdd.shape[0]
     dtau = 0.0
     for a in range(2):
@@ -507,8 +435,8 @@ def kkt_theta_damping(h, qdd, Minv, Y, W, m, crow, lawB, lawC, fB, fC, shift, jb
         for k in range(m):   # λ changes by −Δ v; the torque −λ₇ by +Δ v₇
             if crow[k] == 7:
                 dtau += v[a, k] * dl[a]
-    if act0:
+    if act[0]:
         jb[3] = f0[0] + dl[0]
-    if act1:
+    if act[1]:
         jc[3] = f0[1] + dl[1]
     return dtau

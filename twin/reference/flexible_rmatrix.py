@@ -12,7 +12,8 @@ import numpy as np
 
 from twin.jit import njit
 from twin.natural_coordinates import N_Q, independent_rows, quadratic_terms, reduced_mass_into, solve_aug
-from twin.reference.flexible_kernels import G_FLEX_A, G_FLEX_G, bt_solve, chain_quadratic, flex_mass_times
+from twin.reference.flexible_kernels import (G_FLEX_A, G_FLEX_G, bt_solve, chain_quadratic, flex_mass_times,
+                                             theta_forces)
 from twin.reference.model import _cholesky_solve
 
 
@@ -95,44 +96,13 @@ def theta_damping(h, qdd, Rt, Mb0, nz, prescribed, lawB, lawC, fB, fC, shift, jb
                 for j in range(m):
                     acc += g[a, j] * Y[b, j]
                 Wm[a, b] = acc
-    # the rows' accelerations now: a_n = n·ë (from qdd), and the right-hand sides
+    # the rows' accelerations now: a_n = n·ë (from qdd), then the forces (theta_forces)
     f0 = np.array([fB, fC])
-    law = (lawB, lawC)
-    A = np.zeros((2, 2))
-    r = np.zeros(2)
-    for a in range(2):
-        if not act[a]:
-            A[a, a] = 1.0
-            continue
-        lw = law[a]
-        nx, ny = lw[4], lw[5]
-        if a == 0:
-            an = nx * (qdd[0] - qdd[2]) + ny * (qdd[1] - qdd[3])
-        else:
-            an = nx * (qdd[6] - qdd[4]) + ny * ((qdd[10] if shift else 0.0) - qdd[5])
-        fe, c, rate, bb = lw[0], lw[1], lw[2], lw[3]
-        ch = c * h
-        mhat = 1.0 / Wm[a, a] if Wm[a, a] > 0.0 else 0.0
-        theta = 0.5 if ch <= 2.0 * mhat else 1.0 - mhat / ch
-        # f = fe + c rate + θ c h (an + bb − Σ_b W_ab (f_b − f0_b)): unknowns Δ_b = f_b − f0_b
-        r[a] = fe + c * rate + theta * ch * (an + bb) - f0[a]
-        A[a, a] = 1.0
-        for b in range(2):
-            if act[b]:
-                A[a, b] += theta * ch * Wm[a, b]
+    an = np.zeros(2)
+    an[0] = lawB[4] * (qdd[0] - qdd[2]) + lawB[5] * (qdd[1] - qdd[3])
+    an[1] = lawC[4] * (qdd[6] - qdd[4]) + lawC[5] * ((qdd[10] if shift else 0.0) - qdd[5])
     dl = np.zeros(2)
-    det = A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]
-    dl[0] = (r[0] * A[1, 1] - A[0, 1] * r[1]) / det
-    dl[1] = (A[0, 0] * r[1] - A[1, 0] * r[0]) / det
-    for a in range(2):   # a pulling force leaves its row inactive (f = 0); the other row solved with that known
-        if act[a] and f0[a] + dl[a] < 0.0:
-            o = 1 - a
-            dl[a] = -f0[a]
-            if act[o]:
-                dl[o] = (r[o] - A[o, a] * dl[a]) / A[o, o]
-                if f0[o] + dl[o] < 0.0:
-                    dl[o] = -f0[o]
-            break
+    theta_forces(h, Wm, act, f0, lawB, lawC, an, dl)
     n = qdd.shape[0]
     dtau = 0.0
     for a in range(2):

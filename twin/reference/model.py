@@ -234,8 +234,9 @@ def generalized_forces(P, q, qd, tau, cst_a, cst_b, cst_c, Q, ja, jb, jc):
 
 
 @njit(cache=True)
-def _cholesky_solve(A, b, n):
-    """Solve the SPD system A x = b (n × n, in place: A -> L, b -> x)."""
+def cholesky_factor(A, n):
+    """In-place Cholesky factor of the SPD matrix A (n × n, its lower triangle becomes L); False if A is not
+    positive definite."""
     for j in range(n):
         sacc = A[j, j]
         for k in range(j):
@@ -249,16 +250,30 @@ def _cholesky_solve(A, b, n):
             for k in range(j):
                 t -= A[i, k] * A[j, k]
             A[i, j] = t / ljj
+    return True
+
+
+@njit(cache=True)
+def cholesky_solve_factored(L, n, b):
+    """Solve L Lᵀ x = b in place (b -> x) with the factor of :func:`cholesky_factor`."""
     for i in range(n):
         t = b[i]
         for k in range(i):
-            t -= A[i, k] * b[k]
-        b[i] = t / A[i, i]
+            t -= L[i, k] * b[k]
+        b[i] = t / L[i, i]
     for i in range(n - 1, -1, -1):
         t = b[i]
         for k in range(i + 1, n):
-            t -= A[k, i] * b[k]
-        b[i] = t / A[i, i]
+            t -= L[k, i] * b[k]
+        b[i] = t / L[i, i]
+
+
+@njit(cache=True)
+def _cholesky_solve(A, b, n):
+    """Solve the SPD system A x = b (n × n, in place: A -> L, b -> x)."""
+    if not cholesky_factor(A, n):
+        return False
+    cholesky_solve_factored(A, n, b)
     return True
 
 
