@@ -22,6 +22,7 @@ import time
 from pathlib import Path
 
 from twin.provenance import with_stamp_line
+from twin.util import atomic_write_text
 
 VARIANTS = {  # label: (engine, extra overrides)
     "mujoco (contact law rows)": ("mujoco", {}),
@@ -92,9 +93,7 @@ def main() -> None:
     print(text)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = out.with_suffix(".tmp")
-    tmp.write_text(with_stamp_line(text))
-    tmp.replace(out)
+    atomic_write_text(out, with_stamp_line(text))
     print(f"wrote {out}")
 
 

@@ -23,6 +23,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from twin.provenance import with_stamp_line
+from twin.util import atomic_write_text
 
 
 def resonances(cfg) -> dict[str, float]:
@@ -112,9 +113,7 @@ def main() -> None:
     text = "\n".join(lines)
     print(text)
     out = Path(__file__).resolve().parent / "results" / "structure" / "sensitivity.md"
-    tmp = out.with_suffix(".md.tmp")
-    tmp.write_text(with_stamp_line(text))
-    tmp.replace(out)
+    atomic_write_text(out, with_stamp_line(text))
     print(f"wrote {out}")
 
 
