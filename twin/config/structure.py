@@ -33,6 +33,8 @@ from twin.config.common import _bounded, _check, _choice, check_types
 
 #: structure modes
 STRUCTURE_MODES: tuple[str, ...] = ("rigid", "flexible")
+#: the rod chain's shapes (:func:`twin.structure.undamped_chain`)
+ROD_CHAINS: tuple[str, ...] = ("tuned", "uniform")
 
 
 @dataclass(frozen=True)
@@ -61,13 +63,22 @@ class StructureConfig:
             with N = 6 and 5e-4 the second mode is 1 % high, the third 6 % (convergence with N in
             docs/structure.md). Explore 0 – 2e-3.
         rod_segments: number N of rigid segments of the rod's bending chain [-] (hinges at the
-            N − 1 interior nodes, stiffness E I / (L/N)). Numerical: 6 gives the first three
-            bending modes within 0.8 % of Euler–Bernoulli (error ≈ (nπ/N)⁴/1440), 8 the first
-            four; the highest mode must stay below the explicit stability limit of the step.
-            Range 2 – 24.
+            N − 1 interior nodes). Numerical: the tuned chain (``rod_chain``) reproduces the first
+            three bending modes exactly from 4 segments (the default); the uniform chain needs 6 for
+            them within 0.8 % (error ≈ (nπ/N)⁴/1440), 8 for four. The highest mode must stay below
+            the explicit stability limit of the step. Range 2 – 24 (4 – 24 tuned).
         rod_axial_groups: number M of axially rigid groups of segments [-] (must divide N): an
-            elastic slide at each end (stiffness 2 M E A / L) and between groups (M E A / L).
-            Numerical: 2 gives the first axial mode within ≈ 0.5 %. Range 1 – N.
+            elastic slide at each end and between groups, each holding the bar's compliance between
+            two neighbouring mass centres. Numerical: 2 (the default) gives the first axial mode with
+            B fixed and the slider at C exactly (tuned) or within ≈ 0.4 % (uniform), and the free
+            rod's within 1 %; 1 misses the free rod's by 20 %. Range 1 – N.
+        rod_chain: "tuned" (the default) or "uniform". Uniform: equal segments, hinges E I / l,
+            axial springs E A over the distance between neighbouring mass centres. Tuned: the two
+            outer segments' length and the hinges' stiffness (outermost two, the others) solved at
+            the model's build so that the chain's first three bending modes (B pinned, C held normal
+            to the rod) equal Euler–Bernoulli's with the housings' inertia, and the axial springs
+            scaled so that its first axial mode (B fixed, the end mass and the slider at C) equals
+            the continuum's (:func:`twin.structure.tuned_parameters`). Numerical, no placeholder.
         bending_damping_ratio: damping ratio ζ of the rod's first bending mode (pinned–pinned)
             [-]; stiffness-proportional on the hinges (c = β k, β = 2 ζ / ω₁), so mode n has
             ζ (ω_n/ω₁). PLACEHOLDER: 0.01 (a bolted steel link), explore 0.002 – 0.05.
@@ -99,8 +110,9 @@ class StructureConfig:
     rod_section_width_m: float = 0.014
     rod_youngs_modulus_pa: float = 210e9
     rod_end_inertia_kgm2: float = 0.0
-    rod_segments: int = 6
+    rod_segments: int = 4
     rod_axial_groups: int = 2
+    rod_chain: str = "tuned"
     bending_damping_ratio: float = 0.01
     axial_damping_ratio: float = 0.01
     frame_mass_kg: float = 8.0
@@ -124,7 +136,12 @@ class StructureConfig:
                  "the housings' own inertia; Table 1's rod must keep a bar of positive mass")
         _check(isinstance(self.rod_segments, int) and not isinstance(self.rod_segments, bool)
                and 2 <= self.rod_segments <= 24, "rod_segments",
-               f"must be an integer in [2, 24] (6 resolves three bending modes to 1 %), got {self.rod_segments!r}")
+               f"must be an integer in [2, 24] (4 tuned or 6 uniform resolve three bending modes to 1 %), "
+               f"got {self.rod_segments!r}")
+        _choice(self.rod_chain, "rod_chain", ROD_CHAINS)
+        _check(self.rod_chain == "uniform" or self.rod_segments >= 4, "rod_segments",
+               f"must be at least 4 with rod_chain = \"tuned\" (three bending modes need three elastic hinges; "
+               f"rod_chain = \"uniform\" takes 2 - 3), got {self.rod_segments!r}")
         n, m = self.rod_segments, self.rod_axial_groups
         _check(isinstance(m, int) and not isinstance(m, bool) and 1 <= m <= n and n % m == 0, "rod_axial_groups",
                f"must be an integer in [1, {n}] dividing rod_segments ({n}), got {m!r}")

@@ -100,8 +100,13 @@ def build(cfg, chain) -> FlexLayout:
     """The index tables of ``chain`` (:class:`twin.structure.RodChain`) for configuration ``cfg``."""
     N = len(chain.bodies) - 2
     L = chain.length_m
-    l = L / N
-    slide_nodes = sorted({round(j.x_m / l) for j in chain.joints if j.kind == "slide"})
+    # the nodes' abscissae: each segment's start, then L (segments of equal or, tuned, unequal length)
+    xn = [b.x0_m for b in chain.bodies[1:-1]] + [L]
+
+    def node_of(x: float) -> int:
+        return int(np.argmin(np.abs(np.asarray(xn) - x)))
+
+    slide_nodes = sorted({node_of(j.x_m) for j in chain.joints if j.kind == "slide"})
     # points: for each node, P⁻ then (if a slide sits there) P⁺; node 0's P⁻ is B' (index 2), node N's P⁺ is C (4)
     minus, plus, x0 = {}, {}, []
     idx = N_Q
@@ -110,24 +115,24 @@ def build(cfg, chain) -> FlexLayout:
             minus[0] = 2
         else:
             minus[node] = idx
-            x0.append(node * l)
+            x0.append(xn[node])
             idx += 2
         if node in slide_nodes:
             if node == N:
                 plus[N] = 4
             else:
                 plus[node] = idx
-                x0.append(node * l)
+                x0.append(xn[node])
                 idx += 2
         else:
             plus[node] = minus[node]
     n = idx
     segs = np.array([[plus[j], minus[j + 1]] for j in range(N)], dtype=np.int64)
     seg_bodies = chain.bodies[1:-1]
-    seg_f = np.array([[b.mass_kg, l] for b in seg_bodies])
+    seg_f = np.array([[b.mass_kg, xn[j + 1] - xn[j]] for j, b in enumerate(seg_bodies)])
     hinges, hinge_f, slides, slide_f = [], [], [], []
     for jt in chain.joints:
-        node = round(jt.x_m / l)
+        node = node_of(jt.x_m)
         if jt.kind == "hinge":
             hinges.append([node - 1, node])
             hinge_f.append([jt.stiffness, jt.damping])
@@ -139,6 +144,7 @@ def build(cfg, chain) -> FlexLayout:
     assert len(indep) == (n - N_Q) - (N + len(slide_nodes)), "the chain's rows must be square"
     sens = np.full((6, 4), -1.0)
     from twin.config import ACCELEROMETERS
+    from twin.structure.rod import _body_at
 
     axes = {"+x": 0, "-x": 1, "+y": 2, "-y": 3}
     for i, name in enumerate(ACCELEROMETERS):
@@ -146,14 +152,12 @@ def build(cfg, chain) -> FlexLayout:
         if mnt.body != "rod":
             continue
         sx, sy = mnt.position_m
-        seg = min(N - 1, max(0, int(sx / l)))
-        sens[i] = [seg, sx - seg * l, sy, axes[mnt.axis]]
+        seg = _body_at(chain, sx) - 1 if 0.0 < sx < L else (0 if sx <= 0.0 else N - 1)
+        sens[i] = [seg, sx - xn[seg], sy, axes[mnt.axis]]
     st = cfg.structure
     G = np.zeros(N_G)
     # the mid-span point: the chain body holding L/2 (the MuJoCo engine's rule, twin.structure.rod._body_at), at the
     # same distance from that segment's start
-    from twin.structure.rod import _body_at
-
     mid = _body_at(chain, L / 2) - 1
     G[G_MID_SEG] = mid
     G[G_MID_XI] = L / 2 - chain.bodies[mid + 1].x0_m

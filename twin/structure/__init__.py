@@ -31,11 +31,13 @@ Supports (frame at A: mass on an isotropic spring in the plane; guide: mass on a
 from twin.structure.closed_forms import (axial_fixed_mass_hz, axial_free_masses_hz, bending_pinned_end_inertia_hz,
                                          bending_pinned_hz)
 from twin.structure.mount import MountFilter, mount_coefficients
-from twin.structure.rod import (ChainBody, ChainJoint, Modes, RodChain, RodSplit, highest_frequency_hz, linear_matrices,
-                                modes, point_jacobians, rod_chain, rod_split, undamped_chain)
+from twin.structure.rod import (ChainBody, ChainJoint, ChainTuning, Modes, RodChain, RodSplit, highest_frequency_hz,
+                                linear_matrices, modes, point_jacobians, rod_chain, rod_split, tuned_parameters,
+                                undamped_chain)
 
 __all__ = [
-    "ChainBody", "ChainJoint", "Modes", "MountFilter", "RodChain", "RodSplit", "axial_fixed_mass_hz",
+    "ChainBody", "ChainJoint", "ChainTuning", "Modes", "MountFilter", "RodChain", "RodSplit", "axial_fixed_mass_hz",
     "axial_free_masses_hz", "bending_pinned_end_inertia_hz", "bending_pinned_hz", "highest_frequency_hz",
-    "linear_matrices", "modes", "mount_coefficients", "point_jacobians", "rod_chain", "rod_split", "undamped_chain",
+    "linear_matrices", "modes", "mount_coefficients", "point_jacobians", "rod_chain", "rod_split", "tuned_parameters",
+    "undamped_chain",
 ]

@@ -38,6 +38,7 @@ fixed and the end mass and the slider at C): joint dampers, native to MuJoCo's j
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass
 
@@ -156,24 +157,116 @@ class RodChain:
         return dataclasses.replace(self, joints=joints)
 
 
-def undamped_chain(split: RodSplit, ea_n: float, ei_nm2: float, segments: int, axial_groups: int) -> RodChain:
-    """The chain of the module docstring without damping (dampers: :func:`rod_chain`)."""
-    N, M, L = segments, axial_groups, split.length_m
+def undamped_chain(split: RodSplit, ea_n: float, ei_nm2: float, segments: int, axial_groups: int,
+                   tuned: bool = False, tip_mass_kg: float = 0.0) -> RodChain:
+    """The chain of the module docstring without damping (dampers: :func:`rod_chain`): uniform segments with
+    E I / l hinges and the rigid-finite-element slides, or with ``tuned`` the chain whose outer segments' length
+    and hinge stiffnesses reproduce the first three bending modes and whose slides reproduce the first axial mode
+    of the continuum (:func:`tuned_parameters`; needs N >= 4)."""
+    N, M = segments, axial_groups
     if N < 1 or M < 1 or N % M:
         raise ValueError(f"segments ({N}) must be a positive multiple of axial_groups ({M})")
-    l = L / N
-    ms = split.bar_mass_kg / N
+    if not tuned:
+        return _chain(split, ea_n, ei_nm2, N, M, ChainTuning.uniform(N))
+    return _chain(split, ea_n, ei_nm2, N, M, tuned_parameters(split, ea_n, ei_nm2, N, M, tip_mass_kg))
+
+
+@dataclass(frozen=True)
+class ChainTuning:
+    """The chain's shape parameters: the two outer segments' length as a fraction of L (the N − 2 inner segments
+    share the rest equally), the multipliers of the hinge stiffness E I / l̄ (l̄ the mean length of the two
+    segments the hinge joins) at the two outermost hinges and at the others, and of every axial spring."""
+
+    outer_fraction: float
+    k_outer: float
+    k_inner: float
+    k_axial: float
+
+    @staticmethod
+    def uniform(segments: int) -> "ChainTuning":
+        return ChainTuning(1.0 / segments, 1.0, 1.0, 1.0)
+
+
+def _chain(split: RodSplit, ea_n: float, ei_nm2: float, N: int, M: int, tu: ChainTuning) -> RodChain:
+    L = split.length_m
+    uniform = tu == ChainTuning.uniform(N)
+    if uniform:   # the uniform chain's numbers exactly as written in the module docstring
+        l = L / N
+        lengths = [l] * N
+        x = [j * l for j in range(N + 1)]
+        seg_mass = [split.bar_mass_kg / N] * N
+    else:
+        a = tu.outer_fraction * L
+        lengths = [a] + [(L - 2.0 * a) / (N - 2)] * (N - 2) + [a]
+        x = [0.0] + [float(v) for v in np.cumsum(lengths)]
+        x[-1] = L
+        seg_mass = [split.bar_mass_kg * lj / L for lj in lengths]
     bodies = [ChainBody("end_B", 0.0, 0.0, split.end_b_kg, 0.0, split.end_inertia_kgm2)]
-    bodies += [ChainBody(f"seg_{j + 1}", j * l, (j + 1) * l, ms, (j + 0.5) * l, ms * l * l / 12.0) for j in range(N)]
+    for j in range(N):
+        ms, lj = seg_mass[j], lengths[j]
+        bodies.append(ChainBody(f"seg_{j + 1}", x[j], x[j + 1], ms, (j + 0.5) * lj if uniform else (x[j] + x[j + 1]) / 2,
+                                ms * lj * lj / 12.0))
     bodies.append(ChainBody("end_C", L, L, split.end_c_kg, L, split.end_inertia_kgm2))
-    k_end, k_mid, k_hinge = 2.0 * M * ea_n / L, M * ea_n / L, ei_nm2 / l
-    joints = [ChainJoint("slide", 1, 0.0, k_end, 0.0)]
+    # axial springs: each holds the bar's compliance between two neighbouring mass centres (rigid finite elements):
+    # 2 M E A / L at the ends and M E A / L between groups for uniform segments
+    per = N // M
+    if uniform:
+        k_ax = [2.0 * M * ea_n / L] + [M * ea_n / L] * (M - 1) + [2.0 * M * ea_n / L]
+    else:
+        centres = [0.0] + [(x[g * per] + x[(g + 1) * per]) / 2.0 for g in range(M)] + [L]
+        k_ax = [tu.k_axial * ea_n / (centres[g + 1] - centres[g]) for g in range(M + 1)]
+    joints = [ChainJoint("slide", 1, 0.0, k_ax[0], 0.0)]
     for j in range(1, N):
-        joints.append(ChainJoint("hinge", j + 1, j * l, k_hinge, 0.0))
-        if j % (N // M) == 0:
-            joints.append(ChainJoint("slide", j + 1, j * l, k_mid, 0.0))
-    joints.append(ChainJoint("slide", N + 1, L, k_end, 0.0))
+        mult = tu.k_outer if j in (1, N - 1) else tu.k_inner
+        k_h = ei_nm2 / l if uniform else mult * ei_nm2 / ((lengths[j - 1] + lengths[j]) / 2.0)
+        joints.append(ChainJoint("hinge", j + 1, x[j], k_h, 0.0))
+        if j % per == 0:
+            joints.append(ChainJoint("slide", j + 1, x[j], k_ax[j // per], 0.0))
+    joints.append(ChainJoint("slide", N + 1, L, k_ax[M], 0.0))
     return RodChain(tuple(bodies), tuple(joints), split, ea_n, ei_nm2)
+
+
+@functools.lru_cache(maxsize=64)
+def tuned_parameters(split: RodSplit, ea_n: float, ei_nm2: float, segments: int, axial_groups: int,
+                     tip_mass_kg: float = 0.0) -> ChainTuning:
+    """The tuned chain's shape (:class:`ChainTuning`), solved at the model's build.
+
+    Method: three unknowns (the outer segments' length fraction r, the hinge multipliers κ_o and κ_i) and three
+    equations, the first three bending frequencies of the chain's linearization with B pinned and C held normal to
+    the rod (:func:`modes`, a generalized eigenproblem of size N + M + 1 − 2) equal to Euler–Bernoulli's pinned–pinned
+    bar with the housings' rotary inertia (:func:`twin.structure.closed_forms.bending_pinned_end_inertia_hz`),
+    solved by scipy's ``least_squares`` (trust region, finite-difference Jacobian) from the uniform chain
+    (r = 1/N, κ = 1) in the logarithms of the frequency ratios; then one unknown, the axial springs' multiplier α,
+    from the first axial mode with B fixed and the end mass plus ``tip_mass_kg`` at C against the bar fixed with a
+    tip mass (:func:`~twin.structure.closed_forms.axial_fixed_mass_hz`): the chain's axial mode scales as √α, so
+    α = (f_exact / f_chain)² in one step. Bending and axial motion are uncoupled in the linearization, so the two
+    fits are independent. ValueError if N < 4 (three bending modes need three elastic hinges) or if the fit leaves
+    a bending mode more than 0.1 % off."""
+    from scipy.optimize import least_squares
+
+    from twin.structure.closed_forms import axial_fixed_mass_hz, bending_pinned_end_inertia_hz
+
+    N, M, L = segments, axial_groups, split.length_m
+    if N < 4:
+        raise ValueError(f"the tuned chain needs at least 4 segments (three elastic hinges), got {N}")
+    mu = split.bar_mass_kg / L
+    target = np.log(bending_pinned_end_inertia_hz(ei_nm2, mu, L, split.end_inertia_kgm2, 3))
+
+    def resid(p: np.ndarray) -> np.ndarray:
+        tu = ChainTuning(float(p[0]), float(np.exp(p[1])), float(np.exp(p[2])), 1.0)
+        f = modes(_chain(split, ea_n, ei_nm2, N, M, tu), "mechanism").of_kind("bending")[:3]
+        return np.log(f) - target
+
+    lo = 0.25 / N
+    hi = 0.5 - 0.25 / N if N > 2 else 0.5
+    sol = least_squares(resid, [1.0 / N, 0.0, 0.0], bounds=([lo, -3.0, -3.0], [hi, 3.0, 3.0]),
+                        xtol=1e-14, ftol=1e-14, gtol=1e-14)
+    if np.max(np.abs(sol.fun)) > 1e-3:
+        raise ValueError(f"the tuned chain with {N} segments misses a bending mode by {np.max(np.abs(sol.fun)):.2%}")
+    tu = ChainTuning(float(sol.x[0]), float(np.exp(sol.x[1])), float(np.exp(sol.x[2])), 1.0)
+    fa = modes(_chain(split, ea_n, ei_nm2, N, M, tu), "mechanism", tip_mass_kg).of_kind("axial")[0]
+    fa_exact = axial_fixed_mass_hz(ea_n, mu, L, split.end_c_kg + tip_mass_kg, 1)[0]
+    return dataclasses.replace(tu, k_axial=float((fa_exact / fa) ** 2))
 
 
 # ------------------------------------------------------------------------------------------ linearization
@@ -225,13 +318,15 @@ def point_jacobians(chain: RodChain, x: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _body_at(chain: RodChain, x: float) -> int:
-    """Index of the segment holding rod abscissa x (the end bodies hold x <= 0 and x >= L)."""
+    """Index of the segment holding rod abscissa x (the end bodies hold x <= 0 and x >= L; a node belongs to the
+    segment that starts there)."""
     if x <= 0.0:
         return 0
     if x >= chain.length_m:
         return len(chain.bodies) - 1
     n = len(chain.bodies) - 2
-    return 1 + min(n - 1, int(x / (chain.length_m / n)))
+    starts = [b.x0_m for b in chain.bodies[1:-1]]
+    return 1 + min(n - 1, int(np.searchsorted(starts, x, side="right")) - 1)
 
 
 @dataclass(frozen=True)
@@ -290,8 +385,17 @@ def rod_chain(structure, rod, slider_mass_kg: float) -> RodChain:
     ``rod`` the rod's :class:`~twin.config.mechanism.BodyParams` (S003 Table 1), ``slider_mass_kg`` the
     slider's mass (the axial damping is set on the mode with the slider at C)."""
     split = rod_split(rod.mass_kg, rod.length_m, rod.x_g_m, rod.inertia_kgm2, structure.rod_end_inertia_kgm2)
-    chain = undamped_chain(split, structure.rod_ea_n, structure.rod_ei_nm2, structure.rod_segments,
-                           structure.rod_axial_groups)
+    if structure.rod_chain == "tuned":
+        try:
+            tu = tuned_parameters(split, structure.rod_ea_n, structure.rod_ei_nm2, structure.rod_segments,
+                                  structure.rod_axial_groups, slider_mass_kg)
+        except ValueError as exc:
+            raise ConfigError("structure.rod_chain", f"{exc}; use rod_chain = \"uniform\" or more segments") from None
+        chain = _chain(split, structure.rod_ea_n, structure.rod_ei_nm2, structure.rod_segments,
+                       structure.rod_axial_groups, tu)
+    else:
+        chain = undamped_chain(split, structure.rod_ea_n, structure.rod_ei_nm2, structure.rod_segments,
+                               structure.rod_axial_groups)
     md = modes(chain, "mechanism", slider_mass_kg)
     w_b = 2.0 * math.pi * float(md.of_kind("bending")[0])
     w_a = 2.0 * math.pi * float(md.of_kind("axial")[0])
