@@ -342,7 +342,8 @@ def test_chain_block_solve_equals_a_dense_solve_for_every_chain():
     for N in range(2, 25):
         for M in [m for m in range(1, N + 1) if N % m == 0]:
             cfg = preset(12).replace(**{"structure.mode": "flexible", "structure.rod_segments": N,
-                                        "structure.rod_axial_groups": M, "simulation.timestep_s": 1e-7})
+                                        "structure.rod_axial_groups": M, "simulation.timestep_s": 1e-7,
+                                        "structure.rod_chain": "tuned" if N >= 4 else "uniform"})
             prm = lambda c: RM.build_params(c, drive=False, guide_friction=False)  # noqa: E731
             run = FlexibleRun(cfg, prm(cfg), prm)
             run.reset(initial_state(cfg, 0.7, 0.0, run.P))
