@@ -13,7 +13,9 @@ accelerometer readings from the twin's options, relative to each channel's large
 * ``jacobian dense`` / ``jacobian sparse``: ``opt.jacobian`` (the twin leaves MuJoCo's auto, dense below 60
   degrees of freedom): the same equations, another order of operations;
 * ``islands``: constraint islands on (the twin disables them);
-* ``CG solver``: ``opt.solver`` conjugate gradient instead of Newton, same tolerance;
+* ``CG solver`` / ``PGS solver``: ``opt.solver`` conjugate gradient or projected Gauss–Seidel instead of Newton,
+  same tolerance;
+* ``no warmstart``: the solver starts from the unconstrained acceleration;
 * ``eulerdamp on``: the joint dampers implicit in the Euler step (the twin keeps them explicit, as the
   reference engine does): a different integrator, shown for its cost and its difference.
 
@@ -45,6 +47,8 @@ def _variants(m: mujoco.MjModel) -> dict[str, mujoco.MjModel]:
             ("jacobian sparse", lambda o: setattr(o, "jacobian", mujoco.mjtJacobian.mjJAC_SPARSE)),
             ("islands", lambda o: setattr(o, "disableflags", o.disableflags & ~int(D.mjDSBL_ISLAND))),
             ("CG solver", lambda o: setattr(o, "solver", mujoco.mjtSolver.mjSOL_CG)),
+            ("PGS solver", lambda o: setattr(o, "solver", mujoco.mjtSolver.mjSOL_PGS)),
+            ("no warmstart", lambda o: setattr(o, "disableflags", o.disableflags | int(D.mjDSBL_WARMSTART))),
             ("eulerdamp on", lambda o: setattr(o, "disableflags", o.disableflags & ~int(D.mjDSBL_EULERDAMP)))):
         v = copy.copy(m)
         edit(v.opt)
