@@ -1,7 +1,7 @@
 """MuJoCo stepping options for the flexible structure: cost and effect on the outputs, side by side.
 
 For Table 4 test 12 with ``structure.mode = "flexible"`` (both contact sources) and, as the denominator,
-the rigid model, this script takes the state at full speed and its control sequence
+the rigid model (also with the PGS solver, to show whether a variant's gain is the flexible model's), this script takes the state at full speed and its control sequence
 (``analysis/bench_mujoco.py``'s ``prepare_posthoc``) and rolls out ``--steps`` steps with the twin's options
 and with each variant below, interleaved (best of ``--repeats``), timing the rollout plus the after-the-rollout
 accelerometers (the twin's default, ``mujoco.accelerometers = "posthoc"``), in CPU time (``time.process_time``:
@@ -75,7 +75,9 @@ def main() -> None:
     scenes = {}
     for src in ("law", "force"):
         m, s, c, acc = prepare_posthoc(12, a.steps, contact_source=src)
-        scenes[(src, "rigid")] = {"twin's options": m}, s, c, acc
+        pgs = copy.copy(m)
+        pgs.opt.solver = mujoco.mjtSolver.mjSOL_PGS
+        scenes[(src, "rigid")] = {"twin's options": m, "PGS solver": pgs}, s, c, acc
         m, s, c, acc = prepare_posthoc(12, a.steps, contact_source=src, structure="flexible")
         scenes[(src, "flexible")] = _variants(m), s, c, acc
     best: dict = {}
@@ -96,6 +98,8 @@ def main() -> None:
     for src in ("law", "force"):
         rigid = best[(src, "rigid", "twin's options")]
         print(f"| {src} | rigid model | {rigid:.2f} | 1.00 | | | |")
+        print(f"| {src} | rigid model, PGS solver | {best[(src, 'rigid', 'PGS solver')]:.2f} | "
+              f"{best[(src, 'rigid', 'PGS solver')] / rigid:.2f} | | | |")
         base = outs[(src, "flexible", "twin's options")]
         scale = np.maximum(np.max(np.abs(base), axis=1), 1e-300)
         for label in scenes[(src, "flexible")][0]:
