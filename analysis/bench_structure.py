@@ -11,7 +11,11 @@ flexible / rigid per engine, by wall and by CPU time) and writes it, with the ve
 ``analysis/results/structure/bench_structure.md``. The issue's target: flexible at most 1.5× rigid in each
 engine (test 12).
 
-Run: ``python analysis/bench_structure.py [--duration S] [--rounds R] [--tests 3,6,12]``.
+``--compare KEY=VALUE`` (repeatable) adds a second flexible arm with those ``[structure]`` overrides, timed in the
+same rounds (e.g. the former default chain: ``--compare rod_chain='"uniform"' --compare rod_segments=6``), and a
+column with its CPU-time ratio to rigid.
+
+Run: ``python analysis/bench_structure.py [--duration S] [--rounds R] [--tests 3,6,12] [--compare K=V]``.
 """
 
 from __future__ import annotations
@@ -36,6 +40,8 @@ def main() -> None:
     ap.add_argument("--duration", type=float, default=0.3, help="simulated time per run [s]")
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--tests", default="3,6,12", help="Table 4 tests, comma-separated")
+    ap.add_argument("--compare", action="append", default=[], metavar="KEY=VALUE",
+                    help="[structure] override of a second flexible arm (repeatable)")
     ap.add_argument("--out", default=str(Path(__file__).resolve().parent / "results" / "structure" / "bench_structure.md"))
     args = ap.parse_args()
 
@@ -45,7 +51,14 @@ def main() -> None:
     from twin.config import preset
     from twin.simulation import make_engine, run_chunks, simulate
 
+    from twin.util import toml_loads
+
     tests = [int(t) for t in args.tests.split(",")]
+    compare = {f"structure.{k.strip()}": toml_loads(f"v = {v}")["v"]
+               for k, v in (item.split("=", 1) for item in args.compare)}
+    modes = {"rigid": {"structure.mode": "rigid"}, "flexible": {"structure.mode": "flexible"}}
+    if compare:
+        modes["compared"] = {"structure.mode": "flexible", **compare}
     best: dict[tuple[int, str, str], float] = {}
     best_cpu: dict[tuple[int, str, str], float] = {}
     steps: dict[tuple[int, str, str], int] = {}
@@ -55,9 +68,9 @@ def main() -> None:
     for r in range(args.rounds):
         for tid in tests:
             for label, (engine, over) in VARIANTS.items():
-                for mode in ("rigid", "flexible"):
+                for mode, mode_over in modes.items():
                     cfg = preset(tid).replace(**{"simulation.engine": engine, "simulation.duration_s": args.duration,
-                                                 "structure.mode": mode, **over})
+                                                 **mode_over, **over})
                     eng = make_engine(cfg)   # the model's build outside the clocks
                     c0 = time.process_time()
                     for _ in run_chunks(cfg, eng):
@@ -79,15 +92,19 @@ def main() -> None:
              f"best of {args.rounds} interleaved rounds; wall time of the chunk loop (stepping, channels, mount filter).",
              "",
              "| test | engine | rigid µs/step | flexible µs/step | rigid RTF | flexible RTF | flexible / rigid "
-             "| flexible / rigid, CPU time |",
-             "|---:|---|---:|---:|---:|---:|---:|---:|"]
+             "| flexible / rigid, CPU time |" + (" compared / rigid, CPU time |" if compare else ""),
+             "|---:|---|---:|---:|---:|---:|---:|---:|" + ("---:|" if compare else "")]
+    if compare:
+        lines.insert(1, "Compared arm: flexible with " + ", ".join(f"{k} = {v!r}" for k, v in compare.items()) + ".")
     for tid in tests:
         for label in VARIANTS:
             r, f = best[(tid, label, "rigid")], best[(tid, label, "flexible")]
             us_r, us_f = r / steps[(tid, label, "rigid")] * 1e6, f / steps[(tid, label, "flexible")] * 1e6
             lines.append(f"| {tid} | {label} | {us_r:.2f} | {us_f:.2f} | {args.duration / r:.2f} | "
                          f"{args.duration / f:.2f} | {f / r:.2f} | "
-                         f"{best_cpu[(tid, label, 'flexible')] / best_cpu[(tid, label, 'rigid')]:.2f} |")
+                         f"{best_cpu[(tid, label, 'flexible')] / best_cpu[(tid, label, 'rigid')]:.2f} |"
+                         + (f" {best_cpu[(tid, label, 'compared')] / best_cpu[(tid, label, 'rigid')]:.2f} |"
+                            if compare else ""))
     lines += ["", "Target (test 12): flexible / rigid <= 1.5 in each engine."]
     text = "\n".join(lines) + "\n"
     print(text)
