@@ -59,9 +59,10 @@ class StructureConfig:
             the bending modes (the housing turns with the rod's slope at its end). PLACEHOLDER: 0
             (Table 1 is met by point end masses; a 0.75 kg housing of ≈ 35 mm outer radius
             would hold ≈ 5e-4, which lowers the third mode by 12 %). The chain turns each housing
-            with its end segment's chord, which underestimates the housings' effect:
-            with N = 6 and 5e-4 the second mode is 1 % high, the third 6 % (convergence with N in
-            docs/structure.md). Explore 0 – 2e-3.
+            with its end segment's chord, which underestimates the housings' effect: the uniform
+            chain with N = 6 and 5e-4 has the second mode 1 % high, the third 6 % (convergence with
+            N in docs/structure.md); the tuned chain (the default) is solved against the closed form
+            with this inertia and meets its first three modes. Explore 0 – 2e-3.
         rod_segments: number N of rigid segments of the rod's bending chain [-] (hinges at the
             N − 1 interior nodes). Numerical: the tuned chain (``rod_chain``) reproduces the first
             three bending modes exactly from 4 segments (the default); the uniform chain needs 6 for
