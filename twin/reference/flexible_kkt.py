@@ -17,12 +17,12 @@ stay constraints, Φ_r q̈ = γ_r, so the added force Φ_rᵀ k_r Φ_r q̈ = Φ_
 multipliers by k_r γ_r (neither q̈ nor θ's multiplier reads them). M̃ is block diagonal: the crank's five
 coordinates (θ, A', B; its block changes with θ and is inverted each step, 5 × 5) and constant blocks (the rod's
 housings, the slider, the supports, the chain's groups of segments) inverted once. Then, with Y = M̃⁻¹ Φ_cᵀ and
-W = Φ_c Y (the constraints' mobility, 12 × 12 for the bench's chain of 6 segments):
+W = Φ_c Y (the constraints' mobility, 12 × 12 for a uniform chain of 6 segments):
 
     W λ = Φ_c M̃⁻¹ Q − γ_c,   q̈ = M̃⁻¹ Q − Y λ.
 
 Sparse: each constraint row touches at most eight coordinates, each coordinate's column of M̃⁻¹ only its block
-(x or y of the points of one axial group of segments: 4 for the default chain of 6 segments in 2 groups).
+(x or y of the points of one axial group of segments: 4 for a chain of 6 segments in 2 groups).
 With the crank angle prescribed (a driving constraint) θ's row e₇ joins Φ_c with γ = α and the drive torque is
 −λ₇ (:func:`twin.reference.flexible_rmatrix.flex_solve_acc` gives R₀ᵀ (M q̈ − Q), the same number).
 The normal mobility of a clearance joint (:func:`twin.reference.flexible_rmatrix.normal_mobility`,

@@ -24,7 +24,7 @@ Why this chain (rigid finite elements; measured by ``tests/test_structure.py``):
 kinetic energy in its end displacements is exactly the consistent linear-interpolation mass (its rotary
 inertia included), and the hinge springs E I / l give the central difference of w''. Their errors cancel at
 second order: for the pinned–pinned bar the discrete frequencies are ω_n/ω_n,exact = (sin(φ/2)/(φ/2))² ·
-√(3/(2 + cos φ)), φ = nπ/N, ≈ 1 − φ⁴/1440: N = 6 resolves three bending modes within 0.8 %, N = 8 four;
+√(3/(2 + cos φ)), φ = nπ/N, ≈ 1 − φ⁴/1440: uniform N = 6 resolves three bending modes within 0.8 %, N = 8 four;
 a lumped-mass chain would need N ≈ 27 for the third mode (error ≈ φ²/6). Axially each group of N/M
 segments is rigid (its mass lumped at its centre) and each spring holds the compliance between two
 neighbouring mass centres (the rigid finite element rule): the static stretch is exact and the first axial
