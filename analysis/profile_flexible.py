@@ -22,6 +22,7 @@ from twin.jit import njit
 from twin.natural_coordinates import N_Q, N_Z
 from twin.reference import flexible_kernels as K
 from twin.reference import flexible_kkt as KK
+from twin.reference import flexible_rmatrix as FR
 
 
 @njit
@@ -33,14 +34,14 @@ def _t_factor(R, q, segs, slides, indep, A, LU, piv):
 @njit
 def _t_mass(R, P, G, q, qd, segs, seg_f, slides, A, LU, piv, rows, nz, Rt, S, Mb, MR, b, Bm, RtT):
     for _ in range(R):
-        K.flex_mass(P, G, q, qd, segs, seg_f, slides, A, LU, piv, rows, nz, Rt, S, Mb, MR, b, Bm, RtT)
+        FR.flex_mass(P, G, q, qd, segs, seg_f, slides, A, LU, piv, rows, nz, Rt, S, Mb, MR, b, Bm, RtT)
 
 
 @njit
 def _t_mob(R, Rt, Mb, nz, g, W):
     s = 0.0
     for _ in range(R):
-        s += K.normal_mobility(Rt, Mb, nz, False, 0, 1, 2, 3, 0.6, 0.8, g, W)
+        s += FR.normal_mobility(Rt, Mb, nz, False, 0, 1, 2, 3, 0.6, 0.8, g, W)
     return s
 
 
@@ -48,7 +49,7 @@ def _t_mob(R, Rt, Mb, nz, g, W):
 def _t_acc(R, q, Q, nz, Rt, RtT, S, Mb, Mb0, rhs, b, tmp, qdd, P, segs, seg_f, G, taup):
     for _ in range(R):
         Mb[:, :] = Mb0
-        K.flex_solve_acc(q, Q, nz, Rt, RtT, S, Mb, rhs, b, tmp, qdd, P, segs, seg_f, G, False, 0.0, taup)
+        FR.flex_solve_acc(q, Q, nz, Rt, RtT, S, Mb, rhs, b, tmp, qdd, P, segs, seg_f, G, False, 0.0, taup)
 
 
 @njit
@@ -129,7 +130,7 @@ def main() -> None:
     nc = n - N_Q
     q, qd = fr.x[:n].copy(), fr.x[n:2 * n].copy()
     rows = np.empty(N_Z + 4 + nc, dtype=np.int64)
-    nz = K.flex_rows(P, G, indep, rows)
+    nz = FR.flex_rows(P, G, indep, rows)
     for k in range(indep.shape[0]):
         rows[nz] = N_Q + segs.shape[0] + slides.shape[0] + k
         nz += 1
@@ -140,10 +141,10 @@ def main() -> None:
     Q, taup = np.zeros(n), np.zeros(1)
     h = cfg.simulation.timestep_s
     K.factor(q, segs, slides, indep, A, LU, piv)
-    K.flex_mass(P, G, q, qd, segs, seg_f, slides, A, LU, piv, rows, nz, Rt, S, Mb, MR, b, Bm, RtT)
+    FR.flex_mass(P, G, q, qd, segs, seg_f, slides, A, LU, piv, rows, nz, Rt, S, Mb, MR, b, Bm, RtT)
     Mb0 = Mb.copy()
     K.chain_forces(P, q, qd, segs, seg_f, lay.hinges, lay.hinge_f, slides, lay.slide_f, G, Q)
-    K.flex_solve_acc(q, Q, nz, Rt, RtT, S, Mb, rhs, b, tmp, qdd, P, segs, seg_f, G, False, 0.0, taup)
+    FR.flex_solve_acc(q, Q, nz, Rt, RtT, S, Mb, rhs, b, tmp, qdd, P, segs, seg_f, G, False, 0.0, taup)
     kk = fr.kkt(False)
     m = kk.crow.shape[0]
     PhiV, gam, Y, W = np.zeros((m, kk.pat.shape[1])), np.empty(m), np.empty((m, n)), np.empty((m, m))
