@@ -38,6 +38,7 @@ from twin.errors import ConfigError
 from twin.natural_coordinates import N_Q, P_H, S_Q, S_QD, initial_state
 from twin.reference.model import N_OUT, OK, build_params, free_motion, run_steps
 from twin.studies.penalty import PenaltyParams, penalty_run
+from twin.provenance import figure_metadata, stamped, with_stamp_line
 from twin.util import atomic_write_bytes, atomic_write_json, atomic_write_text
 
 #: release angle of §4.1 [rad]
@@ -416,7 +417,7 @@ def _work_precision_plot(rows: list[dict], out: Path) -> Path:
     ax.legend(fontsize=8)
     fig.tight_layout()
     buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
+    fig.savefig(buf, format="png", dpi=110, metadata=figure_metadata())
     plt.close(fig)
     return atomic_write_bytes(out / "work_precision.png", buf.getvalue())
 
@@ -523,7 +524,7 @@ def _plots(results: list[CaseResult], ref_t: np.ndarray, ref_w: np.ndarray, out:
 
     def save(fig, name: str) -> Path:
         buf = io.BytesIO()
-        fig.savefig(buf, format="png", dpi=110)
+        fig.savefig(buf, format="png", dpi=110, metadata=figure_metadata())
         plt.close(fig)
         return atomic_write_bytes(out / name, buf.getvalue())
 
@@ -652,7 +653,7 @@ def run_study(options: FormulationsOptions) -> FormulationsResult:
             + table + "\n" + _notes(rows) + "\n"
             + (work_precision_markdown(wp, duration_s, exudyn) + "\n" if wp else "")
             + "Figures: " + ", ".join(p.name for p in pngs) + "\n")
-    atomic_write_text(out / "formulations.md", text)
+    atomic_write_text(out / "formulations.md", with_stamp_line(text))
     res = FormulationsResult(duration_s, THETA0, tmax, rows, float(th[-1]), wp, exudyn, tuple(p.name for p in pngs))
-    atomic_write_json(out / "formulations.json", res.to_dict())
+    atomic_write_json(out / "formulations.json", stamped(res.to_dict()))
     return res

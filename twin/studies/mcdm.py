@@ -512,12 +512,13 @@ class McdmResult:
 def run_study(options: McdmOptions) -> McdmResult:
     """Rank the alternatives of ``options.csv_path`` and write ``mcdm.json`` and ``report.md`` (the
     formulas, the weights, every score and rank) to ``options.out``."""
+    from twin.provenance import stamped, with_stamp_line
     from twin.util import atomic_write_json, atomic_write_text
 
     o = options
     res, x = run_mcdm(o.csv_path, o.criteria, o.weights, o.lam, o.names_from)
     out = Path(o.out)
     out.mkdir(exist_ok=True)
-    atomic_write_json(out / "mcdm.json", res)
-    atomic_write_text(out / "report.md", report_md(res, x))
+    atomic_write_json(out / "mcdm.json", stamped(res))
+    atomic_write_text(out / "report.md", with_stamp_line(report_md(res, x)))
     return McdmResult(**res)

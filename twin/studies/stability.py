@@ -83,6 +83,7 @@ from twin.config import CATALOGUE_DIAMETRAL_MM, ORIENTATIONS, BenchConfig, prese
 from twin.errors import ConfigError, TwinError
 from twin.studies.stability_bench import ENGINES, bench_draws, bench_overrides, guide_penetration, label, rotor_energy
 from twin.tracefile import DriveInputs
+from twin.provenance import figure_metadata
 from twin.util import atomic_write_bytes, atomic_write_json, atomic_write_text
 
 #: Largest admissible penetration / radial clearance [-].
@@ -737,7 +738,7 @@ def _figure(out: Path, rows: list[dict[str, Any]]) -> str:
     fig.suptitle(f"twin study stability: {len(rows)} scenes")
     fig.tight_layout()
     buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
+    fig.savefig(buf, format="png", dpi=110, metadata=figure_metadata())
     plt.close(fig)
     atomic_write_bytes(out / "stability.png", buf.getvalue())
     return "stability.png"

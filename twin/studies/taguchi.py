@@ -42,6 +42,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from twin.provenance import figure_metadata
 from twin.studies.mcdm import TableError, numeric_column, read_csv_table
 
 #: (α, β, γ) of each L27 column: level = (α a + β b + γ c) mod 3 (0-based), a, b, c the base columns
@@ -294,7 +295,7 @@ def _plot(path: Path, title: str, names: Sequence[str], values: Sequence[Sequenc
     fig.suptitle(title)
     fig.tight_layout()
     buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=100)
+    fig.savefig(buf, format="png", dpi=100, metadata=figure_metadata())
     plt.close(fig)
     atomic_write_bytes(path, buf.getvalue())
 
@@ -444,6 +445,7 @@ class TaguchiResult:
 def run_study(options: TaguchiOptions) -> TaguchiResult:
     """Analyse ``options.csv_path`` and write ``taguchi.json``, ``report.md`` and per response its
     main-effect and S/N PNGs to ``options.out``."""
+    from twin.provenance import stamped, with_stamp_line
     from twin.util import atomic_write_json, atomic_write_text, check_not_input
 
     o = options
@@ -464,6 +466,6 @@ def run_study(options: TaguchiOptions) -> TaguchiResult:
                   res["factors"], res["levels"], r[key]["main_effects"], ylabel)
             figs.append(name)
     res["figures"] = figs
-    atomic_write_json(out / "taguchi.json", res)
-    atomic_write_text(out / "report.md", report_md(res))
+    atomic_write_json(out / "taguchi.json", stamped(res))
+    atomic_write_text(out / "report.md", with_stamp_line(report_md(res)))
     return TaguchiResult(**{**res, "figures": tuple(figs)})
