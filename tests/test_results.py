@@ -56,6 +56,35 @@ def test_an_identify_result_gives_back_the_golden_dict_exactly(name):
 
 
 @pytest.mark.parametrize("name", sorted(IDENTIFY_GOLDEN))
+def test_the_evidence_reads_into_typed_frozen_values(name):
+    """The training-data check and the model's description are frozen dataclasses (no dicts left in the
+    evidence); the old read access by key still gives the dict's values; an unknown key is refused, not lost."""
+    from twin.identification.results import FeatureDistance, ModelInfo, RecordingMeasures, TrainingDataCheck
+
+    golden = IDENTIFY_GOLDEN[name]["evidence"]
+    ev = Evidence.from_dict(golden)
+    check, model = ev.training_data_check, ev.model
+    assert isinstance(check, TrainingDataCheck) and isinstance(check.measured, RecordingMeasures)
+    assert isinstance(check.feature_distance, FeatureDistance) and isinstance(model, ModelInfo)
+    assert check.measured.ripple_pct == tuple(golden["training_data_check"]["measured"]["ripple_pct"])
+    assert model.crank_hz_range == tuple(golden["model"]["crank_hz_range"]) and model.dataset == golden["model"]["dataset"]
+    assert check.feature_distance.of == golden["training_data_check"]["feature_distance"]["of"]
+    assert check["measured"]["crank_hz"] == check.measured.crank_hz and "feature_distance" in check
+    assert ev.to_dict() == golden and _layout(ev.to_dict()) == _layout(golden)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        check.outside_training_data = True
+    with pytest.raises(ValueError, match="'extra'"):
+        TrainingDataCheck.from_dict({**golden["training_data_check"], "extra": 1})
+    # a model without training ranges: the reason in place of the distance, and no swing measured
+    bare = {"measured": {"crank_hz": 3.0, "ripple_pct": [1.0], "noise_ug_rthz": None},
+            "ranges": "unavailable (the model stores no training ranges)", "outside_training_data": False,
+            "interval_rule": "r"}
+    c = TrainingDataCheck.from_dict(bare)
+    assert c.feature_distance is None and c.measured.speed_swing_pct is None
+    assert c.to_dict() == bare and list(c.to_dict()) == list(bare)
+
+
+@pytest.mark.parametrize("name", sorted(IDENTIFY_GOLDEN))
 def test_the_answer_of_a_sample_has_the_golden_layout_and_values(name):
     """The answer made now has the golden dict's keys in its order at every level; its values equal the golden
     ones to 1e-9 (a regression guard: the golden values are this code's own earlier output)."""
