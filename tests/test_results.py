@@ -128,7 +128,13 @@ def test_a_joint_located_healthy_reports_no_size_and_the_joints_are_found_by_nam
     b = JointAnswer("B", False, 0.03, (0.02, 0.05), size_resolved=True, size_held_out=held)
     c = JointAnswer("C", True, 0.1, (0.08, 0.13), size_resolved=False)
     assert (b.size_mm, b.interval_mm) == (0.0, (0.0, 0.0)) and (c.size_mm, c.interval_mm) == (0.1, (0.08, 0.13))
-    ev = Evidence(1, 2.0, 3.1, 740.0, 0.7, 178, "v", {"outside_training_data": False}, {"dataset": "d"})
+    from twin.identification.results import ModelInfo, RecordingMeasures, TrainingDataCheck
+
+    check = TrainingDataCheck(RecordingMeasures(3.1, (1.0, 2.0), 30.0), False, "inside")
+    ev = Evidence(1, 2.0, 3.1, 740.0, 0.7, 178, "v", check, ModelInfo("d", "0" * 64, "mujoco", (3.0, 3.2)))
+    assert Evidence(1, 2.0, 3.1, 740.0, 0.7, 178, "v", check.to_dict(), ev.model.to_dict()) == ev  # dicts read in
+    with pytest.raises(ValueError, match="missing"):
+        Evidence(1, 2.0, 3.1, 740.0, 0.7, 178, "v", {"outside_training_data": False}, ev.model)
     r = IdentifyResult("C", {"none": 0.1, "B": 0.0, "C": 0.9, "BC": 0.0}, (b, c), "rec.mcap", ("w",), ev, 0.5)
     d = r.to_dict()
     assert d["clearance_b_mm"] == 0.0 and d["clearance_b_if_faulty_mm"] == {"median": 0.03, "interval_90": [0.02, 0.05]}
@@ -355,3 +361,35 @@ def test_train_makes_the_tables_by_windows_when_asked_and_not_by_default(tmp_pat
     _, plain = train([tmp_path], TrainOptions(**opts), features=(np.array(X), rows, owner, [], [ds]))
     assert plain["interval"]["half_width_log10_by_windows"] == {}
     assert plain["interval"]["half_width_log10"] == info["interval"]["half_width_log10"]
+
+
+@pytest.mark.parametrize("pattern, cls_path", [
+    ("**/taguchi.json", "twin.studies.taguchi:TaguchiResult"),
+    ("**/mcdm.json", "twin.studies.mcdm:McdmResult"),
+    ("**/stability.json", "twin.studies.stability:StabilityResult"),
+    ("**/formulations.json", "twin.studies.formulations:FormulationsResult")])
+def test_the_committed_study_files_read_into_typed_summaries_and_back_exactly(pattern, cls_path):
+    """Every committed ``taguchi.json``, ``mcdm.json``, ``stability.json`` and ``formulations.json`` (written from
+    plain dicts, before the typed summaries) reads into its result, whose nested summaries are frozen dataclasses,
+    and back to the same data, key order included; the file's provenance stamp is the file's, dropped first."""
+    import importlib
+
+    from twin.typed import Record
+
+    mod, name = cls_path.split(":")
+    cls = getattr(importlib.import_module(mod), name)
+    files = sorted((ROOT / "analysis" / "results").glob(pattern))
+    assert files, pattern
+    for f in files:
+        golden = json.loads(f.read_text())
+        assert "provenance" in golden, f"{f}: not stamped"
+        r = cls.from_dict(golden)  # the stamp ignored
+        golden.pop("provenance")
+        assert r.to_dict() == golden and _layout(r.to_dict()) == _layout(golden), f
+        nested = {"TaguchiResult": lambda: next(iter(r.responses.values())).raw.prediction,
+                  "McdmResult": lambda: r.methods["waspas"].paper_variant,
+                  "StabilityResult": lambda: r.summary.pen_over_c,
+                  "FormulationsResult": lambda: r.rows[0]}[name]()
+        assert isinstance(nested, Record)
+        with pytest.raises(dataclasses.FrozenInstanceError):
+            setattr(nested, dataclasses.fields(nested)[0].name, None)

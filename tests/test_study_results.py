@@ -119,7 +119,8 @@ def test_formulations_result_is_its_json(tmp_path):
     assert isinstance(res, F.FormulationsResult)
     assert res.to_dict() == _data_of(tmp_path / "formulations.json")
     assert _stamped_md(tmp_path / "formulations.md") and all(_stamped_png(tmp_path / f) for f in res.figures)
-    assert [r["case"] for r in res.rows] == [F.Case("R-matrix", 1e-4).label] and res.work_precision == []
+    assert [r.case for r in res.rows] == [F.Case("R-matrix", 1e-4).label] and res.work_precision == ()
+    assert isinstance(res.rows[0], F.CaseRow) and res.rows[0]["case"] == res.rows[0].case  # read by key as the dict was
     with pytest.raises(ConfigError, match=r"^duration_s: must lie in \(0, 60\] s"):
         F.FormulationsOptions(tmp_path, duration_s=0.0)
 

@@ -105,10 +105,15 @@ class _ReadAsDict:
         return self.to_dict().get(key, default)
 
 
-def _no_other_keys(cls: type, d: Mapping[str, Any], known: tuple[str, ...]) -> None:
+def _no_other_keys(cls: type, d: Mapping[str, Any], known: tuple[str, ...], optional: tuple[str, ...] = ()) -> None:
+    """ValueError naming the keys of ``d`` that ``cls`` does not know, or the ``known`` ones missing (``optional``
+    aside): a key is never lost silently."""
     other = [k for k in d if k not in known]
     if other:
         raise ValueError(f"{cls.__name__}: keys {', '.join(map(repr, other))} unknown; allowed: {', '.join(known)}")
+    missing = [k for k in known if k not in d and k not in optional]
+    if missing:
+        raise ValueError(f"{cls.__name__}: keys {', '.join(map(repr, missing))} missing")
 
 
 @dataclass(frozen=True)
@@ -134,7 +139,7 @@ class RecordingMeasures(_ReadAsDict):
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> "RecordingMeasures":
-        _no_other_keys(cls, d, ("crank_hz", "ripple_pct", "noise_ug_rthz", "speed_swing_pct"))
+        _no_other_keys(cls, d, ("crank_hz", "ripple_pct", "noise_ug_rthz", "speed_swing_pct"), ("speed_swing_pct",))
         return cls(d["crank_hz"], tuple(d["ripple_pct"]), d["noise_ug_rthz"], d.get("speed_swing_pct"))
 
 
@@ -193,7 +198,8 @@ class TrainingDataCheck(_ReadAsDict):
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> "TrainingDataCheck":
-        _no_other_keys(cls, d, ("measured", "ranges", "feature_distance", "outside_training_data", "interval_rule"))
+        _no_other_keys(cls, d, ("measured", "ranges", "feature_distance", "outside_training_data", "interval_rule"),
+                       ("ranges", "feature_distance"))
         fd = d.get("feature_distance")
         return cls(measured=RecordingMeasures.from_dict(d["measured"]),
                    outside_training_data=d["outside_training_data"], interval_rule=d["interval_rule"],
@@ -252,6 +258,12 @@ class Evidence:
     feature_version: str
     training_data_check: TrainingDataCheck
     model: ModelInfo
+
+    def __post_init__(self) -> None:  # dicts as to_dict() writes them are read into the typed values
+        if isinstance(self.training_data_check, Mapping):
+            object.__setattr__(self, "training_data_check", TrainingDataCheck.from_dict(self.training_data_check))
+        if isinstance(self.model, Mapping):
+            object.__setattr__(self, "model", ModelInfo.from_dict(self.model))
 
     def to_dict(self) -> dict[str, Any]:
         return {"windows": self.windows, "revolutions": self.revolutions, "crank_hz": self.crank_hz,
