@@ -67,7 +67,8 @@ def test_the_evidence_reads_into_typed_frozen_values(name):
     assert isinstance(check, TrainingDataCheck) and isinstance(check.measured, RecordingMeasures)
     assert isinstance(check.feature_distance, FeatureDistance) and isinstance(model, ModelInfo)
     assert check.measured.ripple_pct == tuple(golden["training_data_check"]["measured"]["ripple_pct"])
-    assert model.crank_hz_range == tuple(golden["model"]["crank_hz_range"]) and model.dataset == golden["model"]["dataset"]
+    assert model.crank_hz_range == tuple(golden["model"]["crank_hz_range"])
+    assert model.dataset == golden["model"]["dataset"]
     assert check.feature_distance.of == golden["training_data_check"]["feature_distance"]["of"]
     assert check["measured"]["crank_hz"] == check.measured.crank_hz and "feature_distance" in check
     assert ev.to_dict() == golden and _layout(ev.to_dict()) == _layout(golden)
