@@ -17,7 +17,7 @@ from __future__ import annotations
 import dataclasses
 from typing import Any, ClassVar, Iterator, Mapping
 
-__all__ = ["Record"]
+__all__ = ["ByKey", "Record"]
 
 _STAMP = "provenance"  # twin.provenance.PROVENANCE_KEY (not imported: this module imports nothing of the package)
 
@@ -39,7 +39,29 @@ def _frozen(v: Any) -> Any:
     return v
 
 
-class Record:
+class ByKey:
+    """Read access by key to the dict a ``to_dict()`` gives: what the plain dicts typed values replace allowed."""
+
+    def to_dict(self) -> dict[str, Any]:  # pragma: no cover - each class defines it
+        raise NotImplementedError
+
+    def __getitem__(self, key: str) -> Any:
+        return self.to_dict()[key]
+
+    def __contains__(self, key: object) -> bool:
+        return key in self.to_dict()
+
+    def get(self, key: str, default: Any = None) -> Any:
+        return self.to_dict().get(key, default)
+
+    def keys(self) -> Iterator[str]:
+        return iter(self.to_dict().keys())
+
+    def items(self):
+        return self.to_dict().items()
+
+
+class Record(ByKey):
     """Mixin of a frozen dataclass row (module docstring)."""
 
     _OMIT_NONE: ClassVar[tuple[str, ...]] = ()
@@ -87,19 +109,3 @@ class Record:
         if missing:
             raise ValueError(f"{cls.__name__}: keys {', '.join(map(repr, missing))} missing")
         return cls(**{f.name: d[k] for k, f in keys.items() if k in d})  # type: ignore[call-arg]
-
-    # ---- read access by key, as the plain dict
-    def __getitem__(self, key: str) -> Any:
-        return self.to_dict()[key]
-
-    def __contains__(self, key: object) -> bool:
-        return key in self.to_dict()
-
-    def get(self, key: str, default: Any = None) -> Any:
-        return self.to_dict().get(key, default)
-
-    def keys(self) -> Iterator[str]:
-        return iter(self.to_dict().keys())
-
-    def items(self):
-        return self.to_dict().items()

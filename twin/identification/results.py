@@ -14,6 +14,8 @@ import re
 from dataclasses import dataclass
 from typing import Any, Mapping
 
+from twin.typed import ByKey
+
 __all__ = ["Evidence", "FeatureDistance", "HeldOut", "IdentifyResult", "JointAnswer", "ModelInfo", "RecordingMeasures",
            "TrainingDataCheck"]
 
@@ -88,23 +90,6 @@ class JointAnswer:
         return tuple(self.interval_if_faulty_mm) if self.faulty else (0.0, 0.0)
 
 
-class _ReadAsDict:
-    """Read access by key (``value["name"]``, ``in``) to the dict :meth:`to_dict` gives: what the plain dicts these
-    values replace allowed, kept for callers that read them so."""
-
-    def to_dict(self) -> dict[str, Any]:  # pragma: no cover - each class defines it
-        raise NotImplementedError
-
-    def __getitem__(self, key: str) -> Any:
-        return self.to_dict()[key]
-
-    def __contains__(self, key: object) -> bool:
-        return key in self.to_dict()
-
-    def get(self, key: str, default: Any = None) -> Any:
-        return self.to_dict().get(key, default)
-
-
 def _no_other_keys(cls: type, d: Mapping[str, Any], known: tuple[str, ...], optional: tuple[str, ...] = ()) -> None:
     """ValueError naming the keys of ``d`` that ``cls`` does not know, or the ``known`` ones missing (``optional``
     aside): a key is never lost silently."""
@@ -117,7 +102,7 @@ def _no_other_keys(cls: type, d: Mapping[str, Any], known: tuple[str, ...], opti
 
 
 @dataclass(frozen=True)
-class RecordingMeasures(_ReadAsDict):
+class RecordingMeasures(ByKey):
     """What was measured of a recording's steady windows (:func:`twin.identification.ranges.recording_measures`).
 
     Attributes:
@@ -144,7 +129,7 @@ class RecordingMeasures(_ReadAsDict):
 
 
 @dataclass(frozen=True)
-class FeatureDistance(_ReadAsDict):
+class FeatureDistance(ByKey):
     """How far a recording's median window features lie from the training windows'
     (:func:`twin.identification.ranges.feature_outliers`).
 
@@ -169,7 +154,7 @@ class FeatureDistance(_ReadAsDict):
 
 
 @dataclass(frozen=True)
-class TrainingDataCheck(_ReadAsDict):
+class TrainingDataCheck(ByKey):
     """A recording checked against the model's training data (:func:`twin.identification.model.training_check`).
 
     Attributes:
@@ -208,7 +193,7 @@ class TrainingDataCheck(_ReadAsDict):
 
 
 @dataclass(frozen=True)
-class ModelInfo(_ReadAsDict):
+class ModelInfo(ByKey):
     """What the model answering was trained on.
 
     Attributes:
