@@ -269,7 +269,7 @@ def _analysis_md(title: str, a: dict[str, Any], names: Sequence[str], values: Se
                  f"{p['confirmation_runs']} confirmation run(s) ±{p['ci_ce']:.4g} "
                  f"(F({1 - p['alpha']:.2f}; 1, {a['anova']['error_dof']}) = {p['f_crit']:.4f})."
                  if p["ci_pop"] is not None else "; no confidence interval: the error has no degree of freedom "
-                 "(pool terms with --pool)."), ""]
+                 "(pool terms into the error: the option pool)."), ""]
     return lines
 
 
