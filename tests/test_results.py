@@ -394,3 +394,25 @@ def test_the_committed_study_files_read_into_typed_summaries_and_back_exactly(pa
         assert isinstance(nested, Record)
         with pytest.raises(dataclasses.FrozenInstanceError):
             setattr(nested, dataclasses.fields(nested)[0].name, None)
+
+
+def test_a_calibration_result_holds_typed_rows_and_writes_the_same_dict(tmp_path):
+    """The correlated pairs and the evaluation times (dicts as the search gives them) are frozen dataclasses in
+    :class:`twin.calibration.CalibrationResult`; ``to_dict()`` writes the dicts they were, key for key."""
+    from twin.calibration import CalibrationResult, FittedParameter
+    from twin.calibration.rows import CorrelatedPair, EvaluationTimes
+
+    pairs = [{"a": "contact.mu0", "b": "contact.restitution", "correlation": 0.97}]
+    times = {"short": 0.5, "full": 2.0}
+    fp = FittedParameter("contact.mu0", 0.1, 0.08, 0.12, 0.05, (0.0, 0.3), "slice", False, "")
+    r = CalibrationResult((fp,), 3.0, 1.0, [{"band": 1.0}], [{"band": 0.5}], {"band": 1.0}, "note", pairs, [], 10,
+                          8, 2, times, 12.0, tmp_path)
+    assert r.correlated_pairs == (CorrelatedPair("contact.mu0", "contact.restitution", 0.97),)
+    assert r.seconds_per_evaluation == EvaluationTimes(0.5, 2.0) and r.seconds_per_evaluation["full"] == 2.0
+    d = r.to_dict()
+    assert d["correlated_pairs"] == pairs and d["seconds_per_evaluation"] == times
+    assert list(d["seconds_per_evaluation"]) == ["short", "full"] and json.loads(json.dumps(d)) == d
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        r.correlated_pairs[0].correlation = 0.0
+    with pytest.raises(ValueError, match="'stage'"):
+        EvaluationTimes.from_dict({"short": 1.0, "full": 2.0, "stage": "x"})
