@@ -67,7 +67,7 @@ from twin.identification.intervals import (BELT_RATIO, RIPPLE_BAND_PCT, SIZE_RES
                                            fault_split_joints, held_out_at, logs_answer, logs_spread, resolution,
                                            rippled, window_table)
 from twin.identification.ranges import clip_to_hull, out_of_range, recording_measures, widen
-from twin.identification.results import Evidence, HeldOut, IdentifyResult, JointAnswer, ModelInfo, TrainingDataCheck
+from twin.identification.results import Evidence, HeldOut, IdentifyResult, JointAnswer
 from twin.identification.trees import ModelError, TreeEnsemble, from_sklearn
 
 __all__ = ["CLASSES", "ClearanceModel", "DEFAULT_MODEL", "MODEL_FORMAT", "MODEL_SUFFIX", "ModelError",
@@ -399,10 +399,8 @@ def identify_inputs(model: ClearanceModel, acc: dict[str, np.ndarray], counts: n
     evidence = Evidence(windows=len(w.windows), revolutions=round(w.revolutions, 2), crank_hz=w.crank_hz,
                         motor_rpm_if_belt_3_97=w.crank_hz * 60 * BELT_RATIO,
                         steady_s=(w.steady[1] - w.steady[0]) / rate, features=len(model.feature_names),
-                        feature_version=model.feature_version,
-                        training_data_check=TrainingDataCheck.from_dict(checks),
-                        model=ModelInfo.from_dict({k: tr[k] for k in ("dataset", "identity_sha256", "engine",
-                                                                      "crank_hz_range")}))
+                        feature_version=model.feature_version, training_data_check=checks,
+                        model={k: tr[k] for k in ("dataset", "identity_sha256", "engine", "crank_hz_range")})
     seconds = time.perf_counter() - t0
     if math.isfinite(seconds):
         seconds = round(seconds, 4)
