@@ -55,7 +55,8 @@ def main() -> None:
                              note=lambda s: print(s, flush=True))
         wall = time.perf_counter() - t0
         print(json.dumps({"fields": fields, "wall_s": round(wall, 1), "evaluations": res.evaluations,
-                          "simulated": res.simulated, "seconds_per_evaluation": res.seconds_per_evaluation,
+                          "simulated": res.simulated,
+                          "seconds_per_evaluation": res.seconds_per_evaluation.to_dict(),
                           "estimate_s": res.report["evaluations"]["estimate_s"], "workers": a.workers,
                           "loadavg_before": load0, "loadavg_after": os.getloadavg(), "cpus": os.cpu_count(),
                           "values": res.values(), "truth": {f: TRUTH[f] for f in fields},

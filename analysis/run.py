@@ -4,15 +4,15 @@
     python analysis/run.py NAME [NAME ...]     run the named scripts in turn with the arguments that
                                                rebuild their committed results
     python analysis/run.py NAME -- ARGS        one script with other arguments (its own --help says which)
-    python analysis/run.py --unstamped         the results files that carry no version and commit (older)
+    python analysis/run.py --unstamped         the results files that carry no version and commit
 
 Names are the script's path under ``analysis/`` without ``.py`` (``s004_report``,
 ``identify/held_out_plot``). Costs are rough wall times on the project's two-core machine, from the
 scripts' own docstrings where they give one (``~`` marks an estimate). A script marked LONG runs
 only with ``--long`` beside its name. Every results file a script writes carries the package
-version and the git commit (:mod:`twin.provenance`); ``analysis/made_before_stamping.txt`` names the
-committed files that predate that stamp (a list that may only shrink: rebuilding a file through this
-driver stamps it and takes it off).
+version and the git commit (:mod:`twin.provenance`); the files committed before that stamp existed carry
+one read from git history (``stamp_history``: the commit that committed the file and the version then),
+until a run through this driver rebuilds them with a live stamp.
 
 The study commands (``twin study ...``) write the other folders of ``analysis/results/``
 (accuracy, formulations, stability, ...); :data:`STUDY_OUTPUTS` names them with their command.
@@ -106,6 +106,8 @@ SCRIPTS: dict[str, Script] = {
                              "~1 min"),
     "profile_stages": Script(f"prints where a MuJoCo step goes; {R}/speed/profile_stages.json", "~3 min",
                              args=("--json", f"{R}/speed/profile_stages.json")),
+    "stamp_history": Script(f"the stamp read from git history in each unstamped committed file under {R}/ "
+                            "(data untouched)", "5 s"),
     "bit_identical": Script("prints (or --save/--against) digests of the outputs a refactoring keeps", "30 s"),
     # ---- identification (analysis/identify/README.md)
     "identify/train_default": Script(f"twin/data/identify_default.npz and {R}/identify/dev*, samples.json "
@@ -177,9 +179,6 @@ STUDY_OUTPUTS: dict[str, str] = {
     "identify/dev*, identify/fresh*": "twin dataset generate + twin identify evaluate (identify/train_default)",
 }
 
-#: the committed list of results files made before the stamp (tests/test_result_stamps.py: it may only shrink)
-MADE_BEFORE_STAMPING = "made_before_stamping.txt"
-
 #: modules of analysis/ that are not scripts (imported by the scripts or installed as package data)
 NOT_SCRIPTS = ("run.py", "datasets/__init__.py")
 
@@ -241,7 +240,7 @@ def is_stamped(path: Path) -> bool | None:
 
 
 def unstamped() -> str:
-    """The results files of analysis/results/ without a stamp, by folder (they predate the stamp)."""
+    """The results files of analysis/results/ without a stamp, by folder."""
     from collections import Counter
 
     files = sorted(p for p in (HERE / "results").rglob("*") if p.is_file())
@@ -249,8 +248,8 @@ def unstamped() -> str:
     old = [p for p, s in state.items() if s is False]
     per_dir = Counter(p.parent.relative_to(ROOT).as_posix() for p in old)
     lines = [f"{len(old)} of {sum(s is not None for s in state.values())} results files carry no version and commit "
-             f"(written before the stamp, named in analysis/{MADE_BEFORE_STAMPING}; "
-             f"{sum(s is None for s in state.values())} CSV files and folder READMEs carry none by design):"]
+             f"(write them stamped from their script; {sum(s is None for s in state.values())} CSV files and folder "
+             "READMEs carry none by design):"]
     lines += [f"  {d}: {n}" for d, n in sorted(per_dir.items())]
     return "\n".join(lines)
 

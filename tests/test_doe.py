@@ -241,6 +241,8 @@ def test_doe_study_end_to_end(tmp_path, capsys):
     import json
 
     res = json.loads((out / "doe.json").read_text())
+    assert res.pop("provenance")["git_commit"]  # stamped (twin.provenance)
+    assert (out / "doe.md").read_text().splitlines()[-1].startswith("_Written ")
     assert res["lhs_strata_ok"] is True
     assert (out / "max_slider_accel.png").stat().st_size > 10_000
     m = named_preset("s000").bodies.slider.mass_kg

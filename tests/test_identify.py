@@ -471,8 +471,8 @@ def test_out_of_range_warnings_fire_outside_each_range_and_not_inside(small):
         return identify_inputs(m, *simulated_inputs(run, cfg), orientation=orientation, source="sim"), run
 
     a, run = answer(base)
-    assert a.warnings == () and not a.evidence.training_data_check["outside_training_data"]
-    assert a.evidence.training_data_check["feature_distance"]["beyond_far_out_fences"] < 0.05 * len(m.feature_names)
+    assert a.warnings == () and not a.evidence.training_data_check.outside_training_data
+    assert a.evidence.training_data_check.feature_distance.beyond_far_out_fences < 0.05 * len(m.feature_names)
     noisy = base.replace(**{"instrumentation.noise_scale": 4.0})
     b, _ = answer(noisy, run=run)  # the same motion, four times the noise density
     assert len(b.warnings) >= 1 and "sensor noise level" in b.warnings[0]
@@ -480,11 +480,11 @@ def test_out_of_range_warnings_fire_outside_each_range_and_not_inside(small):
     assert any(w.startswith("orientation x was not in the training data") for w in c.warnings)
     rip, _ = answer(base.replace(**{"drive.ripple_pct": (3.0,), "drive.ripple_phase_rad": (0.5,)}))
     assert rip.warnings[0].startswith("within-turn speed ripple ") and " % at 1x" in rip.warnings[0]
-    got = rip.evidence.training_data_check["measured"]["ripple_pct"][0]
+    got = rip.evidence.training_data_check.measured.ripple_pct[0]
     assert got == pytest.approx(3.0, abs=0.3)  # the PID tracks the rippled reference closely
     for x in (b, c, rip):
         lo, hi = x.joint("C").interval_if_faulty_mm
-        assert lo <= 0.5 <= hi and x.evidence.training_data_check["outside_training_data"]
+        assert lo <= 0.5 <= hi and x.evidence.training_data_check.outside_training_data
 
 
 # ------------------------------------------------------------- the shipped model
@@ -504,8 +504,8 @@ def test_the_shipped_model_identifies_the_sample_recordings(rec, fault, c_mm, tm
     a = IdentifyResult.from_json(js.read_text())
     assert a.fault == fault and a.warnings == ()
     check = a.evidence.training_data_check
-    assert not check["outside_training_data"]
-    assert check["measured"]["ripple_pct"][:2] == pytest.approx([1.5, 2.5], abs=0.05)
+    assert not check.outside_training_data
+    assert list(check.measured.ripple_pct[:2]) == pytest.approx([1.5, 2.5], abs=0.05)
     if not c_mm:  # no clearance found means no size at either joint
         assert a.joint("C").size_mm == 0.0 and a.joint("B").size_mm == 0.0
     # every number printed comes with what it is: a word or unit right before or after it
@@ -529,7 +529,7 @@ def test_the_shipped_models_interval_holds_the_clearance_of_the_test6_sample(tmp
     assert main(["identify", "clearance", str(REC / "test6_synthetic.mcap"), "--json", str(js)]) == 0
     a = IdentifyResult.from_json(js.read_text())
     lo, hi = a.joint("C").interval_mm
-    assert a.fault == "C" and not a.evidence.training_data_check["outside_training_data"]
+    assert a.fault == "C" and not a.evidence.training_data_check.outside_training_data
     assert lo <= 0.1 <= hi
 
 
@@ -556,13 +556,13 @@ def test_the_short_repeats_of_test6_are_located_and_their_intervals_hold_the_tru
     a = IdentifyResult.from_json(js.read_text())
     lo, hi = a.joint("C").interval_mm
     check = a.evidence.training_data_check
-    assert a.fault == "C" and 0.2 <= check["measured"]["ripple_pct"][3] <= 0.5
+    assert a.fault == "C" and 0.2 <= check.measured.ripple_pct[3] <= 0.5
     from twin.identification.model import ClearanceModel
 
-    assert check["measured"]["ripple_pct"][3] < ClearanceModel.load(DEFAULT).trained_on["ranges"]["ripple_pct"][3][1]
+    assert check.measured.ripple_pct[3] < ClearanceModel.load(DEFAULT).trained_on["ranges"]["ripple_pct"][3][1]
     assert lo <= 0.1 <= hi
     # one window of two turns: the interval is that of answers from one window, and the answer says so
-    assert a.evidence.windows == 1 and "answers from their first 1 window " in check["interval_rule"]
+    assert a.evidence.windows == 1 and "answers from their first 1 window " in check.interval_rule
 
 
 def test_the_size_target_is_half_the_catalogue_gap_there():

@@ -56,6 +56,36 @@ def test_an_identify_result_gives_back_the_golden_dict_exactly(name):
 
 
 @pytest.mark.parametrize("name", sorted(IDENTIFY_GOLDEN))
+def test_the_evidence_reads_into_typed_frozen_values(name):
+    """The training-data check and the model's description are frozen dataclasses (no dicts left in the
+    evidence); the old read access by key still gives the dict's values; an unknown key is refused, not lost."""
+    from twin.identification.results import FeatureDistance, ModelInfo, RecordingMeasures, TrainingDataCheck
+
+    golden = IDENTIFY_GOLDEN[name]["evidence"]
+    ev = Evidence.from_dict(golden)
+    check, model = ev.training_data_check, ev.model
+    assert isinstance(check, TrainingDataCheck) and isinstance(check.measured, RecordingMeasures)
+    assert isinstance(check.feature_distance, FeatureDistance) and isinstance(model, ModelInfo)
+    assert check.measured.ripple_pct == tuple(golden["training_data_check"]["measured"]["ripple_pct"])
+    assert model.crank_hz_range == tuple(golden["model"]["crank_hz_range"])
+    assert model.dataset == golden["model"]["dataset"]
+    assert check.feature_distance.of == golden["training_data_check"]["feature_distance"]["of"]
+    assert check["measured"]["crank_hz"] == check.measured.crank_hz and "feature_distance" in check
+    assert ev.to_dict() == golden and _layout(ev.to_dict()) == _layout(golden)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        check.outside_training_data = True
+    with pytest.raises(ValueError, match="'extra'"):
+        TrainingDataCheck.from_dict({**golden["training_data_check"], "extra": 1})
+    # a model without training ranges: the reason in place of the distance, and no swing measured
+    bare = {"measured": {"crank_hz": 3.0, "ripple_pct": [1.0], "noise_ug_rthz": None},
+            "ranges": "unavailable (the model stores no training ranges)", "outside_training_data": False,
+            "interval_rule": "r"}
+    c = TrainingDataCheck.from_dict(bare)
+    assert c.feature_distance is None and c.measured.speed_swing_pct is None
+    assert c.to_dict() == bare and list(c.to_dict()) == list(bare)
+
+
+@pytest.mark.parametrize("name", sorted(IDENTIFY_GOLDEN))
 def test_the_answer_of_a_sample_has_the_golden_layout_and_values(name):
     """The answer made now has the golden dict's keys in its order at every level; its values equal the golden
     ones to 1e-9 (a regression guard: the golden values are this code's own earlier output)."""
@@ -99,7 +129,13 @@ def test_a_joint_located_healthy_reports_no_size_and_the_joints_are_found_by_nam
     b = JointAnswer("B", False, 0.03, (0.02, 0.05), size_resolved=True, size_held_out=held)
     c = JointAnswer("C", True, 0.1, (0.08, 0.13), size_resolved=False)
     assert (b.size_mm, b.interval_mm) == (0.0, (0.0, 0.0)) and (c.size_mm, c.interval_mm) == (0.1, (0.08, 0.13))
-    ev = Evidence(1, 2.0, 3.1, 740.0, 0.7, 178, "v", {"outside_training_data": False}, {"dataset": "d"})
+    from twin.identification.results import ModelInfo, RecordingMeasures, TrainingDataCheck
+
+    check = TrainingDataCheck(RecordingMeasures(3.1, (1.0, 2.0), 30.0), False, "inside")
+    ev = Evidence(1, 2.0, 3.1, 740.0, 0.7, 178, "v", check, ModelInfo("d", "0" * 64, "mujoco", (3.0, 3.2)))
+    assert Evidence(1, 2.0, 3.1, 740.0, 0.7, 178, "v", check.to_dict(), ev.model.to_dict()) == ev  # dicts read in
+    with pytest.raises(ValueError, match="missing"):
+        Evidence(1, 2.0, 3.1, 740.0, 0.7, 178, "v", {"outside_training_data": False}, ev.model)
     r = IdentifyResult("C", {"none": 0.1, "B": 0.0, "C": 0.9, "BC": 0.0}, (b, c), "rec.mcap", ("w",), ev, 0.5)
     d = r.to_dict()
     assert d["clearance_b_mm"] == 0.0 and d["clearance_b_if_faulty_mm"] == {"median": 0.03, "interval_90": [0.02, 0.05]}
@@ -326,3 +362,57 @@ def test_train_makes_the_tables_by_windows_when_asked_and_not_by_default(tmp_pat
     _, plain = train([tmp_path], TrainOptions(**opts), features=(np.array(X), rows, owner, [], [ds]))
     assert plain["interval"]["half_width_log10_by_windows"] == {}
     assert plain["interval"]["half_width_log10"] == info["interval"]["half_width_log10"]
+
+
+@pytest.mark.parametrize("pattern, cls_path", [
+    ("**/taguchi.json", "twin.studies.taguchi:TaguchiResult"),
+    ("**/mcdm.json", "twin.studies.mcdm:McdmResult"),
+    ("**/stability.json", "twin.studies.stability:StabilityResult"),
+    ("**/formulations.json", "twin.studies.formulations:FormulationsResult")])
+def test_the_committed_study_files_read_into_typed_summaries_and_back_exactly(pattern, cls_path):
+    """Every committed ``taguchi.json``, ``mcdm.json``, ``stability.json`` and ``formulations.json`` (written from
+    plain dicts, before the typed summaries) reads into its result, whose nested summaries are frozen dataclasses,
+    and back to the same data, key order included; the file's provenance stamp is the file's, dropped first."""
+    import importlib
+
+    from twin.typed import Record
+
+    mod, name = cls_path.split(":")
+    cls = getattr(importlib.import_module(mod), name)
+    files = sorted((ROOT / "analysis" / "results").glob(pattern))
+    assert files, pattern
+    for f in files:
+        golden = json.loads(f.read_text())
+        assert "provenance" in golden, f"{f}: not stamped"
+        r = cls.from_dict(golden)  # the stamp ignored
+        golden.pop("provenance")
+        assert r.to_dict() == golden and _layout(r.to_dict()) == _layout(golden), f
+        nested = {"TaguchiResult": lambda: next(iter(r.responses.values())).raw.prediction,
+                  "McdmResult": lambda: r.methods["waspas"].paper_variant,
+                  "StabilityResult": lambda: r.summary.pen_over_c,
+                  "FormulationsResult": lambda: r.rows[0]}[name]()
+        assert isinstance(nested, Record)
+        with pytest.raises(dataclasses.FrozenInstanceError):
+            setattr(nested, dataclasses.fields(nested)[0].name, None)
+
+
+def test_a_calibration_result_holds_typed_rows_and_writes_the_same_dict(tmp_path):
+    """The correlated pairs and the evaluation times (dicts as the search gives them) are frozen dataclasses in
+    :class:`twin.calibration.CalibrationResult`; ``to_dict()`` writes the dicts they were, key for key."""
+    from twin.calibration import CalibrationResult, FittedParameter
+    from twin.calibration.rows import CorrelatedPair, EvaluationTimes
+
+    pairs = [{"a": "contact.mu0", "b": "contact.restitution", "correlation": 0.97}]
+    times = {"short": 0.5, "full": 2.0}
+    fp = FittedParameter("contact.mu0", 0.1, 0.08, 0.12, 0.05, (0.0, 0.3), "slice", False, "")
+    r = CalibrationResult((fp,), 3.0, 1.0, [{"band": 1.0}], [{"band": 0.5}], {"band": 1.0}, "note", pairs, [], 10,
+                          8, 2, times, 12.0, tmp_path)
+    assert r.correlated_pairs == (CorrelatedPair("contact.mu0", "contact.restitution", 0.97),)
+    assert r.seconds_per_evaluation == EvaluationTimes(0.5, 2.0) and r.seconds_per_evaluation["full"] == 2.0
+    d = r.to_dict()
+    assert d["correlated_pairs"] == pairs and d["seconds_per_evaluation"] == times
+    assert list(d["seconds_per_evaluation"]) == ["short", "full"] and json.loads(json.dumps(d)) == d
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        r.correlated_pairs[0].correlation = 0.0
+    with pytest.raises(ValueError, match="'stage'"):
+        EvaluationTimes.from_dict({"short": 1.0, "full": 2.0, "stage": "x"})

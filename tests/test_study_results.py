@@ -15,6 +15,34 @@ import pytest
 from twin.errors import ConfigError
 
 
+def _data_of(path: Path) -> dict:
+    """The JSON a study wrote, less its provenance stamp (the file's, not the result's: checked here, then
+    dropped, so that the rest compares with ``to_dict()`` key for key)."""
+    import twin
+    from twin.provenance import PROVENANCE_KEY, git_commit
+
+    d = json.loads(path.read_text())
+    assert list(d)[0] == PROVENANCE_KEY, f"{path.name}: not stamped"
+    st = d.pop(PROVENANCE_KEY)
+    assert st["twin_version"] == twin.__version__ and st["git_commit"] == git_commit()
+    return d
+
+
+def _stamped_md(path: Path) -> bool:
+    from twin.provenance import stamp_line
+
+    return path.read_text().endswith("\n\n" + stamp_line() + "\n")
+
+
+def _stamped_png(path: Path) -> bool:
+    from PIL import Image
+
+    from twin.provenance import figure_metadata
+
+    with Image.open(path) as im:
+        return im.info.get("Software") == figure_metadata()["Software"]
+
+
 def _frozen(obj) -> None:
     field = dataclasses.fields(obj)[0].name
     with pytest.raises(dataclasses.FrozenInstanceError):
@@ -30,7 +58,8 @@ def test_mcdm_result_is_its_json(tmp_path):
     res = run_study(opts)
     assert isinstance(res, McdmResult)
     _frozen(opts), _frozen(res)
-    assert res.to_dict() == json.loads((tmp_path / "out" / "mcdm.json").read_text())
+    assert res.to_dict() == _data_of(tmp_path / "out" / "mcdm.json")
+    assert _stamped_md(tmp_path / "out" / "report.md")
     assert res.names == ["a", "b", "c", "d"] and res.weights_source == "MEREC" and res.merec is not None
     # the best alternative by SAW is the one of largest score
     saw = res.methods["saw"]
@@ -51,7 +80,9 @@ def test_taguchi_result_is_its_json(tmp_path):
     res = taguchi.run_study(taguchi.TaguchiOptions(src, "acc", "crank,clearance,mu,rpm", tmp_path / "out"))
     assert isinstance(res, taguchi.TaguchiResult)
     _frozen(res)
-    assert res.to_dict() == json.loads((tmp_path / "out" / "taguchi.json").read_text())
+    assert res.to_dict() == _data_of(tmp_path / "out" / "taguchi.json")
+    assert _stamped_md(tmp_path / "out" / "report.md")
+    assert all(_stamped_png(tmp_path / "out" / f) for f in res.figures)
     assert res.runs == 27 and set(res.responses) == {"acc"}
     assert all((tmp_path / "out" / f).is_file() for f in res.figures) and len(res.figures) == 2
 
@@ -63,7 +94,8 @@ def test_continuous_contact_result_is_its_json(tmp_path):
     opts = ContinuousContactOptions(tmp_path / "out", named_preset("s004"), 0.02)
     res = run_study(opts)
     assert isinstance(res, ContinuousContactResult)
-    assert res.to_dict() == json.loads((tmp_path / "out" / "continuous_contact.json").read_text())
+    assert res.to_dict() == _data_of(tmp_path / "out" / "continuous_contact.json")
+    assert _stamped_png(tmp_path / "out" / "continuous_contact.png")
     # the golden file: what the dict code wrote for the same run (layout; values as a regression guard, 1e-9)
     golden = json.loads((Path(__file__).resolve().parent / "golden" / "continuous_contact_s004_0.02s.json").read_text())
     assert list(res.to_dict()) == list(golden)
@@ -85,8 +117,10 @@ def test_formulations_result_is_its_json(tmp_path):
                                  work_precision_methods={})
     res = F.run_study(opts)
     assert isinstance(res, F.FormulationsResult)
-    assert res.to_dict() == json.loads((tmp_path / "formulations.json").read_text())
-    assert [r["case"] for r in res.rows] == [F.Case("R-matrix", 1e-4).label] and res.work_precision == []
+    assert res.to_dict() == _data_of(tmp_path / "formulations.json")
+    assert _stamped_md(tmp_path / "formulations.md") and all(_stamped_png(tmp_path / f) for f in res.figures)
+    assert [r.case for r in res.rows] == [F.Case("R-matrix", 1e-4).label] and res.work_precision == ()
+    assert isinstance(res.rows[0], F.CaseRow) and res.rows[0]["case"] == res.rows[0].case  # read by key as the dict was
     with pytest.raises(ConfigError, match=r"^duration_s: must lie in \(0, 60\] s"):
         F.FormulationsOptions(tmp_path, duration_s=0.0)
 

@@ -21,6 +21,7 @@ import numpy as np
 from twin.config import BenchConfig
 from twin.errors import ConfigError
 from twin.calibration.params import overlay  # noqa: F401 - part of this module's API
+from twin.calibration.rows import CorrelatedPair, EvaluationTimes
 
 #: misfit per term (J*/n) above which the report warns that the fit did not reach the recordings' scatter
 MISFIT_WARN = 10.0
@@ -136,15 +137,21 @@ class CalibrationResult:
     terms_after: list[dict[str, float]]
     scales: dict[str, float]
     scales_note: str
-    correlated_pairs: list[dict[str, Any]]
+    correlated_pairs: tuple[CorrelatedPair, ...]
     warnings: list[str]
     evaluations: int
     simulated: int
     resumed: int
-    seconds_per_evaluation: dict[str, float]
+    seconds_per_evaluation: EvaluationTimes
     wall_s: float
     out_dir: Path
     report: dict[str, Any] = field(repr=False, default_factory=dict)
+
+    def __post_init__(self) -> None:  # the rows as the search gives them (dicts) read into their types
+        object.__setattr__(self, "correlated_pairs", tuple(
+            p if isinstance(p, CorrelatedPair) else CorrelatedPair.from_dict(p) for p in self.correlated_pairs))
+        if not isinstance(self.seconds_per_evaluation, EvaluationTimes):
+            object.__setattr__(self, "seconds_per_evaluation", EvaluationTimes.from_dict(self.seconds_per_evaluation))
 
     def values(self) -> dict[str, float]:
         """Fitted value by field."""
@@ -155,9 +162,9 @@ class CalibrationResult:
         return {"parameters": [p.to_dict() for p in self.parameters], "objective_before": self.objective_before,
                 "objective_after": self.objective_after, "terms_before": self.terms_before,
                 "terms_after": self.terms_after, "scales": self.scales, "scales_note": self.scales_note,
-                "correlated_pairs": self.correlated_pairs, "warnings": self.warnings,
+                "correlated_pairs": [p.to_dict() for p in self.correlated_pairs], "warnings": self.warnings,
                 "evaluations": self.evaluations, "simulated": self.simulated, "resumed": self.resumed,
-                "seconds_per_evaluation": self.seconds_per_evaluation, "wall_s": self.wall_s,
+                "seconds_per_evaluation": self.seconds_per_evaluation.to_dict(), "wall_s": self.wall_s,
                 "out_dir": str(self.out_dir)}
 
 

@@ -48,6 +48,7 @@ def _run_contact(args: argparse.Namespace) -> int:
 
     from twin.cli import load_config_file
     from twin.config import BenchConfig
+    from twin.provenance import stamped
     from twin.studies.contact_check import check_joints, contact_check
     from twin.util import atomic_write_text, check_output_file, json_text
 
@@ -56,7 +57,7 @@ def _run_contact(args: argparse.Namespace) -> int:
     check_output_file(out, "--out", ".json")
     cfg = load_config_file(args.config) if args.config else BenchConfig()
     report = contact_check(cfg, joints=joints, progress=not args.no_progress and sys.stderr.isatty())
-    atomic_write_text(out, json_text(report, indent=1) + "\n")
+    atomic_write_text(out, json_text(stamped(report), indent=1) + "\n")
     print("| case | m_eff min/median/max [kg] | restitution/0.02 | peak force/5 % | duration/10 % | static | capture |")
     print("|---|---|---:|---:|---:|---:|---|")
     for key, r in report["cases"].items():

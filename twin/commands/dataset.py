@@ -148,7 +148,7 @@ def _info(args: argparse.Namespace) -> int:
     if args.json == "-":
         print(json_text(summary(args.dir)))  # strict JSON: a missing number is null, never NaN
         return 0
-    print(describe(args.dir, show=args.show))
+    print(describe(args.dir, show=args.show, all_hint="--show 0 lists all"))
     if js is not None:
         atomic_write_json(js, summary(args.dir))
         print(f"  wrote {js}")

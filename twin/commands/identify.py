@@ -179,12 +179,12 @@ def _clearance(args: argparse.Namespace) -> int:
               + (f"; at this speed and orientation the model's sizes held within x{held.within_factor:g} in "
                  f"{held.share * 100:.0f} % of {held.runs} training runs left out" if v > 0 and held else ""))
     ev = a.evidence
-    lo_hz, hi_hz = ev.model["crank_hz_range"]
+    lo_hz, hi_hz = ev.model.crank_hz_range
     print(f"  evidence: {ev.windows} window{'s' if ev.windows != 1 else ''}, {ev.revolutions} crank revolutions, "
           f"{ev.steady_s:.2f} s of steady running at a crank rate of {ev.crank_hz:.3f} Hz")
-    print(f"  model: trained on dataset {ev.model['dataset']} at crank rates {lo_hz:.2f}-{hi_hz:.2f} Hz; "
+    print(f"  model: trained on dataset {ev.model.dataset} at crank rates {lo_hz:.2f}-{hi_hz:.2f} Hz; "
           f"identification time {a.seconds:.2f} s")
-    if ev.training_data_check["outside_training_data"]:
+    if ev.training_data_check.outside_training_data:
         n = sum("extrapolation" in w or "unlike the training data" in w for w in a.warnings)
         print(f"  outside the training data: {n} reason{'s' if n != 1 else ''} (warnings below); the intervals are "
               "widened to every clearance the model was trained on at that joint")

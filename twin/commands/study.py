@@ -50,16 +50,16 @@ def _run_formulations(args: argparse.Namespace) -> int:
     print(f"wrote {out / 'formulations.md'}, {out / 'formulations.json'}, "
           + ", ".join(str(out / f) for f in res.figures))
     for r in res.rows:
-        print(f"  {r['case']:38s} dE {r['final_energy_error_J'] * 1e3:10.3f} mJ  max|Phi| {r['max_phi']:9.2e}  "
-              f"{'DIVERGED at %.3f s' % r['t_end_s'] if r['diverged'] else 'ok':22s} wall {r['wall_s']:.3f} s")
+        print(f"  {r.case:38s} dE {r.final_energy_error_J * 1e3:10.3f} mJ  max|Phi| {r.max_phi:9.2e}  "
+              f"{'DIVERGED at %.3f s' % r.t_end_s if r.diverged else 'ok':22s} wall {r.wall_s:.3f} s")
     if res.work_precision:
         print(f"work-precision, theta({args.duration:g} s) error against the exact solution"
               + ("" if res.exudyn else " (Exudyn not installed: skipped)") + ":")
     for r in res.work_precision:
-        err = r["theta_error_rad"]
-        print(f"  {r['method']:30s} h {r['timestep_s']:<7g} {r['us_per_step']:7.2f} us/step "
-              f"{r['s_per_sim_s']:8.4f} s/sim s  error {'failed' if err is None else format(err, '.2e'):>9s}"
-              f"{'  P' if r['front'] else ''}")
+        err = r.theta_error_rad
+        print(f"  {r.method:30s} h {r.timestep_s:<7g} {r.us_per_step:7.2f} us/step "
+              f"{r.s_per_sim_s:8.4f} s/sim s  error {'failed' if err is None else format(err, '.2e'):>9s}"
+              f"{'  P' if r.front else ''}")
     return 0
 
 
@@ -269,7 +269,7 @@ def _run_mcdm(args: argparse.Namespace) -> int:
     out = check_output_dir(args.out)
     res = run_study(McdmOptions(args.responses, args.criteria, out, args.weights, args.waspas_lambda,
                                 args.name_column))
-    w = ", ".join(f"{c['name']} {v:.4f}" for c, v in zip(res.criteria, res.weights))
+    w = ", ".join(f"{c.name} {v:.4f}" for c, v in zip(res.criteria, res.weights))
     print(f"wrote {out / 'mcdm.json'}, {out / 'report.md'}; weights ({res.weights_source}): {w}")
     for k in METHODS:
         print(f"  {k:7s} best {'alternative' if res.name_column else 'row'} {res.best(k)}")
@@ -304,9 +304,9 @@ def register_taguchi_analyze(studies: argparse._SubParsersAction) -> None:
 def _print_taguchi(res, out) -> None:
     print(f"wrote {out / 'taguchi.json'}, {out / 'report.md'}, " + ", ".join(str(out / f) for f in res.figures))
     for spec, r in res.responses.items():
-        a = r["sn_analysis"]
-        best = ", ".join(f"{f}={res.levels[i][a['optimum_levels'][i]]:g}" for i, f in enumerate(res.factors))
-        print(f"  {spec}: best S/N levels {best}; predicted S/N {a['prediction']['predicted']:.4g} dB")
+        a = r.sn_analysis
+        best = ", ".join(f"{f}={res.levels[i][a.optimum_levels[i]]:g}" for i, f in enumerate(res.factors))
+        print(f"  {spec}: best S/N levels {best}; predicted S/N {a.prediction.predicted:.4g} dB")
 
 
 def _run_taguchi_analyze(args: argparse.Namespace) -> int:

@@ -440,9 +440,10 @@ def _json_value(v: Any) -> Any:
     return None if isinstance(v, float) and math.isnan(v) else v
 
 
-def describe(path: str | Path, show: int = 20) -> str:
+def describe(path: str | Path, show: int = 20, *, all_hint: str = "show=0 lists all") -> str:
     """``twin dataset info``: runs by status, class balance per split, size, channels, and the
-    first ``show`` runs with their ids and labels (0: every run)."""
+    first ``show`` runs with their ids and labels (0: every run); ``all_hint``: how to list every run, said
+    after the runs left out (the command names its flag)."""
     d = summary(path)
     rs = d["runs_by_status"]
     lines = [f"{d['path']}: dataset {d['name']!r} ({d['format']}), "
@@ -463,7 +464,7 @@ def describe(path: str | Path, show: int = 20) -> str:
             ["run_id", "status", *(head.get(k, k.removeprefix("factor_")) for k in labels)],
             [[r["run_id"], r["status"], *(r[k] for k in labels)] for r in runs])]
         if len(runs) < len(d["runs"]):
-            lines.append(f"    ... {len(d['runs']) - len(runs)} more (--show 0 lists all)")
+            lines.append(f"    ... {len(d['runs']) - len(runs)} more ({all_hint})")
     failed = [r for r in d["runs"] if r["status"] == "failed"]
     for r in failed[:10]:
         lines.append(f"  failed {r['run_id']}: {r['reason']}")

@@ -14,7 +14,10 @@ import re
 from dataclasses import dataclass
 from typing import Any, Mapping
 
-__all__ = ["Evidence", "HeldOut", "IdentifyResult", "JointAnswer"]
+from twin.typed import ByKey
+
+__all__ = ["Evidence", "FeatureDistance", "HeldOut", "IdentifyResult", "JointAnswer", "ModelInfo", "RecordingMeasures",
+           "TrainingDataCheck"]
 
 
 def _key(joint: str) -> str:
@@ -87,6 +90,134 @@ class JointAnswer:
         return tuple(self.interval_if_faulty_mm) if self.faulty else (0.0, 0.0)
 
 
+def _no_other_keys(cls: type, d: Mapping[str, Any], known: tuple[str, ...], optional: tuple[str, ...] = ()) -> None:
+    """ValueError naming the keys of ``d`` that ``cls`` does not know, or the ``known`` ones missing (``optional``
+    aside): a key is never lost silently."""
+    other = [k for k in d if k not in known]
+    if other:
+        raise ValueError(f"{cls.__name__}: keys {', '.join(map(repr, other))} unknown; allowed: {', '.join(known)}")
+    missing = [k for k in known if k not in d and k not in optional]
+    if missing:
+        raise ValueError(f"{cls.__name__}: keys {', '.join(map(repr, missing))} missing")
+
+
+@dataclass(frozen=True)
+class RecordingMeasures(ByKey):
+    """What was measured of a recording's steady windows (:func:`twin.identification.ranges.recording_measures`).
+
+    Attributes:
+        crank_hz: the crank rate [Hz].
+        ripple_pct: the within-turn speed ripple per harmonic of the crank rate, 1x first [%].
+        noise_ug_rthz: the sensors' noise level [µg/√Hz] (NaN, null in JSON, where it could not be measured).
+        speed_swing_pct: the crank rate's largest swing within 50 ms [%]; None where not measured (answers made
+            before it was).
+    """
+
+    crank_hz: float
+    ripple_pct: tuple[float, ...]
+    noise_ug_rthz: float | None
+    speed_swing_pct: float | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        d = {"crank_hz": self.crank_hz, "ripple_pct": list(self.ripple_pct), "noise_ug_rthz": self.noise_ug_rthz}
+        return d if self.speed_swing_pct is None else d | {"speed_swing_pct": self.speed_swing_pct}
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> "RecordingMeasures":
+        _no_other_keys(cls, d, ("crank_hz", "ripple_pct", "noise_ug_rthz", "speed_swing_pct"), ("speed_swing_pct",))
+        return cls(d["crank_hz"], tuple(d["ripple_pct"]), d["noise_ug_rthz"], d.get("speed_swing_pct"))
+
+
+@dataclass(frozen=True)
+class FeatureDistance(ByKey):
+    """How far a recording's median window features lie from the training windows'
+    (:func:`twin.identification.ranges.feature_outliers`).
+
+    Attributes:
+        beyond_far_out_fences: features beyond the training windows' far-out fences.
+        of: features compared.
+        training_runs_max: the most such features a training run had; None where the model stores no such count.
+    """
+
+    beyond_far_out_fences: int
+    of: int
+    training_runs_max: int | None
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"beyond_far_out_fences": self.beyond_far_out_fences, "of": self.of,
+                "training_runs_max": self.training_runs_max}
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> "FeatureDistance":
+        _no_other_keys(cls, d, ("beyond_far_out_fences", "of", "training_runs_max"))
+        return cls(d["beyond_far_out_fences"], d["of"], d["training_runs_max"])
+
+
+@dataclass(frozen=True)
+class TrainingDataCheck(ByKey):
+    """A recording checked against the model's training data (:func:`twin.identification.model.training_check`).
+
+    Attributes:
+        measured: what was measured of the recording.
+        outside_training_data: whether any check found the recording outside the training data.
+        interval_rule: which interval the answer gives, in words.
+        ranges: why the ranges were not checked ("unavailable ..."); None where they were.
+        feature_distance: the features' distance from the training data, or why it is unavailable (text); None
+            where not checked (no training ranges).
+    """
+
+    measured: RecordingMeasures
+    outside_training_data: bool
+    interval_rule: str
+    ranges: str | None = None
+    feature_distance: FeatureDistance | str | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        d: dict[str, Any] = {"measured": self.measured.to_dict()}
+        if self.ranges is not None:
+            d["ranges"] = self.ranges
+        if self.feature_distance is not None:
+            fd = self.feature_distance
+            d["feature_distance"] = fd if isinstance(fd, str) else fd.to_dict()
+        return d | {"outside_training_data": self.outside_training_data, "interval_rule": self.interval_rule}
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> "TrainingDataCheck":
+        _no_other_keys(cls, d, ("measured", "ranges", "feature_distance", "outside_training_data", "interval_rule"),
+                       ("ranges", "feature_distance"))
+        fd = d.get("feature_distance")
+        return cls(measured=RecordingMeasures.from_dict(d["measured"]),
+                   outside_training_data=d["outside_training_data"], interval_rule=d["interval_rule"],
+                   ranges=d.get("ranges"), feature_distance=fd if fd is None or isinstance(fd, str) else
+                   FeatureDistance.from_dict(fd))
+
+
+@dataclass(frozen=True)
+class ModelInfo(ByKey):
+    """What the model answering was trained on.
+
+    Attributes:
+        dataset: the training datasets' names, joined by "+".
+        identity_sha256: the digest of the model's identity (its training data and settings).
+        engine: the engine(s) the training data were simulated with.
+        crank_hz_range: the training data's crank rates (lowest, highest) [Hz].
+    """
+
+    dataset: str
+    identity_sha256: str
+    engine: str
+    crank_hz_range: tuple[float, float]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"dataset": self.dataset, "identity_sha256": self.identity_sha256, "engine": self.engine,
+                "crank_hz_range": list(self.crank_hz_range)}
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> "ModelInfo":
+        _no_other_keys(cls, d, ("dataset", "identity_sha256", "engine", "crank_hz_range"))
+        return cls(d["dataset"], d["identity_sha256"], d["engine"], tuple(d["crank_hz_range"]))
+
+
 @dataclass(frozen=True)
 class Evidence:
     """What an answer was made from.
@@ -100,7 +231,7 @@ class Evidence:
         features: features per window.
         feature_version: the feature definition's version.
         training_data_check: the checks against the training data (:func:`twin.identification.model.training_check`).
-        model: what the model was trained on (dataset, identity digest, engine, crank rate range [Hz]).
+        model: what the model was trained on.
     """
 
     windows: int
@@ -110,20 +241,28 @@ class Evidence:
     steady_s: float
     features: int
     feature_version: str
-    training_data_check: Mapping[str, Any]
-    model: Mapping[str, Any]
+    training_data_check: TrainingDataCheck
+    model: ModelInfo
+
+    def __post_init__(self) -> None:  # dicts as to_dict() writes them are read into the typed values
+        if isinstance(self.training_data_check, Mapping):
+            object.__setattr__(self, "training_data_check", TrainingDataCheck.from_dict(self.training_data_check))
+        if isinstance(self.model, Mapping):
+            object.__setattr__(self, "model", ModelInfo.from_dict(self.model))
 
     def to_dict(self) -> dict[str, Any]:
         return {"windows": self.windows, "revolutions": self.revolutions, "crank_hz": self.crank_hz,
                 "motor_rpm_if_belt_3_97": self.motor_rpm_if_belt_3_97, "steady_s": self.steady_s,
                 "features": self.features, "feature_version": self.feature_version,
-                "training_data_check": dict(self.training_data_check), "model": dict(self.model)}
+                "training_data_check": self.training_data_check.to_dict(), "model": self.model.to_dict()}
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any] | None) -> "Evidence | None":
         if d is None:
             return None
-        return cls(**{k: d[k] for k in cls.__dataclass_fields__})
+        plain = {k: d[k] for k in cls.__dataclass_fields__}
+        return cls(**plain | {"training_data_check": TrainingDataCheck.from_dict(d["training_data_check"]),
+                              "model": ModelInfo.from_dict(d["model"])})
 
 
 @dataclass(frozen=True)

@@ -54,6 +54,7 @@ from twin.errors import ConfigError, TwinError
 from twin.run import Run
 from twin.signals import band_energy_db, dtw_compare
 from twin.summary import count_impacts
+from twin.provenance import figure_metadata, stamped, with_stamp_line
 from twin.util import atomic_write_bytes, atomic_write_json, atomic_write_text
 
 #: Step of the converged reference ("truth") [s].
@@ -410,8 +411,8 @@ def run_study(options: AccuracyOptions, *, log: Callable[[str], None] | None = N
             bar.close()
     data = aggregate(per_test, vs, settings, quick)
     data["figures"] = plots(out, data)
-    atomic_write_json(out / "accuracy.json", data)
-    atomic_write_text(out / "accuracy.md", render_markdown(data))
+    atomic_write_json(out / "accuracy.json", stamped(data))
+    atomic_write_text(out / "accuracy.md", with_stamp_line(render_markdown(data)))
     return AccuracyResult.from_dict(data)
 
 
@@ -542,7 +543,7 @@ def plots(out: Path, data: dict[str, Any]) -> list[str]:
         ax.grid(True, which="both", alpha=0.3)
         buf = io.BytesIO()
         fig.tight_layout()
-        fig.savefig(buf, format="png", dpi=100)
+        fig.savefig(buf, format="png", dpi=100, metadata=figure_metadata())
         plt.close(fig)
         name = f"work_precision_{k}.png"
         atomic_write_bytes(out / name, buf.getvalue())

@@ -366,6 +366,7 @@ def run_study(options: ContinuousContactOptions) -> ContinuousContactResult:
     ``continuous_contact.npz`` and ``continuous_contact.png`` to ``options.out``."""
     import io
 
+    from twin.provenance import figure_metadata, stamped
     from twin.util import atomic_write_bytes, atomic_write_json
 
     cfg = options.config
@@ -373,7 +374,7 @@ def run_study(options: ContinuousContactOptions) -> ContinuousContactResult:
     out.mkdir(exist_ok=True)
     res = run_free(cfg, options.duration_s)
     result = ContinuousContactResult(ContinuousContactSummary.from_dict(res["summary"]), res["series"])
-    atomic_write_json(out / "continuous_contact.json", result.to_dict())
+    atomic_write_json(out / "continuous_contact.json", stamped(result.to_dict()))
     buf = io.BytesIO()
     np.savez_compressed(buf, **res["series"])
     atomic_write_bytes(out / "continuous_contact.npz", buf.getvalue())
@@ -398,7 +399,7 @@ def run_study(options: ContinuousContactOptions) -> ContinuousContactResult:
                  f"(valid while f_N >= 0: up to {res['summary']['valid_until_crank_deg']:.1f} deg)")
     fig.tight_layout()
     png = io.BytesIO()
-    fig.savefig(png, format="png", dpi=110)
+    fig.savefig(png, format="png", dpi=110, metadata=figure_metadata())
     plt.close(fig)
     atomic_write_bytes(out / "continuous_contact.png", png.getvalue())
     return result

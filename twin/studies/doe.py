@@ -50,6 +50,7 @@ import numpy as np
 
 from twin.dataset.spec import DatasetSpec, FactorSpec, SpecError, parse_spec, read_spec_toml
 from twin.errors import unknown
+from twin.provenance import figure_metadata
 
 #: response name -> (unit, description)
 RESPONSES: dict[str, tuple[str, str]] = {
@@ -549,6 +550,7 @@ class DoeResult:
 def run_study(options: DoeOptions, *, log: Callable[[str], None] = lambda m: None) -> DoeResult:
     """The whole study (module docstring); writes ``doe.json``, ``doe.md`` and the PNGs in
     ``options.out``; ``log`` receives a line per stage."""
+    from twin.provenance import stamped, with_stamp_line
     from twin.util import atomic_write_json, atomic_write_bytes
 
     doe, workers, progress = options.spec, options.workers, options.progress
@@ -620,8 +622,8 @@ def run_study(options: DoeOptions, *, log: Callable[[str], None] = lambda m: Non
         atomic_write_bytes(png, _plot(doe, k, rname, X, result))
         figures.append(png.name)
     result["figures"] = figures
-    atomic_write_json(out / "doe.json", result)
-    atomic_write_bytes(out / "doe.md", report_md(doe, result).encode())
+    atomic_write_json(out / "doe.json", stamped(result))
+    atomic_write_bytes(out / "doe.md", with_stamp_line(report_md(doe, result)).encode())
     return DoeResult.from_dict(result)
 
 
@@ -749,7 +751,7 @@ def _plot(doe: DoeSpec, k: Kriging, rname: str, X: np.ndarray, res: dict[str, An
         fig.suptitle(f"Kriging surrogate of {rname}", fontsize=10)
     fig.tight_layout()
     buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
+    fig.savefig(buf, format="png", dpi=110, metadata=figure_metadata())
     plt.close(fig)
     return buf.getvalue()
 

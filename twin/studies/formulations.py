@@ -38,6 +38,8 @@ from twin.errors import ConfigError
 from twin.natural_coordinates import N_Q, P_H, S_Q, S_QD, initial_state
 from twin.reference.model import N_OUT, OK, build_params, free_motion, run_steps
 from twin.studies.penalty import PenaltyParams, penalty_run
+from twin.provenance import figure_metadata, stamped, with_stamp_line
+from twin.typed import Record
 from twin.util import atomic_write_bytes, atomic_write_json, atomic_write_text
 
 #: release angle of §4.1 [rad]
@@ -416,7 +418,7 @@ def _work_precision_plot(rows: list[dict], out: Path) -> Path:
     ax.legend(fontsize=8)
     fig.tight_layout()
     buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
+    fig.savefig(buf, format="png", dpi=110, metadata=figure_metadata())
     plt.close(fig)
     return atomic_write_bytes(out / "work_precision.png", buf.getvalue())
 
@@ -523,7 +525,7 @@ def _plots(results: list[CaseResult], ref_t: np.ndarray, ref_w: np.ndarray, out:
 
     def save(fig, name: str) -> Path:
         buf = io.BytesIO()
-        fig.savefig(buf, format="png", dpi=110)
+        fig.savefig(buf, format="png", dpi=110, metadata=figure_metadata())
         plt.close(fig)
         return atomic_write_bytes(out / name, buf.getvalue())
 
@@ -597,24 +599,92 @@ class FormulationsOptions:
 
 
 @dataclass(frozen=True)
+class CaseRow(Record):
+    """One case of the study (a row of ``formulations.json``'s ``rows``).
+
+    Attributes:
+        case: its label; method: "R-matrix" or "penalty"; timestep_s: the step [s].
+        alpha, zeta, omega: the penalty's parameters (None for the R-matrix).
+        diverged: whether the run diverged; t_end_s: where it stopped [s].
+        final_energy_error_J, final_energy_error_rel: the energy error at the end [J] and over T_max [-];
+            max_abs_energy_error_J: its largest magnitude [J].
+        max_phi, max_phi_dot: the largest constraint violation [m] and its rate [m/s].
+        max_crank_speed_error_rad_s: the largest crank speed error against the exact motion [rad/s].
+        wall_s: wall time [s]; steps: steps taken.
+    """
+
+    case: str
+    method: str
+    timestep_s: float
+    alpha: float | None
+    zeta: float | None
+    omega: float | None
+    diverged: bool
+    t_end_s: float
+    final_energy_error_J: float
+    final_energy_error_rel: float
+    max_abs_energy_error_J: float
+    max_phi: float
+    max_phi_dot: float
+    max_crank_speed_error_rad_s: float
+    wall_s: float
+    steps: int
+
+
+@dataclass(frozen=True)
+class WorkPrecisionRow(Record):
+    """One method and step of the work–precision comparison (a row of ``work_precision``).
+
+    Attributes:
+        method: the integrator; timestep_s: its step [s]; steps: steps over the run.
+        wall_s: wall time [s]; us_per_step: per step [µs]; s_per_sim_s: per simulated second [s].
+        theta_error_rad: |θ(T) − θ_exact(T)| [rad] (None: the run failed).
+        front: on the Pareto front of cost and error.
+    """
+
+    method: str
+    timestep_s: float
+    steps: int
+    wall_s: float
+    us_per_step: float
+    s_per_sim_s: float
+    theta_error_rad: float | None
+    front: bool
+
+
+@dataclass(frozen=True)
 class FormulationsResult:
     """What the study found (``formulations.json``): per case a row of energy error, constraint
-    violation and wall time; the exact solution's end angle; the work–precision rows."""
+    violation and wall time (:class:`CaseRow`); the exact solution's end angle; the work–precision rows
+    (:class:`WorkPrecisionRow`). Rows given as dicts are read into those."""
 
     duration_s: float
     theta0_rad: float
     t_max_J: float
-    rows: list[dict]
+    rows: tuple[CaseRow, ...]
     theta_exact_end_rad: float
-    work_precision: list[dict]
+    work_precision: tuple[WorkPrecisionRow, ...]
     exudyn: bool
     figures: tuple[str, ...]
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "rows", tuple(r if isinstance(r, CaseRow) else CaseRow.from_dict(r)
+                                               for r in self.rows))
+        object.__setattr__(self, "work_precision", tuple(r if isinstance(r, WorkPrecisionRow) else
+                                                         WorkPrecisionRow.from_dict(r) for r in self.work_precision))
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON data of ``formulations.json``."""
         return {"duration_s": self.duration_s, "theta0_rad": self.theta0_rad, "t_max_J": self.t_max_J,
-                "rows": self.rows, "theta_exact_end_rad": self.theta_exact_end_rad,
-                "work_precision": self.work_precision, "exudyn": self.exudyn, "figures": list(self.figures)}
+                "rows": [r.to_dict() for r in self.rows], "theta_exact_end_rad": self.theta_exact_end_rad,
+                "work_precision": [r.to_dict() for r in self.work_precision], "exudyn": self.exudyn,
+                "figures": list(self.figures)}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> "FormulationsResult":
+        """The result of ``formulations.json``'s data (its provenance stamp ignored)."""
+        return cls(d["duration_s"], d["theta0_rad"], d["t_max_J"], d["rows"], d["theta_exact_end_rad"],
+                   d["work_precision"], d["exudyn"], tuple(d["figures"]))
 
 
 def run_study(options: FormulationsOptions) -> FormulationsResult:
@@ -652,7 +722,7 @@ def run_study(options: FormulationsOptions) -> FormulationsResult:
             + table + "\n" + _notes(rows) + "\n"
             + (work_precision_markdown(wp, duration_s, exudyn) + "\n" if wp else "")
             + "Figures: " + ", ".join(p.name for p in pngs) + "\n")
-    atomic_write_text(out / "formulations.md", text)
+    atomic_write_text(out / "formulations.md", with_stamp_line(text))
     res = FormulationsResult(duration_s, THETA0, tmax, rows, float(th[-1]), wp, exudyn, tuple(p.name for p in pngs))
-    atomic_write_json(out / "formulations.json", res.to_dict())
+    atomic_write_json(out / "formulations.json", stamped(res.to_dict()))
     return res

@@ -54,6 +54,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from twin.errors import TwinError, did_you_mean
+from twin.typed import Record
 
 #: distinguishing coefficient of GRA (the customary value, S002's)
 GRA_XI = 0.5
@@ -484,40 +485,104 @@ class McdmOptions:
 
 
 @dataclass(frozen=True)
+class MethodScores(Record):
+    """One method's answer (``mcdm.json``'s ``methods[name]``).
+
+    Attributes:
+        scores: per alternative its score, in row order [-]; ranks: its rank (1 best).
+        xi: GRA's distinguishing coefficient; lam: WASPAS's λ (``lambda`` in JSON); c: the constant of S002's
+            WASPAS form; form: the formula, in words; paper_variant: WASPAS in S002's form. Each None (and absent
+            from the JSON) where the method has none.
+    """
+
+    _OMIT_NONE = ("xi", "lam", "c", "form", "paper_variant")
+    _KEYS = {"lam": "lambda"}
+
+    scores: tuple[float, ...]
+    ranks: tuple[int, ...]
+    xi: float | None = None
+    lam: float | None = None
+    c: float | None = None
+    form: str | None = None
+    paper_variant: "MethodScores | None" = None
+
+
+MethodScores._NESTED = {"paper_variant": MethodScores}
+
+
+@dataclass(frozen=True)
+class Criterion(Record):
+    """A criterion: its column ``name`` and ``goal`` ("min" or "max")."""
+
+    name: str
+    goal: str
+
+
+@dataclass(frozen=True)
+class MerecSums(Record):
+    """MEREC's intermediate sums: ``S`` the alternatives' overall performances, ``E`` each criterion's removal
+    effect [-]."""
+
+    S: tuple[float, ...]
+    E: tuple[float, ...]
+
+
+@dataclass(frozen=True)
 class McdmResult:
     """The ranking (``mcdm.json``): the alternatives' ``names``, the ``criteria`` and their
-    ``weights``, per method its scores and ranks (``methods``), MEREC's intermediate sums."""
+    ``weights``, per method its scores and ranks (``methods``: :class:`MethodScores`), MEREC's intermediate
+    sums. Dicts given for the typed fields are read into them. ``names`` None: a file written before the
+    alternatives were named (it holds neither ``name_column`` nor ``names``)."""
 
     input: str
     alternatives: int
     name_column: str | None
-    names: list[str]
-    criteria: list[dict[str, str]]
+    names: list[str] | None
+    criteria: tuple[Criterion, ...]
     weights: list[float]
     weights_source: str
-    methods: dict[str, Any]
-    merec: dict[str, list[float]] | None = None
+    methods: dict[str, MethodScores]
+    merec: MerecSums | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "criteria", tuple(c if isinstance(c, Criterion) else Criterion.from_dict(c)
+                                                   for c in self.criteria))
+        object.__setattr__(self, "methods", {k: m if isinstance(m, MethodScores) else MethodScores.from_dict(m)
+                                             for k, m in self.methods.items()})
+        if self.merec is not None and not isinstance(self.merec, MerecSums):
+            object.__setattr__(self, "merec", MerecSums.from_dict(self.merec))
 
     def best(self, method: str) -> str:
         """The alternatives ``method`` ranks first, by name (or row number), comma-separated."""
-        return best_names(self.to_dict(), self.methods[method]["ranks"])
+        names = self.names if self.names is not None else [str(i + 1) for i in range(self.alternatives)]
+        return best_names({"names": names}, list(self.methods[method].ranks))
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON data of ``mcdm.json``."""
-        d = {k: getattr(self, k) for k in ("input", "alternatives", "name_column", "names", "criteria", "weights",
-                                           "weights_source", "methods")}
-        return d if self.merec is None else d | {"merec": self.merec}
+        d: dict[str, Any] = {"input": self.input, "alternatives": self.alternatives}
+        if self.names is not None:
+            d |= {"name_column": self.name_column, "names": self.names}
+        d |= {"criteria": [c.to_dict() for c in self.criteria], "weights": self.weights,
+              "weights_source": self.weights_source, "methods": {k: m.to_dict() for k, m in self.methods.items()}}
+        return d if self.merec is None else d | {"merec": self.merec.to_dict()}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> "McdmResult":
+        """The result of ``mcdm.json``'s data (its provenance stamp ignored)."""
+        return cls(d["input"], d["alternatives"], d.get("name_column"), d.get("names"), d["criteria"], d["weights"],
+                   d["weights_source"], d["methods"], d.get("merec"))
 
 
 def run_study(options: McdmOptions) -> McdmResult:
     """Rank the alternatives of ``options.csv_path`` and write ``mcdm.json`` and ``report.md`` (the
     formulas, the weights, every score and rank) to ``options.out``."""
+    from twin.provenance import stamped, with_stamp_line
     from twin.util import atomic_write_json, atomic_write_text
 
     o = options
     res, x = run_mcdm(o.csv_path, o.criteria, o.weights, o.lam, o.names_from)
     out = Path(o.out)
     out.mkdir(exist_ok=True)
-    atomic_write_json(out / "mcdm.json", res)
-    atomic_write_text(out / "report.md", report_md(res, x))
+    atomic_write_json(out / "mcdm.json", stamped(res))
+    atomic_write_text(out / "report.md", with_stamp_line(report_md(res, x)))
     return McdmResult(**res)

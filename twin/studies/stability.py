@@ -81,8 +81,10 @@ import numpy as np
 
 from twin.config import CATALOGUE_DIAMETRAL_MM, ORIENTATIONS, BenchConfig, preset
 from twin.errors import ConfigError, TwinError
+from twin.studies.stability_summary import StabilitySummary, Stats  # noqa: F401 (public here too)
 from twin.studies.stability_bench import ENGINES, bench_draws, bench_overrides, guide_penetration, label, rotor_energy
 from twin.tracefile import DriveInputs
+from twin.provenance import figure_metadata
 from twin.util import atomic_write_bytes, atomic_write_json, atomic_write_text
 
 #: Largest admissible penetration / radial clearance [-].
@@ -488,20 +490,29 @@ class StabilityResult:
     """
 
     settings: dict[str, Any]
-    summary: dict[str, Any]
+    summary: StabilitySummary
     scenes: list[dict[str, Any]]
     figures: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.summary, StabilitySummary):  # the dict of summarize() or of the JSON file
+            object.__setattr__(self, "summary", StabilitySummary.from_dict(self.summary))
 
     @property
     def passed(self) -> bool:
         """Every scene passed."""
-        return self.summary["passed"] == self.summary["scenes"]
+        return self.summary.passed == self.summary.scenes
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON data of ``stability.json`` (non-finite floats as they are; written through
         :func:`_jsonable`)."""
-        return {"study": "stability", "settings": self.settings, "summary": self.summary, "scenes": self.scenes,
-                "figures": list(self.figures)}
+        return {"study": "stability", "settings": self.settings, "summary": self.summary.to_dict(),
+                "scenes": self.scenes, "figures": list(self.figures)}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> "StabilityResult":
+        """The result of ``stability.json``'s data (its provenance stamp ignored)."""
+        return cls(d["settings"], StabilitySummary.from_dict(d["summary"]), d["scenes"], tuple(d.get("figures", ())))
 
 
 def run_study(settings: StudySettings, *, out: str | Path | None = None, progress: bool = False,
@@ -737,7 +748,7 @@ def _figure(out: Path, rows: list[dict[str, Any]]) -> str:
     fig.suptitle(f"twin study stability: {len(rows)} scenes")
     fig.tight_layout()
     buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
+    fig.savefig(buf, format="png", dpi=110, metadata=figure_metadata())
     plt.close(fig)
     atomic_write_bytes(out / "stability.png", buf.getvalue())
     return "stability.png"

@@ -42,6 +42,8 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from twin.provenance import figure_metadata
+from twin.typed import Record
 from twin.studies.mcdm import TableError, numeric_column, read_csv_table
 
 #: (α, β, γ) of each L27 column: level = (α a + β b + γ c) mod 3 (0-based), a, b, c the base columns
@@ -267,7 +269,7 @@ def _analysis_md(title: str, a: dict[str, Any], names: Sequence[str], values: Se
                  f"{p['confirmation_runs']} confirmation run(s) ±{p['ci_ce']:.4g} "
                  f"(F({1 - p['alpha']:.2f}; 1, {a['anova']['error_dof']}) = {p['f_crit']:.4f})."
                  if p["ci_pop"] is not None else "; no confidence interval: the error has no degree of freedom "
-                 "(pool terms with --pool)."), ""]
+                 "(pool terms into the error: the option pool)."), ""]
     return lines
 
 
@@ -294,7 +296,7 @@ def _plot(path: Path, title: str, names: Sequence[str], values: Sequence[Sequenc
     fig.suptitle(title)
     fig.tight_layout()
     buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=100)
+    fig.savefig(buf, format="png", dpi=100, metadata=figure_metadata())
     plt.close(fig)
     atomic_write_bytes(path, buf.getvalue())
 
@@ -420,9 +422,72 @@ class TaguchiOptions:
 
 
 @dataclass(frozen=True)
+class Prediction(Record):
+    """The additive model's prediction at the optimum levels (:func:`predict`).
+
+    Attributes:
+        predicted: the predicted value [the series' unit]; grand_mean: the series' mean; n_eff: the effective
+            number of replications [-]; alpha: the significance level; confirmation_runs: runs the CI_ce is for;
+        ci_pop, ci_ce: the half-widths of the confidence intervals of Ross (1996) (None without error dof);
+        f_crit: the F quantile they use (None likewise); factors_used: the factors the prediction adds.
+    """
+
+    predicted: float
+    grand_mean: float
+    n_eff: float
+    alpha: float
+    confirmation_runs: int
+    ci_pop: float | None
+    ci_ce: float | None
+    f_crit: float | None
+    factors_used: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class SeriesAnalysis(Record):
+    """The analysis of one series, the raw response or its S/N ratio (:func:`analyze`).
+
+    Attributes:
+        main_effects: per factor the series' mean at each level; delta: per factor its range; rank: per factor its
+            rank by delta (1 largest); optimum_levels: per factor the best level (index).
+        anova: the ANOVA table (:func:`anova`: ``rows`` with each source's ``dof``, ``ss``, ``ms``, ``f``, ``p``,
+            ``contribution_pct`` and ``pooled``, the error's ``error_dof`` and ``error_ms``, a ``summary``), kept as
+            the table it is: its rows differ in their keys (the error and total rows).
+        prediction: the prediction at the optimum levels.
+    """
+
+    _NESTED = {"prediction": Prediction}
+
+    main_effects: tuple[tuple[float, ...], ...]
+    delta: tuple[float, ...]
+    rank: tuple[int, ...]
+    optimum_levels: tuple[int, ...]
+    anova: dict[str, Any]
+    prediction: Prediction
+
+
+@dataclass(frozen=True)
+class ResponseAnalysis(Record):
+    """One response of the study (``taguchi.json``'s ``responses[spec]``).
+
+    Attributes:
+        replicates: the columns averaged into it; sn_ratio: per run its S/N ratio [dB];
+        raw, sn_analysis: the analysis of the raw response and of the S/N ratio.
+    """
+
+    _NESTED = {"raw": SeriesAnalysis, "sn_analysis": SeriesAnalysis}
+
+    replicates: tuple[str, ...]
+    sn_ratio: tuple[float, ...]
+    raw: SeriesAnalysis
+    sn_analysis: SeriesAnalysis
+
+
+@dataclass(frozen=True)
 class TaguchiResult:
-    """The analysis (``taguchi.json``): per response its S/N ratios, main effects, ANOVA and the
-    prediction at the best levels, for the raw response and for the S/N ratio."""
+    """The analysis (``taguchi.json``): per response (:class:`ResponseAnalysis`) its S/N ratios, main effects,
+    ANOVA and the prediction at the best levels, for the raw response and for the S/N ratio. Dicts given for the
+    responses are read into those."""
 
     input: str
     runs: int
@@ -431,19 +496,30 @@ class TaguchiResult:
     sn: str
     interactions: list[str]
     pooled: list[str]
-    responses: dict[str, Any]
+    responses: dict[str, ResponseAnalysis]
     figures: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "responses", {k: r if isinstance(r, ResponseAnalysis) else
+                                               ResponseAnalysis.from_dict(r) for k, r in self.responses.items()})
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON data of ``taguchi.json``."""
         return {"input": self.input, "runs": self.runs, "factors": self.factors, "levels": self.levels, "sn": self.sn,
-                "interactions": self.interactions, "pooled": self.pooled, "responses": self.responses,
-                "figures": list(self.figures)}
+                "interactions": self.interactions, "pooled": self.pooled,
+                "responses": {k: r.to_dict() for k, r in self.responses.items()}, "figures": list(self.figures)}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> "TaguchiResult":
+        """The result of ``taguchi.json``'s data (its provenance stamp ignored)."""
+        return cls(d["input"], d["runs"], d["factors"], d["levels"], d["sn"], d["interactions"], d["pooled"],
+                   d["responses"], tuple(d.get("figures", ())))
 
 
 def run_study(options: TaguchiOptions) -> TaguchiResult:
     """Analyse ``options.csv_path`` and write ``taguchi.json``, ``report.md`` and per response its
     main-effect and S/N PNGs to ``options.out``."""
+    from twin.provenance import stamped, with_stamp_line
     from twin.util import atomic_write_json, atomic_write_text, check_not_input
 
     o = options
@@ -464,6 +540,6 @@ def run_study(options: TaguchiOptions) -> TaguchiResult:
                   res["factors"], res["levels"], r[key]["main_effects"], ylabel)
             figs.append(name)
     res["figures"] = figs
-    atomic_write_json(out / "taguchi.json", res)
-    atomic_write_text(out / "report.md", report_md(res))
+    atomic_write_json(out / "taguchi.json", stamped(res))
+    atomic_write_text(out / "report.md", with_stamp_line(report_md(res)))
     return TaguchiResult(**{**res, "figures": tuple(figs)})
