@@ -21,8 +21,11 @@ accelerometer across the guide) unless said. Experiments, each a controlled chan
 7. *The z row of MuJoCo's 3-D ``connect``*: its Jacobian row and force in the planar model.
 8. *What MuJoCo's floor follows*: MuJoCo alone (τ = 1e-5 s, step 1.25e-6 s, float64, every step) for
    ``--long`` s (default 2.4): the band-passed AC5's floor (median of its 5 ms rms in each 50 ms) against the crank
-   angle and speed. At constant speed a floor set by the rounding of the crank hinge's unbounded angle steps up
-   where the angle crosses a power of two (its ulp doubles there).
+   angle and speed, as built and with MuJoCo's two unbounded hinge angles (``crank_hinge`` and ``rod_hinge``, the
+   rod's angle relative to the crank, ≈ −θ) wrapped by multiples of 2π at every chunk boundary (0.05 s chunks;
+   the PID's reference offset by the crank's turns: the same physics, hinge kinematics being 2π-periodic; a
+   diagnostic patch of the engine's ``advance`` here, not an option of the twin). A floor set by the rounding of
+   an unbounded angle steps up where the angle crosses a power of two (its ulp doubles there).
 
 Writes ``analysis/results/structure/closure_floor.md`` with the versions and the commit.
 Run: ``python analysis/structure_closure_floor.py`` (about 30 runs of 0.6 s; a few minutes).
@@ -233,25 +236,57 @@ def main() -> None:
     # 8. the floor against the crank angle (MuJoCo alone)
     import twin as _t
 
-    cfg = preset(3).replace(**{"structure.mode": "flexible", "simulation.duration_s": args.long,
-                               "simulation.engine": "mujoco", "simulation.timestep_s": 1.25e-6,
-                               "sensors.output_rate_hz": 1 / 1.25e-6, **tau(1e-5)})
-    with _float64_accel(True):
-        r = _t.simulate(cfg)
-    rate = r.rate_hz
-    x, th, w = (np.asarray(r[c], dtype=np.float64) for c in ("AC5", "crank_angle", "crank_speed"))
-    sos = butter(6, [cen[-1] * 10 ** (-1 / 20), cen[-1] * 10 ** (1 / 20)], btype="band", fs=rate, output="sos")
-    b = sosfiltfilt(sos, x)
-    n = int(round(0.05 * rate))
+    import math
+
+    from twin import names
+    from twin.mujoco_engine.engine import MujocoEngine
+
+    def floors(wrap: bool):
+        cfg = preset(3).replace(**{"structure.mode": "flexible", "simulation.duration_s": args.long,
+                                   "simulation.engine": "mujoco", "simulation.timestep_s": 1.25e-6,
+                                   "sensors.output_rate_hz": 1 / 1.25e-6, "simulation.chunk_s": 0.05, **tau(1e-5)})
+        orig = MujocoEngine.advance
+
+        def advance(self, theta_ref, omega_ref, stride):
+            m, d = self.model, self.data
+            a = m.jnt_qposadr[m.joint(names.CRANK_HINGE).id]
+            k = round(d.qpos[a] / (2 * math.pi))
+            d.qpos[a] -= 2 * math.pi * k
+            self._turns = getattr(self, "_turns", 0.0) + 2 * math.pi * k
+            ar = m.jnt_qposadr[m.joint(names.ROD_HINGE).id]
+            d.qpos[ar] -= 2 * math.pi * round(d.qpos[ar] / (2 * math.pi))
+            return orig(self, np.asarray(theta_ref) - self._turns, omega_ref, stride)
+
+        if wrap:
+            MujocoEngine.advance = advance
+        try:
+            with _float64_accel(True):
+                r = _t.simulate(cfg)
+        finally:
+            MujocoEngine.advance = orig
+        rate = r.rate_hz
+        x, w = (np.asarray(r[c], dtype=np.float64) for c in ("AC5", "crank_speed"))
+        sos = butter(6, [cen[-1] * 10 ** (-1 / 20), cen[-1] * 10 ** (1 / 20)], btype="band", fs=rate, output="sos")
+        b = sosfiltfilt(sos, x)
+        n = int(round(0.05 * rate))
+        # the crank angle integrated from its speed (with the wrap the channel is wrapped too)
+        th = np.concatenate([[0.0], np.cumsum(w[:-1]) / rate]) + (np.asarray(r["crank_angle"])[0])
+        rows = []
+        for i in range(2, len(b) // n):
+            seg = b[i * n:(i + 1) * n]
+            sub = np.array([seg[j * n // 10:(j + 1) * n // 10].std() for j in range(10)])
+            rows.append((i * n / rate, th[i * n], w[i * n], np.median(sub)))
+        return rows
+
+    built, wrapped = floors(False), floors(True)
     out("")
     out(f"## 8. MuJoCo's floor against the crank angle (τ = 1e-5 s, step 1.25e-6 s, {args.long:g} s)")
     out("")
-    out("| t [s] | crank angle [rad] | crank speed [rad/s] | AC5 10 kHz band floor [m/s² rms] |")
-    out("|---:|---:|---:|---:|")
-    for i in range(2, len(b) // n):
-        seg = b[i * n:(i + 1) * n]
-        sub = np.array([seg[j * n // 10:(j + 1) * n // 10].std() for j in range(10)])
-        out(f"| {i * n / rate:.2f} | {th[i * n]:.1f} | {w[i * n]:.1f} | {np.median(sub):.1e} |")
+    out("| t [s] | crank angle [rad] | crank speed [rad/s] | AC5 10 kHz band floor [m/s² rms], as built | "
+        "both hinge angles wrapped |")
+    out("|---:|---:|---:|---:|---:|")
+    for (t, th, w, f), (_, _, _, g) in zip(built, wrapped):
+        out(f"| {t:.2f} | {th:.1f} | {w:.1f} | {f:.1e} | {g:.1e} |")
 
     commit = subprocess.run(["git", "describe", "--always", "--dirty"], capture_output=True, text=True,
                             cwd=Path(__file__).resolve().parent).stdout.strip()
