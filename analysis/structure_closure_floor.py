@@ -198,8 +198,8 @@ def main() -> None:
     # 6. when the content occurs
     out("## 6. When the 10 kHz band's content occurs (AC5, float64, every step)")
     out("")
-    out("| τ [s] | step [s] | rms ref / MuJoCo [m/s²] | MuJoCo − ref rms | correlation | difference's energy in the "
-        "reference's bursts | rms per 12.5 ms, ×1e-9 m/s²: reference / (MuJoCo − reference) |")
+    out("| τ [s] | step [s] | rms ref / MuJoCo [m/s²] | MuJoCo − ref rms | correlation | difference's energy in "
+        "the reference's bursts | rms per 12.5 ms, ×1e-9 m/s²: reference / (MuJoCo − reference) |")
     out("|---|---|---:|---:|---:|---:|---|")
     for t, h in ((2e-5, 1e-5), (2e-5, 1.25e-6), (1e-5, 1.25e-6)):
         (r, rate), (m, _) = run("reference", h, True), run("mujoco", h, True, over=tau(t))

@@ -256,7 +256,8 @@ def test_engines_agree_on_third_octave_band_energies(test, timestep_s):
     """The issue's engine agreement, where it holds: AC1-AC6 third-octave band energies, 100 Hz - 10 kHz, within
     1 dB between MuJoCo and the reference. Test 6 at the default step (measured 0.37 dB); test 12 (B and C) at
     2.5e-6 s (measured 0.21 dB), where both engines' contact steps have converged. Independent basis: the other
-    engine. (Test 3 measures 0.74 dB at 2.5e-6 s but 1.33 at 1.25e-6 s, MuJoCo's closure's round-off floor growing as the step is refined: not held as a test, see the xfail below.)"""
+    engine. (Test 3 measures 0.74 dB at 2.5e-6 s but 1.33 at 1.25e-6 s, MuJoCo's closure's round-off floor
+    growing as the step is refined: not held as a test, see the xfail below.)"""
     worst, per = _worst_band_db(test, {} if timestep_s is None else {"simulation.timestep_s": timestep_s})
     assert worst <= 1.0, per
 
