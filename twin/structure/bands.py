@@ -17,7 +17,9 @@ def third_octave_centres(f_lo: float = 100.0, f_hi: float = 10000.0) -> np.ndarr
 
 
 def band_energies(x: np.ndarray, rate_hz: float, centres: np.ndarray | None = None) -> np.ndarray:
-    """Energy of ``x`` (mean removed, Hann window) in each third-octave band of ``centres`` [signal unit² s]."""
+    """Band sums of the Hann-windowed periodogram ``|X_k|² / rate_hz`` of ``x`` (mean removed) in each
+    third-octave band of ``centres`` [signal unit² s per sample]: ``len(x) / 2`` times the band's energy, so
+    compare only signals of the same length and rate (as :func:`band_difference_db` does)."""
     centres = third_octave_centres() if centres is None else np.asarray(centres, dtype=float)
     x = np.asarray(x, dtype=np.float64)
     x = (x - x.mean()) * np.hanning(len(x))
