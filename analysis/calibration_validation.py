@@ -93,16 +93,22 @@ def config_of(case: dict, seed: int, fitted_at_default: bool = False):
     return cfg.replace(**case["truth"])
 
 
-def make(work: Path) -> None:
+def make(work: Path, again: bool = False) -> None:
+    """Draw the truths, write truth.json, then the recordings; ``again``: only the recordings again, from
+    the committed truth.json (checked equal to the drawn truths), when the work folder was lost."""
     truth_path = HERE / "truth.json"
-    if truth_path.exists():
-        sys.exit(f"{truth_path} exists: the set is made once")
-    HERE.mkdir(parents=True, exist_ok=True)
     cases = draw_truths()
-    from twin.provenance import stamped
+    if again:
+        if json.loads(truth_path.read_text())["cases"] != json.loads(json.dumps(cases)):
+            sys.exit(f"{truth_path} differs from the truths drawn now: not the same set")
+    elif truth_path.exists():
+        sys.exit(f"{truth_path} exists: the set is made once (--again makes its recordings again)")
+    else:
+        HERE.mkdir(parents=True, exist_ok=True)
+        from twin.provenance import stamped
 
-    truth_path.write_text(json.dumps(stamped({"seed": SEED, "duration_s": DURATION_S, "motor_rpm": MOTOR_RPM,
-                                              "ramp_s": RAMP_S, "cases": cases}), indent=1) + "\n")
+        truth_path.write_text(json.dumps(stamped({"seed": SEED, "duration_s": DURATION_S, "motor_rpm": MOTOR_RPM,
+                                                  "ramp_s": RAMP_S, "cases": cases}), indent=1) + "\n")
     work.mkdir(parents=True, exist_ok=True)
     twin_exe = str(Path(sys.executable).with_name("twin"))
     for case in cases:
@@ -158,6 +164,52 @@ def run_case(case: dict, work: Path, drive: str) -> dict:
     return {"case": case["case"], "engine": case["engine"], "drive": drive, "params": params,
             "warnings": res.warnings, "wall_s": wall, "evaluations": res.evaluations,
             "objective": [res.objective_before, res.objective_after], "nrmse": nrmse, "replay_within_10pct": replay_ok}
+
+
+def reassess(work: Path, only: list[str] | None) -> None:
+    """Development on the set already looked at (docs/calibration.md, "Intervals: development on the
+    first set"): at each program-drive case's fitted values from results.json, the profiles and the
+    block bootstrap of the current code (``twin.calibrate`` with no search: the base point is the
+    fitted one), no noise replicates; every interval variant against the truth, in reassess.json."""
+    import twin
+    from twin.calibration import CalibrationOptions
+
+    doc = json.loads((HERE / "truth.json").read_text())
+    old = {(r["case"], r["drive"]): r for r in json.loads((HERE / "results.json").read_text())["results"]}
+    out_path = HERE / "reassess.json"
+    rows = json.loads(out_path.read_text())["rows"] if out_path.exists() else []
+    done = {r["case"] for r in rows}
+    from twin.provenance import stamped
+
+    for case in doc["cases"]:
+        if case["case"] in done or (only and case["case"] not in only):
+            continue
+        o = old[(case["case"], "program")]
+        fitted = {p["field"]: p["value"] for p in o["params"]}
+        base = config_of(case, 0, fitted_at_default=True).replace(**fitted)
+        recs = [work / f"{case['case']}_s{s}.mcap" for s in (1, 2)]
+        t0 = time.perf_counter()
+        res = twin.calibrate(recs, case["fields"], work / f"reassess_{case['case']}", config=base,
+                             options=CalibrationOptions(drive="program", plots=False, n_global=0, local_short=0,
+                                                        local_full=0, replicates=0, workers=BUDGET["workers"]))
+        bt = res.report["bootstrap"]
+        for p, q in zip(res.parameters, bt.get("parameters", [{}] * len(res.parameters))):
+            op = next(x for x in o["params"] if x["field"] == p.field)
+            tr = case["truth"][p.field]
+            rows.append({"case": case["case"], "engine": case["engine"], "field": p.field, "truth": tr,
+                         "value": p.value, "outside_range": p.field in case["outside"],
+                         "old": [op["lo"], op["hi"]], "old_noise": [op["noise_lo"], op["noise_hi"]],
+                         "dj": [p.dj_lo, p.dj_hi], "boot": [p.boot_lo, p.boot_hi], "reported": [p.lo, p.hi],
+                         "jitter": [q.get("jitter_lo"), q.get("jitter_hi")],
+                         "rough": p.rough, "flat": p.flat, "roughness": q.get("roughness"),
+                         "boot_sd_u": q.get("boot_sd_u"),
+                         "surrogate_shift_u": q.get("surrogate_shift_u"), "blocks": bt.get("blocks"),
+                         "wall_s": time.perf_counter() - t0})
+            r = rows[-1]
+            print(f"{case['case']} {p.field}: truth {fmt(tr)} fit {fmt(p.value)} old [{fmt(r['old'][0])}, "
+                  f"{fmt(r['old'][1])}] boot [{fmt(p.boot_lo)}, {fmt(p.boot_hi)}] jitter [{fmt(r['jitter'][0])}, "
+                  f"{fmt(r['jitter'][1])}] rough={p.rough} {r['roughness']} {r['wall_s']:.0f} s", flush=True)
+        out_path.write_text(json.dumps(stamped({"rows": rows}), indent=1, default=str) + "\n")
 
 
 def fmt(v: float) -> str:
@@ -228,8 +280,10 @@ def run(work: Path, deadline_utc: str | None) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("step", choices=("make", "run"))
+    ap.add_argument("step", choices=("make", "run", "reassess"))
     ap.add_argument("--work", required=True, type=Path, help="folder for the recordings and calibrations")
+    ap.add_argument("--again", action="store_true",
+                    help="with make: the recordings again from the committed truth.json (a lost work folder)")
     ap.add_argument("--deadline-utc", default=None, help="HH:MM: start no calibration after it")
     ap.add_argument("--smoke", metavar="DIR", type=Path, default=None,
                     help="a trial of the pipeline (not the validation): truths with another seed into DIR, the cases "
@@ -244,7 +298,9 @@ def main() -> None:
         TRACE_CASES = [c for c in TRACE_CASES if c in a.cases.split(",")] if a.cases else TRACE_CASES
         BUDGET.update(n_global=2, local_short=2, local_full=2, replicates=2)
     if a.step == "make":
-        make(a.work)
+        make(a.work, a.again)
+    elif a.step == "reassess":
+        reassess(a.work, a.cases.split(",") if a.cases else None)
     else:
         run(a.work, a.deadline_utc)
 

@@ -104,9 +104,9 @@ def band_levels_db(x: np.ndarray, rate_hz: float) -> np.ndarray:
     return np.asarray(out)
 
 
-def peak_stats(x: np.ndarray, rate_hz: float) -> np.ndarray | None:
-    """log10 of (median peak, 90th-percentile peak, median decay ratio) of the impact peaks near the
-    acceleration reversals (module docstring); None when the window holds fewer than 2 reversals."""
+def peak_events(x: np.ndarray, rate_hz: float) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """The impact events near the acceleration reversals (module docstring): sample index of each
+    peak, its |high-passed acceleration| and its decay ratio; None when the rate is too low for them."""
     from scipy.signal import butter, sosfiltfilt
 
     nyq = rate_hz / 2
@@ -117,7 +117,7 @@ def peak_stats(x: np.ndarray, rate_hz: float) -> np.ndarray | None:
     s = np.signbit(low)
     rev = np.flatnonzero(s[1:] != s[:-1])
     w, d0, d1 = int(0.003 * rate_hz), int(0.003 * rate_hz), int(0.008 * rate_hz)
-    peaks, decays = [], []
+    idx, peaks, decays = [], [], []
     last = -10 * w
     for i in rev:
         if i - last < 2 * w or i - w < 0 or i + w + d1 >= len(x):
@@ -125,13 +125,21 @@ def peak_stats(x: np.ndarray, rate_hz: float) -> np.ndarray | None:
         last = i
         seg = np.abs(high[i - w:i + w])
         k = i - w + int(np.argmax(seg))
+        idx.append(k)
         peaks.append(float(seg.max()))
         early = float(np.sqrt(np.mean(high[k:k + d0] ** 2)))
         late = float(np.sqrt(np.mean(high[k + d0:k + d1] ** 2)))
         decays.append(late / early if early > 0 else 1.0)
-    if len(peaks) < 2:
+    return np.asarray(idx, dtype=int), np.asarray(peaks, dtype=np.float64), np.asarray(decays, dtype=np.float64)
+
+
+def peak_stats(x: np.ndarray, rate_hz: float) -> np.ndarray | None:
+    """log10 of (median peak, 90th-percentile peak, median decay ratio) of the impact peaks near the
+    acceleration reversals (module docstring); None when the window holds fewer than 2 reversals."""
+    ev = peak_events(x, rate_hz)
+    if ev is None or len(ev[1]) < 2:
         return None
-    p = np.asarray(peaks)
+    _idx, p, decays = ev
     return np.log10(np.maximum([np.median(p), np.percentile(p, 90), np.median(decays)], 1e-12))
 
 
@@ -369,6 +377,12 @@ def evaluate_task(task: dict[str, Any]) -> dict[str, Any]:
     k_rep = int(task.get("replicates", 0))
     if k_rep:
         out["terms_rep"] = [[] for _ in range(k_rep)]
+    with_resid = task["fraction"] >= 1.0  # the full stage: the residual vectors (intervals, twin.calibration.bootstrap)
+    if with_resid:
+        out["resid"] = []
+    boot = task.get("bootstrap")  # (replicates, seed): the block bootstrap at this point
+    if boot:
+        out["boot"] = []
     try:
         for path in task["recordings"]:
             tg = get_target(path, task["base_toml"], task["fraction"], task["dtw_max_s"], task["motor"], task["drive"])
@@ -380,9 +394,20 @@ def evaluate_task(task: dict[str, Any]) -> dict[str, Any]:
                      if tg.motor else None)
             for k in range(-1, k_rep):  # -1: the objective's own noise stream; then the replicates
                 acc = measured_window(tg, sim, scfg, 2 if k < 0 else REPLICATE_STREAM0 + k)
-                terms = raw_terms(features(acc, angle, tg.rate, tg.dtw_n, speed), tg.recorded, tg.rate,
-                                  task["dtw_window_s"], task["ripple"])
+                feats = features(acc, angle, tg.rate, tg.dtw_n, speed)
+                terms = raw_terms(feats, tg.recorded, tg.rate, task["dtw_window_s"], task["ripple"])
                 (out["terms"] if k < 0 else out["terms_rep"][k]).append(terms)
+                if k < 0 and with_resid:
+                    from twin.calibration.bootstrap import residual_vector
+
+                    r = residual_vector(terms, feats, tg.recorded, task["ripple"])
+                    out["resid"].append([None if not math.isfinite(v) else float(v) for v in r])
+                if k < 0 and boot:
+                    from twin.calibration.bootstrap import block_bootstrap
+
+                    b = block_bootstrap(acc, tg.rec_acc, tg.phi[tg.window[0]:tg.window[1]], tg.rate,
+                                        int(boot[0]), int(boot[1]))
+                    out["boot"].append(b)
             out["sim_wall_s"] += wall
         out["status"] = "ok"
     except Exception as err:  # a failed simulation (unstable parameters) is a bad point, not a crash

@@ -75,6 +75,8 @@ def render_markdown(r: dict[str, Any]) -> str:
         notes = []
         if p["flat"]:
             notes.append("FLAT: not told by these recordings")
+        if p.get("rough"):
+            notes.append("ROUGH: the objective jumps between neighbouring values; not told by these recordings")
         if p["on_bound"]:
             notes.append(f"on its {p['on_bound']} bound")
         lines.append(f"| {p['field']} | {_fmt(p['base'])} | {_fmt(p['value'])} | {_fmt(p['lo'])} – {_fmt(p['hi'])} | "
@@ -84,6 +86,23 @@ def render_markdown(r: dict[str, Any]) -> str:
               f"({o['delta_j']:g} × max(1, misfit per term J*/n)); {r['uncertainty']['note']}"
               + (f"; widened to hold the 90 % noise interval from {nrep} noise replicates (method +noise)" if nrep else "")
               + ". Their coverage on known truths: docs/calibration.md.", ""]
+    bt = r.get("bootstrap") or {}
+    if bt.get("available"):
+        lines += [f"Bootstrap: {bt['method']}; blocks: {'; '.join(bt['blocks'])}. Per field (interval as "
+                  f"reported with method bootstrap+jitter; the bootstrap alone; the largest deterministic jump of the "
+                  "objective along the profile and the interval where it stays within ΔJ + that jump):", "",
+                  "| field | bootstrap alone | reported | ΔJ interval | largest jump | jitter interval | ROUGH |",
+                  "|---|---|---|---|---|---|---|"]
+        dj = {p["field"]: p for p in r["parameters"]}
+        for q in bt["parameters"]:
+            g = q["roughness"]
+            lines.append(f"| {q['field']} | {_fmt(q['boot_lo'])} – {_fmt(q['boot_hi'])} | {_fmt(q['lo'])} – "
+                         f"{_fmt(q['hi'])} | {_fmt(dj[q['field']].get('dj_lo'))} – {_fmt(dj[q['field']].get('dj_hi'))} | "
+                         f"{_fmt(g['max_drop'], '.3g')} | {_fmt(q['jitter_lo'])} – {_fmt(q['jitter_hi'])} | "
+                         f"{'yes' if q['rough'] else 'no'} |")
+        lines.append("")
+    elif bt:
+        lines += [f"Bootstrap: not available ({bt.get('why')}).", ""]
     if r["warnings"]:
         lines += ["## Warnings", ""] + [f"- {w}" for w in r["warnings"]] + [""]
     if r.get("identifiability"):
@@ -94,7 +113,7 @@ def render_markdown(r: dict[str, Any]) -> str:
                   "| field | verdict | objective rise along its profile | interval / range | noise interval / range "
                   "| correlated with |", "|---|---|---|---|---|---|"]
         for d in r["identifiability"]:
-            lines.append(f"| {d['field']} | {d['verdict'].upper() if d['verdict'] == 'flat' else d['verdict']} | "
+            lines.append(f"| {d['field']} | {d['verdict'].upper() if d['verdict'] in ('flat', 'rough') else d['verdict']} | "
                          f"{_fmt(d['profile_rise'], '.3g')} (ΔJ {_fmt(d['delta_j'], '.3g')}) | "
                          f"{_fmt(d['interval_share_of_range'], '.2f')} | {_fmt(d['noise_share_of_range'], '.2g')} | "
                          f"{', '.join(d['correlated_with']) or '–'} |")
