@@ -67,3 +67,23 @@ def test_roughness_flags_jumps_not_a_smooth_parabola():
     jumps = smooth + np.array([0, 9, 0, 14, 0, 11, 2, 0, 0])  # deterministic jumps of up to 14 ΔJ near the centre
     r = roughness(0.5, du, jumps, 1.0)
     assert r.rough and r.max_drop > 1.0 and r.hi_u - r.lo_u > 0.15
+
+
+def test_residual_block_bootstrap_keeps_blocks_and_scatter():
+    """Moving blocks of an AR(1) series: each draw is made of contiguous runs of the series, and the
+    draws' mean has the series' long-run variance (closed form for AR(1): σ²/(1−φ)² / n), within 25 %."""
+    from twin.calibration.bootstrap import residual_block_bootstrap
+
+    rng = np.random.default_rng(5)
+    n, phi = 2000, 0.5
+    e = rng.normal(size=n)
+    r = np.zeros(n)
+    for i in range(1, n):
+        r[i] = phi * r[i - 1] + e[i]
+    d = residual_block_bootstrap(r, 50, 2000, 1) + r[None, :]
+    # contiguity inside the first block of a draw
+    k = int(np.argmin(np.abs(r - d[0, 0])))
+    np.testing.assert_allclose(d[0, :50], r[k:k + 50], atol=1e-12)
+    var_mean = np.var(d.mean(axis=1))
+    expected = 1.0 / (1 - phi) ** 2 / n
+    assert 0.75 < var_mean / expected < 1.25

@@ -2,21 +2,24 @@
 
 **Residual vector.** The objective's terms are norms of feature differences (simulated − recorded):
 band energies per sensor and band [dB], the three impact-peak statistics per sensor [log10], the
-crank-speed harmonics [rad/s]; plus two scalar terms (DTW distance, command term). Scaled as the
-objective scales them, the vector ``r`` of those differences (and the two scalars) has
-``Σ r² = J`` for one recording (:func:`residual_vector`, :func:`residual_weights`).
+crank-speed harmonics [rad/s], the low-passed crank speed over the run (the command term, decimated
+to :data:`COMMAND_RESID_HZ`) [rad/s]; the DTW distance stays a scalar. Scaled as the objective scales
+them, the vector ``r`` has ``Σ r² = J`` for one recording (the command part up to its decimation;
+:func:`residual_vector`, :func:`residual_weights`).
 
 **Bootstrap** (:func:`block_bootstrap`): the analysis window of a recording and of the simulation at
 the fitted point is cut into blocks — whole crank turns (from the recorded crank angle) when the
 window holds at least :data:`MIN_TURNS` of them, else blocks of two consecutive Welch segments (about
 40 ms at 100 kHz; the report says which) — and the blocks are resampled with replacement, the same
 blocks on both sides (paired: the simulated side varies turn to turn as the recording does, and the
-pairing keeps the crank phase common to both). Each replicate's features: the mean of the chosen
+pairing keeps the crank phase common to both). The command term's series (the low-passed crank
+speed's difference, decimated to :data:`COMMAND_RESID_HZ`) is a residual series of its own: its
+residual at the fitted point is resampled in moving blocks of :data:`COMMAND_BLOCK_S`. Each replicate's features: the mean of the chosen
 segments' periodograms (the band energies; the Welch average of the whole window is the mean of all
 segments), the impact-peak statistics of the peaks that fall in the chosen blocks. Its residual
 vector minus the full window's is one draw ``δ_b`` of the scatter of the objective's terms — sensor
 noise, the impacts' turn-to-turn variation on both sides and the model's error at that point
-included. DTW, ripple and command are whole-window quantities: their ``δ`` is 0 (not resampled).
+included. DTW and the ripple harmonics are whole-window quantities: their ``δ`` is 0 (not resampled).
 
 **Interval** (:func:`surrogate_intervals`): the Jacobian ``G`` of the residual vector in normalized
 coordinates from the profile points (per parameter, a quadratic least-squares fit of each component
@@ -27,13 +30,12 @@ blocks) around the fitted value is the interval.
 :func:`tests.test_calibrate_bootstrap` checks it on a synthetic linear model with known covariance.
 
 **Roughness** (:func:`roughness`): where the impacts are chaotic, neighbouring parameter values give
-another impact sequence: the objective jumps deterministically between profile points by more than
-a smooth curve explains. Along each slice (points within :data:`JAC_RADIUS`) a parabola is fitted to
-J; its residual deviation ``σ_jit`` is the jitter. The observed minimum of a rough objective can lie
-anywhere the smooth part is within about 2 σ_jit of its minimum: the *jitter half-width*
-``sqrt(2 σ_jit / c₂)`` (c₂ the parabola's curvature; infinite without curvature) is added to the
-bootstrap's in quadrature. ROUGH (not identifiable, like FLAT): the jitter is larger than the rise
-that bounds an interval.
+another impact sequence: the objective jumps deterministically between profile points. A smooth
+objective rises monotonically away from its minimum; moving outward from the slice's minimum, the
+largest fall below the running maximum is the jitter. ROUGH (not identifiable, like FLAT) when it
+exceeds the rise ΔJ that bounds an interval: the located minimum is then set by the jumps, not by the
+recordings' information. A ROUGH parameter's interval is widened to where the objective stays within
+ΔJ + the jitter of its minimum along the profile (the fitted number means nothing; the report says so).
 """
 
 from __future__ import annotations
@@ -87,10 +89,26 @@ def stats_of_events(peaks: np.ndarray, decays: np.ndarray) -> np.ndarray | None:
 
 
 # --------------------------------------------------------------------------- residual vectors
-def residual_vector(terms: dict[str, float], sim, rec, ripple: bool) -> np.ndarray:
+#: sampling rate of the command term's residual series (the crank speed low-passed at 50 Hz) [Hz]
+COMMAND_RESID_HZ = 500.0
+#: length of the blocks of the command residual's block bootstrap [s]
+COMMAND_BLOCK_S = 0.05
+
+
+def command_series(sim, rec, rate_hz: float) -> np.ndarray:
+    """The ``command`` term's difference series (simulated − recorded low-passed crank speed [rad/s]),
+    decimated to :data:`COMMAND_RESID_HZ`; empty when the term is absent."""
+    if sim.speed is None or rec.speed is None:
+        return np.zeros(0)
+    n = min(len(sim.speed), len(rec.speed))
+    k = max(1, int(round(rate_hz / COMMAND_RESID_HZ)))
+    return (np.asarray(sim.speed[:n], dtype=np.float64) - np.asarray(rec.speed[:n], dtype=np.float64))[::k]
+
+
+def residual_vector(terms: dict[str, float], sim, rec, ripple: bool, rate_hz: float = 100_000.0) -> np.ndarray:
     """Unscaled differences simulated − recorded (module docstring): bands per sensor, peak statistics
-    per sensor (NaN where either side has none), ripple harmonics (if ``ripple``), then the DTW and
-    command terms as they are (NaN if absent)."""
+    per sensor (NaN where either side has none), ripple harmonics (if ``ripple``), the DTW term as it
+    is (NaN if absent), then the command term's difference series (:func:`command_series`)."""
     sensors = list(rec.bands)
     parts = [sim.bands[a] - rec.bands[a] for a in sensors]
     for a in sensors:
@@ -98,11 +116,13 @@ def residual_vector(terms: dict[str, float], sim, rec, ripple: bool) -> np.ndarr
                      else np.full(3, np.nan))
     if ripple:
         parts.append(sim.ripple - rec.ripple)
-    parts.append(np.array([terms.get("dtw", np.nan), terms.get("command", np.nan)]))
+    parts.append(np.array([terms.get("dtw", np.nan)]))
+    parts.append(command_series(sim, rec, rate_hz))
     return np.concatenate(parts).astype(np.float64)
 
 
-def layout(n_sensors: int, n_bands: int, ripple: bool) -> dict[str, slice]:
+def layout(n_sensors: int, n_bands: int, ripple: bool, m: int) -> dict[str, slice]:
+    """Where each term's components sit in a residual vector of length ``m``."""
     nb, npk = n_sensors * n_bands, 3 * n_sensors
     out = {"bands": slice(0, nb), "peaks": slice(nb, nb + npk)}
     k = nb + npk
@@ -110,7 +130,7 @@ def layout(n_sensors: int, n_bands: int, ripple: bool) -> dict[str, slice]:
         out["ripple"] = slice(k, k + 4)
         k += 4
     out["dtw"] = slice(k, k + 1)
-    out["command"] = slice(k + 1, k + 2)
+    out["command"] = slice(k + 1, m)
     return out
 
 
@@ -122,7 +142,7 @@ def residual_weights(r: np.ndarray, lay: dict[str, slice], scales: dict[str, flo
         n = int(np.count_nonzero(present))
         if not n:
             continue
-        if k in ("dtw", "command"):
+        if k == "dtw":
             w[sl] = 1.0 / scales[k]
         else:
             w[sl] = np.where(present, 1.0 / (scales[k] * math.sqrt(n)), 0.0)
@@ -303,13 +323,28 @@ def roughness(u0: float, du: np.ndarray, j: np.ndarray, delta_j: float) -> Rough
     return Roughness(float(drop), int(du.size), bool(drop > delta_j), lo, hi)
 
 
+def residual_block_bootstrap(r: np.ndarray, block: int, n_boot: int, seed: int) -> np.ndarray:
+    """Moving-block bootstrap of a residual series ``r``: (n_boot, len(r)) draws r*_b − r, each r*_b the
+    concatenation of randomly started blocks of ``block`` samples (NaN samples count as 0)."""
+    r = np.nan_to_num(np.asarray(r, dtype=np.float64))
+    n = len(r)
+    if n == 0:
+        return np.zeros((n_boot, 0))
+    block = min(block, n)
+    n_blk = -(-n // block)
+    rng = np.random.default_rng(seed)
+    starts = rng.integers(0, n - block + 1, (n_boot, n_blk))
+    idx = (starts[:, :, None] + np.arange(block)[None, None, :]).reshape(n_boot, -1)[:, :n]
+    return r[idx] - r[None, :]
+
+
 def _num(x) -> float | None:
     return float(x) if x is not None and math.isfinite(float(x)) else None
 
 
 def analyse_bootstrap(params, u_best: np.ndarray, centre: np.ndarray, entries: list[dict[str, Any]], values: list[float],
                       boot: list[dict[str, Any]], scales: dict[str, float], ripple: bool, delta_j: float,
-                      alpha: float = BOOT_ALPHA) -> dict[str, Any]:
+                      alpha: float = BOOT_ALPHA, seed: int = 0) -> dict[str, Any]:
     """The bootstrap intervals and roughness verdicts of every parameter (module docstring).
 
     ``entries``: the full-length evaluations (each with ``u`` and ``resid``: one raw residual vector per
@@ -330,15 +365,20 @@ def analyse_bootstrap(params, u_best: np.ndarray, centre: np.ndarray, entries: l
         Rk = np.asarray([[np.nan if v is None else v for v in e["resid"][k]] for e in ents], dtype=np.float64)
         n_s = boot[k]["full"].size  # bands + peaks components of this recording
         m = Rk.shape[1]
-        if m != n_s + (4 if ripple else 0) + 2:
+        if m < n_s + (4 if ripple else 0) + 1:
             return {"available": False, "why": "residual layout does not match the bootstrap's"}
-        lay = layout(boot[k]["n_sensors"], boot[k]["n_bands"], ripple)
+        lay = layout(boot[k]["n_sensors"], boot[k]["n_bands"], ripple, m)
         w = residual_weights(Rk[c_idx], lay, scales)
         Rs = Rk * w
         R_parts.append(Rs)
         r0_parts.append(Rs[c_idx])
-        delta = np.zeros((boot[k]["replicates"].shape[0], m))
+        n_b = boot[k]["replicates"].shape[0]
+        delta = np.zeros((n_b, m))
         delta[:, :n_s] = (boot[k]["replicates"] - boot[k]["full"]) * w[:n_s]
+        cs = lay["command"]
+        if cs.stop > cs.start:  # the command series: a moving-block bootstrap of its residual at the centre
+            delta[:, cs] = residual_block_bootstrap(Rs[c_idx, cs], max(1, int(round(COMMAND_BLOCK_S * COMMAND_RESID_HZ))),
+                                                    n_b, seed + 1 + k)
         D_parts.append(delta)
     R = np.hstack(R_parts)
     r0 = np.concatenate(r0_parts)

@@ -344,7 +344,7 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
         if boot_res is not None and boot_res["status"] == "ok":
             ents = list(full_es.values())
             boot = bs.analyse_bootstrap(P, u_best, u_centre, ents, [ev.value(e) for e in ents], boot_res["boot"],
-                                        scales["full"], ripple, options.delta_j * inflation)
+                                        scales["full"], ripple, options.delta_j * inflation, seed=options.seed)
         else:
             boot = {"available": False, "why": ("--boot-replicates 0" if boot_res is None
                                                 else f"the bootstrap's simulation failed: {boot_res.get('error')}")}

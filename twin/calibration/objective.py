@@ -400,7 +400,7 @@ def evaluate_task(task: dict[str, Any]) -> dict[str, Any]:
                 if k < 0 and with_resid:
                     from twin.calibration.bootstrap import residual_vector
 
-                    r = residual_vector(terms, feats, tg.recorded, task["ripple"])
+                    r = residual_vector(terms, feats, tg.recorded, task["ripple"], tg.rate)
                     out["resid"].append([None if not math.isfinite(v) else float(v) for v in r])
                 if k < 0 and boot:
                     from twin.calibration.bootstrap import block_bootstrap
