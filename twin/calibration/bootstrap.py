@@ -19,14 +19,18 @@ segments' periodograms (the band energies; the Welch average of the whole window
 segments), the impact-peak statistics of the peaks that fall in the chosen blocks. Its residual
 vector minus the full window's is one draw ``δ_b`` of the scatter of the objective's terms — sensor
 noise, the impacts' turn-to-turn variation on both sides and the model's error at that point
-included. DTW and the ripple harmonics are whole-window quantities: their ``δ`` is 0 (not resampled).
+included. DTW and the ripple harmonics are whole-window quantities that blocks cannot resample: their
+``δ`` is drawn from a normal law whose size is the term's scaled value at the fitted point, at least 1
+(one repeat-to-repeat scatter; a misfit larger than that is taken as the term's unexplained variation).
 
 **Interval** (:func:`surrogate_intervals`): the Jacobian ``G`` of the residual vector in normalized
 coordinates from the profile points (per parameter, a quadratic least-squares fit of each component
 over the slice within :data:`JAC_RADIUS`; the slope at the centre). For each replicate the quadratic
 surrogate ``‖r̂ + δ_b + G Δu‖²`` is minimized again (Gauss–Newton: ``Δu_b = −(GᵀG)⁻¹ Gᵀ (r̂ + δ_b)``);
-the scatter of ``Δu_b`` (percentiles 5 and 95, widened by :func:`small_sample_factor` for the few
-blocks) around the fitted value is the interval.
+the percentiles 5 and 95 of ``Δu_b − Δu_0`` (widened by :func:`small_sample_factor` for the few
+blocks) placed both around the fitted value and around the surrogate's own minimum ``Δu_0`` — their
+hull, with the fitted value, is the interval (where the surrogate's minimum is not the fitted point,
+the objective is not the surrogate: the disagreement is part of the uncertainty).
 :func:`tests.test_calibrate_bootstrap` checks it on a synthetic linear model with known covariance.
 
 **Roughness** (:func:`roughness`): where the impacts are chaotic, neighbouring parameter values give
@@ -273,7 +277,7 @@ def surrogate_intervals(r0: np.ndarray, G: np.ndarray, deltas: np.ndarray,
     A = g.T @ g
     pinv = np.linalg.pinv(A)
     du0 = -pinv @ (g.T @ r)
-    shifts = -(D @ g) @ pinv.T  # (n_boot, d): -(A^-1 g^T δ_b)
+    shifts = -(D @ g) @ pinv.T  # (n_boot, d): Δu_b − Δu_0 = -(A^-1 g^T δ_b)
     if n_blocks is not None:  # widened for the few blocks (small_sample_factor)
         shifts = shifts * small_sample_factor(n_blocks, alpha)
     lo = np.percentile(shifts, 100 * alpha / 2, axis=0)
@@ -375,6 +379,18 @@ def analyse_bootstrap(params, u_best: np.ndarray, centre: np.ndarray, entries: l
         n_b = boot[k]["replicates"].shape[0]
         delta = np.zeros((n_b, m))
         delta[:, :n_s] = (boot[k]["replicates"] - boot[k]["full"]) * w[:n_s]
+        rng = np.random.default_rng(seed + 101 + k)
+        for key in ("ripple", "dtw"):  # whole-window terms, not resampled: a parametric draw (docstring)
+            sl = lay.get(key)
+            if sl is None or sl.stop <= sl.start:
+                continue
+            comp = Rs[c_idx, sl]
+            present = np.isfinite(comp)
+            if not np.any(present):
+                continue
+            size = max(1.0, float(np.sqrt(np.nansum(comp ** 2))))  # the term's scatter (1) or its misfit
+            delta[:, sl] = np.where(present, rng.normal(0.0, size / math.sqrt(np.count_nonzero(present)),
+                                                        (n_b, sl.stop - sl.start)), 0.0)
         cs = lay["command"]
         if cs.stop > cs.start:  # the command series: a moving-block bootstrap of its residual at the centre
             delta[:, cs] = residual_block_bootstrap(Rs[c_idx, cs], max(1, int(round(COMMAND_BLOCK_S * COMMAND_RESID_HZ))),
@@ -396,7 +412,10 @@ def analyse_bootstrap(params, u_best: np.ndarray, centre: np.ndarray, entries: l
     for i, p in enumerate(params):
         rg = rough[i]
         blo, bhi = float(sur["lo"][i]), float(sur["hi"][i])
-        b_lo_u, b_hi_u = u_best[i] + min(0.0, blo), u_best[i] + max(0.0, bhi)
+        s0 = float(sur["du0"][i]) if math.isfinite(float(sur["du0"][i])) else 0.0
+        # the hull of the scatter around the fitted value and around the surrogate's own minimum (the
+        # literal re-minimization): where they disagree, the surrogate's error is part of the interval
+        b_lo_u, b_hi_u = u_best[i] + min(0.0, blo, s0 + blo), u_best[i] + max(0.0, bhi, s0 + bhi)
         if not (math.isfinite(b_lo_u) and math.isfinite(b_hi_u)):
             b_lo_u, b_hi_u = 0.0, 1.0
         b_lo_u, b_hi_u = float(np.clip(b_lo_u, 0, 1)), float(np.clip(b_hi_u, 0, 1))

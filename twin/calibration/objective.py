@@ -340,15 +340,24 @@ def simulate_raw(target: Target, cfg):
     return sim, scfg, wall
 
 
-def measured_window(target: Target, sim, scfg, stream: int) -> dict[str, np.ndarray]:
+def measured_window(target: Target, sim, scfg, stream: int, with_angle: bool = False):
     """The windowed calibrated accelerations [m/s²] of ``sim`` through the sensor chain with noise
-    stream ``stream`` (2: the objective's; 10, 11, ...: the noise replicates)."""
-    from twin.instrument import apply_chain, measured_accel
+    stream ``stream`` (2: the objective's; 10, 11, ...: the noise replicates); with ``with_angle`` also
+    the crank angle as the encoder gives it over the whole span [rad] (counts, as the recording's), or
+    None when the run has no encoder channel."""
+    from twin.instrument import apply_chain, counts_to_angle, measured_accel
 
     daq = apply_chain(sim, scfg, prefix="sim_", stream=stream, drive_inputs=target.inputs)
     meas = measured_accel(daq, target.cal, prefix="sim_")
     i0, i1 = target.window
-    return {a: np.asarray(meas[f"sim_meas_{a}"][i0:i1], dtype=np.float64) for a in target.sensors}
+    acc = {a: np.asarray(meas[f"sim_meas_{a}"][i0:i1], dtype=np.float64) for a in target.sensors}
+    if not with_angle:
+        return acc
+    if "sim_encoder_counts" not in daq:
+        return acc, None
+    inst = scfg.instrumentation
+    return acc, counts_to_angle(daq["sim_encoder_counts"], inst.encoder_counts_per_rev,
+                                centre=inst.encoder_quantization)
 
 
 #: noise stream of the first replicate (the objective's own is 2, the calibration's 3)
@@ -393,7 +402,15 @@ def evaluate_task(task: dict[str, Any]) -> dict[str, Any]:
             speed = (lowpassed_speed(np.asarray(sim["crank_angle"][:i1], dtype=np.float64), tg.rate)
                      if tg.motor else None)
             for k in range(-1, k_rep):  # -1: the objective's own noise stream; then the replicates
-                acc = measured_window(tg, sim, scfg, 2 if k < 0 else REPLICATE_STREAM0 + k)
+                if k < 0 and (task["ripple"] or tg.motor):
+                    # the crank angle as the encoder gives it (quantized counts, as the recording's): the
+                    # exact angle against the recording's counts biased the ripple and command terms
+                    acc, enc = measured_window(tg, sim, scfg, 2, with_angle=True)
+                    if enc is not None:
+                        angle = np.asarray(enc[i0:i1], dtype=np.float64)
+                        speed = lowpassed_speed(np.asarray(enc[:i1], dtype=np.float64), tg.rate) if tg.motor else None
+                else:
+                    acc = measured_window(tg, sim, scfg, 2 if k < 0 else REPLICATE_STREAM0 + k)
                 feats = features(acc, angle, tg.rate, tg.dtw_n, speed)
                 terms = raw_terms(feats, tg.recorded, tg.rate, task["dtw_window_s"], task["ripple"])
                 (out["terms"] if k < 0 else out["terms_rep"][k]).append(terms)
