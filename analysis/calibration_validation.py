@@ -57,17 +57,17 @@ REPEAT_SEEDS = (1, 2)
 SET2 = {
     "here": Path(__file__).resolve().parent / "calibration_validation_2",
     "seed": 2027, "duration_s": 2.0, "repeat_seeds": (3, 4), "trace_cases": [],
-    "budget": dict(n_global=8, local_short=10, local_full=8, replicates=0, boot_replicates=400, workers=2),
+    "budget": dict(n_global=6, local_short=8, local_full=6, replicates=0, boot_replicates=400, workers=2),
     "cases": [
         ("mu_a", "reference", 6, 0.5, {}, ["contact.mu0"], {}),
-        ("mu_b", "mujoco", 6, 0.5, {}, ["contact.mu0"], {}),
+        ("mu_b", "mujoco", 6, 0.5, {"simulation.duration_s": 1.0}, ["contact.mu0"], {}),
         ("mu_c", "reference", 12, 1.0, {}, ["contact.mu0"], {}),
-        ("mu_d", "mujoco", 12, 1.0, {}, ["contact.mu0"], {}),
+        ("mu_d", "mujoco", 12, 1.0, {"simulation.duration_s": 1.0}, ["contact.mu0"], {}),
         ("e_a", "reference", 6, 0.5, {}, ["contact.restitution"], {}),
-        ("e_b", "mujoco", 12, 1.0, {}, ["contact.restitution"], {}),
-        ("guide_a", "mujoco", 6, 0.5, {}, ["mechanism.guide_friction_n"], {}),
+        ("e_b", "mujoco", 12, 1.0, {"simulation.duration_s": 1.0}, ["contact.restitution"], {}),
+        ("guide_a", "mujoco", 6, 0.5, {"simulation.duration_s": 1.0}, ["mechanism.guide_friction_n"], {}),
         ("kp_a", "reference", 6, 0.5, {"drive.mode": "motor"}, ["drivetrain.speed_kp_nms"], {}),
-        ("belt_a", "mujoco", 6, 0.5, {"drive.mode": "motor"}, ["drivetrain.belt_ea_n"], {}),
+        ("belt_a", "mujoco", 6, 0.5, {"drive.mode": "motor", "simulation.duration_s": 1.0}, ["drivetrain.belt_ea_n"], {}),
         ("mu_guide_a", "reference", 6, 0.5, {}, ["contact.mu0", "mechanism.guide_friction_n"], {}),
     ],
 }
