@@ -5,6 +5,7 @@ resamples (scipy's own), and the roughness verdict on a smooth and on a jumping 
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 
 def test_surrogate_bootstrap_interval_covers_at_the_nominal_rate():
@@ -87,3 +88,12 @@ def test_residual_block_bootstrap_keeps_blocks_and_scatter():
     var_mean = np.var(d.mean(axis=1))
     expected = 1.0 / (1 - phi) ** 2 / n
     assert 0.75 < var_mean / expected < 1.25
+
+
+@pytest.mark.parametrize("kw", [{"interval": "widest"}, {"boot_replicates": -1}, {"boot_replicates": 1.5}])
+def test_bad_bootstrap_options_name_the_field(kw):
+    from twin.calibration import CalibrationOptions
+    from twin.errors import ConfigError
+
+    with pytest.raises(ConfigError, match=next(iter(kw))):
+        CalibrationOptions(**kw)

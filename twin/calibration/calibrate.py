@@ -3,7 +3,9 @@
 Steps: check every input (recordings, fields, bounds, options, output folder) before any simulation;
 prepare each recording for the short and the full stage (:mod:`twin.calibration.objective`); term
 scales from the repeats; time the base point in both stages and state the wall-time estimate; the
-search (:mod:`twin.calibration.search`); intervals (:mod:`twin.calibration.uncertainty`); the
+search (:mod:`twin.calibration.search`); intervals (:mod:`twin.calibration.bootstrap`: a paired block
+bootstrap over crank turns at the fitted point and the objective's roughness; the first version's ΔJ
+and noise intervals, :mod:`twin.calibration.uncertainty`, are kept in the report); the
 outputs in the folder: ``calibrated.toml``, ``report.json``, ``report.md``, ``evaluations.jsonl``
 (the resumable log) and PNG figures, each written atomically.
 """
