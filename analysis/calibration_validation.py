@@ -264,6 +264,77 @@ def reassess(work: Path, only: list[str] | None) -> None:
         out_path.write_text(json.dumps(stamped({"rows": rows}), indent=1, default=str) + "\n")
 
 
+def reverdict(work: Path, prefix: str) -> None:
+    """Development after a look: the ROUGH verdicts and reported intervals of the current
+    :func:`twin.calibration.bootstrap.roughness` recomputed from the calibrations' logs and reports in
+    ``work`` (folders ``{prefix}{case}...``; the bootstrap intervals as the reports hold them), against the
+    truths; no simulation. Writes reverdict_{prefix}.json next to truth.json."""
+    from twin.calibration.bootstrap import roughness
+    from twin.calibration.objective import combine
+    from twin.provenance import stamped
+
+    doc = json.loads((HERE / "truth.json").read_text())
+    rows = []
+    for case in doc["cases"]:
+        dirs = sorted(work.glob(f"{prefix}{case['case']}*"))
+        dirs = [d for d in dirs if d.name in (f"{prefix}{case['case']}", f"{prefix}{case['case']}_program")]
+        if not dirs:
+            continue
+        d = dirs[0]
+        rep = json.loads((d / "report.json").read_text())
+        lines = (d / "evaluations.jsonl").read_text().splitlines()
+        hdr = json.loads(lines[0])
+        scales = rep["objective"]["scales"]
+        pts = {}
+        for ln in lines[1:]:
+            e = json.loads(ln)
+            if e["stage"] == "full" and e["status"] == "ok":
+                pts[tuple(round(x, 10) for x in e["u"])] = sum(combine(t, scales) for t in e["terms"])
+        U = np.asarray(list(pts), dtype=np.float64)
+        J = np.asarray(list(pts.values()))
+        dim = U.shape[1]
+        # the profile centre: the point with the most points differing from it in one coordinate only
+        mates = [int(np.sum(np.sum(np.abs(U - u) > 1e-9, axis=1) == 1)) for u in U]
+        centre = U[int(np.argmax(mates))]
+        bt = {q["field"]: q for q in rep["bootstrap"]["parameters"]}
+        for i, hp in enumerate(hdr["parameters"]):
+            from twin.calibration.params import Parameter  # noqa: F401 - the unit map below is the log's
+
+            lo_f, hi_f, log = hp["lo"], hp["hi"], hp["log"]
+
+            def from_unit(u: float) -> float:
+                return float(math.exp(math.log(lo_f) + u * (math.log(hi_f) - math.log(lo_f)))) if log \
+                    else float(lo_f + u * (hi_f - lo_f))
+
+            others = [k for k in range(dim) if k != i]
+            on = np.all(np.abs(U[:, others] - centre[others]) < 1e-9, axis=1) if others else np.ones(len(U), bool)
+            rg = roughness(float(centre[i]), U[on, i] - centre[i], J[on], rep["objective"]["delta_j_used"])
+            q = bt[hp["field"]]
+            lo, hi = q["boot_lo"], q["boot_hi"]
+            if rg.rough:
+                lo, hi = min(lo, from_unit(rg.lo_u)), max(hi, from_unit(rg.hi_u))
+            value = next(p["value"] for p in rep["parameters"] if p["field"] == hp["field"])
+            lo, hi = min(lo, value), max(hi, value)
+            tr = case["truth"][hp["field"]]
+            rows.append({"case": case["case"], "field": hp["field"], "truth": tr, "value": value,
+                         "rough_before": bool(q["rough"]), "rough": rg.rough, "max_drop": rg.max_drop,
+                         "delta_j": rep["objective"]["delta_j_used"], "interval_before": [q["lo"], q["hi"]],
+                         "interval": [lo, hi], "covered_before": bool(min(q["lo"], value) <= tr <= max(q["hi"], value)),
+                         "covered": bool(lo <= tr <= hi), "outside_range": hp["field"] in case["outside"],
+                         "verdict_right": rg.rough == (hp["field"] in NOT_TOLD)})
+            r = rows[-1]
+            print(f"{r['case']} {r['field']}: truth {fmt(tr)} fit {fmt(value)} ROUGH {r['rough_before']} -> {r['rough']} "
+                  f"(jump {r['max_drop']:.3g}, ΔJ {r['delta_j']:.3g}); interval [{fmt(lo)}, {fmt(hi)}] "
+                  f"holds: {r['covered_before']} -> {r['covered']}", flush=True)
+    n = len(rows)
+    summ = {"values": n, "covered": sum(r["covered"] for r in rows), "covered_before": sum(r["covered_before"] for r in rows),
+            "rough": sum(r["rough"] for r in rows), "verdicts_right": sum(r["verdict_right"] for r in rows),
+            "covered_told": [sum(r["covered"] for r in rows if not r["rough"]), sum(1 for r in rows if not r["rough"])]}
+    print(json.dumps(summ))
+    (HERE / f"reverdict_{prefix.rstrip('_')}.json").write_text(json.dumps(stamped({"rows": rows, "summary": summ}),
+                                                                          indent=1) + "\n")
+
+
 def fmt(v: float) -> str:
     return f"{v:.4g}" if v is not None and math.isfinite(v) else "—"
 
@@ -345,7 +416,8 @@ def run(work: Path, deadline_utc: str | None) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("step", choices=("make", "run", "reassess"))
+    ap.add_argument("step", choices=("make", "run", "reassess", "reverdict"))
+    ap.add_argument("--prefix", default="cal_", help="with reverdict: the calibration folders' prefix (cal_ or reassess_)")
     ap.add_argument("--work", required=True, type=Path, help="folder for the recordings and calibrations")
     ap.add_argument("--set", choices=("1", "2"), default="1",
                     help="1: the first set (its results are in); 2: the second set (docs/calibration.md, \"Second "
@@ -372,6 +444,8 @@ def main() -> None:
         BUDGET.update(n_global=2, local_short=2, local_full=2, replicates=2)
     if a.step == "make":
         make(a.work, a.again)
+    elif a.step == "reverdict":
+        reverdict(a.work, a.prefix)
     elif a.step == "reassess":
         reassess(a.work, a.cases.split(",") if a.cases else None)
     else:

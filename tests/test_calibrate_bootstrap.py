@@ -65,9 +65,13 @@ def test_roughness_flags_jumps_not_a_smooth_parabola():
     # the ΔJ interval of 400 du² is ±0.05; linear interpolation between the evaluated points 0.03 and 0.1
     # (the chord lies above the convex curve) gives ±0.0423
     assert abs(r.lo_u - (0.5 - 0.03 - 0.07 * 0.64 / 3.64)) < 1e-12 and abs(r.hi_u - (0.5 + 0.03 + 0.07 * 0.64 / 3.64)) < 1e-12
-    jumps = smooth + np.array([0, 9, 0, 14, 0, 11, 2, 0, 0])  # deterministic jumps of up to 14 ΔJ near the centre
+    jumps = smooth + np.array([0, 3, 0, 6, 0, 5, 2, 0, 0])  # deterministic jumps of up to 6 ΔJ near the centre
     r = roughness(0.5, du, jumps, 1.0)
-    assert r.rough and r.max_drop > 1.0 and r.hi_u - r.lo_u > 0.15
+    assert r.rough and abs(r.max_drop - (6.04 - 0.36)) < 1e-9 and r.hi_u - r.lo_u > 0.15
+    # a far second basin thousands of ΔJ up is no jump near the minimum
+    far = np.concatenate([[-0.45, -0.4, -0.35], du])
+    r = roughness(0.5, far, np.concatenate([[4000.0, 6000.0, 2000.0], smooth]), 1.0)
+    assert not r.rough and r.max_drop == 0.0
 
 
 def test_residual_block_bootstrap_keeps_blocks_and_scatter():

@@ -35,8 +35,8 @@ the objective is not the surrogate: the disagreement is part of the uncertainty)
 
 **Roughness** (:func:`roughness`): where the impacts are chaotic, neighbouring parameter values give
 another impact sequence: the objective jumps deterministically between profile points. A smooth
-objective rises monotonically away from its minimum; moving outward from the slice's minimum, the
-largest fall below the running maximum is the jitter. ROUGH (not identifiable, like FLAT) when it
+objective rises monotonically away from its minimum; moving outward from the slice's minimum, over the
+points within :data:`ROUGH_LEVEL` ΔJ of it, the largest fall below the running maximum is the jitter. ROUGH (not identifiable, like FLAT) when it
 exceeds the rise ΔJ that bounds an interval: the located minimum is then set by the jumps, not by the
 recordings' information. A ROUGH parameter's interval is widened to where the objective stays within
 ΔJ + the jitter of its minimum along the profile (the fitted number means nothing; the report says so).
@@ -58,6 +58,10 @@ N_BOOT = 400
 BOOT_ALPHA = 0.10
 #: slice points within this normalized distance of the centre enter the Jacobian
 JAC_RADIUS = 0.105
+#: the roughness looks only at slice points whose objective is within this many ΔJ of the minimum (added
+#: after the second validation: far from the minimum a second basin thousands of ΔJ up is no jump that
+#: moves the located minimum, and counting it called seven told fields ROUGH)
+ROUGH_LEVEL = 10.0
 
 
 # --------------------------------------------------------------------------- features per segment / event
@@ -304,7 +308,8 @@ class Roughness:
 def roughness(u0: float, du: np.ndarray, j: np.ndarray, delta_j: float) -> Roughness:
     """Roughness along a slice (offsets ``du`` from ``u0``, objective ``j``): a smooth objective rises
     monotonically away from its minimum; moving outward from the slice's minimum on each side, the
-    largest fall below the running maximum is the jitter. ROUGH when it exceeds ``delta_j``. The jitter
+    largest fall below the running maximum (over the points within :data:`ROUGH_LEVEL` ``delta_j`` of the
+    minimum) is the jitter. ROUGH when it exceeds ``delta_j``. The jitter
     interval: where J stays within ``delta_j`` + that fall of the minimum (linear interpolation; a side
     that never rises so far reaches the range's end)."""
     from twin.calibration.uncertainty import slice_interval
@@ -317,10 +322,13 @@ def roughness(u0: float, du: np.ndarray, j: np.ndarray, delta_j: float) -> Rough
     order = np.argsort(du)
     du, j = du[order], j[order]
     k0 = int(np.argmin(j))
+    near = j <= j[k0] + ROUGH_LEVEL * delta_j  # only where the objective is within ROUGH_LEVEL ΔJ of its minimum
     drop = 0.0
     for idx in (range(k0, du.size), range(k0, -1, -1)):
         run = -math.inf
         for k in idx:
+            if not near[k]:
+                continue
             run = max(run, j[k])
             drop = max(drop, run - j[k])
     lo, hi, _flat = slice_interval(u0 + du[k0], du - du[k0], j, delta_j + drop)
