@@ -50,6 +50,8 @@ from typing import Any
 
 import numpy as np
 
+from twin.calibration.objective import band_levels_from_psd, stats_of_events
+
 #: crank turns the analysis window must hold for whole-turn blocks
 MIN_TURNS = 4
 #: bootstrap replicates
@@ -74,26 +76,6 @@ def segment_psd(x: np.ndarray, rate_hz: float) -> tuple[np.ndarray, np.ndarray, 
     f, t, s = spectrogram(np.asarray(x, dtype=np.float64) - np.mean(x), fs=rate_hz, window="hann", nperseg=nper,
                           noverlap=nper // 2, detrend="constant", scaling="density", mode="psd")
     return f, s.T, np.round(t * rate_hz).astype(int)
-
-
-def band_levels_from_psd(f: np.ndarray, p: np.ndarray, rate_hz: float) -> np.ndarray:
-    """Third-octave band energies [dB] of a PSD ``p`` on the frequencies ``f``."""
-    from twin.calibration.objective import third_octave_bands
-
-    df = f[1] - f[0]
-    out = []
-    for _fc, lo, hi in third_octave_bands(rate_hz):
-        sel = (f >= lo) & (f < hi)
-        e = float(np.sum(p[sel]) * df) if np.any(sel) else 0.0
-        out.append(10.0 * math.log10(max(e, 1e-30)))
-    return np.asarray(out)
-
-
-def stats_of_events(peaks: np.ndarray, decays: np.ndarray) -> np.ndarray | None:
-    """log10 of (median, 90th percentile, median decay) of impact events; None under two."""
-    if len(peaks) < 2:
-        return None
-    return np.log10(np.maximum([np.median(peaks), np.percentile(peaks, 90), np.median(decays)], 1e-12))
 
 
 # --------------------------------------------------------------------------- residual vectors

@@ -95,6 +95,11 @@ def band_levels_db(x: np.ndarray, rate_hz: float) -> np.ndarray:
 
     nper = int(min(len(x), 2 ** int(math.log2(max(16, rate_hz / 25.0)))))  # ~25 Hz resolution
     f, p = welch(x - np.mean(x), fs=rate_hz, window="hann", nperseg=nper, noverlap=nper // 2)
+    return band_levels_from_psd(f, p, rate_hz)
+
+
+def band_levels_from_psd(f: np.ndarray, p: np.ndarray, rate_hz: float) -> np.ndarray:
+    """Third-octave band energies [dB re 1 (m/s²)²] of a PSD ``p`` [(m/s²)²/Hz] on the frequencies ``f`` [Hz]."""
     df = f[1] - f[0]
     out = []
     for _fc, lo, hi in third_octave_bands(rate_hz):
@@ -137,10 +142,14 @@ def peak_stats(x: np.ndarray, rate_hz: float) -> np.ndarray | None:
     """log10 of (median peak, 90th-percentile peak, median decay ratio) of the impact peaks near the
     acceleration reversals (module docstring); None when the window holds fewer than 2 reversals."""
     ev = peak_events(x, rate_hz)
-    if ev is None or len(ev[1]) < 2:
+    return None if ev is None else stats_of_events(ev[1], ev[2])
+
+
+def stats_of_events(peaks: np.ndarray, decays: np.ndarray) -> np.ndarray | None:
+    """log10 of (median peak, 90th-percentile peak, median decay ratio) of impact events; None under two."""
+    if len(peaks) < 2:
         return None
-    _idx, p, decays = ev
-    return np.log10(np.maximum([np.median(p), np.percentile(p, 90), np.median(decays)], 1e-12))
+    return np.log10(np.maximum([np.median(peaks), np.percentile(peaks, 90), np.median(decays)], 1e-12))
 
 
 def speed_harmonics(angle: np.ndarray, rate_hz: float, n: int = 4) -> np.ndarray:
