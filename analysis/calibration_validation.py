@@ -71,6 +71,10 @@ SET2 = {
         ("mu_guide_a", "reference", 6, 0.5, {}, ["contact.mu0", "mechanism.guide_friction_n"], {}),
     ],
 }
+# The third set (docs/calibration.md, "Third validation protocol"): the second set's cases and budget with
+# other seeds, for the roughness rule changed after the second look; committed before its recordings.
+SET3 = {**SET2, "here": Path(__file__).resolve().parent / "calibration_validation_3", "seed": 2028,
+        "repeat_seeds": (5, 6)}
 #: fields whose ROUGH or FLAT verdict is the right answer on these recordings (measured before the
 #: second set: analysis/restitution_length.py); a ROUGH or FLAT verdict on any other field is a miss
 NOT_TOLD = ("contact.restitution",)
@@ -419,7 +423,7 @@ def main() -> None:
     ap.add_argument("step", choices=("make", "run", "reassess", "reverdict"))
     ap.add_argument("--prefix", default="cal_", help="with reverdict: the calibration folders' prefix (cal_ or reassess_)")
     ap.add_argument("--work", required=True, type=Path, help="folder for the recordings and calibrations")
-    ap.add_argument("--set", choices=("1", "2"), default="1",
+    ap.add_argument("--set", choices=("1", "2", "3"), default="1",
                     help="1: the first set (its results are in); 2: the second set (docs/calibration.md, \"Second "
                          "validation protocol\")")
     ap.add_argument("--again", action="store_true",
@@ -431,11 +435,12 @@ def main() -> None:
     ap.add_argument("--cases", default=None, help="with --smoke: the cases to make and run (comma-separated)")
     a = ap.parse_args()
     global HERE, SEED, CASES, TRACE_CASES, DURATION_S, REPEAT_SEEDS
-    if a.set == "2":
-        HERE, SEED, CASES, TRACE_CASES = SET2["here"], SET2["seed"], SET2["cases"], SET2["trace_cases"]
-        DURATION_S, REPEAT_SEEDS = SET2["duration_s"], SET2["repeat_seeds"]
+    if a.set in ("2", "3"):
+        st = SET2 if a.set == "2" else SET3
+        HERE, SEED, CASES, TRACE_CASES = st["here"], st["seed"], st["cases"], st["trace_cases"]
+        DURATION_S, REPEAT_SEEDS = st["duration_s"], st["repeat_seeds"]
         BUDGET.clear()
-        BUDGET.update(SET2["budget"])
+        BUDGET.update(st["budget"])
     if a.smoke is not None:
         HERE, SEED = a.smoke, 99
         if a.cases:
