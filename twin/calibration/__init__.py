@@ -2,7 +2,8 @@
 paths, with bounds) to one or more recordings, with intervals and identifiability warnings.
 
 Modules: :mod:`.params` (fields and bounds), :mod:`.objective` (what a recording can tell),
-:mod:`.search` (global then local, parallel, logged and resumable), :mod:`.uncertainty` (intervals,
+:mod:`.search` (global then local, parallel, logged and resumable), :mod:`.bootstrap` (intervals from a
+block bootstrap over crank turns, ROUGH objectives), :mod:`.uncertainty` (ΔJ and noise intervals,
 correlated pairs, flat profiles), :mod:`.report` (outputs). See docs/calibration.md.
 """
 

@@ -3,7 +3,9 @@
 Steps: check every input (recordings, fields, bounds, options, output folder) before any simulation;
 prepare each recording for the short and the full stage (:mod:`twin.calibration.objective`); term
 scales from the repeats; time the base point in both stages and state the wall-time estimate; the
-search (:mod:`twin.calibration.search`); intervals (:mod:`twin.calibration.uncertainty`); the
+search (:mod:`twin.calibration.search`); intervals (:mod:`twin.calibration.bootstrap`: a paired block
+bootstrap over crank turns at the fitted point and the objective's roughness; the first version's ΔJ
+and noise intervals, :mod:`twin.calibration.uncertainty`, are kept in the report); the
 outputs in the folder: ``calibrated.toml``, ``report.json``, ``report.md``, ``evaluations.jsonl``
 (the resumable log) and PNG figures, each written atomically.
 """
@@ -50,6 +52,10 @@ class CalibrationOptions:
         replicates: noise replicates per full-length evaluation (other sensor-noise realizations of
             the same simulation; their minimizers' scatter is the noise's share of each interval,
             :func:`twin.calibration.uncertainty.replicate_spread`); 0 = the ΔJ rule alone.
+        boot_replicates: replicates of the block bootstrap over crank turns at the fitted point
+            (:mod:`twin.calibration.bootstrap`); 0 = none (the ΔJ interval is reported).
+        interval: the reported interval: "bootstrap" (the bootstrap with the objective's jitter),
+            "hull" (the hull of it and the ΔJ interval) or "dj" (the ΔJ interval with the noise replicates').
         plots: write the PNG figures.
         progress: progress bars on standard error.
     """
@@ -66,12 +72,15 @@ class CalibrationOptions:
     dtw_window_s: float = 0.002
     delta_j: float = 1.0
     replicates: int = 4
+    boot_replicates: int = 400
+    interval: str = "bootstrap"
     plots: bool = True
     progress: bool = False
 
     def __post_init__(self) -> None:
         for name, lo, hi in (("n_global", 0, 4096), ("local_short", 0, 10_000), ("local_full", 0, 10_000),
-                             ("workers", 1, 1024), ("seed", 0, 2 ** 31 - 1), ("replicates", 0, 64)):
+                             ("workers", 1, 1024), ("seed", 0, 2 ** 31 - 1), ("replicates", 0, 64),
+                             ("boot_replicates", 0, 100_000)):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
                 raise ConfigError(name, f"must be an integer in [{lo}, {hi}], got {v!r}")
@@ -80,6 +89,8 @@ class CalibrationOptions:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not (math.isfinite(v) and lo <= v <= hi):
                 raise ConfigError(name, f"must be a number in [{lo:g}, {hi:g}], got {v!r}")
+        if self.interval not in ("bootstrap", "hull", "dj"):
+            raise ConfigError("interval", f"must be bootstrap, hull or dj, got {self.interval!r}")
         if self.drive not in ("trace", "program"):
             raise ConfigError("drive", f"must be trace or program, got {self.drive!r}")
         steps = self.profile_steps
@@ -103,10 +114,17 @@ class FittedParameter:
     on_bound: str
     noise_lo: float = math.nan
     noise_hi: float = math.nan
+    #: the ΔJ interval (slice or marginal, the hull with the noise interval): the first version's
+    dj_lo: float = math.nan
+    dj_hi: float = math.nan
+    #: the bootstrap interval alone, and with the jitter half-width (twin.calibration.bootstrap)
+    boot_lo: float = math.nan
+    boot_hi: float = math.nan
+    rough: bool = False
 
     def to_dict(self) -> dict[str, Any]:
         d = {**self.__dict__, "bounds": list(self.bounds)}
-        for k in ("noise_lo", "noise_hi"):
+        for k in ("noise_lo", "noise_hi", "dj_lo", "dj_hi", "boot_lo", "boot_hi"):
             d[k] = None if not math.isfinite(d[k]) else d[k]
         return d
 
@@ -325,6 +343,20 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
                                   replicates=reps)
         unc["inflation"] = inflation
         unc["profile_centre_is_best"] = bool(np.array_equal(u_centre, u_best))
+        # the block bootstrap at the profile centre (one more simulation per recording; not logged)
+        from twin.calibration import bootstrap as bs
+
+        bt = make_task("full", u_centre, 0)
+        bt["replicates"], bt["bootstrap"] = 0, (options.boot_replicates, options.seed)
+        boot_res = next(iter(search.in_process(obj.evaluate_task)([bt]))) if options.boot_replicates else None
+        full_es = {search._key("full", np.asarray(e["u"])): e for e in ev.history if e["stage"] == "full"}
+        if boot_res is not None and boot_res["status"] == "ok":
+            ents = list(full_es.values())
+            boot = bs.analyse_bootstrap(P, u_best, u_centre, ents, [ev.value(e) for e in ents], boot_res["boot"],
+                                        scales["full"], ripple, options.delta_j * inflation, seed=options.seed)
+        else:
+            boot = {"available": False, "why": ("--boot-replicates 0" if boot_res is None
+                                                else f"the bootstrap's simulation failed: {boot_res.get('error')}")}
         e_before = ev.cache[search._key("full", u0)]
         e_after = ev.cache[search._key("full", u_best)]
     finally:
@@ -334,9 +366,8 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
 
     from twin.calibration.report import write_outputs
 
-    fitted = tuple(FittedParameter(p.field, iv.value, iv.lo, iv.hi, x, (p.lo, p.hi), iv.method, iv.flat, iv.on_bound,
-                                   iv.noise_lo, iv.noise_hi)
-                   for p, iv, x in zip(P, unc["intervals"], x0))
+    fitted = tuple(_fitted(p, iv, x, boot["parameters"][i] if boot.get("available") else None, options.interval)
+                   for i, (p, iv, x) in enumerate(zip(P, unc["intervals"], x0)))
     warnings = []
     for f in fitted:
         if f.on_bound:
@@ -345,6 +376,10 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
         if f.flat:
             warnings.append(f"{f.field}: flat profile: these recordings do not tell its value (the objective "
                             f"moves by less than {options.delta_j:g} across the range)")
+        if f.rough:
+            warnings.append(f"{f.field}: ROUGH objective: it jumps between neighbouring values by more than the rise "
+                            "that bounds an interval (chaotic impacts): these recordings do not tell its value; the "
+                            "fitted number means nothing (longer recordings, more crank turns)")
     for pr in unc["correlated_pairs"]:
         warnings.append(f"{pr['a']} and {pr['b']} are correlated ({pr['correlation']:+.2f}): the recordings "
                         "cannot tell them apart")
@@ -370,7 +405,8 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
                       "terms_after": e_after["terms"], "scales": scales["full"], "scales_note": scales_note,
                       "delta_j": options.delta_j, "delta_j_used": unc["delta_j"]},
         "uncertainty": {k: v for k, v in unc.items() if k != "intervals"},
-        "identifiability": identifiability(P, unc["intervals"], unc["correlated_pairs"], unc["delta_j"]),
+        "bootstrap": boot,
+        "identifiability": identifiability(P, unc["intervals"], unc["correlated_pairs"], unc["delta_j"], fitted),
         "warnings": warnings,
         "evaluations": {"total": len(ev.cache), "simulated_now": ev.simulated, "resumed": ev.resumed,
                         "failed": failed, "seconds_per_evaluation": times,
@@ -391,16 +427,34 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
                              ev.resumed, times, report["wall_s"], out_dir, report)
 
 
-def identifiability(params, intervals, pairs, delta_j: float) -> list[dict[str, Any]]:
+def _fitted(p, iv, x0: float, bt: dict[str, Any] | None, how: str) -> FittedParameter:
+    """The reported interval of one parameter from the ΔJ/noise interval ``iv`` and the bootstrap's ``bt``
+    (``how``: "bootstrap" — the bootstrap with the jitter; "hull" — the hull of both; "dj" — the first version's)."""
+    lo, hi, method = iv.lo, iv.hi, iv.method
+    b_lo = b_hi = math.nan
+    rough = False
+    if bt is not None:
+        b_lo, b_hi, rough = bt["boot_lo"], bt["boot_hi"], bool(bt["rough"])
+        if how == "bootstrap":
+            lo, hi, method = min(bt["lo"], iv.value), max(bt["hi"], iv.value), "bootstrap+jitter"
+        elif how == "hull":
+            lo, hi, method = min(lo, bt["lo"]), max(hi, bt["hi"]), f"{method}+bootstrap"
+    return FittedParameter(p.field, iv.value, lo, hi, x0, (p.lo, p.hi), method, iv.flat, iv.on_bound, iv.noise_lo,
+                           iv.noise_hi, iv.lo, iv.hi, b_lo, b_hi, rough)
+
+
+def identifiability(params, intervals, pairs, delta_j: float, fitted=None) -> list[dict[str, Any]]:
     """Per parameter, what the recordings tell: ``told`` (the interval is under a quarter of the range),
     ``weak`` (under the whole range but wider), ``flat`` (not told: the objective does not rise by ΔJ
-    across the range), with the objective's rise along the profile, the interval's share of the range,
+    across the range), ``rough`` (not told: it jumps between neighbouring values, ``fitted[i].rough``), with the objective's rise along the profile, the interval's share of the range,
     the noise interval's share of it and the correlated partners."""
     out = []
-    for p, iv in zip(params, intervals):
-        share = (p.to_unit(iv.hi) - p.to_unit(iv.lo)) if iv.hi > iv.lo else 0.0
+    for i, (p, iv) in enumerate(zip(params, intervals)):
+        f = fitted[i] if fitted is not None else iv
+        share = (p.to_unit(f.hi) - p.to_unit(f.lo)) if f.hi > f.lo else 0.0
         noise = (p.to_unit(iv.noise_hi) - p.to_unit(iv.noise_lo)) if math.isfinite(iv.noise_lo) else math.nan
-        verdict = "flat" if iv.flat else "told" if share <= 0.25 else "weak"
+        verdict = ("flat" if iv.flat else "rough" if getattr(f, "rough", False) else "told" if share <= 0.25
+                   else "weak")
         partners = [q["b"] if q["a"] == p.field else q["a"] for q in pairs if p.field in (q["a"], q["b"])]
         out.append({"field": p.field, "verdict": verdict, "profile_rise": iv.rise, "delta_j": delta_j,
                     "interval_share_of_range": share,

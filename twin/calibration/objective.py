@@ -95,6 +95,11 @@ def band_levels_db(x: np.ndarray, rate_hz: float) -> np.ndarray:
 
     nper = int(min(len(x), 2 ** int(math.log2(max(16, rate_hz / 25.0)))))  # ~25 Hz resolution
     f, p = welch(x - np.mean(x), fs=rate_hz, window="hann", nperseg=nper, noverlap=nper // 2)
+    return band_levels_from_psd(f, p, rate_hz)
+
+
+def band_levels_from_psd(f: np.ndarray, p: np.ndarray, rate_hz: float) -> np.ndarray:
+    """Third-octave band energies [dB re 1 (m/s²)²] of a PSD ``p`` [(m/s²)²/Hz] on the frequencies ``f`` [Hz]."""
     df = f[1] - f[0]
     out = []
     for _fc, lo, hi in third_octave_bands(rate_hz):
@@ -104,9 +109,9 @@ def band_levels_db(x: np.ndarray, rate_hz: float) -> np.ndarray:
     return np.asarray(out)
 
 
-def peak_stats(x: np.ndarray, rate_hz: float) -> np.ndarray | None:
-    """log10 of (median peak, 90th-percentile peak, median decay ratio) of the impact peaks near the
-    acceleration reversals (module docstring); None when the window holds fewer than 2 reversals."""
+def peak_events(x: np.ndarray, rate_hz: float) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """The impact events near the acceleration reversals (module docstring): sample index of each
+    peak, its |high-passed acceleration| and its decay ratio; None when the rate is too low for them."""
     from scipy.signal import butter, sosfiltfilt
 
     nyq = rate_hz / 2
@@ -117,7 +122,7 @@ def peak_stats(x: np.ndarray, rate_hz: float) -> np.ndarray | None:
     s = np.signbit(low)
     rev = np.flatnonzero(s[1:] != s[:-1])
     w, d0, d1 = int(0.003 * rate_hz), int(0.003 * rate_hz), int(0.008 * rate_hz)
-    peaks, decays = [], []
+    idx, peaks, decays = [], [], []
     last = -10 * w
     for i in rev:
         if i - last < 2 * w or i - w < 0 or i + w + d1 >= len(x):
@@ -125,14 +130,26 @@ def peak_stats(x: np.ndarray, rate_hz: float) -> np.ndarray | None:
         last = i
         seg = np.abs(high[i - w:i + w])
         k = i - w + int(np.argmax(seg))
+        idx.append(k)
         peaks.append(float(seg.max()))
         early = float(np.sqrt(np.mean(high[k:k + d0] ** 2)))
         late = float(np.sqrt(np.mean(high[k + d0:k + d1] ** 2)))
         decays.append(late / early if early > 0 else 1.0)
+    return np.asarray(idx, dtype=int), np.asarray(peaks, dtype=np.float64), np.asarray(decays, dtype=np.float64)
+
+
+def peak_stats(x: np.ndarray, rate_hz: float) -> np.ndarray | None:
+    """log10 of (median peak, 90th-percentile peak, median decay ratio) of the impact peaks near the
+    acceleration reversals (module docstring); None when the window holds fewer than 2 reversals."""
+    ev = peak_events(x, rate_hz)
+    return None if ev is None else stats_of_events(ev[1], ev[2])
+
+
+def stats_of_events(peaks: np.ndarray, decays: np.ndarray) -> np.ndarray | None:
+    """log10 of (median peak, 90th-percentile peak, median decay ratio) of impact events; None under two."""
     if len(peaks) < 2:
         return None
-    p = np.asarray(peaks)
-    return np.log10(np.maximum([np.median(p), np.percentile(p, 90), np.median(decays)], 1e-12))
+    return np.log10(np.maximum([np.median(peaks), np.percentile(peaks, 90), np.median(decays)], 1e-12))
 
 
 def speed_harmonics(angle: np.ndarray, rate_hz: float, n: int = 4) -> np.ndarray:
@@ -332,15 +349,24 @@ def simulate_raw(target: Target, cfg):
     return sim, scfg, wall
 
 
-def measured_window(target: Target, sim, scfg, stream: int) -> dict[str, np.ndarray]:
+def measured_window(target: Target, sim, scfg, stream: int, with_angle: bool = False):
     """The windowed calibrated accelerations [m/s²] of ``sim`` through the sensor chain with noise
-    stream ``stream`` (2: the objective's; 10, 11, ...: the noise replicates)."""
-    from twin.instrument import apply_chain, measured_accel
+    stream ``stream`` (2: the objective's; 10, 11, ...: the noise replicates); with ``with_angle`` also
+    the crank angle as the encoder gives it over the whole span [rad] (counts, as the recording's), or
+    None when the run has no encoder channel."""
+    from twin.instrument import apply_chain, counts_to_angle, measured_accel
 
     daq = apply_chain(sim, scfg, prefix="sim_", stream=stream, drive_inputs=target.inputs)
     meas = measured_accel(daq, target.cal, prefix="sim_")
     i0, i1 = target.window
-    return {a: np.asarray(meas[f"sim_meas_{a}"][i0:i1], dtype=np.float64) for a in target.sensors}
+    acc = {a: np.asarray(meas[f"sim_meas_{a}"][i0:i1], dtype=np.float64) for a in target.sensors}
+    if not with_angle:
+        return acc
+    if "sim_encoder_counts" not in daq:
+        return acc, None
+    inst = scfg.instrumentation
+    return acc, counts_to_angle(daq["sim_encoder_counts"], inst.encoder_counts_per_rev,
+                                centre=inst.encoder_quantization)
 
 
 #: noise stream of the first replicate (the objective's own is 2, the calibration's 3)
@@ -369,6 +395,12 @@ def evaluate_task(task: dict[str, Any]) -> dict[str, Any]:
     k_rep = int(task.get("replicates", 0))
     if k_rep:
         out["terms_rep"] = [[] for _ in range(k_rep)]
+    with_resid = task["fraction"] >= 1.0  # the full stage: the residual vectors (intervals, twin.calibration.bootstrap)
+    if with_resid:
+        out["resid"] = []
+    boot = task.get("bootstrap")  # (replicates, seed): the block bootstrap at this point
+    if boot:
+        out["boot"] = []
     try:
         for path in task["recordings"]:
             tg = get_target(path, task["base_toml"], task["fraction"], task["dtw_max_s"], task["motor"], task["drive"])
@@ -379,10 +411,29 @@ def evaluate_task(task: dict[str, Any]) -> dict[str, Any]:
             speed = (lowpassed_speed(np.asarray(sim["crank_angle"][:i1], dtype=np.float64), tg.rate)
                      if tg.motor else None)
             for k in range(-1, k_rep):  # -1: the objective's own noise stream; then the replicates
-                acc = measured_window(tg, sim, scfg, 2 if k < 0 else REPLICATE_STREAM0 + k)
-                terms = raw_terms(features(acc, angle, tg.rate, tg.dtw_n, speed), tg.recorded, tg.rate,
-                                  task["dtw_window_s"], task["ripple"])
+                if k < 0 and (task["ripple"] or tg.motor):
+                    # the crank angle as the encoder gives it (quantized counts, as the recording's): the
+                    # exact angle against the recording's counts biased the ripple and command terms
+                    acc, enc = measured_window(tg, sim, scfg, 2, with_angle=True)
+                    if enc is not None:
+                        angle = np.asarray(enc[i0:i1], dtype=np.float64)
+                        speed = lowpassed_speed(np.asarray(enc[:i1], dtype=np.float64), tg.rate) if tg.motor else None
+                else:
+                    acc = measured_window(tg, sim, scfg, 2 if k < 0 else REPLICATE_STREAM0 + k)
+                feats = features(acc, angle, tg.rate, tg.dtw_n, speed)
+                terms = raw_terms(feats, tg.recorded, tg.rate, task["dtw_window_s"], task["ripple"])
                 (out["terms"] if k < 0 else out["terms_rep"][k]).append(terms)
+                if k < 0 and with_resid:
+                    from twin.calibration.bootstrap import residual_vector
+
+                    r = residual_vector(terms, feats, tg.recorded, task["ripple"], tg.rate)
+                    out["resid"].append([None if not math.isfinite(v) else float(v) for v in r])
+                if k < 0 and boot:
+                    from twin.calibration.bootstrap import block_bootstrap
+
+                    b = block_bootstrap(acc, tg.rec_acc, tg.phi[tg.window[0]:tg.window[1]], tg.rate,
+                                        int(boot[0]), int(boot[1]))
+                    out["boot"].append(b)
             out["sim_wall_s"] += wall
         out["status"] = "ok"
     except Exception as err:  # a failed simulation (unstable parameters) is a bad point, not a crash

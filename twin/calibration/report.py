@@ -10,6 +10,25 @@ import numpy as np
 
 #: the replay metrics tabulated per accelerometer before and after
 METRICS = ("nrmse_pct", "correlation", "dtw_distance_pct", "rms_error_mps2")
+#: replay metrics that chaotic impacts do not scramble (the time-domain ones above are, at 0.5-1 mm
+#: clearance, limited by the impact sequence): RMS third-octave band-energy difference [dB] and the
+#: differences of log10 of the impact-peak statistics (median, 90th percentile, median decay)
+FEATURE_METRICS = ("band_rms_db", "peak_median_dlog10", "peak_p90_dlog10", "decay_dlog10")
+
+
+def feature_metrics(rec_acc: dict[str, np.ndarray], sim_acc: dict[str, np.ndarray], rate: float) -> dict[str, dict]:
+    """Per accelerometer, :data:`FEATURE_METRICS` of the simulated window against the recorded one."""
+    from twin.calibration.objective import band_levels_db, peak_stats
+
+    out = {}
+    for a, x in rec_acc.items():
+        d = band_levels_db(sim_acc[a], rate) - band_levels_db(x, rate)
+        m = {"band_rms_db": float(np.sqrt(np.mean(d * d)))}
+        pr, ps = peak_stats(x, rate), peak_stats(sim_acc[a], rate)
+        for k, name in enumerate(FEATURE_METRICS[1:]):
+            m[name] = float(ps[k] - pr[k]) if pr is not None and ps is not None else None
+        out[a] = m
+    return out
 
 
 def replay_metrics(target, cfg) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
@@ -23,7 +42,8 @@ def replay_metrics(target, cfg) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
     turns = abs(float(target.phi[i1 - 1] - target.phi[i0])) / (2 * math.pi)
     crank_hz = turns / ((i1 - 1 - i0) / target.rate)
     comp = compare_accelerations(target.rec_acc, acc, target.rate, crank_hz, ReplayOptions(plots=False, dtw_max_s=0.1))
-    return {a: {k: comp[a][k] for k in METRICS} for a in comp}, acc
+    feats = feature_metrics(target.rec_acc, acc, target.rate)
+    return {a: {**{k: comp[a][k] for k in METRICS}, **feats.get(a, {})} for a in comp}, acc
 
 
 def write_outputs(out: Path, report: dict[str, Any], targets, params, x0, x1, config, ev, options,
@@ -47,7 +67,7 @@ def write_outputs(out: Path, report: dict[str, Any], targets, params, x0, x1, co
     text = ("# twin calibrate: a partial configuration (fields not given keep their defaults);\n"
             "# use it with `twin simulate --config` or `twin replay REC --config`.\n"
             + "".join(f"# {p['field']} = {p['value']:.6g}, interval {p['lo']:.4g}..{p['hi']:.4g} ({p['method']}"
-                      + (", FLAT" if p["flat"] else "") + (f", on its {p['on_bound']} bound" if p["on_bound"] else "")
+                      + (", FLAT" if p["flat"] else "") + (", ROUGH" if p.get("rough") else "") + (f", on its {p['on_bound']} bound" if p["on_bound"] else "")
                       + ")\n" for p in report["parameters"])
             + tomli_w.dumps(overlay(config, values)))
     atomic_write_text(out / "calibrated.toml", text)
@@ -75,15 +95,37 @@ def render_markdown(r: dict[str, Any]) -> str:
         notes = []
         if p["flat"]:
             notes.append("FLAT: not told by these recordings")
+        if p.get("rough"):
+            notes.append("ROUGH: the objective jumps between neighbouring values; not told by these recordings")
         if p["on_bound"]:
             notes.append(f"on its {p['on_bound']} bound")
         lines.append(f"| {p['field']} | {_fmt(p['base'])} | {_fmt(p['value'])} | {_fmt(p['lo'])} – {_fmt(p['hi'])} | "
                      f"{p['method']} | {p['bounds'][0]:g} – {p['bounds'][1]:g} | {'; '.join(notes)} |")
     nrep = r["uncertainty"].get("noise_replicates", 0)
-    lines += ["", f"Intervals: where the objective stays within ΔJ = {o['delta_j_used']:.3g} of its minimum "
+    boot_used = any(p["method"] == "bootstrap+jitter" for p in r["parameters"])
+    lines += ["", ("Intervals: the block bootstrap's (method bootstrap+jitter, below); the ΔJ interval beside it: "
+                   if boot_used else "Intervals: ")
+              + f"where the objective stays within ΔJ = {o['delta_j_used']:.3g} of its minimum "
               f"({o['delta_j']:g} × max(1, misfit per term J*/n)); {r['uncertainty']['note']}"
               + (f"; widened to hold the 90 % noise interval from {nrep} noise replicates (method +noise)" if nrep else "")
               + ". Their coverage on known truths: docs/calibration.md.", ""]
+    bt = r.get("bootstrap") or {}
+    if bt.get("available"):
+        lines += [f"Bootstrap: {bt['method']}; blocks: {'; '.join(bt['blocks'])}. Per field (interval as "
+                  f"reported with method bootstrap+jitter; the bootstrap alone; the largest deterministic jump of the "
+                  "objective along the profile and the interval where it stays within ΔJ + that jump):", "",
+                  "| field | bootstrap alone | reported | ΔJ interval | largest jump | jitter interval | ROUGH |",
+                  "|---|---|---|---|---|---|---|"]
+        dj = {p["field"]: p for p in r["parameters"]}
+        for q in bt["parameters"]:
+            g = q["roughness"]
+            lines.append(f"| {q['field']} | {_fmt(q['boot_lo'])} – {_fmt(q['boot_hi'])} | {_fmt(q['lo'])} – "
+                         f"{_fmt(q['hi'])} | {_fmt(dj[q['field']].get('dj_lo'))} – {_fmt(dj[q['field']].get('dj_hi'))} | "
+                         f"{_fmt(g['max_drop'], '.3g')} | {_fmt(q['jitter_lo'])} – {_fmt(q['jitter_hi'])} | "
+                         f"{'yes' if q['rough'] else 'no'} |")
+        lines.append("")
+    elif bt:
+        lines += [f"Bootstrap: not available ({bt.get('why')}).", ""]
     if r["warnings"]:
         lines += ["## Warnings", ""] + [f"- {w}" for w in r["warnings"]] + [""]
     if r.get("identifiability"):
@@ -94,7 +136,7 @@ def render_markdown(r: dict[str, Any]) -> str:
                   "| field | verdict | objective rise along its profile | interval / range | noise interval / range "
                   "| correlated with |", "|---|---|---|---|---|---|"]
         for d in r["identifiability"]:
-            lines.append(f"| {d['field']} | {d['verdict'].upper() if d['verdict'] == 'flat' else d['verdict']} | "
+            lines.append(f"| {d['field']} | {d['verdict'].upper() if d['verdict'] in ('flat', 'rough') else d['verdict']} | "
                          f"{_fmt(d['profile_rise'], '.3g')} (ΔJ {_fmt(d['delta_j'], '.3g')}) | "
                          f"{_fmt(d['interval_share_of_range'], '.2f')} | {_fmt(d['noise_share_of_range'], '.2g')} | "
                          f"{', '.join(d['correlated_with']) or '–'} |")
@@ -111,13 +153,16 @@ def render_markdown(r: dict[str, Any]) -> str:
               "## Replay metrics per accelerometer (before → after)", ""]
     for m in r.get("replay_metrics", []):
         lines += [f"`{m['recording']}`, window {m['window_s'][0]:.3f}–{m['window_s'][1]:.3f} s:", "",
-                  "| sensor | NRMSE % | correlation | DTW % | RMS error m/s² |", "|---|---|---|---|---|"]
+                  "| sensor | NRMSE % | correlation | DTW % | RMS error m/s² | band energies RMS dB | "
+                  "median impact peak Δlog10 |", "|---|---|---|---|---|---|---|"]
         for a, b in m["before"].items():
             c = m["after"][a]
             lines.append(f"| {a} | {_fmt(b['nrmse_pct'], '.3g')} → {_fmt(c['nrmse_pct'], '.3g')} | "
                          f"{_fmt(b['correlation'], '.4f')} → {_fmt(c['correlation'], '.4f')} | "
                          f"{_fmt(b['dtw_distance_pct'], '.3g')} → {_fmt(c['dtw_distance_pct'], '.3g')} | "
-                         f"{_fmt(b['rms_error_mps2'], '.3g')} → {_fmt(c['rms_error_mps2'], '.3g')} |")
+                         f"{_fmt(b['rms_error_mps2'], '.3g')} → {_fmt(c['rms_error_mps2'], '.3g')} | "
+                         f"{_fmt(b.get('band_rms_db'), '.3g')} → {_fmt(c.get('band_rms_db'), '.3g')} | "
+                         f"{_fmt(b.get('peak_median_dlog10'), '+.3f')} → {_fmt(c.get('peak_median_dlog10'), '+.3f')} |")
         lines.append("")
     e = r["evaluations"]
     lines += ["## Cost", "", f"{e['total']} evaluations ({e['simulated_now']} simulated by this run, {e['resumed']} "

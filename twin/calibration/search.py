@@ -36,7 +36,7 @@ from twin.calibration.objective import combine
 from twin.errors import TwinError
 
 LOG_FORMAT = "twin-calibration-log"
-LOG_VERSION = 1
+LOG_VERSION = 2  # 2: full-length evaluations log their residual vectors ("resid")
 #: objective value given to a point whose simulation failed (unstable parameters): worse than any real one
 #: (the terms are scaled by the repeats' scatter, so a real objective can reach 1e6 and more)
 FAILED_J = 1e300
@@ -161,11 +161,11 @@ class Evaluator:
                     e = {"stage": stage, "u": [float(x) for x in u],
                          "x": [p.from_unit(x) for p, x in zip(self.params, u)],
                          "status": r["status"], "terms": r.get("terms", []),
-                         "terms_rep": r.get("terms_rep", []),
+                         "terms_rep": r.get("terms_rep", []), "resid": r.get("resid", []),
                          "error": r.get("error") or r.get("reason"),
                          "wall_s": r.get("wall_s", 0.0), "sim_wall_s": r.get("sim_wall_s", 0.0)}
                     if e["status"] != "ok":
-                        e["terms"], e["terms_rep"] = [], []
+                        e["terms"], e["terms_rep"], e["resid"] = [], [], []
                     self.cache[k] = e
                     self.log.write(json.dumps(e) + "\n")
                     self.log.flush()

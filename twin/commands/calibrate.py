@@ -46,6 +46,11 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="noise replicates per full-length evaluation: other sensor-noise realizations of the same "
                         "simulation, whose minimizers' scatter widens each interval by the noise's share "
                         "(default 4; 0: the objective-rise rule alone)")
+    p.add_argument("--boot-replicates", type=int, default=400, metavar="B",
+                   help="replicates of the block bootstrap over crank turns at the fitted point (default 400; 0: none)")
+    p.add_argument("--interval", choices=("bootstrap", "hull", "dj"), default="bootstrap",
+                   help="the reported interval: bootstrap (with the objective's jitter, default), hull (of it and the "
+                        "objective-rise interval) or dj (the objective-rise interval with the noise replicates')")
     p.add_argument("--no-plots", action="store_true", help="no PNG figures")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
     p.set_defaults(func=run, _field_flags={"params": "--params", "bounds": "--bounds", "recordings": "RECORDING...",
@@ -53,7 +58,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                                            "local_short": "--local-short", "local_full": "--local-full",
                                            "short_fraction": "--short-fraction", "workers": "--workers",
                                            "seed": "--seed", "log": "--out",
-                                           "profile_steps": "--profile-steps"})
+                                           "profile_steps": "--profile-steps",
+                                           "boot_replicates": "--boot-replicates", "interval": "--interval"})
 
 
 def run(args: argparse.Namespace) -> int:
@@ -69,7 +75,8 @@ def run(args: argparse.Namespace) -> int:
         raise TwinError(f"expected numbers separated by commas, got {args.profile_steps!r}",
                         field="--profile-steps") from None
     opts = CalibrationOptions(profile_steps=steps, n_global=args.n_global, local_short=args.local_short, local_full=args.local_full,
-                              replicates=args.replicates,
+                              replicates=args.replicates, boot_replicates=args.boot_replicates,
+                              interval=args.interval,
                               short_fraction=args.short_fraction, drive=args.drive, workers=workers, seed=args.seed,
                               plots=not args.no_plots, progress=not args.no_progress and sys.stderr.isatty())
     cfg = load_config_file(args.config) if args.config else None
@@ -78,7 +85,8 @@ def run(args: argparse.Namespace) -> int:
     print("| field | base | fitted | interval | notes |")
     print("|---|---|---|---|---|")
     for p in res.parameters:
-        notes = ", ".join(x for x in ("FLAT" if p.flat else "", f"on {p.on_bound} bound" if p.on_bound else "") if x)
+        notes = ", ".join(x for x in ("FLAT" if p.flat else "", "ROUGH" if p.rough else "",
+                                      f"on {p.on_bound} bound" if p.on_bound else "") if x)
         print(f"| {p.field} | {p.base:.4g} | {p.value:.4g} | {p.lo:.4g} – {p.hi:.4g} | {notes} |")
     for w in res.warnings:
         print(f"warning: {w}", file=sys.stderr)
