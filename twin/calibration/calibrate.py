@@ -355,7 +355,7 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
             boot = bs.analyse_bootstrap(P, u_best, u_centre, ents, [ev.value(e) for e in ents], boot_res["boot"],
                                         scales["full"], ripple, options.delta_j * inflation, seed=options.seed)
         else:
-            boot = {"available": False, "why": ("--boot-replicates 0" if boot_res is None
+            boot = {"available": False, "why": ("boot_replicates = 0" if boot_res is None
                                                 else f"the bootstrap's simulation failed: {boot_res.get('error')}")}
         e_before = ev.cache[search._key("full", u0)]
         e_after = ev.cache[search._key("full", u_best)]
@@ -386,12 +386,12 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
     if not unc["profile_centre_is_best"]:
         warnings.append("a profile point was better than the point the profiles were taken around: the fitted "
                         "values are that point's, the slices are around the earlier one; more local evaluations "
-                        "(--local-full) would settle it")
+                        "(local_full) would settle it")
     if unc["inflation"] > MISFIT_WARN:
         warnings.append(f"the best point misses the recordings by {math.sqrt(unc['inflation']):.3g} scatters per term "
                         f"(J*/n = {unc['inflation']:.3g}): the search did not reach the recordings' scatter — a local "
                         "minimum, too small a budget, or a model that cannot match them; the intervals hold only if "
-                        "this is the right basin (more --global-points / --local-full, fewer fields)")
+                        "this is the right basin (more n_global / local_full, fewer fields)")
     failed = sum(1 for e in ev.cache.values() if e["status"] != "ok")
     if failed:
         warnings.append(f"{failed} evaluation(s) failed (simulation error; counted as a very bad objective)")
@@ -412,7 +412,7 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
                         "failed": failed, "seconds_per_evaluation": times,
                         "estimate_s": est},
         "options": {k: (list(v) if isinstance(v, tuple) else v) for k, v in options.__dict__.items()},
-        "base_config": "given (--config)" if config is not None else "each recording's own",
+        "base_config": "given (config)" if config is not None else "each recording's own",
     }
     result_wall = time.perf_counter() - wall0
     write_outputs(out_dir, report, targets["full"], P, x0, [f.value for f in fitted], config, ev, options,

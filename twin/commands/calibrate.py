@@ -6,6 +6,7 @@ The contact-law check that this name used to alias is ``twin check contact``.
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 
 from twin.util import resolve_workers
@@ -62,6 +63,11 @@ def register(sub: argparse._SubParsersAction) -> None:
                                            "boot_replicates": "--boot-replicates", "interval": "--interval"})
 
 
+#: option fields the library's warnings name, as this command's flags
+_WARNING_FLAGS = {"n_global": "--global-points", "local_full": "--local-full", "local_short": "--local-short",
+                  "boot_replicates": "--boot-replicates"}
+
+
 def run(args: argparse.Namespace) -> int:
     from twin.calibration import CalibrationOptions, calibrate, parse_bounds
     from twin.cli import load_config_file
@@ -89,6 +95,8 @@ def run(args: argparse.Namespace) -> int:
                                       f"on {p.on_bound} bound" if p.on_bound else "") if x)
         print(f"| {p.field} | {p.base:.4g} | {p.value:.4g} | {p.lo:.4g} – {p.hi:.4g} | {notes} |")
     for w in res.warnings:
+        for field, flag in _WARNING_FLAGS.items():   # the library names options' fields; the CLI says the flags
+            w = re.sub(rf"\b{field}\b", flag, w)
         print(f"warning: {w}", file=sys.stderr)
     print(f"objective {res.objective_before:.4g} -> {res.objective_after:.4g}; {res.evaluations} evaluations "
           f"({res.simulated} simulated, {res.resumed} from the log) in {res.wall_s:.1f} s; wrote {res.out_dir}/"
