@@ -157,7 +157,14 @@ SCRIPTS: dict[str, Script] = {
                               long=True),
     "structure_sensitivity": Script(f"{R}/structure/sensitivity.md (which structure placeholder moves which band)",
                                     "~15 min", long=True, args=("--runs",)),
+    "structure_closure": Script(f"{R}/structure/closure.md (test 3's 10 kHz engine gap against MuJoCo's loop "
+                                "closure at C)", "~10 min"),
+    "structure_closure_floor": Script(f"{R}/structure/closure_floor.md (test 3's 10 kHz band: output precision, "
+                                      "step convergence, the closure's numerical floor)", "~10 min"),
     # ---- calibration
+    "restitution_length": Script("analysis/calibration_validation/restitution_length_*.json (which recording "
+                                 "length tells the restitution)", "~5 min",
+                                 args=("--out", "analysis/calibration_validation/restitution_length_t6_c0.5_e0.39.json")),
     "calibration_walltime": Script("prints the wall time of a two-recording, five-field calibration", "~15 min",
                                    long=True, needs="a work folder (--work)"),
     "calibration_validation": Script("analysis/calibration_validation/truth.json, results.json, table.md (the "

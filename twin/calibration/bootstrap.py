@@ -50,7 +50,7 @@ from typing import Any
 
 import numpy as np
 
-from twin.calibration.objective import band_levels_from_psd, stats_of_events
+from twin.calibration.terms import band_levels_from_psd, stats_of_events
 
 #: crank turns the analysis window must hold for whole-turn blocks
 MIN_TURNS = 4
@@ -157,7 +157,7 @@ def blocks_of(n: int, seg_centres: np.ndarray, angle: np.ndarray | None) -> tupl
 
 
 def _event_arrays(x: np.ndarray, rate_hz: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    from twin.calibration.objective import peak_events
+    from twin.calibration.terms import peak_events
 
     ev = peak_events(x, rate_hz)
     if ev is None:
