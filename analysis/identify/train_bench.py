@@ -30,7 +30,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
 TRAIN = ("clearance_id_bench_motor", "clearance_id_bench_pid", "clearance_id_bench_mujoco", "clearance_id_bench_motor2",
-         "clearance_id_bench_pid2")
+         "clearance_id_bench_pid2", "clearance_id_bench_motor3", "clearance_id_bench_pid3", "clearance_id_bench_mujoco2")
 DEV = ("clearance_id_bench_dev_motor", "clearance_id_bench_dev_pid", "clearance_id_bench_dev_mujoco")
 #: the variants tried on the development sets (TrainOptions fields)
 VARIANTS = {
@@ -38,6 +38,7 @@ VARIANTS = {
     "speed": dict(interval_folds="speed"),
     "median": dict(interval_folds="runs", size_regressor="median"),
     "nosplit": dict(interval_folds="runs", fault_split=False, size_band_mm=None),
+    "det": dict(interval_folds="runs", location="detectors"),
 }
 
 
