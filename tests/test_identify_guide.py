@@ -183,3 +183,47 @@ def test_a_shipped_model_is_named_by_its_name_and_an_unknown_name_is_refused_in_
     with pytest.raises(ModelError, match=r"^model: unknown shipped model 'nope'; allowed: default, bench") as e:
         shipped_model_path("nope")
     assert "\n" not in str(e.value) and set(SHIPPED_MODELS) == {"default", "bench"}
+
+
+def test_presence_detectors_combined_give_the_product_of_their_probabilities_and_save_as_one_classifier(tmp_path):
+    """One presence detector per location, stored as one softmax classifier over the eight classes: by the algebra
+    of the logistic link (softmax of the sums of the detectors' raw scores = the product over the locations of
+    sigmoid or 1 - sigmoid), each class's probability equals the product of the detectors' (independent basis: the
+    detectors' own probabilities, multiplied here), and the model file saves and loads it as any classifier."""
+    from sklearn.ensemble import HistGradientBoostingClassifier as C
+
+    from twin.identification.training import detectors_as_classes
+    from twin.identification.trees import from_sklearn
+
+    rng = np.random.default_rng(4)
+    nf = len(feature_names())
+    X = rng.standard_normal((320, nf))
+    y = np.array(CLASSES)[np.arange(len(X)) % 8]
+    for k, j in enumerate("BCG"):
+        X[:, k] += np.array([j in c for c in y])  # each location seen by one feature
+    det = {j: from_sklearn(C(max_iter=8, max_leaf_nodes=4, random_state=0).fit(X, np.array([str(j in c) for c in y])),
+                           check=X) for j in "BCG"}
+    both = detectors_as_classes(det)
+    assert both.classes == CLASSES and both.kind == "softmax"
+    Xq = rng.standard_normal((50, nf))
+    p = {j: det[j].predict_proba(Xq)[:, 1] for j in "BCG"}
+    want = np.stack([np.prod([p[j] if j in c else 1 - p[j] for j in "BCG"], axis=0) for c in CLASSES], axis=1)
+    np.testing.assert_allclose(both.predict_proba(Xq), want, rtol=0, atol=1e-12)
+    m = _small(("B", "C", "G"))
+    m = ClearanceModel(both, m.size, m.interval_log10, trained_on=m.trained_on)
+    back = ClearanceModel.load(m.save(tmp_path / "det.npz"))
+    assert back.identify(Xq[:3], {"B": True, "C": True}) == m.identify(Xq[:3], {"B": True, "C": True})
+    with pytest.raises(ModelError, match="binary ensemble"):
+        detectors_as_classes({"B": both})
+
+
+def test_a_guide_play_answered_at_the_top_of_the_trained_hull_warns_that_it_may_lie_beyond_it():
+    """The rule of the guide's out-of-range play (twin.identification.ranges.HULL_TOP_FACTOR): an answer within the
+    factor of the largest play trained warns, one below does not, and the joints B and C have no such rule."""
+    from twin.identification.ranges import HULL_TOP_FACTOR, at_hull_top
+
+    seen = {"min": 0.0125, "max": 0.4, "distinct": 50, "ball_bearing": True}
+    top = 0.4 / HULL_TOP_FACTOR["G"]
+    assert at_hull_top("G", 0.4, seen) == pytest.approx(top) and at_hull_top("G", top * 1.01, seen) is not None
+    assert at_hull_top("G", top * 0.99, seen) is None
+    assert at_hull_top("B", 1.6, {"min": 0.0125, "max": 1.6, "distinct": 50, "ball_bearing": True}) is None

@@ -4,7 +4,9 @@ Steps (plain ``twin`` commands and :func:`twin.identification.training.train`):
 
 1. the training sets ``clearance_id_bench_motor.toml`` (reference engine, motor speed loop and V-belt with its
    placeholders drawn), ``clearance_id_bench_pid.toml`` (reference, crank PID with ripple) and
-   ``clearance_id_bench_mujoco.toml`` (MuJoCo, motor + V-belt), and the development sets
+   ``clearance_id_bench_mujoco.toml`` (MuJoCo, motor + V-belt), their second sets (``_motor2``, ``_pid2``) and the
+   third (``_motor3``: y or z vertical only, ``_pid3``, ``_mujoco2``: added where the development misses gathered),
+   and the development sets
    ``clearance_id_bench_dev_{motor,pid,mujoco}.toml``: ``twin dataset generate SPEC --out WORK/NAME --workers N``
    (skipped where the folder is complete);
 2. the window features of the training runs, computed once; each variant (``--variants``) trained on them
@@ -12,6 +14,9 @@ Steps (plain ``twin`` commands and :func:`twin.identification.training.train`):
 3. each variant, and the previous default model (``--baseline``), answered on the development sets through the
    recording answer path (``analysis/identify/bench_eval.py``), the figures printed and written to
    ``WORK/dev_VARIANT.json``;
+   (variant ``det``: a presence detector per location, ``TrainOptions(location="detectors")``; the development set
+   of guide play beyond the trained range, ``clearance_id_bench_dev_out_guide.toml``, is answered apart with
+   ``bench_eval.py``: its runs are out of range and count for the warned share only);
 4. ``--save VARIANT:PATH`` copies that variant's model file to PATH (the choice, made on step 3's figures only).
 
 Run: ``python analysis/identify/train_bench.py --work DIR [--workers 2] [--variants base runs] [--save base:PATH]``.
@@ -30,7 +35,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
 TRAIN = ("clearance_id_bench_motor", "clearance_id_bench_pid", "clearance_id_bench_mujoco", "clearance_id_bench_motor2",
-         "clearance_id_bench_pid2")
+         "clearance_id_bench_pid2", "clearance_id_bench_motor3", "clearance_id_bench_pid3", "clearance_id_bench_mujoco2")
 DEV = ("clearance_id_bench_dev_motor", "clearance_id_bench_dev_pid", "clearance_id_bench_dev_mujoco")
 #: the variants tried on the development sets (TrainOptions fields)
 VARIANTS = {
@@ -38,6 +43,7 @@ VARIANTS = {
     "speed": dict(interval_folds="speed"),
     "median": dict(interval_folds="runs", size_regressor="median"),
     "nosplit": dict(interval_folds="runs", fault_split=False, size_band_mm=None),
+    "det": dict(interval_folds="runs", location="detectors"),
 }
 
 

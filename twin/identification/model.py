@@ -66,7 +66,8 @@ from twin.identification.features import FEATURE_VERSION, MIN_HOP_REVS, REVS_PER
 from twin.identification.intervals import (BELT_RATIO, RIPPLE_BAND_PCT, SIZE_RESOLVED_FROM_RPM, band_half_width,
                                            fault_split_joints, held_out_at, logs_answer, logs_spread, resolution,
                                            rippled, window_table)
-from twin.identification.ranges import clip_to_hull, out_of_range, recording_measures, widen
+from twin.identification.ranges import (at_hull_top, clip_to_hull, out_of_range, recording_measures, trained_hull,
+                                        widen)
 from twin.identification.results import Evidence, HeldOut, IdentifyResult, JointAnswer
 from twin.identification.trees import ModelError, TreeEnsemble, from_sklearn
 
@@ -342,6 +343,11 @@ def training_check(model: ClearanceModel, answer: IdentifyResult, measures: dict
         interval = widen(list(a.interval_if_faulty_mm), seen[a.joint]) if outside else \
             clip_to_hull(a.interval_if_faulty_mm, seen[a.joint])
         size = clip_to_hull([a.size_if_faulty_mm] * 2, seen[a.joint])[0]
+        top = at_hull_top(a.joint, a.size_if_faulty_mm, seen[a.joint]) if a.faulty else None
+        if top is not None:
+            warnings.append(f"the play at {a.joint} reads at the top of the range trained ({top:.2g}-"
+                            f"{trained_hull(seen[a.joint])[1]:.2g} mm): it may lie beyond it; the size and "
+                            "interval say no more than the largest play trained")
         joints.append(dataclasses.replace(a, size_if_faulty_mm=size, interval_if_faulty_mm=tuple(interval)))
     answer = dataclasses.replace(answer, joints=tuple(joints))
     checks["outside_training_data"] = outside

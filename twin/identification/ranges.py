@@ -295,6 +295,23 @@ def clip_to_hull(interval: list[float] | tuple[float, float], seen: Any) -> list
     return [min(max(float(interval[0]), lo), hi), min(max(float(interval[1]), lo), hi)]
 
 
+#: the guide's play answered within this factor of the largest play trained (0.25-0.4 mm of a model trained up to
+#: 0.4 mm) warns that it may lie beyond the trained range: a play beyond it gives features inside the training data's
+#: and is answered at the top of the hull (whole-bench fresh look: 0.6-1.0 mm answered 0.28-0.40 mm, 10 of 15
+#: without a warning). Chosen on the development sets: docs/identification.md, "The whole bench"
+HULL_TOP_FACTOR = {"G": 1.6}
+
+
+def at_hull_top(joint: str, size_mm: float, seen: Any) -> float | None:
+    """The size [mm] from which an answer at ``joint`` reads at the top of the clearances trained there
+    (:data:`HULL_TOP_FACTOR`) where ``size_mm`` [mm] reaches it, else None (also at a joint without the rule)."""
+    hull = trained_hull(seen) if joint in HULL_TOP_FACTOR else None
+    if hull is None:
+        return None
+    top = hull[1] / HULL_TOP_FACTOR[joint]
+    return top if size_mm >= top else None
+
+
 def widen(interval: list[float], seen: Any) -> list[float]:
     """The interval outside the training data: every clearance the model was trained on at that joint
     (:func:`trained_hull`) [mm], the same for every recording (``seen``: ``trained_on["clearances_mm"][joint]``);

@@ -38,7 +38,7 @@ from twin.identification.intervals import (CATALOGUE_BANDS_MM, COVERAGE, FAULT_S
                                            recorded_size_bands)
 from twin.identification.model import CLASSES, JOINTS, ClearanceModel, label_mm
 from twin.identification.ranges import feature_reference, training_ranges
-from twin.identification.trees import ModelError, from_sklearn
+from twin.identification.trees import ModelError, TreeEnsemble, from_sklearn
 
 #: how the out-of-fold scores of the intervals are grouped (:func:`twin.identification.intervals._conformal_folds`)
 INTERVAL_FOLDS = ("runs", "speed")
@@ -52,6 +52,10 @@ SIZE_REGRESSORS = {
     "median": dict(loss="quantile", quantile=0.5, max_iter=300, learning_rate=0.08, max_leaf_nodes=15,
                    l2_regularization=1.0),
 }
+
+#: how :func:`train` learns the fault location (``TrainOptions.location``): one classifier over the classes, or one
+#: presence detector per location combined (:func:`detectors_as_classes`)
+LOCATIONS = ("classes", "detectors")
 
 #: an answer's windows end every this many crank turns [turns] (recorded in the model as
 #: ``trained_on["answer_hop_revs"]``; models without it: back to back). The regressors learn from windows cut back to
@@ -99,6 +103,10 @@ class TrainOptions:
             (``interval.half_width_log10_by_windows``; with windows back to back only). Off by default: ``train``
             has never made these tables (the option was ignored), and turning it on changes what
             ``twin identify train`` writes.
+        location: how the fault location is learned (:data:`LOCATIONS`): ``"classes"``, one classifier over the
+            classes; ``"detectors"``, one presence detector per location (binary, classes weighted to balance),
+            stored as one classifier over the classes whose probabilities are the detectors' product
+            (:func:`detectors_as_classes`).
     """
 
     splits: tuple[str, ...] = ("train", "val")
@@ -115,6 +123,7 @@ class TrainOptions:
     answer_hop_revs: float = ANSWER_HOP_REVS
     fault_split: bool | tuple[str, ...] = FAULT_SPLIT_JOINTS
     by_windows: bool = False
+    location: str = "classes"
 
     def __post_init__(self) -> None:
         def bad(name: str, message: str) -> TrainOptionsError:
@@ -130,6 +139,8 @@ class TrainOptions:
                 raise bad(name, f"{v!r}; allowed: a whole number >= {1 if name == 'workers' else 0}")
         if self.interval_folds not in INTERVAL_FOLDS:
             raise bad("interval_folds", f"{self.interval_folds!r}; allowed: {', '.join(INTERVAL_FOLDS)}")
+        if self.location not in LOCATIONS:
+            raise bad("location", f"{self.location!r}; allowed: {', '.join(LOCATIONS)}")
         if self.size_regressor not in SIZE_REGRESSORS:
             raise bad("size_regressor", f"{self.size_regressor!r}; allowed: {', '.join(SIZE_REGRESSORS)}")
         if not hop_ok(self.answer_hop_revs):
@@ -227,11 +238,20 @@ def train(dataset_dir: str | Path | list[str | Path], options: TrainOptions | No
     # leaves of at least 20 windows (scikit-learn's default) on datasets of a thousand windows and
     # more; smaller datasets (tests, first looks) get smaller leaves, and no early stopping below 500
     leaf = int(min(20, max(3, len(X) // 48)))
-    clf = HistGradientBoostingClassifier(max_iter=400, learning_rate=0.08, max_leaf_nodes=15, l2_regularization=1.0,
-                                         min_samples_leaf=leaf, class_weight="balanced",
-                                         early_stopping=len(X) >= 500, validation_fraction=0.15, random_state=o.seed)
-    clf.fit(X, y)
-    classifier = from_sklearn(clf, check=X)  # what the file holds: answers equal bit for bit, checked
+
+    def classifier_of(labels: np.ndarray) -> Any:
+        clf = HistGradientBoostingClassifier(max_iter=400, learning_rate=0.08, max_leaf_nodes=15,
+                                             l2_regularization=1.0, min_samples_leaf=leaf, class_weight="balanced",
+                                             early_stopping=len(X) >= 500, validation_fraction=0.15,
+                                             random_state=o.seed)
+        return clf.fit(X, labels)
+
+    if o.location == "detectors":
+        locations = [j for j in JOINTS if any(j in c for c in y)]
+        detectors = {j: from_sklearn(classifier_of(np.array([str(j in c) for c in y])), check=X) for j in locations}
+        classifier = detectors_as_classes(detectors, check=X)
+    else:
+        classifier = from_sklearn(classifier_of(y), check=X)  # what the file holds: answers equal bit for bit, checked
     size: dict[str, Any] = {}
     cal = _Calibration()
     # the guide G is sized where the training runs have guide play (G sizes taught by the datasets teaching both
@@ -244,6 +264,49 @@ def train(dataset_dir: str | Path | list[str | Path], options: TrainOptions | No
     trained_on = _trained_on(dss, dirs, rows, X, owner, y, skipped, size_names, o, cal, tuple(size))
     trained_on |= {"feature_seconds": t_feat, "fit_seconds": time.perf_counter() - t0 - t_feat}
     return ClearanceModel(classifier, size, cal.half_width, trained_on=trained_on), trained_on
+
+
+def detectors_as_classes(detectors: Mapping[str, TreeEnsemble], check: np.ndarray | None = None) -> TreeEnsemble:
+    """One classifier over the fault classes (softmax ensemble, the model file's ``classifier``) from one presence
+    detector per location (binary ensembles whose classes are "False", "True"; raw score f_j, P(play at j) =
+    sigmoid(f_j)): class c's raw score is the sum of the f_j of its locations, so that its softmax probability is
+    the product over the locations of sigmoid(f_j) where c has play at j and 1 - sigmoid(f_j) where not (the
+    detectors taken as independent). Each detector iteration becomes one iteration of the combined ensemble: its tree
+    for the classes with play at that location, a single leaf of value 0 for the others. ``check``: features on
+    which the combined probabilities must equal the detectors' product (to 1e-9), else :class:`ModelError`."""
+    locs = [j for j in JOINTS if j in detectors]
+    classes = [c for c in CLASSES if c == "none" or set(c) <= set(locs)]
+    for j, d in detectors.items():
+        if d.kind != "sigmoid" or tuple(d.classes) != ("False", "True"):
+            raise ModelError(f"detector {j}: a binary ensemble over False, True expected, got {d.kind} {d.classes}")
+    K = len(classes)
+    baseline = np.array([sum(float(detectors[j].baseline[0]) for j in locs if j in c) for c in classes])
+    parts: dict[str, list[np.ndarray]] = {k: [] for k in ("tree_nodes", "feature", "threshold", "missing_left",
+                                                          "left", "right", "is_leaf", "value")}
+    leaf0 = {"tree_nodes": [1], "feature": [0], "threshold": [0.0], "missing_left": [False], "left": [0],
+             "right": [0], "is_leaf": [True], "value": [0.0]}
+    for j in locs:
+        d = detectors[j]
+        ends = np.cumsum(d.tree_nodes.astype(np.int64))
+        starts = ends - d.tree_nodes
+        for a, b in zip(starts, ends):
+            tree = {k: getattr(d, k)[a:b] for k in parts if k != "tree_nodes"} | {"tree_nodes": [b - a]}
+            for c in classes:
+                for k in parts:
+                    parts[k].append(np.asarray((tree if j in c else leaf0)[k]))
+    dtypes = {"tree_nodes": np.int32, "feature": np.int32, "threshold": np.float64, "missing_left": np.bool_,
+              "left": np.int32, "right": np.int32, "is_leaf": np.bool_, "value": np.float64}
+    e = TreeEnsemble(kind="softmax", n_features=next(iter(detectors.values())).n_features, trees_per_iteration=K,
+                     baseline=baseline, classes=tuple(classes),
+                     source={"estimator": "presence detectors per location, combined (product of their "
+                                          "probabilities)", "detectors": {j: detectors[j].source for j in locs}},
+                     **{k: np.concatenate(v).astype(dtypes[k]) for k, v in parts.items()})
+    if check is not None:
+        p = {j: detectors[j].predict_proba(check)[:, 1] for j in locs}
+        want = np.stack([np.prod([p[j] if j in c else 1 - p[j] for j in locs], axis=0) for c in classes], axis=1)
+        if not np.allclose(e.predict_proba(check), want, rtol=0, atol=1e-9):
+            raise ModelError("the combined detectors' probabilities differ from the product of theirs")
+    return e
 
 
 @dataclass
@@ -340,7 +403,7 @@ def _trained_on(dss: list[Any], dirs: list[str | Path], rows: list[dict[str, Any
         "orientations": sorted({r["orientation"] for r in rows}),
         "classes": {c: int(np.sum(y == c)) for c in CLASSES if "G" not in c or "G" in joints},
         "versions": {"twin": __version__, "sklearn": sklearn.__version__, "numpy": np.__version__},
-        "size_regressor": o.size_regressor,
+        "size_regressor": o.size_regressor, "location": o.location,
         "answer_hop_revs": float(o.answer_hop_revs),
         "held_out_size_accuracy": cal.held_out | {
             "method": f"out-of-fold answers of the training runs (folds by {o.interval_folds}), per orientation and "
