@@ -156,7 +156,7 @@ SCRIPTS: dict[str, Script] = {
     "structure_fig15": Script(f"{R}/structure_fig15/motor (S003 Fig. 15 and §6 rigid against flexible)", "~20 min",
                               long=True),
     "structure_sensitivity": Script(f"{R}/structure/sensitivity.md (which structure placeholder moves which band)",
-                                    "~15 min", long=True, args=("--runs",)),
+                                    "~1 min", args=("--runs",)),
     "structure_closure": Script(f"{R}/structure/closure.md (test 3's 10 kHz engine gap against MuJoCo's loop "
                                 "closure at C)", "~10 min"),
     "structure_closure_floor": Script(f"{R}/structure/closure_floor.md (test 3's 10 kHz band: output precision, "
