@@ -97,6 +97,12 @@ def _set_inertial(body: mujoco.MjsBody, mass: float, ipos, izz: float) -> None:
     body.inertia = [izz / 2, izz / 2, izz]
 
 
+def solver_name(cfg: BenchConfig) -> str:
+    """The constraint solver of the configuration's model: ``mujoco.flexible_solver`` with the flexible
+    structure, ``mujoco.solver`` otherwise."""
+    return cfg.mujoco.flexible_solver if cfg.structure.flexible else cfg.mujoco.solver
+
+
 def build_spec(cfg: BenchConfig) -> mujoco.MjSpec:
     """Edited (uncompiled) spec of the configuration; contact pairs without final solref."""
     try:
@@ -117,7 +123,7 @@ def build_spec(cfg: BenchConfig) -> mujoco.MjSpec:
     opt = spec.option
     opt.timestep = cfg.simulation.timestep_s
     opt.integrator = getattr(mujoco.mjtIntegrator, f"mjINT_{cfg.mujoco.integrator.upper()}")
-    opt.solver = getattr(mujoco.mjtSolver, f"mjSOL_{cfg.mujoco.solver.upper()}")
+    opt.solver = getattr(mujoco.mjtSolver, f"mjSOL_{solver_name(cfg).upper()}")
     opt.iterations = cfg.mujoco.iterations
     opt.tolerance = cfg.mujoco.tolerance
     opt.gravity = list(mech.gravity_vector)

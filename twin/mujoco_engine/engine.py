@@ -38,7 +38,7 @@ from twin.mujoco_log import MUJOCO_WARNINGS  # noqa: E402 - MuJoCo's warnings: k
 MAX_DOF_SPEED = 1.0e5
 from twin.kinematics import initial_pose, rot2
 from twin.mujoco_engine.accel import PosthocAccelerometers, posthoc_applies
-from twin.mujoco_engine.builder import build
+from twin.mujoco_engine.builder import build, solver_name
 from twin.tracefile import DriveInputs
 
 _STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
@@ -87,7 +87,7 @@ class MujocoEngine:
             "engine_version": mujoco.__version__,
             "timestep_s": cfg.simulation.timestep_s,
             "integrator": cfg.mujoco.integrator,
-            "solver": cfg.mujoco.solver,
+            "solver": solver_name(cfg),
             "steps": 0,
             "wall_s": 0.0,
             "build_s": time.perf_counter() - t0,
