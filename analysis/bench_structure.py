@@ -11,11 +11,13 @@ flexible / rigid per engine, by wall and by CPU time) and writes it, with the ve
 ``analysis/results/structure/bench_structure.md``. The issue's target: flexible at most 1.5× rigid in each
 engine (test 12).
 
-``--compare KEY=VALUE`` (repeatable) adds a second flexible arm with those ``[structure]`` overrides, timed in the
-same rounds (e.g. the former default chain: ``--compare rod_chain='"uniform"' --compare rod_segments=6``), and a
-column with its CPU-time ratio to rigid.
+``--compare KEY=VALUE`` (repeatable) adds a second flexible arm with those ``[structure]`` overrides (a dotted
+``section.field`` key is taken as it stands), timed in the same rounds (e.g. the former default chain:
+``--compare rod_chain='"uniform"' --compare rod_segments=6``; MuJoCo's Newton solver instead of PGS:
+``--compare mujoco.flexible_solver='"Newton"'``), and a column with its CPU-time ratio to rigid. ``--mujoco-only``
+leaves the reference engine out.
 
-Run: ``python analysis/bench_structure.py [--duration S] [--rounds R] [--tests 3,6,12] [--compare K=V]``.
+Run: ``python analysis/bench_structure.py [--duration S] [--rounds R] [--tests 3,6,12] [--compare K=V] [--mujoco-only]``.
 """
 
 from __future__ import annotations
@@ -42,6 +44,7 @@ def main() -> None:
     ap.add_argument("--tests", default="3,6,12", help="Table 4 tests, comma-separated")
     ap.add_argument("--compare", action="append", default=[], metavar="KEY=VALUE",
                     help="[structure] override of a second flexible arm (repeatable)")
+    ap.add_argument("--mujoco-only", action="store_true", help="leave the reference engine out")
     ap.add_argument("--out", default=str(Path(__file__).resolve().parent / "results" / "structure" / "bench_structure.md"))
     args = ap.parse_args()
 
@@ -54,7 +57,8 @@ def main() -> None:
     from twin.util import toml_loads
 
     tests = [int(t) for t in args.tests.split(",")]
-    compare = {f"structure.{k.strip()}": toml_loads(f"v = {v}")["v"]
+    variants = {k: v for k, v in VARIANTS.items() if not (args.mujoco_only and v[0] != "mujoco")}
+    compare = {(k.strip() if "." in k else f"structure.{k.strip()}"): toml_loads(f"v = {v}")["v"]
                for k, v in (item.split("=", 1) for item in args.compare)}
     modes = {"rigid": {"structure.mode": "rigid"}, "flexible": {"structure.mode": "flexible"}}
     if compare:
@@ -62,12 +66,12 @@ def main() -> None:
     best: dict[tuple[int, str, str], float] = {}
     best_cpu: dict[tuple[int, str, str], float] = {}
     steps: dict[tuple[int, str, str], int] = {}
-    for cfg_engine, over in VARIANTS.values():  # warm-up: numba's cache, MuJoCo's first rollouts
+    for cfg_engine, over in variants.values():  # warm-up: numba's cache, MuJoCo's first rollouts
         simulate(preset(tests[-1]).replace(**{"simulation.engine": cfg_engine, "simulation.duration_s": 0.01,
                                        "structure.mode": "flexible", **over}))
     for r in range(args.rounds):
         for tid in tests:
-            for label, (engine, over) in VARIANTS.items():
+            for label, (engine, over) in variants.items():
                 for mode, mode_over in modes.items():
                     cfg = preset(tid).replace(**{"simulation.engine": engine, "simulation.duration_s": args.duration,
                                                  **mode_over, **over})
@@ -97,7 +101,7 @@ def main() -> None:
     if compare:
         lines.insert(1, "Compared arm: flexible with " + ", ".join(f"{k} = {v!r}" for k, v in compare.items()) + ".")
     for tid in tests:
-        for label in VARIANTS:
+        for label in variants:
             r, f = best[(tid, label, "rigid")], best[(tid, label, "flexible")]
             us_r, us_f = r / steps[(tid, label, "rigid")] * 1e6, f / steps[(tid, label, "flexible")] * 1e6
             lines.append(f"| {tid} | {label} | {us_r:.2f} | {us_f:.2f} | {args.duration / r:.2f} | "

@@ -4,7 +4,8 @@ For Table 4 tests 3, 6 and 12 (``structure.mode = "flexible"``, both contact sou
 scale), this script takes the state at full speed (``analysis/bench_mujoco.py``'s ``prepare_posthoc``) and steps
 ``--steps`` steps with ``mj_step`` under each solver (the twin's iterations and tolerance), recording per step:
 the iterations the solver used (and how often it reached ``opt.iterations``, i.e. stopped unconverged), its
-last-iteration improvement, MuJoCo's warnings, the loop closure's residual (the equality rows' ``efc_pos``:
+last iteration's improvement and gradient (``mjSolverStat``: PGS stops on the improvement, Newton on the gradient,
+both against ``opt.tolerance`` scaled by the mean inertia), MuJoCo's warnings, the loop closure's residual (the equality rows' ``efc_pos``:
 ideal joints closed by a ``connect``) and the contact rows' penetration (``efc_pos`` < 0 of the contact rows).
 
 Run: ``python analysis/mujoco_flexible_pgs.py [--steps N]``.
@@ -32,6 +33,7 @@ def stats(m: mujoco.MjModel, state, ctrl, steps: int) -> dict:
     mujoco.mj_setState(m, d, state, mujoco.mjtState.mjSTATE_FULLPHYSICS)
     niter = np.zeros(steps, int)
     improv = np.zeros(steps)
+    grad = np.zeros(steps)
     eq = np.zeros(steps)
     pen = np.zeros(steps)
     nefc = np.zeros(steps, int)
@@ -43,6 +45,7 @@ def stats(m: mujoco.MjModel, state, ctrl, steps: int) -> dict:
         nefc[k] = d.nefc
         if n:
             improv[k] = d.solver[n - 1].improvement
+            grad[k] = d.solver[n - 1].gradient
         t = d.efc_type[:d.nefc]
         p = d.efc_pos[:d.nefc]
         e = p[t == C.mjCNSTR_EQUALITY]
@@ -54,7 +57,7 @@ def stats(m: mujoco.MjModel, state, ctrl, steps: int) -> dict:
     active = nefc > 0
     return {"niter_mean": niter[active].mean() if active.any() else 0.0, "niter_max": int(niter.max()),
             "at_cap": int(np.sum(niter >= m.opt.iterations)), "steps_with_rows": int(active.sum()),
-            "improv_max": float(improv.max()), "eq_max": float(eq.max()), "eq_rms": float(np.sqrt(np.mean(eq**2))),
+            "improv_max": float(improv.max()), "grad_max": float(grad.max()), "eq_max": float(eq.max()), "eq_rms": float(np.sqrt(np.mean(eq**2))),
             "pen_max": float(pen.max()), "pen_mean_in_contact": float(pen[pen > 0].mean()) if (pen > 0).any() else 0.0,
             "contact_steps": int(np.sum(pen > 0)), "warnings": warn, "final_qpos": d.qpos.copy()}
 
@@ -67,7 +70,7 @@ def main() -> None:
     print(f"MuJoCo {mujoco.__version__}, tests {a.tests} at full speed, {a.steps} steps (h = 1e-5 s), mj_step")
     print()
     print("| test | contact source | model, solver | rows/steps | iterations mean / max | steps at the cap | "
-          "largest last improvement | loop closure |efc_pos| max / rms [m] | penetration max / mean [m] (steps) | warnings |")
+          "largest last improvement / gradient | loop closure |efc_pos| max / rms [m] | penetration max / mean [m] (steps) | warnings |")
     print("|---|---|---|---:|---:|---:|---:|---:|---:|---|")
     for test, src, mode in ((t, s, m) for t in (int(x) for x in a.tests.split(",")) for s in ("law", "force")
                             for m in ("rigid", "flexible")):
