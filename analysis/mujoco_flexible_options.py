@@ -1,7 +1,7 @@
 """MuJoCo stepping options for the flexible structure: cost and effect on the outputs, side by side.
 
 For Table 4 test 12 with ``structure.mode = "flexible"`` (both contact sources) and, as the denominator,
-the rigid model (also with the PGS solver, to show whether a variant's gain is the flexible model's), this script takes the state at full speed and its control sequence
+the rigid model (its default Newton solver, and also PGS, to show whether a variant's gain is the flexible model's), this script takes the state at full speed and its control sequence
 (``analysis/bench_mujoco.py``'s ``prepare_posthoc``) and rolls out ``--steps`` steps with the twin's options
 and with each variant below, interleaved (best of ``--repeats``), timing the rollout plus the after-the-rollout
 accelerometers (the twin's default, ``mujoco.accelerometers = "posthoc"``), in CPU time (``time.process_time``:
@@ -13,8 +13,8 @@ accelerometer readings from the twin's options, relative to each channel's large
 * ``jacobian dense`` / ``jacobian sparse``: ``opt.jacobian`` (the twin leaves MuJoCo's auto, dense below 60
   degrees of freedom): the same equations, another order of operations;
 * ``islands``: constraint islands on (the twin disables them);
-* ``CG solver`` / ``PGS solver``: ``opt.solver`` conjugate gradient or projected Gauss–Seidel instead of Newton,
-  same tolerance;
+* ``CG solver`` / ``Newton solver``: ``opt.solver`` conjugate gradient or Newton instead of the flexible model's
+  default projected Gauss–Seidel (``mujoco.flexible_solver``), same tolerance;
 * ``no warmstart``: the solver starts from the unconstrained acceleration;
 * ``eulerdamp on``: the joint dampers implicit in the Euler step (the twin keeps them explicit, as the
   reference engine does): a different integrator, shown for its cost and its difference.
@@ -47,7 +47,7 @@ def _variants(m: mujoco.MjModel) -> dict[str, mujoco.MjModel]:
             ("jacobian sparse", lambda o: setattr(o, "jacobian", mujoco.mjtJacobian.mjJAC_SPARSE)),
             ("islands", lambda o: setattr(o, "disableflags", o.disableflags & ~int(D.mjDSBL_ISLAND))),
             ("CG solver", lambda o: setattr(o, "solver", mujoco.mjtSolver.mjSOL_CG)),
-            ("PGS solver", lambda o: setattr(o, "solver", mujoco.mjtSolver.mjSOL_PGS)),
+            ("Newton solver", lambda o: setattr(o, "solver", mujoco.mjtSolver.mjSOL_NEWTON)),
             ("no warmstart", lambda o: setattr(o, "disableflags", o.disableflags | int(D.mjDSBL_WARMSTART))),
             ("eulerdamp on", lambda o: setattr(o, "disableflags", o.disableflags & ~int(D.mjDSBL_EULERDAMP)))):
         v = copy.copy(m)

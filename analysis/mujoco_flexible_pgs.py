@@ -66,25 +66,41 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steps", type=int, default=20000)
     ap.add_argument("--tests", default="3,6,12")
+    ap.add_argument("--out", default=str(Path(__file__).resolve().parent / "results" / "structure" / "mujoco_flexible_pgs.md"))
     a = ap.parse_args()
-    print(f"MuJoCo {mujoco.__version__}, tests {a.tests} at full speed, {a.steps} steps (h = 1e-5 s), mj_step")
-    print()
-    print("| test | contact source | model, solver | rows/steps | iterations mean / max | steps at the cap | "
-          "largest last improvement / gradient | loop closure |efc_pos| max / rms [m] | penetration max / mean [m] (steps) | warnings |")
-    print("|---|---|---|---:|---:|---:|---:|---:|---:|---|")
-    for test, src, mode in ((t, s, m) for t in (int(x) for x in a.tests.split(",")) for s in ("law", "force")
-                            for m in ("rigid", "flexible")):
-        if True:
-            m0, s, c, _ = prepare_posthoc(test, a.steps, contact_source=src, structure=mode)
-            for name, sol in SOLVERS.items():
-                m = copy.copy(m0)
-                m.opt.solver = sol
-                r = stats(m, s, c, a.steps)
-                print(f"| {test} | {src} | {mode}, {name} (cap {m.opt.iterations}, tol {m.opt.tolerance:g}) | "
-                      f"{r['steps_with_rows']}/{a.steps} | {r['niter_mean']:.2f} / {r['niter_max']} | {r['at_cap']} | "
-                      f"{r['improv_max']:.1e} | {r['eq_max']:.2e} / {r['eq_rms']:.2e} | "
-                      f"{r['pen_max']:.2e} / {r['pen_mean_in_contact']:.2e} ({r['contact_steps']}) | "
-                      f"{r['warnings'] or 'none'} |", flush=True)
+    lines: list[str] = []
+
+    def emit(text: str = "") -> None:  # the table goes to the screen and to --out
+        lines.append(text)
+        print(text, flush=True)
+
+    emit(f"MuJoCo {mujoco.__version__}, tests {a.tests} at full speed, {a.steps} steps (h = 1e-5 s), mj_step")
+    emit()
+    emit("| test | contact source | model, solver | rows/steps | iterations mean / max | steps at the cap | "
+         "largest last improvement / gradient | loop closure |efc_pos| max / rms [m] | penetration max / mean [m] (steps) | warnings |")
+    emit("|---|---|---|---:|---:|---:|---:|---:|---:|---|")
+    for test in (int(x) for x in a.tests.split(",")):
+        for src in ("law", "force"):
+            for mode in ("rigid", "flexible"):
+                m0, s, c, _ = prepare_posthoc(test, a.steps, contact_source=src, structure=mode)
+                for name, sol in SOLVERS.items():
+                    m = copy.copy(m0)
+                    m.opt.solver = sol
+                    r = stats(m, s, c, a.steps)
+                    emit(f"| {test} | {src} | {mode}, {name} (cap {m.opt.iterations}, tol {m.opt.tolerance:g}) | "
+                         f"{r['steps_with_rows']}/{a.steps} | {r['niter_mean']:.2f} / {r['niter_max']} | "
+                         f"{r['at_cap']} | {r['improv_max']:.1e} / {r['grad_max']:.1e} | "
+                         f"{r['eq_max']:.2e} / {r['eq_rms']:.2e} | "
+                         f"{r['pen_max']:.2e} / {r['pen_mean_in_contact']:.2e} ({r['contact_steps']}) | "
+                         f"{r['warnings'] or 'none'} |")
+
+    from twin.provenance import with_stamp_line
+    from twin.util import atomic_write_text
+
+    out = Path(a.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(out, with_stamp_line("\n".join(lines) + "\n"))
+    print(f"wrote {out}")
 
 
 if __name__ == "__main__":

@@ -264,8 +264,8 @@ def test_engines_agree_on_third_octave_band_energies(test, timestep_s):
 
 @pytest.mark.long
 @pytest.mark.xfail(strict=True, reason=(
-    "known gaps (analysis/results/structure/agreement.md, docs/structure-mujoco.md): test 3's AC5 1.87 dB at "
-    "10 kHz (2.69 with the channels in float64), a band of ~1e-7 m/s^2 rms where MuJoCo's loop closure at the ideal C "
+    "known gaps (analysis/results/structure/agreement.md, docs/structure-mujoco.md): test 3's AC5 1.79 dB "
+    "(1.87 with Newton) at 10 kHz (2.69 with the channels in float64), a band of ~1e-7 m/s^2 rms where MuJoCo's loop closure at the ideal C "
     "adds a numerical floor (round-off of its positions through the connect's stabilization, analysis/"
     "structure_closure_floor.py; the reference converges to 0.02 dB) and MuJoCo's step error on the guide friction's "
     "reversals; test 12 at the default step 1.58 dB "
