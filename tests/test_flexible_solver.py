@@ -10,7 +10,6 @@ import sys
 from pathlib import Path
 
 import mujoco
-import numpy as np
 import pytest
 
 from twin.config import preset
@@ -57,25 +56,3 @@ def test_pgs_converges_below_its_iteration_cap_and_matches_newtons_constraints(t
     key = "eq_max" if test == 3 else "pen_max"
     assert newton[key] > 0
     assert abs(pgs[key] - newton[key]) <= 1e-3 * newton[key], (pgs[key], newton[key])
-
-
-@pytest.mark.parametrize("solver", ["PGS", "Newton"])
-def test_stiffer_structure_tends_to_the_rigid_model_in_mujoco(solver):
-    """MuJoCo's version of the reference engine's check (tests/test_structure_reference.py), with either solver:
-    test 3, 20 ms from rest, stiff supports: the slider's departure from the rigid model shrinks with the rod's
-    compliance (quasi-static stretch and sag ∝ 1/E): each fourfold modulus at least halves it, and at 840 GPa it is
-    below 0.1 µm. Measured: 0.41, 0.17, 0.065 µm with both solvers."""
-    from twin.simulation import simulate_run
-
-    base = preset(3).replace(**{"simulation.engine": "mujoco", "simulation.duration_s": 0.02})
-    rigid = simulate_run(base).channels["slider_position"].data
-    diffs = []
-    for e in (52.5e9, 210e9, 840e9):
-        cfg = base.replace(**{"structure.mode": "flexible", "structure.rod_youngs_modulus_pa": e,
-                              "mujoco.flexible_solver": solver,
-                              "structure.frame_frequency_hz": 12000.0, "structure.guide_frequency_hz": 12000.0,
-                              "structure.frame_mass_kg": 40.0, "structure.guide_mass_kg": 20.0})
-        flex = simulate_run(cfg).channels["slider_position"].data
-        diffs.append(float(np.max(np.abs(flex - rigid))))
-    assert diffs[0] > 2 * diffs[1] > 4 * diffs[2], diffs
-    assert diffs[2] < 1e-7, diffs
