@@ -161,6 +161,12 @@ SCRIPTS: dict[str, Script] = {
                                 "closure at C)", "~10 min"),
     "structure_closure_floor": Script(f"{R}/structure/closure_floor.md (test 3's 10 kHz band: output precision, "
                                       "step convergence, the closure's numerical floor)", "~10 min"),
+    "mujoco_flexible_pgs": Script(f"{R}/structure/mujoco_flexible_pgs.md (PGS against Newton for the flexible "
+                                  "model: convergence, loop-closure residual, penetration)", "~5 min"),
+    "structure_solver_bands": Script(f"{R}/structure/solver_bands.md, .json (band energies PGS against Newton against "
+                                     "the reference, with the scene's own noise)", "~10 min"),
+    "structure_solver_stability": Script(f"{R}/structure/solver_stability.md, .json (the stability campaign's scenes "
+                                         "under both solvers)", "~30 min", long=True),
     # ---- calibration
     "restitution_length": Script("analysis/calibration_validation/restitution_length_*.json (which recording "
                                  "length tells the restitution)", "~5 min",

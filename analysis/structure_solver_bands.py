@@ -40,6 +40,7 @@ def main() -> None:
     from twin.config import preset
     from twin.provenance import with_stamp_line
     from twin.structure.bands import band_difference_db
+    from twin.provenance import stamped
     from twin.util import atomic_write_text
 
     rows = []
@@ -83,7 +84,7 @@ def main() -> None:
     out = Path(a.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     atomic_write_text(out, with_stamp_line(text))
-    atomic_write_text(out.with_suffix(".json"), json.dumps(raw))
+    atomic_write_text(out.with_suffix(".json"), json.dumps(stamped({"bands": raw})))
     print(f"wrote {out}")
 
 

@@ -35,6 +35,7 @@ def main() -> None:
     from twin.errors import SimulationError
     from twin.simulation import simulate_run
     from twin.studies.stability import PEN_LIMIT, sample_scene, scene_config, scene_inputs, scene_metrics
+    from twin.provenance import stamped
     from twin.util import atomic_write_text
 
     solvers = ("PGS", "Newton")
@@ -82,7 +83,7 @@ def main() -> None:
     out = Path(a.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     atomic_write_text(out, with_stamp_line(text))
-    atomic_write_text(out.with_suffix(".json"), json.dumps(rows, default=str))
+    atomic_write_text(out.with_suffix(".json"), json.dumps(stamped({"scenes": rows}), default=str))
     print(f"wrote {out}")
 
 

@@ -153,8 +153,8 @@ class BenchConfig:
     def to_dict(self) -> dict[str, Any]:
         """Plain nested dict (tuples as lists), the TOML layout. The ``[drivetrain]`` table is left
         out while it holds the defaults and the drive does not use it (crank PID, prescribed), and the
-        ``[spatial]`` table while it holds the defaults (the planar bench) and the ``[structure]`` table
-        while it holds the defaults (the rigid bench), so that the text and
+        ``[spatial]`` table while it holds the defaults (the planar bench), the ``[structure]`` table
+        while it holds the defaults (the rigid bench) and ``mujoco.flexible_solver`` at its default, so that the text and
         digest of such configurations are what they were before these tables existed."""
         out = _to_plain(self)
         joints = out.get("joints", {})
@@ -167,6 +167,8 @@ class BenchConfig:
             out.pop("spatial", None)
         if self.structure == StructureConfig():  # rigid defaults: no [structure] table (same text and digest)
             out.pop("structure", None)
+        if self.mujoco.flexible_solver == MujocoSettings().flexible_solver:  # the default: left out (same digest)
+            out.get("mujoco", {}).pop("flexible_solver", None)
         return out
 
     def to_toml(self) -> str:
