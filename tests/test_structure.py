@@ -62,6 +62,20 @@ def test_split_refuses_a_rod_too_light_in_inertia():
         rod_split(3.55, 0.6, 0.3, 0.05, 0.0)   # below the uniform bar's m L^2/12: needs negative end masses
 
 
+def test_split_names_the_housing_inertia_and_its_largest_value():
+    # a symmetric rod keeps end masses >= 0 while 2 J_e <= I_G - m L^2/12 (the whole mass as a uniform bar):
+    # Table 1, (0.197 - 3.55 * 0.6^2 / 12) / 2 = 0.04525 kg m^2; the field allows up to 0.05
+    j_max = (0.197 - 3.55 * 0.6 ** 2 / 12.0) / 2.0
+    sp = rod_split(3.55, 0.6, 0.3, 0.197, 0.999 * j_max)
+    assert sp.end_b_kg > 0.0 and sp.end_c_kg > 0.0
+    with pytest.raises(ConfigError, match=r"structure\.rod_end_inertia_kgm2: must lie in \[0, 0\.04525\] kg m\^2"):
+        rod_split(3.55, 0.6, 0.3, 0.197, 1.001 * j_max)
+    from twin.config import BenchConfig
+
+    with pytest.raises(ConfigError, match=r"structure\.rod_end_inertia_kgm2: must lie in \[0, 0\.04525\]"):
+        BenchConfig().replace(**{"structure.mode": "flexible", "structure.rod_end_inertia_kgm2": 0.05})
+
+
 def test_closed_forms_reduce_to_textbook_limits():
     mu, L, ei, ea = 3.4, 0.6, 6615.0, 8.82e7
     # no end inertia: the pinned-pinned (nπ/L)² √(EI/μ)
