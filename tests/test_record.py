@@ -77,3 +77,27 @@ def test_the_command_refuses_bad_values_in_one_line(tmp_path, capsys):
     assert main(["record", "--duration", "0.03", "--out", str(tmp_path / "r.mcap"), "--json",
                  str(tmp_path / "r.mcap")]) == 2
     assert list(tmp_path.iterdir()) == []
+
+
+def test_the_spatial_mechanism_is_refused_naming_it_not_a_channel(tmp_path, capsys):
+    """The spatial mechanism has no accelerometer mounts: a recording of it is refused naming spatial.enabled
+    (before, the refusal named the 'accel' group the record command itself had added)."""
+    assert main(["record", "--preset", "s002", "--duration", "0.01", "--no-progress",
+                 "--out", str(tmp_path / "r.mcap")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("twin: error: spatial.enabled:") and "twin simulate" in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_trace_that_is_not_an_npz_archive_is_refused_without_advising_pickle(tmp_path):
+    """numpy reads a non-zip .npz as a pickle and its error advises allow_pickle; the refusal says what a
+    trace file is instead."""
+    from twin.errors import RecordingError
+    from twin.tracefile import load_trace
+
+    p = tmp_path / "trace.npz"
+    p.write_text("t,angle\n0,0\n1,1\n")
+    with pytest.raises(RecordingError) as err:
+        load_trace(p)
+    msg = str(err.value)
+    assert "\n" not in msg and "pickle" not in msg and "'t' and 'angle'" in msg
