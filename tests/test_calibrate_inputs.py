@@ -53,3 +53,20 @@ def test_an_older_log_is_refused_naming_its_version(tmp_path, old_version):
     msg = str(err.value)
     assert err.value.field == "log" and "\n" not in msg and f"resumes version {LOG_VERSION}" in msg
     assert path.read_bytes() == before
+
+
+@pytest.mark.parametrize("overrides", [
+    {"drive.crank_rpm": 200.0},
+    {"drive.mode": "torque", "drivetrain.torque_s": (0.02,), "drivetrain.torque_nm": (1.0,)},
+], ids=["crank_rpm", "torque"])
+def test_the_replay_configuration_of_other_valid_drive_settings_builds(overrides):
+    """A recording's configuration with the crank's own speed or the torque drive: the calibration's trace-driven
+    configuration (as twin replay's) is valid; before, the configuration refused its own trace program."""
+    from types import SimpleNamespace
+
+    from twin.calibration.objective import sim_config
+    from twin.config import preset
+
+    target = SimpleNamespace(drive="trace", n_sim=1000, rate=100000.0, zero_g={}, motor=False)
+    cfg = sim_config(target, preset(12).replace(**overrides))
+    assert cfg.drive.program == "trace" and cfg.drive.crank_rpm == 0.0 and cfg.drive.mode == "pid"

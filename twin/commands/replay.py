@@ -48,8 +48,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def replay_overrides(args: argparse.Namespace, rec_cfg: BenchConfig) -> BenchConfig:
     """The recording's configuration with the command line's configuration options applied
-    (``--config``/``--test`` replace it as a whole)."""
-    if args.config or args.test is not None:
+    (``--config``/``--test``/``--preset`` replace it as a whole)."""
+    if args.config or args.test is not None or getattr(args, "preset", None) is not None:
         return config_from_args(args)
     fd, tmp = tempfile.mkstemp(suffix=".toml", prefix="twin_replay_")
     try:
