@@ -270,3 +270,7 @@ def test_flexible_fields_refused_in_rigid_mode_and_cross_checks():
     with pytest.raises(ConfigError, match=r"structure\.rod_segments: the rod's highest mode"):
         BenchConfig().replace(**{"structure.mode": "flexible", "structure.rod_segments": 24,
                                  "structure.rod_axial_groups": 24})
+    # the fewest segments of the tuned chain with the deepest section the field allows (0.2 m): the message
+    # names the section and the modulus too (fewer segments are not allowed there)
+    with pytest.raises(ConfigError, match=r"structure\.rod_segments: the rod's highest mode .*rod_section_height_m"):
+        BenchConfig().replace(**{"structure.mode": "flexible", "structure.rod_section_height_m": 0.2})

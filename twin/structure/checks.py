@@ -38,7 +38,8 @@ def check_structure(cfg) -> None:
                           f"the rod's highest mode ({md.frequencies_hz[-1]:.0f} Hz, damping ratio "
                           f"{md.damping_ratios[-1]:.3g}) is beyond the stability margin of the step "
                           f"{h:g} s (ω h at {worst * 100:.0f} % of the limit, "
-                          f"at most {STABILITY_MARGIN * 100:.0f} %): use fewer segments or axial groups, "
+                          f"at most {STABILITY_MARGIN * 100:.0f} %): use fewer segments or axial groups, a softer "
+                          "rod (rod_section_height_m, rod_section_width_m, rod_youngs_modulus_pa), "
                           "less damping or a smaller simulation.timestep_s; got "
                           f"{st.rod_segments} segments, {st.rod_axial_groups} axial groups")
     for part in ("frame", "guide"):
