@@ -250,3 +250,21 @@ def test_a_preset_replaces_the_recordings_configuration_as_test_does():
     assert replay_cmd.replay_overrides(args, preset(6)) == named_preset("torque_release")
     args = parser.parse_args(["replay", "rec.mcap", "--preset", "torque_release", "--clearance-c", "0"])
     assert replay_cmd.replay_overrides(args, preset(6)).joints.clearance_c_mm == 0.0
+
+
+def test_a_flexible_recording_replays_with_the_rigid_model():
+    """--structure rigid on a flexible recording's configuration (the ideal-model comparison the command offers):
+    the 'structure' channel group --structure flexible added goes with it (before: refused, naming a group the
+    user had not given)."""
+    import argparse
+
+    from twin.commands import replay as replay_cmd
+    from twin.config import CHANNEL_GROUPS
+
+    parser = argparse.ArgumentParser()
+    replay_cmd.register(parser.add_subparsers())
+    flexible = preset(6).replace(**{"structure.mode": "flexible",
+                                    "sensors.channels": list(CHANNEL_GROUPS) + ["structure"]})
+    cfg = replay_cmd.replay_overrides(parser.parse_args(["replay", "rec.mcap", "--structure", "rigid"]), flexible)
+    assert cfg.structure.mode == "rigid" and "structure" not in cfg.sensors.channels
+    assert list(cfg.sensors.channels) == list(CHANNEL_GROUPS)
