@@ -250,6 +250,12 @@ def test_a_preset_replaces_the_recordings_configuration_as_test_does():
     assert replay_cmd.replay_overrides(args, preset(6)) == named_preset("torque_release")
     args = parser.parse_args(["replay", "rec.mcap", "--preset", "torque_release", "--clearance-c", "0"])
     assert replay_cmd.replay_overrides(args, preset(6)).joints.clearance_c_mm == 0.0
+    # the trace replaces the constant program: its crank speed set on the command line is refused, not ignored
+    from twin.errors import ConfigError
+
+    args = parser.parse_args(["replay", "rec.mcap", "--set", "drive.crank_rpm=300"])
+    with pytest.raises(ConfigError, match=r"^--set drive\.crank_rpm: does not apply to this command"):
+        replay_cmd.replay_overrides(args, preset(6))
 
 
 def test_a_flexible_recording_replays_with_the_rigid_model():

@@ -27,7 +27,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("recording", metavar="RECORDING.mcap", help=RECORDING_HELP)
     # the model to replay with; the drive, duration, channels and rate come from the recording
     add_config_args(p, SELECT_OPTIONS + MODEL_OPTIONS + ("engine", "timestep"),
-                    refused_set=("drive.program", "drive.trace_file", "simulation.duration_s",
+                    refused_set=("drive.program", "drive.trace_file", "drive.crank_rpm", "simulation.duration_s",
                                  "sensors.channels", "sensors.output_rate_hz", "instrumentation.zero_g_v",
                                  "instrumentation.daq_rate_hz"))
     p.add_argument("--out", metavar="DIR", help="output folder (default: replay_<recording name>)")
