@@ -207,6 +207,23 @@ def test_a_twin_simulate_file_is_refused_in_one_line_naming_twin_record(tmp_path
     assert json.loads(js.read_text())["refused"] is True
 
 
+@pytest.mark.parametrize("name", ["export.npz", "sample:no-such-sample"])
+def test_a_file_that_is_not_a_recording_is_refused_in_the_json_too(tmp_path, capsys, name):
+    """Every refusal of the recording argument writes the --json record, as a recording refused for its
+    content does (a pipeline reads the file, not the message): another file type, an unknown sample."""
+    from twin.cli import main
+
+    if not name.startswith("sample:"):
+        (tmp_path / name).write_bytes(b"PK not a recording")
+        name = str(tmp_path / name)
+    js = tmp_path / "a.json"
+    rc = main(["identify", "clearance", name, "--json", str(js)])
+    err = capsys.readouterr().err
+    assert rc == 2 and err.count("\n") == 1
+    d = json.loads(js.read_text())
+    assert d["refused"] is True and d["recording"] == name and d["reason"] in err
+
+
 # ------------------------------------------------------------------ the dataset generator's recordings
 def test_the_dataset_generator_writes_the_bench_recording_twin_record_writes(tmp_path):
     """outputs.recordings: each run also a bench recording, through twin.record's code path: sample for sample

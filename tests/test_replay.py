@@ -212,3 +212,65 @@ def test_the_replay_result_is_the_report_file_and_has_the_golden_layout(ideal):
     on_disk = json.loads((out / "report.json").read_text())
     assert d["files"].pop("report") == ["report.json", "report.md"]
     assert json.loads(json.dumps(d, default=float)) == on_disk
+
+
+@pytest.mark.parametrize("overrides", [
+    # the constant program's speed given as the crank's (valid to record): the trace replaces the program
+    {"drive.crank_rpm": 200.0, "simulation.duration_s": 0.8},
+    # the torque drive (spin-up at 1 N m): it has no speed program; the crank PID follows the trace
+    {"drive.mode": "torque", "drivetrain.torque_s": (0.02,), "drivetrain.torque_nm": (1.0,),
+     "simulation.duration_s": 0.8},
+], ids=["crank_rpm", "torque"])
+def test_valid_recordings_of_other_drive_settings_replay(tmp_path, overrides):
+    """Before, both were refused by the replay's own configuration (drive.crank_rpm or drive.program 'trace'
+    with the torque mode), naming fields the user had not set. The replay now runs and tracks the crank
+    (the replay's crank follows the recorded encoder within its quantization)."""
+    import twin
+
+    rec = tmp_path / "rec.mcap"
+    twin.record(preset(12).replace(**overrides), rec, static_s=0.1)
+    report = replay(rec, tmp_path / "out", opts=ReplayOptions(plots=False))
+    assert (tmp_path / "out" / "report.json").is_file()
+    # the simulated crank vs the recorded counts (count centres, +-0.5 count of quantization): below one count,
+    # as in test_replay_recovers_the_crank_motion
+    assert report.tracking.sim_vs_recorded_max_counts < 1.0, report.tracking
+
+
+def test_a_preset_replaces_the_recordings_configuration_as_test_does():
+    """--preset is a starting point as --test is: it replaces the recording's configuration (before, it was
+    refused as 'cannot be combined with --config', an option the user had not given)."""
+    import argparse
+
+    from twin.commands import replay as replay_cmd
+    from twin.config import named_preset
+
+    parser = argparse.ArgumentParser()
+    replay_cmd.register(parser.add_subparsers())
+    args = parser.parse_args(["replay", "rec.mcap", "--preset", "torque_release"])
+    assert replay_cmd.replay_overrides(args, preset(6)) == named_preset("torque_release")
+    args = parser.parse_args(["replay", "rec.mcap", "--preset", "torque_release", "--clearance-c", "0"])
+    assert replay_cmd.replay_overrides(args, preset(6)).joints.clearance_c_mm == 0.0
+    # the trace replaces the constant program: its crank speed set on the command line is refused, not ignored
+    from twin.errors import ConfigError
+
+    args = parser.parse_args(["replay", "rec.mcap", "--set", "drive.crank_rpm=300"])
+    with pytest.raises(ConfigError, match=r"^--set drive\.crank_rpm: does not apply to this command"):
+        replay_cmd.replay_overrides(args, preset(6))
+
+
+def test_a_flexible_recording_replays_with_the_rigid_model():
+    """--structure rigid on a flexible recording's configuration (the ideal-model comparison the command offers):
+    the 'structure' channel group --structure flexible added goes with it (before: refused, naming a group the
+    user had not given)."""
+    import argparse
+
+    from twin.commands import replay as replay_cmd
+    from twin.config import CHANNEL_GROUPS
+
+    parser = argparse.ArgumentParser()
+    replay_cmd.register(parser.add_subparsers())
+    flexible = preset(6).replace(**{"structure.mode": "flexible",
+                                    "sensors.channels": list(CHANNEL_GROUPS) + ["structure"]})
+    cfg = replay_cmd.replay_overrides(parser.parse_args(["replay", "rec.mcap", "--structure", "rigid"]), flexible)
+    assert cfg.structure.mode == "rigid" and "structure" not in cfg.sensors.channels
+    assert list(cfg.sensors.channels) == list(CHANNEL_GROUPS)

@@ -62,6 +62,20 @@ def test_split_refuses_a_rod_too_light_in_inertia():
         rod_split(3.55, 0.6, 0.3, 0.05, 0.0)   # below the uniform bar's m L^2/12: needs negative end masses
 
 
+def test_split_names_the_housing_inertia_and_its_largest_value():
+    # a symmetric rod keeps end masses >= 0 while 2 J_e <= I_G - m L^2/12 (the whole mass as a uniform bar):
+    # Table 1, (0.197 - 3.55 * 0.6^2 / 12) / 2 = 0.04525 kg m^2; the field allows up to 0.05
+    j_max = (0.197 - 3.55 * 0.6 ** 2 / 12.0) / 2.0
+    sp = rod_split(3.55, 0.6, 0.3, 0.197, 0.999 * j_max)
+    assert sp.end_b_kg > 0.0 and sp.end_c_kg > 0.0
+    with pytest.raises(ConfigError, match=r"structure\.rod_end_inertia_kgm2: must lie in \[0, 0\.04525\] kg m\^2"):
+        rod_split(3.55, 0.6, 0.3, 0.197, 1.001 * j_max)
+    from twin.config import BenchConfig
+
+    with pytest.raises(ConfigError, match=r"structure\.rod_end_inertia_kgm2: must lie in \[0, 0\.04525\]"):
+        BenchConfig().replace(**{"structure.mode": "flexible", "structure.rod_end_inertia_kgm2": 0.05})
+
+
 def test_closed_forms_reduce_to_textbook_limits():
     mu, L, ei, ea = 3.4, 0.6, 6615.0, 8.82e7
     # no end inertia: the pinned-pinned (nπ/L)² √(EI/μ)
@@ -256,3 +270,26 @@ def test_flexible_fields_refused_in_rigid_mode_and_cross_checks():
     with pytest.raises(ConfigError, match=r"structure\.rod_segments: the rod's highest mode"):
         BenchConfig().replace(**{"structure.mode": "flexible", "structure.rod_segments": 24,
                                  "structure.rod_axial_groups": 24})
+    # the fewest segments of the tuned chain with the deepest section the field allows (0.2 m): the message
+    # names the section and the modulus too (fewer segments are not allowed there)
+    with pytest.raises(ConfigError, match=r"structure\.rod_segments: the rod's highest mode .*rod_section_height_m"):
+        BenchConfig().replace(**{"structure.mode": "flexible", "structure.rod_section_height_m": 0.2})
+
+
+def test_a_clearance_at_b_or_c_checks_the_free_rods_modes_against_the_step():
+    """Housings of much rotary inertia leave light end masses (0.02 kg at 0.044 kg m^2): held by the crank and
+    the slider they are stiffly carried (the mechanism's modes stay near 4.5 kHz), but in a clearance the end
+    flies free on its end slide: Test 6 (0.1 mm at C) then diverged at the first steps in both engines. The
+    configuration refuses it naming the housing inertia; ideal joints, or a step small enough, are accepted."""
+    from twin.config import BenchConfig, preset
+
+    flex = {"structure.mode": "flexible", "structure.rod_end_inertia_kgm2": 0.044}
+    with pytest.raises(ConfigError, match=r"^structure\.rod_end_inertia_kgm2: the free rod's highest mode"):
+        preset(6).replace(**flex)
+    preset(3).replace(**flex)  # ideal joints: the ends stay on the crank and the slider
+    cfg = preset(6).replace(**flex, **{"simulation.timestep_s": 2e-6, "simulation.duration_s": 0.002})
+    import twin
+
+    r = twin.simulate(cfg)
+    assert np.all(np.isfinite(np.asarray(r["AC4"], float)))
+    BenchConfig().replace(**{"structure.mode": "flexible"})  # the default is far inside the margin

@@ -180,8 +180,12 @@ def test_flexible_runs_with_the_drive_train_the_prescribed_crank_and_refuses_wha
     th, _ = DriveReference(cfg)(np.arange(run.channels["crank_angle"].data.size) / cfg.sensors.output_rate_hz)
     assert np.max(np.abs(run.channels["crank_angle"].data - th)) < 1e-9
     assert all(np.all(np.isfinite(ch.data)) for ch in run.channels.values())
-    with pytest.raises(ConfigError, match=r"^structure\.mode: .*joints\.clearance_a_mm = 0"):
+    with pytest.raises(ConfigError, match=r"^joints\.clearance_a_mm: is not available with structure\.mode = "
+                                          r"\"flexible\".*use 0, got 0\.1$"):
         ReferenceEngine(base.replace(**{"joints.clearance_a_mm": 0.1}))
+    # the guide's play too, naming its own field (as the MuJoCo engine does)
+    with pytest.raises(ConfigError, match=r"^joints\.clearance_guide_mm: is not available with structure\.mode"):
+        ReferenceEngine(base.replace(**{"joints.clearance_guide_mm": 0.2}))
     with pytest.raises(ConfigError, match=r"^sensors\.channels: the optional group 'drive_energy'"):
         ReferenceEngine(base.replace(**{"drive.mode": "motor", "sensors.channels": ["accel", "drive_energy"]}))
 

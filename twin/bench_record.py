@@ -109,6 +109,12 @@ def recording_config(cfg: BenchConfig) -> BenchConfig:
     if not isinstance(cfg, BenchConfig):
         raise TypeError(f"cfg: must be a BenchConfig (twin.preset(...), twin.config.load_config(...)), "
                         f"got {type(cfg).__name__}")
+    if cfg.spatial.enabled:  # refused here, not as a channel the user did not ask for
+        from twin.errors import ConfigError
+
+        raise ConfigError("spatial.enabled", "a bench recording is the planar bench's (its accelerometers and "
+                          "encoder); the spatial mechanism has no accelerometer mounts: simulate it with "
+                          "'twin simulate' (twin.simulate), or record with spatial.enabled = false")
     missing = [g for g in CHAIN_GROUPS if g not in cfg.sensors.channels]
     return cfg.replace(**{"sensors.channels": [*cfg.sensors.channels, *missing]}) if missing else cfg
 

@@ -46,6 +46,7 @@ import numpy as np
 
 from twin.channels import encoder_from_bench
 from twin.config import ACCELEROMETERS, CHANNEL_GROUPS, BenchConfig
+from twin.config.drivetrain import Drivetrain
 from twin.errors import ConfigError, RecordingError, TwinError
 from twin.instrument import (apply_chain, counts_to_angle, measured_accel, simulated_calibration)
 from twin.instrument.encoder import count_step_rad
@@ -127,10 +128,21 @@ def check_replayable(rec: Run, info: Any, base: BenchConfig, where: str, command
         raise RecordingError(f"{where}: {command} needs the recording's motor_command channel; it has none")
 
 
+def torque_as_pid(cfg: BenchConfig) -> dict[str, Any]:
+    """Overrides that replay a torque-driven configuration by the crank PID on a trace: the torque mode has no
+    speed program to follow a trace, and a coast-down passes the motor drive's speed range; the PID reads no
+    drive-train field, so they go back to their defaults (the PID mode refuses them). Empty for other modes."""
+    if cfg.drive.mode != "torque":
+        return {}
+    return {"drive.mode": "pid", **{f"drivetrain.{f.name}": f.default for f in dataclasses.fields(Drivetrain)}}
+
+
 def replay_config(rec_cfg: BenchConfig, trace_file: Path, rec: Run, zero_g_v: dict[str, float]) -> BenchConfig:
-    """Simulation configuration of a replay: ``rec_cfg`` driven by the trace at the recording's rate."""
-    return rec_cfg.replace(**{
+    """Simulation configuration of a replay: ``rec_cfg`` driven by the trace at the recording's rate. A
+    torque-driven recording is replayed by the crank PID on the trace (:func:`torque_as_pid`)."""
+    return rec_cfg.replace(**torque_as_pid(rec_cfg), **{
         "drive.program": "trace", "drive.trace_file": str(trace_file),
+        "drive.crank_rpm": 0.0,  # the constant program's speed: the trace replaces it (nonzero is refused with it)
         "simulation.duration_s": rec.n / rec.rate_hz,
         "sensors.output_rate_hz": rec.rate_hz, "sensors.channels": list(CHANNEL_GROUPS),
         "instrumentation.zero_g_v": dict(zero_g_v),

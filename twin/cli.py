@@ -289,6 +289,10 @@ def config_from_args(args: argparse.Namespace) -> BenchConfig:
         groups = list(ov.get("sensors.channels", cfg.sensors.channels))
         if "structure" not in groups:  # the flexible structure's channels (both engines)
             ov["sensors.channels"] = groups + ["structure"]
+    if _opt(args, "structure") == "rigid" and _opt(args, "channels") is None:
+        groups = list(ov.get("sensors.channels", cfg.sensors.channels))
+        if "structure" in groups:  # the group --structure flexible added (e.g. a flexible recording's, replayed rigid)
+            ov["sensors.channels"] = [g for g in groups if g != "structure"]
     if ov.get("drive.mode", cfg.drive.mode) == "torque":  # the torque drive follows its torque program, no speed
         # program: the configuration refuses drive.program/motor speed too; here the flag that set it is named
         for flag, given in (("--speed", _opt(args, "speed")), ("--protocol", _opt(args, "protocol") or None),

@@ -96,9 +96,15 @@ class DriveReference:
         if d.program == "trace":
             from twin.tracefile import check_trace_speed
 
-            t, phi = inputs.trace if inputs is not None and inputs.trace is not None else load_trace(d.trace_file)
-            # the fastest crank the drive commands: the motor's ±1000 rpm through the belt, or crank_rpm
-            check_trace_speed(t, phi, max(1000.0 / d.belt_ratio, abs(d.crank_rpm)), str(d.trace_file))
+            if inputs is not None and inputs.trace is not None:
+                # a library's arrays (a replay's recorded encoder, in radians by construction; its counts were
+                # checked against the recording's own drive, which may be faster than this one's, e.g. torque)
+                t, phi = inputs.trace
+            else:
+                t, phi = load_trace(d.trace_file)
+                # a user's file: the fastest crank the drive commands (the motor's ±1000 rpm through the belt,
+                # or crank_rpm); far faster is an angle in degrees
+                check_trace_speed(t, phi, max(1000.0 / d.belt_ratio, abs(d.crank_rpm)), str(d.trace_file))
             self._trace = self._prepare_trace(t, phi)
             h = float(np.median(np.diff(t)))
             run_s = float(cfg.simulation.duration_s)

@@ -54,6 +54,9 @@ def load_trace(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     except RecordingError:
         raise
     except (OSError, ValueError, UnicodeDecodeError, zipfile.BadZipFile, EOFError, Warning) as err:
+        if p.suffix.lower() == ".npz" and not zipfile.is_zipfile(p):  # numpy's own words would advise unpickling it
+            raise RecordingError(f"{p}: not an .npz archive (numpy.savez of arrays 't' and 'angle'); a text export "
+                                 "is read as .csv with columns t, angle") from None
         raise RecordingError(f"{p}: not a readable trace ({type(err).__name__}: {str(err).splitlines()[0] if str(err) else ''})") from None
     return check_trace(t, a, str(p))
 

@@ -195,11 +195,16 @@ def sim_config(target: Target, cfg):
     with ``drive`` "program" the configuration's own drive program instead of the encoder trace)."""
     from twin.config import CHANNEL_GROUPS
 
-    over = ({"drive.program": "trace", "drive.trace_file": "encoder_trace.npz", "drive.trace_filter_hz": TRACE_FILTER_HZ}
+    over = ({"drive.program": "trace", "drive.trace_file": "encoder_trace.npz", "drive.trace_filter_hz": TRACE_FILTER_HZ,
+             "drive.crank_rpm": 0.0}  # the constant program's speed: the trace replaces it (nonzero is refused with it)
             if target.drive == "trace" else {})
     over |= {"simulation.duration_s": target.n_sim / target.rate,
             "sensors.output_rate_hz": target.rate, "sensors.channels": list(CHANNEL_GROUPS),
             "instrumentation.zero_g_v": dict(target.zero_g)}
+    if target.drive == "trace":  # a torque-driven recording: the crank PID on its trace (bench_replay.torque_as_pid)
+        from twin.bench_replay import torque_as_pid
+
+        over |= torque_as_pid(cfg)
     if target.motor:  # drive-train fields: the motor model drives the crank
         groups = list(CHANNEL_GROUPS) + (["motor"] if "motor" not in CHANNEL_GROUPS else [])
         over.update({"drive.mode": "motor", "sensors.channels": groups})

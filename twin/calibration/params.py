@@ -9,6 +9,7 @@ stiffness, gains).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any, Iterable, Mapping
@@ -122,9 +123,27 @@ def field_value(cfg: BenchConfig, field: str) -> float:
     except KeyError:
         raise ConfigError("params", f"{field!r} is not a configuration field (dotted path, e.g. "
                                     "contact.restitution)") from None
+    if dataclasses.is_dataclass(v) or isinstance(v, Mapping):
+        raise ConfigError("params", f"{field!r} is a section, not a field; name one of its numeric fields "
+                                    f"(e.g. {field}.<field>)")
     if isinstance(v, bool) or not isinstance(v, (int, float)):
         raise ConfigError("params", f"{field!r} is not a numeric field (value {v!r}); only numbers can be fitted")
+    if _declared_int(cfg, field):
+        raise ConfigError("params", f"{field!r} is an integer field (value {v!r}); only real-valued fields can be "
+                                    "fitted (set it with --config and fit the others)")
     return float(v)
+
+
+def _declared_int(cfg: BenchConfig, field: str) -> bool:
+    """True when ``field`` is declared ``int`` in its section's dataclass (a count or a choice: the search's
+    real values would be refused)."""
+    import typing
+
+    parent_path, _, name = field.rpartition(".")
+    parent = _field_value(cfg, parent_path) if parent_path else cfg
+    if not dataclasses.is_dataclass(parent):
+        return False
+    return typing.get_type_hints(type(parent)).get(name) is int
 
 
 def make_parameters(fields: Iterable[str], base: BenchConfig,
@@ -184,6 +203,8 @@ def parse_bounds(items: Iterable[str]) -> dict[str, tuple[float, float]]:
             raise ConfigError("bounds", f"expected FIELD=LO:HI (e.g. contact.restitution=0.2:0.8), got {item!r}") from None
         if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
             raise ConfigError("bounds", f"{item!r}: need finite LO < HI")
+        if field.strip() in out:
+            raise ConfigError("bounds", f"{field.strip()!r} is given twice; give one FIELD=LO:HI per field")
         out[field.strip()] = (lo, hi)
     return out
 

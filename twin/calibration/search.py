@@ -66,6 +66,10 @@ def read_log(path: Path, header: dict[str, Any], d: int) -> tuple[list[dict[str,
                        "folder)", field="log") from None
     if not isinstance(first, dict) or first.get("format") != LOG_FORMAT:
         raise LogError(f"{path}: not a {LOG_FORMAT} file", field="log")
+    if first.get("version") != header.get("version"):
+        raise LogError(f"{path}: an evaluation log of version {first.get('version', 1)!r} (another twin's; this twin "
+                       f"resumes version {header.get('version')!r} only); delete it to start over or use another "
+                       "output folder", field="log")
     diff = sorted(k for k in set(first) | set(header) if k != "created" and first.get(k) != header.get(k))
     if diff:
         raise LogError(f"{path} was written by another calibration ({', '.join(diff)} differ); use another output "

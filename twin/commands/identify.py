@@ -154,9 +154,15 @@ def _recording_and_json(args: argparse.Namespace) -> tuple[Path, Path | None]:
 
 def _clearance(args: argparse.Namespace) -> int:
     from twin.identification.model import ClearanceModel, identify_recording
-    from twin.util import atomic_write_text
+    from twin.util import atomic_write_text, check_output_file
 
-    rec, js = _recording_and_json(args)
+    js = check_output_file(args.json, "--json", ".json") if args.json else None
+    try:
+        rec, _js = _recording_and_json(args)
+    except TwinError as err:  # not a recording (another file type, an unknown sample): refused in the --json too
+        if js is not None:
+            atomic_write_text(js, refusal_json(str(args.recording), str(err)) + "\n")
+        raise
     path = resolve_model(args.model)
     if not args.model and not path.is_file():
         raise TwinError(f"no default model in this installation ({path}); give --model MODEL.npz")

@@ -27,7 +27,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("recording", metavar="RECORDING.mcap", help=RECORDING_HELP)
     # the model to replay with; the drive, duration, channels and rate come from the recording
     add_config_args(p, SELECT_OPTIONS + MODEL_OPTIONS + ("engine", "timestep"),
-                    refused_set=("drive.program", "drive.trace_file", "simulation.duration_s",
+                    refused_set=("drive.program", "drive.trace_file", "drive.crank_rpm", "simulation.duration_s",
                                  "sensors.channels", "sensors.output_rate_hz", "instrumentation.zero_g_v",
                                  "instrumentation.daq_rate_hz"))
     p.add_argument("--out", metavar="DIR", help="output folder (default: replay_<recording name>)")
@@ -48,8 +48,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def replay_overrides(args: argparse.Namespace, rec_cfg: BenchConfig) -> BenchConfig:
     """The recording's configuration with the command line's configuration options applied
-    (``--config``/``--test`` replace it as a whole)."""
-    if args.config or args.test is not None:
+    (``--config``/``--test``/``--preset`` replace it as a whole)."""
+    if args.config or args.test is not None or getattr(args, "preset", None) is not None:
         return config_from_args(args)
     fd, tmp = tempfile.mkstemp(suffix=".toml", prefix="twin_replay_")
     try:

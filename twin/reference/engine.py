@@ -302,9 +302,11 @@ def _flexible_run(cfg: BenchConfig, P: np.ndarray, options: ReferenceOptions):
                           "structure's dampers in the reference engine yet (its balance would not close); remove it "
                           "with structure.mode = \"flexible\"")
     if cfg.joints.diametral_mm("A") > 0 or cfg.joints.guide_play:
-        raise ConfigError("structure.mode", "\"flexible\" carries the frame and the guide on their supports: "
-                          "the reference engine has it with A and the guide ideal (joints.clearance_a_mm = 0, "
-                          "joints.clearance_guide_mm = 0)")
+        field, value = (("clearance_a_mm", cfg.joints.clearance_a_mm) if cfg.joints.diametral_mm("A") > 0
+                        else ("clearance_guide_mm", cfg.joints.clearance_guide_mm))
+        raise ConfigError(f"joints.{field}", "is not available with structure.mode = \"flexible\" (it carries the "
+                          "frame and the guide on their supports: the reference engine has it with A and the guide "
+                          f"ideal); use 0, got {value!r}")
     return FlexibleRun(cfg, P, lambda c: engine_params(c, options))
 
 

@@ -38,9 +38,24 @@ def check_structure(cfg) -> None:
                           f"the rod's highest mode ({md.frequencies_hz[-1]:.0f} Hz, damping ratio "
                           f"{md.damping_ratios[-1]:.3g}) is beyond the stability margin of the step "
                           f"{h:g} s (ω h at {worst * 100:.0f} % of the limit, "
-                          f"at most {STABILITY_MARGIN * 100:.0f} %): use fewer segments or axial groups, "
+                          f"at most {STABILITY_MARGIN * 100:.0f} %): use fewer segments or axial groups, a softer "
+                          "rod (rod_section_height_m, rod_section_width_m, rod_youngs_modulus_pa), "
                           "less damping or a smaller simulation.timestep_s; got "
                           f"{st.rod_segments} segments, {st.rod_axial_groups} axial groups")
+    if cfg.joints.diametral_mm("B") > 0 or cfg.joints.diametral_mm("C") > 0:
+        # an end in its clearance flies free between impacts: the housing on its end slide alone, the rod's free
+        # modes (light end masses, i.e. housings of much rotary inertia, put them far above the mechanism's)
+        fr = modes(chain, "free")
+        worst = max(step_limit(2 * math.pi * f, z, h) for f, z in zip(fr.frequencies_hz, fr.damping_ratios))
+        if worst > STABILITY_MARGIN:
+            raise ConfigError("structure.rod_end_inertia_kgm2" if st.rod_end_inertia_kgm2 > 0 else "structure.rod_segments",
+                              f"the free rod's highest mode ({fr.frequencies_hz[-1]:.0f} Hz: a clearance at B or C "
+                              f"lets the rod's ends fly free) is beyond the stability margin of the step {h:g} s "
+                              f"(ω h at {worst * 100:.0f} % of the limit, at most {STABILITY_MARGIN * 100:.0f} %; "
+                              f"end masses {chain.split.end_b_kg:.3g} / {chain.split.end_c_kg:.3g} kg): use less "
+                              "housing inertia, fewer segments or axial groups, a softer rod or a smaller "
+                              f"simulation.timestep_s; got rod_end_inertia_kgm2 = {st.rod_end_inertia_kgm2!r}, "
+                              f"{st.rod_segments} segments, {st.rod_axial_groups} axial groups")
     for part in ("frame", "guide"):
         f, z = getattr(st, f"{part}_frequency_hz"), getattr(st, f"{part}_damping_ratio")
         if step_limit(2 * math.pi * f, z, h) > STABILITY_MARGIN:

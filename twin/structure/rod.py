@@ -111,6 +111,16 @@ def rod_split(mass_kg: float, length_m: float, x_g_m: float, inertia_kgm2: float
     end_c = s2 - bar / 3.0
     end_b = mass_kg - bar - end_c
     if not (bar > 0.0 and end_b >= 0.0 and end_c >= 0.0):
+        # the housings' inertia J_e takes 2 J_e / L² from s2; the end masses stay >= 0 (and the bar > 0) down to
+        # s2 = max(2 s1 / 3, (4 s1 − m) / 3): the largest J_e this rod allows
+        s2_min = max(2.0 * s1 / 3.0, (4.0 * s1 - mass_kg) / 3.0)
+        j_max = 0.5 * (inertia_kgm2 + mass_kg * x_g_m ** 2 - s2_min * L * L)
+        s2_0 = (inertia_kgm2 + mass_kg * x_g_m ** 2) / (L * L)  # without the housings' inertia
+        if s2_min <= s2_0 < s1 and end_inertia_kgm2 > j_max:  # the rod splits; the housings' inertia is too much
+            raise ConfigError("structure.rod_end_inertia_kgm2",
+                              f"must lie in [0, {j_max:.4g}] kg m^2 with this rod (bodies.rod: mass {mass_kg:g} kg, "
+                              f"x_G {x_g_m:g} m, I_G {inertia_kgm2:g} kg m^2: more housing inertia leaves the end "
+                              f"masses negative), got {end_inertia_kgm2!r}")
         raise ConfigError("bodies.rod.inertia_kgm2",
                           "the flexible rod needs Table 1's rod as a uniform bar with end masses; "
                           f"mass {mass_kg:g} kg, "
