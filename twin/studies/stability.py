@@ -215,15 +215,16 @@ def sample_scene(seed: int, index: int, duration_range_s: tuple[float, float] = 
     if bench:
         scene.update(bench_draws(rng))
     if structure:
-        scene["structure"] = structure_draws(seed, index, timestep)
+        scene["structure"] = structure_draws(seed, index, timestep, cb, cc)
     return scene
 
 
-def structure_draws(seed: int, index: int, timestep_s: float) -> dict[str, float]:
+def structure_draws(seed: int, index: int, timestep_s: float, clearance_b_mm: float = 0.0,
+                    clearance_c_mm: float = 0.0) -> dict[str, float]:
     """The flexible structure's placeholders of a scene, uniform over their documented ranges, from the scene's own
-    generator; a draw the configuration refuses at this timestep (a mount at or above half the output rate, a mode
-    beyond the explicit step's stability margin) is drawn again (at most 100 times), so every scene is one a user
-    could run."""
+    generator; a draw the configuration refuses at this timestep and with the scene's clearances at B and C (a mount
+    at or above half the output rate, a mode beyond the explicit step's stability margin — with a clearance, the
+    free rod's too) is drawn again (at most 100 times), so every scene is one a user could run."""
     from twin.config.structure import EXPLORE_RANGES
 
     srng = np.random.default_rng([seed, index, 43])
@@ -232,7 +233,9 @@ def structure_draws(seed: int, index: int, timestep_s: float) -> dict[str, float
         draw = {field: float(f"{srng.uniform(lo, hi):.6g}") for _, field, _, (lo, hi) in EXPLORE_RANGES}
         try:
             preset(1).replace(**{"structure.mode": "flexible", "simulation.timestep_s": timestep_s,
-                                 "sensors.output_rate_hz": rate, **{f"structure.{k}": v for k, v in draw.items()}})
+                                 "sensors.output_rate_hz": rate, "joints.clearance_b_mm": clearance_b_mm,
+                                 "joints.clearance_c_mm": clearance_c_mm,
+                                 **{f"structure.{k}": v for k, v in draw.items()}})
         except ConfigError:
             continue
         return draw
