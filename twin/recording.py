@@ -129,16 +129,12 @@ class RecordingInfo:
 # ------------------------------------------------------------------------ validation
 #: how far beyond its supply rails a recorded accelerometer voltage may read (ADC noise, offsets) [V]
 RAIL_TOL_V = 0.1
-
-
-#: fastest crank of the torque drive [rpm]: no speed command bounds it (a spin-up passes the motor's ±1000 rpm
-#: range), so the configuration's largest crank speed (drive.crank_rpm's range) bounds it
+#: fastest crank of the torque drive [rpm]: no speed command bounds it, so drive.crank_rpm's range does
 TORQUE_DRIVE_MAX_CRANK_RPM = 6000.0
 
 
 def _max_crank_rpm(cfg: BenchConfig) -> float:
-    """Fastest crank speed the drive can command (±1000 motor rpm through the belt, or a faster constant
-    ``drive.crank_rpm``; the torque drive: :data:`TORQUE_DRIVE_MAX_CRANK_RPM`) [rpm]."""
+    """Fastest crank speed the drive commands (±1000 motor rpm, a faster drive.crank_rpm; torque drive: above) [rpm]."""
     if cfg.drive.mode == "torque":
         return TORQUE_DRIVE_MAX_CRANK_RPM
     return max(1000.0 / cfg.drive.belt_ratio, abs(cfg.drive.crank_rpm))

@@ -130,7 +130,7 @@ def field_value(cfg: BenchConfig, field: str) -> float:
         raise ConfigError("params", f"{field!r} is not a numeric field (value {v!r}); only numbers can be fitted")
     if _declared_int(cfg, field):
         raise ConfigError("params", f"{field!r} is an integer field (value {v!r}); only real-valued fields can be "
-                                    "fitted (set it with --config and fit the others)")
+                                    "fitted (set it in the base configuration and fit the others)")
     return float(v)
 
 
