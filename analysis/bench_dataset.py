@@ -182,14 +182,12 @@ def measure_warm(spec, workers: int, work: str, warm: bool, limit: int | None = 
 
 
 def _stamp() -> str:
-    import subprocess
-
     import mujoco
 
     from twin import __version__
+    from twin.provenance import git_commit
 
-    commit = subprocess.run(["git", "describe", "--always", "--dirty"], capture_output=True, text=True,
-                            cwd=os.path.dirname(os.path.abspath(__file__))).stdout.strip()
+    commit = git_commit()
     return f"twin {__version__}, MuJoCo {mujoco.__version__}, commit {commit or '?'}, {os.cpu_count()} cores"
 
 

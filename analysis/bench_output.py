@@ -31,7 +31,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import subprocess
 import tempfile
 import time
 from pathlib import Path
@@ -155,8 +154,9 @@ def main() -> None:
                         best[(e, k)] = rec
                     for f in folder.iterdir():
                         f.unlink()
-    commit = subprocess.run(["git", "describe", "--always", "--dirty"], capture_output=True, text=True,
-                            cwd=Path(__file__).resolve().parent).stdout.strip()
+    from twin.provenance import git_commit
+
+    commit = git_commit()
     print(f"test 12, {args.duration:g} s simulated at 100 kHz output, best of {args.repeats} (interleaved), "
           f"commit {commit or '?'}")
     print()

@@ -30,7 +30,6 @@ import subprocess
 import sys
 import tempfile
 import time
-from pathlib import Path
 
 PY = sys.executable
 TWIN = [PY, "-m", "twin.cli"]
@@ -86,8 +85,9 @@ def main() -> None:
             for k, cmd in CMDS.items():
                 best[k] = min(best[k], timed(cmd, cwd, k))
         imports = importtime(CMDS["twin simulate, one step (mujoco)"], cwd, args.top)
-    commit = subprocess.run(["git", "describe", "--always", "--dirty"], capture_output=True, text=True,
-                            cwd=Path(__file__).resolve().parent).stdout.strip()
+    from twin.provenance import git_commit
+
+    commit = git_commit()
     print(f"best of {args.repeats} fresh processes (interleaved), commit {commit}, MUJOCO_GL="
           f"{os.environ.get('MUJOCO_GL', '(unset)')}, PYTHONDONTWRITEBYTECODE="
           f"{os.environ.get('PYTHONDONTWRITEBYTECODE', '(unset)')}")

@@ -23,7 +23,6 @@ Run: ``python analysis/bench_structure.py [--duration S] [--rounds R] [--tests 3
 from __future__ import annotations
 
 import argparse
-import subprocess
 import time
 from pathlib import Path
 
@@ -86,8 +85,9 @@ def main() -> None:
                     best_cpu[key] = min(best_cpu.get(key, float("inf")), cpu)
                     steps[key] = meta["steps"]
         print(f"  round {r + 1}/{args.rounds} done", flush=True)
-    commit = subprocess.run(["git", "describe", "--always", "--dirty"], capture_output=True, text=True,
-                            cwd=Path(__file__).resolve().parent).stdout.strip()
+    from twin.provenance import git_commit
+
+    commit = git_commit()
     import twin
 
     lines = [f"twin {twin.__version__}, MuJoCo {mujoco.__version__}, numba {numba.__version__}, commit {commit or '?'}; "

@@ -371,8 +371,9 @@ def main() -> int:
     def rng(v: list[float]) -> str:
         return f"{statistics.median(v):.2f} ({min(v):.2f}-{max(v):.2f})"
 
-    commit = subprocess.run(["git", "describe", "--always", "--dirty"], capture_output=True, text=True,
-                            cwd=ROOT).stdout.strip()
+    from twin.provenance import git_commit
+
+    commit = git_commit()
     print(f"commit {commit}; B+C scene (test 12, 750 rpm), {args.duration:g} s simulated, {args.rounds} interleaved "
           f"rounds, {os.cpu_count()} CPUs, 1-min load average {load0:.1f} at the start, "
           f"{os.getloadavg()[0]:.1f} at the end (other work on the machine counts in it)")

@@ -276,8 +276,9 @@ def main() -> None:
     finally:
         shims.remove()
         shims.clock = mujoco_clock  # leave the process as it was
-    commit = subprocess.run(["git", "describe", "--always", "--dirty"], capture_output=True, text=True,
-                            cwd=Path(__file__).resolve().parent).stdout.strip()
+    from twin.provenance import git_commit
+
+    commit = git_commit()
     print(f"MuJoCo {mujoco.__version__}, h = 1e-5 s, {args.steps} steps, best of {args.repeats} (interleaved), "
           f"commit {commit or '?'}, accelerometers {args.accelerometers}")
     print()

@@ -98,8 +98,9 @@ def cpu_model() -> str:
 
 
 def commit() -> str:
-    return subprocess.run(["git", "describe", "--always", "--dirty"], capture_output=True, text=True,
-                          cwd=ROOT).stdout.strip() or "unknown"
+    from twin.provenance import git_commit
+
+    return git_commit()
 
 
 def per_step(steps: int, repeats: int) -> dict[str, float]:

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import subprocess
 from pathlib import Path
 
 from twin.provenance import stamped, with_stamp_line
@@ -64,8 +63,9 @@ def main() -> None:
     for t in (int(x) for x in args.tests.split(",")):
         results[t] = agreement(t, args.duration, args.skip, overrides)
         print(f"  test {t} done", flush=True)
-    commit = subprocess.run(["git", "describe", "--always", "--dirty"], capture_output=True, text=True,
-                            cwd=Path(__file__).resolve().parent).stdout.strip()
+    from twin.provenance import git_commit
+
+    commit = git_commit()
     head = (f"twin {twin.__version__}, MuJoCo {mujoco.__version__}, commit {commit or '?'}; structure.mode = flexible "
             f"(default [structure]){', ' + ', '.join(f'{k} = {v}' for k, v in overrides.items()) if overrides else ''}; "
             f"{args.duration:g} s from rest, bands over t >= {args.skip:g} s; 10 log10(E_mujoco / E_reference) per "

@@ -16,7 +16,6 @@ Run: ``python analysis/structure_closure.py [--duration 0.6] [--skip 0.2]``.
 from __future__ import annotations
 
 import argparse
-import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -101,8 +100,9 @@ def main() -> None:
         lvl = f"{10 * np.log10(em[-1] / em.max()):.1f} / {10 * np.log10(er[-1] / er.max()):.1f}"
         lines.append(f"| {label} | " + " | ".join(cells(m, r)) + f" | {lvl} |")
         print(lines[-1], flush=True)
-    commit = subprocess.run(["git", "describe", "--always", "--dirty"], capture_output=True, text=True,
-                            cwd=Path(__file__).resolve().parent).stdout.strip()
+    from twin.provenance import git_commit
+
+    commit = git_commit()
     head = (f"twin {twin.__version__}, MuJoCo {mujoco.__version__}, commit {commit or '?'}; Table 4 test 3 (ideal "
             f"joints), structure.mode = flexible (default [structure]); {args.duration:g} s from rest, bands over "
             f"t >= {args.skip:g} s; 10 log10(E_mujoco / E_reference) per third-octave band (100 Hz - 10 kHz).")

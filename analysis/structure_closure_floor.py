@@ -36,7 +36,6 @@ from __future__ import annotations
 import argparse
 import contextlib
 import dataclasses
-import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -288,8 +287,9 @@ def main() -> None:
     for (t, th, w, f), (_, _, _, g) in zip(built, wrapped):
         out(f"| {t:.2f} | {th:.1f} | {w:.1f} | {f:.1e} | {g:.1e} |")
 
-    commit = subprocess.run(["git", "describe", "--always", "--dirty"], capture_output=True, text=True,
-                            cwd=Path(__file__).resolve().parent).stdout.strip()
+    from twin.provenance import git_commit
+
+    commit = git_commit()
     head = (f"twin {twin.__version__}, MuJoCo {mujoco.__version__}, commit {commit or '?'}; Table 4 test 3 (ideal "
             f"joints), structure.mode = flexible (default [structure]); {DUR:g} s from rest, bands over t >= {SKIP:g} "
             f"s; dB = 10 log10(E_mujoco / E_reference) unless said.")

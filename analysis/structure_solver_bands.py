@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -69,8 +68,9 @@ def main() -> None:
                  ("PGS", "reference"), ("Newton", "reference")]
         rows.append((test, [worst(x, y) for x, y in pairs]))
         print(f"  test {test} done", flush=True)
-    commit = subprocess.run(["git", "describe", "--always", "--dirty"], capture_output=True, text=True,
-                            cwd=Path(__file__).resolve().parent).stdout.strip()
+    from twin.provenance import git_commit
+
+    commit = git_commit()
     lines = [f"twin {twin.__version__}, MuJoCo {mujoco.__version__}, commit {commit or '?'}; structure.mode = flexible, "
              f"default step; {a.duration:g} s from rest, bands over t >= {a.skip:g} s (full speed); largest "
              f"|10 log10(E_x / E_y)| over AC1-AC6 and the third-octave bands 100 Hz - 10 kHz (sensor); perturbed = "
