@@ -26,8 +26,7 @@ import argparse
 import time
 from pathlib import Path
 
-from twin.provenance import with_stamp_line
-from twin.util import atomic_write_text
+from twin.provenance import git_commit, write_stamped_text
 
 VARIANTS = {  # label: (engine, extra overrides)
     "mujoco (contact law rows)": ("mujoco", {}),
@@ -85,8 +84,6 @@ def main() -> None:
                     best_cpu[key] = min(best_cpu.get(key, float("inf")), cpu)
                     steps[key] = meta["steps"]
         print(f"  round {r + 1}/{args.rounds} done", flush=True)
-    from twin.provenance import git_commit
-
     commit = git_commit()
     import twin
 
@@ -112,9 +109,7 @@ def main() -> None:
     lines += ["", "Target (test 12): flexible / rigid <= 1.5 in each engine."]
     text = "\n".join(lines) + "\n"
     print(text)
-    out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(out, with_stamp_line(text))
+    out = write_stamped_text(args.out, text)
     print(f"wrote {out}")
 
 

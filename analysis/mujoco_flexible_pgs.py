@@ -94,12 +94,9 @@ def main() -> None:
                          f"{r['pen_max']:.2e} / {r['pen_mean_in_contact']:.2e} ({r['contact_steps']}) | "
                          f"{r['warnings'] or 'none'} |")
 
-    from twin.provenance import with_stamp_line
-    from twin.util import atomic_write_text
+    from twin.provenance import write_stamped_text
 
-    out = Path(a.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(out, with_stamp_line("\n".join(lines) + "\n"))
+    out = write_stamped_text(a.out, "\n".join(lines) + "\n")
     print(f"wrote {out}")
 
 

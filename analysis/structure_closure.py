@@ -20,8 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from twin.provenance import with_stamp_line
-from twin.util import atomic_write_text
+from twin.provenance import git_commit, write_stamped_text
 
 FINE = 1.25e-6
 #: (label, MuJoCo step [s], MuJoCo overrides, reference step [s], overrides of both)
@@ -100,16 +99,12 @@ def main() -> None:
         lvl = f"{10 * np.log10(em[-1] / em.max()):.1f} / {10 * np.log10(er[-1] / er.max()):.1f}"
         lines.append(f"| {label} | " + " | ".join(cells(m, r)) + f" | {lvl} |")
         print(lines[-1], flush=True)
-    from twin.provenance import git_commit
-
     commit = git_commit()
     head = (f"twin {twin.__version__}, MuJoCo {mujoco.__version__}, commit {commit or '?'}; Table 4 test 3 (ideal "
             f"joints), structure.mode = flexible (default [structure]); {args.duration:g} s from rest, bands over "
             f"t >= {args.skip:g} s; 10 log10(E_mujoco / E_reference) per third-octave band (100 Hz - 10 kHz).")
     text = "\n".join([head, ""] + lines) + "\n"
-    out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(out, with_stamp_line(text))
+    out = write_stamped_text(args.out, text)
     print(f"wrote {out}")
 
 

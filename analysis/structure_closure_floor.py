@@ -40,8 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
-from twin.provenance import with_stamp_line
-from twin.util import atomic_write_text
+from twin.provenance import git_commit, write_stamped_text
 
 DUR, SKIP = 0.6, 0.2
 
@@ -287,16 +286,12 @@ def main() -> None:
     for (t, th, w, f), (_, _, _, g) in zip(built, wrapped):
         out(f"| {t:.2f} | {th:.1f} | {w:.1f} | {f:.1e} | {g:.1e} |")
 
-    from twin.provenance import git_commit
-
     commit = git_commit()
     head = (f"twin {twin.__version__}, MuJoCo {mujoco.__version__}, commit {commit or '?'}; Table 4 test 3 (ideal "
             f"joints), structure.mode = flexible (default [structure]); {DUR:g} s from rest, bands over t >= {SKIP:g} "
             f"s; dB = 10 log10(E_mujoco / E_reference) unless said.")
     text = "\n".join([head, ""] + L) + "\n"
-    p = Path(args.out)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(p, with_stamp_line(text))
+    p = write_stamped_text(args.out, text)
     print(f"wrote {p}")
 
 

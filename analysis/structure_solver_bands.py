@@ -37,7 +37,7 @@ def main() -> None:
 
     import twin
     from twin.config import preset
-    from twin.provenance import with_stamp_line
+    from twin.provenance import git_commit, write_stamped_text
     from twin.structure.bands import band_difference_db
     from twin.provenance import stamped
     from twin.util import atomic_write_text
@@ -68,8 +68,6 @@ def main() -> None:
                  ("PGS", "reference"), ("Newton", "reference")]
         rows.append((test, [worst(x, y) for x, y in pairs]))
         print(f"  test {test} done", flush=True)
-    from twin.provenance import git_commit
-
     commit = git_commit()
     lines = [f"twin {twin.__version__}, MuJoCo {mujoco.__version__}, commit {commit or '?'}; structure.mode = flexible, "
              f"default step; {a.duration:g} s from rest, bands over t >= {a.skip:g} s (full speed); largest "
@@ -81,9 +79,7 @@ def main() -> None:
         lines.append(f"| {test} | " + " | ".join(f"{v:.2f} ({s})" for v, s in cells) + " |")
     text = "\n".join(lines) + "\n"
     print(text)
-    out = Path(a.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(out, with_stamp_line(text))
+    out = write_stamped_text(a.out, text)
     atomic_write_text(out.with_suffix(".json"), json.dumps(stamped({"bands": raw})))
     print(f"wrote {out}")
 

@@ -31,7 +31,7 @@ def main() -> None:
     import mujoco
 
     import twin
-    from twin.provenance import with_stamp_line
+    from twin.provenance import write_stamped_text
     from twin.errors import SimulationError
     from twin.simulation import simulate_run
     from twin.studies.stability import PEN_LIMIT, sample_scene, scene_config, scene_inputs, scene_metrics
@@ -80,9 +80,7 @@ def main() -> None:
               f"whose pen/c criterion differs: {flips or 'none'}."]
     text = "\n".join(lines) + "\n"
     print(text)
-    out = Path(a.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(out, with_stamp_line(text))
+    out = write_stamped_text(a.out, text)
     atomic_write_text(out.with_suffix(".json"), json.dumps(stamped({"scenes": rows}), default=str))
     print(f"wrote {out}")
 

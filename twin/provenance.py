@@ -83,3 +83,13 @@ def figure_metadata() -> dict[str, str]:
 def with_stamp_line(text: str) -> str:
     """``text`` (Markdown) ending with :func:`stamp_line` after a blank line."""
     return text.rstrip("\n") + "\n\n" + stamp_line() + "\n"
+
+
+def write_stamped_text(path: str | Path, text: str) -> Path:
+    """Write a Markdown or text results file: ``text`` with :func:`stamp_line` at its end, the parent folders made,
+    atomically (temporary file, then rename); returns the path."""
+    from twin.util import atomic_write_text
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    return atomic_write_text(path, with_stamp_line(text))
