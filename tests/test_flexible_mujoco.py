@@ -242,8 +242,12 @@ def _worst_band_db(test: int, overrides: dict) -> tuple[float, dict]:
     import sys
     from pathlib import Path
 
+    saved = list(sys.path)  # restored below: analysis/datasets would shadow Hugging Face's datasets
     sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "analysis"))
-    from structure_agreement import agreement
+    try:
+        from structure_agreement import agreement
+    finally:
+        sys.path[:] = saved
 
     per = agreement(test, 0.6, 0.2, overrides)
     worst = {k: round(max(abs(x) for x in v), 2) for k, v in per.items()}
