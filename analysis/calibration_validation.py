@@ -418,6 +418,17 @@ def run(work: Path, deadline_utc: str | None) -> None:
     print(json.dumps(summary(results), indent=1))
 
 
+def select_set(name: str) -> None:
+    """Make set ``name`` ("1", "2", "3") the module's current set (its folder, seed, cases, budget)."""
+    global HERE, SEED, CASES, TRACE_CASES, DURATION_S, REPEAT_SEEDS
+    st = {"2": SET2, "3": SET3}.get(name)
+    if st is not None:
+        HERE, SEED, CASES, TRACE_CASES = st["here"], st["seed"], st["cases"], st["trace_cases"]
+        DURATION_S, REPEAT_SEEDS = st["duration_s"], st["repeat_seeds"]
+        BUDGET.clear()
+        BUDGET.update(st["budget"])
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("step", choices=("make", "run", "reassess", "reverdict"))
@@ -434,13 +445,8 @@ def main() -> None:
                          "given by --cases, a small budget")
     ap.add_argument("--cases", default=None, help="with --smoke: the cases to make and run (comma-separated)")
     a = ap.parse_args()
-    global HERE, SEED, CASES, TRACE_CASES, DURATION_S, REPEAT_SEEDS
-    if a.set in ("2", "3"):
-        st = SET2 if a.set == "2" else SET3
-        HERE, SEED, CASES, TRACE_CASES = st["here"], st["seed"], st["cases"], st["trace_cases"]
-        DURATION_S, REPEAT_SEEDS = st["duration_s"], st["repeat_seeds"]
-        BUDGET.clear()
-        BUDGET.update(st["budget"])
+    select_set(a.set)
+    global HERE, SEED, CASES, TRACE_CASES
     if a.smoke is not None:
         HERE, SEED = a.smoke, 99
         if a.cases:

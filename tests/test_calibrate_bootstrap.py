@@ -72,6 +72,12 @@ def test_roughness_flags_jumps_not_a_smooth_parabola():
     far = np.concatenate([[-0.45, -0.4, -0.35], du])
     r = roughness(0.5, far, np.concatenate([[4000.0, 6000.0, 2000.0], smooth]), 1.0)
     assert not r.rough and r.max_drop == 0.0
+    # a peak far above the level between the minimum and a point within it splits the low set: a jump
+    # (the third validation set's mu_c: J 3.1e4 at the minimum, 4.9e5 next, 6.6e4 after it, ΔJ 5.2e3)
+    split = smooth.copy()
+    split[6] = 500.0  # du = +0.03: 1.25 below the level... raised 500 ΔJ above the minimum
+    r = roughness(0.5, du, split, 1.0)
+    assert r.rough and abs(r.max_drop - (500.0 - 4.0)) < 1e-9  # falls to du = +0.1 (J = 4, within 10 ΔJ)
 
 
 def test_residual_block_bootstrap_keeps_blocks_and_scatter():

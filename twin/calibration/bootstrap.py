@@ -35,8 +35,10 @@ the objective is not the surrogate: the disagreement is part of the uncertainty)
 
 **Roughness** (:func:`roughness`): where the impacts are chaotic, neighbouring parameter values give
 another impact sequence: the objective jumps deterministically between profile points. A smooth
-objective rises monotonically away from its minimum; moving outward from the slice's minimum, over the
-points within :data:`ROUGH_LEVEL` ΔJ of it, the largest fall below the running maximum is the jitter. ROUGH (not identifiable, like FLAT) when it
+objective rises monotonically away from its minimum; moving outward from the slice's minimum, the
+largest fall below the running maximum onto a point within :data:`ROUGH_LEVEL` ΔJ of it is the jitter
+(the running maximum takes every point passed: a peak above the level between two points within it
+counts). ROUGH (not identifiable, like FLAT) when it
 exceeds the rise ΔJ that bounds an interval: the located minimum is then set by the jumps, not by the
 recordings' information. A ROUGH parameter's interval is widened to where the objective stays within
 ΔJ + the jitter of its minimum along the profile (the fitted number means nothing; the report says so).
@@ -290,8 +292,9 @@ class Roughness:
 def roughness(u0: float, du: np.ndarray, j: np.ndarray, delta_j: float) -> Roughness:
     """Roughness along a slice (offsets ``du`` from ``u0``, objective ``j``): a smooth objective rises
     monotonically away from its minimum; moving outward from the slice's minimum on each side, the
-    largest fall below the running maximum (over the points within :data:`ROUGH_LEVEL` ``delta_j`` of the
-    minimum) is the jitter. ROUGH when it exceeds ``delta_j``. The jitter
+    largest fall below the running maximum onto a point within :data:`ROUGH_LEVEL` ``delta_j`` of the
+    minimum is the jitter (the running maximum takes every point passed, those above the level included:
+    a peak between two low points splits the low set). ROUGH when it exceeds ``delta_j``. The jitter
     interval: where J stays within ``delta_j`` + that fall of the minimum (linear interpolation; a side
     that never rises so far reaches the range's end)."""
     from twin.calibration.uncertainty import slice_interval
@@ -304,15 +307,17 @@ def roughness(u0: float, du: np.ndarray, j: np.ndarray, delta_j: float) -> Rough
     order = np.argsort(du)
     du, j = du[order], j[order]
     k0 = int(np.argmin(j))
-    near = j <= j[k0] + ROUGH_LEVEL * delta_j  # only where the objective is within ROUGH_LEVEL ΔJ of its minimum
+    near = j <= j[k0] + ROUGH_LEVEL * delta_j  # only falls *to* where the objective is within ROUGH_LEVEL ΔJ of its minimum
     drop = 0.0
     for idx in (range(k0, du.size), range(k0, -1, -1)):
         run = -math.inf
         for k in idx:
-            if not near[k]:
-                continue
+            # the running maximum takes every point on the way out (a peak above the level between two
+            # points within it is a jump: the sub-level set is split), the falls only count where they land
+            # within the level (a second basin far up the slope is not roughness)
             run = max(run, j[k])
-            drop = max(drop, run - j[k])
+            if near[k]:
+                drop = max(drop, run - j[k])
     lo, hi, _flat = slice_interval(u0 + du[k0], du - du[k0], j, delta_j + drop)
     return Roughness(float(drop), int(du.size), bool(drop > delta_j), lo, hi)
 

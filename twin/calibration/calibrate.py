@@ -58,6 +58,9 @@ class CalibrationOptions:
             "hull" (the hull of it and the ΔJ interval) or "dj" (the ΔJ interval with the noise replicates').
         plots: write the PNG figures.
         progress: progress bars on standard error.
+        restarts: when the full-length best still misses the recordings (misfit per term J*/n above
+            :data:`MISFIT_WARN`), local searches again from up to this many of the global stage's next-best
+            points away from the basin already searched (half the local budgets each); 0 = none.
     """
 
     n_global: int = 16
@@ -76,11 +79,12 @@ class CalibrationOptions:
     interval: str = "bootstrap"
     plots: bool = True
     progress: bool = False
+    restarts: int = 2
 
     def __post_init__(self) -> None:
         for name, lo, hi in (("n_global", 0, 4096), ("local_short", 0, 10_000), ("local_full", 0, 10_000),
                              ("workers", 1, 1024), ("seed", 0, 2 ** 31 - 1), ("replicates", 0, 64),
-                             ("boot_replicates", 0, 100_000)):
+                             ("boot_replicates", 0, 100_000), ("restarts", 0, 64)):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
                 raise ConfigError(name, f"must be an integer in [{lo}, {hi}], got {v!r}")
@@ -325,6 +329,10 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
             u_centre = min(seen.values(), key=lambda c: c[1])[0].copy()
             profile(u_centre)
             seen = full_points()
+        restarted = []
+        if options.restarts:
+            u_centre, seen, restarted = _restart_on_misfit(ev, options, cand, [u_g], u_centre, seen, profile,
+                                                           full_points)
         fulls = list(seen.values())
         reps = None
         if options.replicates:
@@ -342,6 +350,7 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
         unc = uncertainty.analyse(P, u_best, fulls, options.delta_j * inflation, centre=u_centre,
                                   replicates=reps)
         unc["inflation"] = inflation
+        unc["restarts"] = restarted
         unc["profile_centre_is_best"] = bool(np.array_equal(u_centre, u_best))
         # the block bootstrap at the profile centre (one more simulation per recording; not logged)
         from twin.calibration import bootstrap as bs
@@ -387,6 +396,10 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
         warnings.append("a profile point was better than the point the profiles were taken around: the fitted "
                         "values are that point's, the slices are around the earlier one; more local evaluations "
                         "(local_full) would settle it")
+    for r in unc.get("restarts", []):
+        warnings.append(f"the search restarted from u = {', '.join(f'{x:.3g}' for x in r['start_u'])} (misfit per term "
+                        f"{r['misfit_before']:.3g} above {MISFIT_WARN:g}): "
+                        + ("a better point found" if r["improved"] else "no better point found"))
     if unc["inflation"] > MISFIT_WARN:
         warnings.append(f"the best point misses the recordings by {math.sqrt(unc['inflation']):.3g} scatters per term "
                         f"(J*/n = {unc['inflation']:.3g}): the search did not reach the recordings' scatter — a local "
@@ -427,6 +440,52 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
                              ev.resumed, times, report["wall_s"], out_dir, report)
 
 
+#: a restart's start lies at least this far (normalized, largest coordinate) from the starts already searched
+RESTART_SEPARATION = 0.1
+
+
+def _misfit(ev, u: np.ndarray, j: float) -> float:
+    """The misfit per term J*/n of the full-length point ``u`` (objective ``j``)."""
+    from twin.calibration import search
+
+    return float(j) / max(1, sum(len(t) for t in ev.cache[search._key("full", u)]["terms"]))
+
+
+def _restart_on_misfit(ev, options: CalibrationOptions, cand, starts, u_centre, seen, profile, full_points):
+    """Restarts (``CalibrationOptions.restarts``): while the full-length best misses the recordings by more
+    than :data:`MISFIT_WARN` per term, a short-window then a full-length Nelder–Mead (half the local
+    budgets) from the next-best global point at least :data:`RESTART_SEPARATION` from every start so far;
+    a better full-length point found becomes the centre of new profiles. Returns the profile centre, the
+    full-length points and what each restart did (for the report)."""
+    from twin.calibration import search
+
+    done = []
+    ranked = sorted(cand, key=lambda c: c[0])
+    used = [np.asarray(u) for u in starts]
+    for _ in range(options.restarts):
+        u_best, j_best = min(seen.values(), key=lambda c: c[1])
+        misfit = _misfit(ev, u_best, j_best)
+        if misfit <= MISFIT_WARN:
+            break
+        nxt = next(((j, u) for j, u in ranked
+                    if all(np.max(np.abs(np.asarray(u) - v)) >= RESTART_SEPARATION for v in used)), None)
+        if nxt is None:
+            break
+        used.append(np.asarray(nxt[1]))
+        u_s = search.nelder_mead(ev, "short", np.asarray(nxt[1]), max(2, options.local_short // 2), 0.1)
+        u_f = search.nelder_mead(ev, "full", u_s, max(2, options.local_full // 2), 0.05)
+        seen = full_points()
+        u_new, j_new = min(seen.values(), key=lambda c: c[1])
+        improved = bool(j_new < j_best)
+        done.append({"start_u": [float(x) for x in nxt[1]], "misfit_before": misfit, "end_u": [float(x) for x in u_f],
+                     "improved": improved, "misfit_after": _misfit(ev, u_new, j_new)})
+        if improved:
+            u_centre = u_new.copy()
+            profile(u_centre)
+            seen = full_points()
+    return u_centre, seen, done
+
+
 def _fitted(p, iv, x0: float, bt: dict[str, Any] | None, how: str) -> FittedParameter:
     """The reported interval of one parameter from the ΔJ/noise interval ``iv`` and the bootstrap's ``bt``
     (``how``: "bootstrap" — the bootstrap with the jitter; "hull" — the hull of both; "dj" — the first version's)."""
@@ -437,6 +496,11 @@ def _fitted(p, iv, x0: float, bt: dict[str, Any] | None, how: str) -> FittedPara
         b_lo, b_hi, rough = bt["boot_lo"], bt["boot_hi"], bool(bt["rough"])
         if how == "bootstrap":
             lo, hi, method = min(bt["lo"], iv.value), max(bt["hi"], iv.value), "bootstrap+jitter"
+            if not rough and (iv.lo < lo or iv.hi > hi):
+                # never narrower than where the objective rises by ΔJ (what it tells: a weakly told field,
+                # e.g. restitution, gets a bootstrap far narrower than its profile allows;
+                # analysis/restitution_length.py measures that rise)
+                lo, hi, method = min(lo, iv.lo), max(hi, iv.hi), "bootstrap+jitter+dj"
         elif how == "hull":
             lo, hi, method = min(lo, bt["lo"]), max(hi, bt["hi"]), f"{method}+bootstrap"
     return FittedParameter(p.field, iv.value, lo, hi, x0, (p.lo, p.hi), method, iv.flat, iv.on_bound, iv.noise_lo,

@@ -102,8 +102,8 @@ def render_markdown(r: dict[str, Any]) -> str:
         lines.append(f"| {p['field']} | {_fmt(p['base'])} | {_fmt(p['value'])} | {_fmt(p['lo'])} – {_fmt(p['hi'])} | "
                      f"{p['method']} | {p['bounds'][0]:g} – {p['bounds'][1]:g} | {'; '.join(notes)} |")
     nrep = r["uncertainty"].get("noise_replicates", 0)
-    boot_used = any(p["method"] == "bootstrap+jitter" for p in r["parameters"])
-    lines += ["", ("Intervals: the block bootstrap's (method bootstrap+jitter, below); the ΔJ interval beside it: "
+    boot_used = any(p["method"].startswith("bootstrap+jitter") for p in r["parameters"])
+    lines += ["", ("Intervals: the block bootstrap's (method bootstrap+jitter, below; +dj: widened to the ΔJ interval where that is wider); the ΔJ interval beside it: "
                    if boot_used else "Intervals: ")
               + f"where the objective stays within ΔJ = {o['delta_j_used']:.3g} of its minimum "
               f"({o['delta_j']:g} × max(1, misfit per term J*/n)); {r['uncertainty']['note']}"
