@@ -283,9 +283,14 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
         n_prof = 2 * len(options.profile_steps) * len(P)
         est = search.estimate_wall_s(t_short, t_full, options.local_short, options.local_full, options.workers,
                                      options.n_global, n_prof)
+        # each restart (only when the fit misses the recordings): half the local budgets and new profiles
+        est_restart = options.restarts * search.estimate_wall_s(t_short, t_full, options.local_short // 2,
+                                                                options.local_full // 2, options.workers, 0, n_prof)
         say(f"one evaluation takes {t_short:.2f} s (short windows) and {t_full:.2f} s (full length) for "
             f"{len(recs)} recording(s); about {options.n_global + options.local_short + options.local_full + n_prof} "
             f"evaluations: about {est / 60:.1f} min on {options.workers} worker(s)"
+            + (f", up to {(est + est_restart) / 60:.1f} min if the fit misses the recordings ({options.restarts} "
+               "restart(s))" if options.restarts else "")
             + (" (logged ones are not simulated again)" if ev.resumed else ""))
         # 1. global stage, short windows
         pts = search.sobol_points(len(P), options.n_global, options.seed)
@@ -423,7 +428,7 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
         "warnings": warnings,
         "evaluations": {"total": len(ev.cache), "simulated_now": ev.simulated, "resumed": ev.resumed,
                         "failed": failed, "seconds_per_evaluation": times,
-                        "estimate_s": est},
+                        "estimate_s": est, "estimate_with_restarts_s": est + est_restart},
         "options": {k: (list(v) if isinstance(v, tuple) else v) for k, v in options.__dict__.items()},
         "base_config": "given (config)" if config is not None else "each recording's own",
     }
