@@ -407,6 +407,17 @@ def fmt(v: float) -> str:
     return f"{v:.4g}" if v is not None and math.isfinite(v) else "—"
 
 
+def _error_and_verdict(p: dict) -> tuple[str, str]:
+    """A fitted value's error against its truth (relative or absolute, as its target) and verdict cell."""
+    kind, _tol = TARGETS[p["field"]]
+    err = f"{100 * p['error']:+.1f} %" if kind == "rel" else f"{p['error']:+.3f}"
+    v = (("FLAT" if p["flat"] else "") + (" ROUGH" if p.get("rough") else "")
+         + (f" on {p['on_bound']} bound" if p["on_bound"] else ""))
+    if p["outside_range"]:
+        v += " (truth outside range)"
+    return err, v
+
+
 def table(results: list[dict]) -> str:
     if SET_NAME == "4":
         return table4(results)
@@ -417,19 +428,13 @@ def table(results: list[dict]) -> str:
             lines.append(f"| {r['case']} | | {r['drive']} | FAILED: {r['error']} | | | | | | miss | | | | {r['wall_s']:.0f} |")
             continue
         for p in r["params"]:
-            kind, _tol = TARGETS[p["field"]]
-            err = f"{100 * p['error']:+.1f} %" if kind == "rel" else f"{p['error']:+.3f}"
-            v = (("FLAT" if p["flat"] else "") + (" ROUGH" if p.get("rough") else "")
-                 + (f" on {p['on_bound']} bound" if p["on_bound"] else ""))
-            if p["outside_range"]:
-                v += " (truth outside range)"
+            err, v = _error_and_verdict(p)
             lines.append(f"| {r['case']} | {r['engine']} | {r['drive']} | {p['field']} | {fmt(p['truth'])} | "
                          f"{fmt(p['value'])} | {err} | {fmt(p['lo'])} – {fmt(p['hi'])} | {v.strip() or 'fit'} | "
                          f"{'hit' if p['hit'] else 'MISS'} | {'yes' if p['covered'] else 'NO'} | "
                          f"{'yes' if r['replay_within_10pct'] else 'NO'} | "
                          f"{'—' if 'bands_within_10pct' not in r else 'yes' if r['bands_within_10pct'] else 'NO'} | "
-                         + (f"{'yes' if r['replay_within_floor'] else 'NO'} | " if "replay_within_floor" in r else "")
-                         + f"{r['wall_s']:.0f} |")
+                         f"{r['wall_s']:.0f} |")
     return "\n".join(lines) + "\n"
 
 
@@ -444,12 +449,7 @@ def table4(results: list[dict]) -> str:
                          f"{r['wall_s']:.0f} |")
             continue
         for p in r["params"]:
-            kind, _tol = TARGETS[p["field"]]
-            err = f"{100 * p['error']:+.1f} %" if kind == "rel" else f"{p['error']:+.3f}"
-            v = (("FLAT" if p["flat"] else "") + (" ROUGH" if p.get("rough") else "")
-                 + (f" on {p['on_bound']} bound" if p["on_bound"] else ""))
-            if p["outside_range"]:
-                v += " (truth outside range)"
+            err, v = _error_and_verdict(p)
             yn = {True: "yes", False: "NO", None: "—"}
             lines.append(f"| {r['case']} | {r['engine']} | {r['drive']} | {p['field']} | {fmt(p['truth'])} | "
                          f"{fmt(p['value'])} | {err} | {fmt(p['lo'])} – {fmt(p['hi'])} | {v.strip() or 'fit'} | "

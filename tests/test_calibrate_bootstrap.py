@@ -75,7 +75,7 @@ def test_roughness_flags_jumps_not_a_smooth_parabola():
     # a peak far above the level between the minimum and a point within it splits the low set: a jump
     # (the third validation set's mu_c: J 3.1e4 at the minimum, 4.9e5 next, 6.6e4 after it, ΔJ 5.2e3)
     split = smooth.copy()
-    split[6] = 500.0  # du = +0.03: 1.25 below the level... raised 500 ΔJ above the minimum
+    split[6] = 500.0  # du = +0.03 raised far above the 10 ΔJ level
     r = roughness(0.5, du, split, 1.0)
     assert r.rough and abs(r.max_drop - (500.0 - 4.0)) < 1e-9  # falls to du = +0.1 (J = 4, within 10 ΔJ)
 
