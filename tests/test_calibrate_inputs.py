@@ -70,3 +70,16 @@ def test_the_replay_configuration_of_other_valid_drive_settings_builds(overrides
     target = SimpleNamespace(drive="trace", n_sim=1000, rate=100000.0, zero_g={}, motor=False)
     cfg = sim_config(target, preset(12).replace(**overrides))
     assert cfg.drive.program == "trace" and cfg.drive.crank_rpm == 0.0 and cfg.drive.mode == "pid"
+
+
+def test_restarts_flag_reaches_the_options_and_a_bad_value_names_it(tmp_path, capsys):
+    """``--restarts`` is the options' ``restarts``: a negative count is refused in one line naming the flag,
+    before any recording is read or anything written."""
+    from twin.cli import main
+
+    out = tmp_path / "out"
+    rc = main(["calibrate", str(tmp_path / "missing.mcap"), "--params", "contact.mu0", "--restarts", "-1",
+               "--out", str(out), "--no-plots", "--no-progress"])
+    err = capsys.readouterr().err.strip()
+    assert rc != 0 and "--restarts" in err and len(err.splitlines()) == 1, err
+    assert not out.exists()

@@ -49,6 +49,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "(default 4; 0: the objective-rise rule alone)")
     p.add_argument("--boot-replicates", type=int, default=400, metavar="B",
                    help="replicates of the block bootstrap over crank turns at the fitted point (default 400; 0: none)")
+    p.add_argument("--restarts", type=int, default=2, metavar="R",
+                   help="local searches restarted from the next-best global points while the fit misses the "
+                        "recordings (default 2; 0: none)")
     p.add_argument("--interval", choices=("bootstrap", "hull", "dj"), default="bootstrap",
                    help="the reported interval: bootstrap (with the objective's jitter, default), hull (of it and the "
                         "objective-rise interval) or dj (the objective-rise interval with the noise replicates')")
@@ -60,12 +63,13 @@ def register(sub: argparse._SubParsersAction) -> None:
                                            "short_fraction": "--short-fraction", "workers": "--workers",
                                            "seed": "--seed", "log": "--out",
                                            "profile_steps": "--profile-steps",
-                                           "boot_replicates": "--boot-replicates", "interval": "--interval"})
+                                           "boot_replicates": "--boot-replicates", "interval": "--interval",
+                                           "restarts": "--restarts"})
 
 
 #: option fields the library's warnings name, as this command's flags
 _WARNING_FLAGS = {"n_global": "--global-points", "local_full": "--local-full", "local_short": "--local-short",
-                  "boot_replicates": "--boot-replicates"}
+                  "boot_replicates": "--boot-replicates", "restarts": "--restarts"}
 
 
 def run(args: argparse.Namespace) -> int:
@@ -81,7 +85,7 @@ def run(args: argparse.Namespace) -> int:
         raise TwinError(f"expected numbers separated by commas, got {args.profile_steps!r}",
                         field="--profile-steps") from None
     opts = CalibrationOptions(profile_steps=steps, n_global=args.n_global, local_short=args.local_short, local_full=args.local_full,
-                              replicates=args.replicates, boot_replicates=args.boot_replicates,
+                              replicates=args.replicates, boot_replicates=args.boot_replicates, restarts=args.restarts,
                               interval=args.interval,
                               short_fraction=args.short_fraction, drive=args.drive, workers=workers, seed=args.seed,
                               plots=not args.no_plots, progress=not args.no_progress and sys.stderr.isatty())
