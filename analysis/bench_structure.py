@@ -15,9 +15,9 @@ engine (test 12).
 ``section.field`` key is taken as it stands), timed in the same rounds (e.g. the former default chain:
 ``--compare rod_chain='"uniform"' --compare rod_segments=6``; MuJoCo's Newton solver instead of PGS:
 ``--compare mujoco.flexible_solver='"Newton"'``), and a column with its CPU-time ratio to rigid. ``--mujoco-only``
-leaves the reference engine out.
+leaves the reference engine out, ``--reference-only`` the MuJoCo engine.
 
-Run: ``python analysis/bench_structure.py [--duration S] [--rounds R] [--tests 3,6,12] [--compare K=V] [--mujoco-only]``.
+Run: ``python analysis/bench_structure.py [--duration S] [--rounds R] [--tests 3,6,12] [--compare K=V] [--mujoco-only | --reference-only]``.
 """
 
 from __future__ import annotations
@@ -43,6 +43,7 @@ def main() -> None:
     ap.add_argument("--compare", action="append", default=[], metavar="KEY=VALUE",
                     help="[structure] override of a second flexible arm (repeatable)")
     ap.add_argument("--mujoco-only", action="store_true", help="leave the reference engine out")
+    ap.add_argument("--reference-only", action="store_true", help="leave the MuJoCo engine out")
     ap.add_argument("--out", default=str(Path(__file__).resolve().parent / "results" / "structure" / "bench_structure.md"))
     args = ap.parse_args()
 
@@ -55,7 +56,10 @@ def main() -> None:
     from twin.util import toml_loads
 
     tests = [int(t) for t in args.tests.split(",")]
-    variants = {k: v for k, v in VARIANTS.items() if not (args.mujoco_only and v[0] != "mujoco")}
+    if args.mujoco_only and args.reference_only:
+        ap.error("--mujoco-only and --reference-only exclude each other")
+    variants = {k: v for k, v in VARIANTS.items() if not (args.mujoco_only and v[0] != "mujoco")
+                and not (args.reference_only and v[0] != "reference")}
     compare = {(k.strip() if "." in k else f"structure.{k.strip()}"): toml_loads(f"v = {v}")["v"]
                for k, v in (item.split("=", 1) for item in args.compare)}
     modes = {"rigid": {"structure.mode": "rigid"}, "flexible": {"structure.mode": "flexible"}}

@@ -53,10 +53,11 @@ class KKTLayout:
     Attributes (all numpy arrays for the compiled kernels): ``crow`` the constraint rows (0–11 the rigid set's,
     12 + j segment j's length, 12 + N + k slide k's), ``pat``/``pn`` each row's structural columns, ``Minv`` the
     inverse of M̃'s constant blocks (n × n, zero on the crank's rows and columns), ``cols``/``cn`` for each
-    coordinate the coordinates of its block, ``kaug`` the penalty weights of rows 0 and 1."""
+    coordinate the coordinates of its block, ``kaug`` the penalty weights of rows 0 and 1. ``mass``: the constant
+    mass matrix (n × n) where it is not the chain's (the modal rod, no segments or slides)."""
 
     def __init__(self, P: np.ndarray, G: np.ndarray, segs: np.ndarray, seg_f: np.ndarray, slides: np.ndarray,
-                 n: int, prescribed: bool) -> None:
+                 n: int, prescribed: bool, mass: np.ndarray | None = None) -> None:
         indep = {7, 2}
         if P[P_CLR_A] > 0.5 or G[G_FLEX_A] > 0.5:
             indep |= {8, 9}
@@ -107,13 +108,16 @@ class KKTLayout:
         self.pat = np.zeros((len(pats), _MAXNZ), dtype=np.int64)
         for i, p in enumerate(pats):
             self.pat[i, :len(p)] = p
-        # the constant mass matrix, probed
-        M = np.empty((n, n))
-        e = np.zeros(n)
-        for k in range(n):
-            e[:] = 0.0
-            e[k] = 1.0
-            flex_mass_times(P, segs, seg_f, G, e, M[:, k])
+        # the constant mass matrix, probed (or given: the modal rod's, twin.reference.flexible_modal)
+        if mass is not None:
+            M = np.array(mass, dtype=np.float64)
+        else:
+            M = np.empty((n, n))
+            e = np.zeros(n)
+            for k in range(n):
+                e[:] = 0.0
+                e[k] = 1.0
+                flex_mass_times(P, segs, seg_f, G, e, M[:, k])
         crank = set(CRANK.tolist())
         rest = [k for k in range(n) if k not in crank]
         if np.any(M[np.ix_(CRANK, rest)] != 0.0):

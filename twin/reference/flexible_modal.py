@@ -1,0 +1,710 @@
+r"""The reference engine's modal rod (``reference.rod_model = "modal"``): the flexible connecting rod as its chord and
+a few assumed modes with a constant mass matrix, on the same R-matrix / constraint-force machinery as the chain
+(:mod:`twin.reference.flexible`), at a fraction of its cost (``analysis/profile_reference_flexible.py``).
+
+Kinematics: the material point at ξ = x/L of the rod (B' at ξ = 0, C at ξ = 1, the housings' centres as in the
+rigid model and the chain) is
+
+    r(ξ) = B' + ξ (C − B') + Σ_k φ_k(ξ) u_k,     φ_k(ξ) = sin(kπξ),  k = 1 … K (K = 3),
+
+u_k ∈ R² a global 2-vector per shape: coordinates q = [q_0 … q_11 | u_1 … u_K] (n = 12 + 2K). r is linear in q, so
+the bar's kinetic energy ½ ∫ μ |ṙ|² dx (μ its mass per length; the housings are the rigid model's point masses at
+B' and C) is a constant quadratic form, the same in x and in y. Its elastic energy in the rod's frame
+(ê = (C − B')/ℓ, ℓ = |C − B'|, n̂ = R₉₀ ê):
+
+    V = ½ (EA/L) (ℓ − L)² + Σ_k [½ k_a,k s_k² + ½ k_b,k w_k²],   s_k = u_k·ê,  w_k = u_k·n̂,
+    k_a,k = EA ∫φ_k'² dx = EA (kπ/L)² L/2,   k_b,k = EI ∫φ_k''² dx = EI (kπ/L)⁴ L/2:
+
+the chord's stretch and the shapes' axial (s) and bending (w) amplitudes. The sines are the pinned–pinned beam's
+and the fixed–fixed bar's own shapes: bending 1–3 are Euler–Bernoulli's exactly, the first axial mode (B fixed, the
+end mass and the slider at C) within 0.003 % and the free rod's within 0.07 % (``analysis/structure_modal_basis.py``).
+No constraint row is added (the rod's length row 2 is an independent coordinate, its stretch, as in the chain): the
+acceleration solve has the rigid model's rows and the projection is the rigid model's closed form.
+
+Damping: stiffness-proportional as the chain's (β_b = 2ζ_b/ω_b1, β_a = 2ζ_a/ω_a1, the model's own first pinned–pinned
+bending and first axial modes), on the objective rates ṡ_k = u̇_k·ê + w_k (n̂·ḋ)/ℓ, ẇ_k = u̇_k·n̂ − s_k (n̂·ḋ)/ℓ
+and ℓ̇ (d = C − B'): the dampers dissipate Σ c ṡ² + c ẇ² + c_s ℓ̇² ≥ 0 and a rigid rotation of the bent rod none.
+
+The housings turn with the rod's end tangents t_B = r'(0), t_C = r'(1) (ξ-derivatives): a clearance joint's
+friction moment acts there (the force pair of a moment M on t: M R₉₀t/|t|² through ∂t/∂q) and the friction's
+sliding speed takes the tangent's spin. The accelerometers read the material point at their abscissa, offset across
+along the local normal: p̈ = r̈(ξ) + η R₉₀ r̈'(ξ), η = offset/|r'(ξ)|, along the local tangent. Everything else (the
+supports, the contact forces on the eyes, the laws' damping bound and θ-method, the drive train, the sampling) is
+the chain's (:mod:`twin.reference.flexible`).
+
+Scope: the housings' own rotary inertia (``structure.rod_end_inertia_kgm2``) must be 0 (the sines are not the
+pinned–pinned modes with end inertia; the chain takes it).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from twin.jit import njit
+from twin.natural_coordinates import (N_Q, P_CLR_B, P_CLR_C, P_DOFF, P_FGUIDE, P_GX, P_GY, P_H, P_IMAX, P_KI,
+                                      P_KP, P_KV, P_L, P_M1, P_M2, P_M3, P_NEWTON_MAXIT, P_NEWTON_TOL, P_OUT_ENERGY,
+                                      P_R, P_RBUSH_B, P_RBUSH_C, P_V0, P_V1, P_XG1, P_XG2, S_I, S_IN_A, S_IN_B,
+                                      S_IN_C, S_Q, S_QD, S_VIMP_A, S_VIMP_B, S_VIMP_C, energy, kinetic_energy,
+                                      mass_times, residual, solve_aug)
+from twin.reference import drivetrain as DT
+from twin.reference.flexible_kernels import (G_CF, G_CG, G_FLEX_A, G_FLEX_G, G_KF, G_KG, G_MF, G_MG,
+                                             _bound_damping, _independent_values, _slider_sensors, law_terms)
+from twin.reference.flexible_kkt import (kkt_accelerations, kkt_factor, kkt_mobility, kkt_rows,
+                                          kkt_theta_damping)
+from twin.reference.guide import N_GUIDE_OUT
+from twin.reference.model import N_OUT, NEWTON_FAILED, NOT_FINITE, O_ACC, O_EKIN, O_EPOT, OK, _outputs, \
+    _rod_force, generalized_forces
+
+#: shapes of the modal rod (bending 1–3 need three; the first axial mode is the chord's with their axial parts)
+N_SHAPES = 3
+# the rod's scalars ``H``: length L [m], the chord's stiffness EA/L [N/m] and damping [N s/m], the bar's mass [kg]
+H_L, H_KS, H_CS, H_MBAR = 0, 1, 2, 3
+N_H = 4
+# per shape ``MD[k]``: k_b, k_a, c_b, c_a, φ_k(½), φ_k'(0), φ_k'(1), ∫φ_k dξ
+D_KB, D_KA, D_CB, D_CA, D_MID, D_T0, D_T1, D_INT = range(8)
+N_D = 8
+
+
+def shape_tables(K: int):
+    """φ_k(ξ) = sin(kπξ): (at ½, slope at 0, slope at 1, integral over [0, 1]) per shape, and the bar's mass integrals
+    ∫ f_i f_j dξ over f = (1 − ξ, ξ, φ_1 … φ_K) (closed forms)."""
+    tab = np.zeros((K, 4))
+    F = np.zeros((K + 2, K + 2))
+    F[0, 0] = F[1, 1] = 1.0 / 3.0
+    F[0, 1] = F[1, 0] = 1.0 / 6.0
+    for k in range(1, K + 1):
+        kp = k * math.pi
+        tab[k - 1] = [math.sin(kp / 2.0), kp, kp * math.cos(kp), (1.0 - math.cos(kp)) / kp]
+        F[0, 1 + k] = F[1 + k, 0] = 1.0 / kp                  # ∫(1 − ξ) sin kπξ
+        F[1, 1 + k] = F[1 + k, 1] = -math.cos(kp) / kp        # ∫ξ sin kπξ
+        F[1 + k, 1 + k] = 0.5
+    return tab, F
+
+
+def modal_matrices(split, ea: float, ei: float, K: int = N_SHAPES):
+    """(M, Ka, Kb) per direction over [B', C, u_1 … u_K], the rod along x and straight: the bar's consistent mass
+    with the housings' point masses, the axial stiffness (chord and shapes) and the bending stiffness."""
+    L = split.length_m
+    _, F = shape_tables(K)
+    M = split.bar_mass_kg * F
+    M[0, 0] += split.end_b_kg
+    M[1, 1] += split.end_c_kg
+    Ka, Kb = np.zeros((K + 2, K + 2)), np.zeros((K + 2, K + 2))
+    Ka[:2, :2] = ea / L * np.array([[1.0, -1.0], [-1.0, 1.0]])
+    for k in range(1, K + 1):
+        Ka[1 + k, 1 + k] = ea * (k * math.pi / L) ** 2 * L / 2.0
+        Kb[1 + k, 1 + k] = ei * (k * math.pi / L) ** 4 * L / 2.0
+    return M, Ka, Kb
+
+
+def modal_frequencies(split, ea: float, ei: float, slider_kg: float, K: int = N_SHAPES):
+    """The modal rod's linearized frequencies [Hz]: (bending with B' and C held across — pinned–pinned, ascending;
+    axial with B fixed and the slider at C, ascending; the free rod's elastic axial, ascending)."""
+    from scipy.linalg import eigh
+
+    M, Ka, Kb = modal_matrices(split, ea, ei, K)
+    hz = lambda w2: np.sqrt(np.maximum(w2, 0.0)) / (2.0 * math.pi)  # noqa: E731
+    bend = hz(eigh(Kb[2:, 2:], M[2:, 2:], eigvals_only=True))
+    Mm = M.copy()
+    Mm[1, 1] += slider_kg
+    idx = [1] + list(range(2, K + 2))
+    ax = hz(eigh(Ka[np.ix_(idx, idx)], Mm[np.ix_(idx, idx)], eigvals_only=True))
+    free = hz(eigh(Ka, M, eigvals_only=True))[1:]
+    return bend, ax, free
+
+
+class ModalLayout:
+    """The modal rod's tables for one configuration: ``n`` coordinates, ``H`` (H_*), ``MD`` (K × N_D, D_*), the
+    rod's accelerometers ``sens`` (6 × 4: ξ (−1: not on the rod), offset across [m], axis code, unused) with their
+    shapes' values ``sphi`` and slopes ``sdphi`` (6 × K), the supports ``G`` (as the chain's), the per-direction
+    bar mass ``F`` (μL ∫ f_i f_j)."""
+
+    def __init__(self, cfg, split) -> None:
+        from twin.config import ACCELEROMETERS
+        from twin.config.structure import StructureConfig  # noqa: F401  (the fields read below)
+        from twin.reference.flexible import G_MID_SEG, G_MID_XI, N_G
+
+        st = cfg.structure
+        K = N_SHAPES
+        L = split.length_m
+        self.K = K
+        self.n = N_Q + 2 * K
+        tab, F = shape_tables(K)
+        self.F = split.bar_mass_kg * F
+        bend, ax, _ = modal_frequencies(split, st.rod_ea_n, st.rod_ei_nm2, cfg.bodies.slider.mass_kg, K)
+        beta_b = 2.0 * st.bending_damping_ratio / (2.0 * math.pi * bend[0])
+        beta_a = 2.0 * st.axial_damping_ratio / (2.0 * math.pi * ax[0])
+        _, Ka, Kb = modal_matrices(split, st.rod_ea_n, st.rod_ei_nm2, K)
+        self.H = np.array([L, st.rod_ea_n / L, beta_a * st.rod_ea_n / L, split.bar_mass_kg])
+        self.MD = np.zeros((K, N_D))
+        for k in range(K):
+            kb, ka = Kb[2 + k, 2 + k], Ka[2 + k, 2 + k]
+            self.MD[k] = [kb, ka, beta_b * kb, beta_a * ka, tab[k, 0], tab[k, 1], tab[k, 2], tab[k, 3]]
+        axes = {"+x": 0, "-x": 1, "+y": 2, "-y": 3}
+        self.sens = np.full((6, 4), -1.0)
+        self.sphi = np.zeros((6, K))
+        self.sdphi = np.zeros((6, K))
+        for i, name in enumerate(ACCELEROMETERS):
+            mnt = cfg.sensors.accelerometers[name]
+            if mnt.body != "rod":
+                continue
+            sx, sy = mnt.position_m
+            xi = min(max(sx / L, 0.0), 1.0)
+            self.sens[i] = [xi, sy, axes[mnt.axis], 0.0]
+            for k in range(K):
+                kp = (k + 1) * math.pi
+                self.sphi[i, k] = math.sin(kp * xi)
+                self.sdphi[i, k] = kp * math.cos(kp * xi)
+        G = np.zeros(N_G)
+        G[G_MID_SEG], G[G_MID_XI] = -1.0, 0.5
+        G[G_FLEX_A] = G[G_FLEX_G] = 1.0
+        G[G_MF] = st.frame_mass_kg
+        G[G_KF] = st.support_stiffness(st.frame_mass_kg, st.frame_frequency_hz)
+        G[G_CF] = st.support_damping(st.frame_mass_kg, st.frame_frequency_hz, st.frame_damping_ratio)
+        G[G_MG] = st.guide_mass_kg
+        G[G_KG] = st.support_stiffness(st.guide_mass_kg, st.guide_frequency_hz)
+        G[G_CG] = st.support_damping(st.guide_mass_kg, st.guide_frequency_hz, st.guide_damping_ratio)
+        self.G = G
+
+    def mass_matrix(self, P: np.ndarray) -> np.ndarray:
+        """The full constant mass matrix (n × n; θ massless), probed from :func:`modal_mass_times`."""
+        n = self.n
+        M = np.empty((n, n))
+        e = np.zeros(n)
+        for k in range(n):
+            e[:] = 0.0
+            e[k] = 1.0
+            modal_mass_times(P, self.G, self.F, e, M[:, k])
+        return M
+
+
+# --------------------------------------------------------------------------------------------- kernels
+@njit(cache=True)
+def modal_mass_times(P, G, F, v, out):
+    """out = M v: the rigid model's blocks (the rod as its two housings), the supports, the bar's consistent mass
+    over (B', C, u_k) in x and in y."""
+    mass_times(P, v[:N_Q], out[:N_Q])
+    for i in range(N_Q, v.shape[0]):
+        out[i] = 0.0
+    if G[G_FLEX_A] > 0.5:
+        out[8] += G[G_MF] * v[8]
+        out[9] += G[G_MF] * v[9]
+    if G[G_FLEX_G] > 0.5:
+        out[10] += G[G_MG] * v[10]
+    m = F.shape[0]
+    for d in range(2):
+        for i in range(m):
+            ii = 2 + 2 * i + d if i < 2 else N_Q + 2 * (i - 2) + d
+            acc = 0.0
+            for j in range(m):
+                jj = 2 + 2 * j + d if j < 2 else N_Q + 2 * (j - 2) + d
+                acc += F[i, j] * v[jj]
+            out[ii] += acc
+
+
+@njit(cache=True)
+def _tangent(q, qd, MD, end):
+    """The rod's end tangent r'(ξ) (ξ-derivative) at B (``end`` 0) or C (1) and its spin rate t × ṫ / |t|²."""
+    tx, ty = q[4] - q[2], q[5] - q[3]
+    vx, vy = qd[4] - qd[2], qd[5] - qd[3]
+    col = 5 + end
+    for k in range(MD.shape[0]):
+        s = MD[k, col]
+        i = N_Q + 2 * k
+        tx += s * q[i]
+        ty += s * q[i + 1]
+        vx += s * qd[i]
+        vy += s * qd[i + 1]
+    return tx, ty, (tx * vy - ty * vx) / (tx * tx + ty * ty)
+
+
+@njit(cache=True)
+def _end_moment(q, MD, end, m, Q):
+    """A moment m about z on the housing at B (``end`` 0) or C (1), which turns with the end tangent t: the
+    generalized force m R₉₀t/|t|² · ∂t/∂q."""
+    tx, ty, _ = _tangent(q, q, MD, end)
+    f = m / (tx * tx + ty * ty)
+    gx, gy = -ty * f, tx * f
+    Q[4] += gx
+    Q[5] += gy
+    Q[2] -= gx
+    Q[3] -= gy
+    col = 5 + end
+    for k in range(MD.shape[0]):
+        s = MD[k, col]
+        i = N_Q + 2 * k
+        Q[i] += s * gx
+        Q[i + 1] += s * gy
+
+
+@njit(cache=True)
+def _modal_eye_contact(P, qs, q, MD, jo, fn0, ft0, eye, rb, Q):
+    """As :func:`twin.reference.flexible_kernels._eye_contact`: the clearance joint's force on the eye's centre
+    (``eye`` 2: B', 4: C) and its friction moment −R_b f_T on the housing (the end tangent)."""
+    ex, ey = jo[0], jo[1]
+    d = math.sqrt(ex * ex + ey * ey)
+    if d > 0.0:
+        nx, ny = ex / d, ey / d
+    else:
+        nx, ny = 1.0, 0.0
+    fx = -fn0 * nx - ft0 * ny
+    fy = -fn0 * ny + ft0 * nx
+    _rod_force(P, qs, fx, fy, qs[eye] + rb * nx, qs[eye + 1] + rb * ny, Q)   # undoes the element's −F
+    fx = -jo[3] * nx - jo[4] * ny
+    fy = -jo[3] * ny + jo[4] * nx
+    Q[eye] -= fx
+    Q[eye + 1] -= fy
+    _end_moment(q, MD, 0 if eye == 2 else 1, -rb * jo[4], Q)
+
+
+@njit(cache=True)
+def modal_forces(P, q, qd, H, MD, G, Q):
+    """Add the bar's weight, the chord's and the shapes' elastic and damping forces and the supports' to Q; returns
+    the dampers' power [W] (≥ 0)."""
+    gx, gy = P[P_GX], P[P_GY]
+    mbar = H[H_MBAR]
+    for i in (2, 4):   # the bar's weight: half on each end's linear field, ∫φ_k on each shape
+        Q[i] += 0.5 * mbar * gx
+        Q[i + 1] += 0.5 * mbar * gy
+    dx, dy = q[4] - q[2], q[5] - q[3]
+    vx, vy = qd[4] - qd[2], qd[5] - qd[3]
+    ell = math.sqrt(dx * dx + dy * dy)
+    ex, ey = dx / ell, dy / ell
+    nx, ny = -ey, ex
+    dn = (nx * vx + ny * vy) / ell      # the chord's spin
+    rate = ex * vx + ey * vy            # ℓ̇
+    fs = -H[H_KS] * (ell - H[H_L]) - H[H_CS] * rate
+    diss = H[H_CS] * rate * rate
+    fdx, fdy = fs * ex, fs * ey          # on C (−on B')
+    for k in range(MD.shape[0]):
+        i = N_Q + 2 * k
+        ux, uy = q[i], q[i + 1]
+        s = ux * ex + uy * ey
+        w = ux * nx + uy * ny
+        sd = qd[i] * ex + qd[i + 1] * ey + w * dn
+        wd = qd[i] * nx + qd[i + 1] * ny - s * dn
+        fa = -MD[k, D_KA] * s - MD[k, D_CA] * sd
+        fb = -MD[k, D_KB] * w - MD[k, D_CB] * wd
+        diss += MD[k, D_CA] * sd * sd + MD[k, D_CB] * wd * wd
+        Q[i] += fa * ex + fb * nx + MD[k, D_INT] * mbar * gx
+        Q[i + 1] += fa * ey + fb * ny + MD[k, D_INT] * mbar * gy
+        # through ê(d), n̂(d): ∂s/∂d = w n̂/ℓ, ∂w/∂d = −s n̂/ℓ (the rates' gradients the same)
+        c = (fa * w - fb * s) / ell
+        fdx += c * nx
+        fdy += c * ny
+    Q[4] += fdx
+    Q[5] += fdy
+    Q[2] -= fdx
+    Q[3] -= fdy
+    if G[G_FLEX_A] > 0.5:
+        for i in (8, 9):
+            Q[i] += -G[G_KF] * q[i] - G[G_CF] * qd[i]
+            diss += G[G_CF] * qd[i] * qd[i]
+        Q[8] += G[G_MF] * gx
+        Q[9] += G[G_MF] * gy
+    if G[G_FLEX_G] > 0.5:
+        Q[10] += -G[G_KG] * q[10] - G[G_CG] * qd[10] + (P[P_M3] + G[G_MG]) * gy
+        diss += G[G_CG] * qd[10] * qd[10]
+    return diss
+
+
+@njit(cache=True)
+def modal_energy(P, q, qd, H, MD, G, F):
+    """(T, V) [J]: kinetic (all masses) and potential (gravity, the chord and the shapes, the supports)."""
+    n = q.shape[0]
+    mv = np.empty(n)
+    modal_mass_times(P, G, F, qd, mv)
+    T = 0.0
+    for i in range(n):
+        T += 0.5 * qd[i] * mv[i]
+    V = energy(P, q[:N_Q], qd[:N_Q]) - kinetic_energy(P, q[:N_Q], qd[:N_Q])
+    gx, gy = P[P_GX], P[P_GY]
+    mbar = H[H_MBAR]
+    V -= 0.5 * mbar * (gx * (q[2] + q[4]) + gy * (q[3] + q[5]))
+    dx, dy = q[4] - q[2], q[5] - q[3]
+    ell = math.sqrt(dx * dx + dy * dy)
+    ex, ey = dx / ell, dy / ell
+    V += 0.5 * H[H_KS] * (ell - H[H_L]) ** 2
+    for k in range(MD.shape[0]):
+        i = N_Q + 2 * k
+        s = q[i] * ex + q[i + 1] * ey
+        w = -q[i] * ey + q[i + 1] * ex
+        V += 0.5 * MD[k, D_KA] * s * s + 0.5 * MD[k, D_KB] * w * w
+        V -= MD[k, D_INT] * mbar * (gx * q[i] + gy * q[i + 1])
+    if G[G_FLEX_A] > 0.5:
+        V += 0.5 * G[G_KF] * (q[8] * q[8] + q[9] * q[9]) - G[G_MF] * (gx * q[8] + gy * q[9])
+    if G[G_FLEX_G] > 0.5:
+        V += 0.5 * G[G_KG] * q[10] * q[10] - (P[P_M3] + G[G_MG]) * gy * q[10]
+    return T, V
+
+
+@njit(cache=True)
+def modal_project(P, G, q, qd, res, dq, b, z):
+    """Newton on the rigid model's rows (the stretch, the supports and the independent coordinates held; the shapes
+    u_k free), then q̇ ← R ż on the rigid twelve (the shapes' rates kept). Returns the iterations, −1 if no
+    convergence. ``z``: empty int arrays standing for the chain's tables."""
+    tol = P[P_NEWTON_TOL]
+    maxit = int(P[P_NEWTON_MAXIT])
+    it = 0
+    conv = False
+    while it < maxit:
+        s, c = math.sin(q[7]), math.cos(q[7])
+        residual(P, q[:N_Q], s, c, res[:N_Q])
+        res[2] = 0.0
+        if G[G_FLEX_A] > 0.5:
+            res[8] = 0.0
+            res[9] = 0.0
+        if G[G_FLEX_G] > 0.5:
+            res[10] = 0.0
+            if P[P_CLR_C] < 0.5:
+                res[6] = P[P_DOFF] + q[10] - q[5]
+        for i in range(N_Q):
+            res[i] = -res[i]
+        solve_aug(q, s, c, res, dq)
+        big = 0.0
+        for i in range(N_Q):
+            q[i] += dq[i]
+            if abs(dq[i]) > big:
+                big = abs(dq[i])
+        it += 1
+        if big <= tol:
+            conv = True
+            break
+    if not conv:
+        return -1
+    s, c = math.sin(q[7]), math.cos(q[7])
+    _independent_values(P, G, q, qd, z, z, z, b)
+    solve_aug(q, s, c, b, dq)
+    for i in range(N_Q):
+        qd[i] = dq[i]
+    return it
+
+
+@njit(cache=True)
+def _modal_rod_sensors(P, q, qdd, sens, sphi, sdphi, row):
+    """The rod's accelerometers: the material point at ξ, offset across along the local normal, read along the local
+    tangent (or normal)."""
+    gx, gy = P[P_GX], P[P_GY]
+    K = sphi.shape[1]
+    for i in range(6):
+        xi = sens[i, 0]
+        if xi < 0.0:
+            continue
+        ax = (1.0 - xi) * qdd[2] + xi * qdd[4]
+        ay = (1.0 - xi) * qdd[3] + xi * qdd[5]
+        tx, ty = q[4] - q[2], q[5] - q[3]
+        atx, aty = qdd[4] - qdd[2], qdd[5] - qdd[3]
+        for k in range(K):
+            j = N_Q + 2 * k
+            ax += sphi[i, k] * qdd[j]
+            ay += sphi[i, k] * qdd[j + 1]
+            tx += sdphi[i, k] * q[j]
+            ty += sdphi[i, k] * q[j + 1]
+            atx += sdphi[i, k] * qdd[j]
+            aty += sdphi[i, k] * qdd[j + 1]
+        ln = math.sqrt(tx * tx + ty * ty)
+        hx, hy = tx / ln, ty / ln
+        eta = sens[i, 1] / ln
+        ax += -eta * aty - gx
+        ay += eta * atx - gy
+        axis = int(sens[i, 2])
+        v = ax * hx + ay * hy if axis < 2 else -ax * hy + ay * hx
+        if axis == 1 or axis == 3:
+            v = -v
+        row[O_ACC + i] = v
+
+
+@njit(cache=True)
+def _modal_structure_outputs(P, G, q, MD, row):
+    """The "structure" channels (as :func:`twin.reference.flexible._structure_outputs`): the stretch, the mid-span
+    point's distance from the chord Σ φ_k(½) u_k·n̂, the frame's and the guide's displacements [m]."""
+    dx, dy = q[4] - q[2], q[5] - q[3]
+    d = math.sqrt(dx * dx + dy * dy)
+    w = 0.0
+    for k in range(MD.shape[0]):
+        i = N_Q + 2 * k
+        w += MD[k, D_MID] * (-q[i] * dy + q[i + 1] * dx) / d
+    o = N_OUT + 1
+    row[o] = d - P[P_L]
+    row[o + 1] = w
+    row[o + 2] = q[8] if G[G_FLEX_A] > 0.5 else 0.0
+    row[o + 3] = q[9] if G[G_FLEX_A] > 0.5 else 0.0
+    row[o + 4] = q[10] if G[G_FLEX_G] > 0.5 else 0.0
+
+
+@njit(cache=True, nogil=True)
+def run_modal(P, G, H, MD, F, sens, sphi, sdphi, st, x, theta_ref, omega_ref, stride, out, want_out, D, ds,
+              setpoint, dout, alpha_ref, crow, pat, pn, Minv, cols, cn, Mcrank, kaug):
+    """:func:`twin.reference.flexible.run_flexible` for the modal rod: the same drives, contact handling, sampling and
+    returns; the rod's forces, projection, sensors and energy are this module's."""
+    n = (x.shape[0] - 1) // 2
+    h = P[P_H]
+    kp, kv, ki, imax = P[P_KP], P[P_KV], P[P_KI], P[P_IMAX]
+    q = x[:n].copy()
+    qd = x[n:2 * n].copy()
+    diss_total = x[2 * n]
+    integ = st[S_I]
+    cst_a = np.empty(2)
+    cst_b = np.empty(2)
+    cst_c = np.empty(6)
+    cst_a[0], cst_a[1] = st[S_IN_A], st[S_VIMP_A]
+    cst_b[0], cst_b[1] = st[S_IN_B], st[S_VIMP_B]
+    cst_c[0], cst_c[1] = st[S_IN_C], st[S_VIMP_C]
+    for i in range(4):
+        cst_c[2 + i] = 0.0
+    Q = np.empty(n)
+    qs = np.empty(N_Q)
+    qds = np.empty(N_Q)
+    ja = np.zeros(5)
+    jb = np.zeros(5)
+    jc = np.zeros(5 + N_GUIDE_OUT)
+    mk = crow.shape[0]
+    PhiV = np.zeros((mk, pat.shape[1]))
+    gam = np.empty(mk)
+    Yk = np.empty((mk, n))
+    Wk = np.empty((mk, mk))
+    lam = np.empty(mk)
+    uk = np.empty(2 * mk)
+    sck = np.empty((3, 5, 5))
+    qs2 = np.empty(N_Q)
+    qdd = np.empty(n)
+    res = np.empty(n)
+    dq = np.empty(n)
+    b = np.empty(n)
+    z = np.empty((0, 3), dtype=np.int64)
+    lawB = np.zeros(6)
+    lawC = np.zeros(6)
+    zth = np.empty((2, n))
+    vth = np.empty((2, mk))
+    motor = D.shape[0] > 0
+    prescribed = alpha_ref.shape[0] > 0
+    nsteps = setpoint.shape[0] if motor else (alpha_ref.shape[0] if prescribed else theta_ref.shape[0])
+    dtmp = np.empty(3)
+    Qb = np.empty(N_Q)
+    qd0 = np.empty(N_Q)
+    Qg = np.zeros(N_Q)
+    if motor:
+        DT.gravity_forces(P[P_GX], P[P_GY], P[P_M1], P[P_XG1], P[P_R], P[P_M2], P[P_XG2], P[P_L], P[P_M3], Qg)
+    status = OK
+    k = 0
+    while k < nsteps:
+        if motor:
+            err = 0.0
+            tau = DT.begin_step(D, ds, qd[7], setpoint[k], dtmp)
+        elif prescribed:
+            err = 0.0
+            tau = 0.0
+        else:
+            err = theta_ref[k] - q[7]
+            tau = kp * err + kv * (omega_ref[k] - qd[7]) + ki * integ
+        for i in range(n):
+            Q[i] = 0.0
+        for i in range(N_Q):
+            qs[i] = q[i]
+            qds[i] = qd[i]
+        shift = G[G_FLEX_G] > 0.5 and P[P_CLR_C] > 0.5
+        if shift:
+            qs[5] -= q[10]
+            qds[5] -= qd[10]
+        kkt_rows(P, q, qd, z[:, :2], z, crow, pat, pn, alpha_ref[k] if prescribed else 0.0, PhiV, gam, qs2)
+        if not kkt_factor(P, q, crow, pat, pn, PhiV, Minv, cols, cn, Mcrank, kaug, Yk, Wk, sck):
+            status = NOT_FINITE
+            break
+        generalized_forces(P, qs, qds, tau, cst_a, cst_b, cst_c, Q[:N_Q], ja, jb, jc)
+        if P[P_CLR_B] > 0.5 and jb[2] > 0.0:
+            d = math.sqrt(jb[0] * jb[0] + jb[1] * jb[1])
+            mob = kkt_mobility(pat, pn, PhiV, Minv, cols, cn, Yk, Wk, mk, 0, 1, 2, 3, jb[0] / d, jb[1] / d, uk) \
+                if d > 0.0 else 0.0
+            fn0, ft0 = _bound_damping(P, qs, qds, True, cst_b, jb, mob, h, _tangent(q, qd, MD, 0)[2], Q)
+            if fn0 > 0.0 or jb[3] > 0.0:
+                _modal_eye_contact(P, qs, q, MD, jb, fn0, ft0, 2, P[P_RBUSH_B], Q)
+        if P[P_CLR_C] > 0.5 and jc[2] > 0.0:
+            d = math.sqrt(jc[0] * jc[0] + jc[1] * jc[1])
+            mob = kkt_mobility(pat, pn, PhiV, Minv, cols, cn, Yk, Wk, mk, 6, 10 if shift else -1, 4, 5, jc[0] / d,
+                               jc[1] / d, uk) if d > 0.0 else 0.0
+            fn0, ft0 = _bound_damping(P, qs, qds, False, cst_c, jc, mob, h, _tangent(q, qd, MD, 1)[2], Q)
+            if fn0 > 0.0 or jc[3] > 0.0:
+                _modal_eye_contact(P, qs, q, MD, jc, fn0, ft0, 4, P[P_RBUSH_C], Q)
+        if shift and jc[3] > 0.0:
+            ex, ey = jc[0], jc[1]
+            d = math.sqrt(ex * ex + ey * ey)
+            nx, ny = (ex / d, ey / d) if d > 0.0 else (1.0, 0.0)
+            Q[10] += -jc[3] * ny + jc[4] * nx
+        for i in range(N_Q):
+            Qb[i] = Q[i]
+        diss = modal_forces(P, q, qd, H, MD, G, Q)
+        fB = fC = 0.0
+        if P[P_CLR_B] > 0.5 and jb[2] > 0.0:
+            law_terms(P, qs, qds, True, cst_b, jb, lawB)
+            fB = jb[3]
+        if P[P_CLR_C] > 0.5 and jc[2] > 0.0:
+            law_terms(P, qs, qds, False, cst_c, jc, lawC)
+            fC = jc[3]
+        mu = kkt_accelerations(q, Q, crow, pat, pn, PhiV, gam, Minv, cols, cn, Yk, Wk, qdd, lam)
+        if prescribed:
+            tau = -mu
+        if fB > 0.0 or fC > 0.0:
+            tau += kkt_theta_damping(h, qdd, Minv, Yk, Wk, mk, crow, lawB, lawC, fB, fC, shift, jb, jc, zth, vth)
+        if want_out and k % stride == 0:
+            row = out[k // stride]
+            _outputs(P, q[:N_Q], qd[:N_Q], qdd[:N_Q], tau, ja, jb, jc, row)
+            _modal_rod_sensors(P, q, qdd, sens, sphi, sdphi, row)
+            if G[G_FLEX_G] > 0.5:
+                _slider_sensors(P, qdd, sens, row)
+            if P[P_OUT_ENERGY] > 0.5:
+                T, V = modal_energy(P, q, qd, H, MD, G, F)
+                row[O_EKIN] = T
+                row[O_EPOT] = V
+            row[N_OUT] = diss_total
+            _modal_structure_outputs(P, G, q, MD, row)
+            if motor:
+                DT.outputs(D, ds, dout[k // stride])
+                if D[DT.D_ACCOUNT] != 0.0:
+                    T, V = modal_energy(P, q, qd, H, MD, G, F)
+                    dout[k // stride, DT.DO_EMECH] = T + V + dout[k // stride, DT.DO_ROTOR_KE]
+        diss_total += h * diss
+        integ += h * err
+        if imax > 0.0:
+            if integ > imax:
+                integ = imax
+            elif integ < -imax:
+                integ = -imax
+        for i in range(N_Q):
+            qd0[i] = qd[i]
+        for i in range(n):
+            qd[i] += h * qdd[i]
+            q[i] += h * qd[i]
+        if prescribed:
+            q[7] = theta_ref[k + 1]
+            qd[7] = omega_ref[k + 1]
+        if modal_project(P, G, q, qd, res, dq, b, z) < 0:
+            status = NEWTON_FAILED
+            k += 1
+            break
+        fin = True
+        for i in range(n):
+            if not (math.isfinite(q[i]) and math.isfinite(qd[i])):
+                fin = False
+        if not fin:
+            status = NOT_FINITE
+            k += 1
+            break
+        if motor:
+            fgd = DT.guide_force(P[P_FGUIDE], qd0[6], P[P_V0], P[P_V1]) if D[DT.D_ACCOUNT] != 0.0 else 0.0
+            DT.end_step(D, ds, Qb, Qg, tau, fgd, qd0, qd[:N_Q])
+        k += 1
+    x[:n] = q
+    x[n:2 * n] = qd
+    x[2 * n] = diss_total
+    st[S_Q:S_Q + N_Q] = q[:N_Q]
+    st[S_QD:S_QD + N_Q] = qd[:N_Q]
+    st[S_I] = integ
+    st[S_IN_A], st[S_VIMP_A] = cst_a[0], cst_a[1]
+    st[S_IN_B], st[S_VIMP_B] = cst_b[0], cst_b[1]
+    st[S_IN_C], st[S_VIMP_C] = cst_c[0], cst_c[1]
+    return status, k
+
+
+# ------------------------------------------------------------------------------------------ Python side
+class ModalRun:
+    """The modal rod's runner for :class:`twin.reference.engine.ReferenceEngine` (the interface of
+    :class:`twin.reference.flexible.FlexibleRun`: ``reset``, ``run``, ``mounts``, ``x``, ``layout``)."""
+
+    def __init__(self, cfg, P_rigid: np.ndarray, params) -> None:
+        import dataclasses
+
+        from twin.config.structure import StructureConfig
+        from twin.errors import ConfigError
+        from twin.reference.flexible import rigid_rod_body
+        from twin.structure import MountFilter, rod_split
+
+        st = cfg.structure
+        if st.rod_end_inertia_kgm2 != 0.0:
+            raise ConfigError("reference.rod_model", "\"modal\" needs structure.rod_end_inertia_kgm2 = 0 (its sine "
+                                                     "shapes leave the housings' rotary inertia out); use \"chain\"")
+        self.cfg = cfg
+        split = rod_split(cfg.bodies.rod.mass_kg, cfg.bodies.rod.length_m, cfg.bodies.rod.x_g_m,
+                          cfg.bodies.rod.inertia_kgm2, st.rod_end_inertia_kgm2)
+        self.split = split
+        self.layout = ModalLayout(cfg, split)
+        sensors = dataclasses.replace(cfg.sensors, channels=tuple(g for g in cfg.sensors.channels if g != "structure"))
+        ends = dataclasses.replace(cfg, bodies=dataclasses.replace(cfg.bodies, rod=rigid_rod_body(split)),
+                                   structure=StructureConfig(), sensors=sensors)
+        self.P = params(ends)
+        self.P_rigid = P_rigid
+        self.mounts = MountFilter(st.mount_frequency_hz, st.mount_damping_ratio, cfg.sensors.output_rate_hz)
+        self.x: np.ndarray | None = None
+        self._kkt: dict = {}
+        self._z = np.empty((0, 3), dtype=np.int64)
+        self.kkt(cfg.drive.mode == "prescribed")
+
+    def kkt(self, prescribed: bool):
+        """The sparse acceleration solve's tables (the rigid model's rows only), built once per drive kind."""
+        from twin.reference.flexible_kkt import KKTLayout
+
+        kk = self._kkt.get(prescribed)
+        if kk is None:
+            lay = self.layout
+            z2 = np.empty((0, 2), dtype=np.int64)
+            kk = self._kkt[prescribed] = KKTLayout(self.P, lay.G, z2, np.empty((0, 2)), self._z, lay.n, prescribed,
+                                                   mass=lay.mass_matrix(self.P))
+        return kk
+
+    def reset(self, st_rigid: np.ndarray) -> None:
+        """The straight, unstretched rod on the rigid model's pose (its velocities projected), the contact stiffnesses
+        of the rigid model's parameters."""
+        from twin.natural_coordinates import P_CLIN_A, P_CLIN_B, P_CLIN_C, P_K_A, P_K_B, P_K_C
+        for i in (P_K_A, P_K_B, P_K_C, P_CLIN_A, P_CLIN_B, P_CLIN_C):
+            self.P[i] = self.P_rigid[i]
+        n = self.layout.n
+        x = np.zeros(2 * n + 1)
+        q, qd = x[:n].copy(), np.zeros(n)
+        q[:N_Q] = st_rigid[S_Q:S_Q + N_Q]
+        qd[:N_Q] = st_rigid[S_QD:S_QD + N_Q]
+        if modal_project(self.P, self.layout.G, q, qd, np.empty(n), np.empty(n), np.empty(n), self._z) < 0:
+            raise ValueError("the modal rod's initial pose does not satisfy its constraints")
+        x[:n], x[n:2 * n] = q, qd
+        self.x = x
+        self.mounts.reset()
+
+    def run(self, st: np.ndarray, theta_ref: np.ndarray, omega_ref: np.ndarray, stride: int, buf: np.ndarray,
+            train=None, k0: int = 0, alpha_ref: np.ndarray | None = None):
+        """One chunk (arguments as :meth:`twin.reference.flexible.FlexibleRun.run`)."""
+        lay = self.layout
+        if train is not None:
+            sp, dbuf = train.chunk_inputs(k0, omega_ref, stride, buf.shape[0])
+            D, ds = train.D, train.ds
+        else:
+            sp = D = ds = np.empty(0)
+            dbuf = np.empty((0, 1))
+        kk = self.kkt(alpha_ref is not None)
+        return run_modal(self.P, lay.G, lay.H, lay.MD, lay.F, lay.sens, lay.sphi, lay.sdphi, st, self.x, theta_ref,
+                         omega_ref, stride, buf, True, D, ds, sp, dbuf,
+                         np.empty(0) if alpha_ref is None else alpha_ref, kk.crow, kk.pat, kk.pn, kk.Minv, kk.cols,
+                         kk.cn, kk.Mcrank, kk.kaug)
+
+    def tap(self, speed_mps: float, axial: bool) -> None:
+        """A tap on the current state: the mid-span point given ``speed_mps`` normal to the chord (through the
+        first shape, φ_1(½) = 1), or (``axial``) the bore C along the chord; velocities projected."""
+        n = self.layout.n
+        x = self.x
+        q, qd = x[:n].copy(), x[n:2 * n].copy()
+        ux, uy = q[4] - q[2], q[5] - q[3]
+        L = math.hypot(ux, uy)
+        if axial:
+            qd[4] += speed_mps * ux / L
+            qd[5] += speed_mps * uy / L
+        else:
+            qd[N_Q] += -speed_mps * uy / L
+            qd[N_Q + 1] += speed_mps * ux / L
+        if modal_project(self.P, self.layout.G, q, qd, np.empty(n), np.empty(n), np.empty(n), self._z) < 0:
+            raise ValueError("the tapped state does not satisfy the constraints")
+        x[:n], x[n:2 * n] = q, qd
+
+    def deflection(self) -> float:
+        """The mid-span point's distance from the chord B'–C [m]."""
+        row = np.zeros(N_OUT + 6)
+        _modal_structure_outputs(self.P, self.layout.G, self.x[:self.layout.n], self.layout.MD, row)
+        return float(row[N_OUT + 2])
