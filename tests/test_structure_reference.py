@@ -15,25 +15,32 @@ from twin.reference import model as RM
 from twin.reference.flexible import N_OUT_FLEX, O_DISS, FlexibleRun, tap_response
 
 
-def _run(cfg, theta0, *, drive=False, guide_friction=False):
+def _run(cfg, theta0, *, drive=False, guide_friction=False, rod_model="chain"):
     prm = lambda c: RM.build_params(c, drive=drive, guide_friction=guide_friction)  # noqa: E731
-    run = FlexibleRun(cfg, prm(cfg), prm)
+    if rod_model == "modal":
+        from twin.reference.flexible_modal import ModalRun
+
+        run = ModalRun(cfg, prm(cfg), prm)
+    else:
+        run = FlexibleRun(cfg, prm(cfg), prm)
     run.P[RM.P_OUT_ENERGY] = 1.0   # the energy columns
     st = initial_state(cfg, theta0, 0.0, run.P)
     run.reset(st)
     return run, st
 
 
-def test_tap_decays_with_the_configured_damping_ratio():
+@pytest.mark.parametrize("rod_model", ["chain", "modal"])
+def test_tap_decays_with_the_configured_damping_ratio(rod_model):
     """Rod between a crank of large inertia and the guide on heavy, undamped supports, no gravity, no drive: a tap
     (transverse velocity of the middle node) rings in the first bending mode, whose logarithmic decrement over
-    ~30 periods gives the damping ratio set for it (independent basis: ζ = δ / √(4π² + δ²) of a linear mode)."""
+    ~30 periods gives the damping ratio set for it (independent basis: ζ = δ / √(4π² + δ²) of a linear mode).
+    Both reference rods (the chain and the modal rod, ``reference.rod_model``)."""
     zeta_set = 0.01
     cfg = preset(3).replace(**{
         "structure.mode": "flexible", "mechanism.gravity_mps2": 0.0, "bodies.crank.inertia_kgm2": 10.0,
         "structure.bending_damping_ratio": zeta_set, "structure.frame_damping_ratio": 0.0,
         "structure.guide_damping_ratio": 0.0, "structure.frame_mass_kg": 1000.0, "structure.guide_mass_kg": 1000.0})
-    t, w = tap_response(cfg, 0.01, 0.2, 5, 0.3)
+    t, w = tap_response(cfg, 0.01, 0.2, 5, 0.3, rod_model=rod_model)
     stride, h = 5, cfg.simulation.timestep_s
     peaks, times = [], []
     for i in range(1, w.size - 1):
@@ -65,7 +72,8 @@ def _crests(t, w, sign):
     return np.array(tt), np.array(vv)
 
 
-def test_axial_tap_rings_at_the_closed_form_and_decays_with_the_axial_ratio():
+@pytest.mark.parametrize("rod_model", ["chain", "modal"])
+def test_axial_tap_rings_at_the_closed_form_and_decays_with_the_axial_ratio(rod_model):
     """The same heavy crank and supports; a tap on the bore C along the rod: the stretch |C − B'| − L rings at the
     first axial mode of the bar fixed at B with the end mass and the slider at C (closed form β tan β = m_bar/m_tip,
     1041.4 Hz; within 1 %) and its crest-to-trough amplitude decays with the axial damping ratio set (within 5 %)."""
@@ -80,7 +88,7 @@ def test_axial_tap_rings_at_the_closed_form_and_decays_with_the_axial_ratio():
     sp = rod_split(rod.mass_kg, rod.length_m, rod.x_g_m, rod.inertia_kgm2, 0.0)
     f_ref = axial_fixed_mass_hz(cfg.structure.rod_ea_n, sp.bar_mass_kg / sp.length_m, sp.length_m,
                                 sp.end_c_kg + cfg.bodies.slider.mass_kg, 1)[0]
-    t, w = tap_response(cfg, 0.01, 0.05, 1, 0.3, axial=True)
+    t, w = tap_response(cfg, 0.01, 0.05, 1, 0.3, axial=True, rod_model=rod_model)
     tp, p = _crests(t, w, 1)
     _, v = _crests(t, w, -1)
     m = min(p.size, v.size)
@@ -93,12 +101,12 @@ def test_axial_tap_rings_at_the_closed_form_and_decays_with_the_axial_ratio():
     assert 1.0 / np.mean(np.diff(tp)) == pytest.approx(f_ref, rel=0.01)
 
 
-def _energy_change(cfg, flexible):
+def _energy_change(cfg, flexible, rod_model="chain"):
     """(E(end) − E(0), dissipated) of a free swing from rest at θ = π/3 (S003 §4.1), no drive, no guide friction."""
     n, stride = 10000, 100
     zero = np.zeros(n)
     if flexible:
-        run, st = _run(cfg, math.pi / 3)
+        run, st = _run(cfg, math.pi / 3, rod_model=rod_model)
         buf = np.empty((n // stride, N_OUT_FLEX))
         assert run.run(st, zero, zero, stride, buf)[0] == RM.OK
         e = buf[:, RM.O_EKIN] + buf[:, RM.O_EPOT]
@@ -112,13 +120,14 @@ def _energy_change(cfg, flexible):
     return e[-1] - e[0], 0.0
 
 
-def test_energy_balance_counts_the_structural_damping():
+@pytest.mark.parametrize("rod_model", ["chain", "modal"])
+def test_energy_balance_counts_the_structural_damping(rod_model):
     """Free swing of the ideal mechanism (test 3's joints): the flexible model's mechanical energy (kinetic, gravity,
-    hinges, slides, supports) plus what its dampers dissipated changes only by the rigid model's own numerical loss
-    (the projection's, S003 §4.1) — within 2 % of the dissipated energy."""
+    hinges, slides, supports; the modal rod's chord and shapes) plus what its dampers dissipated changes only by the
+    rigid model's own numerical loss (the projection's, S003 §4.1) — within 2 % of the dissipated energy."""
     cfg = preset(3).replace(**{"structure.mode": "flexible", "structure.bending_damping_ratio": 0.05,
                                "structure.axial_damping_ratio": 0.05})
-    d_flex, dissipated = _energy_change(cfg, True)
+    d_flex, dissipated = _energy_change(cfg, True, rod_model)
     d_rigid, _ = _energy_change(preset(3), False)
     assert dissipated > 1e-5
     assert abs(d_flex + dissipated - d_rigid) < 0.02 * dissipated

@@ -505,13 +505,18 @@ class FlexibleRun:
 
 
 def tap_response(cfg, speed_mps: float = 0.01, duration_s: float = 0.2, every: int = 5, theta0: float = 0.3,
-                 drive: bool = False, axial: bool = False) -> tuple[np.ndarray, np.ndarray]:
+                 drive: bool = False, axial: bool = False, rod_model: str = "chain") -> tuple[np.ndarray, np.ndarray]:
     """A tap on the flexible rod in the reference engine: the mechanism at rest at crank angle ``theta0`` [rad]
     (no drive unless ``drive``, no guide friction), the rod's middle node given ``speed_mps`` normal to the
     chord; returns (t [s], the node's distance from the chord B'–C [m]) every ``every`` steps for
     ``duration_s``. The rod's bending relative to its ends: its ringing gives the in-situ bending mode and
     its damping (``tests/test_structure_reference.py``; the MuJoCo twin's agreement checks can tap the same).
-    ``axial``: the tap is on the bore C along the chord instead, and the response the stretch |C − B'| − L."""
+    ``axial``: the tap is on the bore C along the chord instead, and the response the stretch |C − B'| − L.
+    ``rod_model`` "modal": the same with :mod:`twin.reference.flexible_modal`'s rod."""
+    if rod_model == "modal":
+        from twin.reference.flexible_modal import modal_tap_response
+
+        return modal_tap_response(cfg, speed_mps, duration_s, every, theta0, drive, axial)
     from twin.natural_coordinates import initial_state
     from twin.reference.model import build_params
 

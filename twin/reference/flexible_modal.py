@@ -708,3 +708,31 @@ class ModalRun:
         row = np.zeros(N_OUT + 6)
         _modal_structure_outputs(self.P, self.layout.G, self.x[:self.layout.n], self.layout.MD, row)
         return float(row[N_OUT + 2])
+
+
+def modal_tap_response(cfg, speed_mps: float, duration_s: float, every: int, theta0: float, drive: bool,
+                       axial: bool) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`twin.reference.flexible.tap_response` for the modal rod (the same arguments and returns; the bending
+    tap is the mid-span point's velocity given through the first shape)."""
+    from twin.natural_coordinates import initial_state
+    from twin.reference.model import build_params
+
+    prm = lambda c: build_params(c, drive=drive, guide_friction=False)  # noqa: E731
+    run = ModalRun(cfg, prm(cfg), prm)
+    st = initial_state(cfg, theta0, 0.0, run.P)
+    run.reset(st)
+    run.tap(speed_mps, axial)
+    n = run.layout.n
+    h = cfg.simulation.timestep_s
+    steps = int(round(duration_s / (every * h)))
+    buf = np.empty((1, N_OUT + 6))
+    ref = np.full(every, theta0)
+    zero = np.zeros(every)
+    w = np.empty(steps)
+    for i in range(steps):
+        status, _ = run.run(st, ref, zero, every, buf)
+        if status != OK:
+            raise ValueError(f"the tap response failed at step {i * every} (status {status})")
+        qq = run.x[:n]
+        w[i] = math.hypot(qq[4] - qq[2], qq[5] - qq[3]) - cfg.bodies.rod.length_m if axial else run.deflection()
+    return (np.arange(steps) + 1) * every * h, w
