@@ -51,8 +51,8 @@ from twin.natural_coordinates import (N_Q, P_CLR_B, P_CLR_C, P_DOFF, P_FGUIDE, P
 from twin.reference import drivetrain as DT
 from twin.reference.flexible_kernels import (G_CF, G_CG, G_FLEX_A, G_FLEX_G, G_KF, G_KG, G_MF, G_MG,
                                              _bound_damping, _independent_values, _slider_sensors, law_terms)
-from twin.reference.flexible_kkt import (kkt_accelerations, kkt_factor, kkt_mobility, kkt_rows,
-                                          kkt_theta_damping)
+from twin.reference.flexible_kernels import theta_forces
+from twin.reference.flexible_kkt import _kkt_response, kkt_accelerations, kkt_factor, kkt_rows
 from twin.reference.guide import N_GUIDE_OUT
 from twin.reference.model import N_OUT, NEWTON_FAILED, NOT_FINITE, O_ACC, O_EKIN, O_EPOT, OK, _outputs, \
     _rod_force, generalized_forces
@@ -434,6 +434,62 @@ def _modal_structure_outputs(P, G, q, MD, row):
     row[o + 4] = q[10] if G[G_FLEX_G] > 0.5 else 0.0
 
 
+@njit(cache=True)
+def _pair_response(Minv, Y, W, m, a, pin_x, pin_y, eye_x, eye_y, jo, z, v):
+    """The constrained response of clearance pair ``a`` (0: B, 1: C) to a unit force along its normal (``jo``'s
+    eccentricity; :func:`twin.reference.flexible_kkt._kkt_response` into ``z[a]``, ``v[a]``) and its normal mobility
+    J N Jᵀ = J z [1/kg] (0 without a normal). One solve serves the damping bound and the θ-method."""
+    d = math.sqrt(jo[0] * jo[0] + jo[1] * jo[1])
+    if not d > 0.0:
+        return 0.0
+    nx, ny = jo[0] / d, jo[1] / d
+    za = z[a]
+    _kkt_response(Minv, Y, W, m, pin_x, pin_y, eye_x, eye_y, nx, ny, za, v[a])
+    return nx * (za[pin_x] - za[eye_x]) + ny * ((za[pin_y] if pin_y >= 0 else 0.0) - za[eye_y])
+
+
+@njit(cache=True)
+def _modal_theta_damping(h, qdd, m, crow, lawB, lawC, fB, fC, shift, jb, jc, z, v, act, Wm, an, f0, dl):
+    """:func:`twin.reference.flexible_kkt.kkt_theta_damping` with the pairs' responses ``z``, ``v`` already solved
+    (:func:`_pair_response`) and its scratch (``act`` … ``dl``) given: the same method, no allocation."""
+    act[0] = fB > 0.0 and lawB[1] > 0.0
+    act[1] = fC > 0.0 and lawC[1] > 0.0
+    if not (act[0] or act[1]):
+        return 0.0
+    for a in range(2):
+        an[a] = 0.0
+        dl[a] = 0.0
+        for b in range(2):
+            Wm[a, b] = 0.0
+    for a in range(2):
+        if not act[a]:
+            continue
+        lw = lawB if a == 0 else lawC
+        px, py, ex_, ey_ = (0, 1, 2, 3) if a == 0 else (6, 10 if shift else -1, 4, 5)
+        nx, ny = lw[4], lw[5]
+        an[a] = nx * (qdd[px] - qdd[ex_]) + ny * ((qdd[py] if py >= 0 else 0.0) - qdd[ey_])
+        for b in range(2):
+            if act[b]:
+                Wm[a, b] = nx * (z[b, px] - z[b, ex_]) + ny * ((z[b, py] if py >= 0 else 0.0) - z[b, ey_])
+    f0[0], f0[1] = fB, fC
+    theta_forces(h, Wm, act, f0, lawB, lawC, an, dl)
+    n = qdd.shape[0]
+    dtau = 0.0
+    for a in range(2):
+        if not act[a] or dl[a] == 0.0:
+            continue
+        for i in range(n):
+            qdd[i] -= z[a, i] * dl[a]
+        for k in range(m):
+            if crow[k] == 7:
+                dtau += v[a, k] * dl[a]
+    if act[0]:
+        jb[3] = f0[0] + dl[0]
+    if act[1]:
+        jc[3] = f0[1] + dl[1]
+    return dtau
+
+
 @njit(cache=True, nogil=True)
 def run_modal(P, G, H, MD, F, sens, sphi, sdphi, st, x, theta_ref, omega_ref, stride, out, want_out, D, ds,
               setpoint, dout, alpha_ref, crow, pat, pn, Minv, cols, cn, Mcrank, kaug):
@@ -466,7 +522,6 @@ def run_modal(P, G, H, MD, F, sens, sphi, sdphi, st, x, theta_ref, omega_ref, st
     Yk = np.empty((mk, n))
     Wk = np.empty((mk, mk))
     lam = np.empty(mk)
-    uk = np.empty(2 * mk)
     sck = np.empty((3, 5, 5))
     qs2 = np.empty(N_Q)
     qdd = np.empty(n)
@@ -476,8 +531,13 @@ def run_modal(P, G, H, MD, F, sens, sphi, sdphi, st, x, theta_ref, omega_ref, st
     z = np.empty((0, 3), dtype=np.int64)
     lawB = np.zeros(6)
     lawC = np.zeros(6)
-    zth = np.empty((2, n))
-    vth = np.empty((2, mk))
+    zth = np.zeros((2, n))
+    vth = np.zeros((2, mk))
+    act = np.zeros(2, dtype=np.bool_)
+    Wm = np.zeros((2, 2))
+    an = np.zeros(2)
+    f0 = np.zeros(2)
+    dl = np.zeros(2)
     motor = D.shape[0] > 0
     prescribed = alpha_ref.shape[0] > 0
     nsteps = setpoint.shape[0] if motor else (alpha_ref.shape[0] if prescribed else theta_ref.shape[0])
@@ -514,16 +574,12 @@ def run_modal(P, G, H, MD, F, sens, sphi, sdphi, st, x, theta_ref, omega_ref, st
             break
         generalized_forces(P, qs, qds, tau, cst_a, cst_b, cst_c, Q[:N_Q], ja, jb, jc)
         if P[P_CLR_B] > 0.5 and jb[2] > 0.0:
-            d = math.sqrt(jb[0] * jb[0] + jb[1] * jb[1])
-            mob = kkt_mobility(pat, pn, PhiV, Minv, cols, cn, Yk, Wk, mk, 0, 1, 2, 3, jb[0] / d, jb[1] / d, uk) \
-                if d > 0.0 else 0.0
+            mob = _pair_response(Minv, Yk, Wk, mk, 0, 0, 1, 2, 3, jb, zth, vth)
             fn0, ft0 = _bound_damping(P, qs, qds, True, cst_b, jb, mob, h, _tangent(q, qd, MD, 0)[2], Q)
             if fn0 > 0.0 or jb[3] > 0.0:
                 _modal_eye_contact(P, qs, q, MD, jb, fn0, ft0, 2, P[P_RBUSH_B], Q)
         if P[P_CLR_C] > 0.5 and jc[2] > 0.0:
-            d = math.sqrt(jc[0] * jc[0] + jc[1] * jc[1])
-            mob = kkt_mobility(pat, pn, PhiV, Minv, cols, cn, Yk, Wk, mk, 6, 10 if shift else -1, 4, 5, jc[0] / d,
-                               jc[1] / d, uk) if d > 0.0 else 0.0
+            mob = _pair_response(Minv, Yk, Wk, mk, 1, 6, 10 if shift else -1, 4, 5, jc, zth, vth)
             fn0, ft0 = _bound_damping(P, qs, qds, False, cst_c, jc, mob, h, _tangent(q, qd, MD, 1)[2], Q)
             if fn0 > 0.0 or jc[3] > 0.0:
                 _modal_eye_contact(P, qs, q, MD, jc, fn0, ft0, 4, P[P_RBUSH_C], Q)
@@ -546,7 +602,8 @@ def run_modal(P, G, H, MD, F, sens, sphi, sdphi, st, x, theta_ref, omega_ref, st
         if prescribed:
             tau = -mu
         if fB > 0.0 or fC > 0.0:
-            tau += kkt_theta_damping(h, qdd, Minv, Yk, Wk, mk, crow, lawB, lawC, fB, fC, shift, jb, jc, zth, vth)
+            tau += _modal_theta_damping(h, qdd, mk, crow, lawB, lawC, fB, fC, shift, jb, jc, zth, vth, act, Wm, an,
+                                        f0, dl)
         if want_out and k % stride == 0:
             row = out[k // stride]
             _outputs(P, q[:N_Q], qd[:N_Q], qdd[:N_Q], tau, ja, jb, jc, row)
