@@ -70,6 +70,9 @@ from twin.reference.flexible_kernels import (G_CF, G_CG, G_FLEX_A, G_FLEX_G, G_K
                                              _rod_sensors, _slider_sensors)
 from twin.reference.flexible_kkt import (KKTLayout, kkt_accelerations, kkt_factor, kkt_mobility, kkt_rows,
                                           kkt_theta_damping)
+from twin.reference.flexible_modal import (_modal_eye_contact, _modal_rod_sensors, _modal_structure_outputs,
+                                           _modal_theta_damping, _pair_response, _tangent, modal_energy, modal_forces,
+                                           modal_project)
 
 # the supports' parameters ``G`` (build()): indices G_KF … G_FLEX_G, defined with the kernels that read them; then
 # the rod's mid-span material point for the "structure" channels (:func:`_structure_outputs`): its segment and its
@@ -199,7 +202,7 @@ def _structure_outputs(P, G, q, segs, row):
 @njit(cache=True, nogil=True)
 def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sens, st, x, theta_ref, omega_ref,
                  stride, out, want_out, D, ds, setpoint, dout, alpha_ref, crow, pat, pn, Minv, cols, cn, Mcrank,
-                 kaug):
+                 kaug, H, MD, F, msens, sphi, sdphi):
     """Integrate ``len(theta_ref)`` steps of the flexible bench from the rigid state ``st`` (PID integral,
     contact events; its q, q̇ unused) and the full coordinates ``x`` = [q (n), q̇ (n), dissipated energy]
     (updated in place). Crank PID drive, or with ``D`` non-empty the drive train (:mod:`twin.reference.drivetrain`,
@@ -210,7 +213,10 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
     ``alpha_ref`` its acceleration at t_0 … t_{n−1}; the drive torque goes to the torque column). Returns
     (status, steps done). The accelerations by the sparse constraint-force solve of
     :mod:`twin.reference.flexible_kkt` (``crow`` to ``kaug``: its :class:`~twin.reference.flexible_kkt.KKTLayout`,
-    with θ's row among the constraints when the crank is prescribed)."""
+    with θ's row among the constraints when the crank is prescribed). ``H`` non-empty: the rod is the modal rod of
+    :mod:`twin.reference.flexible_modal` (``H`` … ``sdphi`` its tables; the chain's tables empty): its forces,
+    projection, sensors, energy, eye contact and the pairs' responses (one solve per pair for the damping bound and
+    the θ-method) are that module's, the rest of the step is the same."""
     n = (x.shape[0] - 1) // 2
     nc = n - N_Q
     h = P[P_H]
@@ -254,6 +260,12 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
     lawC = np.zeros(6)
     zth = np.empty((2, n))
     vth = np.empty((2, mk))
+    modal = H.shape[0] > 0
+    act = np.zeros(2, dtype=np.bool_)
+    Wm = np.zeros((2, 2))
+    an = np.zeros(2)
+    f0 = np.zeros(2)
+    dl = np.zeros(2)
     motor = D.shape[0] > 0
     prescribed = alpha_ref.shape[0] > 0
     nsteps = setpoint.shape[0] if motor else (alpha_ref.shape[0] if prescribed else theta_ref.shape[0])
@@ -284,7 +296,7 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
         if shift:   # the joint C's pin C' rides on the guide: its eccentricity is measured from d_off + y_g
             qs[5] -= q[10]
             qds[5] -= qd[10]
-        if k == 0 and not factor(q, segs, slides, indep, A, LU, piv):   # later steps: the projection's
+        if not modal and k == 0 and not factor(q, segs, slides, indep, A, LU, piv):   # later steps: the projection's
             status = NOT_FINITE
             break
         # the constraint rows and the mobility W = Φ_c M̃⁻¹ Φ_cᵀ at (q, q̇) (flexible_kkt: the R matrix's q̈ to
@@ -297,22 +309,36 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
         # the contact forces on the rod act on its eyes (end_B, end_C), not spread as on a rigid rod, with the
         # law's damping bounded by the pair's effective mass (_bound_damping)
         if P[P_CLR_B] > 0.5 and jb[2] > 0.0:
-            d = math.sqrt(jb[0] * jb[0] + jb[1] * jb[1])
-            mob = kkt_mobility(pat, pn, PhiV, Minv, cols, cn, Yk, Wk, mk, 0, 1, 2, 3, jb[0] / d, jb[1] / d, uk) \
-                if d > 0.0 else 0.0
-            fn0, ft0 = _bound_damping(P, qs, qds, True, cst_b, jb, mob, h,
-                                      _seg_angle_rate(q, qd, segs[0, 0], segs[0, 1])[2], Q)
+            if modal:
+                mob = _pair_response(Minv, Yk, Wk, mk, 0, 0, 1, 2, 3, jb, zth, vth)
+                w_eye = _tangent(q, qd, MD, 0)[2]
+            else:
+                d = math.sqrt(jb[0] * jb[0] + jb[1] * jb[1])
+                mob = kkt_mobility(pat, pn, PhiV, Minv, cols, cn, Yk, Wk, mk, 0, 1, 2, 3, jb[0] / d, jb[1] / d,
+                                   uk) if d > 0.0 else 0.0
+                w_eye = _seg_angle_rate(q, qd, segs[0, 0], segs[0, 1])[2]
+            fn0, ft0 = _bound_damping(P, qs, qds, True, cst_b, jb, mob, h, w_eye, Q)
             if fn0 > 0.0 or jb[3] > 0.0:
-                _eye_contact(P, qs, q, jb, fn0, ft0, 2, P[P_RBUSH_B], segs[0, 0], segs[0, 1], Q)
+                if modal:
+                    _modal_eye_contact(P, qs, q, MD, jb, fn0, ft0, 2, P[P_RBUSH_B], Q)
+                else:
+                    _eye_contact(P, qs, q, jb, fn0, ft0, 2, P[P_RBUSH_B], segs[0, 0], segs[0, 1], Q)
         if P[P_CLR_C] > 0.5 and jc[2] > 0.0:
-            d = math.sqrt(jc[0] * jc[0] + jc[1] * jc[1])
-            mob = kkt_mobility(pat, pn, PhiV, Minv, cols, cn, Yk, Wk, mk, 6, 10 if shift else -1, 4, 5, jc[0] / d,
-                               jc[1] / d, uk) if d > 0.0 else 0.0
             last = segs.shape[0] - 1
-            fn0, ft0 = _bound_damping(P, qs, qds, False, cst_c, jc, mob, h,
-                                      _seg_angle_rate(q, qd, segs[last, 0], segs[last, 1])[2], Q)
+            if modal:
+                mob = _pair_response(Minv, Yk, Wk, mk, 1, 6, 10 if shift else -1, 4, 5, jc, zth, vth)
+                w_eye = _tangent(q, qd, MD, 1)[2]
+            else:
+                d = math.sqrt(jc[0] * jc[0] + jc[1] * jc[1])
+                mob = kkt_mobility(pat, pn, PhiV, Minv, cols, cn, Yk, Wk, mk, 6, 10 if shift else -1, 4, 5,
+                                   jc[0] / d, jc[1] / d, uk) if d > 0.0 else 0.0
+                w_eye = _seg_angle_rate(q, qd, segs[last, 0], segs[last, 1])[2]
+            fn0, ft0 = _bound_damping(P, qs, qds, False, cst_c, jc, mob, h, w_eye, Q)
             if fn0 > 0.0 or jc[3] > 0.0:
-                _eye_contact(P, qs, q, jc, fn0, ft0, 4, P[P_RBUSH_C], segs[last, 0], segs[last, 1], Q)
+                if modal:
+                    _modal_eye_contact(P, qs, q, MD, jc, fn0, ft0, 4, P[P_RBUSH_C], Q)
+                else:
+                    _eye_contact(P, qs, q, jc, fn0, ft0, 4, P[P_RBUSH_C], segs[last, 0], segs[last, 1], Q)
         if shift and jc[3] > 0.0:   # the contact's normal component on the pin, which the ideal guide took, moves it
             ex, ey = jc[0], jc[1]
             d = math.sqrt(ex * ex + ey * ey)
@@ -320,7 +346,10 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
             Q[10] += -jc[3] * ny + jc[4] * nx
         for i in range(N_Q):   # the mechanism's own forces (the drive train's accounts read them)
             Qb[i] = Q[i]
-        diss = chain_forces(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G, Q)
+        if modal:
+            diss = modal_forces(P, q, qd, H, MD, G, Q)
+        else:
+            diss = chain_forces(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G, Q)
         # the laws' damping by the θ-method (kkt_theta_damping) after the explicit solve: the laws' terms now
         fB = fC = 0.0
         if P[P_CLR_B] > 0.5 and jb[2] > 0.0:
@@ -332,24 +361,35 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
         mu = kkt_accelerations(q, Q, crow, pat, pn, PhiV, gam, Minv, cols, cn, Yk, Wk, qdd, lam)
         if prescribed:   # the drive torque: minus the multiplier of the driving constraint
             tau = -mu
-        if fB > 0.0 or fC > 0.0:
+        if modal and (fB > 0.0 or fC > 0.0):   # the pairs' responses of this step, solved above
+            tau += _modal_theta_damping(h, qdd, mk, crow, lawB, lawC, fB, fC, shift, jb, jc, zth, vth, act, Wm, an,
+                                        f0, dl)
+        elif fB > 0.0 or fC > 0.0:
             tau += kkt_theta_damping(h, qdd, Minv, Yk, Wk, mk, crow, lawB, lawC, fB, fC, shift, jb, jc, zth, vth)
         if want_out and k % stride == 0:
             row = out[k // stride]
             _outputs(P, q[:N_Q], qd[:N_Q], qdd[:N_Q], tau, ja, jb, jc, row)
-            _rod_sensors(P, q, qdd, segs, sens, row)
+            if modal:
+                _modal_rod_sensors(P, q, qdd, msens, sphi, sdphi, row)
+            else:
+                _rod_sensors(P, q, qdd, segs, sens, row)
             if G[G_FLEX_G] > 0.5:
                 _slider_sensors(P, qdd, sens, row)
             if P[P_OUT_ENERGY] > 0.5:
-                T, V = flex_energy(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G)
+                T, V = modal_energy(P, q, qd, H, MD, G, F) if modal else \
+                    flex_energy(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G)
                 row[O_EKIN] = T
                 row[O_EPOT] = V
             row[N_OUT] = diss_total
-            _structure_outputs(P, G, q, segs, row)
+            if modal:
+                _modal_structure_outputs(P, G, q, MD, row)
+            else:
+                _structure_outputs(P, G, q, segs, row)
             if motor:
                 DT.outputs(D, ds, dout[k // stride])
                 if D[DT.D_ACCOUNT] != 0.0:
-                    T, V = flex_energy(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G)
+                    T, V = modal_energy(P, q, qd, H, MD, G, F) if modal else \
+                        flex_energy(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G)
                     dout[k // stride, DT.DO_EMECH] = T + V + dout[k // stride, DT.DO_ROTOR_KE]
         diss_total += h * diss
         integ += h * err
@@ -366,7 +406,8 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
         if prescribed:   # the driving constraint: θ and θ̇ are the program's at t_{k+1}
             q[7] = theta_ref[k + 1]
             qd[7] = omega_ref[k + 1]
-        if flex_project(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, res, dq, b, tmp) < 0:
+        if (modal_project(P, G, q, qd, res, dq, b, indep) if modal else
+                flex_project(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, res, dq, b, tmp)) < 0:
             status = NEWTON_FAILED
             k += 1
             break
@@ -395,6 +436,8 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
 
 
 # ------------------------------------------------------------------------------------------ Python side
+#: the modal rod's tables of :func:`run_flexible`, empty: the chain
+NO_MODAL = (np.empty(0), np.empty((0, 8)), np.empty((0, 0)), np.empty((0, 4)), np.empty((0, 0)), np.empty((0, 0)))
 #: output columns of :func:`run_flexible`: the rigid model's, then the dissipated energy, then the "structure"
 #: channels (:data:`STRUCTURE_CHANNELS` order, :func:`_structure_outputs`)
 O_DISS = N_OUT
@@ -492,7 +535,7 @@ class FlexibleRun:
         return run_flexible(self.P, lay.G, lay.segs, lay.seg_f, lay.hinges, lay.hinge_f, lay.slides, lay.slide_f,
                             lay.indep, lay.sensors, st, self.x, theta_ref, omega_ref, stride, buf, True, D, ds, sp,
                             dbuf, np.empty(0) if alpha_ref is None else alpha_ref, kk.crow, kk.pat, kk.pn, kk.Minv,
-                            kk.cols, kk.cn, kk.Mcrank, kk.kaug)
+                            kk.cols, kk.cn, kk.Mcrank, kk.kaug, *NO_MODAL)
 
     def kkt(self, prescribed: bool) -> KKTLayout:
         """The sparse acceleration solve's tables (:class:`twin.reference.flexible_kkt.KKTLayout`), built once per

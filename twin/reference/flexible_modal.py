@@ -43,19 +43,12 @@ import math
 import numpy as np
 
 from twin.jit import njit
-from twin.natural_coordinates import (N_Q, P_CLR_B, P_CLR_C, P_DOFF, P_FGUIDE, P_GX, P_GY, P_H, P_IMAX, P_KI,
-                                      P_KP, P_KV, P_L, P_M1, P_M2, P_M3, P_NEWTON_MAXIT, P_NEWTON_TOL, P_OUT_ENERGY,
-                                      P_R, P_RBUSH_B, P_RBUSH_C, P_V0, P_V1, P_XG1, P_XG2, S_I, S_IN_A, S_IN_B,
-                                      S_IN_C, S_Q, S_QD, S_VIMP_A, S_VIMP_B, S_VIMP_C, energy, kinetic_energy,
-                                      mass_times, residual, solve_aug)
-from twin.reference import drivetrain as DT
+from twin.natural_coordinates import (N_Q, P_CLR_C, P_DOFF, P_GX, P_GY, P_L, P_M3, P_NEWTON_MAXIT, P_NEWTON_TOL,
+                                      S_Q, S_QD, energy, kinetic_energy, mass_times, residual, solve_aug)
 from twin.reference.flexible_kernels import (G_CF, G_CG, G_FLEX_A, G_FLEX_G, G_KF, G_KG, G_MF, G_MG,
-                                             _bound_damping, _independent_values, _slider_sensors, law_terms)
-from twin.reference.flexible_kernels import theta_forces
-from twin.reference.flexible_kkt import _kkt_response, kkt_accelerations, kkt_factor, kkt_rows
-from twin.reference.guide import N_GUIDE_OUT
-from twin.reference.model import N_OUT, NEWTON_FAILED, NOT_FINITE, O_ACC, O_EKIN, O_EPOT, OK, _outputs, \
-    _rod_force, generalized_forces
+                                             _independent_values, theta_forces)
+from twin.reference.flexible_kkt import _kkt_response
+from twin.reference.model import N_OUT, O_ACC, OK, _rod_force
 
 #: shapes of the modal rod (bending 1–3 need three; the first axial mode is the chord's with their axial parts)
 N_SHAPES = 3
@@ -490,180 +483,6 @@ def _modal_theta_damping(h, qdd, m, crow, lawB, lawC, fB, fC, shift, jb, jc, z, 
     return dtau
 
 
-@njit(cache=True, nogil=True)
-def run_modal(P, G, H, MD, F, sens, sphi, sdphi, st, x, theta_ref, omega_ref, stride, out, want_out, D, ds,
-              setpoint, dout, alpha_ref, crow, pat, pn, Minv, cols, cn, Mcrank, kaug):
-    """:func:`twin.reference.flexible.run_flexible` for the modal rod: the same drives, contact handling, sampling and
-    returns; the rod's forces, projection, sensors and energy are this module's."""
-    n = (x.shape[0] - 1) // 2
-    h = P[P_H]
-    kp, kv, ki, imax = P[P_KP], P[P_KV], P[P_KI], P[P_IMAX]
-    q = x[:n].copy()
-    qd = x[n:2 * n].copy()
-    diss_total = x[2 * n]
-    integ = st[S_I]
-    cst_a = np.empty(2)
-    cst_b = np.empty(2)
-    cst_c = np.empty(6)
-    cst_a[0], cst_a[1] = st[S_IN_A], st[S_VIMP_A]
-    cst_b[0], cst_b[1] = st[S_IN_B], st[S_VIMP_B]
-    cst_c[0], cst_c[1] = st[S_IN_C], st[S_VIMP_C]
-    for i in range(4):
-        cst_c[2 + i] = 0.0
-    Q = np.empty(n)
-    qs = np.empty(N_Q)
-    qds = np.empty(N_Q)
-    ja = np.zeros(5)
-    jb = np.zeros(5)
-    jc = np.zeros(5 + N_GUIDE_OUT)
-    mk = crow.shape[0]
-    PhiV = np.zeros((mk, pat.shape[1]))
-    gam = np.empty(mk)
-    Yk = np.empty((mk, n))
-    Wk = np.empty((mk, mk))
-    lam = np.empty(mk)
-    sck = np.empty((3, 5, 5))
-    qs2 = np.empty(N_Q)
-    qdd = np.empty(n)
-    res = np.empty(n)
-    dq = np.empty(n)
-    b = np.empty(n)
-    z = np.empty((0, 3), dtype=np.int64)
-    lawB = np.zeros(6)
-    lawC = np.zeros(6)
-    zth = np.zeros((2, n))
-    vth = np.zeros((2, mk))
-    act = np.zeros(2, dtype=np.bool_)
-    Wm = np.zeros((2, 2))
-    an = np.zeros(2)
-    f0 = np.zeros(2)
-    dl = np.zeros(2)
-    motor = D.shape[0] > 0
-    prescribed = alpha_ref.shape[0] > 0
-    nsteps = setpoint.shape[0] if motor else (alpha_ref.shape[0] if prescribed else theta_ref.shape[0])
-    dtmp = np.empty(3)
-    Qb = np.empty(N_Q)
-    qd0 = np.empty(N_Q)
-    Qg = np.zeros(N_Q)
-    if motor:
-        DT.gravity_forces(P[P_GX], P[P_GY], P[P_M1], P[P_XG1], P[P_R], P[P_M2], P[P_XG2], P[P_L], P[P_M3], Qg)
-    status = OK
-    k = 0
-    while k < nsteps:
-        if motor:
-            err = 0.0
-            tau = DT.begin_step(D, ds, qd[7], setpoint[k], dtmp)
-        elif prescribed:
-            err = 0.0
-            tau = 0.0
-        else:
-            err = theta_ref[k] - q[7]
-            tau = kp * err + kv * (omega_ref[k] - qd[7]) + ki * integ
-        for i in range(n):
-            Q[i] = 0.0
-        for i in range(N_Q):
-            qs[i] = q[i]
-            qds[i] = qd[i]
-        shift = G[G_FLEX_G] > 0.5 and P[P_CLR_C] > 0.5
-        if shift:
-            qs[5] -= q[10]
-            qds[5] -= qd[10]
-        kkt_rows(P, q, qd, z[:, :2], z, crow, pat, pn, alpha_ref[k] if prescribed else 0.0, PhiV, gam, qs2)
-        if not kkt_factor(P, q, crow, pat, pn, PhiV, Minv, cols, cn, Mcrank, kaug, Yk, Wk, sck):
-            status = NOT_FINITE
-            break
-        generalized_forces(P, qs, qds, tau, cst_a, cst_b, cst_c, Q[:N_Q], ja, jb, jc)
-        if P[P_CLR_B] > 0.5 and jb[2] > 0.0:
-            mob = _pair_response(Minv, Yk, Wk, mk, 0, 0, 1, 2, 3, jb, zth, vth)
-            fn0, ft0 = _bound_damping(P, qs, qds, True, cst_b, jb, mob, h, _tangent(q, qd, MD, 0)[2], Q)
-            if fn0 > 0.0 or jb[3] > 0.0:
-                _modal_eye_contact(P, qs, q, MD, jb, fn0, ft0, 2, P[P_RBUSH_B], Q)
-        if P[P_CLR_C] > 0.5 and jc[2] > 0.0:
-            mob = _pair_response(Minv, Yk, Wk, mk, 1, 6, 10 if shift else -1, 4, 5, jc, zth, vth)
-            fn0, ft0 = _bound_damping(P, qs, qds, False, cst_c, jc, mob, h, _tangent(q, qd, MD, 1)[2], Q)
-            if fn0 > 0.0 or jc[3] > 0.0:
-                _modal_eye_contact(P, qs, q, MD, jc, fn0, ft0, 4, P[P_RBUSH_C], Q)
-        if shift and jc[3] > 0.0:
-            ex, ey = jc[0], jc[1]
-            d = math.sqrt(ex * ex + ey * ey)
-            nx, ny = (ex / d, ey / d) if d > 0.0 else (1.0, 0.0)
-            Q[10] += -jc[3] * ny + jc[4] * nx
-        for i in range(N_Q):
-            Qb[i] = Q[i]
-        diss = modal_forces(P, q, qd, H, MD, G, Q)
-        fB = fC = 0.0
-        if P[P_CLR_B] > 0.5 and jb[2] > 0.0:
-            law_terms(P, qs, qds, True, cst_b, jb, lawB)
-            fB = jb[3]
-        if P[P_CLR_C] > 0.5 and jc[2] > 0.0:
-            law_terms(P, qs, qds, False, cst_c, jc, lawC)
-            fC = jc[3]
-        mu = kkt_accelerations(q, Q, crow, pat, pn, PhiV, gam, Minv, cols, cn, Yk, Wk, qdd, lam)
-        if prescribed:
-            tau = -mu
-        if fB > 0.0 or fC > 0.0:
-            tau += _modal_theta_damping(h, qdd, mk, crow, lawB, lawC, fB, fC, shift, jb, jc, zth, vth, act, Wm, an,
-                                        f0, dl)
-        if want_out and k % stride == 0:
-            row = out[k // stride]
-            _outputs(P, q[:N_Q], qd[:N_Q], qdd[:N_Q], tau, ja, jb, jc, row)
-            _modal_rod_sensors(P, q, qdd, sens, sphi, sdphi, row)
-            if G[G_FLEX_G] > 0.5:
-                _slider_sensors(P, qdd, sens, row)
-            if P[P_OUT_ENERGY] > 0.5:
-                T, V = modal_energy(P, q, qd, H, MD, G, F)
-                row[O_EKIN] = T
-                row[O_EPOT] = V
-            row[N_OUT] = diss_total
-            _modal_structure_outputs(P, G, q, MD, row)
-            if motor:
-                DT.outputs(D, ds, dout[k // stride])
-                if D[DT.D_ACCOUNT] != 0.0:
-                    T, V = modal_energy(P, q, qd, H, MD, G, F)
-                    dout[k // stride, DT.DO_EMECH] = T + V + dout[k // stride, DT.DO_ROTOR_KE]
-        diss_total += h * diss
-        integ += h * err
-        if imax > 0.0:
-            if integ > imax:
-                integ = imax
-            elif integ < -imax:
-                integ = -imax
-        for i in range(N_Q):
-            qd0[i] = qd[i]
-        for i in range(n):
-            qd[i] += h * qdd[i]
-            q[i] += h * qd[i]
-        if prescribed:
-            q[7] = theta_ref[k + 1]
-            qd[7] = omega_ref[k + 1]
-        if modal_project(P, G, q, qd, res, dq, b, z) < 0:
-            status = NEWTON_FAILED
-            k += 1
-            break
-        fin = True
-        for i in range(n):
-            if not (math.isfinite(q[i]) and math.isfinite(qd[i])):
-                fin = False
-        if not fin:
-            status = NOT_FINITE
-            k += 1
-            break
-        if motor:
-            fgd = DT.guide_force(P[P_FGUIDE], qd0[6], P[P_V0], P[P_V1]) if D[DT.D_ACCOUNT] != 0.0 else 0.0
-            DT.end_step(D, ds, Qb, Qg, tau, fgd, qd0, qd[:N_Q])
-        k += 1
-    x[:n] = q
-    x[n:2 * n] = qd
-    x[2 * n] = diss_total
-    st[S_Q:S_Q + N_Q] = q[:N_Q]
-    st[S_QD:S_QD + N_Q] = qd[:N_Q]
-    st[S_I] = integ
-    st[S_IN_A], st[S_VIMP_A] = cst_a[0], cst_a[1]
-    st[S_IN_B], st[S_VIMP_B] = cst_b[0], cst_b[1]
-    st[S_IN_C], st[S_VIMP_C] = cst_c[0], cst_c[1]
-    return status, k
-
-
 # ------------------------------------------------------------------------------------------ Python side
 class ModalRun:
     """The modal rod's runner for :class:`twin.reference.engine.ReferenceEngine` (the interface of
@@ -728,7 +547,10 @@ class ModalRun:
 
     def run(self, st: np.ndarray, theta_ref: np.ndarray, omega_ref: np.ndarray, stride: int, buf: np.ndarray,
             train=None, k0: int = 0, alpha_ref: np.ndarray | None = None):
-        """One chunk (arguments as :meth:`twin.reference.flexible.FlexibleRun.run`)."""
+        """One chunk (arguments as :meth:`twin.reference.flexible.FlexibleRun.run`): the stepping loop is the
+        chain's, :func:`twin.reference.flexible.run_flexible`, with this rod's tables."""
+        from twin.reference.flexible import run_flexible
+
         lay = self.layout
         if train is not None:
             sp, dbuf = train.chunk_inputs(k0, omega_ref, stride, buf.shape[0])
@@ -737,10 +559,11 @@ class ModalRun:
             sp = D = ds = np.empty(0)
             dbuf = np.empty((0, 1))
         kk = self.kkt(alpha_ref is not None)
-        return run_modal(self.P, lay.G, lay.H, lay.MD, lay.F, lay.sens, lay.sphi, lay.sdphi, st, self.x, theta_ref,
-                         omega_ref, stride, buf, True, D, ds, sp, dbuf,
-                         np.empty(0) if alpha_ref is None else alpha_ref, kk.crow, kk.pat, kk.pn, kk.Minv, kk.cols,
-                         kk.cn, kk.Mcrank, kk.kaug)
+        e2, ez = np.empty((0, 2)), np.empty((0, 2), dtype=np.int64)
+        return run_flexible(self.P, lay.G, ez, e2, ez, e2, self._z, e2, self._z, lay.sens, st, self.x, theta_ref,
+                            omega_ref, stride, buf, True, D, ds, sp, dbuf,
+                            np.empty(0) if alpha_ref is None else alpha_ref, kk.crow, kk.pat, kk.pn, kk.Minv, kk.cols,
+                            kk.cn, kk.Mcrank, kk.kaug, lay.H, lay.MD, lay.F, lay.sens, lay.sphi, lay.sdphi)
 
     def tap(self, speed_mps: float, axial: bool) -> None:
         """A tap on the current state: the mid-span point given ``speed_mps`` normal to the chord (through the
