@@ -14,7 +14,8 @@ from twin.config import BenchConfig, preset
 from twin.errors import ConfigError
 from twin.natural_coordinates import N_Q, initial_state
 from twin.reference import model as RM
-from twin.reference.flexible_modal import ModalRun, modal_energy, modal_forces, modal_frequencies, modal_matrices
+from twin.reference.flexible_modal import modal_energy, modal_forces, modal_frequencies, modal_matrices
+from twin.reference.flexible_modal_run import ModalRun
 from twin.structure import axial_fixed_mass_hz, axial_free_masses_hz, bending_pinned_hz, rod_split
 
 BASE = BenchConfig()

@@ -18,7 +18,7 @@ from twin.reference.flexible import N_OUT_FLEX, O_DISS, FlexibleRun, tap_respons
 def _run(cfg, theta0, *, drive=False, guide_friction=False, rod_model="chain"):
     prm = lambda c: RM.build_params(c, drive=drive, guide_friction=guide_friction)  # noqa: E731
     if rod_model == "modal":
-        from twin.reference.flexible_modal import ModalRun
+        from twin.reference.flexible_modal_run import ModalRun
 
         run = ModalRun(cfg, prm(cfg), prm)
     else:

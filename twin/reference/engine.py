@@ -318,7 +318,7 @@ def _flexible_run(cfg: BenchConfig, P: np.ndarray, options: ReferenceOptions):
                           "frame and the guide on their supports: the reference engine has it with A and the guide "
                           f"ideal); use 0, got {value!r}")
     if options.rod_model == "modal":
-        from twin.reference.flexible_modal import ModalRun
+        from twin.reference.flexible_modal_run import ModalRun
 
         return ModalRun(cfg, P, lambda c: engine_params(c, options))
     return FlexibleRun(cfg, P, lambda c: engine_params(c, options))

@@ -69,10 +69,9 @@ from twin.reference.flexible_kernels import (G_CF, G_CG, G_FLEX_A, G_FLEX_G, G_K
                                              flex_energy, flex_project,
                                              _rod_sensors, _slider_sensors)
 from twin.reference.flexible_kkt import (KKTLayout, kkt_accelerations, kkt_factor, kkt_mobility, kkt_rows,
-                                          kkt_theta_damping)
+                                          kkt_theta_damping, theta_from_responses)
 from twin.reference.flexible_modal import (_modal_eye_contact, _modal_rod_sensors, _modal_structure_outputs,
-                                           _modal_theta_damping, _pair_response, _tangent, modal_energy, modal_forces,
-                                           modal_project)
+                                           _pair_response, _tangent, modal_energy, modal_forces, modal_project)
 
 # the supports' parameters ``G`` (build()): indices G_KF … G_FLEX_G, defined with the kernels that read them; then
 # the rod's mid-span material point for the "structure" channels (:func:`_structure_outputs`): its segment and its
@@ -362,7 +361,7 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
         if prescribed:   # the drive torque: minus the multiplier of the driving constraint
             tau = -mu
         if modal and (fB > 0.0 or fC > 0.0):   # the pairs' responses of this step, solved above
-            tau += _modal_theta_damping(h, qdd, mk, crow, lawB, lawC, fB, fC, shift, jb, jc, zth, vth, act, Wm, an,
+            tau += theta_from_responses(h, qdd, mk, crow, lawB, lawC, fB, fC, shift, jb, jc, zth, vth, act, Wm, an,
                                         f0, dl)
         elif fB > 0.0 or fC > 0.0:
             tau += kkt_theta_damping(h, qdd, Minv, Yk, Wk, mk, crow, lawB, lawC, fB, fC, shift, jb, jc, zth, vth)
@@ -482,38 +481,52 @@ def initial_coordinates(P, G, lay: FlexLayout, q_rigid, qd_rigid) -> np.ndarray:
     return x
 
 
-class FlexibleRun:
-    """The flexible bench of one configuration for :class:`twin.reference.engine.ReferenceEngine`: parameters,
-    layout, state and the accelerometer mounts."""
+class RodRun:
+    """What the two reference rods' runners share (:class:`FlexibleRun`, the chain;
+    :class:`twin.reference.flexible_modal.ModalRun`): Table 1's rod split, the rigid model's parameters with the rod as
+    its two housings (``P``), the accelerometer mounts, the state ``x``."""
 
     def __init__(self, cfg, P_rigid: np.ndarray, params) -> None:
-        from twin.structure import MountFilter, rod_chain, rod_split
+        from twin.config.structure import StructureConfig
+        from twin.structure import MountFilter, rod_split
 
         st = cfg.structure
         self.cfg = cfg
-        self.chain = rod_chain(st, cfg.bodies.rod, cfg.bodies.slider.mass_kg)
-        self.layout = build(cfg, self.chain)
-        split = rod_split(cfg.bodies.rod.mass_kg, cfg.bodies.rod.length_m, cfg.bodies.rod.x_g_m,
-                          cfg.bodies.rod.inertia_kgm2, st.rod_end_inertia_kgm2)
-        from twin.config.structure import StructureConfig
-
+        self.split = rod_split(cfg.bodies.rod.mass_kg, cfg.bodies.rod.length_m, cfg.bodies.rod.x_g_m,
+                               cfg.bodies.rod.inertia_kgm2, st.rod_end_inertia_kgm2)
         # (the rigid model's parameters of the rod's two housings; its "structure" channels are this runner's)
         sensors = dataclasses.replace(cfg.sensors, channels=tuple(g for g in cfg.sensors.channels if g != "structure"))
-        ends = dataclasses.replace(cfg, bodies=dataclasses.replace(cfg.bodies, rod=rigid_rod_body(split)),
+        ends = dataclasses.replace(cfg, bodies=dataclasses.replace(cfg.bodies, rod=rigid_rod_body(self.split)),
                                    structure=StructureConfig(), sensors=sensors)
         self.P = params(ends)
         self.P_rigid = P_rigid
         self.mounts = MountFilter(st.mount_frequency_hz, st.mount_damping_ratio, cfg.sensors.output_rate_hz)
         self.x: np.ndarray | None = None
         self._kkt: dict[bool, KKTLayout] = {}
+
+    def take_contact_parameters(self) -> None:
+        """The contact stiffnesses of the rigid model's parameters (resolved at its reset)."""
+        from twin.natural_coordinates import P_CLIN_A, P_CLIN_B, P_CLIN_C, P_K_A, P_K_B, P_K_C
+        for i in (P_K_A, P_K_B, P_K_C, P_CLIN_A, P_CLIN_B, P_CLIN_C):
+            self.P[i] = self.P_rigid[i]
+
+
+class FlexibleRun(RodRun):
+    """The flexible bench of one configuration for :class:`twin.reference.engine.ReferenceEngine`: parameters,
+    layout, state and the accelerometer mounts."""
+
+    def __init__(self, cfg, P_rigid: np.ndarray, params) -> None:
+        from twin.structure import rod_chain
+
+        super().__init__(cfg, P_rigid, params)
+        self.chain = rod_chain(cfg.structure, cfg.bodies.rod, cfg.bodies.slider.mass_kg)
+        self.layout = build(cfg, self.chain)
         self.kkt(cfg.drive.mode == "prescribed")   # built here, not in the first chunk's stepping time
 
     def reset(self, st_rigid: np.ndarray) -> None:
         """Start from the rigid model's state (the straight, unstretched rod on its pose), the contact stiffnesses
         of the rigid model's parameters."""
-        from twin.natural_coordinates import P_CLIN_A, P_CLIN_B, P_CLIN_C, P_K_A, P_K_B, P_K_C
-        for i in (P_K_A, P_K_B, P_K_C, P_CLIN_A, P_CLIN_B, P_CLIN_C):
-            self.P[i] = self.P_rigid[i]
+        self.take_contact_parameters()
         lay = self.layout
         self.x = initial_coordinates(self.P, lay.G, lay, st_rigid[S_Q:S_Q + N_Q], st_rigid[S_QD:S_QD + N_Q])
         self.mounts.reset()
@@ -557,7 +570,7 @@ def tap_response(cfg, speed_mps: float = 0.01, duration_s: float = 0.2, every: i
     ``axial``: the tap is on the bore C along the chord instead, and the response the stretch |C − B'| − L.
     ``rod_model`` "modal": the same with :mod:`twin.reference.flexible_modal`'s rod."""
     if rod_model == "modal":
-        from twin.reference.flexible_modal import modal_tap_response
+        from twin.reference.flexible_modal_run import modal_tap_response
 
         return modal_tap_response(cfg, speed_mps, duration_s, every, theta0, drive, axial)
     from twin.natural_coordinates import initial_state

@@ -470,6 +470,14 @@ def chain_forces(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G, Q):
         Q[c + 1] += f * ey
         Q[p] -= f * ex
         Q[p + 1] -= f * ey
+    return support_forces(P, q, qd, G, Q, diss)
+
+
+@njit(cache=True)
+def support_forces(P, q, qd, G, Q, diss):
+    """Add the supports' springs, dampers and weights to Q (the frame at A' = (q_8, q_9), the guide's y_g = q_10);
+    returns ``diss`` plus the power their dampers dissipate [W]. Shared by the chain and the modal rod."""
+    gx, gy = P[P_GX], P[P_GY]
     if G[G_FLEX_A] > 0.5:   # the frame's spring and damper, and the frame's own weight (its mass moves with A')
         for i in (8, 9):
             Q[i] += -G[G_KF] * q[i] - G[G_CF] * qd[i]
@@ -480,6 +488,17 @@ def chain_forces(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G, Q):
         Q[10] += -G[G_KG] * q[10] - G[G_CG] * qd[10] + (P[P_M3] + G[G_MG]) * gy
         diss += G[G_CG] * qd[10] * qd[10]
     return diss
+
+
+@njit(cache=True)
+def support_energy(P, q, G, V):
+    """``V`` plus the supports' springs' energy and their (and the guide-borne slider's) weight's [J]."""
+    gx, gy = P[P_GX], P[P_GY]
+    if G[G_FLEX_A] > 0.5:
+        V += 0.5 * G[G_KF] * (q[8] * q[8] + q[9] * q[9]) - G[G_MF] * (gx * q[8] + gy * q[9])
+    if G[G_FLEX_G] > 0.5:
+        V += 0.5 * G[G_KG] * q[10] * q[10] - (P[P_M3] + G[G_MG]) * gy * q[10]
+    return V
 
 
 @njit(cache=True)
@@ -512,11 +531,7 @@ def flex_energy(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G):
         wn = math.sqrt(wx * wx + wy * wy)
         d = ((q[c] - q[p]) * wx + (q[c + 1] - q[p + 1]) * wy) / wn
         V += 0.5 * slide_f[k, 0] * d * d
-    if G[G_FLEX_A] > 0.5:
-        V += 0.5 * G[G_KF] * (q[8] * q[8] + q[9] * q[9]) - G[G_MF] * (gx * q[8] + gy * q[9])
-    if G[G_FLEX_G] > 0.5:
-        V += 0.5 * G[G_KG] * q[10] * q[10] - (P[P_M3] + G[G_MG]) * gy * q[10]
-    return T, V
+    return T, support_energy(P, q, G, V)
 
 
 @njit(cache=True)
@@ -547,6 +562,22 @@ def _independent_values(P, G, q, qd, segs, slides, indep, b):
 
 
 @njit(cache=True)
+def rigid_residual(P, G, q, s, c, res):
+    """The rigid model's constraint residuals into ``res[:12]`` with the flexible structure's independent rows 0: the
+    rod's length (its stretch), the frame's A' and the guide's y_g; the ideal joint C on the moving guide: C' at
+    d_off + y_g. Shared by the chain's and the modal rod's projections."""
+    residual(P, q[:N_Q], s, c, res[:N_Q])
+    res[2] = 0.0
+    if G[G_FLEX_A] > 0.5:
+        res[8] = 0.0
+        res[9] = 0.0
+    if G[G_FLEX_G] > 0.5:
+        res[10] = 0.0
+        if P[P_CLR_C] < 0.5:
+            res[6] = P[P_DOFF] + q[10] - q[5]
+
+
+@njit(cache=True)
 def flex_project(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, res, dq, b, tmp):
     """Newton on the constraints with the independent coordinates held, then q̇ ← R ż (as the rigid
     :func:`twin.natural_coordinates.project`). On return A and LU hold the chain's rows at the final q (the
@@ -563,15 +594,7 @@ def flex_project(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, res, dq, b
         return -1
     while it < maxit:
         s, c = math.sin(q[7]), math.cos(q[7])
-        residual(P, q[:N_Q], s, c, res[:N_Q])
-        res[2] = 0.0
-        if G[G_FLEX_A] > 0.5:
-            res[8] = 0.0
-            res[9] = 0.0
-        if G[G_FLEX_G] > 0.5:
-            res[10] = 0.0
-            if P[P_CLR_C] < 0.5:   # the ideal joint C on the moving guide: C' at d_off + y_g
-                res[6] = P[P_DOFF] + q[10] - q[5]
+        rigid_residual(P, G, q, s, c, res)
         chain_residual(q, segs, seg_f, slides, res[N_Q:])
         for i in range(n):
             res[i] = -res[i]

@@ -414,8 +414,25 @@ def kkt_theta_damping(h, qdd, Minv, Y, W, m, crow, lawB, lawC, fB, fC, shift, jb
             lw = lawB if a == 0 else lawC
             p = pins[a]
             _kkt_response(Minv, Y, W, m, p[0], p[1], p[2], p[3], lw[4], lw[5], z[a], v[a])
-    Wm = np.zeros((2, 2))
-    an = np.zeros(2)
+    return theta_from_responses(h, qdd, m, crow, lawB, lawC, fB, fC, shift, jb, jc, z, v, act, np.zeros((2, 2)),
+                                np.zeros(2), np.zeros(2), np.zeros(2))
+
+
+@njit(cache=True)
+def theta_from_responses(h, qdd, m, crow, lawB, lawC, fB, fC, shift, jb, jc, z, v, act, Wm, an, f0, dl):
+    """The θ-method of :func:`kkt_theta_damping` once the active pairs' responses ``z[a]`` = N J_aᵀ, ``v[a]`` (the
+    multipliers' change per unit force, :func:`_kkt_response`) are solved (the modal rod solves them once per step for
+    its damping bound too); ``act`` the active pairs (set here), ``Wm`` … ``dl`` scratch (2 × 2, 2, 2, 2)."""
+    act[0] = fB > 0.0 and lawB[1] > 0.0
+    act[1] = fC > 0.0 and lawC[1] > 0.0
+    if not (act[0] or act[1]):
+        return 0.0
+    for a in range(2):
+        an[a] = 0.0
+        dl[a] = 0.0
+        for b in range(2):
+            Wm[a, b] = 0.0
+    pins = ((0, 1, 2, 3), (6, 10 if shift else -1, 4, 5))
     for a in range(2):
         if not act[a]:
             continue
@@ -426,8 +443,7 @@ def kkt_theta_damping(h, qdd, Minv, Y, W, m, crow, lawB, lawC, fB, fC, shift, jb
         for b in range(2):
             if act[b]:   # J_a z_b
                 Wm[a, b] = nx * (z[b, p[0]] - z[b, p[2]]) + ny * ((z[b, p[1]] if p[1] >= 0 else 0.0) - z[b, p[3]])
-    f0 = np.array([fB, fC])
-    dl = np.zeros(2)
+    f0[0], f0[1] = fB, fC
     theta_forces(h, Wm, act, f0, lawB, lawC, an, dl)
     n = qdd.shape[0]
     dtau = 0.0

@@ -43,12 +43,12 @@ import math
 import numpy as np
 
 from twin.jit import njit
-from twin.natural_coordinates import (N_Q, P_CLR_C, P_DOFF, P_GX, P_GY, P_L, P_M3, P_NEWTON_MAXIT, P_NEWTON_TOL,
-                                      S_Q, S_QD, energy, kinetic_energy, mass_times, residual, solve_aug)
+from twin.natural_coordinates import (N_Q, P_GX, P_GY, P_L, P_NEWTON_MAXIT, P_NEWTON_TOL, energy, kinetic_energy,
+                                      mass_times, solve_aug)
 from twin.reference.flexible_kernels import (G_CF, G_CG, G_FLEX_A, G_FLEX_G, G_KF, G_KG, G_MF, G_MG,
-                                             _independent_values, theta_forces)
+                                             _independent_values, rigid_residual, support_energy, support_forces)
 from twin.reference.flexible_kkt import _kkt_response
-from twin.reference.model import N_OUT, O_ACC, OK, _rod_force
+from twin.reference.model import N_OUT, O_ACC, _rod_force
 
 #: shapes of the modal rod (bending 1–3 need three; the first axial mode is the chord's with their axial parts)
 N_SHAPES = 3
@@ -291,16 +291,7 @@ def modal_forces(P, q, qd, H, MD, G, Q):
     Q[5] += fdy
     Q[2] -= fdx
     Q[3] -= fdy
-    if G[G_FLEX_A] > 0.5:
-        for i in (8, 9):
-            Q[i] += -G[G_KF] * q[i] - G[G_CF] * qd[i]
-            diss += G[G_CF] * qd[i] * qd[i]
-        Q[8] += G[G_MF] * gx
-        Q[9] += G[G_MF] * gy
-    if G[G_FLEX_G] > 0.5:
-        Q[10] += -G[G_KG] * q[10] - G[G_CG] * qd[10] + (P[P_M3] + G[G_MG]) * gy
-        diss += G[G_CG] * qd[10] * qd[10]
-    return diss
+    return support_forces(P, q, qd, G, Q, diss)
 
 
 @njit(cache=True)
@@ -326,11 +317,7 @@ def modal_energy(P, q, qd, H, MD, G, F):
         w = -q[i] * ey + q[i + 1] * ex
         V += 0.5 * MD[k, D_KA] * s * s + 0.5 * MD[k, D_KB] * w * w
         V -= MD[k, D_INT] * mbar * (gx * q[i] + gy * q[i + 1])
-    if G[G_FLEX_A] > 0.5:
-        V += 0.5 * G[G_KF] * (q[8] * q[8] + q[9] * q[9]) - G[G_MF] * (gx * q[8] + gy * q[9])
-    if G[G_FLEX_G] > 0.5:
-        V += 0.5 * G[G_KG] * q[10] * q[10] - (P[P_M3] + G[G_MG]) * gy * q[10]
-    return T, V
+    return T, support_energy(P, q, G, V)
 
 
 @njit(cache=True)
@@ -344,15 +331,7 @@ def modal_project(P, G, q, qd, res, dq, b, z):
     conv = False
     while it < maxit:
         s, c = math.sin(q[7]), math.cos(q[7])
-        residual(P, q[:N_Q], s, c, res[:N_Q])
-        res[2] = 0.0
-        if G[G_FLEX_A] > 0.5:
-            res[8] = 0.0
-            res[9] = 0.0
-        if G[G_FLEX_G] > 0.5:
-            res[10] = 0.0
-            if P[P_CLR_C] < 0.5:
-                res[6] = P[P_DOFF] + q[10] - q[5]
+        rigid_residual(P, G, q, s, c, res)
         for i in range(N_Q):
             res[i] = -res[i]
         solve_aug(q, s, c, res, dq)
@@ -439,180 +418,3 @@ def _pair_response(Minv, Y, W, m, a, pin_x, pin_y, eye_x, eye_y, jo, z, v):
     za = z[a]
     _kkt_response(Minv, Y, W, m, pin_x, pin_y, eye_x, eye_y, nx, ny, za, v[a])
     return nx * (za[pin_x] - za[eye_x]) + ny * ((za[pin_y] if pin_y >= 0 else 0.0) - za[eye_y])
-
-
-@njit(cache=True)
-def _modal_theta_damping(h, qdd, m, crow, lawB, lawC, fB, fC, shift, jb, jc, z, v, act, Wm, an, f0, dl):
-    """:func:`twin.reference.flexible_kkt.kkt_theta_damping` with the pairs' responses ``z``, ``v`` already solved
-    (:func:`_pair_response`) and its scratch (``act`` … ``dl``) given: the same method, no allocation."""
-    act[0] = fB > 0.0 and lawB[1] > 0.0
-    act[1] = fC > 0.0 and lawC[1] > 0.0
-    if not (act[0] or act[1]):
-        return 0.0
-    for a in range(2):
-        an[a] = 0.0
-        dl[a] = 0.0
-        for b in range(2):
-            Wm[a, b] = 0.0
-    for a in range(2):
-        if not act[a]:
-            continue
-        lw = lawB if a == 0 else lawC
-        px, py, ex_, ey_ = (0, 1, 2, 3) if a == 0 else (6, 10 if shift else -1, 4, 5)
-        nx, ny = lw[4], lw[5]
-        an[a] = nx * (qdd[px] - qdd[ex_]) + ny * ((qdd[py] if py >= 0 else 0.0) - qdd[ey_])
-        for b in range(2):
-            if act[b]:
-                Wm[a, b] = nx * (z[b, px] - z[b, ex_]) + ny * ((z[b, py] if py >= 0 else 0.0) - z[b, ey_])
-    f0[0], f0[1] = fB, fC
-    theta_forces(h, Wm, act, f0, lawB, lawC, an, dl)
-    n = qdd.shape[0]
-    dtau = 0.0
-    for a in range(2):
-        if not act[a] or dl[a] == 0.0:
-            continue
-        for i in range(n):
-            qdd[i] -= z[a, i] * dl[a]
-        for k in range(m):
-            if crow[k] == 7:
-                dtau += v[a, k] * dl[a]
-    if act[0]:
-        jb[3] = f0[0] + dl[0]
-    if act[1]:
-        jc[3] = f0[1] + dl[1]
-    return dtau
-
-
-# ------------------------------------------------------------------------------------------ Python side
-class ModalRun:
-    """The modal rod's runner for :class:`twin.reference.engine.ReferenceEngine` (the interface of
-    :class:`twin.reference.flexible.FlexibleRun`: ``reset``, ``run``, ``mounts``, ``x``, ``layout``)."""
-
-    def __init__(self, cfg, P_rigid: np.ndarray, params) -> None:
-        import dataclasses
-
-        from twin.config.structure import StructureConfig
-        from twin.errors import ConfigError
-        from twin.reference.flexible import rigid_rod_body
-        from twin.structure import MountFilter, rod_split
-
-        st = cfg.structure
-        if st.rod_end_inertia_kgm2 != 0.0:
-            raise ConfigError("reference.rod_model", "\"modal\" needs structure.rod_end_inertia_kgm2 = 0 (its sine "
-                                                     "shapes leave the housings' rotary inertia out); use \"chain\"")
-        self.cfg = cfg
-        split = rod_split(cfg.bodies.rod.mass_kg, cfg.bodies.rod.length_m, cfg.bodies.rod.x_g_m,
-                          cfg.bodies.rod.inertia_kgm2, st.rod_end_inertia_kgm2)
-        self.split = split
-        self.layout = ModalLayout(cfg, split)
-        sensors = dataclasses.replace(cfg.sensors, channels=tuple(g for g in cfg.sensors.channels if g != "structure"))
-        ends = dataclasses.replace(cfg, bodies=dataclasses.replace(cfg.bodies, rod=rigid_rod_body(split)),
-                                   structure=StructureConfig(), sensors=sensors)
-        self.P = params(ends)
-        self.P_rigid = P_rigid
-        self.mounts = MountFilter(st.mount_frequency_hz, st.mount_damping_ratio, cfg.sensors.output_rate_hz)
-        self.x: np.ndarray | None = None
-        self._kkt: dict = {}
-        self._z = np.empty((0, 3), dtype=np.int64)
-        self.kkt(cfg.drive.mode == "prescribed")
-
-    def kkt(self, prescribed: bool):
-        """The sparse acceleration solve's tables (the rigid model's rows only), built once per drive kind."""
-        from twin.reference.flexible_kkt import KKTLayout
-
-        kk = self._kkt.get(prescribed)
-        if kk is None:
-            lay = self.layout
-            z2 = np.empty((0, 2), dtype=np.int64)
-            kk = self._kkt[prescribed] = KKTLayout(self.P, lay.G, z2, np.empty((0, 2)), self._z, lay.n, prescribed,
-                                                   mass=lay.mass_matrix(self.P))
-        return kk
-
-    def reset(self, st_rigid: np.ndarray) -> None:
-        """The straight, unstretched rod on the rigid model's pose (its velocities projected), the contact stiffnesses
-        of the rigid model's parameters."""
-        from twin.natural_coordinates import P_CLIN_A, P_CLIN_B, P_CLIN_C, P_K_A, P_K_B, P_K_C
-        for i in (P_K_A, P_K_B, P_K_C, P_CLIN_A, P_CLIN_B, P_CLIN_C):
-            self.P[i] = self.P_rigid[i]
-        n = self.layout.n
-        x = np.zeros(2 * n + 1)
-        q, qd = x[:n].copy(), np.zeros(n)
-        q[:N_Q] = st_rigid[S_Q:S_Q + N_Q]
-        qd[:N_Q] = st_rigid[S_QD:S_QD + N_Q]
-        if modal_project(self.P, self.layout.G, q, qd, np.empty(n), np.empty(n), np.empty(n), self._z) < 0:
-            raise ValueError("the modal rod's initial pose does not satisfy its constraints")
-        x[:n], x[n:2 * n] = q, qd
-        self.x = x
-        self.mounts.reset()
-
-    def run(self, st: np.ndarray, theta_ref: np.ndarray, omega_ref: np.ndarray, stride: int, buf: np.ndarray,
-            train=None, k0: int = 0, alpha_ref: np.ndarray | None = None):
-        """One chunk (arguments as :meth:`twin.reference.flexible.FlexibleRun.run`): the stepping loop is the
-        chain's, :func:`twin.reference.flexible.run_flexible`, with this rod's tables."""
-        from twin.reference.flexible import run_flexible
-
-        lay = self.layout
-        if train is not None:
-            sp, dbuf = train.chunk_inputs(k0, omega_ref, stride, buf.shape[0])
-            D, ds = train.D, train.ds
-        else:
-            sp = D = ds = np.empty(0)
-            dbuf = np.empty((0, 1))
-        kk = self.kkt(alpha_ref is not None)
-        e2, ez = np.empty((0, 2)), np.empty((0, 2), dtype=np.int64)
-        return run_flexible(self.P, lay.G, ez, e2, ez, e2, self._z, e2, self._z, lay.sens, st, self.x, theta_ref,
-                            omega_ref, stride, buf, True, D, ds, sp, dbuf,
-                            np.empty(0) if alpha_ref is None else alpha_ref, kk.crow, kk.pat, kk.pn, kk.Minv, kk.cols,
-                            kk.cn, kk.Mcrank, kk.kaug, lay.H, lay.MD, lay.F, lay.sens, lay.sphi, lay.sdphi)
-
-    def tap(self, speed_mps: float, axial: bool) -> None:
-        """A tap on the current state: the mid-span point given ``speed_mps`` normal to the chord (through the
-        first shape, φ_1(½) = 1), or (``axial``) the bore C along the chord; velocities projected."""
-        n = self.layout.n
-        x = self.x
-        q, qd = x[:n].copy(), x[n:2 * n].copy()
-        ux, uy = q[4] - q[2], q[5] - q[3]
-        L = math.hypot(ux, uy)
-        if axial:
-            qd[4] += speed_mps * ux / L
-            qd[5] += speed_mps * uy / L
-        else:
-            qd[N_Q] += -speed_mps * uy / L
-            qd[N_Q + 1] += speed_mps * ux / L
-        if modal_project(self.P, self.layout.G, q, qd, np.empty(n), np.empty(n), np.empty(n), self._z) < 0:
-            raise ValueError("the tapped state does not satisfy the constraints")
-        x[:n], x[n:2 * n] = q, qd
-
-    def deflection(self) -> float:
-        """The mid-span point's distance from the chord B'–C [m]."""
-        row = np.zeros(N_OUT + 6)
-        _modal_structure_outputs(self.P, self.layout.G, self.x[:self.layout.n], self.layout.MD, row)
-        return float(row[N_OUT + 2])
-
-
-def modal_tap_response(cfg, speed_mps: float, duration_s: float, every: int, theta0: float, drive: bool,
-                       axial: bool) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`twin.reference.flexible.tap_response` for the modal rod (the same arguments and returns; the bending
-    tap is the mid-span point's velocity given through the first shape)."""
-    from twin.natural_coordinates import initial_state
-    from twin.reference.model import build_params
-
-    prm = lambda c: build_params(c, drive=drive, guide_friction=False)  # noqa: E731
-    run = ModalRun(cfg, prm(cfg), prm)
-    st = initial_state(cfg, theta0, 0.0, run.P)
-    run.reset(st)
-    run.tap(speed_mps, axial)
-    n = run.layout.n
-    h = cfg.simulation.timestep_s
-    steps = int(round(duration_s / (every * h)))
-    buf = np.empty((1, N_OUT + 6))
-    ref = np.full(every, theta0)
-    zero = np.zeros(every)
-    w = np.empty(steps)
-    for i in range(steps):
-        status, _ = run.run(st, ref, zero, every, buf)
-        if status != OK:
-            raise ValueError(f"the tap response failed at step {i * every} (status {status})")
-        qq = run.x[:n]
-        w[i] = math.hypot(qq[4] - qq[2], qq[5] - qq[3]) - cfg.bodies.rod.length_m if axial else run.deflection()
-    return (np.arange(steps) + 1) * every * h, w
