@@ -157,12 +157,21 @@ def build(cfg, chain) -> FlexLayout:
         seg = _body_at(chain, sx) - 1 if 0.0 < sx < L else (0 if sx <= 0.0 else N - 1)
         sens[i] = [seg, sx - xn[seg], sy, axes[mnt.axis]]
     st = cfg.structure
-    G = np.zeros(N_G)
     # the mid-span point: the chain body holding L/2 (the MuJoCo engine's rule, twin.structure.rod._body_at), at the
     # same distance from that segment's start
     mid = _body_at(chain, L / 2) - 1
-    G[G_MID_SEG] = mid
-    G[G_MID_XI] = L / 2 - chain.bodies[mid + 1].x0_m
+    G = support_table(st, mid, L / 2 - chain.bodies[mid + 1].x0_m)
+    return FlexLayout(n, (n - N_Q) // 2, segs, seg_f, np.array(hinges, dtype=np.int64), np.array(hinge_f),
+                      np.array(slides, dtype=np.int64), np.array(slide_f), np.array(indep, dtype=np.int64), sens, G,
+                      np.array(x0))
+
+
+def support_table(st, mid_seg: float, mid_xi: float) -> np.ndarray:
+    """The supports' parameters ``G`` (G_* indices) of ``st`` (:class:`twin.config.structure.StructureConfig`), with
+    the rod's mid-span point (its segment and the distance from its start; the modal rod: −1 and ξ = ½)."""
+    G = np.zeros(N_G)
+    G[G_MID_SEG] = mid_seg
+    G[G_MID_XI] = mid_xi
     G[G_FLEX_A] = G[G_FLEX_G] = 1.0
     G[G_MF] = st.frame_mass_kg
     G[G_KF] = st.support_stiffness(st.frame_mass_kg, st.frame_frequency_hz)
@@ -170,9 +179,7 @@ def build(cfg, chain) -> FlexLayout:
     G[G_MG] = st.guide_mass_kg
     G[G_KG] = st.support_stiffness(st.guide_mass_kg, st.guide_frequency_hz)
     G[G_CG] = st.support_damping(st.guide_mass_kg, st.guide_frequency_hz, st.guide_damping_ratio)
-    return FlexLayout(n, (n - N_Q) // 2, segs, seg_f, np.array(hinges, dtype=np.int64), np.array(hinge_f),
-                      np.array(slides, dtype=np.int64), np.array(slide_f), np.array(indep, dtype=np.int64), sens, G,
-                      np.array(x0))
+    return G
 
 
 # --------------------------------------------------------------------------------------------- kernels

@@ -45,7 +45,7 @@ import numpy as np
 from twin.jit import njit
 from twin.natural_coordinates import (N_Q, P_GX, P_GY, P_L, P_NEWTON_MAXIT, P_NEWTON_TOL, energy, kinetic_energy,
                                       mass_times, solve_aug)
-from twin.reference.flexible_kernels import (G_CF, G_CG, G_FLEX_A, G_FLEX_G, G_KF, G_KG, G_MF, G_MG,
+from twin.reference.flexible_kernels import (G_FLEX_A, G_FLEX_G, G_MF, G_MG,
                                              _independent_values, rigid_residual, support_energy, support_forces)
 from twin.reference.flexible_kkt import _kkt_response
 from twin.reference.model import N_OUT, O_ACC, _rod_force
@@ -117,7 +117,7 @@ class ModalLayout:
     def __init__(self, cfg, split) -> None:
         from twin.config import ACCELEROMETERS
         from twin.config.structure import StructureConfig  # noqa: F401  (the fields read below)
-        from twin.reference.flexible import G_MID_SEG, G_MID_XI, N_G
+        from twin.reference.flexible import support_table
 
         st = cfg.structure
         K = N_SHAPES
@@ -150,16 +150,7 @@ class ModalLayout:
                 kp = (k + 1) * math.pi
                 self.sphi[i, k] = math.sin(kp * xi)
                 self.sdphi[i, k] = kp * math.cos(kp * xi)
-        G = np.zeros(N_G)
-        G[G_MID_SEG], G[G_MID_XI] = -1.0, 0.5
-        G[G_FLEX_A] = G[G_FLEX_G] = 1.0
-        G[G_MF] = st.frame_mass_kg
-        G[G_KF] = st.support_stiffness(st.frame_mass_kg, st.frame_frequency_hz)
-        G[G_CF] = st.support_damping(st.frame_mass_kg, st.frame_frequency_hz, st.frame_damping_ratio)
-        G[G_MG] = st.guide_mass_kg
-        G[G_KG] = st.support_stiffness(st.guide_mass_kg, st.guide_frequency_hz)
-        G[G_CG] = st.support_damping(st.guide_mass_kg, st.guide_frequency_hz, st.guide_damping_ratio)
-        self.G = G
+        self.G = support_table(st, -1.0, 0.5)
 
     def mass_matrix(self, P: np.ndarray) -> np.ndarray:
         """The full constant mass matrix (n × n; θ massless), probed from :func:`modal_mass_times`."""
