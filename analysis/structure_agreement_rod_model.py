@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from twin.provenance import stamped, with_stamp_line
+from twin.provenance import stamped, write_stamped_text
 
 ACCELS = ("AC1", "AC2", "AC3", "AC4", "AC5", "AC6")
 MODELS = ("chain", "modal")
@@ -75,9 +75,7 @@ def main() -> None:
             lines.append(f"| {tid} | {label} | " + " | ".join(cells) + f" | {worst:.2f} |")
     text = "\n".join(lines) + "\n"
     print(text)
-    out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(out, with_stamp_line(text))
+    out = write_stamped_text(args.out, text)
     atomic_write_text(out.with_suffix(".json"), json.dumps(stamped(result), indent=1) + "\n")
     print(f"wrote {out}")
 
