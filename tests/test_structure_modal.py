@@ -168,3 +168,24 @@ def test_rod_model_option_errors_name_the_field():
     cfg = preset(12).replace(**{"structure.mode": "flexible", "structure.rod_end_inertia_kgm2": 5e-4})
     with pytest.raises(ConfigError, match=r"^reference\.rod_model: \"modal\" needs structure\.rod_end_inertia_kgm2"):
         _run(cfg)
+
+
+def test_stiffer_modal_rod_tends_to_the_rigid_model():
+    """As the chain's check (tests/test_structure_reference.py): test 3, 20 ms from rest, stiff supports; the
+    slider's departure from the rigid model at least halves with each fourfold modulus and is below 0.1 µm at
+    840 GPa."""
+    from twin.reference.engine import ReferenceEngine, ReferenceOptions
+    from twin.simulation import Collector, simulate, simulate_run
+
+    base = preset(3).replace(**{"simulation.engine": "reference", "simulation.duration_s": 0.02})
+    rigid = simulate_run(base).channels["slider_position"].data
+    diffs = []
+    for e in (52.5e9, 210e9, 840e9):
+        cfg = base.replace(**{"structure.mode": "flexible", "structure.rod_youngs_modulus_pa": e,
+                              "structure.frame_frequency_hz": 12000.0, "structure.guide_frequency_hz": 12000.0,
+                              "structure.frame_mass_kg": 40.0, "structure.guide_mass_kg": 20.0})
+        keep = Collector()
+        simulate(cfg, [keep], engine=ReferenceEngine(cfg, ReferenceOptions(rod_model="modal")))
+        diffs.append(float(np.max(np.abs(keep.run.channels["slider_position"].data - rigid))))
+    assert diffs[0] > 2 * diffs[1] > 4 * diffs[2], diffs
+    assert diffs[2] < 1e-7, diffs
