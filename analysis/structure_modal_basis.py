@@ -34,35 +34,22 @@ import math
 from pathlib import Path
 
 import numpy as np
-from scipy.integrate import quad
 from scipy.linalg import eigh
 
 from twin.provenance import write_stamped_text
 
 
 def basis_matrices(split, ea: float, ei: float, shapes: int, slope_inertia: bool = True):
-    """(M, Ka, Kb): the per-direction mass matrix over [B', C, u_1 … u_n] (the housings' rotary inertia J_e through
-    the end slopes when ``slope_inertia``) and the axial and bending stiffness (linearized, rod along x)."""
-    L, mu = split.length_m, split.bar_mass_kg / split.length_m
-    f = [lambda x: 1.0 - x, lambda x: x] + [(lambda k: (lambda x: math.sin(k * math.pi * x)))(k)
-                                           for k in range(1, shapes + 1)]
-    df = [-1.0, 1.0]   # slopes d/dξ at ξ = 0 and 1 of each shape: (at 0, at 1)
-    d0 = [-1.0, 1.0] + [k * math.pi for k in range(1, shapes + 1)]
-    d1 = [-1.0, 1.0] + [k * math.pi * math.cos(k * math.pi) for k in range(1, shapes + 1)]
-    del df
-    n = len(f)
-    M = np.array([[quad(lambda x: f[i](x) * f[j](x), 0.0, 1.0, epsabs=1e-13)[0] * mu * L for j in range(n)]
-                  for i in range(n)])
-    M[0, 0] += split.end_b_kg
-    M[1, 1] += split.end_c_kg
-    if slope_inertia and split.end_inertia_kgm2 > 0.0:   # ½ J (ẇ'(0)² + ẇ'(L)²), slopes d/dx = d/dξ / L
-        J = split.end_inertia_kgm2 / (L * L)
-        M += J * (np.outer(d0, d0) + np.outer(d1, d1))
-    Ka, Kb = np.zeros((n, n)), np.zeros((n, n))
-    Ka[:2, :2] = ea / L * np.array([[1.0, -1.0], [-1.0, 1.0]])
-    for k in range(1, shapes + 1):
-        Ka[1 + k, 1 + k] = ea * (k * math.pi / L) ** 2 * L / 2.0
-        Kb[1 + k, 1 + k] = ei * (k * math.pi / L) ** 4 * L / 2.0
+    """(M, Ka, Kb) of :func:`twin.reference.flexible_modal.modal_matrices` (per direction over [B', C, u_1 … u_n]), with
+    the housings' rotary inertia J_e read through the end slopes when ``slope_inertia`` (½ J_e (ẇ'(0)² + ẇ'(L)²))."""
+    from twin.reference.flexible_modal import modal_matrices
+
+    M, Ka, Kb = modal_matrices(split, ea, ei, shapes)
+    if slope_inertia and split.end_inertia_kgm2 > 0.0:   # slopes d/dx = (d/dξ) / L of (1 − ξ, ξ, sin kπξ)
+        L = split.length_m
+        d0 = [-1.0, 1.0] + [k * math.pi for k in range(1, shapes + 1)]
+        d1 = [-1.0, 1.0] + [k * math.pi * math.cos(k * math.pi) for k in range(1, shapes + 1)]
+        M = M + split.end_inertia_kgm2 / (L * L) * (np.outer(d0, d0) + np.outer(d1, d1))
     return M, Ka, Kb
 
 
