@@ -1,8 +1,9 @@
-"""Feasibility of a modal rod for the reference engine: a constant-mass modal basis against the closed forms.
+"""The reference engine's modal rod (``reference.rod_model = "modal"``, :mod:`twin.reference.flexible_modal`): its
+constant-mass basis against the closed forms, with more shapes and with the housings' rotary inertia.
 
-The reference's flexible step costs ~5× its rigid step (``analysis/profile_reference_flexible.py``): the tuned chain's
-24 coordinates with 10 constraint rows in the acceleration solve and 12 chain rows in the projection. A cheaper rod
-that keeps the natural-coordinate machinery (a constant, block-diagonal mass matrix; only the rigid model's rows):
+The reference's flexible step with the chain costs ~5× its rigid step (``analysis/profile_reference_flexible.py``):
+24 coordinates with 10 constraint rows in the acceleration solve and 12 chain rows in the projection. The modal rod
+keeps the natural-coordinate machinery (a constant, block-diagonal mass matrix; only the rigid model's rows):
 
     r(ξ) = B' + ξ (C − B') + Σ_k φ_k(ξ) u_k,     ξ = x/L ∈ [0, 1],
 
