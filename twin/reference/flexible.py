@@ -68,10 +68,10 @@ from twin.reference.flexible_kernels import (G_CF, G_CG, G_FLEX_A, G_FLEX_G, G_K
                                              _eye_contact, _bound_damping, _seg_angle_rate, chain_forces, law_terms,
                                              flex_energy, flex_project,
                                              _rod_sensors, _slider_sensors)
-from twin.reference.flexible_kkt import (KKTLayout, kkt_accelerations, kkt_factor, kkt_mobility, kkt_rows,
-                                          kkt_theta_damping, theta_from_responses)
+from twin.reference.flexible_kkt import (KKTLayout, kkt_accelerations, kkt_factor, kkt_rows, pair_response,
+                                          theta_from_responses)
 from twin.reference.flexible_modal import (_modal_eye_contact, _modal_rod_sensors, _modal_structure_outputs,
-                                           _pair_response, _tangent, modal_energy, modal_forces, modal_project)
+                                           _tangent, modal_energy, modal_forces, modal_project)
 
 # the supports' parameters ``G`` (build()): indices G_KF … G_FLEX_G, defined with the kernels that read them; then
 # the rod's mid-span material point for the "structure" channels (:func:`_structure_outputs`): its segment and its
@@ -251,7 +251,6 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
     Yk = np.empty((mk, n))
     Wk = np.empty((mk, mk))
     lam = np.empty(mk)
-    uk = np.empty(2 * mk)
     sck = np.empty((3, 5, 5))
     qs2 = np.empty(N_Q)
     qdd = np.empty(n)
@@ -315,13 +314,12 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
         # the contact forces on the rod act on its eyes (end_B, end_C), not spread as on a rigid rod, with the
         # law's damping bounded by the pair's effective mass (_bound_damping)
         if P[P_CLR_B] > 0.5 and jb[2] > 0.0:
+            # the pair's constrained response, solved once: its mobility bounds the damping here, the θ-method
+            # below reads the response itself
+            mob = pair_response(Minv, Yk, Wk, mk, 0, 0, 1, 2, 3, jb, zth, vth)
             if modal:
-                mob = _pair_response(Minv, Yk, Wk, mk, 0, 0, 1, 2, 3, jb, zth, vth)
                 w_eye = _tangent(q, qd, MD, 0)[2]
             else:
-                d = math.sqrt(jb[0] * jb[0] + jb[1] * jb[1])
-                mob = kkt_mobility(pat, pn, PhiV, Minv, cols, cn, Yk, Wk, mk, 0, 1, 2, 3, jb[0] / d, jb[1] / d,
-                                   uk) if d > 0.0 else 0.0
                 w_eye = _seg_angle_rate(q, qd, segs[0, 0], segs[0, 1])[2]
             fn0, ft0 = _bound_damping(P, qs, qds, True, cst_b, jb, mob, h, w_eye, Q)
             if fn0 > 0.0 or jb[3] > 0.0:
@@ -331,13 +329,10 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
                     _eye_contact(P, qs, q, jb, fn0, ft0, 2, P[P_RBUSH_B], segs[0, 0], segs[0, 1], Q)
         if P[P_CLR_C] > 0.5 and jc[2] > 0.0:
             last = segs.shape[0] - 1
+            mob = pair_response(Minv, Yk, Wk, mk, 1, 6, 10 if shift else -1, 4, 5, jc, zth, vth)
             if modal:
-                mob = _pair_response(Minv, Yk, Wk, mk, 1, 6, 10 if shift else -1, 4, 5, jc, zth, vth)
                 w_eye = _tangent(q, qd, MD, 1)[2]
             else:
-                d = math.sqrt(jc[0] * jc[0] + jc[1] * jc[1])
-                mob = kkt_mobility(pat, pn, PhiV, Minv, cols, cn, Yk, Wk, mk, 6, 10 if shift else -1, 4, 5,
-                                   jc[0] / d, jc[1] / d, uk) if d > 0.0 else 0.0
                 w_eye = _seg_angle_rate(q, qd, segs[last, 0], segs[last, 1])[2]
             fn0, ft0 = _bound_damping(P, qs, qds, False, cst_c, jc, mob, h, w_eye, Q)
             if fn0 > 0.0 or jc[3] > 0.0:
@@ -356,7 +351,8 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
             diss = modal_forces(P, q, qd, H, MD, G, Q)
         else:
             diss = chain_forces(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G, Q)
-        # the laws' damping by the θ-method (kkt_theta_damping) after the explicit solve: the laws' terms now
+        # the laws' damping by the θ-method (theta_from_responses, as kkt_theta_damping) after the explicit solve: the
+        # laws' terms now
         fB = fC = 0.0
         if P[P_CLR_B] > 0.5 and jb[2] > 0.0:
             law_terms(P, qs, qds, True, cst_b, jb, lawB)
@@ -367,11 +363,9 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
         mu = kkt_accelerations(q, Q, crow, pat, pn, PhiV, gam, Minv, cols, cn, Yk, Wk, qdd, lam)
         if prescribed:   # the drive torque: minus the multiplier of the driving constraint
             tau = -mu
-        if modal and (fB > 0.0 or fC > 0.0):   # the pairs' responses of this step, solved above
+        if fB > 0.0 or fC > 0.0:   # the pairs' responses of this step, solved above
             tau += theta_from_responses(h, qdd, mk, crow, lawB, lawC, fB, fC, shift, jb, jc, zth, vth, act, Wm, an,
                                         f0, dl)
-        elif fB > 0.0 or fC > 0.0:
-            tau += kkt_theta_damping(h, qdd, Minv, Yk, Wk, mk, crow, lawB, lawC, fB, fC, shift, jb, jc, zth, vth)
         if want_out and k % stride == 0:
             row = out[k // stride]
             _outputs(P, q[:N_Q], qd[:N_Q], qdd[:N_Q], tau, ja, jb, jc, row)

@@ -396,6 +396,21 @@ def _kkt_response(Minv, Y, W, m, pin_x, pin_y, eye_x, eye_y, nx, ny, z, v):
 
 
 @njit(cache=True)
+def pair_response(Minv, Y, W, m, a, pin_x, pin_y, eye_x, eye_y, jo, z, v):
+    """The constrained response of clearance pair ``a`` (0: B, 1: C) to a unit force along its normal (``jo``'s
+    eccentricity; :func:`_kkt_response` into ``z[a]``, ``v[a]``) and its normal mobility
+    J N Jᵀ = J z [1/kg] (0 without a normal). One solve serves the damping bound and the θ-method (:func:`theta_from_responses`), for
+    either rod."""
+    d = math.sqrt(jo[0] * jo[0] + jo[1] * jo[1])
+    if not d > 0.0:
+        return 0.0
+    nx, ny = jo[0] / d, jo[1] / d
+    za = z[a]
+    _kkt_response(Minv, Y, W, m, pin_x, pin_y, eye_x, eye_y, nx, ny, za, v[a])
+    return nx * (za[pin_x] - za[eye_x]) + ny * ((za[pin_y] if pin_y >= 0 else 0.0) - za[eye_y])
+
+
+@njit(cache=True)
 def kkt_theta_damping(h, qdd, Minv, Y, W, m, crow, lawB, lawC, fB, fC, shift, jb, jc, z, v):
     """The contact laws' damping at B and C by the θ-method after :func:`kkt_accelerations` (the sparse form of
     :func:`twin.reference.flexible_rmatrix.theta_damping`, which states the method and is its check): the normal

@@ -47,7 +47,6 @@ from twin.natural_coordinates import (N_Q, P_GX, P_GY, P_L, P_NEWTON_MAXIT, P_NE
                                       mass_times, solve_aug)
 from twin.reference.flexible_kernels import (G_FLEX_A, G_FLEX_G, G_MF, G_MG,
                                              _independent_values, rigid_residual, support_energy, support_forces)
-from twin.reference.flexible_kkt import _kkt_response
 from twin.reference.model import N_OUT, O_ACC, _rod_force
 
 #: shapes of the modal rod (bending 1–3 need three; the first axial mode is the chord's with their axial parts)
@@ -395,17 +394,3 @@ def _modal_structure_outputs(P, G, q, MD, row):
     row[o + 2] = q[8] if G[G_FLEX_A] > 0.5 else 0.0
     row[o + 3] = q[9] if G[G_FLEX_A] > 0.5 else 0.0
     row[o + 4] = q[10] if G[G_FLEX_G] > 0.5 else 0.0
-
-
-@njit(cache=True)
-def _pair_response(Minv, Y, W, m, a, pin_x, pin_y, eye_x, eye_y, jo, z, v):
-    """The constrained response of clearance pair ``a`` (0: B, 1: C) to a unit force along its normal (``jo``'s
-    eccentricity; :func:`twin.reference.flexible_kkt._kkt_response` into ``z[a]``, ``v[a]``) and its normal mobility
-    J N Jᵀ = J z [1/kg] (0 without a normal). One solve serves the damping bound and the θ-method."""
-    d = math.sqrt(jo[0] * jo[0] + jo[1] * jo[1])
-    if not d > 0.0:
-        return 0.0
-    nx, ny = jo[0] / d, jo[1] / d
-    za = z[a]
-    _kkt_response(Minv, Y, W, m, pin_x, pin_y, eye_x, eye_y, nx, ny, za, v[a])
-    return nx * (za[pin_x] - za[eye_x]) + ny * ((za[pin_y] if pin_y >= 0 else 0.0) - za[eye_y])
