@@ -6,8 +6,9 @@
    no sub-steps: one symplectic-Euler step per h, checked here from the runs' step counts).
 2. *The flexible step's kernels*, each timed alone in a compiled loop at the state reached after the run (test 12,
    B and C clearances): the constraint rows and their quadratic terms, the sparse KKT factor (Y = M̃⁻¹Φᵀ, W = Φ Y,
-   its Cholesky), the mechanism's forces, the chain's elastic forces, the accelerations, one contact mobility (two
-   per step while both clearance joints touch), the position/velocity projection, the outputs. What the sum does not
+   its Cholesky), the mechanism's forces, the chain's elastic forces, the accelerations, one clearance pair's
+   constrained response and mobility (two per step while both clearance joints touch; the θ-method reuses them), the
+   position/velocity projection, the outputs. What the sum does not
    hold (the laws' damping bound and θ-method while in contact, the drive, the loop itself, the mount filter and the
    channels in Python) is the run's figure minus the sum.
 3. *Sizes*: coordinates, constraint rows of the acceleration solve, projection iterations at that state.
@@ -37,7 +38,7 @@ def _kernel_loops():
     from twin.natural_coordinates import N_Q
     from twin.reference.flexible import _structure_outputs
     from twin.reference.flexible_kernels import _rod_sensors, chain_forces, flex_project
-    from twin.reference.flexible_kkt import kkt_accelerations, kkt_factor, kkt_mobility, kkt_rows
+    from twin.reference.flexible_kkt import kkt_accelerations, kkt_factor, kkt_rows, pair_response
     from twin.reference.model import _outputs, generalized_forces
 
     @njit(cache=False)
@@ -75,8 +76,7 @@ def _kernel_loops():
     def mob(K, a):
         s = 0.0
         for _ in range(K):
-            s += kkt_mobility(a.pat, a.pn, a.PhiV, a.Minv, a.cols, a.cn, a.Y, a.W, a.crow.shape[0], 0, 1, 2, 3,
-                              0.6, 0.8, a.u)
+            s += pair_response(a.Minv, a.Y, a.W, a.crow.shape[0], 0, 0, 1, 2, 3, a.jo, a.z, a.v)
         return s
 
     @njit(cache=False)
@@ -107,7 +107,7 @@ def _kernel_loops():
     return {"constraint rows + quadratic terms (kkt_rows)": rows, "KKT factor: Y, W, Cholesky (kkt_factor)": fac,
             "mechanism forces and contact laws (generalized_forces)": gf,
             "chain elastic + support forces (chain_forces)": chain,
-            "accelerations: W⁻¹, q̈ (kkt_accelerations)": acc, "one contact mobility (kkt_mobility)": mob,
+            "accelerations: W⁻¹, q̈ (kkt_accelerations)": acc, "one pair's response and mobility (pair_response)": mob,
             "projection: Newton + velocity (flex_project)": (proj, copy), "outputs + rod sensors": outs}
 
 
@@ -180,7 +180,8 @@ def main() -> None:
         piv=np.empty(nc, dtype=np.int64), res=np.empty(n), dq=np.empty(n), b=np.empty(n), tmp=np.empty(n),
         Q=np.zeros(n), q2=np.empty(n), qd2=np.empty(n), ca=np.array([st[S_IN_A], st[S_VIMP_A]]),
         cb=np.array([st[S_IN_B], st[S_VIMP_B]]), cc=cc, ja=np.zeros(5), jb=np.zeros(5),
-        jc=np.zeros(5 + N_GUIDE_OUT), row=np.zeros(256))
+        jc=np.zeros(5 + N_GUIDE_OUT), row=np.zeros(256), jo=np.array([3e-5, 4e-5, 1e-6, 0.0, 0.0]),
+        z=np.empty((2, n)), v=np.empty((2, mk)))
     a = namedtuple("Args", fields)(**fields)
     from twin.reference.flexible_kernels import factor
 
@@ -209,7 +210,7 @@ def main() -> None:
     for name, v in timings.items():
         lines.append(f"| {name} | {v:.3f} | {v / total:.0%} |")
     lines += [f"| sum of the kernels called every step (all but the mobility) | {always:.3f} | {always / total:.0%} |",
-              f"| the rest of the run's step (contact: damping bound with two mobilities, θ-method; drive; loop; "
+              f"| the rest of the run's step (contact: damping bound with the pairs' responses, θ-method; drive; loop; "
               f"mount filter, channels) | {total - always:.3f} | {(total - always) / total:.0%} |",
               f"| the run's flexible step | {total:.3f} | 100% |",
               f"| the run's rigid step (for scale) | {best[(tests[-1], 'rigid')]:.3f} | |", "",
