@@ -51,7 +51,7 @@ def _kernel_loops():
         ok = True
         for _ in range(K):
             ok &= kkt_factor(a.P, a.q, a.crow, a.pat, a.pn, a.PhiV, a.Minv, a.cols, a.cn, a.Mcrank, a.kaug, a.Y, a.W,
-                             a.sc)
+                             a.sc, a.wlo)
         return ok
 
     @njit(cache=False)
@@ -87,7 +87,7 @@ def _kernel_loops():
                 a.q2[i] = a.q[i] + a.h * a.qd[i]
                 a.qd2[i] = a.qd[i]
             it += flex_project(a.P, a.G, a.q2, a.qd2, a.segs, a.seg_f, a.slides, a.indep, a.A, a.LU, a.piv, a.res,
-                               a.dq, a.b, a.tmp)
+                               a.dq, a.b, a.tmp, True)
         return it
 
     @njit(cache=False)
@@ -174,7 +174,7 @@ def main() -> None:
         P=fl.P, G=lay.G, q=fl.x[:n].copy(), qd=fl.x[n:2 * n].copy(), h=float(eng.cfg.simulation.timestep_s),
         segs=lay.segs, seg_f=lay.seg_f, hinges=lay.hinges, hinge_f=lay.hinge_f, slides=lay.slides,
         slide_f=lay.slide_f, indep=lay.indep, sens=lay.sensors, crow=kk.crow, pat=kk.pat, pn=kk.pn, Minv=kk.Minv,
-        cols=kk.cols, cn=kk.cn, Mcrank=kk.Mcrank, kaug=kk.kaug, PhiV=np.zeros((mk, kk.pat.shape[1])),
+        cols=kk.cols, cn=kk.cn, wlo=kk.wlo, Mcrank=kk.Mcrank, kaug=kk.kaug, PhiV=np.zeros((mk, kk.pat.shape[1])),
         gam=np.empty(mk), Y=np.empty((mk, n)), W=np.empty((mk, mk)), lam=np.empty(mk), u=np.empty(2 * mk),
         sc=np.empty((3, 5, 5)), qs2=np.empty(N_Q), qdd=np.zeros(n), A=np.empty((nc, n)), LU=np.empty((nc, nc)),
         piv=np.empty(nc, dtype=np.int64), res=np.empty(n), dq=np.empty(n), b=np.empty(n), tmp=np.empty(n),

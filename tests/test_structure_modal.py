@@ -125,7 +125,7 @@ def test_modal_sparse_solve_equals_a_dense_lagrange_solve(test_id):
         PhiV, gam, Y, W = np.zeros((m, kk.pat.shape[1])), np.empty(m), np.empty((m, n)), np.empty((m, m))
         KK.kkt_rows(P, q, qd, z, z, kk.crow, kk.pat, kk.pn, 0.0, PhiV, gam, np.empty(12))
         assert KK.kkt_factor(P, q, kk.crow, kk.pat, kk.pn, PhiV, kk.Minv, kk.cols, kk.cn, kk.Mcrank, kk.kaug, Y, W,
-                             np.empty((3, 5, 5)))
+                             np.empty((3, 5, 5)), kk.wlo)
         qdd = np.empty(n)
         KK.kkt_accelerations(q, Q, kk.crow, kk.pat, kk.pn, PhiV, gam, kk.Minv, kk.cols, kk.cn, Y, W, qdd, np.empty(m))
         Phi = np.zeros((m, n))

@@ -316,7 +316,7 @@ def test_sparse_constraint_force_solve_equals_the_r_matrix_solve(test_id, chain,
         PhiV, gam, Y, W = np.zeros((m, kk.pat.shape[1])), np.empty(m), np.empty((m, n)), np.empty((m, m))
         KK.kkt_rows(P, q, qd, lay.segs, lay.slides, kk.crow, kk.pat, kk.pn, alpha, PhiV, gam, np.empty(12))
         assert KK.kkt_factor(P, q, kk.crow, kk.pat, kk.pn, PhiV, kk.Minv, kk.cols, kk.cn, kk.Mcrank, kk.kaug, Y, W,
-                             np.empty((3, 5, 5)))
+                             np.empty((3, 5, 5)), kk.wlo)
         mobs2 = [KK.kkt_mobility(kk.pat, kk.pn, PhiV, kk.Minv, kk.cols, kk.cn, Y, W, m, *j, 0.6, 0.8,
                                  np.empty(2 * m)) for j in ((0, 1, 2, 3), (6, -1, 4, 5))]
         qdd2 = np.empty(n)

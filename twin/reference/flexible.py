@@ -208,7 +208,7 @@ def _structure_outputs(P, G, q, segs, row):
 @njit(cache=True, nogil=True)
 def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sens, st, x, theta_ref, omega_ref,
                  stride, out, want_out, D, ds, setpoint, dout, alpha_ref, crow, pat, pn, Minv, cols, cn, Mcrank,
-                 kaug, H, MD, F, msens, sphi, sdphi):
+                 kaug, H, MD, F, msens, sphi, sdphi, wlo):
     """Integrate ``len(theta_ref)`` steps of the flexible bench from the rigid state ``st`` (PID integral,
     contact events; its q, q̇ unused) and the full coordinates ``x`` = [q (n), q̇ (n), dissipated energy]
     (updated in place). Crank PID drive, or with ``D`` non-empty the drive train (:mod:`twin.reference.drivetrain`,
@@ -218,7 +218,8 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
     :func:`twin.reference.model.run_prescribed` does (``theta_ref``, ``omega_ref`` hold the program at t_0 … t_n,
     ``alpha_ref`` its acceleration at t_0 … t_{n−1}; the drive torque goes to the torque column). Returns
     (status, steps done). The accelerations by the sparse constraint-force solve of
-    :mod:`twin.reference.flexible_kkt` (``crow`` to ``kaug``: its :class:`~twin.reference.flexible_kkt.KKTLayout`,
+    :mod:`twin.reference.flexible_kkt` (``crow`` to ``kaug`` and ``wlo``: its
+    :class:`~twin.reference.flexible_kkt.KKTLayout`,
     with θ's row among the constraints when the crank is prescribed). ``H`` non-empty: the rod is the modal rod of
     :mod:`twin.reference.flexible_modal` (``H`` … ``sdphi`` its tables; the chain's tables empty): its forces,
     projection, sensors, energy, eye contact and the pairs' responses (one solve per pair for the damping bound and
@@ -307,7 +308,7 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
         # the constraint rows and the mobility W = Φ_c M̃⁻¹ Φ_cᵀ at (q, q̇) (flexible_kkt: the R matrix's q̈ to
         # round-off)
         kkt_rows(P, q, qd, segs, slides, crow, pat, pn, alpha_ref[k] if prescribed else 0.0, PhiV, gam, qs2)
-        if not kkt_factor(P, q, crow, pat, pn, PhiV, Minv, cols, cn, Mcrank, kaug, Yk, Wk, sck):
+        if not kkt_factor(P, q, crow, pat, pn, PhiV, Minv, cols, cn, Mcrank, kaug, Yk, Wk, sck, wlo):
             status = NOT_FINITE
             break
         generalized_forces(P, qs, qds, tau, cst_a, cst_b, cst_c, Q[:N_Q], ja, jb, jc)
@@ -407,7 +408,7 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
             q[7] = theta_ref[k + 1]
             qd[7] = omega_ref[k + 1]
         if (modal_project(P, G, q, qd, res, dq, b, indep) if modal else
-                flex_project(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, res, dq, b, tmp)) < 0:
+                flex_project(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, res, dq, b, tmp, True)) < 0:
             status = NEWTON_FAILED
             k += 1
             break
@@ -475,7 +476,7 @@ def initial_coordinates(P, G, lay: FlexLayout, q_rigid, qd_rigid) -> np.ndarray:
     A, LU, piv = np.empty((nc, n)), np.empty((nc, nc)), np.empty(nc, dtype=np.int64)
     qc = q.copy()
     it = flex_project(P, G, qc, qd, lay.segs, lay.seg_f, lay.slides, lay.indep, A, LU, piv, np.empty(n),
-                      np.empty(n), np.empty(n), np.empty(n))
+                      np.empty(n), np.empty(n), np.empty(n), False)
     if it < 0:
         raise ValueError("the flexible rod's initial pose does not satisfy its constraints")
     x[:n], x[n:2 * n] = qc, qd
@@ -549,7 +550,7 @@ class FlexibleRun(RodRun):
         return run_flexible(self.P, lay.G, lay.segs, lay.seg_f, lay.hinges, lay.hinge_f, lay.slides, lay.slide_f,
                             lay.indep, lay.sensors, st, self.x, theta_ref, omega_ref, stride, buf, True, D, ds, sp,
                             dbuf, np.empty(0) if alpha_ref is None else alpha_ref, kk.crow, kk.pat, kk.pn, kk.Minv,
-                            kk.cols, kk.cn, kk.Mcrank, kk.kaug, *NO_MODAL)
+                            kk.cols, kk.cn, kk.Mcrank, kk.kaug, *NO_MODAL, kk.wlo)
 
     def kkt(self, prescribed: bool) -> KKTLayout:
         """The sparse acceleration solve's tables (:class:`twin.reference.flexible_kkt.KKTLayout`), built once per
@@ -597,7 +598,7 @@ def tap_response(cfg, speed_mps: float = 0.01, duration_s: float = 0.2, every: i
     nc = n - N_Q
     A, LU, piv = np.empty((nc, n)), np.empty((nc, nc)), np.empty(nc, dtype=np.int64)
     if flex_project(run.P, lay.G, q, qd, lay.segs, lay.seg_f, lay.slides, lay.indep, A, LU, piv,
-                    np.empty(n), np.empty(n), np.empty(n), np.empty(n)) < 0:
+                    np.empty(n), np.empty(n), np.empty(n), np.empty(n), False) < 0:
         raise ValueError("the tapped state does not satisfy the constraints")
     x[:n], x[n:2 * n] = q, qd
     h = cfg.simulation.timestep_s

@@ -578,21 +578,25 @@ def rigid_residual(P, G, q, s, c, res):
 
 
 @njit(cache=True)
-def flex_project(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, res, dq, b, tmp):
+def flex_project(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, res, dq, b, tmp, held):
     """Newton on the constraints with the independent coordinates held, then q̇ ← R ż (as the rigid
-    :func:`twin.natural_coordinates.project`). On return A and LU hold the chain's rows at the final q (the
-    next step's acceleration solve reuses them). Returns the iterations, −1 if no convergence."""
+    :func:`twin.natural_coordinates.project`). On return A, LU and piv hold the chain's rows and their factors at the
+    final q. ``held``: the Newton iteration starts from the factors A, LU, piv already hold (:func:`factor` at the
+    previous step's final q, an h q̇ away: the stepping loop's projection, which factors once per step instead of
+    twice); else it factors at the given q first. Returns the iterations, −1 if no convergence."""
     n = q.shape[0]
     nc = A.shape[0]
     tol = P[P_NEWTON_TOL]
     maxit = int(P[P_NEWTON_MAXIT])
     it = 0
     conv = False
-    # modified Newton: the chain block factored once at the predicted q (a step moves it by h q̇, so the
-    # iteration contracts by ~|ΔA|/|A| per pass); the velocity projection below refactors at the final q
-    if not factor(q, segs, slides, indep, A, LU, piv):
+    # modified Newton: the chain block factored once, at the predicted q or (held) at the previous step's final q
+    # (a step moves it by h q̇, so the iteration contracts by ~|ΔA|/|A| per pass); the velocity projection below
+    # refactors at the final q
+    if not held and not factor(q, segs, slides, indep, A, LU, piv):
         return -1
-    while it < maxit:
+    lim = maxit
+    while it < lim:
         s, c = math.sin(q[7]), math.cos(q[7])
         rigid_residual(P, G, q, s, c, res)
         chain_residual(q, segs, seg_f, slides, res[N_Q:])
@@ -608,6 +612,10 @@ def flex_project(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, res, dq, b
         if big <= tol:
             conv = True
             break
+        if held and it == maxit and lim == maxit:   # the held factors did not contract: factor here, go on
+            if not factor(q, segs, slides, indep, A, LU, piv):
+                return -1
+            lim += maxit
     if not conv:
         return -1
     s, c = math.sin(q[7]), math.cos(q[7])

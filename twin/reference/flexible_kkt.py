@@ -53,7 +53,8 @@ class KKTLayout:
     Attributes (all numpy arrays for the compiled kernels): ``crow`` the constraint rows (0–11 the rigid set's,
     12 + j segment j's length, 12 + N + k slide k's), ``pat``/``pn`` each row's structural columns, ``Minv`` the
     inverse of M̃'s constant blocks (n × n, zero on the crank's rows and columns), ``cols``/``cn`` for each
-    coordinate the coordinates of its block, ``kaug`` the penalty weights of rows 0 and 1. ``mass``: the constant
+    coordinate the coordinates of its block, ``kaug`` the penalty weights of rows 0 and 1, ``wlo`` the envelope of
+    W = Φ_c M̃⁻¹ Φ_cᵀ (each row's first structurally nonzero column). ``mass``: the constant
     mass matrix (n × n) where it is not the chain's (the modal rod, no segments or slides)."""
 
     def __init__(self, P: np.ndarray, G: np.ndarray, segs: np.ndarray, seg_f: np.ndarray, slides: np.ndarray,
@@ -161,6 +162,12 @@ class KKTLayout:
         for k in CRANK:
             self.cn[k] = 5
             self.cols[k, :5] = CRANK
+        # W's envelope: W_rs = Φ_r M̃⁻¹ Φ_sᵀ is structurally zero unless rows r and s reach a common block of M̃;
+        # wlo[r] the first row s ≤ r it can be nonzero in. Cholesky keeps the envelope (no fill before wlo[r]),
+        # so W and its factor are computed on it only (the same numbers: the entries left out are exact zeros)
+        blocks = [{int(self.cols[k, 0]) for k in p} for p in pats]
+        self.wlo = np.array([min(s for s in range(r + 1) if blocks[r] & blocks[s]) for r in range(len(pats))],
+                            dtype=np.int64)
         self.Mcrank = M[np.ix_(CRANK, CRANK)].copy()
         mc, r = P[P_MC], P[P_R]
         # penalty weights: row 0 (gradient 2(B − A'), |2r|) adds ≈ m_c/2 on B, row 1 (|(s, −c)| = 1, r on θ)
@@ -250,11 +257,11 @@ def _put(pat, pn, i, col, v, PhiV):
 
 
 @njit(cache=True)
-def kkt_factor(P, q, crow, pat, pn, PhiV, Minv, cols, cn, Mcrank, kaug, Y, W, sc):
+def kkt_factor(P, q, crow, pat, pn, PhiV, Minv, cols, cn, Mcrank, kaug, Y, W, sc, wlo):
     """M̃'s crank block inverted into ``Minv`` (the rest of ``Minv`` is constant), Y = M̃⁻¹ Φ_cᵀ (n × m) and the
     Cholesky factor of W = Φ_c Y into ``W``'s lower triangle; False if W is not positive definite. ``Y`` is held
     transposed, m × n (a constraint row's M̃⁻¹ Φ_rᵀ contiguous); ``sc``: scratch, (3, 5, 5) (no allocation in the
-    step)."""
+    step); ``wlo``: W's envelope (:class:`KKTLayout`; W and its factor are computed on it, zero before it)."""
     m = crow.shape[0]
     # the crank block: M + k0 Φ0ᵀΦ0 + k1 Φ1ᵀΦ1 on (x_B, y_B, θ, x_A, y_A)
     s, c = math.sin(q[7]), math.cos(q[7])
@@ -283,13 +290,38 @@ def kkt_factor(P, q, crow, pat, pn, PhiV, Minv, cols, cn, Mcrank, kaug, Y, W, sc
                 i = cols[k, u]
                 Yr[i] += Minv[k, i] * v   # M̃⁻¹ symmetric: its row k
     for r in range(m):
-        for s2 in range(r + 1):
+        for s2 in range(wlo[r]):
+            W[r, s2] = 0.0
+        for s2 in range(wlo[r], r + 1):
             Ys = Y[s2]
             acc = 0.0
             for t in range(pn[r]):
                 acc += PhiV[r, t] * Ys[pat[r, t]]
             W[r, s2] = acc
-    return cholesky_factor(W, m)
+    return envelope_cholesky(W, m, wlo)
+
+
+@njit(cache=True)
+def envelope_cholesky(A, n, lo):
+    """:func:`twin.reference.model.cholesky_factor` on the envelope ``lo`` (row i is zero before column lo[i]; the
+    factor keeps it): the same factor, operation for operation, without the products of the zeros before the
+    envelope (which subtract exact zeros). False if A is not positive definite."""
+    for j in range(n):
+        sacc = A[j, j]
+        for k in range(lo[j], j):
+            sacc -= A[j, k] * A[j, k]
+        if not sacc > 0.0:
+            return False
+        ljj = math.sqrt(sacc)
+        A[j, j] = ljj
+        for i in range(j + 1, n):
+            if lo[i] > j:
+                continue
+            t = A[i, j]
+            for k in range(max(lo[i], lo[j]), j):
+                t -= A[i, k] * A[j, k]
+            A[i, j] = t / ljj
+    return True
 
 
 CRANK_C = CRANK

@@ -73,7 +73,7 @@ class ModalRun(RodRun):
         return run_flexible(self.P, lay.G, ez, e2, ez, e2, self._z, e2, self._z, lay.sens, st, self.x, theta_ref,
                             omega_ref, stride, buf, True, D, ds, sp, dbuf,
                             np.empty(0) if alpha_ref is None else alpha_ref, kk.crow, kk.pat, kk.pn, kk.Minv, kk.cols,
-                            kk.cn, kk.Mcrank, kk.kaug, lay.H, lay.MD, lay.F, lay.sens, lay.sphi, lay.sdphi)
+                            kk.cn, kk.Mcrank, kk.kaug, lay.H, lay.MD, lay.F, lay.sens, lay.sphi, lay.sdphi, kk.wlo)
 
     def tap(self, speed_mps: float, axial: bool) -> None:
         """A tap on the current state: the mid-span point given ``speed_mps`` normal to the chord (through the
