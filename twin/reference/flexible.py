@@ -264,6 +264,8 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
     piv = np.empty(nc, dtype=np.int64)
     lawB = np.zeros(6)
     lawC = np.zeros(6)
+    fcb = np.zeros(3)   # the laws' (F_e, c) from the damping bound, for the θ-method's terms
+    fcc = np.zeros(3)
     zth = np.empty((2, n))
     vth = np.empty((2, mk))
     modal = H.shape[0] > 0
@@ -322,7 +324,7 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
                 w_eye = _tangent(q, qd, MD, 0)[2]
             else:
                 w_eye = _seg_angle_rate(q, qd, segs[0, 0], segs[0, 1])[2]
-            fn0, ft0 = _bound_damping(P, qs, qds, True, cst_b, jb, mob, h, w_eye, Q)
+            fn0, ft0 = _bound_damping(P, qs, qds, True, cst_b, jb, mob, h, w_eye, Q, fcb)
             if fn0 > 0.0 or jb[3] > 0.0:
                 if modal:
                     _modal_eye_contact(P, qs, q, MD, jb, fn0, ft0, 2, P[P_RBUSH_B], Q)
@@ -335,7 +337,7 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
                 w_eye = _tangent(q, qd, MD, 1)[2]
             else:
                 w_eye = _seg_angle_rate(q, qd, segs[last, 0], segs[last, 1])[2]
-            fn0, ft0 = _bound_damping(P, qs, qds, False, cst_c, jc, mob, h, w_eye, Q)
+            fn0, ft0 = _bound_damping(P, qs, qds, False, cst_c, jc, mob, h, w_eye, Q, fcc)
             if fn0 > 0.0 or jc[3] > 0.0:
                 if modal:
                     _modal_eye_contact(P, qs, q, MD, jc, fn0, ft0, 4, P[P_RBUSH_C], Q)
@@ -356,10 +358,10 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
         # laws' terms now
         fB = fC = 0.0
         if P[P_CLR_B] > 0.5 and jb[2] > 0.0:
-            law_terms(P, qs, qds, True, cst_b, jb, lawB)
+            law_terms(P, qs, qds, True, cst_b, jb, lawB, fcb)
             fB = jb[3]
         if P[P_CLR_C] > 0.5 and jc[2] > 0.0:
-            law_terms(P, qs, qds, False, cst_c, jc, lawC)
+            law_terms(P, qs, qds, False, cst_c, jc, lawC, fcc)
             fC = jc[3]
         mu = kkt_accelerations(q, Q, crow, pat, pn, PhiV, gam, Minv, cols, cn, Yk, Wk, qdd, lam)
         if prescribed:   # the drive torque: minus the multiplier of the driving constraint

@@ -290,7 +290,7 @@ def _eye_contact(P, qs, q, jo, fn0, ft0, eye, rb, a, b, Q):
 
 
 @njit(cache=True)
-def _bound_damping(P, qs, qds, pin_b, cst, jo, mob, h, w_eye, Q):
+def _bound_damping(P, qs, qds, pin_b, cst, jo, mob, h, w_eye, Q, fc):
     """The contact law and friction of clearance joint B (``pin_b``) or C on the flexible rod: the element of the
     rigid model (:func:`twin.reference.model._joint`) evaluated them for a rigid rod; two things differ here.
 
@@ -306,9 +306,12 @@ def _bound_damping(P, qs, qds, pin_b, cst, jo, mob, h, w_eye, Q):
 
     The friction is evaluated from the (possibly bounded) normal force and that sliding speed. The element's forces
     (``jo`` [3:5], which it applied to ``Q`` on both bodies) are replaced in ``jo`` and on the pin's side of ``Q``
-    (the crank, or the slider); the rod's side is :func:`_eye_contact`'s. Returns the element's (f_N, f_T)."""
+    (the crank, or the slider); the rod's side is :func:`_eye_contact`'s. Returns the element's (f_N, f_T). ``fc``
+    (3): the law's elastic force and damping coefficient (F_e, c) with fc[2] = 1 where evaluated here, else 0 (for
+    :func:`law_terms`, the same numbers at the same state)."""
     fn0, ft0 = jo[3], jo[4]
     delta = jo[2]
+    fc[2] = 0.0
     if not delta > 0.0:
         return fn0, ft0
     if pin_b:
@@ -326,6 +329,7 @@ def _bound_damping(P, qs, qds, pin_b, cst, jo, mob, h, w_eye, Q):
         code = int(P[P_LAW])
         fe = normal_force(code, delta, 0.0, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX])
         c = normal_force(code, delta, 1.0, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX]) - fe
+        fc[0], fc[1], fc[2] = fe, c, 1.0
         cmax = 0.5 / (h * mob)
         if c > cmax:
             rate = (nx * edx + ny * edy) * (cmax / c)
@@ -359,11 +363,12 @@ def _bound_damping(P, qs, qds, pin_b, cst, jo, mob, h, w_eye, Q):
 
 
 @njit(cache=True)
-def law_terms(P, qs, qds, pin_b, cst, jo, out):
+def law_terms(P, qs, qds, pin_b, cst, jo, out, fc):
     """The contact law of clearance joint B (``pin_b``) or C at the step's state, for :func:`theta_damping`:
     ``out`` = [F_e, c, δ̇, b, n_x, n_y] with the law's force F_e + c δ̇ (F_e its elastic part, c its damping
     coefficient, both 0 out of contact; in the clamped branch of a hysteresis law c = 0), δ̇ the approach rate and
-    b = |ė_⊥|²/|e| the part of δ̈ that the pin's sliding along the bore's curve adds to n·ë."""
+    b = |ė_⊥|²/|e| the part of δ̈ that the pin's sliding along the bore's curve adds to n·ë. ``fc``: F_e and c as
+    :func:`_bound_damping` evaluated them at this state (fc[2] = 1), else evaluated here."""
     for i in range(6):
         out[i] = 0.0
     delta = jo[2]
@@ -383,9 +388,12 @@ def law_terms(P, qs, qds, pin_b, cst, jo, out):
     nx, ny = ex / d, ey / d
     rate = nx * edx + ny * edy
     code = int(P[P_LAW])
-    fe = normal_force(code, delta, 0.0, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX])
+    if fc[2] > 0.5:   # the same law, arguments and state as _bound_damping's: the same numbers
+        fe, c = fc[0], fc[1]
+    else:
+        fe = normal_force(code, delta, 0.0, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX])
+        c = normal_force(code, delta, 1.0, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX]) - fe
     f1 = normal_force(code, delta, rate, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX])
-    c = normal_force(code, delta, 1.0, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX]) - fe
     if c > 0.0 and abs(f1 - (fe + c * rate)) > 1e-9 * (abs(f1) + abs(fe) + 1e-300):   # clamped: no rate term
         fe, c = f1, 0.0
     vt = -ny * edx + nx * edy
