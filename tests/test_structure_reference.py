@@ -272,9 +272,10 @@ def test_sparse_constraint_force_solve_equals_the_r_matrix_solve(test_id, chain,
     """The step's sparse solve (twin.reference.flexible_kkt: Lagrange multipliers, block-diagonal M̃) against the
     dense R-matrix one (flex_mass, flex_solve_acc, normal_mobility: Rᵀ M R z̈ = Rᵀ (Q − M Ṙż)) on random
     configurations near a running pose (coordinates moved off the constraint manifold, random velocities and
-    forces): the same q̈, drive torque of the prescribed crank and contact mobilities at B and C to round-off, and
-    the same change of q̈, contact forces and drive torque by the contact damping's θ-method (kkt_theta_damping
-    against theta_damping).
+    forces): the same q̈, drive torque of the prescribed crank and contact mobilities at B and C to round-off
+    (kkt_mobility and the step's pair_response), and the same change of q̈, contact forces and drive torque by the
+    contact damping's θ-method (kkt_theta_damping against theta_damping); W's factor, computed on its envelope,
+    against NumPy's Cholesky of the dense Φ_c M̃⁻¹ Φ_cᵀ.
     Independent basis: the two are different algebra for the same equations (Gauss's principle), the R matrix
     a basis of the allowed motions, the multipliers its complement. Chains (rod_segments, rod_axial_groups): the
     default, one axial group of 16 segments (a 17-point mass block), a slide at every node."""
@@ -317,6 +318,15 @@ def test_sparse_constraint_force_solve_equals_the_r_matrix_solve(test_id, chain,
         KK.kkt_rows(P, q, qd, lay.segs, lay.slides, kk.crow, kk.pat, kk.pn, alpha, PhiV, gam, np.empty(12))
         assert KK.kkt_factor(P, q, kk.crow, kk.pat, kk.pn, PhiV, kk.Minv, kk.cols, kk.cn, kk.Mcrank, kk.kaug, Y, W,
                              np.empty((3, 5, 5)), kk.wlo)
+        # the factor computed on W's envelope (kk.wlo) against NumPy's Cholesky of the dense Φ_c M̃⁻¹ Φ_cᵀ, which
+        # is exactly zero before the envelope
+        Phi = np.zeros((m, n))
+        for r in range(m):
+            Phi[r, kk.pat[r, :kk.pn[r]]] = PhiV[r, :kk.pn[r]]
+        Wd = Phi @ kk.Minv @ Phi.T
+        assert all(np.all(Wd[r, :kk.wlo[r]] == 0.0) for r in range(m))
+        Ld = np.linalg.cholesky(0.5 * (Wd + Wd.T))
+        assert np.max(np.abs(np.tril(W) - Ld)) <= 1e-9 * np.max(np.abs(Ld))
         mobs2 = [KK.kkt_mobility(kk.pat, kk.pn, PhiV, kk.Minv, kk.cols, kk.cn, Y, W, m, *j, 0.6, 0.8,
                                  np.empty(2 * m)) for j in ((0, 1, 2, 3), (6, -1, 4, 5))]
         qdd2 = np.empty(n)
@@ -324,6 +334,12 @@ def test_sparse_constraint_force_solve_equals_the_r_matrix_solve(test_id, chain,
                                   np.empty(m))
         assert np.max(np.abs(qdd2 - qdd)) <= 1e-10 * np.max(np.abs(qdd)), np.max(np.abs(qdd2 - qdd))
         assert mobs2 == pytest.approx(mobs, rel=1e-10)
+        # the step's form: one constrained response per pair, its mobility J z (the θ-method reads z)
+        jo = np.array([0.6e-5, 0.8e-5, 1e-6, 0.0, 0.0])
+        zr, vr = np.empty((2, n)), np.empty((2, m))
+        mobs3 = [KK.pair_response(kk.Minv, Y, W, m, a, *j, jo, zr, vr)
+                 for a, j in enumerate(((0, 1, 2, 3), (6, -1, 4, 5)))]
+        assert mobs3 == pytest.approx(mobs, rel=1e-10)
         if prescribed:
             assert qdd2[7] == pytest.approx(alpha, rel=1e-12)
             assert -mu == pytest.approx(tau[0], rel=1e-9, abs=1e-9 * np.max(np.abs(Q)))
