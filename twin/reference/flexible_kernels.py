@@ -627,7 +627,11 @@ def flex_project(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, res, dq, b
     if not conv:
         return -1
     s, c = math.sin(q[7]), math.cos(q[7])
-    if not factor(q, segs, slides, indep, A, LU, piv):
+    if held:   # the rows' order (piv) is the chain's topology, set by the factor the held factors came from
+        chain_jacobian(q, segs, slides, indep, A)
+        if not bt_factor(A, piv, LU):
+            return -1
+    elif not factor(q, segs, slides, indep, A, LU, piv):
         return -1
     _independent_values(P, G, q, qd, segs, slides, indep, b)
     flex_solve(q, s, c, A, LU, piv, b, dq, tmp)
