@@ -1,7 +1,8 @@
 """Cost of the flexible structure: time per simulated second, flexible over rigid, for Table 4 tests 3, 6, 12.
 
 For each test (``--tests``, default 3, 6 and 12: ideal, C only, B+C 0.1 mm; 750 motor rpm) and each engine
-(MuJoCo with each contact source, the reference), this script builds the engine and runs its chunk loop for
+(MuJoCo with each contact source, the reference with its chain rod and with its modal rod,
+``reference.rod_model``), this script builds the engine and runs its chunk loop for
 ``--duration`` simulated seconds with ``structure.mode = "rigid"`` and ``"flexible"`` (the default ``[structure]``
 fields), interleaved round by round so that machine load hits every variant alike, and keeps the best of
 ``--rounds`` of the chunk loop's wall time (``meta["wall_s"]``: stepping, channels, mount filter; not the model's
@@ -15,9 +16,9 @@ engine (test 12).
 ``section.field`` key is taken as it stands), timed in the same rounds (e.g. the former default chain:
 ``--compare rod_chain='"uniform"' --compare rod_segments=6``; MuJoCo's Newton solver instead of PGS:
 ``--compare mujoco.flexible_solver='"Newton"'``), and a column with its CPU-time ratio to rigid. ``--mujoco-only``
-leaves the reference engine out.
+leaves the reference engine out, ``--reference-only`` the MuJoCo engine.
 
-Run: ``python analysis/bench_structure.py [--duration S] [--rounds R] [--tests 3,6,12] [--compare K=V] [--mujoco-only]``.
+Run: ``python analysis/bench_structure.py [--duration S] [--rounds R] [--tests 3,6,12] [--compare K=V] [--mujoco-only | --reference-only]``.
 """
 
 from __future__ import annotations
@@ -32,7 +33,10 @@ VARIANTS = {  # label: (engine, extra overrides)
     "mujoco (contact law rows)": ("mujoco", {}),
     "mujoco (contact as force)": ("mujoco", {"mujoco.contact_source": "force"}),
     "reference": ("reference", {}),
+    "reference (modal rod)": ("reference", {}),
 }
+#: reference-engine options of a variant (:class:`twin.reference.engine.ReferenceOptions`; not configuration fields)
+REFERENCE_OPTIONS = {"reference (modal rod)": {"rod_model": "modal"}}
 
 
 def main() -> None:
@@ -43,6 +47,7 @@ def main() -> None:
     ap.add_argument("--compare", action="append", default=[], metavar="KEY=VALUE",
                     help="[structure] override of a second flexible arm (repeatable)")
     ap.add_argument("--mujoco-only", action="store_true", help="leave the reference engine out")
+    ap.add_argument("--reference-only", action="store_true", help="leave the MuJoCo engine out")
     ap.add_argument("--out", default=str(Path(__file__).resolve().parent / "results" / "structure" / "bench_structure.md"))
     args = ap.parse_args()
 
@@ -55,7 +60,10 @@ def main() -> None:
     from twin.util import toml_loads
 
     tests = [int(t) for t in args.tests.split(",")]
-    variants = {k: v for k, v in VARIANTS.items() if not (args.mujoco_only and v[0] != "mujoco")}
+    if args.mujoco_only and args.reference_only:
+        ap.error("--mujoco-only and --reference-only exclude each other")
+    variants = {k: v for k, v in VARIANTS.items() if not (args.mujoco_only and v[0] != "mujoco")
+                and not (args.reference_only and v[0] != "reference")}
     compare = {(k.strip() if "." in k else f"structure.{k.strip()}"): toml_loads(f"v = {v}")["v"]
                for k, v in (item.split("=", 1) for item in args.compare)}
     modes = {"rigid": {"structure.mode": "rigid"}, "flexible": {"structure.mode": "flexible"}}
@@ -64,16 +72,23 @@ def main() -> None:
     best: dict[tuple[int, str, str], float] = {}
     best_cpu: dict[tuple[int, str, str], float] = {}
     steps: dict[tuple[int, str, str], int] = {}
-    for cfg_engine, over in variants.values():  # warm-up: numba's cache, MuJoCo's first rollouts
-        simulate(preset(tests[-1]).replace(**{"simulation.engine": cfg_engine, "simulation.duration_s": 0.01,
-                                       "structure.mode": "flexible", **over}))
+    from twin.reference.engine import ReferenceEngine, ReferenceOptions
+
+    def engine_of(label, cfg):
+        opts = REFERENCE_OPTIONS.get(label)
+        return make_engine(cfg) if opts is None else ReferenceEngine(cfg, ReferenceOptions(**opts))
+
+    for label, (cfg_engine, over) in variants.items():  # warm-up: numba's cache, MuJoCo's first rollouts
+        cfg = preset(tests[-1]).replace(**{"simulation.engine": cfg_engine, "simulation.duration_s": 0.01,
+                                           "structure.mode": "flexible", **over})
+        simulate(cfg, engine=engine_of(label, cfg))
     for r in range(args.rounds):
         for tid in tests:
             for label, (engine, over) in variants.items():
                 for mode, mode_over in modes.items():
                     cfg = preset(tid).replace(**{"simulation.engine": engine, "simulation.duration_s": args.duration,
                                                  **mode_over, **over})
-                    eng = make_engine(cfg)   # the model's build outside the clocks
+                    eng = engine_of(label, cfg)   # the model's build outside the clocks
                     c0 = time.process_time()
                     for _ in run_chunks(cfg, eng):
                         pass

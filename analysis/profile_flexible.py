@@ -69,7 +69,7 @@ def _t_proj(R, P, G, q0, qd0, qdd, h, segs, seg_f, slides, indep, A, LU, piv, re
         for i in range(q.shape[0]):
             qd[i] += h * qdd[i]
             q[i] += h * qd[i]
-        it += K.flex_project(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, res, dq, b, tmp)
+        it += K.flex_project(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, res, dq, b, tmp, False)
     return it
 
 
@@ -90,9 +90,9 @@ def _t_rows(R, P, q, qd, segs, slides, crow, pat, pn, PhiV, gam):
 
 
 @njit
-def _t_kfactor(R, P, q, crow, pat, pn, PhiV, Minv, cols, cn, Mcrank, kaug, Y, W, sc):
+def _t_kfactor(R, P, q, crow, pat, pn, PhiV, Minv, cols, cn, Mcrank, kaug, Y, W, sc, wlo):
     for _ in range(R):
-        KK.kkt_factor(P, q, crow, pat, pn, PhiV, Minv, cols, cn, Mcrank, kaug, Y, W, sc)
+        KK.kkt_factor(P, q, crow, pat, pn, PhiV, Minv, cols, cn, Mcrank, kaug, Y, W, sc, wlo)
 
 
 @njit
@@ -151,12 +151,12 @@ def main() -> None:
     u, Qt, lam, qdd2 = np.empty(2 * m), np.empty(n), np.empty(m), np.empty(n)
     KK.kkt_rows(P, q, qd, segs, slides, kk.crow, kk.pat, kk.pn, 0.0, PhiV, gam, np.empty(12))
     sc = np.empty((3, 5, 5))
-    KK.kkt_factor(P, q, kk.crow, kk.pat, kk.pn, PhiV, kk.Minv, kk.cols, kk.cn, kk.Mcrank, kk.kaug, Y, W, sc)
+    KK.kkt_factor(P, q, kk.crow, kk.pat, kk.pn, PhiV, kk.Minv, kk.cols, kk.cn, kk.Mcrank, kk.kaug, Y, W, sc, kk.wlo)
     tests = {
         "step now: kkt_rows (Φ_c, γ_c)": lambda R: _t_rows(R, P, q, qd, segs, slides, kk.crow, kk.pat, kk.pn, PhiV,
                                                              gam),
         "step now: kkt_factor (M̃⁻¹ crank block, Y, W, Cholesky)": lambda R: _t_kfactor(
-            R, P, q, kk.crow, kk.pat, kk.pn, PhiV, kk.Minv, kk.cols, kk.cn, kk.Mcrank, kk.kaug, Y, W, sc),
+            R, P, q, kk.crow, kk.pat, kk.pn, PhiV, kk.Minv, kk.cols, kk.cn, kk.Mcrank, kk.kaug, Y, W, sc, kk.wlo),
         "step now: kkt_mobility (per joint in contact)": lambda R: _t_kmob(R, kk.pat, kk.pn, PhiV, kk.Minv, kk.cols,
                                                                             kk.cn, Y, W, m, u),
         "step now: kkt_accelerations": lambda R: _t_kacc(R, q, Q, kk.crow, kk.pat, kk.pn, PhiV, gam, kk.Minv,

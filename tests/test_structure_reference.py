@@ -15,25 +15,32 @@ from twin.reference import model as RM
 from twin.reference.flexible import N_OUT_FLEX, O_DISS, FlexibleRun, tap_response
 
 
-def _run(cfg, theta0, *, drive=False, guide_friction=False):
+def _run(cfg, theta0, *, drive=False, guide_friction=False, rod_model="chain"):
     prm = lambda c: RM.build_params(c, drive=drive, guide_friction=guide_friction)  # noqa: E731
-    run = FlexibleRun(cfg, prm(cfg), prm)
+    if rod_model == "modal":
+        from twin.reference.flexible_modal_run import ModalRun
+
+        run = ModalRun(cfg, prm(cfg), prm)
+    else:
+        run = FlexibleRun(cfg, prm(cfg), prm)
     run.P[RM.P_OUT_ENERGY] = 1.0   # the energy columns
     st = initial_state(cfg, theta0, 0.0, run.P)
     run.reset(st)
     return run, st
 
 
-def test_tap_decays_with_the_configured_damping_ratio():
+@pytest.mark.parametrize("rod_model", ["chain", "modal"])
+def test_tap_decays_with_the_configured_damping_ratio(rod_model):
     """Rod between a crank of large inertia and the guide on heavy, undamped supports, no gravity, no drive: a tap
     (transverse velocity of the middle node) rings in the first bending mode, whose logarithmic decrement over
-    ~30 periods gives the damping ratio set for it (independent basis: ζ = δ / √(4π² + δ²) of a linear mode)."""
+    ~30 periods gives the damping ratio set for it (independent basis: ζ = δ / √(4π² + δ²) of a linear mode).
+    Both reference rods (the chain and the modal rod, ``reference.rod_model``)."""
     zeta_set = 0.01
     cfg = preset(3).replace(**{
         "structure.mode": "flexible", "mechanism.gravity_mps2": 0.0, "bodies.crank.inertia_kgm2": 10.0,
         "structure.bending_damping_ratio": zeta_set, "structure.frame_damping_ratio": 0.0,
         "structure.guide_damping_ratio": 0.0, "structure.frame_mass_kg": 1000.0, "structure.guide_mass_kg": 1000.0})
-    t, w = tap_response(cfg, 0.01, 0.2, 5, 0.3)
+    t, w = tap_response(cfg, 0.01, 0.2, 5, 0.3, rod_model=rod_model)
     stride, h = 5, cfg.simulation.timestep_s
     peaks, times = [], []
     for i in range(1, w.size - 1):
@@ -65,7 +72,8 @@ def _crests(t, w, sign):
     return np.array(tt), np.array(vv)
 
 
-def test_axial_tap_rings_at_the_closed_form_and_decays_with_the_axial_ratio():
+@pytest.mark.parametrize("rod_model", ["chain", "modal"])
+def test_axial_tap_rings_at_the_closed_form_and_decays_with_the_axial_ratio(rod_model):
     """The same heavy crank and supports; a tap on the bore C along the rod: the stretch |C − B'| − L rings at the
     first axial mode of the bar fixed at B with the end mass and the slider at C (closed form β tan β = m_bar/m_tip,
     1041.4 Hz; within 1 %) and its crest-to-trough amplitude decays with the axial damping ratio set (within 5 %)."""
@@ -80,7 +88,7 @@ def test_axial_tap_rings_at_the_closed_form_and_decays_with_the_axial_ratio():
     sp = rod_split(rod.mass_kg, rod.length_m, rod.x_g_m, rod.inertia_kgm2, 0.0)
     f_ref = axial_fixed_mass_hz(cfg.structure.rod_ea_n, sp.bar_mass_kg / sp.length_m, sp.length_m,
                                 sp.end_c_kg + cfg.bodies.slider.mass_kg, 1)[0]
-    t, w = tap_response(cfg, 0.01, 0.05, 1, 0.3, axial=True)
+    t, w = tap_response(cfg, 0.01, 0.05, 1, 0.3, axial=True, rod_model=rod_model)
     tp, p = _crests(t, w, 1)
     _, v = _crests(t, w, -1)
     m = min(p.size, v.size)
@@ -93,12 +101,12 @@ def test_axial_tap_rings_at_the_closed_form_and_decays_with_the_axial_ratio():
     assert 1.0 / np.mean(np.diff(tp)) == pytest.approx(f_ref, rel=0.01)
 
 
-def _energy_change(cfg, flexible):
+def _energy_change(cfg, flexible, rod_model="chain"):
     """(E(end) − E(0), dissipated) of a free swing from rest at θ = π/3 (S003 §4.1), no drive, no guide friction."""
     n, stride = 10000, 100
     zero = np.zeros(n)
     if flexible:
-        run, st = _run(cfg, math.pi / 3)
+        run, st = _run(cfg, math.pi / 3, rod_model=rod_model)
         buf = np.empty((n // stride, N_OUT_FLEX))
         assert run.run(st, zero, zero, stride, buf)[0] == RM.OK
         e = buf[:, RM.O_EKIN] + buf[:, RM.O_EPOT]
@@ -112,13 +120,14 @@ def _energy_change(cfg, flexible):
     return e[-1] - e[0], 0.0
 
 
-def test_energy_balance_counts_the_structural_damping():
+@pytest.mark.parametrize("rod_model", ["chain", "modal"])
+def test_energy_balance_counts_the_structural_damping(rod_model):
     """Free swing of the ideal mechanism (test 3's joints): the flexible model's mechanical energy (kinetic, gravity,
-    hinges, slides, supports) plus what its dampers dissipated changes only by the rigid model's own numerical loss
-    (the projection's, S003 §4.1) — within 2 % of the dissipated energy."""
+    hinges, slides, supports; the modal rod's chord and shapes) plus what its dampers dissipated changes only by the
+    rigid model's own numerical loss (the projection's, S003 §4.1) — within 2 % of the dissipated energy."""
     cfg = preset(3).replace(**{"structure.mode": "flexible", "structure.bending_damping_ratio": 0.05,
                                "structure.axial_damping_ratio": 0.05})
-    d_flex, dissipated = _energy_change(cfg, True)
+    d_flex, dissipated = _energy_change(cfg, True, rod_model)
     d_rigid, _ = _energy_change(preset(3), False)
     assert dissipated > 1e-5
     assert abs(d_flex + dissipated - d_rigid) < 0.02 * dissipated
@@ -263,9 +272,10 @@ def test_sparse_constraint_force_solve_equals_the_r_matrix_solve(test_id, chain,
     """The step's sparse solve (twin.reference.flexible_kkt: Lagrange multipliers, block-diagonal M̃) against the
     dense R-matrix one (flex_mass, flex_solve_acc, normal_mobility: Rᵀ M R z̈ = Rᵀ (Q − M Ṙż)) on random
     configurations near a running pose (coordinates moved off the constraint manifold, random velocities and
-    forces): the same q̈, drive torque of the prescribed crank and contact mobilities at B and C to round-off, and
-    the same change of q̈, contact forces and drive torque by the contact damping's θ-method (kkt_theta_damping
-    against theta_damping).
+    forces): the same q̈, drive torque of the prescribed crank and contact mobilities at B and C to round-off
+    (kkt_mobility and the step's pair_response), and the same change of q̈, contact forces and drive torque by the
+    contact damping's θ-method (kkt_theta_damping against theta_damping); W's factor, computed on its envelope,
+    against NumPy's Cholesky of the dense Φ_c M̃⁻¹ Φ_cᵀ.
     Independent basis: the two are different algebra for the same equations (Gauss's principle), the R matrix
     a basis of the allowed motions, the multipliers its complement. Chains (rod_segments, rod_axial_groups): the
     default, one axial group of 16 segments (a 17-point mass block), a slide at every node."""
@@ -307,7 +317,16 @@ def test_sparse_constraint_force_solve_equals_the_r_matrix_solve(test_id, chain,
         PhiV, gam, Y, W = np.zeros((m, kk.pat.shape[1])), np.empty(m), np.empty((m, n)), np.empty((m, m))
         KK.kkt_rows(P, q, qd, lay.segs, lay.slides, kk.crow, kk.pat, kk.pn, alpha, PhiV, gam, np.empty(12))
         assert KK.kkt_factor(P, q, kk.crow, kk.pat, kk.pn, PhiV, kk.Minv, kk.cols, kk.cn, kk.Mcrank, kk.kaug, Y, W,
-                             np.empty((3, 5, 5)))
+                             np.empty((3, 5, 5)), kk.wlo)
+        # the factor computed on W's envelope (kk.wlo) against NumPy's Cholesky of the dense Φ_c M̃⁻¹ Φ_cᵀ, which
+        # is exactly zero before the envelope
+        Phi = np.zeros((m, n))
+        for r in range(m):
+            Phi[r, kk.pat[r, :kk.pn[r]]] = PhiV[r, :kk.pn[r]]
+        Wd = Phi @ kk.Minv @ Phi.T
+        assert all(np.all(Wd[r, :kk.wlo[r]] == 0.0) for r in range(m))
+        Ld = np.linalg.cholesky(0.5 * (Wd + Wd.T))
+        assert np.max(np.abs(np.tril(W) - Ld)) <= 1e-9 * np.max(np.abs(Ld))
         mobs2 = [KK.kkt_mobility(kk.pat, kk.pn, PhiV, kk.Minv, kk.cols, kk.cn, Y, W, m, *j, 0.6, 0.8,
                                  np.empty(2 * m)) for j in ((0, 1, 2, 3), (6, -1, 4, 5))]
         qdd2 = np.empty(n)
@@ -315,6 +334,12 @@ def test_sparse_constraint_force_solve_equals_the_r_matrix_solve(test_id, chain,
                                   np.empty(m))
         assert np.max(np.abs(qdd2 - qdd)) <= 1e-10 * np.max(np.abs(qdd)), np.max(np.abs(qdd2 - qdd))
         assert mobs2 == pytest.approx(mobs, rel=1e-10)
+        # the step's form: one constrained response per pair, its mobility J z (the θ-method reads z)
+        jo = np.array([0.6e-5, 0.8e-5, 1e-6, 0.0, 0.0])
+        zr, vr = np.empty((2, n)), np.empty((2, m))
+        mobs3 = [KK.pair_response(kk.Minv, Y, W, m, a, *j, jo, zr, vr)
+                 for a, j in enumerate(((0, 1, 2, 3), (6, -1, 4, 5)))]
+        assert mobs3 == pytest.approx(mobs, rel=1e-10)
         if prescribed:
             assert qdd2[7] == pytest.approx(alpha, rel=1e-12)
             assert -mu == pytest.approx(tau[0], rel=1e-9, abs=1e-9 * np.max(np.abs(Q)))

@@ -35,6 +35,8 @@ from twin.reference import model as ref_model
 from twin.tracefile import DriveInputs
 
 ENGINE_VERSION = "1"
+#: the flexible rod's formulations (:attr:`ReferenceOptions.rod_model`)
+ROD_MODELS = ("chain", "modal")
 
 
 @dataclass(frozen=True)
@@ -53,11 +55,16 @@ class ReferenceOptions:
             the work–precision comparison of ``twin study formulations``). Scenes with a clearance
             joint refuse "midpoint": through hard impacts at h = 1e-5 s it is not stable (a 12.5 ms
             spin-up of test 12: AC1 RMS 9242 m/s² against 113 m/s² converged, Euler 234).
+        rod_model: the flexible rod (``structure.mode = "flexible"``): "chain" (the MuJoCo engine's chain of
+            rigid segments, :mod:`twin.reference.flexible`) or "modal" (its chord and three sine shapes with a
+            constant mass matrix, :mod:`twin.reference.flexible_modal`: the same modes, far fewer coordinates and
+            rows; the housings' rotary inertia must be 0). Unused with a rigid structure.
     """
 
     newton_tol_m: float = 1e-10
     newton_max_iter: int = 20
     integrator: str = "euler"
+    rod_model: str = "chain"
 
     def __post_init__(self) -> None:
         t = self.newton_tol_m
@@ -69,6 +76,8 @@ class ReferenceOptions:
         if self.integrator not in ref_model.INTEGRATORS:
             raise ConfigError("reference.integrator", f"must be one of {', '.join(ref_model.INTEGRATORS)}, "
                                                       f"got {self.integrator!r}")
+        if self.rod_model not in ROD_MODELS:
+            raise ConfigError("reference.rod_model", f"must be one of {', '.join(ROD_MODELS)}, got {self.rod_model!r}")
 
 
 def engine_params(cfg: BenchConfig, options: ReferenceOptions = ReferenceOptions(), **switches: bool
@@ -121,7 +130,8 @@ class ReferenceEngine:
             "wall_s": 0.0,
             "build_s": self.build_s,
             "compile_s": self.load_s,
-            "options": asdict(self.options),
+            "options": {k: v for k, v in asdict(self.options).items()   # the rod's model only where there is one
+                        if k != "rod_model" or cfg.structure.flexible},
         }
         self.state0: np.ndarray | None = None
         self.contacts: dict[str, Any] = {}
@@ -307,6 +317,10 @@ def _flexible_run(cfg: BenchConfig, P: np.ndarray, options: ReferenceOptions):
         raise ConfigError(f"joints.{field}", "is not available with structure.mode = \"flexible\" (it carries the "
                           "frame and the guide on their supports: the reference engine has it with A and the guide "
                           f"ideal); use 0, got {value!r}")
+    if options.rod_model == "modal":
+        from twin.reference.flexible_modal_run import ModalRun
+
+        return ModalRun(cfg, P, lambda c: engine_params(c, options))
     return FlexibleRun(cfg, P, lambda c: engine_params(c, options))
 
 

@@ -68,8 +68,10 @@ from twin.reference.flexible_kernels import (G_CF, G_CG, G_FLEX_A, G_FLEX_G, G_K
                                              _eye_contact, _bound_damping, _seg_angle_rate, chain_forces, law_terms,
                                              flex_energy, flex_project,
                                              _rod_sensors, _slider_sensors)
-from twin.reference.flexible_kkt import (KKTLayout, kkt_accelerations, kkt_factor, kkt_mobility, kkt_rows,
-                                          kkt_theta_damping)
+from twin.reference.flexible_kkt import (KKTLayout, kkt_accelerations, kkt_factor, kkt_rows, pair_response,
+                                          theta_from_responses)
+from twin.reference.flexible_modal import (_modal_eye_contact, _modal_rod_sensors, _modal_structure_outputs,
+                                           _tangent, modal_energy, modal_forces, modal_project)
 
 # the supports' parameters ``G`` (build()): indices G_KF … G_FLEX_G, defined with the kernels that read them; then
 # the rod's mid-span material point for the "structure" channels (:func:`_structure_outputs`): its segment and its
@@ -155,12 +157,21 @@ def build(cfg, chain) -> FlexLayout:
         seg = _body_at(chain, sx) - 1 if 0.0 < sx < L else (0 if sx <= 0.0 else N - 1)
         sens[i] = [seg, sx - xn[seg], sy, axes[mnt.axis]]
     st = cfg.structure
-    G = np.zeros(N_G)
     # the mid-span point: the chain body holding L/2 (the MuJoCo engine's rule, twin.structure.rod._body_at), at the
     # same distance from that segment's start
     mid = _body_at(chain, L / 2) - 1
-    G[G_MID_SEG] = mid
-    G[G_MID_XI] = L / 2 - chain.bodies[mid + 1].x0_m
+    G = support_table(st, mid, L / 2 - chain.bodies[mid + 1].x0_m)
+    return FlexLayout(n, (n - N_Q) // 2, segs, seg_f, np.array(hinges, dtype=np.int64), np.array(hinge_f),
+                      np.array(slides, dtype=np.int64), np.array(slide_f), np.array(indep, dtype=np.int64), sens, G,
+                      np.array(x0))
+
+
+def support_table(st, mid_seg: float, mid_xi: float) -> np.ndarray:
+    """The supports' parameters ``G`` (G_* indices) of ``st`` (:class:`twin.config.structure.StructureConfig`), with
+    the rod's mid-span point (its segment and the distance from its start; the modal rod: −1 and ξ = ½)."""
+    G = np.zeros(N_G)
+    G[G_MID_SEG] = mid_seg
+    G[G_MID_XI] = mid_xi
     G[G_FLEX_A] = G[G_FLEX_G] = 1.0
     G[G_MF] = st.frame_mass_kg
     G[G_KF] = st.support_stiffness(st.frame_mass_kg, st.frame_frequency_hz)
@@ -168,9 +179,7 @@ def build(cfg, chain) -> FlexLayout:
     G[G_MG] = st.guide_mass_kg
     G[G_KG] = st.support_stiffness(st.guide_mass_kg, st.guide_frequency_hz)
     G[G_CG] = st.support_damping(st.guide_mass_kg, st.guide_frequency_hz, st.guide_damping_ratio)
-    return FlexLayout(n, (n - N_Q) // 2, segs, seg_f, np.array(hinges, dtype=np.int64), np.array(hinge_f),
-                      np.array(slides, dtype=np.int64), np.array(slide_f), np.array(indep, dtype=np.int64), sens, G,
-                      np.array(x0))
+    return G
 
 
 # --------------------------------------------------------------------------------------------- kernels
@@ -199,7 +208,7 @@ def _structure_outputs(P, G, q, segs, row):
 @njit(cache=True, nogil=True)
 def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sens, st, x, theta_ref, omega_ref,
                  stride, out, want_out, D, ds, setpoint, dout, alpha_ref, crow, pat, pn, Minv, cols, cn, Mcrank,
-                 kaug):
+                 kaug, H, MD, F, msens, sphi, sdphi, wlo):
     """Integrate ``len(theta_ref)`` steps of the flexible bench from the rigid state ``st`` (PID integral,
     contact events; its q, q̇ unused) and the full coordinates ``x`` = [q (n), q̇ (n), dissipated energy]
     (updated in place). Crank PID drive, or with ``D`` non-empty the drive train (:mod:`twin.reference.drivetrain`,
@@ -209,8 +218,12 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
     :func:`twin.reference.model.run_prescribed` does (``theta_ref``, ``omega_ref`` hold the program at t_0 … t_n,
     ``alpha_ref`` its acceleration at t_0 … t_{n−1}; the drive torque goes to the torque column). Returns
     (status, steps done). The accelerations by the sparse constraint-force solve of
-    :mod:`twin.reference.flexible_kkt` (``crow`` to ``kaug``: its :class:`~twin.reference.flexible_kkt.KKTLayout`,
-    with θ's row among the constraints when the crank is prescribed)."""
+    :mod:`twin.reference.flexible_kkt` (``crow`` to ``kaug`` and ``wlo``: its
+    :class:`~twin.reference.flexible_kkt.KKTLayout`,
+    with θ's row among the constraints when the crank is prescribed). ``H`` non-empty: the rod is the modal rod of
+    :mod:`twin.reference.flexible_modal` (``H`` … ``sdphi`` its tables; the chain's tables empty): its forces,
+    projection, sensors, energy, eye contact and the pairs' responses (one solve per pair for the damping bound and
+    the θ-method) are that module's, the rest of the step is the same."""
     n = (x.shape[0] - 1) // 2
     nc = n - N_Q
     h = P[P_H]
@@ -239,7 +252,6 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
     Yk = np.empty((mk, n))
     Wk = np.empty((mk, mk))
     lam = np.empty(mk)
-    uk = np.empty(2 * mk)
     sck = np.empty((3, 5, 5))
     qs2 = np.empty(N_Q)
     qdd = np.empty(n)
@@ -252,8 +264,16 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
     piv = np.empty(nc, dtype=np.int64)
     lawB = np.zeros(6)
     lawC = np.zeros(6)
+    fcb = np.zeros(3)   # the laws' (F_e, c) from the damping bound, for the θ-method's terms
+    fcc = np.zeros(3)
     zth = np.empty((2, n))
     vth = np.empty((2, mk))
+    modal = H.shape[0] > 0
+    act = np.zeros(2, dtype=np.bool_)
+    Wm = np.zeros((2, 2))
+    an = np.zeros(2)
+    f0 = np.zeros(2)
+    dl = np.zeros(2)
     motor = D.shape[0] > 0
     prescribed = alpha_ref.shape[0] > 0
     nsteps = setpoint.shape[0] if motor else (alpha_ref.shape[0] if prescribed else theta_ref.shape[0])
@@ -284,35 +304,45 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
         if shift:   # the joint C's pin C' rides on the guide: its eccentricity is measured from d_off + y_g
             qs[5] -= q[10]
             qds[5] -= qd[10]
-        if k == 0 and not factor(q, segs, slides, indep, A, LU, piv):   # later steps: the projection's
+        if not modal and k == 0 and not factor(q, segs, slides, indep, A, LU, piv):   # later steps: the projection's
             status = NOT_FINITE
             break
         # the constraint rows and the mobility W = Φ_c M̃⁻¹ Φ_cᵀ at (q, q̇) (flexible_kkt: the R matrix's q̈ to
         # round-off)
         kkt_rows(P, q, qd, segs, slides, crow, pat, pn, alpha_ref[k] if prescribed else 0.0, PhiV, gam, qs2)
-        if not kkt_factor(P, q, crow, pat, pn, PhiV, Minv, cols, cn, Mcrank, kaug, Yk, Wk, sck):
+        if not kkt_factor(P, q, crow, pat, pn, PhiV, Minv, cols, cn, Mcrank, kaug, Yk, Wk, sck, wlo):
             status = NOT_FINITE
             break
         generalized_forces(P, qs, qds, tau, cst_a, cst_b, cst_c, Q[:N_Q], ja, jb, jc)
         # the contact forces on the rod act on its eyes (end_B, end_C), not spread as on a rigid rod, with the
         # law's damping bounded by the pair's effective mass (_bound_damping)
         if P[P_CLR_B] > 0.5 and jb[2] > 0.0:
-            d = math.sqrt(jb[0] * jb[0] + jb[1] * jb[1])
-            mob = kkt_mobility(pat, pn, PhiV, Minv, cols, cn, Yk, Wk, mk, 0, 1, 2, 3, jb[0] / d, jb[1] / d, uk) \
-                if d > 0.0 else 0.0
-            fn0, ft0 = _bound_damping(P, qs, qds, True, cst_b, jb, mob, h,
-                                      _seg_angle_rate(q, qd, segs[0, 0], segs[0, 1])[2], Q)
+            # the pair's constrained response, solved once: its mobility bounds the damping here, the θ-method
+            # below reads the response itself
+            mob = pair_response(Minv, Yk, Wk, mk, 0, 0, 1, 2, 3, jb, zth, vth)
+            if modal:
+                w_eye = _tangent(q, qd, MD, 0)[2]
+            else:
+                w_eye = _seg_angle_rate(q, qd, segs[0, 0], segs[0, 1])[2]
+            fn0, ft0 = _bound_damping(P, qs, qds, True, cst_b, jb, mob, h, w_eye, Q, fcb)
             if fn0 > 0.0 or jb[3] > 0.0:
-                _eye_contact(P, qs, q, jb, fn0, ft0, 2, P[P_RBUSH_B], segs[0, 0], segs[0, 1], Q)
+                if modal:
+                    _modal_eye_contact(P, qs, q, MD, jb, fn0, ft0, 2, P[P_RBUSH_B], Q)
+                else:
+                    _eye_contact(P, qs, q, jb, fn0, ft0, 2, P[P_RBUSH_B], segs[0, 0], segs[0, 1], Q)
         if P[P_CLR_C] > 0.5 and jc[2] > 0.0:
-            d = math.sqrt(jc[0] * jc[0] + jc[1] * jc[1])
-            mob = kkt_mobility(pat, pn, PhiV, Minv, cols, cn, Yk, Wk, mk, 6, 10 if shift else -1, 4, 5, jc[0] / d,
-                               jc[1] / d, uk) if d > 0.0 else 0.0
             last = segs.shape[0] - 1
-            fn0, ft0 = _bound_damping(P, qs, qds, False, cst_c, jc, mob, h,
-                                      _seg_angle_rate(q, qd, segs[last, 0], segs[last, 1])[2], Q)
+            mob = pair_response(Minv, Yk, Wk, mk, 1, 6, 10 if shift else -1, 4, 5, jc, zth, vth)
+            if modal:
+                w_eye = _tangent(q, qd, MD, 1)[2]
+            else:
+                w_eye = _seg_angle_rate(q, qd, segs[last, 0], segs[last, 1])[2]
+            fn0, ft0 = _bound_damping(P, qs, qds, False, cst_c, jc, mob, h, w_eye, Q, fcc)
             if fn0 > 0.0 or jc[3] > 0.0:
-                _eye_contact(P, qs, q, jc, fn0, ft0, 4, P[P_RBUSH_C], segs[last, 0], segs[last, 1], Q)
+                if modal:
+                    _modal_eye_contact(P, qs, q, MD, jc, fn0, ft0, 4, P[P_RBUSH_C], Q)
+                else:
+                    _eye_contact(P, qs, q, jc, fn0, ft0, 4, P[P_RBUSH_C], segs[last, 0], segs[last, 1], Q)
         if shift and jc[3] > 0.0:   # the contact's normal component on the pin, which the ideal guide took, moves it
             ex, ey = jc[0], jc[1]
             d = math.sqrt(ex * ex + ey * ey)
@@ -320,36 +350,49 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
             Q[10] += -jc[3] * ny + jc[4] * nx
         for i in range(N_Q):   # the mechanism's own forces (the drive train's accounts read them)
             Qb[i] = Q[i]
-        diss = chain_forces(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G, Q)
-        # the laws' damping by the θ-method (kkt_theta_damping) after the explicit solve: the laws' terms now
+        if modal:
+            diss = modal_forces(P, q, qd, H, MD, G, Q)
+        else:
+            diss = chain_forces(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G, Q)
+        # the laws' damping by the θ-method (theta_from_responses, as kkt_theta_damping) after the explicit solve: the
+        # laws' terms now
         fB = fC = 0.0
         if P[P_CLR_B] > 0.5 and jb[2] > 0.0:
-            law_terms(P, qs, qds, True, cst_b, jb, lawB)
+            law_terms(P, qs, qds, True, cst_b, jb, lawB, fcb)
             fB = jb[3]
         if P[P_CLR_C] > 0.5 and jc[2] > 0.0:
-            law_terms(P, qs, qds, False, cst_c, jc, lawC)
+            law_terms(P, qs, qds, False, cst_c, jc, lawC, fcc)
             fC = jc[3]
         mu = kkt_accelerations(q, Q, crow, pat, pn, PhiV, gam, Minv, cols, cn, Yk, Wk, qdd, lam)
         if prescribed:   # the drive torque: minus the multiplier of the driving constraint
             tau = -mu
-        if fB > 0.0 or fC > 0.0:
-            tau += kkt_theta_damping(h, qdd, Minv, Yk, Wk, mk, crow, lawB, lawC, fB, fC, shift, jb, jc, zth, vth)
+        if fB > 0.0 or fC > 0.0:   # the pairs' responses of this step, solved above
+            tau += theta_from_responses(h, qdd, mk, crow, lawB, lawC, fB, fC, shift, jb, jc, zth, vth, act, Wm, an,
+                                        f0, dl)
         if want_out and k % stride == 0:
             row = out[k // stride]
             _outputs(P, q[:N_Q], qd[:N_Q], qdd[:N_Q], tau, ja, jb, jc, row)
-            _rod_sensors(P, q, qdd, segs, sens, row)
+            if modal:
+                _modal_rod_sensors(P, q, qdd, msens, sphi, sdphi, row)
+            else:
+                _rod_sensors(P, q, qdd, segs, sens, row)
             if G[G_FLEX_G] > 0.5:
                 _slider_sensors(P, qdd, sens, row)
             if P[P_OUT_ENERGY] > 0.5:
-                T, V = flex_energy(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G)
+                T, V = modal_energy(P, q, qd, H, MD, G, F) if modal else \
+                    flex_energy(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G)
                 row[O_EKIN] = T
                 row[O_EPOT] = V
             row[N_OUT] = diss_total
-            _structure_outputs(P, G, q, segs, row)
+            if modal:
+                _modal_structure_outputs(P, G, q, MD, row)
+            else:
+                _structure_outputs(P, G, q, segs, row)
             if motor:
                 DT.outputs(D, ds, dout[k // stride])
                 if D[DT.D_ACCOUNT] != 0.0:
-                    T, V = flex_energy(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G)
+                    T, V = modal_energy(P, q, qd, H, MD, G, F) if modal else \
+                        flex_energy(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G)
                     dout[k // stride, DT.DO_EMECH] = T + V + dout[k // stride, DT.DO_ROTOR_KE]
         diss_total += h * diss
         integ += h * err
@@ -366,7 +409,8 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
         if prescribed:   # the driving constraint: θ and θ̇ are the program's at t_{k+1}
             q[7] = theta_ref[k + 1]
             qd[7] = omega_ref[k + 1]
-        if flex_project(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, res, dq, b, tmp) < 0:
+        if (modal_project(P, G, q, qd, res, dq, b, indep) if modal else
+                flex_project(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, res, dq, b, tmp, True)) < 0:
             status = NEWTON_FAILED
             k += 1
             break
@@ -395,6 +439,8 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
 
 
 # ------------------------------------------------------------------------------------------ Python side
+#: the modal rod's tables of :func:`run_flexible`, empty: the chain
+NO_MODAL = (np.empty(0), np.empty((0, 8)), np.empty((0, 0)), np.empty((0, 4)), np.empty((0, 0)), np.empty((0, 0)))
 #: output columns of :func:`run_flexible`: the rigid model's, then the dissipated energy, then the "structure"
 #: channels (:data:`STRUCTURE_CHANNELS` order, :func:`_structure_outputs`)
 O_DISS = N_OUT
@@ -432,45 +478,59 @@ def initial_coordinates(P, G, lay: FlexLayout, q_rigid, qd_rigid) -> np.ndarray:
     A, LU, piv = np.empty((nc, n)), np.empty((nc, nc)), np.empty(nc, dtype=np.int64)
     qc = q.copy()
     it = flex_project(P, G, qc, qd, lay.segs, lay.seg_f, lay.slides, lay.indep, A, LU, piv, np.empty(n),
-                      np.empty(n), np.empty(n), np.empty(n))
+                      np.empty(n), np.empty(n), np.empty(n), False)
     if it < 0:
         raise ValueError("the flexible rod's initial pose does not satisfy its constraints")
     x[:n], x[n:2 * n] = qc, qd
     return x
 
 
-class FlexibleRun:
-    """The flexible bench of one configuration for :class:`twin.reference.engine.ReferenceEngine`: parameters,
-    layout, state and the accelerometer mounts."""
+class RodRun:
+    """What the two reference rods' runners share (:class:`FlexibleRun`, the chain;
+    :class:`twin.reference.flexible_modal.ModalRun`): Table 1's rod split, the rigid model's parameters with the rod as
+    its two housings (``P``), the accelerometer mounts, the state ``x``."""
 
     def __init__(self, cfg, P_rigid: np.ndarray, params) -> None:
-        from twin.structure import MountFilter, rod_chain, rod_split
+        from twin.config.structure import StructureConfig
+        from twin.structure import MountFilter, rod_split
 
         st = cfg.structure
         self.cfg = cfg
-        self.chain = rod_chain(st, cfg.bodies.rod, cfg.bodies.slider.mass_kg)
-        self.layout = build(cfg, self.chain)
-        split = rod_split(cfg.bodies.rod.mass_kg, cfg.bodies.rod.length_m, cfg.bodies.rod.x_g_m,
-                          cfg.bodies.rod.inertia_kgm2, st.rod_end_inertia_kgm2)
-        from twin.config.structure import StructureConfig
-
+        self.split = rod_split(cfg.bodies.rod.mass_kg, cfg.bodies.rod.length_m, cfg.bodies.rod.x_g_m,
+                               cfg.bodies.rod.inertia_kgm2, st.rod_end_inertia_kgm2)
         # (the rigid model's parameters of the rod's two housings; its "structure" channels are this runner's)
         sensors = dataclasses.replace(cfg.sensors, channels=tuple(g for g in cfg.sensors.channels if g != "structure"))
-        ends = dataclasses.replace(cfg, bodies=dataclasses.replace(cfg.bodies, rod=rigid_rod_body(split)),
+        ends = dataclasses.replace(cfg, bodies=dataclasses.replace(cfg.bodies, rod=rigid_rod_body(self.split)),
                                    structure=StructureConfig(), sensors=sensors)
         self.P = params(ends)
         self.P_rigid = P_rigid
         self.mounts = MountFilter(st.mount_frequency_hz, st.mount_damping_ratio, cfg.sensors.output_rate_hz)
         self.x: np.ndarray | None = None
         self._kkt: dict[bool, KKTLayout] = {}
+
+    def take_contact_parameters(self) -> None:
+        """The contact stiffnesses of the rigid model's parameters (resolved at its reset)."""
+        from twin.natural_coordinates import P_CLIN_A, P_CLIN_B, P_CLIN_C, P_K_A, P_K_B, P_K_C
+        for i in (P_K_A, P_K_B, P_K_C, P_CLIN_A, P_CLIN_B, P_CLIN_C):
+            self.P[i] = self.P_rigid[i]
+
+
+class FlexibleRun(RodRun):
+    """The flexible bench of one configuration for :class:`twin.reference.engine.ReferenceEngine`: parameters,
+    layout, state and the accelerometer mounts."""
+
+    def __init__(self, cfg, P_rigid: np.ndarray, params) -> None:
+        from twin.structure import rod_chain
+
+        super().__init__(cfg, P_rigid, params)
+        self.chain = rod_chain(cfg.structure, cfg.bodies.rod, cfg.bodies.slider.mass_kg)
+        self.layout = build(cfg, self.chain)
         self.kkt(cfg.drive.mode == "prescribed")   # built here, not in the first chunk's stepping time
 
     def reset(self, st_rigid: np.ndarray) -> None:
         """Start from the rigid model's state (the straight, unstretched rod on its pose), the contact stiffnesses
         of the rigid model's parameters."""
-        from twin.natural_coordinates import P_CLIN_A, P_CLIN_B, P_CLIN_C, P_K_A, P_K_B, P_K_C
-        for i in (P_K_A, P_K_B, P_K_C, P_CLIN_A, P_CLIN_B, P_CLIN_C):
-            self.P[i] = self.P_rigid[i]
+        self.take_contact_parameters()
         lay = self.layout
         self.x = initial_coordinates(self.P, lay.G, lay, st_rigid[S_Q:S_Q + N_Q], st_rigid[S_QD:S_QD + N_Q])
         self.mounts.reset()
@@ -492,7 +552,7 @@ class FlexibleRun:
         return run_flexible(self.P, lay.G, lay.segs, lay.seg_f, lay.hinges, lay.hinge_f, lay.slides, lay.slide_f,
                             lay.indep, lay.sensors, st, self.x, theta_ref, omega_ref, stride, buf, True, D, ds, sp,
                             dbuf, np.empty(0) if alpha_ref is None else alpha_ref, kk.crow, kk.pat, kk.pn, kk.Minv,
-                            kk.cols, kk.cn, kk.Mcrank, kk.kaug)
+                            kk.cols, kk.cn, kk.Mcrank, kk.kaug, *NO_MODAL, kk.wlo)
 
     def kkt(self, prescribed: bool) -> KKTLayout:
         """The sparse acceleration solve's tables (:class:`twin.reference.flexible_kkt.KKTLayout`), built once per
@@ -505,13 +565,18 @@ class FlexibleRun:
 
 
 def tap_response(cfg, speed_mps: float = 0.01, duration_s: float = 0.2, every: int = 5, theta0: float = 0.3,
-                 drive: bool = False, axial: bool = False) -> tuple[np.ndarray, np.ndarray]:
+                 drive: bool = False, axial: bool = False, rod_model: str = "chain") -> tuple[np.ndarray, np.ndarray]:
     """A tap on the flexible rod in the reference engine: the mechanism at rest at crank angle ``theta0`` [rad]
     (no drive unless ``drive``, no guide friction), the rod's middle node given ``speed_mps`` normal to the
     chord; returns (t [s], the node's distance from the chord B'–C [m]) every ``every`` steps for
     ``duration_s``. The rod's bending relative to its ends: its ringing gives the in-situ bending mode and
     its damping (``tests/test_structure_reference.py``; the MuJoCo twin's agreement checks can tap the same).
-    ``axial``: the tap is on the bore C along the chord instead, and the response the stretch |C − B'| − L."""
+    ``axial``: the tap is on the bore C along the chord instead, and the response the stretch |C − B'| − L.
+    ``rod_model`` "modal": the same with :mod:`twin.reference.flexible_modal`'s rod."""
+    if rod_model == "modal":
+        from twin.reference.flexible_modal_run import modal_tap_response
+
+        return modal_tap_response(cfg, speed_mps, duration_s, every, theta0, drive, axial)
     from twin.natural_coordinates import initial_state
     from twin.reference.model import build_params
 
@@ -535,7 +600,7 @@ def tap_response(cfg, speed_mps: float = 0.01, duration_s: float = 0.2, every: i
     nc = n - N_Q
     A, LU, piv = np.empty((nc, n)), np.empty((nc, nc)), np.empty(nc, dtype=np.int64)
     if flex_project(run.P, lay.G, q, qd, lay.segs, lay.seg_f, lay.slides, lay.indep, A, LU, piv,
-                    np.empty(n), np.empty(n), np.empty(n), np.empty(n)) < 0:
+                    np.empty(n), np.empty(n), np.empty(n), np.empty(n), False) < 0:
         raise ValueError("the tapped state does not satisfy the constraints")
     x[:n], x[n:2 * n] = q, qd
     h = cfg.simulation.timestep_s

@@ -290,7 +290,7 @@ def _eye_contact(P, qs, q, jo, fn0, ft0, eye, rb, a, b, Q):
 
 
 @njit(cache=True)
-def _bound_damping(P, qs, qds, pin_b, cst, jo, mob, h, w_eye, Q):
+def _bound_damping(P, qs, qds, pin_b, cst, jo, mob, h, w_eye, Q, fc):
     """The contact law and friction of clearance joint B (``pin_b``) or C on the flexible rod: the element of the
     rigid model (:func:`twin.reference.model._joint`) evaluated them for a rigid rod; two things differ here.
 
@@ -306,9 +306,12 @@ def _bound_damping(P, qs, qds, pin_b, cst, jo, mob, h, w_eye, Q):
 
     The friction is evaluated from the (possibly bounded) normal force and that sliding speed. The element's forces
     (``jo`` [3:5], which it applied to ``Q`` on both bodies) are replaced in ``jo`` and on the pin's side of ``Q``
-    (the crank, or the slider); the rod's side is :func:`_eye_contact`'s. Returns the element's (f_N, f_T)."""
+    (the crank, or the slider); the rod's side is :func:`_eye_contact`'s. Returns the element's (f_N, f_T). ``fc``
+    (3): the law's elastic force and damping coefficient (F_e, c) with fc[2] = 1 where evaluated here, else 0 (for
+    :func:`law_terms`, the same numbers at the same state)."""
     fn0, ft0 = jo[3], jo[4]
     delta = jo[2]
+    fc[2] = 0.0
     if not delta > 0.0:
         return fn0, ft0
     if pin_b:
@@ -326,6 +329,7 @@ def _bound_damping(P, qs, qds, pin_b, cst, jo, mob, h, w_eye, Q):
         code = int(P[P_LAW])
         fe = normal_force(code, delta, 0.0, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX])
         c = normal_force(code, delta, 1.0, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX]) - fe
+        fc[0], fc[1], fc[2] = fe, c, 1.0
         cmax = 0.5 / (h * mob)
         if c > cmax:
             rate = (nx * edx + ny * edy) * (cmax / c)
@@ -359,11 +363,12 @@ def _bound_damping(P, qs, qds, pin_b, cst, jo, mob, h, w_eye, Q):
 
 
 @njit(cache=True)
-def law_terms(P, qs, qds, pin_b, cst, jo, out):
+def law_terms(P, qs, qds, pin_b, cst, jo, out, fc):
     """The contact law of clearance joint B (``pin_b``) or C at the step's state, for :func:`theta_damping`:
     ``out`` = [F_e, c, δ̇, b, n_x, n_y] with the law's force F_e + c δ̇ (F_e its elastic part, c its damping
     coefficient, both 0 out of contact; in the clamped branch of a hysteresis law c = 0), δ̇ the approach rate and
-    b = |ė_⊥|²/|e| the part of δ̈ that the pin's sliding along the bore's curve adds to n·ë."""
+    b = |ė_⊥|²/|e| the part of δ̈ that the pin's sliding along the bore's curve adds to n·ë. ``fc``: F_e and c as
+    :func:`_bound_damping` evaluated them at this state (fc[2] = 1), else evaluated here."""
     for i in range(6):
         out[i] = 0.0
     delta = jo[2]
@@ -383,9 +388,12 @@ def law_terms(P, qs, qds, pin_b, cst, jo, out):
     nx, ny = ex / d, ey / d
     rate = nx * edx + ny * edy
     code = int(P[P_LAW])
-    fe = normal_force(code, delta, 0.0, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX])
+    if fc[2] > 0.5:   # the same law, arguments and state as _bound_damping's: the same numbers
+        fe, c = fc[0], fc[1]
+    else:
+        fe = normal_force(code, delta, 0.0, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX])
+        c = normal_force(code, delta, 1.0, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX]) - fe
     f1 = normal_force(code, delta, rate, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX])
-    c = normal_force(code, delta, 1.0, cst[1], K, P[P_N], P[P_E], clin, P[P_DMAX]) - fe
     if c > 0.0 and abs(f1 - (fe + c * rate)) > 1e-9 * (abs(f1) + abs(fe) + 1e-300):   # clamped: no rate term
         fe, c = f1, 0.0
     vt = -ny * edx + nx * edy
@@ -470,6 +478,14 @@ def chain_forces(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G, Q):
         Q[c + 1] += f * ey
         Q[p] -= f * ex
         Q[p + 1] -= f * ey
+    return support_forces(P, q, qd, G, Q, diss)
+
+
+@njit(cache=True)
+def support_forces(P, q, qd, G, Q, diss):
+    """Add the supports' springs, dampers and weights to Q (the frame at A' = (q_8, q_9), the guide's y_g = q_10);
+    returns ``diss`` plus the power their dampers dissipate [W]. Shared by the chain and the modal rod."""
+    gx, gy = P[P_GX], P[P_GY]
     if G[G_FLEX_A] > 0.5:   # the frame's spring and damper, and the frame's own weight (its mass moves with A')
         for i in (8, 9):
             Q[i] += -G[G_KF] * q[i] - G[G_CF] * qd[i]
@@ -480,6 +496,17 @@ def chain_forces(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G, Q):
         Q[10] += -G[G_KG] * q[10] - G[G_CG] * qd[10] + (P[P_M3] + G[G_MG]) * gy
         diss += G[G_CG] * qd[10] * qd[10]
     return diss
+
+
+@njit(cache=True)
+def support_energy(P, q, G, V):
+    """``V`` plus the supports' springs' energy and their (and the guide-borne slider's) weight's [J]."""
+    gx, gy = P[P_GX], P[P_GY]
+    if G[G_FLEX_A] > 0.5:
+        V += 0.5 * G[G_KF] * (q[8] * q[8] + q[9] * q[9]) - G[G_MF] * (gx * q[8] + gy * q[9])
+    if G[G_FLEX_G] > 0.5:
+        V += 0.5 * G[G_KG] * q[10] * q[10] - (P[P_M3] + G[G_MG]) * gy * q[10]
+    return V
 
 
 @njit(cache=True)
@@ -512,11 +539,7 @@ def flex_energy(P, q, qd, segs, seg_f, hinges, hinge_f, slides, slide_f, G):
         wn = math.sqrt(wx * wx + wy * wy)
         d = ((q[c] - q[p]) * wx + (q[c + 1] - q[p + 1]) * wy) / wn
         V += 0.5 * slide_f[k, 0] * d * d
-    if G[G_FLEX_A] > 0.5:
-        V += 0.5 * G[G_KF] * (q[8] * q[8] + q[9] * q[9]) - G[G_MF] * (gx * q[8] + gy * q[9])
-    if G[G_FLEX_G] > 0.5:
-        V += 0.5 * G[G_KG] * q[10] * q[10] - (P[P_M3] + G[G_MG]) * gy * q[10]
-    return T, V
+    return T, support_energy(P, q, G, V)
 
 
 @njit(cache=True)
@@ -547,31 +570,43 @@ def _independent_values(P, G, q, qd, segs, slides, indep, b):
 
 
 @njit(cache=True)
-def flex_project(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, res, dq, b, tmp):
+def rigid_residual(P, G, q, s, c, res):
+    """The rigid model's constraint residuals into ``res[:12]`` with the flexible structure's independent rows 0: the
+    rod's length (its stretch), the frame's A' and the guide's y_g; the ideal joint C on the moving guide: C' at
+    d_off + y_g. Shared by the chain's and the modal rod's projections."""
+    residual(P, q[:N_Q], s, c, res[:N_Q])
+    res[2] = 0.0
+    if G[G_FLEX_A] > 0.5:
+        res[8] = 0.0
+        res[9] = 0.0
+    if G[G_FLEX_G] > 0.5:
+        res[10] = 0.0
+        if P[P_CLR_C] < 0.5:
+            res[6] = P[P_DOFF] + q[10] - q[5]
+
+
+@njit(cache=True)
+def flex_project(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, res, dq, b, tmp, held):
     """Newton on the constraints with the independent coordinates held, then q̇ ← R ż (as the rigid
-    :func:`twin.natural_coordinates.project`). On return A and LU hold the chain's rows at the final q (the
-    next step's acceleration solve reuses them). Returns the iterations, −1 if no convergence."""
+    :func:`twin.natural_coordinates.project`). On return A, LU and piv hold the chain's rows and their factors at the
+    final q. ``held``: the Newton iteration starts from the factors A, LU, piv already hold (:func:`factor` at the
+    previous step's final q, an h q̇ away: the stepping loop's projection, which factors once per step instead of
+    twice); else it factors at the given q first. Returns the iterations, −1 if no convergence."""
     n = q.shape[0]
     nc = A.shape[0]
     tol = P[P_NEWTON_TOL]
     maxit = int(P[P_NEWTON_MAXIT])
     it = 0
     conv = False
-    # modified Newton: the chain block factored once at the predicted q (a step moves it by h q̇, so the
-    # iteration contracts by ~|ΔA|/|A| per pass); the velocity projection below refactors at the final q
-    if not factor(q, segs, slides, indep, A, LU, piv):
+    # modified Newton: the chain block factored once, at the predicted q or (held) at the previous step's final q
+    # (a step moves it by h q̇, so the iteration contracts by ~|ΔA|/|A| per pass); the velocity projection below
+    # refactors at the final q
+    if not held and not factor(q, segs, slides, indep, A, LU, piv):
         return -1
-    while it < maxit:
+    lim = maxit
+    while it < lim:
         s, c = math.sin(q[7]), math.cos(q[7])
-        residual(P, q[:N_Q], s, c, res[:N_Q])
-        res[2] = 0.0
-        if G[G_FLEX_A] > 0.5:
-            res[8] = 0.0
-            res[9] = 0.0
-        if G[G_FLEX_G] > 0.5:
-            res[10] = 0.0
-            if P[P_CLR_C] < 0.5:   # the ideal joint C on the moving guide: C' at d_off + y_g
-                res[6] = P[P_DOFF] + q[10] - q[5]
+        rigid_residual(P, G, q, s, c, res)
         chain_residual(q, segs, seg_f, slides, res[N_Q:])
         for i in range(n):
             res[i] = -res[i]
@@ -585,10 +620,18 @@ def flex_project(P, G, q, qd, segs, seg_f, slides, indep, A, LU, piv, res, dq, b
         if big <= tol:
             conv = True
             break
+        if held and it == maxit and lim == maxit:   # the held factors did not contract: factor here, go on
+            if not factor(q, segs, slides, indep, A, LU, piv):
+                return -1
+            lim += maxit
     if not conv:
         return -1
     s, c = math.sin(q[7]), math.cos(q[7])
-    if not factor(q, segs, slides, indep, A, LU, piv):
+    if held:   # the rows' order (piv) is the chain's topology, set by the factor the held factors came from
+        chain_jacobian(q, segs, slides, indep, A)
+        if not bt_factor(A, piv, LU):
+            return -1
+    elif not factor(q, segs, slides, indep, A, LU, piv):
         return -1
     _independent_values(P, G, q, qd, segs, slides, indep, b)
     flex_solve(q, s, c, A, LU, piv, b, dq, tmp)

@@ -53,10 +53,12 @@ class KKTLayout:
     Attributes (all numpy arrays for the compiled kernels): ``crow`` the constraint rows (0–11 the rigid set's,
     12 + j segment j's length, 12 + N + k slide k's), ``pat``/``pn`` each row's structural columns, ``Minv`` the
     inverse of M̃'s constant blocks (n × n, zero on the crank's rows and columns), ``cols``/``cn`` for each
-    coordinate the coordinates of its block, ``kaug`` the penalty weights of rows 0 and 1."""
+    coordinate the coordinates of its block, ``kaug`` the penalty weights of rows 0 and 1, ``wlo`` the envelope of
+    W = Φ_c M̃⁻¹ Φ_cᵀ (each row's first structurally nonzero column). ``mass``: the constant
+    mass matrix (n × n) where it is not the chain's (the modal rod, no segments or slides)."""
 
     def __init__(self, P: np.ndarray, G: np.ndarray, segs: np.ndarray, seg_f: np.ndarray, slides: np.ndarray,
-                 n: int, prescribed: bool) -> None:
+                 n: int, prescribed: bool, mass: np.ndarray | None = None) -> None:
         indep = {7, 2}
         if P[P_CLR_A] > 0.5 or G[G_FLEX_A] > 0.5:
             indep |= {8, 9}
@@ -107,13 +109,16 @@ class KKTLayout:
         self.pat = np.zeros((len(pats), _MAXNZ), dtype=np.int64)
         for i, p in enumerate(pats):
             self.pat[i, :len(p)] = p
-        # the constant mass matrix, probed
-        M = np.empty((n, n))
-        e = np.zeros(n)
-        for k in range(n):
-            e[:] = 0.0
-            e[k] = 1.0
-            flex_mass_times(P, segs, seg_f, G, e, M[:, k])
+        # the constant mass matrix, probed (or given: the modal rod's, twin.reference.flexible_modal)
+        if mass is not None:
+            M = np.array(mass, dtype=np.float64)
+        else:
+            M = np.empty((n, n))
+            e = np.zeros(n)
+            for k in range(n):
+                e[:] = 0.0
+                e[k] = 1.0
+                flex_mass_times(P, segs, seg_f, G, e, M[:, k])
         crank = set(CRANK.tolist())
         rest = [k for k in range(n) if k not in crank]
         if np.any(M[np.ix_(CRANK, rest)] != 0.0):
@@ -157,6 +162,12 @@ class KKTLayout:
         for k in CRANK:
             self.cn[k] = 5
             self.cols[k, :5] = CRANK
+        # W's envelope: W_rs = Φ_r M̃⁻¹ Φ_sᵀ is structurally zero unless rows r and s reach a common block of M̃;
+        # wlo[r] the first row s ≤ r it can be nonzero in. Cholesky keeps the envelope (no fill before wlo[r]),
+        # so W and its factor are computed on it only (the same numbers: the entries left out are exact zeros)
+        blocks = [{int(self.cols[k, 0]) for k in p} for p in pats]
+        self.wlo = np.array([min(s for s in range(r + 1) if blocks[r] & blocks[s]) for r in range(len(pats))],
+                            dtype=np.int64)
         self.Mcrank = M[np.ix_(CRANK, CRANK)].copy()
         mc, r = P[P_MC], P[P_R]
         # penalty weights: row 0 (gradient 2(B − A'), |2r|) adds ≈ m_c/2 on B, row 1 (|(s, −c)| = 1, r on θ)
@@ -246,11 +257,11 @@ def _put(pat, pn, i, col, v, PhiV):
 
 
 @njit(cache=True)
-def kkt_factor(P, q, crow, pat, pn, PhiV, Minv, cols, cn, Mcrank, kaug, Y, W, sc):
+def kkt_factor(P, q, crow, pat, pn, PhiV, Minv, cols, cn, Mcrank, kaug, Y, W, sc, wlo):
     """M̃'s crank block inverted into ``Minv`` (the rest of ``Minv`` is constant), Y = M̃⁻¹ Φ_cᵀ (n × m) and the
     Cholesky factor of W = Φ_c Y into ``W``'s lower triangle; False if W is not positive definite. ``Y`` is held
     transposed, m × n (a constraint row's M̃⁻¹ Φ_rᵀ contiguous); ``sc``: scratch, (3, 5, 5) (no allocation in the
-    step)."""
+    step); ``wlo``: W's envelope (:class:`KKTLayout`; W and its factor are computed on it, zero before it)."""
     m = crow.shape[0]
     # the crank block: M + k0 Φ0ᵀΦ0 + k1 Φ1ᵀΦ1 on (x_B, y_B, θ, x_A, y_A)
     s, c = math.sin(q[7]), math.cos(q[7])
@@ -279,13 +290,38 @@ def kkt_factor(P, q, crow, pat, pn, PhiV, Minv, cols, cn, Mcrank, kaug, Y, W, sc
                 i = cols[k, u]
                 Yr[i] += Minv[k, i] * v   # M̃⁻¹ symmetric: its row k
     for r in range(m):
-        for s2 in range(r + 1):
+        for s2 in range(wlo[r]):
+            W[r, s2] = 0.0
+        for s2 in range(wlo[r], r + 1):
             Ys = Y[s2]
             acc = 0.0
             for t in range(pn[r]):
                 acc += PhiV[r, t] * Ys[pat[r, t]]
             W[r, s2] = acc
-    return cholesky_factor(W, m)
+    return envelope_cholesky(W, m, wlo)
+
+
+@njit(cache=True)
+def envelope_cholesky(A, n, lo):
+    """:func:`twin.reference.model.cholesky_factor` on the envelope ``lo`` (row i is zero before column lo[i]; the
+    factor keeps it): the same factor, operation for operation, without the products of the zeros before the
+    envelope (which subtract exact zeros). False if A is not positive definite."""
+    for j in range(n):
+        sacc = A[j, j]
+        for k in range(lo[j], j):
+            sacc -= A[j, k] * A[j, k]
+        if not sacc > 0.0:
+            return False
+        ljj = math.sqrt(sacc)
+        A[j, j] = ljj
+        for i in range(j + 1, n):
+            if lo[i] > j:
+                continue
+            t = A[i, j]
+            for k in range(max(lo[i], lo[j]), j):
+                t -= A[i, k] * A[j, k]
+            A[i, j] = t / ljj
+    return True
 
 
 CRANK_C = CRANK
@@ -392,6 +428,21 @@ def _kkt_response(Minv, Y, W, m, pin_x, pin_y, eye_x, eye_y, nx, ny, z, v):
 
 
 @njit(cache=True)
+def pair_response(Minv, Y, W, m, a, pin_x, pin_y, eye_x, eye_y, jo, z, v):
+    """The constrained response of clearance pair ``a`` (0: B, 1: C) to a unit force along its normal (``jo``'s
+    eccentricity; :func:`_kkt_response` into ``z[a]``, ``v[a]``) and its normal mobility
+    J N Jᵀ = J z [1/kg] (0 without a normal). One solve serves the damping bound and the θ-method (:func:`theta_from_responses`), for
+    either rod."""
+    d = math.sqrt(jo[0] * jo[0] + jo[1] * jo[1])
+    if not d > 0.0:
+        return 0.0
+    nx, ny = jo[0] / d, jo[1] / d
+    za = z[a]
+    _kkt_response(Minv, Y, W, m, pin_x, pin_y, eye_x, eye_y, nx, ny, za, v[a])
+    return nx * (za[pin_x] - za[eye_x]) + ny * ((za[pin_y] if pin_y >= 0 else 0.0) - za[eye_y])
+
+
+@njit(cache=True)
 def kkt_theta_damping(h, qdd, Minv, Y, W, m, crow, lawB, lawC, fB, fC, shift, jb, jc, z, v):
     """The contact laws' damping at B and C by the θ-method after :func:`kkt_accelerations` (the sparse form of
     :func:`twin.reference.flexible_rmatrix.theta_damping`, which states the method and is its check): the normal
@@ -410,8 +461,25 @@ def kkt_theta_damping(h, qdd, Minv, Y, W, m, crow, lawB, lawC, fB, fC, shift, jb
             lw = lawB if a == 0 else lawC
             p = pins[a]
             _kkt_response(Minv, Y, W, m, p[0], p[1], p[2], p[3], lw[4], lw[5], z[a], v[a])
-    Wm = np.zeros((2, 2))
-    an = np.zeros(2)
+    return theta_from_responses(h, qdd, m, crow, lawB, lawC, fB, fC, shift, jb, jc, z, v, act, np.zeros((2, 2)),
+                                np.zeros(2), np.zeros(2), np.zeros(2))
+
+
+@njit(cache=True)
+def theta_from_responses(h, qdd, m, crow, lawB, lawC, fB, fC, shift, jb, jc, z, v, act, Wm, an, f0, dl):
+    """The θ-method of :func:`kkt_theta_damping` once the active pairs' responses ``z[a]`` = N J_aᵀ, ``v[a]`` (the
+    multipliers' change per unit force, :func:`_kkt_response`) are solved (the modal rod solves them once per step for
+    its damping bound too); ``act`` the active pairs (set here), ``Wm`` … ``dl`` scratch (2 × 2, 2, 2, 2)."""
+    act[0] = fB > 0.0 and lawB[1] > 0.0
+    act[1] = fC > 0.0 and lawC[1] > 0.0
+    if not (act[0] or act[1]):
+        return 0.0
+    for a in range(2):
+        an[a] = 0.0
+        dl[a] = 0.0
+        for b in range(2):
+            Wm[a, b] = 0.0
+    pins = ((0, 1, 2, 3), (6, 10 if shift else -1, 4, 5))
     for a in range(2):
         if not act[a]:
             continue
@@ -422,8 +490,7 @@ def kkt_theta_damping(h, qdd, Minv, Y, W, m, crow, lawB, lawC, fB, fC, shift, jb
         for b in range(2):
             if act[b]:   # J_a z_b
                 Wm[a, b] = nx * (z[b, p[0]] - z[b, p[2]]) + ny * ((z[b, p[1]] if p[1] >= 0 else 0.0) - z[b, p[3]])
-    f0 = np.array([fB, fC])
-    dl = np.zeros(2)
+    f0[0], f0[1] = fB, fC
     theta_forces(h, Wm, act, f0, lawB, lawC, an, dl)
     n = qdd.shape[0]
     dtau = 0.0
