@@ -36,10 +36,10 @@ def _kernel_loops():
     """Compiled loops, each calling one kernel K times (arguments as the stepping loop passes them)."""
     from twin.jit import njit
     from twin.natural_coordinates import N_Q
-    from twin.reference.flexible import _structure_outputs
-    from twin.reference.flexible_kernels import _rod_sensors, chain_forces, flex_project
+    from twin.reference import flexible as F, flexible_kernels as FK, model as RM
+    from twin.reference.flexible_kernels import chain_forces, flex_project
     from twin.reference.flexible_kkt import kkt_accelerations, kkt_factor, kkt_rows, pair_response
-    from twin.reference.model import _outputs, generalized_forces
+    from twin.reference.model import generalized_forces
 
     @njit(cache=False)
     def rows(K, a):
@@ -100,9 +100,9 @@ def _kernel_loops():
     @njit(cache=False)
     def outs(K, a):
         for _ in range(K):
-            _outputs(a.P, a.q[:N_Q], a.qd[:N_Q], a.qdd[:N_Q], 0.1, a.ja, a.jb, a.jc, a.row)
-            _rod_sensors(a.P, a.q, a.qdd, a.segs, a.sens, a.row)
-            _structure_outputs(a.P, a.G, a.q, a.segs, a.row)
+            RM._outputs(a.P, a.q[:N_Q], a.qd[:N_Q], a.qdd[:N_Q], 0.1, a.ja, a.jb, a.jc, a.row)
+            FK._rod_sensors(a.P, a.q, a.qdd, a.segs, a.sens, a.row)
+            F._structure_outputs(a.P, a.G, a.q, a.segs, a.row)
 
     return {"constraint rows + quadratic terms (kkt_rows)": rows, "KKT factor: Y, W, Cholesky (kkt_factor)": fac,
             "mechanism forces and contact laws (generalized_forces)": gf,

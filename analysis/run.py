@@ -149,6 +149,12 @@ SCRIPTS: dict[str, Script] = {
                               "side)", "~5 min"),
     "profile_flexible": Script("prints where a step of the reference's flexible structure goes, kernel by kernel",
                                "~1 min"),
+    "profile_reference_flexible": Script(f"{R}/structure/profile_reference_flexible.md (the reference's flexible "
+                                         "step, kernel by kernel, chain and modal rod)", "~2 min"),
+    "structure_modal_basis": Script(f"{R}/structure/modal_basis.md (the modal rod's basis against the closed forms)",
+                                    "~10 s"),
+    "structure_agreement_rod_model": Script(f"{R}/structure/agreement_rod_model.md (MuJoCo against the reference's chain and modal rod, "
+                                            "third-octave bands)", "~10 min"),
     "mujoco_flexible_options": Script("prints MuJoCo stepping options for the flexible structure: cost and output "
                                       "difference", "~2 min"),
     "structure_agreement": Script(f"{R}/structure/agreement.md, .json (third-octave bands, MuJoCo against the "
@@ -171,6 +177,9 @@ SCRIPTS: dict[str, Script] = {
     "restitution_length": Script("analysis/calibration_validation/restitution_length_*.json (which recording "
                                  "length tells the restitution)", "~5 min",
                                  args=("--out", "analysis/calibration_validation/restitution_length_t6_c0.5_e0.39.json")),
+    "replay_noise_floor": Script("analysis/calibration_validation_N/replay_noise_floor.json (the replay "
+                                 "criterion's floor: noise streams and ±1e-9 offsets of the truth)", "~30 min",
+                                 long=True, needs="a validation set's recordings (--set, --work)"),
     "calibration_walltime": Script("prints the wall time of a two-recording, five-field calibration", "~15 min",
                                    long=True, needs="a work folder (--work)"),
     "calibration_validation": Script("analysis/calibration_validation/truth.json, results.json, table.md (the "

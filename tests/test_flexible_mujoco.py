@@ -334,7 +334,7 @@ def test_stability_campaign_draws_the_structure_without_changing_the_other_draws
 
 
 def _mujoco_tap(cfg, speed_mps: float, duration_s: float, every: int, theta0: float, axial: bool = False):
-    """The reference's tap (twin.reference.flexible.tap_response) in the MuJoCo twin: the mechanism at rest at
+    """The reference's tap (twin.reference.flexible_tap.tap_response) in the MuJoCo twin: the mechanism at rest at
     ``theta0``, no drive torque (the PID's gains zeroed), the rod's middle node (axial: the bore C) struck by an
     impulse that gives it ``speed_mps`` normal to (along) the chord B'-C, the loop closure at C taking its share
     (the velocity change is M⁻¹ Jᵀ λ with J the node's and the closure's rows); returns (t, the node's distance
@@ -399,7 +399,7 @@ def test_engines_tap_ring_at_the_same_in_situ_mode(axial, band):
     """Modal agreement of the two engines in the mechanism as built (default supports and structure, crank free,
     no gravity): the same tap on the rod rings at the same first bending (axial: stretch) frequency within 1 %.
     Independent basis: the other engine (natural coordinates, R-matrix)."""
-    from twin.reference.flexible import tap_response
+    from twin.reference.flexible_tap import tap_response
 
     cfg = _flexible(**{"mechanism.gravity_mps2": 0.0, "mechanism.guide_friction_n": 0.0})
     dur, every = (0.2, 5) if not axial else (0.05, 1)

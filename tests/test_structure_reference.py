@@ -12,7 +12,8 @@ import pytest
 from twin.config import preset
 from twin.natural_coordinates import initial_state
 from twin.reference import model as RM
-from twin.reference.flexible import N_OUT_FLEX, O_DISS, FlexibleRun, tap_response
+from twin.reference.flexible import N_OUT_FLEX, O_DISS, FlexibleRun
+from twin.reference.flexible_tap import tap_response
 
 
 def _run(cfg, theta0, *, drive=False, guide_friction=False, rod_model="chain"):

@@ -64,7 +64,7 @@ from twin.natural_coordinates import (N_Q, P_CLR_B, P_CLR_C, P_FGUIDE, P_GX, P_G
 from twin.reference.model import N_OUT, NEWTON_FAILED, NOT_FINITE, O_EKIN, O_EPOT, OK, _outputs, generalized_forces
 from twin.reference import drivetrain as DT
 from twin.reference.guide import N_GUIDE_OUT
-from twin.reference.flexible_kernels import (G_CF, G_CG, G_FLEX_A, G_FLEX_G, G_KF, G_KG, G_MF, G_MG, factor,
+from twin.reference.flexible_kernels import (G_MID_SEG, G_MID_XI, N_G, support_table, G_CF, G_CG, G_FLEX_A, G_FLEX_G, G_KF, G_KG, G_MF, G_MG, factor,
                                              _eye_contact, _bound_damping, _seg_angle_rate, chain_forces, law_terms,
                                              flex_energy, flex_project,
                                              _rod_sensors, _slider_sensors)
@@ -73,11 +73,6 @@ from twin.reference.flexible_kkt import (KKTLayout, kkt_accelerations, kkt_facto
 from twin.reference.flexible_modal import (_modal_eye_contact, _modal_rod_sensors, _modal_structure_outputs,
                                            _tangent, modal_energy, modal_forces, modal_project)
 
-# the supports' parameters ``G`` (build()): indices G_KF … G_FLEX_G, defined with the kernels that read them; then
-# the rod's mid-span material point for the "structure" channels (:func:`_structure_outputs`): its segment and its
-# distance from the segment's start [m]
-G_MID_SEG, G_MID_XI = 8, 9
-N_G = 10
 
 
 @dataclasses.dataclass
@@ -164,22 +159,6 @@ def build(cfg, chain) -> FlexLayout:
     return FlexLayout(n, (n - N_Q) // 2, segs, seg_f, np.array(hinges, dtype=np.int64), np.array(hinge_f),
                       np.array(slides, dtype=np.int64), np.array(slide_f), np.array(indep, dtype=np.int64), sens, G,
                       np.array(x0))
-
-
-def support_table(st, mid_seg: float, mid_xi: float) -> np.ndarray:
-    """The supports' parameters ``G`` (G_* indices) of ``st`` (:class:`twin.config.structure.StructureConfig`), with
-    the rod's mid-span point (its segment and the distance from its start; the modal rod: −1 and ξ = ½)."""
-    G = np.zeros(N_G)
-    G[G_MID_SEG] = mid_seg
-    G[G_MID_XI] = mid_xi
-    G[G_FLEX_A] = G[G_FLEX_G] = 1.0
-    G[G_MF] = st.frame_mass_kg
-    G[G_KF] = st.support_stiffness(st.frame_mass_kg, st.frame_frequency_hz)
-    G[G_CF] = st.support_damping(st.frame_mass_kg, st.frame_frequency_hz, st.frame_damping_ratio)
-    G[G_MG] = st.guide_mass_kg
-    G[G_KG] = st.support_stiffness(st.guide_mass_kg, st.guide_frequency_hz)
-    G[G_CG] = st.support_damping(st.guide_mass_kg, st.guide_frequency_hz, st.guide_damping_ratio)
-    return G
 
 
 # --------------------------------------------------------------------------------------------- kernels
@@ -564,19 +543,15 @@ class FlexibleRun(RodRun):
         return kk
 
 
-def tap_response(cfg, speed_mps: float = 0.01, duration_s: float = 0.2, every: int = 5, theta0: float = 0.3,
-                 drive: bool = False, axial: bool = False, rod_model: str = "chain") -> tuple[np.ndarray, np.ndarray]:
+def chain_tap_response(cfg, speed_mps: float = 0.01, duration_s: float = 0.2, every: int = 5, theta0: float = 0.3,
+                       drive: bool = False, axial: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """A tap on the flexible rod in the reference engine: the mechanism at rest at crank angle ``theta0`` [rad]
     (no drive unless ``drive``, no guide friction), the rod's middle node given ``speed_mps`` normal to the
     chord; returns (t [s], the node's distance from the chord B'–C [m]) every ``every`` steps for
     ``duration_s``. The rod's bending relative to its ends: its ringing gives the in-situ bending mode and
     its damping (``tests/test_structure_reference.py``; the MuJoCo twin's agreement checks can tap the same).
     ``axial``: the tap is on the bore C along the chord instead, and the response the stretch |C − B'| − L.
-    ``rod_model`` "modal": the same with :mod:`twin.reference.flexible_modal`'s rod."""
-    if rod_model == "modal":
-        from twin.reference.flexible_modal_run import modal_tap_response
-
-        return modal_tap_response(cfg, speed_mps, duration_s, every, theta0, drive, axial)
+    The chain rod's; :func:`twin.reference.flexible_tap.tap_response` takes either rod."""
     from twin.natural_coordinates import initial_state
     from twin.reference.model import build_params
 

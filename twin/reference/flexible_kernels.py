@@ -23,6 +23,10 @@ from twin.reference.model import O_ACC, _rod_force
 
 # ----------------------------------------------------------------- the supports' parameters ``G`` (build())
 G_KF, G_CF, G_MF, G_KG, G_CG, G_MG, G_FLEX_A, G_FLEX_G = 0, 1, 2, 3, 4, 5, 6, 7
+# then the rod's mid-span material point for the "structure" channels (``flexible._structure_outputs``): its segment
+# and its distance from the segment's start [m]; :func:`support_table` fills them
+G_MID_SEG, G_MID_XI = 8, 9
+N_G = 10
 
 
 @njit(cache=True)
@@ -676,3 +680,19 @@ def _slider_sensors(P, qdd, sens, row):
         if axis == 1 or axis == 3:
             v = -v
         row[O_ACC + i] = v
+
+
+def support_table(st, mid_seg: float, mid_xi: float) -> np.ndarray:
+    """The supports' parameters ``G`` (G_* indices) of ``st`` (:class:`twin.config.structure.StructureConfig`), with
+    the rod's mid-span point (its segment and the distance from its start; the modal rod: −1 and ξ = ½)."""
+    G = np.zeros(N_G)
+    G[G_MID_SEG] = mid_seg
+    G[G_MID_XI] = mid_xi
+    G[G_FLEX_A] = G[G_FLEX_G] = 1.0
+    G[G_MF] = st.frame_mass_kg
+    G[G_KF] = st.support_stiffness(st.frame_mass_kg, st.frame_frequency_hz)
+    G[G_CF] = st.support_damping(st.frame_mass_kg, st.frame_frequency_hz, st.frame_damping_ratio)
+    G[G_MG] = st.guide_mass_kg
+    G[G_KG] = st.support_stiffness(st.guide_mass_kg, st.guide_frequency_hz)
+    G[G_CG] = st.support_damping(st.guide_mass_kg, st.guide_frequency_hz, st.guide_damping_ratio)
+    return G

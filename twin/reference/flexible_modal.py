@@ -116,7 +116,7 @@ class ModalLayout:
     def __init__(self, cfg, split) -> None:
         from twin.config import ACCELEROMETERS
         from twin.config.structure import StructureConfig  # noqa: F401  (the fields read below)
-        from twin.reference.flexible import support_table
+        from twin.reference.flexible_kernels import support_table
 
         st = cfg.structure
         K = N_SHAPES

@@ -102,7 +102,7 @@ class ModalRun(RodRun):
 
 def modal_tap_response(cfg, speed_mps: float, duration_s: float, every: int, theta0: float, drive: bool,
                        axial: bool) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`twin.reference.flexible.tap_response` for the modal rod (the same arguments and returns; the bending
+    """:func:`twin.reference.flexible.chain_tap_response` for the modal rod (the same arguments and returns; the bending
     tap is the mid-span point's velocity given through the first shape)."""
     from twin.natural_coordinates import initial_state
     from twin.reference.model import build_params
