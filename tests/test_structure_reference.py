@@ -171,6 +171,27 @@ def test_flexible_test6_runs_with_mounted_sensors():
     assert np.max(np.abs(flex["crank_angle"].data - rigid["crank_angle"].data)) < 1e-3
 
 
+def test_friction_is_mu_times_the_normal_force_the_step_applies():
+    """Coulomb's law at the clearance joints B and C of the flexible rod (test 12, 0.1 s from rest): the regularized
+    law gives |f_T| = μ(|v_t|) f_N with μ ≤ μ0, so |f_T| ≤ μ0 f_N in every sample.
+    Independent basis: the friction law itself (S003 Eq. 19–20), with the f_N the step applies (the θ-method's,
+    reported in fn_B/fn_C). The friction had taken the explicit normal force, and exceeded μ0 f_N by 0.7 %
+    here (2 % at full speed). Tolerance: the channels' float32 rounding."""
+    from twin.simulation import simulate_run
+
+    cfg = preset(12).replace(**{"simulation.engine": "reference", "simulation.duration_s": 0.1,
+                                "structure.mode": "flexible"})
+    ch = simulate_run(cfg).channels
+    mu0 = cfg.contact.mu0
+    for j in ("B", "C"):
+        fn = ch[f"fn_{j}"].data.astype(np.float64)
+        ft = ch[f"ft_{j}"].data.astype(np.float64)
+        on = fn > 1.0
+        assert on.sum() > 1000, j
+        ratio = np.abs(ft[on]) / fn[on]
+        assert ratio.max() <= mu0 * (1.0 + 1e-5), (j, ratio.max())
+
+
 def test_flexible_runs_with_the_drive_train_the_prescribed_crank_and_refuses_what_it_leaves_out():
     """Test 12 for 10 ms through the flexible loop driven by the motor and V-belt (finite channels, the motor's
     channels present) and by the prescribed crank (the crank angle is the program's at every sample, as in the

@@ -44,7 +44,10 @@ law's explicit damping is bounded at the dead-beat value m̂/(2h), m̂ the flexi
 normal (:func:`_bound_damping`, as the MuJoCo engine's force path: unbounded, against the light housing it rang at
 the step's Nyquist rate), and after the explicit solve the law's damping is integrated by the θ-method as the MuJoCo
 engine's contact rows do (:func:`twin.reference.flexible_kkt.kkt_theta_damping`): the explicit damping had been the largest step error against
-MuJoCo (test 12, 12 dB at 10 kHz).
+MuJoCo (test 12, 12 dB at 10 kHz). The friction then follows the θ-method's normal force
+(:func:`twin.reference.flexible_kkt.kkt_friction_follow`): f_T = μ(v_t) f_N with the f_N the step applies, as in the
+rigid model and the MuJoCo engine (it had taken the explicit f_N: |f_T|/f_N up to 2 % off μ in sliding contact, and
+the engines 1.6 dB apart on test 12 at the default step).
 Scope: every drive (crank PID, prescribed crank, motor and torque through the drive train), symplectic Euler,
 clearances at B and C (A and the guide ideal).
 """
@@ -58,8 +61,8 @@ import numpy as np
 
 from twin.jit import njit
 from twin.natural_coordinates import (N_Q, P_CLR_B, P_CLR_C, P_FGUIDE, P_GX, P_GY, P_H, P_IMAX, P_KI, P_KP,
-                                      P_KV, P_L, P_M1, P_M2, P_M3, P_OUT_ENERGY, P_R, P_RBUSH_B, P_RBUSH_C, P_V0,
-                                      P_V1, P_XG1, P_XG2, S_I, S_IN_A, S_IN_B, S_IN_C, S_Q, S_QD, S_VIMP_A,
+                                      P_KV, P_L, P_M1, P_M2, P_M3, P_OUT_ENERGY, P_R, P_RBUSH_B, P_RBUSH_C, P_RPIN_B,
+                                      P_V0, P_V1, P_XG1, P_XG2, S_I, S_IN_A, S_IN_B, S_IN_C, S_Q, S_QD, S_VIMP_A,
                                       S_VIMP_B, S_VIMP_C)
 from twin.reference.model import N_OUT, NEWTON_FAILED, NOT_FINITE, O_EKIN, O_EPOT, OK, _outputs, generalized_forces
 from twin.reference import drivetrain as DT
@@ -68,8 +71,8 @@ from twin.reference.flexible_kernels import (G_MID_SEG, G_MID_XI, N_G, support_t
                                              _eye_contact, _bound_damping, _seg_angle_rate, chain_forces, law_terms,
                                              flex_energy, flex_project,
                                              _rod_sensors, _slider_sensors)
-from twin.reference.flexible_kkt import (KKTLayout, kkt_accelerations, kkt_factor, kkt_rows, pair_response,
-                                          theta_from_responses)
+from twin.reference.flexible_kkt import (KKTLayout, kkt_accelerations, kkt_factor, kkt_friction_follow, kkt_rows,
+                                          pair_response, theta_from_responses)
 from twin.reference.flexible_modal import (_modal_eye_contact, _modal_rod_sensors, _modal_structure_outputs,
                                            _tangent, modal_energy, modal_forces, modal_project)
 
@@ -246,6 +249,7 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
     fcb = np.zeros(3)   # the laws' (F_e, c) from the damping bound, for the θ-method's terms
     fcc = np.zeros(3)
     zth = np.empty((2, n))
+    gfr = np.empty(n)
     vth = np.empty((2, mk))
     modal = H.shape[0] > 0
     act = np.zeros(2, dtype=np.bool_)
@@ -348,6 +352,10 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
         if fB > 0.0 or fC > 0.0:   # the pairs' responses of this step, solved above
             tau += theta_from_responses(h, qdd, mk, crow, lawB, lawC, fB, fC, shift, jb, jc, zth, vth, act, Wm, an,
                                         f0, dl)
+            if not modal:   # the friction with the normal force the step applies (Coulomb's f_T = μ f_N, as the
+                # rigid model's); the modal rod's friction keeps the explicit normal force (not carried over to it)
+                tau += kkt_friction_follow(q, qdd, Minv, Yk, Wk, mk, crow, segs, P[P_RPIN_B], P[P_RBUSH_B],
+                                           P[P_RBUSH_C], fB, fC, shift, jb, jc, gfr, zth[0], vth[0])
         if want_out and k % stride == 0:
             row = out[k // stride]
             _outputs(P, q[:N_Q], qd[:N_Q], qdd[:N_Q], tau, ja, jb, jc, row)
