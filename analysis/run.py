@@ -155,6 +155,9 @@ SCRIPTS: dict[str, Script] = {
                                     "~10 s"),
     "structure_agreement_rod_model": Script(f"{R}/structure/agreement_rod_model.md (MuJoCo against the reference's chain and modal rod, "
                                             "third-octave bands)", "~10 min"),
+    "structure_fullspeed": Script(f"{R}/structure/fullspeed.md, .json (the engines at full speed: step convergence, "
+                                  "the physical bisection, the slider-mass ensemble)", "~60 min", long=True,
+                                  args=("--bisect",)),
     "mujoco_flexible_options": Script("prints MuJoCo stepping options for the flexible structure: cost and output "
                                       "difference", "~2 min"),
     "structure_agreement": Script(f"{R}/structure/agreement.md, .json (third-octave bands, MuJoCo against the "
