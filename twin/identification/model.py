@@ -88,6 +88,14 @@ DEFAULT_MODEL = "identify_default.npz"
 #: trained on the crank PID and the motor drive with a tight guide) and "bench" (B, C and the slider guide G,
 #: trained on recordings of the whole bench; analysis/identify/train_bench.py makes it)
 SHIPPED_MODELS = {"default": DEFAULT_MODEL, "bench": "identify_bench.npz"}
+#: orientations where a tight guide is not told from play at the guide, with the caveat an answer that names no play
+#: at G gives: with y vertical the slider's weight holds it on its lower rail, the guide's normal force keeps one sign
+#: over every turn of the rigid bench at 250-800 rpm (3.6-70 N; ``analysis/identify/guide_load.py``, closed form), so
+#: in steady running the slider crosses its play only where impacts at B or C lift it; on the development sets guide
+#: play alone with y vertical was located in 2 of 7 runs (0.013-0.061 mm), with play at B or C as well in 7 of 8
+GUIDE_HELD_DOWN = {"y": "with y vertical the slider's weight holds it on its lower rail in steady running (the "
+                        "guide's load keeps one sign over the turn, model card): play at the slider guide alone is not "
+                        "told from a tight guide; 'no play at G' is not established"}
 
 
 def label_key(joint: str) -> str:
@@ -359,6 +367,12 @@ def training_check(model: ClearanceModel, answer: IdentifyResult, measures: dict
     return answer, warnings, checks
 
 
+def guide_caveat(orientation: str, joints: tuple[str, ...], fault: str) -> str | None:
+    """The warning of an answer that names no play at the guide where the guide's play is not told from a tight guide
+    (:data:`GUIDE_HELD_DOWN`), for a model that locates the guide (``joints``); None otherwise."""
+    return GUIDE_HELD_DOWN.get(orientation) if "G" in joints and "G" not in fault else None
+
+
 def identify_recording(model: ClearanceModel, path: str | Path) -> IdentifyResult:
     """The answer for a bench recording (any recording ``twin replay`` accepts), with the evidence used."""
     from twin.identification.inputs import recording_inputs
@@ -402,6 +416,9 @@ def identify_inputs(model: ClearanceModel, acc: dict[str, np.ndarray], counts: n
                             f"{orientation} vertical: the bench's sensors tell 0.05-0.1 mm at {j} apart from "
                             f"{SIZE_RESOLVED_FROM_RPM[j].get(orientation, float('nan')):g} rpm on (model card); "
                             "trust the location and the interval, not the size")
+    caveat = guide_caveat(orientation, model.joints, ans.fault)
+    if caveat:
+        warnings.append(caveat)
     evidence = Evidence(windows=len(w.windows), revolutions=round(w.revolutions, 2), crank_hz=w.crank_hz,
                         motor_rpm_if_belt_3_97=w.crank_hz * 60 * BELT_RATIO,
                         steady_s=(w.steady[1] - w.steady[0]) / rate, features=len(model.feature_names),
