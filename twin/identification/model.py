@@ -34,9 +34,11 @@ from the file, and answering needs no scikit-learn. Members:
   within-turn ripple per harmonic, noise level and orientations, with their ``source``; ``feature_reference``:
   the training windows' feature quartiles, or null where unknown; ``interval.normalized``: the normalized
   conformal scale per joint, where trained; ``held_out_size_accuracy``
-  (:func:`twin.identification.intervals.held_out_accuracy`) and ``answer_hop_revs``, where recorded), and ``estimators``: per estimator (``classifier``,
+  (:func:`twin.identification.intervals.held_out_accuracy`) and ``answer_hop_revs``, where recorded; ``size_context``:
+  true where the size regressors also read the other locations' play, two columns after the features,
+  :func:`size_context`; ``size_weights``: ``"runs"`` where they weighed each training run alike), and ``estimators``: per estimator (``classifier``,
   ``size_B``, ``size_C``, ``size_G`` where the model sizes G) its kind (link: ``softmax`` for the classifier, ``identity`` for the size
-  regressors), number of features, trees per iteration, classes and source
+  regressors), number of features (the size regressors of a ``size_context`` model: two more), trees per iteration, classes and source
   (:meth:`twin.identification.trees.TreeEnsemble.meta`);
 * per estimator E, the arrays ``E.baseline``, ``E.tree_nodes``, ``E.feature``, ``E.threshold``,
   ``E.missing_left``, ``E.left``, ``E.right``, ``E.is_leaf``, ``E.value`` (dtypes and meaning:
@@ -222,7 +224,9 @@ class ClearanceModel:
             raise ModelError(f"{p}: made for features {version!r}, this twin computes {FEATURE_VERSION!r}; "
                              "retrain it with 'twin identify train'")
         classes = CLASSES if "G" in joints else tuple(c for c in CLASSES if "G" not in c)
-        if any(e.n_features != len(names) for e in est.values()) or est["classifier"].kind == "identity" or \
+        n_size = len(names) + (len(JOINTS) - 1 if trained_on.get("size_context") else 0)
+        if est["classifier"].n_features != len(names) or any(est[f"size_{j}"].n_features != n_size for j in joints) \
+                or est["classifier"].kind == "identity" or \
                 not set(est["classifier"].classes) <= set(classes) or \
                 any(est[f"size_{j}"].kind != "identity" for j in joints):
             raise ModelError(f"{p}: not a readable identification model (estimators do not fit its "
@@ -279,7 +283,8 @@ class ClearanceModel:
         few = window_table(interval, len(X))
         joints = []
         for j in self.joints:
-            logs = self.size[j].predict(X)
+            logs = self.size[j].predict(np.hstack([X, size_context(j, [fault] * len(X))])
+                                        if self.trained_on.get("size_context") else X)
             mid = logs_answer(logs)
             half = few if j in few else self.interval_log10
             side = j if resolved.get(j, True) or f"{j}_unresolved" not in half else f"{j}_unresolved"
@@ -365,6 +370,14 @@ def training_check(model: ClearanceModel, answer: IdentifyResult, measures: dict
                                "was trained on at that joint (no calibrated interval exists there)" if outside else
                                f"inside the training data: the conformal 90 % interval{few}")
     return answer, warnings, checks
+
+
+def size_context(joint: str, faults: list[str]) -> np.ndarray:
+    """Whether the locations other than ``joint`` have play in each of ``faults`` (class names) [len(faults), 2]
+    (0.0 / 1.0, in the order of :data:`JOINTS`): the columns a size regressor trained with
+    ``TrainOptions(size_context=True)`` reads after the window features."""
+    others = [k for k in JOINTS if k != joint]
+    return np.array([[float(k in f) for k in others] for f in faults], dtype=np.float64).reshape(len(faults), len(others))
 
 
 def guide_caveat(orientation: str, joints: tuple[str, ...], fault: str) -> str | None:
