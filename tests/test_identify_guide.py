@@ -227,3 +227,36 @@ def test_a_guide_play_answered_at_the_top_of_the_trained_hull_warns_that_it_may_
     assert at_hull_top("G", 0.4, seen) == pytest.approx(top) and at_hull_top("G", top * 1.01, seen) is not None
     assert at_hull_top("G", top * 0.99, seen) is None
     assert at_hull_top("B", 1.6, {"min": 0.0125, "max": 1.6, "distinct": 50, "ball_bearing": True}) is None
+
+
+def test_with_y_vertical_an_answer_naming_no_guide_play_says_that_none_is_not_established():
+    """guide_caveat: y vertical, a model of the guide, no play located at G -> the warning; G located, x or z
+    vertical, or a model of B and C only -> none."""
+    from twin.identification.model import GUIDE_HELD_DOWN, guide_caveat
+
+    assert guide_caveat("y", ("B", "C", "G"), "none") == GUIDE_HELD_DOWN["y"]
+    assert guide_caveat("y", ("B", "C", "G"), "BC") == GUIDE_HELD_DOWN["y"]
+    assert guide_caveat("y", ("B", "C", "G"), "G") is None
+    assert guide_caveat("z", ("B", "C", "G"), "none") is None and guide_caveat("x", ("B", "C", "G"), "B") is None
+    assert guide_caveat("y", ("B", "C"), "none") is None
+
+
+def test_the_guide_load_with_y_vertical_meets_statics_at_low_speed_and_keeps_one_sign_over_the_bench_speeds():
+    """analysis/identify/guide_load.py (inverse dynamics of the ideal rigid bench): as the speed goes to zero the
+    guide carries the slider's weight and the rod's share at C, m_s g + m_rod g x_G / L (statics, independent basis);
+    at the bench's top speed (800 motor rpm) the load still keeps one sign (the caveat's basis)."""
+    import sys
+
+    from twin.config import BenchConfig
+
+    sys.path.insert(0, str(ROOT / "analysis" / "identify"))
+    try:
+        from guide_load import guide_load
+    finally:
+        sys.path.remove(str(ROOT / "analysis" / "identify"))
+    cfg = BenchConfig()
+    b, g = cfg.bodies, cfg.mechanism.gravity_mps2
+    static = b.slider.mass_kg * g + b.rod.mass_kg * g * b.rod.x_g_m / b.rod.length_m
+    slow = guide_load(1.0, cfg)
+    np.testing.assert_allclose(slow, static, rtol=1e-3)
+    assert guide_load(800.0, cfg).min() > 0

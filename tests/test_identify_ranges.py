@@ -176,3 +176,30 @@ def test_the_ripple_factors_draw_a_phase_per_run_and_set_each_harmonic():
     assert len(ov["drive.ripple_phase_rad"]) == 3 and ov["drive.ripple_phase_rad"][1] == 0.0
     assert all(0 <= p < 2 * math.pi for p in ov["drive.ripple_phase_rad"])
     preset(6).replace(**ov)  # a valid configuration
+
+
+@pytest.mark.parametrize("ratio, warned", [(0.0, False), (0.09, False), (-0.09, False), (0.2, True), (-0.3, True)])
+def test_the_rigid_rod_check_warns_where_the_rods_two_ends_disagree(ratio, warned):
+    """The rod's longitudinal accelerometers at B (AC1) and C (AC4) read the same above 800 Hz on a rigid rod:
+    beyond RIGID_ROD_RATIO_MAX (either sign) one warning naming both sensors, and the evidence records the
+    value; the other checks are inside."""
+    names = ["crank_hz", id_ranges.RIGID_ROD_FEATURE, "other"]
+    x = np.array([2.2, ratio, 0.0])
+    m = {"crank_hz": 2.2, "ripple_pct": [0.0] * 4, "noise_ug_rthz": 30.0}
+    w, ev = id_ranges.out_of_range(m, "y", RANGES, x, None, names)
+    assert ev["rigid_rod_ratio_log10"] == {"measured": ratio, "limit": id_ranges.RIGID_ROD_RATIO_MAX}
+    assert len(w) == int(warned)
+    if warned:
+        assert "AC1" in w[0] and "AC4" in w[0] and "extrapolation" in w[0]
+
+
+def test_the_rigid_rod_check_is_in_the_answers_record_and_reads_back():
+    from twin.identification.results import TrainingDataCheck
+
+    d = {"measured": {"crank_hz": 2.2, "ripple_pct": [0.0] * 4, "noise_ug_rthz": 30.0},
+         "rigid_rod_ratio_log10": {"measured": 0.25, "limit": 0.1}, "outside_training_data": True,
+         "interval_rule": "widened"}
+    c = TrainingDataCheck.from_dict(d)
+    assert c.rigid_rod_ratio_log10.measured == 0.25 and c.to_dict() == d
+    with pytest.raises(ValueError, match="unknown"):
+        TrainingDataCheck.from_dict(d | {"rigid_rod_ratio_log10": {"measured": 0.2, "limit": 0.1, "x": 1}})

@@ -44,6 +44,8 @@ VARIANTS = {
     "median": dict(interval_folds="runs", size_regressor="median"),
     "nosplit": dict(interval_folds="runs", fault_split=False, size_band_mm=None),
     "det": dict(interval_folds="runs", location="detectors"),
+    "detw": dict(interval_folds="runs", location="detectors", size_weights="runs"),
+    "detwc": dict(interval_folds="runs", location="detectors", size_weights="runs", size_context=True),
 }
 
 

@@ -34,9 +34,11 @@ from the file, and answering needs no scikit-learn. Members:
   within-turn ripple per harmonic, noise level and orientations, with their ``source``; ``feature_reference``:
   the training windows' feature quartiles, or null where unknown; ``interval.normalized``: the normalized
   conformal scale per joint, where trained; ``held_out_size_accuracy``
-  (:func:`twin.identification.intervals.held_out_accuracy`) and ``answer_hop_revs``, where recorded), and ``estimators``: per estimator (``classifier``,
+  (:func:`twin.identification.intervals.held_out_accuracy`) and ``answer_hop_revs``, where recorded; ``size_context``:
+  true where the size regressors also read the other locations' play, two columns after the features,
+  :func:`size_context`; ``size_weights``: ``"runs"`` where they weighed each training run alike), and ``estimators``: per estimator (``classifier``,
   ``size_B``, ``size_C``, ``size_G`` where the model sizes G) its kind (link: ``softmax`` for the classifier, ``identity`` for the size
-  regressors), number of features, trees per iteration, classes and source
+  regressors), number of features (the size regressors of a ``size_context`` model: two more), trees per iteration, classes and source
   (:meth:`twin.identification.trees.TreeEnsemble.meta`);
 * per estimator E, the arrays ``E.baseline``, ``E.tree_nodes``, ``E.feature``, ``E.threshold``,
   ``E.missing_left``, ``E.left``, ``E.right``, ``E.is_leaf``, ``E.value`` (dtypes and meaning:
@@ -88,6 +90,14 @@ DEFAULT_MODEL = "identify_default.npz"
 #: trained on the crank PID and the motor drive with a tight guide) and "bench" (B, C and the slider guide G,
 #: trained on recordings of the whole bench; analysis/identify/train_bench.py makes it)
 SHIPPED_MODELS = {"default": DEFAULT_MODEL, "bench": "identify_bench.npz"}
+#: orientations where a tight guide is not told from play at the guide, with the caveat an answer that names no play
+#: at G gives: with y vertical the slider's weight holds it on its lower rail, the guide's normal force keeps one sign
+#: over every turn of the rigid bench at 250-800 rpm (3.6-70 N; ``analysis/identify/guide_load.py``, closed form), so
+#: in steady running the slider crosses its play only where impacts at B or C lift it; on the development sets guide
+#: play alone with y vertical was located in 2 of 7 runs (0.013-0.061 mm), with play at B or C as well in 7 of 8
+GUIDE_HELD_DOWN = {"y": "with y vertical the slider's weight holds it on its lower rail in steady running (the "
+                        "guide's load keeps one sign over the turn, model card): play at the slider guide alone is not "
+                        "told from a tight guide; 'no play at G' is not established"}
 
 
 def label_key(joint: str) -> str:
@@ -214,7 +224,9 @@ class ClearanceModel:
             raise ModelError(f"{p}: made for features {version!r}, this twin computes {FEATURE_VERSION!r}; "
                              "retrain it with 'twin identify train'")
         classes = CLASSES if "G" in joints else tuple(c for c in CLASSES if "G" not in c)
-        if any(e.n_features != len(names) for e in est.values()) or est["classifier"].kind == "identity" or \
+        n_size = len(names) + (len(JOINTS) - 1 if trained_on.get("size_context") else 0)
+        if est["classifier"].n_features != len(names) or any(est[f"size_{j}"].n_features != n_size for j in joints) \
+                or est["classifier"].kind == "identity" or \
                 not set(est["classifier"].classes) <= set(classes) or \
                 any(est[f"size_{j}"].kind != "identity" for j in joints):
             raise ModelError(f"{p}: not a readable identification model (estimators do not fit its "
@@ -271,7 +283,8 @@ class ClearanceModel:
         few = window_table(interval, len(X))
         joints = []
         for j in self.joints:
-            logs = self.size[j].predict(X)
+            logs = self.size[j].predict(np.hstack([X, size_context(j, [fault] * len(X))])
+                                        if self.trained_on.get("size_context") else X)
             mid = logs_answer(logs)
             half = few if j in few else self.interval_log10
             side = j if resolved.get(j, True) or f"{j}_unresolved" not in half else f"{j}_unresolved"
@@ -359,6 +372,20 @@ def training_check(model: ClearanceModel, answer: IdentifyResult, measures: dict
     return answer, warnings, checks
 
 
+def size_context(joint: str, faults: list[str]) -> np.ndarray:
+    """Whether the locations other than ``joint`` have play in each of ``faults`` (class names) [len(faults), 2]
+    (0.0 / 1.0, in the order of :data:`JOINTS`): the columns a size regressor trained with
+    ``TrainOptions(size_context=True)`` reads after the window features."""
+    others = [k for k in JOINTS if k != joint]
+    return np.array([[float(k in f) for k in others] for f in faults], dtype=np.float64).reshape(len(faults), len(others))
+
+
+def guide_caveat(orientation: str, joints: tuple[str, ...], fault: str) -> str | None:
+    """The warning of an answer that names no play at the guide where the guide's play is not told from a tight guide
+    (:data:`GUIDE_HELD_DOWN`), for a model that locates the guide (``joints``); None otherwise."""
+    return GUIDE_HELD_DOWN.get(orientation) if "G" in joints and "G" not in fault else None
+
+
 def identify_recording(model: ClearanceModel, path: str | Path) -> IdentifyResult:
     """The answer for a bench recording (any recording ``twin replay`` accepts), with the evidence used."""
     from twin.identification.inputs import recording_inputs
@@ -402,6 +429,9 @@ def identify_inputs(model: ClearanceModel, acc: dict[str, np.ndarray], counts: n
                             f"{orientation} vertical: the bench's sensors tell 0.05-0.1 mm at {j} apart from "
                             f"{SIZE_RESOLVED_FROM_RPM[j].get(orientation, float('nan')):g} rpm on (model card); "
                             "trust the location and the interval, not the size")
+    caveat = guide_caveat(orientation, model.joints, ans.fault)
+    if caveat:
+        warnings.append(caveat)
     evidence = Evidence(windows=len(w.windows), revolutions=round(w.revolutions, 2), crank_hz=w.crank_hz,
                         motor_rpm_if_belt_3_97=w.crank_hz * 60 * BELT_RATIO,
                         steady_s=(w.steady[1] - w.steady[0]) / rate, features=len(model.feature_names),

@@ -34,6 +34,11 @@ margin for its measurement, stated here and never tuned on an answer:
   :data:`FEATURE_OUTLIER_SHARE` (5 %) of the features; and, whatever the training runs reach, a third of the
   features or more (:data:`FEATURE_FAR_SHARE`: judged on the recording itself, a confident answer resting on
   so many features the trees never saw there is not);
+* rigid rod (:data:`RIGID_ROD_FEATURE`): the rod's two longitudinal accelerometers, AC1 at B and AC4 at C, read the
+  same acceleration above :data:`twin.identification.features.RATIO_BAND_HZ`'s 800 Hz on a rigid rod (a rigid body's
+  points on one line along it share their acceleration along that line, but for the centripetal term, which lies
+  far below the band); the log10 ratio of their band energies beyond :data:`RIGID_ROD_RATIO_MAX` says the rod does
+  not move as one body there (a flexible structure: the rod's axial modes; or a sensor loose on its mount);
 * speed swing (the 50 ms crank rate's swing in steady running, :attr:`twin.identification.features.Windows.swing`):
   beyond :data:`BENCH_SWING_PCT` (85 %, the most the bench's motor drive gives, measured), or, where the model
   stores the training runs' range, beyond its top by :data:`SWING_MARGIN_PCT` (5 points).
@@ -80,6 +85,17 @@ BENCH_SWING_PCT = 85.0
 #: allowance above the training runs' largest swing [percentage points]: the allowance the steady part's
 #: tolerance gives a recording's own spread (:data:`twin.identification.features.RIPPLE_ALLOWANCE`)
 SWING_MARGIN_PCT = 5.0
+#: the feature of the rigid-rod check: log10 of the 0.8-6 kHz band energy of AC1 (rod, at B, along it) over AC4's
+#: (rod, at C, along it) (:mod:`twin.identification.features`)
+RIGID_ROD_FEATURE = "ratio_band_AC1_AC4"
+#: the largest |RIGID_ROD_FEATURE| (a recording's median over its windows) of a rod moving as one body [log10]:
+#: 1812 whole-bench training runs (both engines, rigid structure, sensor mount offsets, noise and contact
+#: parameters drawn) reach 0.069 and the 97 development runs 0.023; the threshold is the training runs' largest rounded
+#: up to 0.1 (a 26 % band-energy difference between the rod's two ends). Recordings of the flexible structure
+#: (``structure.mode = "flexible"``, ``twin record``) read 0.17-0.46 in 7 of 8 (x/y/z vertical, 300-700 rpm, both
+#: engines), 0.026 in the eighth (z vertical, 300 rpm, 0.5 mm at B: the impacts' energy dominates both ends);
+#: ``analysis/identify/rigid_rod_check.py``
+RIGID_ROD_RATIO_MAX = 0.1
 #: Tukey's far-out fences: quartiles ± this many interquartile ranges
 FENCE_IQR = 3.0
 #: noise band [Hz]: above the accelerometers' 21 kHz resonance, below the 50 kHz Nyquist rate of the DAQ
@@ -258,6 +274,14 @@ def out_of_range(measures: dict[str, Any], orientation: str, ranges: dict[str, A
                         f"{ranges['speed_swing_pct'][1]:.0f} %: the answer is an extrapolation")
     if orientation not in ranges["orientations"]:
         warnings.append(f"orientation {orientation} was not in the training data: the answer is an extrapolation")
+    if x_median is not None and feature_names and RIGID_ROD_FEATURE in feature_names:
+        r = float(x_median[feature_names.index(RIGID_ROD_FEATURE)])
+        ev["rigid_rod_ratio_log10"] = {"measured": round(r, 4), "limit": RIGID_ROD_RATIO_MAX}
+        if math.isfinite(r) and abs(r) > RIGID_ROD_RATIO_MAX:
+            warnings.append(f"the rod's two longitudinal accelerometers (AC1 at B, AC4 at C) differ by {abs(r):.2f} "
+                            f"in log10 of their 0.8-6 kHz band energy, more than a rigid rod gives (up to "
+                            f"{RIGID_ROD_RATIO_MAX:g}, measured): a flexible structure or a loose sensor mount, unlike "
+                            "the training data; the answer is an extrapolation")
     if features_ref is None:
         ev["feature_distance"] = "unavailable (the model stores no reference of its training features)"
     elif x_median is not None:

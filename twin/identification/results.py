@@ -154,6 +154,24 @@ class FeatureDistance(ByKey):
 
 
 @dataclass(frozen=True)
+class RigidRod(ByKey):
+    """The rigid-rod check (:data:`twin.identification.ranges.RIGID_ROD_FEATURE`): the log10 ratio of the 0.8-6 kHz
+    band energies of the rod's two longitudinal accelerometers (AC1 at B over AC4 at C) [log10], and the largest
+    a rod moving as one body gives (:data:`twin.identification.ranges.RIGID_ROD_RATIO_MAX`) [log10]."""
+
+    measured: float
+    limit: float
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"measured": self.measured, "limit": self.limit}
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> "RigidRod":
+        _no_other_keys(cls, d, ("measured", "limit"))
+        return cls(d["measured"], d["limit"])
+
+
+@dataclass(frozen=True)
 class TrainingDataCheck(ByKey):
     """A recording checked against the model's training data (:func:`twin.identification.model.training_check`).
 
@@ -164,6 +182,7 @@ class TrainingDataCheck(ByKey):
         ranges: why the ranges were not checked ("unavailable ..."); None where they were.
         feature_distance: the features' distance from the training data, or why it is unavailable (text); None
             where not checked (no training ranges).
+        rigid_rod_ratio_log10: the rigid-rod check (:class:`RigidRod`); None where not checked.
     """
 
     measured: RecordingMeasures
@@ -171,6 +190,7 @@ class TrainingDataCheck(ByKey):
     interval_rule: str
     ranges: str | None = None
     feature_distance: FeatureDistance | str | None = None
+    rigid_rod_ratio_log10: RigidRod | None = None
 
     def to_dict(self) -> dict[str, Any]:
         d: dict[str, Any] = {"measured": self.measured.to_dict()}
@@ -179,17 +199,21 @@ class TrainingDataCheck(ByKey):
         if self.feature_distance is not None:
             fd = self.feature_distance
             d["feature_distance"] = fd if isinstance(fd, str) else fd.to_dict()
+        if self.rigid_rod_ratio_log10 is not None:
+            d["rigid_rod_ratio_log10"] = self.rigid_rod_ratio_log10.to_dict()
         return d | {"outside_training_data": self.outside_training_data, "interval_rule": self.interval_rule}
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> "TrainingDataCheck":
-        _no_other_keys(cls, d, ("measured", "ranges", "feature_distance", "outside_training_data", "interval_rule"),
-                       ("ranges", "feature_distance"))
-        fd = d.get("feature_distance")
+        _no_other_keys(cls, d, ("measured", "ranges", "feature_distance", "rigid_rod_ratio_log10",
+                                "outside_training_data", "interval_rule"),
+                       ("ranges", "feature_distance", "rigid_rod_ratio_log10"))
+        fd, rr = d.get("feature_distance"), d.get("rigid_rod_ratio_log10")
         return cls(measured=RecordingMeasures.from_dict(d["measured"]),
                    outside_training_data=d["outside_training_data"], interval_rule=d["interval_rule"],
                    ranges=d.get("ranges"), feature_distance=fd if fd is None or isinstance(fd, str) else
-                   FeatureDistance.from_dict(fd))
+                   FeatureDistance.from_dict(fd),
+                   rigid_rod_ratio_log10=None if rr is None else RigidRod.from_dict(rr))
 
 
 @dataclass(frozen=True)

@@ -36,7 +36,7 @@ from twin.identification.intervals import (CATALOGUE_BANDS_MM, COVERAGE, FAULT_S
                                            _interval_parts, fault_split_joints,
                                            held_out_accuracy, logs_answer, logs_spread, normalized_scale,
                                            recorded_size_bands)
-from twin.identification.model import CLASSES, JOINTS, ClearanceModel, label_mm
+from twin.identification.model import CLASSES, JOINTS, ClearanceModel, label_mm, size_context
 from twin.identification.ranges import feature_reference, training_ranges
 from twin.identification.trees import ModelError, TreeEnsemble, from_sklearn
 
@@ -52,6 +52,11 @@ SIZE_REGRESSORS = {
     "median": dict(loss="quantile", quantile=0.5, max_iter=300, learning_rate=0.08, max_leaf_nodes=15,
                    l2_regularization=1.0),
 }
+
+#: how the size regressors weigh the training windows (``TrainOptions.size_weights``): each window alike, or each
+#: run alike (a run's windows share its weight: a 3 s run at 800 rpm has about three times the windows of one at
+#: 250 rpm, and its windows are not independent observations of the size, they share the run's scene)
+SIZE_WEIGHTS = ("windows", "runs")
 
 #: how :func:`train` learns the fault location (``TrainOptions.location``): one classifier over the classes, or one
 #: presence detector per location combined (:func:`detectors_as_classes`)
@@ -107,6 +112,13 @@ class TrainOptions:
             classes; ``"detectors"``, one presence detector per location (binary, classes weighted to balance),
             stored as one classifier over the classes whose probabilities are the detectors' product
             (:func:`detectors_as_classes`).
+        size_context: each joint's size regressor also reads whether the other two locations have play
+            (:func:`twin.identification.model.size_context`: the training runs' true classes while training and
+            for the intervals' out-of-fold answers, the located class while answering): the impacts at one joint
+            reach the sensors of another, so a size read beside play elsewhere differs from one read alone.
+        size_weights: how the size regressors weigh the training windows (:data:`SIZE_WEIGHTS`): ``"windows"``,
+            each window alike (a fast run, with more windows in its seconds, weighs more); ``"runs"``, each run
+            alike (its windows share the weight 1).
     """
 
     splits: tuple[str, ...] = ("train", "val")
@@ -124,6 +136,8 @@ class TrainOptions:
     fault_split: bool | tuple[str, ...] = FAULT_SPLIT_JOINTS
     by_windows: bool = False
     location: str = "classes"
+    size_context: bool = False
+    size_weights: str = "windows"
 
     def __post_init__(self) -> None:
         def bad(name: str, message: str) -> TrainOptionsError:
@@ -141,6 +155,8 @@ class TrainOptions:
             raise bad("interval_folds", f"{self.interval_folds!r}; allowed: {', '.join(INTERVAL_FOLDS)}")
         if self.location not in LOCATIONS:
             raise bad("location", f"{self.location!r}; allowed: {', '.join(LOCATIONS)}")
+        if self.size_weights not in SIZE_WEIGHTS:
+            raise bad("size_weights", f"{self.size_weights!r}; allowed: {', '.join(SIZE_WEIGHTS)}")
         if self.size_regressor not in SIZE_REGRESSORS:
             raise bad("size_regressor", f"{self.size_regressor!r}; allowed: {', '.join(SIZE_REGRESSORS)}")
         if not hop_ok(self.answer_hop_revs):
@@ -166,7 +182,7 @@ class TrainOptions:
                                          and math.isfinite(b) and b > 0
                                          for b in ((bands,) if isinstance(bands, (int, float)) else bands)):
             raise bad("size_band_mm", f"{self.size_band_mm!r}; allowed: None, or sizes > 0 [mm]")
-        for name in ("normalized_intervals", "ripple_split", "interval_by_engine", "by_windows"):
+        for name in ("normalized_intervals", "ripple_split", "interval_by_engine", "by_windows", "size_context"):
             if not isinstance(getattr(self, name), bool):
                 raise bad(name, f"{getattr(self, name)!r}; allowed: True or False")
 
@@ -331,6 +347,9 @@ def _fit_size(j: str, X: np.ndarray, rows: list[dict[str, Any]], owner: np.ndarr
     from sklearn.ensemble import HistGradientBoostingRegressor
 
     truth = np.array([label_mm(rows[i], j) for i in owner], float)  # the dataset's label column
+    per_run = 1.0 / np.bincount(owner)[owner]  # each window's share of its run
+    if o.size_context:  # the other locations' play, as the training runs have it
+        X = np.hstack([X, size_context(j, [rows[i]["fault"] for i in owner])])
     sel = (truth > 0) & for_size
     if sel.sum() < 10:
         raise ModelError(f"{', '.join(map(str, dirs))}: fewer than 10 windows with a clearance at {j}: cannot "
@@ -340,7 +359,8 @@ def _fit_size(j: str, X: np.ndarray, rows: list[dict[str, Any]], owner: np.ndarr
         reg = HistGradientBoostingRegressor(**SIZE_REGRESSORS[o.size_regressor],
                                             min_samples_leaf=int(min(20, max(3, int(use.sum()) // 48))),
                                             random_state=o.seed)
-        return reg.fit(X[use], np.log10(truth[use]))
+        weight = None if o.size_weights == "windows" else per_run[use]
+        return reg.fit(X[use], np.log10(truth[use]), sample_weight=weight)
 
     regressor = from_sklearn(fit(sel), check=X[sel])
     # out-of-fold scores of whole runs (twin.identification.intervals)
@@ -404,6 +424,8 @@ def _trained_on(dss: list[Any], dirs: list[str | Path], rows: list[dict[str, Any
         "classes": {c: int(np.sum(y == c)) for c in CLASSES if "G" not in c or "G" in joints},
         "versions": {"twin": __version__, "sklearn": sklearn.__version__, "numpy": np.__version__},
         "size_regressor": o.size_regressor, "location": o.location,
+        **({"size_context": True} if o.size_context else {}),
+        **({"size_weights": o.size_weights} if o.size_weights != "windows" else {}),
         "answer_hop_revs": float(o.answer_hop_revs),
         "held_out_size_accuracy": cal.held_out | {
             "method": f"out-of-fold answers of the training runs (folds by {o.interval_folds}), per orientation and "
