@@ -138,6 +138,13 @@ SCRIPTS: dict[str, Script] = {
     "identify/train_bench": Script("WORK/bench_VARIANT.npz, WORK/dev_VARIANT.json (the whole-bench model of B, C and "
                                    "the guide; twin/data/identify_bench.npz by --save)", "66 min of data + 13 min",
                                    long=True, needs="a work folder (--work)"),
+    "identify/bench_variants": Script("prints development-set figures of location and size variants on kept "
+                                      "features", "~15 min", long=True, needs="a work folder (--work)"),
+    "identify/guide_load": Script(f"{R}/identify/guide_load.json (the slider guide's normal force over a turn with y "
+                                  "vertical, closed form)", "~10 s"),
+    "identify/rigid_rod_check": Script(f"{R}/identify/rigid_rod_check.json (the rigid-rod check on training, "
+                                       "development and flexible-structure recordings)", "~20 min", long=True,
+                                       needs="a work folder (--work)"),
     "identify/bench_eval": Script(f"{R}/identify/bench_*.json (--out): whole-bench figures through the answer path",
                                   "20 s per 100 runs", needs="a model file and dataset folders (arguments)"),
     "structure_modes": Script("prints the flexible rod's modes against the closed forms (results/structure_modes.txt "

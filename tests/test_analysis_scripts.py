@@ -28,6 +28,7 @@ PENDING_PRIVATE: dict[str, tuple[set[str], str]] = {}
 #: writes of a script that are not results files (a cache, a work folder, a spec, the docs page in place)
 NOT_RESULTS = {
     ("identify/nuisance_study", "js"),        # feature cache in the work folder
+    ("identify/bench_variants", "js"),        # feature cache of the development sets (--cache)
     ("profile_stages", "src"),                # C source of the timing shims, in a temporary folder
     ("bench_storage", "folder / 'source.json'"),  # the benchmark's own input, in its work folder
     ("s002_l27_spec", "HERE / name"),         # study specs (analysis/datasets/*.toml), inputs not results
