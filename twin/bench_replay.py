@@ -105,6 +105,9 @@ class ReplayOptions:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not (math.isfinite(v) and 0 <= v <= 10):
                 raise ConfigError(name, f"must lie in [0, 10] s, got {v!r}")
+        if self.dtw_window_s == 0:  # the library's "no band": a full DTW of up to dtw_max_s, O(n²) (minutes)
+            raise ConfigError("dtw_window_s", "must lie in (0, 10] s: 0 is a DTW without a band, whose cost grows "
+                                              "with the square of the samples compared (minutes on 0.5 s at 100 kHz)")
         if self.dtw_max_s < 0.001:  # DTW on a few samples says nothing
             raise ConfigError("dtw_max_s", f"must be at least 0.001 s, got {self.dtw_max_s!r}")
         if self.drive not in ("pid", "motor"):
