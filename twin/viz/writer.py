@@ -161,7 +161,7 @@ class RerunWriter:
             self._fft_parts = {n: [] for n in fft_names}
         elif self.opts.fft_window_s is not None:  # it would be accepted and ignored
             raise TwinError("this file has no accelerations in m/s² to take spectra of (a bench recording holds the "
-                            "DAQ's volts; 'twin plot REC --spectrum' draws its calibrated spectra); leave it out",
+                            "DAQ's volts: 'twin plot' draws its calibrated spectra); leave it out",
                             field="fft_window_s")
 
         blueprint = bp.default_blueprint(self.cfg, self._groups, self._channels, self._joints, self._has_pose,
