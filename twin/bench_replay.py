@@ -105,6 +105,9 @@ class ReplayOptions:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not (math.isfinite(v) and 0 <= v <= 10):
                 raise ConfigError(name, f"must lie in [0, 10] s, got {v!r}")
+        if self.dtw_window_s == 0:  # the library's "no band": a full DTW of up to dtw_max_s, O(n²) (minutes)
+            raise ConfigError("dtw_window_s", "must lie in (0, 10] s: 0 is a DTW without a band, whose cost grows "
+                                              "with the square of the samples compared (minutes on 0.5 s at 100 kHz)")
         if self.dtw_max_s < 0.001:  # DTW on a few samples says nothing
             raise ConfigError("dtw_max_s", f"must be at least 0.001 s, got {self.dtw_max_s!r}")
         if self.drive not in ("pid", "motor"):
@@ -137,10 +140,36 @@ def torque_as_pid(cfg: BenchConfig) -> dict[str, Any]:
     return {"drive.mode": "pid", **{f"drivetrain.{f.name}": f.default for f in dataclasses.fields(Drivetrain)}}
 
 
+#: the drive modes that follow a trace; a replay drives the crank by the recording's encoder trace in one of them
+TRACE_MODES = ("pid", "prescribed")
+#: [drive] fields of the programs a trace replaces (the steps and the protocol) and of the ripple imposed on a
+#: program: a replay's trace holds what the crank did, ripple included
+_PROGRAM_ONLY = ("steps_s", "steps_rpm", "protocol_rpm", "protocol_hold_s", "protocol_stop_s", "ripple_pct",
+                 "ripple_phase_rad")
+#: the [drivetrain] fields of the torque program alone (the motor mode refuses them)
+_TORQUE_ONLY = ("torque_s", "torque_nm", "torque_ramp_s", "release_s")
+
+
+def trace_drive(cfg: BenchConfig) -> dict[str, Any]:
+    """Overrides that make ``cfg``'s drive follow the recording's encoder trace, whatever drove the recorded run: a
+    motor or torque drive becomes the crank PID (the motor's speed loop and belt only follow a reference through
+    their own dynamics: a motor recording replayed by them lagged its trace by a tenth of a turn), its drive-train
+    fields back to their defaults (:func:`torque_as_pid`); the fields of the program the trace replaces and any
+    imposed ripple (the trace holds the recorded ripple; imposed again it doubles) back to theirs. Empty where
+    ``cfg`` already follows a trace as it is."""
+    from twin.config.drive import Drive
+
+    over = {"drive.mode": "pid", **{f"drivetrain.{f.name}": f.default for f in dataclasses.fields(Drivetrain)}} \
+        if cfg.drive.mode not in TRACE_MODES else {}
+    default = Drive()
+    over |= {f"drive.{n}": getattr(default, n) for n in _PROGRAM_ONLY if getattr(cfg.drive, n) != getattr(default, n)}
+    return over
+
+
 def replay_config(rec_cfg: BenchConfig, trace_file: Path, rec: Run, zero_g_v: dict[str, float]) -> BenchConfig:
-    """Simulation configuration of a replay: ``rec_cfg`` driven by the trace at the recording's rate. A
-    torque-driven recording is replayed by the crank PID on the trace (:func:`torque_as_pid`)."""
-    return rec_cfg.replace(**torque_as_pid(rec_cfg), **{
+    """Simulation configuration of a replay: ``rec_cfg`` driven by the trace at the recording's rate
+    (:func:`trace_drive`: a motor- or torque-driven recording is replayed by the crank PID on the trace)."""
+    return rec_cfg.replace(**trace_drive(rec_cfg), **{
         "drive.program": "trace", "drive.trace_file": str(trace_file),
         "drive.crank_rpm": 0.0,  # the constant program's speed: the trace replaces it (nonzero is refused with it)
         "simulation.duration_s": rec.n / rec.rate_hz,
@@ -295,7 +324,7 @@ def replay(recording: str | Path, out_dir: str | Path,
     # the simulated configuration (checked before anything is written) and the analysis window
     cfg = replay_config(base, trace, rec, dict(info.calibration.zero_g_v))
     if opts.drive == "motor":
-        motor_config(cfg, final / "motor_command_trace.npz")  # checked before anything is written
+        motor_config(cfg, final / "motor_command_trace.npz", base)  # checked before anything is written
     edge = 2.0 / cfg.drive.trace_filter_hz if cfg.drive.trace_filter_hz > 0 else 0.0
     window = _window_indices(rec.n, rec.rate_hz, opts.window_s, edge)
     # everything is written into a temporary folder beside the target, renamed into place at the
@@ -426,7 +455,7 @@ def _replay_into(out: Path, recording: str | Path, rec: Run, info: Any, repairs:
         report["files"]["plots"] = list(report["plots"])
     if opts.drive == "motor":
         report["motor_drive"] = _motor_drive(out, rec, cfg, inputs, phi, window, lag, sensors, rec_meas,
-                                             crank_rate_hz, opts, comparison, tracking)
+                                             crank_rate_hz, opts, comparison, tracking, base)
         report["files"]["motor_command_trace"] = "motor_command_trace.npz"
     report["wall_s"] = {"simulation": sim_wall, "total": time.perf_counter() - wall0}
     atomic_write_json(out / "report.json", json.loads(json.dumps(report, default=json_default)))
@@ -435,18 +464,24 @@ def _replay_into(out: Path, recording: str | Path, rec: Run, info: Any, repairs:
     return report
 
 
-def motor_config(cfg: BenchConfig, command_trace: Path) -> BenchConfig:
+def motor_config(cfg: BenchConfig, command_trace: Path, base: BenchConfig | None = None) -> BenchConfig:
     """The PID replay's configuration ``cfg`` driven instead by the motor model from the recorded
-    command (``drivetrain.command_file``), with the motor channels."""
+    command (``drivetrain.command_file``), with the motor channels; the drive train's fields are those of
+    ``base`` (the configuration replayed) where it drives by the motor or torque (the torque program's aside),
+    else their defaults."""
     groups = list(cfg.sensors.channels) + (["motor"] if "motor" not in cfg.sensors.channels else [])
-    return cfg.replace(**{"drive.mode": "motor", "drivetrain.command_file": str(command_trace),
-                          "sensors.channels": groups})
+    train = {f"drivetrain.{f.name}": getattr(base.drivetrain, f.name) for f in dataclasses.fields(Drivetrain)
+             if f.name not in _TORQUE_ONLY + ("command_file",)} \
+        if base is not None and base.drive.mode in ("motor", "torque") else {}
+    return cfg.replace(**train, **{"drive.mode": "motor", "drivetrain.command_file": str(command_trace),
+                                   "sensors.channels": groups})
 
 
 def _motor_drive(out: Path, rec: Run, cfg: BenchConfig, inputs: DriveInputs, phi: np.ndarray,
                  window: tuple[int, int], lag: int, sensors: list[str], rec_meas: Run, crank_rate_hz: float,
                  opts: ReplayOptions,
-                 pid_comparison: dict[str, Any], pid_tracking: dict[str, Any]) -> dict[str, Any]:
+                 pid_comparison: dict[str, Any], pid_tracking: dict[str, Any],
+                 base: BenchConfig | None = None) -> dict[str, Any]:
     """The motor-driven replay (:class:`ReplayOptions` ``drive = "motor"``): simulate, put through the
     same sensor chain and calibration, compare over the same window with the PID replay's time lag."""
     from twin.simulation import simulate_run
@@ -455,7 +490,7 @@ def _motor_drive(out: Path, rec: Run, cfg: BenchConfig, inputs: DriveInputs, phi
     inputs = DriveInputs(trace=inputs.trace, command=(t_cmd, volts))
     trace = out / "motor_command_trace.npz"
     np.savez(trace, t=t_cmd, volts=volts)  # an output, never read back here
-    mcfg = motor_config(cfg, trace)
+    mcfg = motor_config(cfg, trace, base)
     t0 = time.perf_counter()
     sim = simulate_run(mcfg, progress=opts.progress, inputs=inputs)
     wall = time.perf_counter() - t0
@@ -486,9 +521,10 @@ def _motor_drive(out: Path, rec: Run, cfg: BenchConfig, inputs: DriveInputs, phi
 
 def _same_model(a: BenchConfig, b: BenchConfig) -> bool:
     """Whether the simulated model equals the recording's: same mechanism, contact, sensors,
-    engine and step (drive program, duration and output settings aside)."""
-    keep = ("bodies", "materials", "joints", "mechanism", "contact", "sensors", "mujoco", "pid")
+    engine and step (drive program, duration and output settings aside: the channel groups are the replay's)."""
+    keep = ("bodies", "materials", "joints", "mechanism", "contact", "mujoco", "pid")
     return (all(getattr(a, k) == getattr(b, k) for k in keep)
+            and dataclasses.replace(a.sensors, channels=b.sensors.channels) == b.sensors
             and a.simulation.engine == b.simulation.engine and a.simulation.timestep_s == b.simulation.timestep_s)
 
 

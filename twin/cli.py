@@ -206,6 +206,17 @@ def load_config_file(path: str) -> BenchConfig:
     return with_trace_duration(cfg)  # a trace program without a duration: the trace's length
 
 
+#: (flag, argparse dest, configuration field) of the options that set one field to their value
+_OPTION_FIELDS = (("--clearance-b", "clearance_b", "joints.clearance_b_mm"),
+                  ("--clearance-c", "clearance_c", "joints.clearance_c_mm"),
+                  ("--clearance-a", "clearance_a", "joints.clearance_a_mm"),
+                  ("--clearance-guide", "clearance_guide", "joints.clearance_guide_mm"),
+                  ("--orientation", "orientation", "mechanism.orientation"), ("--speed", "speed", "drive.motor_rpm"),
+                  ("--duration", "duration", "simulation.duration_s"), ("--timestep", "timestep", "simulation.timestep_s"),
+                  ("--output-rate", "output_rate", "sensors.output_rate_hz"), ("--engine", "engine", "simulation.engine"),
+                  ("--structure", "structure", "structure.mode"), ("--drive-mode", "drive_mode", "drive.mode"))
+
+
 def config_from_args(args: argparse.Namespace) -> BenchConfig:
     """Configuration from ``--config``/``--test`` plus the override options the command offers."""
     from twin.config import ALL_CHANNEL_GROUPS, BenchConfig, preset, with_overrides
@@ -271,6 +282,9 @@ def config_from_args(args: argparse.Namespace) -> BenchConfig:
                                             f"got {args.channels!r}")
         ov["sensors.channels"] = groups
     refused = getattr(args, "_refused_set", ())
+    # the fields an option sets itself, with its flag: a --set of one to another value contradicts it (before, the
+    # --set won silently, or --structure flexible's channels were refused for a --set structure.mode = "rigid")
+    by_option = {key: flag for flag, dest, key in _OPTION_FIELDS if _opt(args, dest) is not None}
     for item in _opt(args, "set") or []:
         if "=" not in item:
             raise ConfigError("--set", f"expects KEY=VALUE, got {item!r}")
@@ -284,6 +298,8 @@ def config_from_args(args: argparse.Namespace) -> BenchConfig:
                 if k == r or (r.endswith(".") and k.startswith(r)):
                     raise ConfigError(f"--set {k}", f"does not apply to this command (it sets {r.rstrip('.')} "
                                                     "itself or does not use it)")
+            if k in by_option and v != ov[k]:
+                raise ConfigError(f"--set {k}", f"contradicts {by_option[k]} {ov[k]!r} (got {v!r}); give the field once")
             ov[k] = v
     if _opt(args, "structure") == "flexible" and _opt(args, "channels") is None:
         groups = list(ov.get("sensors.channels", cfg.sensors.channels))

@@ -72,11 +72,34 @@ _WARNING_FLAGS = {"n_global": "--global-points", "local_full": "--local-full", "
                   "boot_replicates": "--boot-replicates", "restarts": "--restarts"}
 
 
+def check_outputs_are_not_inputs(out: str, recordings: list[str], config: str | None) -> None:
+    """Refuse, before any work, an input that is one of the files a calibration writes in ``out``
+    (``twin.calibration.calibrate.OUTPUT_FILES``: e.g. ``--config DIR/calibrated.toml --out DIR``, a calibration
+    started from the last one's result, would write over its base). Anything else in the folder is safe: a
+    calibration writes only those names there, each through a temporary file renamed into place."""
+    from pathlib import Path
+
+    from twin.calibration.calibrate import OUTPUT_FILES
+    from twin.errors import TwinError
+    from twin.util import show
+
+    inputs = [("--config", config)] if config else []
+    inputs += [("RECORDING", r) for r in recordings]
+    for name in OUTPUT_FILES:
+        target = (Path(out) / name).resolve()
+        for flag, path in inputs:
+            if Path(path).resolve() == target:
+                raise TwinError(f"{show(out)} would receive {name}, written over the input {flag} {show(path)}; "
+                                f"give another folder or move the input (a calibration writes "
+                                f"{', '.join(OUTPUT_FILES)} there)", field="--out")
+
+
 def run(args: argparse.Namespace) -> int:
     from twin.calibration import CalibrationOptions, calibrate, parse_bounds
     from twin.cli import load_config_file
     from twin.errors import TwinError
 
+    check_outputs_are_not_inputs(args.out, args.recording, args.config)
     workers = resolve_workers(args.workers, "workers")
     bounds = parse_bounds(args.bounds)
     try:

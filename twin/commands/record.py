@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from twin.cli import add_config_args, config_from_args
+from twin.cli import ALL_CONFIG_OPTIONS, add_config_args, config_from_args
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -15,7 +15,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "the sensor chain of [instrumentation] (response, noise, saturation, 18-bit DAQ, "
                                    "encoder counts), the motor command, and a static calibration from a simulated "
                                    "static recording. Every command that reads a bench recording reads it.")
-    add_config_args(p)
+    # a recording holds the DAQ's channels whatever groups are computed (twin.bench_record.recording_config adds
+    # those the sensor chain reads): --channels would be accepted and ignored
+    add_config_args(p, tuple(o for o in ALL_CONFIG_OPTIONS if o != "channels"), refused_set=("sensors.channels",))
     p.add_argument("--out", required=True, metavar="REC.mcap", help="bench recording to write")
     p.add_argument("--notes", default="", metavar="TEXT", help="free text stored in the recording (test id, ...)")
     p.add_argument("--static", type=float, default=1.0, metavar="S", dest="static_s",

@@ -29,7 +29,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_config_args(p, SELECT_OPTIONS + MODEL_OPTIONS + ("engine", "timestep"),
                     refused_set=("drive.program", "drive.trace_file", "drive.crank_rpm", "simulation.duration_s",
                                  "sensors.channels", "sensors.output_rate_hz", "instrumentation.zero_g_v",
-                                 "instrumentation.daq_rate_hz"))
+                                 "instrumentation.daq_rate_hz", *REPLACED_BY_TRACE))
     p.add_argument("--out", metavar="DIR", help="output folder (default: replay_<recording name>)")
     p.add_argument("--window", nargs=2, type=float, metavar=("START", "STOP"),
                    help="analysis window in recording time [s] (default: second half, at most 1 s)")
@@ -46,9 +46,43 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
+#: [drive] fields of the program the recording's trace replaces (its speeds, ramps, steps, protocol, start angle and
+#: imposed ripple): a replay follows what the crank did, so ``--set`` of them is refused (they would be ignored)
+REPLACED_BY_TRACE = tuple(f"drive.{n}" for n in ("motor_rpm", "ramp_s", "ramp_shape", "protocol_rpm", "protocol_hold_s",
+                                                  "protocol_stop_s", "steps_s", "steps_rpm", "initial_encoder_angle_rad",
+                                                  "ripple_pct", "ripple_phase_rad"))
+
+
+def set_drive_mode(args: argparse.Namespace) -> str | None:
+    """The drive mode ``--set drive.mode=...`` (or ``--set drive={mode=...}``) asks for, None where none; one-line
+    refusal of a mode that does not follow a trace (:data:`twin.bench_replay.TRACE_MODES`): a replay drives the
+    crank by the recording's encoder trace."""
+    from twin.bench_replay import TRACE_MODES
+    from twin.cli import _flatten, _parse_value
+
+    mode = None
+    for item in getattr(args, "set", None) or []:
+        key, _, text = (x.strip() for x in item.partition("="))
+        for k, v in _flatten(key, _parse_value(key, text)):
+            if k == "drive.mode":
+                mode = v
+    if mode is not None and mode not in TRACE_MODES:
+        raise TwinError(f"--set drive.mode: a replay drives the crank by the recording's encoder trace, with "
+                        f"{' or '.join(TRACE_MODES)} (the crank PID, or the angle imposed); got {mode!r} (--drive motor "
+                        "adds the motor model driven by the recorded motor command)")
+    return mode
+
+
 def replay_overrides(args: argparse.Namespace, rec_cfg: BenchConfig) -> BenchConfig:
     """The recording's configuration with the command line's configuration options applied
     (``--config``/``--test``/``--preset`` replace it as a whole)."""
+    from twin.bench_replay import TRACE_MODES, trace_drive
+
+    if set_drive_mode(args) is not None and rec_cfg.drive.mode not in TRACE_MODES:
+        # a motor or torque recording replayed with the mode asked for: the drive the replay would use anyway
+        # (twin.bench_replay.trace_drive), so that its drive-train fields and channels do not refuse the mode
+        rec_cfg = rec_cfg.replace(**trace_drive(rec_cfg), **{"sensors.channels": [
+            g for g in rec_cfg.sensors.channels if g not in ("motor", "drive_energy")]})
     if args.config or args.test is not None or getattr(args, "preset", None) is not None:
         return config_from_args(args)
     fd, tmp = tempfile.mkstemp(suffix=".toml", prefix="twin_replay_")

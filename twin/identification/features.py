@@ -172,6 +172,10 @@ def steady_windows(counts: np.ndarray, rate_hz: float, counts_per_rev: float, sk
     turns = c[start:] / counts_per_rev
     moved = float(abs(turns[-1] - turns[0])) if turns.size else 0.0
     L = max(1, int(round(RATE_WINDOW_S * rate_hz)))
+    if turns.size <= 2 * L and moved >= REVS_PER_WINDOW:  # turns enough, but too briefly to measure its rate
+        raise IdentifyError(f"too short: {turns.size / rate_hz:.3f} s after {skip_s:g} s ({moved:.2f} crank "
+                            f"revolutions); the crank rate is measured over {RATE_WINDOW_S * 1e3:g} ms windows, "
+                            f"so more than {2 * L / rate_hz:g} s are needed")
     if turns.size <= 2 * L or moved < REVS_PER_WINDOW:
         raise IdentifyError(f"too little motion: {moved:.2f} crank revolutions after {skip_s:g} s "
                             f"(at least {REVS_PER_WINDOW} steady revolutions are needed)")

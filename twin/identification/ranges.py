@@ -10,6 +10,7 @@ in the model file) and on every recording answered:
 * **noise level** [µg/√Hz]: the accelerometers' noise floor above the sensors' resonance
   (:func:`measure_noise`);
 * **orientation**: the bench axis that points up (the recording's configuration);
+* **direction of rotation**: forward or reverse, from the encoder (:mod:`twin.identification.rotation`);
 * **speed swing** [%]: the 50 ms crank rate's swing in steady running (:attr:`twin.identification.features.
   Windows.swing`): it widens the steady part's tolerance without a cap below a stop, so a recording that turns
   through whole turns is answered however it swings;
@@ -29,6 +30,8 @@ margin for its measurement, stated here and never tuned on an answer:
   speed and engine: measured level / noise scale 29.7-30.9 µg/√Hz over 1594 MuJoCo training runs and 427
   reference-engine development runs, noise ×0.7-4; the margin is six times that spread);
 * orientation: not among the training runs';
+* direction of rotation: not among the training runs' (a model that does not store them: forward only,
+  :mod:`twin.identification.rotation`);
 * features: more features beyond the training windows' far-out fences than 99 % of the training runs have
   (``max_outliers``, stored by :func:`feature_reference`); a model without that count: at least
   :data:`FEATURE_OUTLIER_SHARE` (5 %) of the features; and, whatever the training runs reach, a third of the
@@ -59,6 +62,8 @@ import math
 from typing import Any
 
 import numpy as np
+
+from twin.identification.rotation import rotation, rotation_warning, training_rotations
 
 #: harmonics of the crank rate whose ripple is measured
 RIPPLE_HARMONICS = 4
@@ -179,12 +184,14 @@ def ripple_span(counts: np.ndarray, windows: Any) -> tuple[int, int]:
 def recording_measures(acc: dict[str, np.ndarray], counts: np.ndarray, rate_hz: float, counts_per_rev: float,
                        windows: Any) -> dict[str, Any]:
     """The measured quantities of a recording's steady windows (module docstring): crank rate [Hz], ripple
-    per harmonic [%] and noise level [µg/√Hz]."""
+    per harmonic [%], noise level [µg/√Hz], speed swing [%] and the direction of rotation
+    (:mod:`twin.identification.rotation`)."""
     a, b = ripple_span(counts, windows)
     return {"crank_hz": float(windows.crank_hz),
             "ripple_pct": [round(v, 4) for v in measure_ripple(counts, rate_hz, counts_per_rev, a, b)],
             "noise_ug_rthz": round(measure_noise(acc, rate_hz, a, b), 3),
-            "speed_swing_pct": round(100.0 * float(getattr(windows, "swing", 0.0)), 3)}
+            "speed_swing_pct": round(100.0 * float(getattr(windows, "swing", 0.0)), 3),
+            "rotation": rotation(counts, a, b)}
 
 
 def training_ranges(measures: list[dict[str, Any]], orientations: list[str], source: str) -> dict[str, Any]:
@@ -198,7 +205,7 @@ def training_ranges(measures: list[dict[str, Any]], orientations: list[str], sou
             "crank_hz": [float(hz.min()), float(hz.max())], **swing,
             "ripple_pct": [[float(r[:, k].min()), float(r[:, k].max())] for k in range(r.shape[1])],
             "noise_ug_rthz": [float(np.nanmin(nz)), float(np.nanmax(nz))],
-            "orientations": sorted(set(orientations))}
+            "orientations": sorted(set(orientations)), **training_rotations(measures)}
 
 
 #: share of the training runs a feature-distance threshold leaves inside [-]
@@ -244,6 +251,9 @@ def out_of_range(measures: dict[str, Any], orientation: str, ranges: dict[str, A
     orientation can be checked (by the caller); nothing else is claimed."""
     warnings: list[str] = []
     ev: dict[str, Any] = {"measured": measures}
+    turned = rotation_warning(measures.get("rotation"), ranges)  # a model without ranges: read as trained forward
+    if turned:
+        warnings.append(turned)
     if ranges is None:
         ev["ranges"] = "unavailable (the model stores no training ranges)"
         return warnings, ev

@@ -111,21 +111,27 @@ class RecordingMeasures(ByKey):
         noise_ug_rthz: the sensors' noise level [µg/√Hz] (NaN, null in JSON, where it could not be measured).
         speed_swing_pct: the crank rate's largest swing within 50 ms [%]; None where not measured (answers made
             before it was).
+        rotation: the crank's direction, "forward" (encoder counts increasing) or "reverse"
+            (:mod:`twin.identification.rotation`); None where not measured (answers made before it was).
     """
 
     crank_hz: float
     ripple_pct: tuple[float, ...]
     noise_ug_rthz: float | None
     speed_swing_pct: float | None = None
+    rotation: str | None = None
 
     def to_dict(self) -> dict[str, Any]:
         d = {"crank_hz": self.crank_hz, "ripple_pct": list(self.ripple_pct), "noise_ug_rthz": self.noise_ug_rthz}
-        return d if self.speed_swing_pct is None else d | {"speed_swing_pct": self.speed_swing_pct}
+        d = d if self.speed_swing_pct is None else d | {"speed_swing_pct": self.speed_swing_pct}
+        return d if self.rotation is None else d | {"rotation": self.rotation}
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> "RecordingMeasures":
-        _no_other_keys(cls, d, ("crank_hz", "ripple_pct", "noise_ug_rthz", "speed_swing_pct"), ("speed_swing_pct",))
-        return cls(d["crank_hz"], tuple(d["ripple_pct"]), d["noise_ug_rthz"], d.get("speed_swing_pct"))
+        _no_other_keys(cls, d, ("crank_hz", "ripple_pct", "noise_ug_rthz", "speed_swing_pct", "rotation"),
+                       ("speed_swing_pct", "rotation"))
+        return cls(d["crank_hz"], tuple(d["ripple_pct"]), d["noise_ug_rthz"], d.get("speed_swing_pct"),
+                   d.get("rotation"))
 
 
 @dataclass(frozen=True)

@@ -141,8 +141,8 @@ class StudySettings:
     first: int = 0
 
     def __post_init__(self) -> None:
-        if isinstance(self.scenes, bool) or not isinstance(self.scenes, int) or self.scenes < 1:
-            raise ConfigError("scenes", f"must be an integer >= 1, got {self.scenes!r}")
+        if isinstance(self.scenes, bool) or not isinstance(self.scenes, int) or not 1 <= self.scenes <= MAX_SCENES:
+            raise ConfigError("scenes", f"must be an integer in [1, {MAX_SCENES}], got {self.scenes!r}")
         if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
             raise ConfigError("seed", f"must be an integer >= 0, got {self.seed!r}")
         if self.family not in ("bench", "spatial"):
@@ -151,13 +151,20 @@ class StudySettings:
             raise ConfigError("first", f"must be an integer >= 0, got {self.first!r}")
         lo, hi = (tuple(self.duration_range_s) + (None, None))[:2]
         if (len(self.duration_range_s) != 2 or not all(isinstance(x, (int, float)) and math.isfinite(x)
-                                                       for x in (lo, hi)) or not 0 < lo <= hi):
-            raise ConfigError("durations", "must be two numbers LO HI with 0 < LO <= HI [s], got "
+                                                       for x in (lo, hi)) or not 0 < lo <= hi <= MAX_DURATION_S):
+            raise ConfigError("durations", f"must be two numbers LO HI with 0 < LO <= HI <= {MAX_DURATION_S:g} [s] (a "
+                              "scene's speed ramp, up to 0.4 of its duration, stays within the drive's 10 s), got "
                               f"{list(self.duration_range_s)!r}")
         if self.structure and (self.bench or self.family != "bench"):
             raise ConfigError("structure", "draws the flexible structure on the planar twin's plain scenes; it "
                               "cannot be combined with bench (guide clearance and motor drive are not available "
                               "with the flexible structure) or the spatial family")
+
+
+#: the most scenes a campaign draws (the documented campaign has 500; more only fills the memory with scenes to run)
+MAX_SCENES = 100_000
+#: the longest scene [s]: the constant program's ramp is drawn up to 0.4 of the duration, and drive.ramp_s <= 10 s
+MAX_DURATION_S = 20.0
 
 
 def quick(scenes: int = 20, seed: int = 1, bench: bool = False) -> StudySettings:

@@ -159,6 +159,10 @@ class RerunWriter:
             check_window(w, self.t_start, self.t_end, rate)
             self._fft_window = (float(w[0]), float(w[1]))
             self._fft_parts = {n: [] for n in fft_names}
+        elif self.opts.fft_window_s is not None:  # it would be accepted and ignored
+            raise TwinError("this file has no accelerations in m/s² to take spectra of (a bench recording holds the "
+                            "DAQ's volts: 'twin plot' draws its calibrated spectra); leave it out",
+                            field="fft_window_s")
 
         blueprint = bp.default_blueprint(self.cfg, self._groups, self._channels, self._joints, self._has_pose,
                                          self._fft_window, fft_names, self.opts)
