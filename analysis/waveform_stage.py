@@ -27,13 +27,15 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 
 
-def run_case(cv, case: dict, fit: dict, work: Path, budget: int) -> dict:
+def run_case(cv, case: dict, fit: dict, work: Path, budget: int, other_engine: bool = False) -> dict:
     from twin.calibration.objective import get_target
     from twin.calibration.params import make_parameters
     from twin.calibration.waveform import waveform_stage
 
     motor = any(f.startswith("drivetrain.") for f in case["fields"])
     base = cv.config_of(case, 0, fitted_at_default=True)
+    if other_engine:  # model error: the recordings' engine is not the model's
+        base = base.replace(**{"simulation.engine": "reference" if case["engine"] == "mujoco" else "mujoco"})
     recs = [work / f"{case['case']}_s{s}.mcap" for s in cv.REPEAT_SEEDS]
     tgs = [get_target(str(r), base.to_toml(), 1.0, 0.05, motor, "program") for r in recs]
     P = make_parameters(case["fields"], tgs[0].base)
@@ -44,7 +46,7 @@ def run_case(cv, case: dict, fit: dict, work: Path, budget: int) -> dict:
     st = waveform_stage(tgs, P, u, ivs, budget=budget, say=lambda s: print("   ", s, flush=True))
     wall = time.perf_counter() - t0
     after = dict(zip(st["fields"], st["values"])) if st.get("values") else fitted
-    rep = cv.replay_compare(case, recs, base, after, "program") if st["ran"] else None
+    rep = cv.replay_compare(case, recs, base, after, "program") if st["ran"] and not other_engine else None
     params = []
     for p in fit["params"]:
         tr = case["truth"][p["field"]]
@@ -52,7 +54,7 @@ def run_case(cv, case: dict, fit: dict, work: Path, budget: int) -> dict:
         params.append({"field": p["field"], "truth": tr, "before": p["value"], "after": after[p["field"]],
                        "error_before": p["error"], "error_after": e1, "hit_before": p["hit"], "hit_after": h1,
                        "interval": [p["lo"], p["hi"]], "inside_interval_after": bool(p["lo"] <= after[p["field"]] <= p["hi"])})
-    row = {"case": case["case"], "engine": case["engine"], "stage": st, "params": params, "stage_wall_s": wall,
+    row = {"case": case["case"], "engine": case["engine"], "model_engine": base.simulation.engine, "stage": st, "params": params, "stage_wall_s": wall,
            "calibration_wall_s": fit["wall_s"],
            "nrmse_before": fit["nrmse"], "literal_before": fit["replay_within_10pct"],
            "floor_before": fit.get("replay_within_floor")}
@@ -94,6 +96,9 @@ def main() -> None:
     ap.add_argument("--cases", default=None, help="comma-separated cases (default: every program-drive case)")
     ap.add_argument("--budget", type=int, default=None, help="replays (default: the stage's default)")
     ap.add_argument("--plot", action="store_true")
+    ap.add_argument("--other-engine", action="store_true",
+                    help="model error: the model runs the other engine than the recordings' (waveform_stage_cross.json); "
+                         "the replay comparison is left out (the truth's replay is the recordings' engine)")
     a = ap.parse_args()
     sys.path.insert(0, str(HERE))
     import calibration_validation as cv
@@ -106,14 +111,14 @@ def main() -> None:
     fits = {r["case"]: r for r in json.loads((cv.HERE / "results.json").read_text())["results"]
             if r.get("drive") == "program" and "params" in r}
     only = a.cases.split(",") if a.cases else None
-    out = cv.HERE / "waveform_stage.json"
+    out = cv.HERE / ("waveform_stage_cross.json" if a.other_engine else "waveform_stage.json")
     rows = json.loads(out.read_text())["rows"] if out.exists() else []
     rows = [r for r in rows if not only or r["case"] not in only]
     for case in doc["cases"]:
         if (only and case["case"] not in only) or case["case"] not in fits or any(r["case"] == case["case"] for r in rows):
             continue
         print(f"{case['case']} ({case['engine']}):", flush=True)
-        r = run_case(cv, case, fits[case["case"]], a.work, a.budget or DEFAULT_BUDGET)
+        r = run_case(cv, case, fits[case["case"]], a.work, a.budget or DEFAULT_BUDGET, a.other_engine)
         rows.append(r)
         st = r["stage"]
         print(f"  {'ran' if st['ran'] else 'skipped'}: {st['reason']}; {st['replays']} replays, {r['stage_wall_s']:.0f} s "
@@ -126,7 +131,7 @@ def main() -> None:
         print("  NRMSE/truth after  " + " ".join(f"{s} {v['fitted'] / v['truth']:.3g}" for s, v in r["nrmse_after"].items())
               + f" (literal {r['literal_after']}, floor {r['floor_after']})", flush=True)
         atomic_write_text(out, json.dumps(stamped({"set": a.set, "rows": rows}), indent=1, default=str) + "\n")
-    if a.plot and rows:
+    if a.plot and rows and not a.other_engine:
         plot(rows, cv.HERE / "waveform_stage.png")
 
 
