@@ -89,6 +89,29 @@ def plot(rows: list[dict], path: Path) -> None:
     plt.close(fig)
 
 
+def table(rows: list[dict]) -> str:
+    """Markdown: per case and field, the errors and the replay criterion before/after, the stage's cost."""
+    out = ["| case | engine | stage | field | error: feature fit → + waveform | change / interval half-width | "
+           "replay NRMSE ≤ 1.1 × truth (literal): before → after | worst NRMSE / truth: before → after | stage [s] "
+           "(calibration [s]) |", "|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        st = r["stage"]
+        how = f"ran ({st['replays']} replays)" if st["ran"] else "skipped: not predictable" if "predictable" in st[
+            "reason"] else f"skipped: {st['reason']}"
+        ch = {c["field"]: c for c in st.get("changes", [])}
+        worst = lambda k: max(v["fitted"] / v["truth"] for v in r[k].values())  # noqa: E731
+        for p in r["params"]:
+            e = (lambda x: f"{100 * x:+.3g} %") if abs(p["truth"]) > 0 and "restitution" not in p["field"] else (
+                lambda x: f"{x:+.3g}")
+            sh = ch.get(p["field"], {}).get("shift_in_half_widths")
+            out.append(f"| {r['case']} | {r['engine']}{'' if r.get('model_engine', r['engine']) == r['engine'] else ' → model ' + r['model_engine']} "
+                       f"| {how} | {p['field']} | {e(p['error_before'])} → {e(p['error_after'])} | "
+                       f"{'–' if sh is None else f'{sh:+.2f}'} | {'yes' if r['literal_before'] else 'no'} → "
+                       f"{'yes' if r['literal_after'] else 'no'} | {worst('nrmse_before'):.3g} → {worst('nrmse_after'):.3g} | "
+                       f"{r['stage_wall_s']:.0f} ({r['calibration_wall_s']:.0f}) |")
+    return "\n".join(out) + "\n"
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--set", choices=("3", "4"), default="4")
@@ -96,6 +119,7 @@ def main() -> None:
     ap.add_argument("--cases", default=None, help="comma-separated cases (default: every program-drive case)")
     ap.add_argument("--budget", type=int, default=None, help="replays (default: the stage's default)")
     ap.add_argument("--plot", action="store_true")
+    ap.add_argument("--table", action="store_true", help="only print the table of the set's waveform_stage.json")
     ap.add_argument("--other-engine", action="store_true",
                     help="model error: the model runs the other engine than the recordings' (waveform_stage_cross.json); "
                          "the replay comparison is left out (the truth's replay is the recordings' engine)")
@@ -110,6 +134,12 @@ def main() -> None:
     doc = json.loads((cv.HERE / "truth.json").read_text())
     fits = {r["case"]: r for r in json.loads((cv.HERE / "results.json").read_text())["results"]
             if r.get("drive") == "program" and "params" in r}
+    if a.table:
+        for name in ("waveform_stage.json", "waveform_stage_cross.json"):
+            if (cv.HERE / name).exists():
+                print(name)
+                print(table(json.loads((cv.HERE / name).read_text())["rows"]))
+        return
     only = a.cases.split(",") if a.cases else None
     out = cv.HERE / ("waveform_stage_cross.json" if a.other_engine else "waveform_stage.json")
     rows = json.loads(out.read_text())["rows"] if out.exists() else []
@@ -131,6 +161,8 @@ def main() -> None:
         print("  NRMSE/truth after  " + " ".join(f"{s} {v['fitted'] / v['truth']:.3g}" for s, v in r["nrmse_after"].items())
               + f" (literal {r['literal_after']}, floor {r['floor_after']})", flush=True)
         atomic_write_text(out, json.dumps(stamped({"set": a.set, "rows": rows}), indent=1, default=str) + "\n")
+    if rows:
+        print(table(rows))
     if a.plot and rows and not a.other_engine:
         plot(rows, cv.HERE / "waveform_stage.png")
 

@@ -48,18 +48,38 @@ def test_stage_recovers_known_friction_more_precisely_than_its_start(setup):
     _ws, _recs, _base, tgs, P = setup
     start = TRUE_MU0 * (1.0 + START_OFFSET)
     u0 = np.asarray([P[0].to_unit(start)])
-    st = waveform_stage(tgs, P, u0, [(0.09, 0.11)], budget=12)
+    st = waveform_stage(tgs, P, u0, [(0.09, 0.11)], budget=16)
     assert st["ran"], st["reason"]
     assert max(st["predictability_pct"]) <= st["chaos_pct"]  # 0.5 mm, μ 0.1: not chaotic
     (after,) = st["values"]
     err0, err1 = abs(start - TRUE_MU0) / TRUE_MU0, abs(after - TRUE_MU0) / TRUE_MU0
     assert err1 < 0.1 * err0, (start, after)
-    assert st["cost_after"] < st["cost_before"] and st["replays"] <= 12
+    assert st["cost_after"] < st["cost_before"] and st["replays"] <= 16
+    assert max(st["nonlinearity"]) <= waveform_nonlinearity_max()
     # the replay NRMSE of every accelerometer fell (what the issue's replay criterion measures)
     for b, a in zip(st["nrmse_before"], st["nrmse_after"]):
         assert all(a[s] < b[s] for s in b)
     (c,) = st["changes"]
     assert c["inside_interval"] and c["before"] == pytest.approx(start)
+
+
+def waveform_nonlinearity_max() -> float:
+    from twin.calibration.waveform import NONLINEARITY_MAX
+
+    return NONLINEARITY_MAX
+
+
+def test_stage_is_skipped_where_the_residuals_are_not_smooth(setup, monkeypatch):
+    """The second gate: with a nonlinearity limit below any (a negative one), the stage stops after its
+    probes at ± the Jacobian's step and says why; the values stay the feature fit's."""
+    from twin.calibration import waveform
+
+    _ws, _recs, _base, tgs, P = setup
+    monkeypatch.setattr(waveform, "NONLINEARITY_MAX", -1.0)
+    u0 = np.asarray([P[0].to_unit(0.102)])
+    st = waveform.waveform_stage(tgs, P, u0, budget=16)
+    assert not st["ran"] and "not smooth" in st["reason"] and st["replays"] == 5
+    assert st["values"] == [pytest.approx(0.102)] and len(st["nonlinearity"]) == 1
 
 
 def test_stage_is_skipped_where_the_replay_is_not_predictable(setup, monkeypatch):
@@ -86,7 +106,7 @@ def test_calibrate_with_waveform_reports_the_stage(setup, tmp_path):
     _ws, recs, base, _tgs, _P = setup
     opts = CalibrationOptions(n_global=2, local_short=3, local_full=3, profile_steps=(0.03,), drive="program",
                               plots=False, replicates=0, boot_replicates=50, restarts=0, waveform=True,
-                              waveform_budget=8)
+                              waveform_budget=10)
     res = twin.calibrate(recs, ["contact.mu0"], tmp_path / "out", config=base, bounds={"contact.mu0": (0.0, 0.3)},
                          options=opts)
     (p,) = res.parameters

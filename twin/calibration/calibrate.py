@@ -86,7 +86,7 @@ class CalibrationOptions:
     progress: bool = False
     restarts: int = 2
     waveform: bool = False
-    waveform_budget: int = 12
+    waveform_budget: int = 16
 
     def __post_init__(self) -> None:
         for name, lo, hi in (("n_global", 0, 4096), ("local_short", 0, 10_000), ("local_full", 0, 10_000),

@@ -59,8 +59,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="after the feature fit, least squares on the low-passed replayed accelerations, where the "
                         "fitted point's replay is not chaotic (default off: on a bench it may fit model error; "
                         "the report gives each change against its interval)")
-    p.add_argument("--waveform-budget", type=int, default=12, metavar="N",
-                   help="replays of all recordings the waveform stage may use (default 12)")
+    p.add_argument("--waveform-budget", type=int, default=16, metavar="N",
+                   help="replays of all recordings the waveform stage may use (default 16)")
     p.add_argument("--no-plots", action="store_true", help="no PNG figures")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
     p.set_defaults(func=run, _field_flags={"params": "--params", "bounds": "--bounds", "recordings": "RECORDING...",
