@@ -61,6 +61,8 @@ def run_case(cv, case: dict, fit: dict, work: Path, budget: int, other_engine: b
     if rep is not None:
         row.update(nrmse_after=rep["nrmse"], literal_after=rep["replay_within_10pct"],
                    floor_after=rep.get("replay_within_floor"))
+    elif other_engine:  # no replay comparison: the truth's replay is the recordings' engine
+        row.update(nrmse_after=None, literal_after=None, floor_after=None)
     else:
         row.update(nrmse_after=fit["nrmse"], literal_after=fit["replay_within_10pct"],
                    floor_after=fit.get("replay_within_floor"))
@@ -99,7 +101,7 @@ def table(rows: list[dict]) -> str:
         how = f"ran ({st['replays']} replays)" if st["ran"] else "skipped: not predictable" if "predictable" in st[
             "reason"] else f"skipped: {st['reason']}"
         ch = {c["field"]: c for c in st.get("changes", [])}
-        worst = lambda k: max(v["fitted"] / v["truth"] for v in r[k].values())  # noqa: E731
+        worst = lambda k: max(v["fitted"] / v["truth"] for v in r[k].values()) if r[k] else float("nan")  # noqa: E731
         for p in r["params"]:
             e = (lambda x: f"{100 * x:+.3g} %") if abs(p["truth"]) > 0 and "restitution" not in p["field"] else (
                 lambda x: f"{x:+.3g}")
@@ -107,7 +109,7 @@ def table(rows: list[dict]) -> str:
             out.append(f"| {r['case']} | {r['engine']}{'' if r.get('model_engine', r['engine']) == r['engine'] else ' → model ' + r['model_engine']} "
                        f"| {how} | {p['field']} | {e(p['error_before'])} → {e(p['error_after'])} | "
                        f"{'–' if sh is None else f'{sh:+.2f}'} | {'yes' if r['literal_before'] else 'no'} → "
-                       f"{'yes' if r['literal_after'] else 'no'} | {worst('nrmse_before'):.3g} → {worst('nrmse_after'):.3g} | "
+                       f"{'–' if r['literal_after'] is None else 'yes' if r['literal_after'] else 'no'} | {worst('nrmse_before'):.3g} → {worst('nrmse_after'):.3g} | "
                        f"{r['stage_wall_s']:.0f} ({r['calibration_wall_s']:.0f}) |")
     return "\n".join(out) + "\n"
 
@@ -158,7 +160,7 @@ def main() -> None:
                   f"{p['after']:.6g} ({p['error_after']:+.2e}); in interval {p['inside_interval_after']}", flush=True)
         print("  NRMSE/truth before " + " ".join(f"{s} {v['fitted'] / v['truth']:.3g}" for s, v in r["nrmse_before"].items())
               + f" (literal {r['literal_before']})", flush=True)
-        print("  NRMSE/truth after  " + " ".join(f"{s} {v['fitted'] / v['truth']:.3g}" for s, v in r["nrmse_after"].items())
+        print("  NRMSE/truth after  " + " ".join(f"{s} {v['fitted'] / v['truth']:.3g}" for s, v in (r["nrmse_after"] or {}).items())
               + f" (literal {r['literal_after']}, floor {r['floor_after']})", flush=True)
         atomic_write_text(out, json.dumps(stamped({"set": a.set, "rows": rows}), indent=1, default=str) + "\n")
     if rows:
