@@ -12,30 +12,19 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from twin.config import preset
+from test_calibrate_fit import TRUE_MU0, _truth, record_repeats  # the same known truth as the feature fit's tests
 from twin.errors import ConfigError
 
-TRUE_MU0 = 0.1
 START_OFFSET = 0.02  # relative: what a feature fit leaves (1-4 % on the validation sets)
-
-
-def _truth():
-    return preset(6).replace(**{"simulation.duration_s": 0.6, "simulation.engine": "reference", "drive.ramp_s": 0.05,
-                                "drive.motor_rpm": 1000.0, "joints.clearance_c_mm": 0.5, "contact.mu0": TRUE_MU0})
 
 
 @pytest.fixture(scope="module")
 def setup(tmp_path_factory):
-    import twin
     from twin.calibration.objective import get_target
     from twin.calibration.params import make_parameters
 
     ws = tmp_path_factory.mktemp("wave")
-    recs = []
-    for seed in (1, 2):
-        p = ws / f"rep{seed}.mcap"
-        twin.record(_truth().replace(**{"instrumentation.seed": seed}), p)
-        recs.append(p)
+    recs = record_repeats(ws)
     base = _truth().replace(**{"contact.mu0": 0.05})
     tgs = [get_target(str(r), base.to_toml(), 1.0, 0.05, False, "program") for r in recs]
     P = make_parameters(["contact.mu0"], tgs[0].base, {"contact.mu0": (0.0, 0.3)})
