@@ -303,6 +303,8 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
             f"evaluations: about {est / 60:.1f} min on {options.workers} worker(s)"
             + (f", up to {(est + est_restart) / 60:.1f} min if the fit misses the recordings ({options.restarts} "
                "restart(s))" if options.restarts else "")
+            + (f", and up to {options.waveform_budget * t_full / 60:.1f} min more for the waveform stage "
+               f"({options.waveform_budget} replays, one process)" if options.waveform else "")
             + (" (logged ones are not simulated again)" if ev.resumed else ""))
         # 1. global stage, short windows
         pts = search.sobol_points(len(P), options.n_global, options.seed)
