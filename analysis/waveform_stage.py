@@ -8,7 +8,7 @@ feature fit. Then the validation's replay comparison (``calibration_validation.r
 first recording replayed with the true and the fitted values) at the stage's values, and the errors
 against the truth before and after.
 
-    python analysis/waveform_stage.py --set 4 --work /tmp/val4 [--cases mu_a,mu_b] [--budget 12]
+    python analysis/waveform_stage.py --set 4 --work /tmp/val4 [--cases mu_a,mu_b] [--budget 16]
 
 Writes ``analysis/calibration_validation_{set}/waveform_stage.json`` (stamped) and prints a table; with
 ``--plot`` also ``waveform_stage.png`` (replay NRMSE over the truth's, before and after, per case).
