@@ -27,17 +27,25 @@ def _truth():
                                 "drive.motor_rpm": 1000.0, "joints.clearance_c_mm": 0.5, "contact.mu0": TRUE_MU0})
 
 
+def record_repeats(ws):
+    """Two synthetic recordings of the truth (noise seeds 1 and 2: the repeats) in the folder ``ws``."""
+    import twin
+
+    recs = []
+    for seed in (1, 2):
+        p = ws / f"rep{seed}.mcap"
+        twin.record(_truth().replace(**{"instrumentation.seed": seed}), p)
+        recs.append(p)
+    return recs
+
+
 @pytest.fixture(scope="module")
 def fitted(tmp_path_factory):
     import twin
     from twin.calibration import CalibrationOptions
 
     ws = tmp_path_factory.mktemp("calib")
-    recs = []
-    for seed in (1, 2):
-        p = ws / f"rep{seed}.mcap"
-        twin.record(_truth().replace(**{"instrumentation.seed": seed}), p)
-        recs.append(p)
+    recs = record_repeats(ws)
     base = _truth().replace(**{"contact.mu0": 0.05})
     notes: list[str] = []
     res = twin.calibrate(recs, ["contact.mu0"], ws / "out", config=base, bounds={"contact.mu0": (0.0, 0.3)},

@@ -61,6 +61,11 @@ class CalibrationOptions:
         restarts: when the full-length best still misses the recordings (misfit per term J*/n above
             :data:`MISFIT_WARN`), local searches again from up to this many of the global stage's next-best
             points away from the basin already searched (half the local budgets each); 0 = none.
+        waveform: after the feature fit, the waveform stage (:mod:`twin.calibration.waveform`): a local
+            least-squares fit of the low-passed replayed accelerations, run only where the fitted point's
+            replay is predictable (not chaotic); on a real bench it may fit model error into the parameters
+            (the report gives each change against its interval). Off by default (docs/calibration.md).
+        waveform_budget: replays of all recordings the waveform stage may use (Jacobian columns included).
     """
 
     n_global: int = 16
@@ -80,11 +85,14 @@ class CalibrationOptions:
     plots: bool = True
     progress: bool = False
     restarts: int = 2
+    waveform: bool = False
+    waveform_budget: int = 16
 
     def __post_init__(self) -> None:
         for name, lo, hi in (("n_global", 0, 4096), ("local_short", 0, 10_000), ("local_full", 0, 10_000),
                              ("workers", 1, 1024), ("seed", 0, 2 ** 31 - 1), ("replicates", 0, 64),
-                             ("boot_replicates", 0, 100_000), ("restarts", 0, 64)):
+                             ("boot_replicates", 0, 100_000), ("restarts", 0, 64),
+                             ("waveform_budget", 1, 10_000)):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
                 raise ConfigError(name, f"must be an integer in [{lo}, {hi}], got {v!r}")
@@ -93,6 +101,8 @@ class CalibrationOptions:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not (math.isfinite(v) and lo <= v <= hi):
                 raise ConfigError(name, f"must be a number in [{lo:g}, {hi:g}], got {v!r}")
+        if not isinstance(self.waveform, bool):
+            raise ConfigError("waveform", f"must be true or false, got {self.waveform!r}")
         if self.interval not in ("bootstrap", "hull", "dj"):
             raise ConfigError("interval", f"must be bootstrap, hull or dj, got {self.interval!r}")
         if self.drive not in ("trace", "program"):
@@ -125,10 +135,12 @@ class FittedParameter:
     boot_lo: float = math.nan
     boot_hi: float = math.nan
     rough: bool = False
+    #: the feature fit's value where the waveform stage changed it (``value`` is then the stage's); else nan
+    feature_value: float = math.nan
 
     def to_dict(self) -> dict[str, Any]:
         d = {**self.__dict__, "bounds": list(self.bounds)}
-        for k in ("noise_lo", "noise_hi", "dj_lo", "dj_hi", "boot_lo", "boot_hi"):
+        for k in ("noise_lo", "noise_hi", "dj_lo", "dj_hi", "boot_lo", "boot_hi", "feature_value"):
             d[k] = None if not math.isfinite(d[k]) else d[k]
         return d
 
@@ -291,6 +303,8 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
             f"evaluations: about {est / 60:.1f} min on {options.workers} worker(s)"
             + (f", up to {(est + est_restart) / 60:.1f} min if the fit misses the recordings ({options.restarts} "
                "restart(s))" if options.restarts else "")
+            + (f", and up to {options.waveform_budget * t_full / 60:.1f} min more for the waveform stage "
+               f"({options.waveform_budget} replays, one process)" if options.waveform else "")
             + (" (logged ones are not simulated again)" if ev.resumed else ""))
         # 1. global stage, short windows
         pts = search.sobol_points(len(P), options.n_global, options.seed)
@@ -383,6 +397,9 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
     fitted = tuple(_fitted(p, iv, x, boot["parameters"][i] if boot.get("available") else None, options.interval)
                    for i, (p, iv, x) in enumerate(zip(P, unc["intervals"], x0)))
     warnings = []
+    wave = None
+    if options.waveform:
+        fitted, wave = _waveform(targets["full"], P, u_best, fitted, options, say, warnings)
     for f in fitted:
         if f.on_bound:
             warnings.append(f"{f.field}: the fitted value {f.value:.4g} sits on its {f.on_bound} bound "
@@ -424,6 +441,7 @@ def calibrate(recordings: Iterable[str | Path] | str | Path, params: Iterable[st
                       "delta_j": options.delta_j, "delta_j_used": unc["delta_j"]},
         "uncertainty": {k: v for k, v in unc.items() if k != "intervals"},
         "bootstrap": boot,
+        "waveform": wave if wave is not None else {"ran": False, "reason": "not asked (waveform off)"},
         "identifiability": identifiability(P, unc["intervals"], unc["correlated_pairs"], unc["delta_j"], fitted),
         "warnings": warnings,
         "evaluations": {"total": len(ev.cache), "simulated_now": ev.simulated, "resumed": ev.resumed,
@@ -489,6 +507,29 @@ def _restart_on_misfit(ev, options: CalibrationOptions, cand, starts, u_centre, 
             profile(u_centre)
             seen = full_points()
     return u_centre, seen, done
+
+
+def _waveform(targets, P, u_best, fitted, options: CalibrationOptions, say, warnings: list[str]):
+    """The waveform stage (:mod:`twin.calibration.waveform`) from the feature fit's point: the fitted
+    parameters with the stage's values (intervals kept: the feature fit's) and the stage's report; a skip
+    or a value moved outside its interval is a warning."""
+    import dataclasses
+
+    from twin.calibration.waveform import waveform_stage
+
+    say(f"waveform stage: at most {options.waveform_budget} replays of {len(targets)} recording(s)")
+    wave = waveform_stage(targets, P, u_best, [(f.lo, f.hi) for f in fitted], budget=options.waveform_budget, say=say)
+    if not wave["ran"]:
+        warnings.append(f"waveform stage skipped: {wave['reason']}")
+        return fitted, wave
+    fitted = tuple(dataclasses.replace(f, value=float(v), feature_value=f.value) for f, v in zip(fitted, wave["values"]))
+    for f, c in zip(fitted, wave["changes"]):
+        if not c.get("inside_interval", True):
+            warnings.append(f"{f.field}: the waveform stage moved it from {f.feature_value:.6g} to {f.value:.6g}, outside "
+                            f"its interval {f.lo:.4g} – {f.hi:.4g} from the features: either that interval is too narrow or the "
+                            "waveform carries model error the stage fitted into the parameter (on a bench recording, "
+                            "compare with --no-waveform)")
+    return fitted, wave
 
 
 def _fitted(p, iv, x0: float, bt: dict[str, Any] | None, how: str) -> FittedParameter:

@@ -84,6 +84,31 @@ def _fmt(v: Any, spec: str = ".4g") -> str:
     return format(v, spec)
 
 
+def waveform_lines(w: dict[str, Any] | None) -> list[str]:
+    """The report's section on the waveform stage (twin.calibration.waveform)."""
+    if not w:
+        return []
+    if not w.get("ran"):
+        return ["## Waveform stage", "", f"Not run: {w.get('reason')}.", ""]
+    lines = ["## Waveform stage", "",
+             f"Least squares on the accelerations low-passed at {w['lowpass_hz']:g} Hz from the feature fit "
+             f"({w['replays']} replays, {w['wall_s']:.1f} s; {w['reason']}); predictability: the fitted values × "
+             f"(1 ± 1e-9) replay {max(w['predictability_pct']):.2g} % away (limit {w['chaos_pct']:g} %). Misfit "
+             f"{w['cost_before']:.3g} → {w['cost_after']:.3g}. The intervals are the feature fit's: a change of "
+             "several half-widths on a bench recording is more likely model error than information.", "",
+             "| field | feature fit | waveform stage | change | change / interval half-width | inside interval |",
+             "|---|---|---|---|---|---|"]
+    for c in w["changes"]:
+        rel = f" ({100 * c['relative_change']:+.3g} %)" if c.get("relative_change") is not None else ""
+        lines.append(f"| {c['field']} | {_fmt(c['before'], '.6g')} | {_fmt(c['after'], '.6g')} | "
+                     f"{_fmt(c['change'], '+.3g')}{rel} | {_fmt(c.get('shift_in_half_widths'), '+.2f')} | "
+                     f"{'yes' if c.get('inside_interval', True) else 'NO'} |")
+    lines += ["", "Replay NRMSE [%] per recording and accelerometer, feature fit → waveform stage: "
+              + "; ".join(f"{i + 1}: " + ", ".join(f"{a} {b:.3g} → {w['nrmse_after'][i][a]:.3g}" for a, b in nb.items())
+                          for i, nb in enumerate(w["nrmse_before"])), ""]
+    return lines
+
+
 def render_markdown(r: dict[str, Any]) -> str:
     o = r["objective"]
     lines = ["# Calibration report", "",
@@ -126,6 +151,7 @@ def render_markdown(r: dict[str, Any]) -> str:
         lines.append("")
     elif bt:
         lines += [f"Bootstrap: not available ({bt.get('why')}).", ""]
+    lines += waveform_lines(r.get("waveform"))
     if r["warnings"]:
         lines += ["## Warnings", ""] + [f"- {w}" for w in r["warnings"]] + [""]
     if r.get("identifiability"):

@@ -55,6 +55,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--interval", choices=("bootstrap", "hull", "dj"), default="bootstrap",
                    help="the reported interval: bootstrap (with the objective's jitter, default), hull (of it and the "
                         "objective-rise interval) or dj (the objective-rise interval with the noise replicates')")
+    p.add_argument("--waveform", action=argparse.BooleanOptionalAction, default=False,
+                   help="after the feature fit, least squares on the low-passed replayed accelerations, where the "
+                        "fitted point's replay is not chaotic (default off: on a bench it may fit model error; "
+                        "the report gives each change against its interval)")
+    p.add_argument("--waveform-budget", type=int, default=16, metavar="N",
+                   help="replays of all recordings the waveform stage may use (default 16)")
     p.add_argument("--no-plots", action="store_true", help="no PNG figures")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
     p.set_defaults(func=run, _field_flags={"params": "--params", "bounds": "--bounds", "recordings": "RECORDING...",
@@ -64,7 +70,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                                            "seed": "--seed", "log": "--out",
                                            "profile_steps": "--profile-steps",
                                            "boot_replicates": "--boot-replicates", "interval": "--interval",
-                                           "restarts": "--restarts"})
+                                           "restarts": "--restarts", "waveform": "--waveform",
+                                           "waveform_budget": "--waveform-budget"})
 
 
 #: option fields the library's warnings name, as this command's flags
@@ -109,7 +116,7 @@ def run(args: argparse.Namespace) -> int:
                         field="--profile-steps") from None
     opts = CalibrationOptions(profile_steps=steps, n_global=args.n_global, local_short=args.local_short, local_full=args.local_full,
                               replicates=args.replicates, boot_replicates=args.boot_replicates, restarts=args.restarts,
-                              interval=args.interval,
+                              interval=args.interval, waveform=args.waveform, waveform_budget=args.waveform_budget,
                               short_fraction=args.short_fraction, drive=args.drive, workers=workers, seed=args.seed,
                               plots=not args.no_plots, progress=not args.no_progress and sys.stderr.isatty())
     cfg = load_config_file(args.config) if args.config else None
@@ -119,7 +126,9 @@ def run(args: argparse.Namespace) -> int:
     print("|---|---|---|---|---|")
     for p in res.parameters:
         notes = ", ".join(x for x in ("FLAT" if p.flat else "", "ROUGH" if p.rough else "",
-                                      f"on {p.on_bound} bound" if p.on_bound else "") if x)
+                                      f"on {p.on_bound} bound" if p.on_bound else "",
+                                      f"waveform stage (features: {p.feature_value:.6g})"
+                                      if p.feature_value == p.feature_value else "") if x)
         print(f"| {p.field} | {p.base:.4g} | {p.value:.4g} | {p.lo:.4g} – {p.hi:.4g} | {notes} |")
     for w in res.warnings:
         for field, flag in _WARNING_FLAGS.items():   # the library names options' fields; the CLI says the flags
