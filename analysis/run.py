@@ -190,6 +190,9 @@ SCRIPTS: dict[str, Script] = {
     "replay_noise_floor": Script("analysis/calibration_validation_N/replay_noise_floor.json (the replay "
                                  "criterion's floor: noise streams and ±1e-9 offsets of the truth)", "~30 min",
                                  long=True, needs="a validation set's recordings (--set, --work)"),
+    "waveform_stage": Script("analysis/calibration_validation_N/waveform_stage.json, .png (the calibration's "
+                             "waveform stage from a set's fitted values: errors and the replay criterion)",
+                             "~20 min", long=True, needs="a validation set's recordings (--set, --work)"),
     "calibration_walltime": Script("prints the wall time of a two-recording, five-field calibration", "~15 min",
                                    long=True, needs="a work folder (--work)"),
     "calibration_validation": Script("analysis/calibration_validation/truth.json, results.json, table.md (the "

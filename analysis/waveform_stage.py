@@ -17,6 +17,8 @@ Writes ``analysis/calibration_validation_{set}/waveform_stage.json`` (stamped) a
 from __future__ import annotations
 
 import argparse
+import os
+import tempfile
 import json
 import sys
 import time
@@ -70,6 +72,7 @@ def run_case(cv, case: dict, fit: dict, work: Path, budget: int, other_engine: b
 
 
 def plot(rows: list[dict], path: Path) -> None:
+    from twin.provenance import figure_metadata
     import matplotlib
 
     matplotlib.use("Agg")
@@ -87,7 +90,10 @@ def plot(rows: list[dict], path: Path) -> None:
     ax.set_ylabel("worst accelerometer: replay NRMSE / truth's")
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".png")   # then renamed: a figure is whole or absent
+    os.close(fd)
+    fig.savefig(tmp, dpi=110, metadata=figure_metadata())
+    os.replace(tmp, path)
     plt.close(fig)
 
 
