@@ -138,9 +138,9 @@ CASES: list[tuple[str, str]] = [
     ("simulate --out {ws}/old.mcap --rerun {ws}/r.mcap", "--rerun"),
     ("simulate --out {ws}/old.mcap --rerun {ws}/afile/r.rrd", "--rerun"),
     # simulate: drive traces
-    ("simulate --trace {ws}/missing.npz", "drive.trace_file"),
+    ("simulate --trace {ws}/missing.npz", "--trace: no such file"),
     ("simulate --trace {ws}/garbage_trace.npz", "garbage_trace.npz"),
-    ("simulate --trace {ws}/trace.txt", "drive.trace_file"),
+    ("simulate --trace {ws}/trace.txt", "--trace: must be a .npz or .csv"),
     ("simulate --trace {ws}/bool_trace.npz", "must hold real numbers"),
     ("simulate --trace {ws}/backwards.csv", "strictly increasing"),
     # simulate: configuration files

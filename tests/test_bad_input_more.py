@@ -344,11 +344,11 @@ CASES: list[tuple[str, str]] = [
     ("simulate --trace {ws}/gap.npz", "gap"),
     ("simulate --trace {ws}/ok_trace.npz --duration 5", "covers"),
     ("simulate --trace {ws}/npy_as.npz", "npy_as.npz"),
-    ("simulate --trace {ws}/fifo.npz", "drive.trace_file"),
+    ("simulate --trace {ws}/fifo.npz", "--trace:"),
     ("simulate --trace {ws}/trace2d.npz", "1-D"),
     ("simulate --trace ''", "--trace"),
     ("simulate --trace {ws}/empty.csv", "empty.csv"),
-    ("simulate --trace {ws}/loop1", "drive.trace_file"),
+    ("simulate --trace {ws}/loop1", "--trace: must be a .npz or .csv"),
     # ---- export-mjcf
     ("export-mjcf --out ''", "--out: is empty"),
     ("export-mjcf --out .", "--out"),

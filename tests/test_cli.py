@@ -27,7 +27,8 @@ def _run(capsys, *argv):
     (["--set", "drive.motor_rmp=3"], "drive.motor_rmp"),
     (["--set", "nonsense"], "KEY=VALUE"),
     (["--config", "missing.toml"], "cannot read"),
-    (["--trace", "missing.npz"], "drive.trace_file"),
+    (["--trace", "missing.npz"], "--trace: no such file"),
+    (["--trace", "missing.csv"], "--trace: no such file"),
     (["--channels", "accel,gps"], "sensors.channels"),
     (["--summary-json", "s.txt"], "--summary-json"),
 ])
@@ -202,3 +203,18 @@ def test_check_contact_wiring(tmp_path, monkeypatch, capsys):
     assert "| B:0.1 | 0.80/1.30/3.50 | 0.04 | 0.20 | 0.05 | 0.000 % | same |" in cap.out
     assert json.loads(out.read_text())["ok"] is True
     assert cap.err == ""
+
+
+def test_bad_value_in_a_config_file_names_the_file_and_the_field(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "old.mcap").write_bytes(b"old")
+    (tmp_path / "bad.toml").write_text("[joints]\nclearance_b_mm = -1\n")
+    rc, out, err = _run(capsys, "simulate", "--out", "old.mcap", "--config", "bad.toml")
+    assert rc == 2 and err.count("\n") == 1 and "Traceback" not in err
+    assert err.startswith("twin: error: joints.clearance_b_mm:") and "bad.toml" in err
+    assert (tmp_path / "old.mcap").read_bytes() == b"old"
+    # a trace file the configuration names: the field and the file it is in
+    (tmp_path / "trace.toml").write_text('[drive]\nprogram = "trace"\ntrace_file = "nope.csv"\n')
+    rc, out, err = _run(capsys, "simulate", "--out", "old.mcap", "--config", "trace.toml")
+    assert rc == 2 and err.count("\n") == 1
+    assert err.startswith("twin: error: drive.trace_file: no such file") and "trace.toml" in err

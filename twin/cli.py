@@ -199,11 +199,12 @@ def load_config_file(path: str) -> BenchConfig:
 
     try:
         cfg = load_config(path)
+        return with_trace_duration(cfg)  # a trace program without a duration: the trace's length
     except ConfigError as err:
         if err.field == "path":
             raise ConfigError("--config", err.message) from None
-        raise
-    return with_trace_duration(cfg)  # a trace program without a duration: the trace's length
+        # a bad value in the file: the message names the file as well as the field
+        raise ConfigError(err.field, f"{err.message} (in --config {path})") from None
 
 
 #: (flag, argparse dest, configuration field) of the options that set one field to their value
@@ -354,6 +355,9 @@ CONFIG_FLAGS = {"joints.clearance_b_mm": "clearance_b", "joints.clearance_c_mm":
                 "sensors.output_rate_hz": "output_rate", "simulation.engine": "engine", "drive.mode": "drive_mode",
                 "sensors.channels": "channels"}
 
+#: configuration fields naming a file that an option gives: an error about that file names the option
+_FILE_FIELDS = frozenset({"drive.trace_file"})
+
 #: unit suffixes of the library's argument names (``max_lag_s``) that the flag leaves out (``--max-lag``)
 _UNIT_SUFFIXES = ("_s", "_hz", "_mm", "_m", "_rpm", "_n", "_deg", "_px")
 
@@ -376,8 +380,11 @@ def error_message(err: TwinError, args: argparse.Namespace | None = None) -> str
     def flag_of(name: str, given_only: bool) -> str | None:
         if name in explicit:
             return explicit[name]
-        if not given_only and CONFIG_FLAGS.get(name) in flags:  # a configuration field this command sets
-            return f"{name} or {flags[CONFIG_FLAGS[name]]}"
+        if CONFIG_FLAGS.get(name) in flags:  # a configuration field this command sets
+            if not given_only:
+                return f"{name} or {flags[CONFIG_FLAGS[name]]}"
+            if name in _FILE_FIELDS and getattr(args, CONFIG_FLAGS[name], None) is not None:
+                return flags[CONFIG_FLAGS[name]]  # a file the option named (--trace FILE): the option
         for dest in [name] + [name[:-len(u)] for u in _UNIT_SUFFIXES if name.endswith(u)]:
             if dest in flags and not (given_only and getattr(args, dest, None) is None):
                 return flags[dest]
