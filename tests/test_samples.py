@@ -99,8 +99,8 @@ def test_spec_argument_path_or_name(tmp_path, monkeypatch):
     assert inputs.spec("mine") == Path("mine")  # an existing file is the user's
     for text in ("tiny.toml", "specs/tiny", str(tmp_path / "x")):  # a suffix or a folder: a path
         assert inputs.spec(text) == Path(text)
-    with pytest.raises(NameNotFoundError, match=r"^tny: no such file, and no dataset spec named 'tny' "
-                                                r"\(did you mean 'tiny'\?\)"):
+    with pytest.raises(NameNotFoundError, match=r"^tny: no such file, and no dataset spec named 'tny' ships with "
+                                                r"twin \(closest: 'tiny'.*; 'twin dataset list' lists all \d+\)$"):
         inputs.spec("tny")
 
 
@@ -116,7 +116,23 @@ def test_dataset_plan_by_name_outside_the_checkout(tmp_path, monkeypatch, capsys
     assert rc == 0, err
     assert out.startswith("tiny: 8 runs (grid design")
     rc, out, err = _cli(["dataset", "plan", "tny", "--no-estimate"], capsys)
-    assert rc == 2 and err.count("\n") == 1 and "did you mean 'tiny'?" in err
+    assert rc == 2 and err.count("\n") == 1 and "closest: 'tiny'" in err
+
+
+@pytest.mark.parametrize("argv", [["dataset", "plan", "clearance_id_bench", "--no-estimate"],
+                                  ["study", "doe", "clearance_id_bench", "--out", "o"],
+                                  ["study", "taguchi", "clearance_id_bench", "--out", "o"]])
+def test_unknown_spec_name_gives_the_closest_names_not_all(argv, tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    names = twin.samples.spec_names()
+    assert len(names) > 20  # the case this guards: a list too long for one line
+    rc, out, err = _cli(argv, capsys)
+    assert rc == 2 and err.count("\n") == 1 and "Traceback" not in err
+    assert "closest: 'clearance_id_bench_" in err and "'twin dataset list' lists all" in err
+    assert sum(f"'{n}'" in err for n in names) <= 5  # a few matches, not the list
+    assert not (tmp_path / "o").exists()
+    rc, out, err = _cli(["dataset", "list"], capsys)
+    assert rc == 0 and out.split() == names
 
 
 def test_identify_clearance_of_a_sample_by_name(tmp_path, monkeypatch, capsys):

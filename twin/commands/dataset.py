@@ -13,7 +13,7 @@ from twin.util import resolve_workers
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("dataset", help="synthetic datasets: generate, plan, info, verify",
+    p = sub.add_parser("dataset", help="synthetic datasets: generate, plan, info, verify, list",
                        description="Synthetic datasets of the bench for clearance identification and observers: "
                                    "a TOML spec (a file, or the name of one that ships with twin: tiny, ...) varies "
                                    "clearances, orientation, speed, "
@@ -68,6 +68,18 @@ def register(sub: argparse._SubParsersAction) -> None:
     v.add_argument("dir", metavar="DIR", help="dataset folder (twin dataset generate --out DIR)")
     v.add_argument("--no-progress", action="store_true", help="no progress bar")
     v.set_defaults(func=_verify)
+
+    ls = ds.add_parser("list", help="print the names of the dataset specs that ship with twin, one a line",
+                       description="Print the names of the dataset specs that ship with twin (what a SPEC "
+                                   "argument may name instead of a .toml file), one a line.")
+    ls.set_defaults(func=_list)
+
+
+def _list(args: argparse.Namespace) -> int:
+    from twin.samples import spec_names
+
+    print("\n".join(spec_names()))
+    return 0
 
 
 def _generate(args: argparse.Namespace) -> int:

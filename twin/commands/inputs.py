@@ -56,5 +56,19 @@ def spec(text: str) -> Path:
 
     try:
         return samples.spec_path(text)
-    except NameNotFoundError as err:
-        raise NameNotFoundError(f"{text}: no such file, and {err}") from None
+    except NameNotFoundError:
+        # the closest names, not all of them (over a hundred ship): the full list is `twin dataset list`
+        names = samples.spec_names()
+        close = closest_names(text, names)
+        hint = f"closest: {', '.join(map(repr, close))}; " if close else ""
+        raise NameNotFoundError(f"{text}: no such file, and no dataset spec named {text!r} ships with twin ({hint}"
+                                f"'twin dataset list' lists all {len(names)})") from None
+
+
+def closest_names(given: str, names: list[str], n: int = 5) -> list[str]:
+    """Up to ``n`` entries of ``names`` closest to ``given`` (difflib's ratio at least 0.5, without case),
+    closest first."""
+    import difflib
+
+    by_lower = {x.lower(): x for x in reversed(names)}
+    return [by_lower[m] for m in difflib.get_close_matches(given.lower(), list(by_lower), n=n, cutoff=0.5)]
