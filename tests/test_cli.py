@@ -218,3 +218,17 @@ def test_bad_value_in_a_config_file_names_the_file_and_the_field(capsys, tmp_pat
     rc, out, err = _run(capsys, "simulate", "--out", "old.mcap", "--config", "trace.toml")
     assert rc == 2 and err.count("\n") == 1
     assert err.startswith("twin: error: drive.trace_file: no such file") and "trace.toml" in err
+
+
+def test_an_option_value_starting_with_a_dash_is_named_with_how_to_write_it(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "r.csv").write_text("name,a,b\nx,1,2\ny,2,1\n")
+    base = ["study", "mcdm", "r.csv", "--criteria", "a:min,b:max", "--out", "o"]
+    rc, out, err = _run(capsys, *base, "--weights", "-1,2")
+    assert rc == 2 and err.count("\n") == 1
+    assert "--weights" in err and "'-1,2' reads as an option: write --weights=-1,2" in err
+    rc, out, err = _run(capsys, *base, "--weights=-1,2")  # as the message says: read, then refused by its rule
+    assert rc == 2 and err.count("\n") == 1 and err.startswith("twin: error: --weights:") and ">= 0" in err
+    rc, out, err = _run(capsys, "study", "mcdm", "r.csv", "--criteria", "a:min,b:max", "--weights", "--out", "o")
+    assert rc == 2 and "reads as an option" not in err  # a real option after the flag: no such advice
+    assert not (tmp_path / "o").exists()

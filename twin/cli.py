@@ -78,7 +78,20 @@ class _Parser(argparse.ArgumentParser):
     """ArgumentParser whose errors are one line (no usage dump): :func:`main` prints them and
     returns exit status 2 like every other bad input."""
 
+    def parse_known_args(self, args=None, namespace=None):  # type: ignore[override]
+        self._argv = list(sys.argv[1:] if args is None else args)  # for error(): the value argparse did not take
+        return super().parse_known_args(args, namespace)
+
     def error(self, message: str) -> None:  # type: ignore[override]
+        # `--weights -1,2`: argparse reads a value that starts with '-' (other than a plain negative number) as an
+        # option and says only "expected one argument"; name the value and how to give it
+        m = re.match(r"argument (-[^\s/:]+)(?:/\S+)?: expected one argument$", message)
+        argv = getattr(self, "_argv", [])
+        if m:
+            nxt = [argv[i + 1] for i, a in enumerate(argv[:-1]) if a == m.group(1) and argv[i + 1].startswith("-")
+                   and argv[i + 1].split("=")[0] not in self._option_string_actions]  # not a real option
+            if nxt:
+                message += f"; {nxt[0]!r} reads as an option: write {m.group(1)}={nxt[0]}"
         raise UsageError(f"{message} (see '{self.prog} --help')")
 
 

@@ -253,7 +253,7 @@ def register_mcdm(studies: argparse._SubParsersAction) -> None:
     p.add_argument("--criteria", required=True, metavar="NAME:min|max,…",
                    help="criterion columns and whether smaller (min) or larger (max) is better")
     p.add_argument("--weights", default="merec", metavar="merec|equal|W1,W2,…",
-                   help="MEREC weights (default), equal weights or one weight per criterion (scaled to sum 1)")
+                   help="MEREC weights (default), equal weights or one weight >= 0 per criterion (scaled to sum 1)")
     p.add_argument("--waspas-lambda", type=float, default=WASPAS_LAMBDA, metavar="L",
                    help=f"lambda of WASPAS in [0, 1] (default {WASPAS_LAMBDA}, S002's; the original method uses 0.5)")
     p.add_argument("--out", required=True, metavar="DIR", help="output directory (created if missing)")
