@@ -232,3 +232,24 @@ def test_an_option_value_starting_with_a_dash_is_named_with_how_to_write_it(caps
     rc, out, err = _run(capsys, "study", "mcdm", "r.csv", "--criteria", "a:min,b:max", "--weights", "--out", "o")
     assert rc == 2 and "reads as an option" not in err  # a real option after the flag: no such advice
     assert not (tmp_path / "o").exists()
+
+
+def test_continuous_contact_config_says_it_replaces_the_preset(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "alone.toml").write_text("[joints]\nclearance_b_mm = 0.5\n")  # from the default bench: C has play
+    rc, out, err = _run(capsys, "study", "continuous-contact", "--config", "alone.toml", "--out", "o",
+                        "--duration", "0.02")
+    assert rc == 2 and err.count("\n") == 1 and err.startswith("twin: error: joints.clearance_c_mm:")
+    assert "alone.toml replaces the s004 preset" in err and 'preset = "s004"' in err and not (tmp_path / "o").exists()
+    (tmp_path / "s004.toml").write_text('preset = "s004"\n[joints]\nclearance_b_mm = 0.5\n')
+    rc, out, err = _run(capsys, "study", "continuous-contact", "--config", "s004.toml", "--out", "o",
+                        "--duration", "0.02")
+    assert rc == 0 and "replaces" not in err  # the file starts from s004: nothing replaced
+    rc, out, err = _run(capsys, "study", "continuous-contact", "--config", "s004.toml", "--preset", "s004",
+                        "--out", "o2")
+    assert rc == 2 and err.count("\n") == 1 and "--preset: cannot be combined with --config" in err
+    (tmp_path / "ok.toml").write_text('[joints]\nclearance_b_mm = 0.5\nclearance_c_mm = 0\n'
+                                      '[drive]\nmode = "prescribed"\nprogram = "constant"\nramp_s = 0\n')
+    rc, out, err = _run(capsys, "study", "continuous-contact", "--config", "ok.toml", "--out", "o3",
+                        "--duration", "0.02")
+    assert rc == 0 and err.count("\n") == 1 and err.startswith("twin: note: ok.toml replaces the s004 preset")

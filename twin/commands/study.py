@@ -208,8 +208,10 @@ def register_continuous_contact(studies: argparse._SubParsersAction) -> None:
                     "and the slider's deviation from the ideal motion up to there), continuous_contact.npz (time "
                     "series) and continuous_contact.png. (In the repository, python analysis/s004_report.py compares "
                     "it with the contact model.)")
-    p.add_argument("--preset", default="s004", metavar="NAME", help="mechanism (default s004)")
-    p.add_argument("--config", metavar="FILE", help="TOML configuration instead of a preset")
+    p.add_argument("--preset", metavar="NAME", help="mechanism (default s004)")
+    p.add_argument("--config", metavar="FILE",
+                   help="TOML configuration instead of the preset: a file replaces s004 (its missing fields are "
+                        "twin's default bench's); write preset = \"s004\" in it to start from s004")
     p.add_argument("--clearance-b", type=float, metavar="MM", help="diametral clearance at B [mm] (S004: 0.5, 1.0)")
     p.add_argument("--duration", type=float, default=2 * math.pi / 30.0, metavar="S",
                    help="simulated time [s] (default one turn at 30 rad/s)")
@@ -220,19 +222,42 @@ def register_continuous_contact(studies: argparse._SubParsersAction) -> None:
 def _run_continuous_contact(args: argparse.Namespace) -> int:
     from twin.cli import load_config_file
     from twin.config import named_preset
+    from twin.errors import ConfigError
     from twin.studies.continuous_contact import ContinuousContactOptions, run_study
     from twin.util import check_output_dir
 
-    cfg = load_config_file(args.config) if args.config else named_preset(args.preset)
+    if args.config and args.preset:
+        raise ConfigError("--preset", "cannot be combined with --config (put 'preset = \"NAME\"' in the file)")
+    cfg = load_config_file(args.config) if args.config else named_preset(args.preset or "s004")
+    # a --config file replaces the s004 preset, not merged with it: said once, in the error or as a note
+    replaced = (f"{args.config} replaces the s004 preset: its missing fields are twin's default bench's; write "
+                "preset = \"s004\" in it to start from s004") if args.config and not _starts_from_preset(args.config) \
+        else None
     if args.clearance_b is not None:
         cfg = cfg.replace(**{"joints.clearance_b_mm": args.clearance_b, "joints.allow_noncatalogue": True})
-    opts = ContinuousContactOptions(args.out, cfg, args.duration)
+    try:
+        opts = ContinuousContactOptions(args.out, cfg, args.duration)
+    except ConfigError as err:
+        if replaced and err.field and err.field.startswith(("joints.", "mechanism.", "drive.")):
+            raise ConfigError(err.field, f"{err.message} ({replaced})") from None
+        raise
+    if replaced:
+        print(f"twin: note: {replaced}", file=sys.stderr)
     out = check_output_dir(args.out)
     sm = run_study(opts).summary
     print(f"continuous-contact model, c = {1e3 * sm.clearance_radial_m:g} mm: journal on the wall up to "
           f"{sm.valid_until_crank_deg:.1f} deg; deviation from the ideal slider until then: "
           f"x {1e3 * sm.dx_max_m:.3f} mm, v {sm.dv_max_mps:.3f} m/s, a {sm.da_max_mps2:.0f} m/s^2; wrote {out}")
     return 0
+
+
+def _starts_from_preset(path: str) -> bool:
+    """Whether the TOML file ``path`` (already read by the configuration) starts from a preset or test."""
+    import tomllib
+    from pathlib import Path
+
+    data = tomllib.loads(Path(path).read_text(encoding="utf-8"))
+    return "preset" in data or "test" in data
 
 
 # ------------------------------------------------------------------ mcdm
