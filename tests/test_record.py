@@ -131,3 +131,25 @@ def test_valid_fast_runs_are_recorded_and_replayed(tmp_path, overrides, top_rpm)
     # would be off by turns). Not the sub-count tracking of the bench's 189 rpm (test_replay): at these speeds
     # the trace filter's lag alone puts the reference a few counts from the recorded encoder
     assert report.tracking.sim_vs_recorded_max_counts < 0.001 * 32768, report.tracking
+
+
+@pytest.mark.parametrize("argv, warned", [
+    (["--orientation", "x", "--drive-mode", "motor", "--duration", "0.5"], True),  # x vertical: the motor stalls
+    (["--speed", "1000", "--set", "drive.ramp_s=0", "--duration", "0.4"], False),  # about 1.7 turns
+])
+def test_record_warns_in_one_line_when_the_crank_makes_no_whole_turn(argv, warned, tmp_path, capsys):
+    rec, js = tmp_path / "r.mcap", tmp_path / "r.json"
+    assert main(["record", *argv, "--static", "0.1", "--no-progress", "--out", str(rec), "--json", str(js)]) == 0
+    err = capsys.readouterr().err
+    turns = json.loads(js.read_text())["turns"]
+    # the truth's turns against the recording's own encoder counts (the sensor chain: an independent path)
+    run, _, _ = read_recording(rec)
+    counts = run["encoder_counts"]
+    by_encoder = (counts[-1] - counts[0]) / twin.BenchConfig().instrumentation.encoder_counts_per_rev
+    assert turns == pytest.approx(by_encoder, abs=0.01)
+    if warned:
+        assert abs(turns) < 1 and err.count("\n") == 1 and err.startswith("twin: warning: the crank turned")
+        assert "less than one whole turn" in err
+    else:
+        assert turns > 1 and "warning" not in err
+    assert rec.exists()  # a warning, not a refusal: the recording is written

@@ -38,6 +38,8 @@ class RecordResult:
         engine: the engine that simulated the run.
         bytes: size of the file [B].
         seconds: wall time of the whole call [s].
+        turns: crank turns through the run, last minus first angle over 2π (NaN where the run has no crank
+            angle); under 1 the crank stalled or rocked (``twin record`` warns): no whole turn to analyse.
     """
 
     path: Path
@@ -47,6 +49,7 @@ class RecordResult:
     engine: str
     bytes: int
     seconds: float
+    turns: float = float("nan")
 
     def to_dict(self) -> dict[str, Any]:
         """A JSON-able dict (the path as text)."""
@@ -72,10 +75,16 @@ class RecordingSink:
         self.daq: Run | None = None
         self.meta: dict[str, Any] = {}
         self.written: Path | None = None
+        #: first and last crank angle of the run [rad] (unwrapped), where the run has one
+        self.angle_span: list[float] = []
 
     def write(self, chunk: Run) -> None:
         from twin.instrument.chain import ChainStream
+        from twin.names import SENSOR_CRANK_ANGLE
 
+        if chunk.n and SENSOR_CRANK_ANGLE in chunk:
+            a = chunk[SENSOR_CRANK_ANGLE]
+            self.angle_span = [self.angle_span[0] if self.angle_span else float(a[0]), float(a[-1])]
         if self.stream is None:
             self.stream = ChainStream(self.cfg, chunk.rate_hz)
         out = self.stream.process(chunk)
@@ -147,5 +156,6 @@ def record(cfg: BenchConfig, out: str | Path, *, notes: str = "", static_s: floa
     simulate(cfg, [sink], progress=progress)
     assert sink.daq is not None and sink.written is not None
     daq, written = sink.daq, sink.written
+    turns = (sink.angle_span[1] - sink.angle_span[0]) / (2 * math.pi) if sink.angle_span else float("nan")
     return RecordResult(written, daq.duration_s, daq.rate_hz, tuple(daq.channels), str(sink.meta.get("engine", "")),
-                        written.stat().st_size, time.perf_counter() - t0)
+                        written.stat().st_size, time.perf_counter() - t0, turns)

@@ -46,6 +46,10 @@ def run(args: argparse.Namespace) -> int:
         raise
     if js is not None:
         atomic_write_json(js, res.to_dict())
+    if abs(res.turns) < 1:  # (NaN: no crank angle, nothing said) x vertical with a weak drive stalls or rocks
+        print(f"twin: warning: the crank turned {res.turns:.2f} turns in {res.duration_s:g} s, less than one whole "
+              "turn (stalled, rocking, or a run too short): commands that analyse whole turns (twin identify clearance) refuse "
+              "this recording", file=sys.stderr)
     print(f"  {res.engine} engine, {res.duration_s:g} s at {res.rate_hz:g} Hz: {', '.join(res.channels)}")
     print(f"  wrote {res.path} ({res.bytes / 1e6:.2f} MB) in {res.seconds:.1f} s")
     return 0
