@@ -189,6 +189,8 @@ def resolve_config(spec: DatasetSpec, base: BenchConfig, values: dict[str, Any],
         f = resolve(name, spec.engine)
         v = check_value(f, values[name], f"{where}.{name}")
         f.apply(v, ov, rng, base)
+    if "structure" in values or "structure.mode" in values:
+        _structure_fields_where_they_apply(base, ov)
     program = ov.pop("@program", spec.program)
     duration = spec.duration_s
     if program == "protocol":
@@ -209,6 +211,23 @@ def resolve_config(spec: DatasetSpec, base: BenchConfig, values: dict[str, Any],
         return with_overrides(base, ov)
     except ConfigError as err:
         raise SpecError(f"{where} ({err.field})", err.message) from None
+
+
+def _structure_fields_where_they_apply(base: BenchConfig, ov: dict[str, Any]) -> None:
+    """A spec that crosses ``structure`` (rigid, flexible) with the flexible structure's fields: a rigid run
+    keeps each of those fields at its default (the rigid bench has no such field; the configuration refuses
+    one off its default), its factor value unused. A spec without a ``structure`` factor is not changed (a
+    structure field on a rigid base is still refused, naming the field)."""
+    import dataclasses
+
+    from twin.config.structure import StructureConfig
+
+    if ov.get("structure.mode", base.structure.mode) == "flexible":
+        return
+    for f in dataclasses.fields(StructureConfig):
+        key = f"structure.{f.name}"
+        if f.name != "mode" and (key in ov or getattr(base.structure, f.name) != f.default):
+            ov[key] = f.default
 
 
 def plan(spec: DatasetSpec) -> list[RunPlan]:
