@@ -241,6 +241,21 @@ def test_with_y_vertical_an_answer_naming_no_guide_play_says_that_none_is_not_es
     assert guide_caveat("y", ("B", "C"), "none") is None
 
 
+def test_the_guide_caveat_widens_the_interval_at_G_to_every_play_trained_and_leaves_the_rest():
+    """guide_held_down_interval: with the caveat the guide's interval is the trained hull at G (its smallest play
+    included, whatever the regressor read), B and C and every size untouched; a model without G: unchanged."""
+    from twin.identification.model import guide_held_down_interval
+    from twin.identification.results import JointAnswer
+
+    seen = {"B": {"min": 0.0125, "max": 1.6}, "C": {"min": 0.0126, "max": 1.59}, "G": {"min": 0.0125, "max": 0.4}}
+    joints = [JointAnswer("B", True, 0.1, (0.05, 0.2)), JointAnswer("C", False, 0.3, (0.2, 0.45)),
+              JointAnswer("G", False, 0.136, (0.0201, 0.3966))]
+    out = guide_held_down_interval(joints, seen)
+    assert out[2].interval_if_faulty_mm == (0.0125, 0.4) and out[2].size_if_faulty_mm == 0.136
+    assert out[:2] == joints[:2]
+    assert guide_held_down_interval(joints[:2], {k: seen[k] for k in "BC"}) == joints[:2]
+
+
 def test_the_guide_load_with_y_vertical_meets_statics_at_low_speed_and_keeps_one_sign_over_the_bench_speeds():
     """analysis/identify/guide_load.py (inverse dynamics of the ideal rigid bench): as the speed goes to zero the
     guide carries the slider's weight and the rod's share at C, m_s g + m_rod g x_G / L (statics, independent basis);

@@ -97,7 +97,7 @@ SHIPPED_MODELS = {"default": DEFAULT_MODEL, "bench": "identify_bench.npz"}
 #: play alone with y vertical was located in 2 of 7 runs (0.013-0.061 mm), with play at B or C as well in 7 of 8
 GUIDE_HELD_DOWN = {"y": "with y vertical the slider's weight holds it on its lower rail in steady running (the "
                         "guide's load keeps one sign over the turn, model card): play at the slider guide alone is not "
-                        "told from a tight guide; 'no play at G' is not established"}
+                        "told from a tight guide; 'no play at G' is not established, and the interval at G is every play trained"}
 
 
 def label_key(joint: str) -> str:
@@ -386,6 +386,18 @@ def guide_caveat(orientation: str, joints: tuple[str, ...], fault: str) -> str |
     return GUIDE_HELD_DOWN.get(orientation) if "G" in joints and "G" not in fault else None
 
 
+def guide_held_down_interval(joints: list[JointAnswer], seen: dict[str, Any]) -> list[JointAnswer]:
+    """``joints`` with the guide's interval (the play's size if it had play) widened to every play trained at G
+    (:func:`twin.identification.ranges.widen`), for an answer with the guide caveat (:func:`guide_caveat`): where
+    the slider's weight holds it on its lower rail the features say little of a play at G, and the regressor's
+    size there is no better than a guess (on the development sets the two guide-only runs with y vertical that read
+    no play had 0.013 and 0.020 mm, their conformal intervals began at 0.020 mm)."""
+    if "G" not in seen:
+        return joints
+    return [dataclasses.replace(a, interval_if_faulty_mm=tuple(widen(list(a.interval_if_faulty_mm), seen["G"])))
+            if a.joint == "G" else a for a in joints]
+
+
 def identify_recording(model: ClearanceModel, path: str | Path) -> IdentifyResult:
     """The answer for a bench recording (any recording ``twin replay`` accepts), with the evidence used."""
     from twin.identification.inputs import recording_inputs
@@ -432,6 +444,7 @@ def identify_inputs(model: ClearanceModel, acc: dict[str, np.ndarray], counts: n
     caveat = guide_caveat(orientation, model.joints, ans.fault)
     if caveat:
         warnings.append(caveat)
+        joints = guide_held_down_interval(joints, tr.get("clearances_mm") or {})
     evidence = Evidence(windows=len(w.windows), revolutions=round(w.revolutions, 2), crank_hz=w.crank_hz,
                         motor_rpm_if_belt_3_97=w.crank_hz * 60 * BELT_RATIO,
                         steady_s=(w.steady[1] - w.steady[0]) / rate, features=len(model.feature_names),
