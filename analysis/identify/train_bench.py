@@ -45,7 +45,6 @@ VARIANTS = {
     "nosplit": dict(interval_folds="runs", fault_split=False, size_band_mm=None),
     "det": dict(interval_folds="runs", location="detectors"),
     "detw": dict(interval_folds="runs", location="detectors", size_weights="runs"),
-    "detws": dict(interval_folds="speed", location="detectors", size_weights="runs"),
     "detwc": dict(interval_folds="runs", location="detectors", size_weights="runs", size_context=True),
 }
 
