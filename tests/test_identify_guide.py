@@ -275,3 +275,33 @@ def test_the_guide_load_with_y_vertical_meets_statics_at_low_speed_and_keeps_one
     slow = guide_load(1.0, cfg)
     np.testing.assert_allclose(slow, static, rtol=1e-3)
     assert guide_load(800.0, cfg).min() > 0
+
+
+def test_an_interval_within_its_half_width_of_the_smallest_size_trained_reaches_down_to_it():
+    """reach_hull_floor (arithmetic, the rule as stated): lo < floor 10^w -> the floor; at or above -> lo unchanged;
+    no hull -> unchanged; TrainOptions.hull_floor accepts booleans only."""
+    from twin.identification.intervals import reach_hull_floor
+    from twin.identification.training import TrainOptions, TrainOptionsError
+
+    floor, w = 0.0125, 0.2
+    edge = floor * 10 ** w  # 0.01981 mm
+    assert reach_hull_floor(0.0183, w, floor) == floor  # the development miss at G: 0.0178 mm now inside
+    assert reach_hull_floor(edge * 0.999, w, floor) == floor
+    assert reach_hull_floor(edge * 1.001, w, floor) == edge * 1.001
+    assert reach_hull_floor(0.0183, w, None) == 0.0183
+    assert TrainOptions(hull_floor=True).hull_floor is True
+    with pytest.raises(TrainOptionsError, match="hull_floor"):
+        TrainOptions(hull_floor=1)
+
+
+def test_the_shipped_bench_model_has_the_hull_floor_rule_and_a_model_with_a_bad_flag_is_refused(tmp_path):
+    """The shipped `bench` file records interval.hull_floor = true; a file whose flag is not a boolean is refused in
+    one line naming it."""
+    from twin.identification.model import shipped_model_path
+
+    m = ClearanceModel.load(shipped_model_path("bench"))
+    assert m.trained_on["interval"]["hull_floor"] is True
+    m.trained_on["interval"]["hull_floor"] = "yes"
+    m.save(tmp_path / "bad.npz")
+    with pytest.raises(ModelError, match="hull_floor"):
+        ClearanceModel.load(tmp_path / "bad.npz")

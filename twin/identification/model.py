@@ -66,8 +66,8 @@ import numpy as np
 
 from twin.identification.features import FEATURE_VERSION, MIN_HOP_REVS, REVS_PER_WINDOW, feature_names, features, hop_ok
 from twin.identification.intervals import (BELT_RATIO, RIPPLE_BAND_PCT, SIZE_RESOLVED_FROM_RPM, band_half_width,
-                                           fault_split_joints, held_out_at, logs_answer, logs_spread, resolution,
-                                           rippled, window_table)
+                                           fault_split_joints, held_out_at, logs_answer, logs_spread, reach_hull_floor,
+                                           resolution, rippled, window_table)
 from twin.identification.ranges import (at_hull_top, clip_to_hull, out_of_range, recording_measures, trained_hull,
                                         widen)
 from twin.identification.results import Evidence, HeldOut, IdentifyResult, JointAnswer
@@ -211,6 +211,8 @@ class ClearanceModel:
                     and all(isinstance(v, (int, float)) and math.isfinite(v) and v >= 0 for v in t.values())
                     for n, t in bw.items()):
                 raise ValueError("interval.half_width_log10_by_windows malformed")
+            if not isinstance(trained_on.get("interval", {}).get("hull_floor", False), bool):
+                raise ValueError("interval.hull_floor malformed (true or false)")
             rb = trained_on.get("interval", {}).get("ripple_band_pct")
             if rb is not None and not (isinstance(rb, (int, float)) and math.isfinite(rb) and rb > 0):
                 raise ValueError("interval.ripple_band_pct malformed")
@@ -296,6 +298,9 @@ class ClearanceModel:
             if side in norm:  # normalized conformal: the half width scales with the recording's difficulty
                 w = norm[side]["q"] * (logs_spread(logs) + norm[side]["beta"])
             lo, hi = (float(f"{mid * 10 ** sign:.12g}") for sign in (-w, w))
+            if interval.get("hull_floor"):  # near the smallest size trained, the interval reaches down to it
+                hull = trained_hull((self.trained_on.get("clearances_mm") or {}).get(j) or [])
+                lo = reach_hull_floor(lo, w, hull[0] if hull else None)
             joints.append(JointAnswer(j, j in fault, mid, (lo, hi)))
         return IdentifyResult(fault, p, tuple(joints))
 
