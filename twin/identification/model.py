@@ -36,7 +36,9 @@ from the file, and answering needs no scikit-learn. Members:
   conformal scale per joint, where trained; ``held_out_size_accuracy``
   (:func:`twin.identification.intervals.held_out_accuracy`) and ``answer_hop_revs``, where recorded; ``size_context``:
   true where the size regressors also read the other locations' play, two columns after the features,
-  :func:`size_context`; ``size_weights``: ``"runs"`` where they weighed each training run alike), and ``estimators``: per estimator (``classifier``,
+  :func:`size_context`; ``size_weights``: ``"runs"`` where they weighed each training run alike; ``interval.hull_floor``: true where an
+  interval within its half width of the smallest size trained reaches down to it,
+  :func:`twin.identification.intervals.reach_hull_floor`), and ``estimators``: per estimator (``classifier``,
   ``size_B``, ``size_C``, ``size_G`` where the model sizes G) its kind (link: ``softmax`` for the classifier, ``identity`` for the size
   regressors), number of features (the size regressors of a ``size_context`` model: two more), trees per iteration, classes and source
   (:meth:`twin.identification.trees.TreeEnsemble.meta`);
