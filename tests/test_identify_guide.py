@@ -241,6 +241,21 @@ def test_with_y_vertical_an_answer_naming_no_guide_play_says_that_none_is_not_es
     assert guide_caveat("y", ("B", "C"), "none") is None
 
 
+def test_the_guide_caveat_widens_the_interval_at_G_to_every_play_trained_and_leaves_the_rest():
+    """guide_held_down_interval: with the caveat the guide's interval is the trained hull at G (its smallest play
+    included, whatever the regressor read), B and C and every size untouched; a model without G: unchanged."""
+    from twin.identification.model import guide_held_down_interval
+    from twin.identification.results import JointAnswer
+
+    seen = {"B": {"min": 0.0125, "max": 1.6}, "C": {"min": 0.0126, "max": 1.59}, "G": {"min": 0.0125, "max": 0.4}}
+    joints = [JointAnswer("B", True, 0.1, (0.05, 0.2)), JointAnswer("C", False, 0.3, (0.2, 0.45)),
+              JointAnswer("G", False, 0.136, (0.0201, 0.3966))]
+    out = guide_held_down_interval(joints, seen)
+    assert out[2].interval_if_faulty_mm == (0.0125, 0.4) and out[2].size_if_faulty_mm == 0.136
+    assert out[:2] == joints[:2]
+    assert guide_held_down_interval(joints[:2], {k: seen[k] for k in "BC"}) == joints[:2]
+
+
 def test_the_guide_load_with_y_vertical_meets_statics_at_low_speed_and_keeps_one_sign_over_the_bench_speeds():
     """analysis/identify/guide_load.py (inverse dynamics of the ideal rigid bench): as the speed goes to zero the
     guide carries the slider's weight and the rod's share at C, m_s g + m_rod g x_G / L (statics, independent basis);
@@ -260,3 +275,33 @@ def test_the_guide_load_with_y_vertical_meets_statics_at_low_speed_and_keeps_one
     slow = guide_load(1.0, cfg)
     np.testing.assert_allclose(slow, static, rtol=1e-3)
     assert guide_load(800.0, cfg).min() > 0
+
+
+def test_an_interval_within_its_half_width_of_the_smallest_size_trained_reaches_down_to_it():
+    """reach_hull_floor (arithmetic, the rule as stated): lo < floor 10^w -> the floor; at or above -> lo unchanged;
+    no hull -> unchanged; TrainOptions.hull_floor accepts booleans only."""
+    from twin.identification.intervals import reach_hull_floor
+    from twin.identification.training import TrainOptions, TrainOptionsError
+
+    floor, w = 0.0125, 0.2
+    edge = floor * 10 ** w  # 0.01981 mm
+    assert reach_hull_floor(0.0183, w, floor) == floor  # the development miss at G: 0.0178 mm now inside
+    assert reach_hull_floor(edge * 0.999, w, floor) == floor
+    assert reach_hull_floor(edge * 1.001, w, floor) == edge * 1.001
+    assert reach_hull_floor(0.0183, w, None) == 0.0183
+    assert TrainOptions(hull_floor=True).hull_floor is True
+    with pytest.raises(TrainOptionsError, match="hull_floor"):
+        TrainOptions(hull_floor=1)
+
+
+def test_the_shipped_bench_model_has_the_hull_floor_rule_and_a_model_with_a_bad_flag_is_refused(tmp_path):
+    """The shipped `bench` file records interval.hull_floor = true; a file whose flag is not a boolean is refused in
+    one line naming it."""
+    from twin.identification.model import shipped_model_path
+
+    m = ClearanceModel.load(shipped_model_path("bench"))
+    assert m.trained_on["interval"]["hull_floor"] is True
+    m.trained_on["interval"]["hull_floor"] = "yes"
+    m.save(tmp_path / "bad.npz")
+    with pytest.raises(ModelError, match="hull_floor"):
+        ClearanceModel.load(tmp_path / "bad.npz")

@@ -45,6 +45,7 @@ VARIANTS = {
     "nosplit": dict(interval_folds="runs", fault_split=False, size_band_mm=None),
     "det": dict(interval_folds="runs", location="detectors"),
     "detw": dict(interval_folds="runs", location="detectors", size_weights="runs"),
+    "detwf": dict(interval_folds="runs", location="detectors", size_weights="runs", hull_floor=True),
     "detwc": dict(interval_folds="runs", location="detectors", size_weights="runs", size_context=True),
 }
 

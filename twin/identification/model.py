@@ -36,7 +36,9 @@ from the file, and answering needs no scikit-learn. Members:
   conformal scale per joint, where trained; ``held_out_size_accuracy``
   (:func:`twin.identification.intervals.held_out_accuracy`) and ``answer_hop_revs``, where recorded; ``size_context``:
   true where the size regressors also read the other locations' play, two columns after the features,
-  :func:`size_context`; ``size_weights``: ``"runs"`` where they weighed each training run alike), and ``estimators``: per estimator (``classifier``,
+  :func:`size_context`; ``size_weights``: ``"runs"`` where they weighed each training run alike; ``interval.hull_floor``: true where an
+  interval within its half width of the smallest size trained reaches down to it,
+  :func:`twin.identification.intervals.reach_hull_floor`), and ``estimators``: per estimator (``classifier``,
   ``size_B``, ``size_C``, ``size_G`` where the model sizes G) its kind (link: ``softmax`` for the classifier, ``identity`` for the size
   regressors), number of features (the size regressors of a ``size_context`` model: two more), trees per iteration, classes and source
   (:meth:`twin.identification.trees.TreeEnsemble.meta`);
@@ -66,8 +68,8 @@ import numpy as np
 
 from twin.identification.features import FEATURE_VERSION, MIN_HOP_REVS, REVS_PER_WINDOW, feature_names, features, hop_ok
 from twin.identification.intervals import (BELT_RATIO, RIPPLE_BAND_PCT, SIZE_RESOLVED_FROM_RPM, band_half_width,
-                                           fault_split_joints, held_out_at, logs_answer, logs_spread, resolution,
-                                           rippled, window_table)
+                                           fault_split_joints, held_out_at, logs_answer, logs_spread, reach_hull_floor,
+                                           resolution, rippled, window_table)
 from twin.identification.ranges import (at_hull_top, clip_to_hull, out_of_range, recording_measures, trained_hull,
                                         widen)
 from twin.identification.results import Evidence, HeldOut, IdentifyResult, JointAnswer
@@ -97,7 +99,7 @@ SHIPPED_MODELS = {"default": DEFAULT_MODEL, "bench": "identify_bench.npz"}
 #: play alone with y vertical was located in 2 of 7 runs (0.013-0.061 mm), with play at B or C as well in 7 of 8
 GUIDE_HELD_DOWN = {"y": "with y vertical the slider's weight holds it on its lower rail in steady running (the "
                         "guide's load keeps one sign over the turn, model card): play at the slider guide alone is not "
-                        "told from a tight guide; 'no play at G' is not established"}
+                        "told from a tight guide; 'no play at G' is not established, and the interval at G is every play trained"}
 
 
 def label_key(joint: str) -> str:
@@ -211,6 +213,8 @@ class ClearanceModel:
                     and all(isinstance(v, (int, float)) and math.isfinite(v) and v >= 0 for v in t.values())
                     for n, t in bw.items()):
                 raise ValueError("interval.half_width_log10_by_windows malformed")
+            if not isinstance(trained_on.get("interval", {}).get("hull_floor", False), bool):
+                raise ValueError("interval.hull_floor malformed (true or false)")
             rb = trained_on.get("interval", {}).get("ripple_band_pct")
             if rb is not None and not (isinstance(rb, (int, float)) and math.isfinite(rb) and rb > 0):
                 raise ValueError("interval.ripple_band_pct malformed")
@@ -296,6 +300,9 @@ class ClearanceModel:
             if side in norm:  # normalized conformal: the half width scales with the recording's difficulty
                 w = norm[side]["q"] * (logs_spread(logs) + norm[side]["beta"])
             lo, hi = (float(f"{mid * 10 ** sign:.12g}") for sign in (-w, w))
+            if interval.get("hull_floor"):  # near the smallest size trained, the interval reaches down to it
+                hull = trained_hull((self.trained_on.get("clearances_mm") or {}).get(j) or [])
+                lo = reach_hull_floor(lo, w, hull[0] if hull else None)
             joints.append(JointAnswer(j, j in fault, mid, (lo, hi)))
         return IdentifyResult(fault, p, tuple(joints))
 
@@ -386,6 +393,18 @@ def guide_caveat(orientation: str, joints: tuple[str, ...], fault: str) -> str |
     return GUIDE_HELD_DOWN.get(orientation) if "G" in joints and "G" not in fault else None
 
 
+def guide_held_down_interval(joints: list[JointAnswer], seen: dict[str, Any]) -> list[JointAnswer]:
+    """``joints`` with the guide's interval (the play's size if it had play) widened to every play trained at G
+    (:func:`twin.identification.ranges.widen`), for an answer with the guide caveat (:func:`guide_caveat`): where
+    the slider's weight holds it on its lower rail the features say little of a play at G, and the regressor's
+    size there is no better than a guess (on the development sets the two guide-only runs with y vertical that read
+    no play had 0.013 and 0.020 mm, their conformal intervals began at 0.020 mm)."""
+    if "G" not in seen:
+        return joints
+    return [dataclasses.replace(a, interval_if_faulty_mm=tuple(widen(list(a.interval_if_faulty_mm), seen["G"])))
+            if a.joint == "G" else a for a in joints]
+
+
 def identify_recording(model: ClearanceModel, path: str | Path) -> IdentifyResult:
     """The answer for a bench recording (any recording ``twin replay`` accepts), with the evidence used."""
     from twin.identification.inputs import recording_inputs
@@ -432,6 +451,7 @@ def identify_inputs(model: ClearanceModel, acc: dict[str, np.ndarray], counts: n
     caveat = guide_caveat(orientation, model.joints, ans.fault)
     if caveat:
         warnings.append(caveat)
+        joints = guide_held_down_interval(joints, tr.get("clearances_mm") or {})
     evidence = Evidence(windows=len(w.windows), revolutions=round(w.revolutions, 2), crank_hz=w.crank_hz,
                         motor_rpm_if_belt_3_97=w.crank_hz * 60 * BELT_RATIO,
                         steady_s=(w.steady[1] - w.steady[0]) / rate, features=len(model.feature_names),

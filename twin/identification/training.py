@@ -119,6 +119,9 @@ class TrainOptions:
         size_weights: how the size regressors weigh the training windows (:data:`SIZE_WEIGHTS`): ``"windows"``,
             each window alike (a fast run, with more windows in its seconds, weighs more); ``"runs"``, each run
             alike (its windows share the weight 1).
+        hull_floor: an interval whose lower end lies within its half width of the smallest size trained at the
+            joint reaches down to it (``interval.hull_floor``,
+            :func:`twin.identification.intervals.reach_hull_floor`).
     """
 
     splits: tuple[str, ...] = ("train", "val")
@@ -138,6 +141,7 @@ class TrainOptions:
     location: str = "classes"
     size_context: bool = False
     size_weights: str = "windows"
+    hull_floor: bool = False
 
     def __post_init__(self) -> None:
         def bad(name: str, message: str) -> TrainOptionsError:
@@ -155,6 +159,8 @@ class TrainOptions:
             raise bad("interval_folds", f"{self.interval_folds!r}; allowed: {', '.join(INTERVAL_FOLDS)}")
         if self.location not in LOCATIONS:
             raise bad("location", f"{self.location!r}; allowed: {', '.join(LOCATIONS)}")
+        if not isinstance(self.hull_floor, bool):
+            raise bad("hull_floor", f"{self.hull_floor!r}; allowed: true, false")
         if self.size_weights not in SIZE_WEIGHTS:
             raise bad("size_weights", f"{self.size_weights!r}; allowed: {', '.join(SIZE_WEIGHTS)}")
         if self.size_regressor not in SIZE_REGRESSORS:
@@ -436,6 +442,7 @@ def _trained_on(dss: list[Any], dirs: list[str | Path], rows: list[dict[str, Any
                      "ripple_band_pct": RIPPLE_BAND_PCT if o.ripple_split else None,
                      "by_engine": o.interval_by_engine,
                      "fault_split": list(o.fault_split),
+                     **({"hull_floor": True} if o.hull_floor else {}),
                      "half_width_log10": cal.half_width,
                      "half_width_log10_by_windows": cal.by_windows,
                      "normalized": cal.normalized,
