@@ -439,7 +439,7 @@ def _error_and_verdict(p: dict) -> tuple[str, str]:
 
 
 def table(results: list[dict]) -> str:
-    if SET_NAME == "4":
+    if SET_NAME in ("4", "5"):
         return table4(results)
     lines = ["| case | engine | drive | field | truth | fitted | error | interval | verdict | target | interval holds truth | replay NRMSE fitted ≤ 1.1 × truth | band energies fitted ≤ 1.1 × truth | wall [s] |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
