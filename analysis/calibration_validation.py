@@ -103,6 +103,26 @@ SET4 = {
          ["structure.mount_frequency_hz", "structure.mount_damping_ratio"], {}),
     ],
 }
+# The fifth set (analysis/calibration_validation_5/PROTOCOL.md), committed before any of its recordings existed:
+# recordings the calibration could not replay on their trace before (an imposed ripple replayed twice, the motor's
+# own speed loop instead of the encoder trace), calibrated once with the default drive (trace) and the fourth
+# set's budget; both engines, friction, guide friction and the speed-loop gain drawn across their ranges.
+SET5 = {
+    "here": Path(__file__).resolve().parent / "calibration_validation_5",
+    "seed": 2030, "duration_s": 2.0, "repeat_seeds": (9, 10),
+    "trace_cases": ["ripple_mu", "motor_guide", "motor_kp", "ripple_guide"], "program": False,
+    "budget": dict(SET4["budget"]),
+    "cases": [
+        ("ripple_mu", "reference", 6, 0.5, {"drive.ripple_pct": (3.0,)}, ["contact.mu0"], {}),
+        ("motor_guide", "mujoco", 6, 0.5, {"drive.mode": "motor", "simulation.duration_s": 1.0},
+         ["mechanism.guide_friction_n"], {}),
+        ("motor_kp", "reference", 6, 0.5, {"drive.mode": "motor"}, ["drivetrain.speed_kp_nms"], {}),
+        ("ripple_guide", "mujoco", 12, 1.0, {"drive.ripple_pct": (2.0, 1.0), "simulation.duration_s": 1.0},
+         ["mechanism.guide_friction_n"], {}),
+    ],
+}
+#: whether the set's cases are calibrated with the program drive (sets 1-4; set 5: the trace drive only)
+PROGRAM_JOBS = True
 #: the fourth set's restitution verdict rule (analysis/restitution_length.py: on analysis windows of at least
 #: four crank turns the objective's largest jump stayed below ΔJ in 5 of 6 benches, on shorter ones it
 #: ranged from 0.02 to 7 ΔJ): ROUGH or FLAT is a miss on windows of >= RESTITUTION_TOLD_TURNS turns, either
@@ -231,7 +251,7 @@ def replay_compare(case: dict, recs: list[Path], base, fitted: dict[str, float],
     i0, i1 = tg.window
     turns = abs(float(tg.phi[i1 - 1] - tg.phi[i0])) / (2 * math.pi)
     floor = {}
-    if SET_NAME == "4":  # the replay floor: the truth moved by 1e-9 (analysis/replay_noise_floor.py)
+    if SET_NAME in ("4", "5"):  # the replay floor: the truth moved by 1e-9 (analysis/replay_noise_floor.py)
         for k in FLOOR_PERTURB:
             m_p, _ = replay_metrics(tg, tg.base.replace(**{f: v * (1.0 + k) for f, v in case["truth"].items()}))
             for a in m_p:
@@ -419,7 +439,7 @@ def _error_and_verdict(p: dict) -> tuple[str, str]:
 
 
 def table(results: list[dict]) -> str:
-    if SET_NAME == "4":
+    if SET_NAME in ("4", "5"):
         return table4(results)
     lines = ["| case | engine | drive | field | truth | fitted | error | interval | verdict | target | interval holds truth | replay NRMSE fitted ≤ 1.1 × truth | band energies fitted ≤ 1.1 × truth | wall [s] |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
@@ -491,7 +511,8 @@ def run(work: Path, deadline_utc: str | None) -> None:
     res_path = HERE / "results.json"
     results: list[dict] = json.loads(res_path.read_text())["results"] if res_path.exists() else []
     done = {(r["case"], r["drive"]) for r in results}
-    jobs = [(c, "program") for c in doc["cases"]] + [(c, "trace") for c in doc["cases"] if c["case"] in TRACE_CASES]
+    jobs = ([(c, "program") for c in doc["cases"]] if PROGRAM_JOBS else []) \
+        + [(c, "trace") for c in doc["cases"] if c["case"] in TRACE_CASES]
     from datetime import datetime, timezone
 
     from twin.provenance import stamped, with_stamp_line
@@ -515,10 +536,11 @@ def run(work: Path, deadline_utc: str | None) -> None:
 
 def select_set(name: str) -> None:
     """Make set ``name`` ("1" to "4") the module's current set (its folder, seed, cases, budget)."""
-    global HERE, SEED, CASES, TRACE_CASES, DURATION_S, REPEAT_SEEDS, SET_NAME
+    global HERE, SEED, CASES, TRACE_CASES, DURATION_S, REPEAT_SEEDS, SET_NAME, PROGRAM_JOBS
     SET_NAME = name
-    st = {"2": SET2, "3": SET3, "4": SET4}.get(name)
+    st = {"2": SET2, "3": SET3, "4": SET4, "5": SET5}.get(name)
     if st is not None:
+        PROGRAM_JOBS = st.get("program", True)
         HERE, SEED, CASES, TRACE_CASES = st["here"], st["seed"], st["cases"], st["trace_cases"]
         DURATION_S, REPEAT_SEEDS = st["duration_s"], st["repeat_seeds"]
         BUDGET.clear()
@@ -530,7 +552,7 @@ def main() -> None:
     ap.add_argument("step", choices=("make", "run", "reassess", "reverdict"))
     ap.add_argument("--prefix", default="cal_", help="with reverdict: the calibration folders' prefix (cal_ or reassess_)")
     ap.add_argument("--work", required=True, type=Path, help="folder for the recordings and calibrations")
-    ap.add_argument("--set", choices=("1", "2", "3", "4"), default="1",
+    ap.add_argument("--set", choices=("1", "2", "3", "4", "5"), default="1",
                     help="1: the first set (its results are in); 2: the second set (docs/calibration.md, \"Second "
                          "validation protocol\")")
     ap.add_argument("--again", action="store_true",

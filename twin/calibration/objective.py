@@ -191,25 +191,47 @@ def prepare_target(path: str, base_toml: str | None, fraction: float, dtw_max_s:
 
 
 def sim_config(target: Target, cfg):
-    """The replay configuration of ``cfg`` for ``target``'s stage (twin.bench_replay.replay_config;
-    with ``drive`` "program" the configuration's own drive program instead of the encoder trace)."""
+    """The replay configuration of ``cfg`` for ``target``'s stage.
+
+    ``drive`` "trace": as ``twin replay`` (:func:`twin.bench_replay.trace_drive`), whatever drove the recording:
+    the crank PID follows the encoder trace, the fields of the program the trace replaces (steps, protocol)
+    and any imposed ripple back to their defaults (the trace holds the recorded ripple: imposed again it
+    doubled), a motor or torque drive becomes the PID. Where drive-train fields are fitted (``target.motor``)
+    the motor model drives the crank on the recorded motor command instead, with ``cfg``'s drive train (the
+    fitted values; the torque program's own fields back to their defaults: the motor mode refuses them).
+
+    ``drive`` "program": the configuration's own drive program, reproduced once (steps, ripple, motor or
+    torque drive as recorded); fitting drive-train fields on a PID-driven configuration runs the motor model
+    on that program."""
+    import dataclasses
+
+    from twin.bench_replay import _TORQUE_ONLY, trace_drive
     from twin.config import CHANNEL_GROUPS
+    from twin.config.drivetrain import Drivetrain
 
-    over = ({"drive.program": "trace", "drive.trace_file": "encoder_trace.npz", "drive.trace_filter_hz": TRACE_FILTER_HZ,
-             "drive.crank_rpm": 0.0}  # the constant program's speed: the trace replaces it (nonzero is refused with it)
-            if target.drive == "trace" else {})
+    over: dict[str, Any] = {}
+    if target.drive == "trace":
+        drive_over = trace_drive(cfg)
+        if target.motor:  # the fitted drive train stays; only the torque program's fields go back to defaults
+            drive_over = {k: v for k, v in drive_over.items() if not k.startswith("drivetrain.")}
+            if cfg.drive.mode == "torque":
+                drive_over |= {f"drivetrain.{f.name}": f.default for f in dataclasses.fields(Drivetrain)
+                               if f.name in _TORQUE_ONLY}
+        over |= drive_over
+        over |= {"drive.program": "trace", "drive.trace_file": "encoder_trace.npz",
+                 "drive.trace_filter_hz": TRACE_FILTER_HZ,
+                 "drive.crank_rpm": 0.0}  # the constant program's speed: the trace replaces it (nonzero is refused with it)
     over |= {"simulation.duration_s": target.n_sim / target.rate,
-            "sensors.output_rate_hz": target.rate, "sensors.channels": list(CHANNEL_GROUPS),
-            "instrumentation.zero_g_v": dict(target.zero_g)}
-    if target.drive == "trace":  # a torque-driven recording: the crank PID on its trace (bench_replay.torque_as_pid)
-        from twin.bench_replay import torque_as_pid
-
-        over |= torque_as_pid(cfg)
+             "sensors.output_rate_hz": target.rate, "sensors.channels": list(CHANNEL_GROUPS),
+             "instrumentation.zero_g_v": dict(target.zero_g)}
     if target.motor:  # drive-train fields: the motor model drives the crank
         groups = list(CHANNEL_GROUPS) + (["motor"] if "motor" not in CHANNEL_GROUPS else [])
-        over.update({"drive.mode": "motor", "sensors.channels": groups})
+        over["sensors.channels"] = groups
         if target.drive == "trace":  # on the recorded motor command (twin replay's motor drive)
-            over["drivetrain.command_file"] = "motor_command_trace.npz"  # in memory: never read
+            over.update({"drive.mode": "motor",
+                         "drivetrain.command_file": "motor_command_trace.npz"})  # in memory: never read
+        elif cfg.drive.mode not in ("motor", "torque"):  # the program, followed by the motor model
+            over["drive.mode"] = "motor"
     return cfg.replace(**over)
 
 

@@ -154,8 +154,13 @@ def make_parameters(fields: Iterable[str], base: BenchConfig,
     if isinstance(fields, str):
         fields = [f for f in fields.split(",")]
     fields = [str(f).strip() for f in fields]
-    if not fields or any(not f for f in fields):
+    if fields and not fields[-1] and len(fields) > 1:  # a trailing comma ("contact.mu0,"): nothing left out
+        fields = fields[:-1]
+    if not fields or not any(fields):
         raise ConfigError("params", "give one or more configuration fields, e.g. contact.restitution,contact.mu0")
+    if any(not f for f in fields):
+        raise ConfigError("params", f"an empty field between commas in {','.join(fields)!r}; give FIELD,FIELD "
+                                    "(e.g. contact.restitution,contact.mu0)")
     if len(set(fields)) != len(fields):
         raise ConfigError("params", f"a field is given twice: {','.join(fields)}")
     bounds = dict(bounds or {})
@@ -169,6 +174,10 @@ def make_parameters(fields: Iterable[str], base: BenchConfig,
             raise ConfigError("params", f"{f!r} describes the recording or its drive, not an uncertain number of "
                                         "the bench; it cannot be fitted")
         field_value(base, f)
+        if f.startswith("drivetrain.") and base.drive.mode not in ("motor", "torque"):
+            raise ConfigError("params", f"{f!r} acts only with drive.mode = \"motor\" or \"torque\"; the base "
+                                        f"configuration's is {base.drive.mode!r} (its crank PID drives the crank: the "
+                                        "drive train is not in the loop of this recording; fit it on a motor-driven one)")
         if f.startswith("structure.") and base.structure.mode != "flexible":
             raise ConfigError("params", f"{f!r} acts only with structure.mode = \"flexible\"; the base configuration "
                                         f"is {base.structure.mode!r} (start from a configuration with a flexible structure)")
