@@ -145,6 +145,8 @@ SCRIPTS: dict[str, Script] = {
     "identify/rigid_rod_check": Script(f"{R}/identify/rigid_rod_check.json (the rigid-rod check on training, "
                                        "development and flexible-structure recordings)", "~20 min", long=True,
                                        needs="a work folder (--work)"),
+    "identify/hull_floor": Script("a model file with the hull-floor interval rule on (arguments IN.npz OUT.npz; "
+                                  "every array checked unchanged)", "~5 s", needs="a model file (arguments)"),
     "identify/bench_eval": Script(f"{R}/identify/bench_*.json (--out): whole-bench figures through the answer path",
                                   "20 s per 100 runs", needs="a model file and dataset folders (arguments)"),
     "structure_modes": Script("prints the flexible rod's modes against the closed forms (results/structure_modes.txt "
