@@ -66,6 +66,13 @@ def count_impacts(in_contact: np.ndarray, rate_hz: float, min_free_s: float = MI
     return int(np.count_nonzero(free >= min_free))
 
 
+
+def _sum_sq(x: np.ndarray) -> float:
+    """Σ x² of a float array, in float64, by NumPy's own (pairwise) summation: not ``np.dot``, whose BLAS splits
+    the sum by the thread count, so that a summary's last bits would follow the machine's threads."""
+    x = np.asarray(x, dtype=np.float64)
+    return float(np.sum(x * x))
+
 class ImpactCounter:
     """:func:`count_impacts` over a stream of chunks: same count as on the whole record.
 
@@ -151,13 +158,13 @@ class SummaryAccumulator:
             if a in chunk:
                 x = chunk[a].astype(np.float64)
                 acc = self._acc.setdefault(a, [0.0, 0.0])
-                acc[0] += float(np.dot(x, x))
+                acc[0] += _sum_sq(x)
                 acc[1] = max(acc[1], float(np.max(np.abs(x))))
         if "crank_angle" in chunk and "theta_ref" in chunk and not (self.config and self.config.drive.mode == "torque"):
             err = chunk["theta_ref"] - chunk["crank_angle"]
             tr = self._track if self._track is not None else [0.0, 0.0]
             tr[0] = max(tr[0], float(np.max(np.abs(err))))
-            tr[1] += float(np.dot(err, err))
+            tr[1] += _sum_sq(err)
             self._track = tr
         for name in ("rod_deflection", "rod_stretch", "frame_x", "frame_y", "guide_y"):
             if name in chunk:
@@ -166,7 +173,7 @@ class SummaryAccumulator:
             u = chunk["motor_torque"].astype(np.float64)
             mo = self._motor if self._motor is not None else [0.0, 0.0, 0.0, 0.0, 0.0]
             peak = self.config.drivetrain.peak_torque_nm if self.config else np.inf
-            mo[0] += float(np.dot(u, u))
+            mo[0] += _sum_sq(u)
             mo[1] = max(mo[1], float(np.max(np.abs(u))))
             mo[2] += float(np.count_nonzero(np.abs(u) >= peak * (1 - 1e-6)))  # float32 channel
             mo[3] = max(mo[3], float(np.max(np.abs(chunk["belt_torque"]))))
