@@ -250,6 +250,7 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
     fcc = np.zeros(3)
     zth = np.empty((2, n))
     gfr = np.empty(n)
+    gfi = np.empty(n, dtype=np.int64)
     vth = np.empty((2, mk))
     modal = H.shape[0] > 0
     act = np.zeros(2, dtype=np.bool_)
@@ -355,7 +356,7 @@ def run_flexible(P, G, segs, seg_f, hinges, hinge_f, slides, slide_f, indep, sen
             if not modal:   # the friction with the normal force the step applies (Coulomb's f_T = μ f_N, as the
                 # rigid model's); the modal rod's friction keeps the explicit normal force (not carried over to it)
                 tau += kkt_friction_follow(q, qdd, Minv, Yk, Wk, mk, crow, segs, P[P_RPIN_B], P[P_RBUSH_B],
-                                           P[P_RBUSH_C], fB, fC, shift, jb, jc, gfr, zth[0], vth[0])
+                                           P[P_RBUSH_C], fB, fC, shift, jb, jc, gfr, zth[0], vth[0], gfi)
         if want_out and k % stride == 0:
             row = out[k // stride]
             _outputs(P, q[:N_Q], qd[:N_Q], qdd[:N_Q], tau, ja, jb, jc, row)
@@ -551,6 +552,20 @@ class FlexibleRun(RodRun):
         return kk
 
 
+def tap_kick(q: np.ndarray, qd: np.ndarray, node: int, speed_mps: float, axial: bool) -> None:
+    """The tap's velocity change on a flexible rod's coordinates, in place: the point whose x coordinate is
+    ``q[node]`` given ``speed_mps`` [m/s] normal to the chord B'–C, or (``axial``) the bore C along it. Either rod's
+    (the chain's middle node; the modal rod's first shape)."""
+    ux, uy = q[4] - q[2], q[5] - q[3]
+    L = math.hypot(ux, uy)
+    if axial:
+        qd[4] += speed_mps * ux / L
+        qd[5] += speed_mps * uy / L
+    else:
+        qd[node] += -speed_mps * uy / L
+        qd[node + 1] += speed_mps * ux / L
+
+
 def chain_tap_response(cfg, speed_mps: float = 0.01, duration_s: float = 0.2, every: int = 5, theta0: float = 0.3,
                        drive: bool = False, axial: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """A tap on the flexible rod in the reference engine: the mechanism at rest at crank angle ``theta0`` [rad]
@@ -572,14 +587,7 @@ def chain_tap_response(cfg, speed_mps: float = 0.01, duration_s: float = 0.2, ev
     mid = int(lay.segs[cfg.structure.rod_segments // 2 - 1, 1])   # the middle node (end of the middle segment)
     x = run.x
     q, qd = x[:n].copy(), x[n:2 * n].copy()
-    ux, uy = q[4] - q[2], q[5] - q[3]
-    L = math.hypot(ux, uy)
-    if axial:
-        qd[4] += speed_mps * ux / L
-        qd[5] += speed_mps * uy / L
-    else:
-        qd[mid] += -speed_mps * uy / L
-        qd[mid + 1] += speed_mps * ux / L
+    tap_kick(q, qd, mid, speed_mps, axial)
     nc = n - N_Q
     A, LU, piv = np.empty((nc, n)), np.empty((nc, nc)), np.empty(nc, dtype=np.int64)
     if flex_project(run.P, lay.G, q, qd, lay.segs, lay.seg_f, lay.slides, lay.indep, A, LU, piv,

@@ -510,7 +510,8 @@ def theta_from_responses(h, qdd, m, crow, lawB, lawC, fB, fC, shift, jb, jc, z, 
 
 
 @njit(cache=True)
-def kkt_friction_follow(q, qdd, Minv, Y, W, m, crow, segs, rpin_b, rb_b, rb_c, fB, fC, shift, jb, jc, g, z, v):
+def kkt_friction_follow(q, qdd, Minv, Y, W, m, crow, segs, rpin_b, rb_b, rb_c, fB, fC, shift, jb, jc, g, z, v,
+                        nzi):
     """After :func:`kkt_theta_damping`: the friction of each clearance joint follows its normal force's change, so
     that the step applies Coulomb's f_T = μ(v_t) f_N with the normal force it applies (the θ-method's), as the
     rigid model and the MuJoCo engine do; before, the friction took the explicit normal force ``fB``, ``fC``
@@ -522,8 +523,8 @@ def kkt_friction_follow(q, qdd, Minv, Y, W, m, crow, segs, rpin_b, rb_b, rb_c, f
     acts as the friction does (:func:`twin.reference.flexible_kernels._eye_contact`): on the pin along t = R₉₀ n at
     its contact point (pin B: at B with the moment R_pin ΔF_T on the crank; pin C: x on the slider, y on the guide
     with ``shift``), opposite at the eye's centre with the moment −R_b ΔF_T on the end segment: q̈ += N g
-    (N = M̃⁻¹ − Y W⁻¹ Yᵀ, g the generalized force of both joints' changes, one solve). ``g``, ``z`` (n) and ``v``
-    (m) scratch.
+    (N = M̃⁻¹ − Y W⁻¹ Yᵀ, g the generalized force of both joints' changes, one solve). ``g``, ``z`` (n), ``v``
+    (m) and ``nzi`` (n, int64) scratch.
     Returns the change of the drive torque −λ₇ where θ's row is a constraint (the prescribed crank), else 0."""
     n = qdd.shape[0]
     for i in range(n):
@@ -562,7 +563,6 @@ def kkt_friction_follow(q, qdd, Minv, Y, W, m, crow, segs, rpin_b, rb_b, rb_c, f
         g[sa + 1] -= ux * f
     if not any_change:
         return 0.0
-    nzi = np.empty(n, dtype=np.int64)
     nz = 0
     for k in range(n):   # g's nonzero coordinates (at most 18)
         if g[k] != 0.0:

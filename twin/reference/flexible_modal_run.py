@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from twin.natural_coordinates import N_Q, S_Q, S_QD
-from twin.reference.flexible import RodRun
+from twin.reference.flexible import RodRun, tap_kick
 from twin.reference.flexible_modal import ModalLayout, _modal_structure_outputs, modal_project
 from twin.reference.model import N_OUT, OK
 
@@ -81,14 +81,7 @@ class ModalRun(RodRun):
         n = self.layout.n
         x = self.x
         q, qd = x[:n].copy(), x[n:2 * n].copy()
-        ux, uy = q[4] - q[2], q[5] - q[3]
-        L = math.hypot(ux, uy)
-        if axial:
-            qd[4] += speed_mps * ux / L
-            qd[5] += speed_mps * uy / L
-        else:
-            qd[N_Q] += -speed_mps * uy / L
-            qd[N_Q + 1] += speed_mps * ux / L
+        tap_kick(q, qd, N_Q, speed_mps, axial)
         if modal_project(self.P, self.layout.G, q, qd, np.empty(n), np.empty(n), np.empty(n), self._z) < 0:
             raise ValueError("the tapped state does not satisfy the constraints")
         x[:n], x[n:2 * n] = q, qd
